@@ -1,0 +1,16 @@
+//! One BVH over every bounded primitive.
+//!
+//! obvhs builds the tree (PLOC, Meister and Bittner 2018, with parallel
+//! reinsertion); we collapse its binary tree into an 8-wide layout of our
+//! own whose child boxes are plain f32 in structure-of-arrays form, so one
+//! `wide::f32x8` slab test checks all eight children of a node. We traverse
+//! it ourselves: obvhs's own traversal clamps tmin to 1e-4, uses a
+//! non-watertight triangle test and drops nodes when its 32-entry stack
+//! overflows. Ours honours `[tmin, tmax]`, uses the watertight test and
+//! spills to the heap instead of dropping work.
+
+pub mod build;
+pub mod node;
+pub mod traverse;
+
+pub use build::{BuildQuality, Bvh8};

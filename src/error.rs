@@ -1,0 +1,62 @@
+//! One error type for everything a user can get wrong.
+//!
+//! Every message names the file and, where one applies, the key or line, so
+//! that a user can go straight to the mistake. The CLI prints the message on
+//! one line and exits with code 2.
+
+use std::fmt;
+use std::path::Path;
+
+/// A problem with something the user handed us: a scene, mesh, partial file or flag.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputError {
+    /// The file at fault (or `<command line>` for a flag).
+    pub file: String,
+    /// The TOML key path (`objects[2].sphere.radius`), `line N`, or empty.
+    pub location: String,
+    pub message: String,
+}
+
+impl InputError {
+    pub fn new(file: impl AsRef<Path>, location: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            file: file.as_ref().display().to_string(),
+            location: location.into(),
+            message: message.into(),
+        }
+    }
+
+    /// An error about the file as a whole (unreadable, wrong format).
+    pub fn file(file: impl AsRef<Path>, message: impl Into<String>) -> Self {
+        Self::new(file, "", message)
+    }
+
+    /// Prefix the location with an outer key, so errors raised deep inside
+    /// a nested object report the full path.
+    pub fn within(mut self, outer: &str) -> Self {
+        self.location = if self.location.is_empty() {
+            outer.to_string()
+        } else if self.location.starts_with('[') {
+            format!("{outer}{}", self.location)
+        } else {
+            format!("{outer}.{}", self.location)
+        };
+        self
+    }
+}
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Keep it on one line: multi-line parser messages are folded.
+        let message = self.message.split_whitespace().collect::<Vec<_>>().join(" ");
+        if self.location.is_empty() {
+            write!(f, "{}: {}", self.file, message)
+        } else {
+            write!(f, "{}: {}: {}", self.file, self.location, message)
+        }
+    }
+}
+
+impl std::error::Error for InputError {}
+
+pub type InputResult<T> = Result<T, InputError>;

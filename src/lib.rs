@@ -1,0 +1,10 @@
+//! strata: a data-oriented Monte Carlo distribution ray tracer.
+//!
+//! The data flow is describe → compile → accelerate → sample → shade →
+//! schedule → output; see the README's architecture section.
+
+pub mod accel;
+pub mod error;
+pub mod math;
+pub mod sampling;
+pub mod shape;

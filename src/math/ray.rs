@@ -1,0 +1,33 @@
+//! A ray with an explicit parametric interval `[tmin, tmax]`.
+
+use glam::Vec3;
+
+/// `origin + t * direction` for `t` in `[tmin, tmax]`. The direction need not
+/// be unit length: rays moved into object space keep world-space `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    pub tmin: f32,
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, direction: Vec3) -> Self {
+        Self { origin, direction, tmin: 0.0, tmax: f32::INFINITY }
+    }
+
+    pub fn segment(origin: Vec3, direction: Vec3, tmax: f32) -> Self {
+        Self { origin, direction, tmin: 0.0, tmax }
+    }
+
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.direction
+    }
+
+    /// True if every component is finite and the direction is not zero.
+    pub fn is_valid(&self) -> bool {
+        self.origin.is_finite() && self.direction.is_finite() && self.direction != Vec3::ZERO
+    }
+}

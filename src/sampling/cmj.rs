@@ -1,0 +1,149 @@
+//! Correlated multi-jittered sampling: Kensler 2013, "Correlated
+//! Multi-Jittered Sampling" (Pixar Technical Memo 13-01).
+//!
+//! Sample `s` of an `N`-sample set is computed on its own, with no table and
+//! no loop over earlier samples, for any `N` (not only squares). The set is
+//! jittered in 2D and stratified in both 1D projections (Latin hypercube).
+//! That is what sample slicing needs: a slice is a range of indices of the
+//! one N-sample set.
+
+use glam::Vec2;
+
+/// A pseudo-random permutation of `0..len`, indexed by `i`, chosen by
+/// `pattern`. Hash steps that are bijective on the low bits, cycle-walked
+/// into range (Kensler 2013, listing 3).
+pub fn permute(mut i: u32, len: u32, pattern: u32) -> u32 {
+    debug_assert!(len > 0 && i < len);
+    if len == 1 {
+        return 0;
+    }
+    let p = pattern;
+    let mut w = len - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            break;
+        }
+    }
+    (i.wrapping_add(p)) % len
+}
+
+/// A hashed float in [0, 1) for index `i` under `pattern` (Kensler 2013, listing 4).
+pub fn rand_float(mut i: u32, p: u32) -> f32 {
+    i ^= p;
+    i ^= i >> 17;
+    i ^= i >> 10;
+    i = i.wrapping_mul(0xb365_34e5);
+    i ^= i >> 12;
+    i ^= i >> 21;
+    i = i.wrapping_mul(0x93fc_4795);
+    i ^= 0xdf6e_307f;
+    i ^= i >> 17;
+    i = i.wrapping_mul(1 | p >> 18);
+    super::hash::unit_float(i)
+}
+
+/// Sample `s` of an `n`-sample correlated multi-jittered set in [0,1)².
+pub fn cmj_2d(s: u32, n: u32, pattern: u32) -> Vec2 {
+    debug_assert!(s < n);
+    // An m × rows grid with m ≈ √n; for non-square n the last row is partial.
+    let m = ((n as f32).sqrt() as u32).max(1);
+    let rows = n.div_ceil(m);
+    let s = permute(s, n, pattern.wrapping_mul(0x5163_3e2d));
+    let sx = permute(s % m, m, pattern.wrapping_mul(0x68bc_21eb));
+    let sy = permute(s / m, rows, pattern.wrapping_mul(0x02e5_be93));
+    let jx = rand_float(s, pattern.wrapping_mul(0x967a_889b));
+    let jy = rand_float(s, pattern.wrapping_mul(0x368c_c8b7));
+    let x = (sx as f32 + (sy as f32 + jx) / rows as f32) / m as f32;
+    let y = ((s / m) as f32 + jy) / rows as f32;
+    Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
+}
+
+/// Sample `s` of an `n`-sample stratified (jittered) set in [0,1).
+pub fn stratified_1d(s: u32, n: u32, pattern: u32) -> f32 {
+    let stratum = permute(s, n, pattern.wrapping_mul(0x2d2a_8cd3));
+    let j = rand_float(s, pattern.wrapping_mul(0x7a3f_c10b));
+    ((stratum as f32 + j) / n as f32).min(ONE_MINUS_EPSILON)
+}
+
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permute_is_a_permutation_for_many_lengths() {
+        for len in [1u32, 2, 3, 5, 7, 16, 17, 100, 1000] {
+            for pattern in [0u32, 1, 0xdead_beef] {
+                let mut seen = vec![false; len as usize];
+                for i in 0..len {
+                    let j = permute(i, len, pattern) as usize;
+                    assert!(!seen[j], "len {len} pattern {pattern}: {j} twice");
+                    seen[j] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cmj_is_stratified_in_both_projections_for_any_n() {
+        for n in [1u32, 2, 3, 4, 7, 9, 16, 30, 64, 100] {
+            let pts: Vec<Vec2> = (0..n).map(|s| cmj_2d(s, n, 12345)).collect();
+            let m = ((n as f32).sqrt() as u32).max(1);
+            let rows = n.div_ceil(m);
+            // Each column of width 1/m holds at most `rows` samples, each
+            // row of height 1/rows at most m samples.
+            let mut cols = vec![0; m as usize];
+            let mut rws = vec![0; rows as usize];
+            for p in &pts {
+                assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y));
+                cols[(p.x * m as f32) as usize] += 1;
+                rws[(p.y * rows as f32) as usize] += 1;
+            }
+            assert!(cols.iter().all(|&c| c <= rows), "n {n} cols {cols:?}");
+            assert!(rws.iter().all(|&c| c <= m), "n {n} rows {rws:?}");
+            // For full grids the fine 1D strata (n of them) hold one sample each.
+            if m * rows == n {
+                let mut fine = vec![0; n as usize];
+                for p in &pts {
+                    fine[(p.x * n as f32) as usize] += 1;
+                }
+                assert!(fine.iter().all(|&c| c == 1), "n {n} x-projection {fine:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn stratified_1d_has_one_sample_per_stratum() {
+        for n in [1u32, 3, 10, 33] {
+            let mut strata = vec![0; n as usize];
+            for s in 0..n {
+                strata[(stratified_1d(s, n, 77) * n as f32) as usize] += 1;
+            }
+            assert!(strata.iter().all(|&c| c == 1));
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! What a mesh loader hands to the scene compiler: plain arrays in file
+//! order, with optional data present only where the file has it.
+
+use crate::shade::material::Material;
+use glam::Vec3;
+
+/// One triangle mesh read from a file. Triangles keep the file's order, so a
+/// triangle's index in `indices` is the primitive id that `strata trace`
+/// reports and that Embree sees.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadedMesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+    /// Shading normals, only if the file has them.
+    pub normals: Option<MeshNormals>,
+    /// Index into [`LoadedAsset::materials`], if the file assigns one.
+    pub material: Option<usize>,
+}
+
+/// Shading normals with their own per-triangle indexing (an OBJ may index
+/// normals apart from positions; glTF repeats the position indices).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshNormals {
+    pub values: Vec<Vec3>,
+    /// One entry per triangle, parallel to [`LoadedMesh::indices`].
+    pub indices: Vec<[u32; 3]>,
+}
+
+/// A camera found in a glTF file, already placed in world space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedCamera {
+    pub position: Vec3,
+    pub forward: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees for a perspective camera.
+    pub yfov_degrees: Option<f32>,
+    /// World-space view height for an orthographic camera.
+    pub ortho_height: Option<f32>,
+}
+
+/// A punctual point light (glTF `KHR_lights_punctual`), in world space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedPointLight {
+    pub position: Vec3,
+    /// Radiant intensity in W/sr per channel.
+    pub intensity: Vec3,
+}
+
+/// Everything one mesh file contributes to a scene.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadedAsset {
+    pub meshes: Vec<LoadedMesh>,
+    pub materials: Vec<(String, Material)>,
+    pub cameras: Vec<LoadedCamera>,
+    pub point_lights: Vec<LoadedPointLight>,
+}
+
+impl LoadedAsset {
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.indices.len()).sum()
+    }
+}
