@@ -18,7 +18,11 @@ pub struct InputError {
 }
 
 impl InputError {
-    pub fn new(file: impl AsRef<Path>, location: impl Into<String>, message: impl Into<String>) -> Self {
+    pub fn new(
+        file: impl AsRef<Path>,
+        location: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
         Self {
             file: file.as_ref().display().to_string(),
             location: location.into(),
@@ -48,7 +52,11 @@ impl InputError {
 impl fmt::Display for InputError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         // Keep it on one line: multi-line parser messages are folded.
-        let message = self.message.split_whitespace().collect::<Vec<_>>().join(" ");
+        let message = self
+            .message
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
         if self.location.is_empty() {
             write!(f, "{}: {}", self.file, message)
         } else {

@@ -4,7 +4,12 @@
 //! schedule → output; see the README's architecture section.
 
 pub mod accel;
+pub mod camera;
 pub mod error;
 pub mod math;
+pub mod output;
+pub mod render;
 pub mod sampling;
+pub mod scene;
+pub mod shade;
 pub mod shape;

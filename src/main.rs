@@ -1,3 +1,21 @@
-fn main() {
-    println!("Hello, world!");
+//! The `strata` command line: argument parsing and dispatch only.
+
+mod cli;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args = cli::Cli::parse();
+    match cli::run(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(cli::CliError::Input(e)) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+        Err(cli::CliError::Internal(e)) => {
+            eprintln!("internal error: {e}");
+            ExitCode::from(1)
+        }
+    }
 }

@@ -32,7 +32,9 @@ impl std::str::FromStr for BuildQuality {
             "auto" => Ok(Self::Auto),
             "medium" => Ok(Self::Medium),
             "high" => Ok(Self::High),
-            _ => Err(format!("unknown BVH quality '{s}' (expected fastest, fast, auto, medium or high)")),
+            _ => Err(format!(
+                "unknown BVH quality '{s}' (expected fastest, fast, auto, medium or high)"
+            )),
         }
     }
 }
@@ -62,7 +64,12 @@ pub struct Bvh8 {
 
 impl Bvh8 {
     pub fn empty() -> Self {
-        Self { nodes: Vec::new(), prim_ids: Vec::new(), bounds: Aabb::EMPTY, depth: 0 }
+        Self {
+            nodes: Vec::new(),
+            prim_ids: Vec::new(),
+            bounds: Aabb::EMPTY,
+            depth: 0,
+        }
     }
 
     /// Build over primitive boxes; primitive `i` is reported as id `i`.
@@ -71,11 +78,18 @@ impl Bvh8 {
         if boxes.is_empty() {
             return Self::empty();
         }
-        assert!(boxes.len() <= MAX_PRIMS, "too many primitives for one BVH: {}", boxes.len());
+        assert!(
+            boxes.len() <= MAX_PRIMS,
+            "too many primitives for one BVH: {}",
+            boxes.len()
+        );
         let params = quality.params(boxes.len());
         let aabbs: Vec<obvhs::aabb::Aabb> = boxes
             .iter()
-            .map(|b| obvhs::aabb::Aabb { min: Vec3A::from(b.min), max: Vec3A::from(b.max) })
+            .map(|b| obvhs::aabb::Aabb {
+                min: Vec3A::from(b.min),
+                max: Vec3A::from(b.max),
+            })
             .collect();
         let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
             params.ploc_search_distance,
@@ -94,7 +108,11 @@ impl Bvh8 {
             depth: 0,
         };
         let counts = subtree_counts(&bvh2);
-        let mut collapse = Collapse { bvh2: &bvh2, counts: &counts, out: &mut out };
+        let mut collapse = Collapse {
+            bvh2: &bvh2,
+            counts: &counts,
+            out: &mut out,
+        };
         collapse.root();
         out
     }
@@ -188,7 +206,10 @@ impl Collapse<'_> {
                 .enumerate()
                 .filter(|(_, &c)| !self.is_leaf_candidate(c))
                 .max_by(|a, b| {
-                    self.bvh2.nodes[*a.1].aabb.half_area().total_cmp(&self.bvh2.nodes[*b.1].aabb.half_area())
+                    self.bvh2.nodes[*a.1]
+                        .aabb
+                        .half_area()
+                        .total_cmp(&self.bvh2.nodes[*b.1].aabb.half_area())
                 })
                 .map(|(i, _)| i);
             let Some(i) = best else { break };
@@ -206,7 +227,9 @@ impl Collapse<'_> {
             let node = &self.bvh2.nodes[i];
             if node.prim_count > 0 {
                 let s = node.first_index as usize;
-                self.out.prim_ids.extend_from_slice(&self.bvh2.primitive_indices[s..s + node.prim_count as usize]);
+                self.out.prim_ids.extend_from_slice(
+                    &self.bvh2.primitive_indices[s..s + node.prim_count as usize],
+                );
             } else {
                 stack.push(node.first_index as usize + 1);
                 stack.push(node.first_index as usize);

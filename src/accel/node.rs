@@ -41,7 +41,10 @@ pub enum ChildRef {
     Empty,
     Node(u32),
     /// A range of `prim_ids`.
-    Leaf { start: u32, count: u32 },
+    Leaf {
+        start: u32,
+        count: u32,
+    },
 }
 
 pub fn encode_leaf(start: u32, count: u32) -> u32 {
@@ -54,7 +57,10 @@ pub fn decode(c: u32) -> ChildRef {
     if c == EMPTY {
         ChildRef::Empty
     } else if c & LEAF_BIT != 0 {
-        ChildRef::Leaf { start: c & START_MASK, count: ((c >> COUNT_SHIFT) & COUNT_MASK) + 1 }
+        ChildRef::Leaf {
+            start: c & START_MASK,
+            count: ((c >> COUNT_SHIFT) & COUNT_MASK) + 1,
+        }
     } else {
         ChildRef::Node(c)
     }

@@ -25,7 +25,11 @@ struct Stack {
 impl Stack {
     #[inline]
     fn new() -> Self {
-        Self { inline: [(0, 0.0); 64], len: 0, spill: Vec::new() }
+        Self {
+            inline: [(0, 0.0); 64],
+            len: 0,
+            spill: Vec::new(),
+        }
     }
 
     #[inline]
@@ -78,8 +82,16 @@ impl RayBoxes {
             far[axis] = 2 * axis + 1 - neg;
         }
         Self {
-            origin: [f32x8::splat(ray.origin.x), f32x8::splat(ray.origin.y), f32x8::splat(ray.origin.z)],
-            inv: [f32x8::splat(inv.x), f32x8::splat(inv.y), f32x8::splat(inv.z)],
+            origin: [
+                f32x8::splat(ray.origin.x),
+                f32x8::splat(ray.origin.y),
+                f32x8::splat(ray.origin.z),
+            ],
+            inv: [
+                f32x8::splat(inv.x),
+                f32x8::splat(inv.y),
+                f32x8::splat(inv.z),
+            ],
             near,
             far,
         }
@@ -88,9 +100,15 @@ impl RayBoxes {
     /// Entry distances and the mask of children the ray may enter.
     #[inline(always)]
     fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
-        let slab = |axis: usize, side: usize| (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis];
-        let tn = slab(0, self.near[0]).max(slab(1, self.near[1])).max(slab(2, self.near[2]).max(f32x8::splat(tmin)));
-        let tf = slab(0, self.far[0]).min(slab(1, self.far[1])).min(slab(2, self.far[2]).min(f32x8::splat(tmax)));
+        let slab = |axis: usize, side: usize| {
+            (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis]
+        };
+        let tn = slab(0, self.near[0])
+            .max(slab(1, self.near[1]))
+            .max(slab(2, self.near[2]).max(f32x8::splat(tmin)));
+        let tf = slab(0, self.far[0])
+            .min(slab(1, self.far[1]))
+            .min(slab(2, self.far[2]).min(f32x8::splat(tmax)));
         let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
         (tn, tn.simd_le(tf).to_bitmask())
     }
@@ -208,26 +226,49 @@ mod tests {
         };
         for _ in 0..500 {
             let c = Vec3::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
-            spheres.push(Sphere { center: c, radius: 0.05 + rnd() * 0.5 });
+            spheres.push(Sphere {
+                center: c,
+                radius: 0.05 + rnd() * 0.5,
+            });
         }
         let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
-        for quality in [BuildQuality::Fastest, BuildQuality::Fast, BuildQuality::Medium, BuildQuality::High] {
+        for quality in [
+            BuildQuality::Fastest,
+            BuildQuality::Fast,
+            BuildQuality::Medium,
+            BuildQuality::High,
+        ] {
             let bvh = Bvh8::build(&boxes, quality);
             let mut seen = bvh.prim_ids.clone();
             seen.sort();
-            assert_eq!(seen, (0..500).collect::<Vec<_>>(), "each primitive in exactly one leaf");
+            assert_eq!(
+                seen,
+                (0..500).collect::<Vec<_>>(),
+                "each primitive in exactly one leaf"
+            );
             for _ in 0..2000 {
                 let o = Vec3::new(rnd(), rnd(), rnd()) * 30.0 - 15.0;
                 let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
                 let mut ray = Ray::new(o, d);
                 ray.tmax = 5.0 + rnd() * 40.0;
                 let hit = |id: u32, r: &Ray| {
-                    spheres[id as usize].intersect(r).map(|t| PrimHit { t, prim: id, u: 0.0, v: 0.0, part: 0 })
+                    spheres[id as usize].intersect(r).map(|t| PrimHit {
+                        t,
+                        prim: id,
+                        u: 0.0,
+                        v: 0.0,
+                        part: 0,
+                    })
                 };
-                let brute = (0..500u32).filter_map(|i| hit(i, &ray)).min_by(|a, b| a.t.total_cmp(&b.t));
+                let brute = (0..500u32)
+                    .filter_map(|i| hit(i, &ray))
+                    .min_by(|a, b| a.t.total_cmp(&b.t));
                 let got = bvh.closest(&ray, hit);
                 assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
-                assert_eq!(bvh.any_hit(&ray, |id, r| hit(id, r).is_some()), brute.is_some());
+                assert_eq!(
+                    bvh.any_hit(&ray, |id, r| hit(id, r).is_some()),
+                    brute.is_some()
+                );
             }
         }
     }
@@ -238,7 +279,15 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
         // A ray along +x exactly in the box's bottom face plane.
         let ray = Ray::new(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
-        let hit = bvh.closest(&ray, |id, _| Some(PrimHit { t: 1.0, prim: id, u: 0.0, v: 0.0, part: 0 }));
+        let hit = bvh.closest(&ray, |id, _| {
+            Some(PrimHit {
+                t: 1.0,
+                prim: id,
+                u: 0.0,
+                v: 0.0,
+                part: 0,
+            })
+        });
         assert!(hit.is_some());
         let empty = Bvh8::build(&[], BuildQuality::Auto);
         assert!(empty.closest(&ray, |_, _| None).is_none());

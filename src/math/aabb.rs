@@ -10,7 +10,10 @@ pub struct Aabb {
 
 impl Aabb {
     /// The empty box: the identity of `union`.
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
 
     pub fn new(min: Vec3, max: Vec3) -> Self {
         Self { min, max }
@@ -21,15 +24,24 @@ impl Aabb {
     }
 
     pub fn grow(self, p: Vec3) -> Self {
-        Self { min: self.min.min(p), max: self.max.max(p) }
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
     }
 
     pub fn union(self, o: Aabb) -> Self {
-        Self { min: self.min.min(o.min), max: self.max.max(o.max) }
+        Self {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
     }
 
     pub fn intersection(self, o: Aabb) -> Self {
-        Self { min: self.min.max(o.min), max: self.max.min(o.max) }
+        Self {
+            min: self.min.max(o.min),
+            max: self.max.min(o.max),
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -68,7 +80,13 @@ impl Aabb {
     }
 
     /// Slab test. Returns the entry/exit interval clipped to `[tmin, tmax]`.
-    pub fn intersect(&self, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> Option<(f32, f32)> {
+    pub fn intersect(
+        &self,
+        origin: Vec3,
+        inv_dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<(f32, f32)> {
         let t0 = (self.min - origin) * inv_dir;
         let t1 = (self.max - origin) * inv_dir;
         let near = t0.min(t1).max_element().max(tmin);

@@ -38,7 +38,13 @@ mod tests {
 
     #[test]
     fn frames_are_orthonormal_even_near_the_poles() {
-        for z in [Vec3::Z, -Vec3::Z, Vec3::X, Vec3::new(1e-8, 0.0, -1.0).normalize(), Vec3::new(0.3, -0.4, 0.5).normalize()] {
+        for z in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(1e-8, 0.0, -1.0).normalize(),
+            Vec3::new(0.3, -0.4, 0.5).normalize(),
+        ] {
             let f = Frame::from_z(z);
             for (a, b) in [(f.x, f.y), (f.y, f.z), (f.x, f.z)] {
                 assert!(a.dot(b).abs() < 1e-6);

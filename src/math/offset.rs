@@ -92,7 +92,10 @@ mod tests {
                 let q = spawn_origin(p, err, n, dir);
                 let moved = (q - p).dot(dir.dot(n).signum() * n);
                 assert!(moved >= n.abs().dot(err), "scale {scale}");
-                assert!((q - p).length() < 1e-5 * scale, "offset too large at scale {scale}");
+                assert!(
+                    (q - p).length() < 1e-5 * scale,
+                    "offset too large at scale {scale}"
+                );
             }
         }
     }

@@ -14,11 +14,21 @@ pub struct Ray {
 
 impl Ray {
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
-        Self { origin, direction, tmin: 0.0, tmax: f32::INFINITY }
+        Self {
+            origin,
+            direction,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        }
     }
 
     pub fn segment(origin: Vec3, direction: Vec3, tmax: f32) -> Self {
-        Self { origin, direction, tmin: 0.0, tmax }
+        Self {
+            origin,
+            direction,
+            tmin: 0.0,
+            tmax,
+        }
     }
 
     #[inline]

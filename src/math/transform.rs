@@ -26,7 +26,11 @@ impl Transform {
         }
         let to_object = to_world.inverse();
         let normal_to_world = Mat3::from(to_object.matrix3).transpose();
-        Some(Self { to_world, to_object, normal_to_world })
+        Some(Self {
+            to_world,
+            to_object,
+            normal_to_world,
+        })
     }
 
     pub fn is_identity(&self) -> bool {

@@ -25,7 +25,9 @@ impl std::str::FromStr for SamplerKind {
         match s {
             "random" => Ok(Self::Random),
             "stratified" => Ok(Self::Stratified),
-            _ => Err(format!("unknown sampler '{s}' (expected random or stratified)")),
+            _ => Err(format!(
+                "unknown sampler '{s}' (expected random or stratified)"
+            )),
         }
     }
 }

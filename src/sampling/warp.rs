@@ -39,7 +39,11 @@ pub fn uniform_hemisphere(u: Vec2) -> Vec3 {
 /// Reflectance Model for Physically Based Rendering").
 pub fn phong_lobe(u: Vec2, exponent: f32) -> Vec3 {
     // powf(u, 1/(n+1)) underflows to 0 for tiny u and huge n; ln/exp form keeps it accurate.
-    let cos_a = if u.x > 0.0 { (u.x.ln() / (exponent + 1.0)).exp() } else { 0.0 };
+    let cos_a = if u.x > 0.0 {
+        (u.x.ln() / (exponent + 1.0)).exp()
+    } else {
+        0.0
+    };
     let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
     let phi = 2.0 * PI * u.y;
     Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a)
@@ -101,7 +105,10 @@ mod tests {
             }
             // E[cosα] = (n+1)/(n+2) for the pdf ∝ cosⁿα on the hemisphere.
             let expected = (n + 1.0) / (n + 2.0);
-            assert!((mean_cos - expected).abs() < 0.02, "n {n}: {mean_cos} vs {expected}");
+            assert!(
+                (mean_cos - expected).abs() < 0.02,
+                "n {n}: {mean_cos} vs {expected}"
+            );
         }
     }
 }

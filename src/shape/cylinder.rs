@@ -87,7 +87,11 @@ impl Cylinder {
         let n = self.all_hits(ray, &mut hits);
         for &(t, part) in &hits[..n] {
             let normal = self.normal(ray.at(t), part);
-            out.push(Crossing { t, entering: normal.dot(ray.direction) < 0.0, part });
+            out.push(Crossing {
+                t,
+                entering: normal.dot(ray.direction) < 0.0,
+                part,
+            });
         }
     }
 
@@ -115,7 +119,11 @@ impl Cylinder {
             TOP => Vec3::new(p.x, p.y, self.height),
             _ => Vec3::new(n.x * self.radius, n.y * self.radius, p.z),
         };
-        (q, gamma(5) * q.abs() + gamma(3) * Vec3::splat(self.radius), n)
+        (
+            q,
+            gamma(5) * q.abs() + gamma(3) * Vec3::splat(self.radius),
+            n,
+        )
     }
 
     pub fn contains(&self, p: Vec3) -> bool {
@@ -134,7 +142,11 @@ impl Cylinder {
 mod tests {
     use super::*;
 
-    const C: Cylinder = Cylinder { radius: 1.0, height: 2.0, caps: true };
+    const C: Cylinder = Cylinder {
+        radius: 1.0,
+        height: 2.0,
+        caps: true,
+    };
 
     #[test]
     fn side_caps_and_inside_rays() {

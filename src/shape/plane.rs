@@ -43,10 +43,19 @@ mod tests {
 
     #[test]
     fn parallel_rays_miss_and_others_hit_at_the_analytic_t() {
-        let plane = Plane { point: Vec3::new(0.0, -1.0, 0.0), normal: Vec3::Y, material: 0 };
+        let plane = Plane {
+            point: Vec3::new(0.0, -1.0, 0.0),
+            normal: Vec3::Y,
+            material: 0,
+        };
         assert!(plane.intersect(&Ray::new(Vec3::ZERO, Vec3::X)).is_none());
-        let t = plane.intersect(&Ray::new(Vec3::ZERO, Vec3::new(1.0, -1.0, 0.0))).unwrap();
+        let t = plane
+            .intersect(&Ray::new(Vec3::ZERO, Vec3::new(1.0, -1.0, 0.0)))
+            .unwrap();
         assert!((t - 1.0).abs() < 1e-6);
-        assert!(plane.intersect(&Ray::new(Vec3::ZERO, Vec3::Y)).is_none(), "behind the origin");
+        assert!(
+            plane.intersect(&Ray::new(Vec3::ZERO, Vec3::Y)).is_none(),
+            "behind the origin"
+        );
     }
 }

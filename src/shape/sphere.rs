@@ -62,8 +62,16 @@ impl Sphere {
     /// Entry and exit along the whole line, for CSG.
     pub fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
         if let Some((t0, t1)) = self.roots(ray) {
-            out.push(Crossing { t: t0, entering: true, part: 0 });
-            out.push(Crossing { t: t1, entering: false, part: 0 });
+            out.push(Crossing {
+                t: t0,
+                entering: true,
+                part: 0,
+            });
+            out.push(Crossing {
+                t: t1,
+                entering: false,
+                part: 0,
+            });
         }
     }
 
@@ -84,7 +92,10 @@ impl Sphere {
     }
 
     pub fn bounds(&self) -> crate::math::Aabb {
-        crate::math::Aabb::new(self.center - Vec3::splat(self.radius), self.center + Vec3::splat(self.radius))
+        crate::math::Aabb::new(
+            self.center - Vec3::splat(self.radius),
+            self.center + Vec3::splat(self.radius),
+        )
     }
 }
 
@@ -92,14 +103,20 @@ impl Sphere {
 mod tests {
     use super::*;
 
-    const S: Sphere = Sphere { center: Vec3::new(1.0, 2.0, 3.0), radius: 2.0 };
+    const S: Sphere = Sphere {
+        center: Vec3::new(1.0, 2.0, 3.0),
+        radius: 2.0,
+    };
 
     #[test]
     fn hits_from_outside_and_inside_with_analytic_t() {
         let ray = Ray::new(Vec3::new(1.0, 2.0, 10.0), -Vec3::Z);
         assert!((S.intersect(&ray).unwrap() - 5.0).abs() < 1e-5);
         let inside = Ray::new(S.center, Vec3::X * 0.5);
-        assert!((S.intersect(&inside).unwrap() - 4.0).abs() < 1e-5, "unnormalised direction keeps t parametric");
+        assert!(
+            (S.intersect(&inside).unwrap() - 4.0).abs() < 1e-5,
+            "unnormalised direction keeps t parametric"
+        );
     }
 
     #[test]
@@ -113,7 +130,10 @@ mod tests {
 
     #[test]
     fn far_away_rays_stay_accurate() {
-        let far = Sphere { center: Vec3::ZERO, radius: 1.0 };
+        let far = Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
         let ray = Ray::new(Vec3::new(0.0, 0.5, 1e5), -Vec3::Z);
         let t = far.intersect(&ray).unwrap();
         let expected = 1e5 - (1.0f32 - 0.25).sqrt();

@@ -33,7 +33,14 @@ impl ShearedRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / d[kz];
-        Self { kx, ky, kz, sx: d[kx] * sz, sy: d[ky] * sz, sz }
+        Self {
+            kx,
+            ky,
+            kz,
+            sx: d[kx] * sz,
+            sy: d[ky] * sz,
+            sz,
+        }
     }
 }
 
@@ -58,7 +65,9 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
     let mut e2 = bx * ay - by * ax;
     // Fall back to double precision on exact zeros (on an edge).
     if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-        let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
+        let (ax, ay, bx, by, cx, cy) = (
+            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+        );
         e0 = (cx * by - cy * bx) as f32;
         e1 = (ax * cy - ay * cx) as f32;
         e2 = (bx * ay - by * ax) as f32;
@@ -86,7 +95,13 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
 /// Intersect and package as a [`PrimHit`].
 #[inline]
 pub fn intersect_prim(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3], prim: u32) -> Option<PrimHit> {
-    intersect(ray, s, v).map(|(t, u, v)| PrimHit { t, prim, u, v, part: 0 })
+    intersect(ray, s, v).map(|(t, u, v)| PrimHit {
+        t,
+        prim,
+        u,
+        v,
+        part: 0,
+    })
 }
 
 /// Unnormalised geometric normal along the winding (v0, v1, v2).
@@ -99,12 +114,19 @@ mod tests {
     use super::*;
 
     fn tri() -> [Vec3; 3] {
-        [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]
+        [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ]
     }
 
     #[test]
     fn hits_with_analytic_t_and_barycentrics_from_both_sides() {
-        for (o, d) in [(Vec3::new(0.25, 0.5, 2.0), -Vec3::Z), (Vec3::new(0.25, 0.5, -3.0), Vec3::Z * 2.0)] {
+        for (o, d) in [
+            (Vec3::new(0.25, 0.5, 2.0), -Vec3::Z),
+            (Vec3::new(0.25, 0.5, -3.0), Vec3::Z * 2.0),
+        ] {
             let ray = Ray::new(o, d);
             let (t, u, v) = intersect(&ray, &ShearedRay::new(&ray), &tri()).unwrap();
             let expected_t = o.z.abs() / d.length();
@@ -128,8 +150,16 @@ mod tests {
     #[test]
     fn a_ray_through_a_shared_edge_or_vertex_hits_a_triangle() {
         // A unit square split along its diagonal, plus a fan around a vertex.
-        let a = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0)];
-        let b = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let a = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+        ];
+        let b = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
         for i in 0..=1000 {
             let x = i as f32 / 1000.0 * 0.999 + 0.0005;
             let dir = Vec3::new(0.1, -0.2, -1.0) * (1.0 + i as f32 * 1e-3);
@@ -137,7 +167,10 @@ mod tests {
             let target = Vec3::new(x, x, 0.0);
             let ray = Ray::new(target - 3.0 * dir, dir);
             let s = ShearedRay::new(&ray);
-            assert!(intersect(&ray, &s, &a).is_some() || intersect(&ray, &s, &b).is_some(), "leak at {x}");
+            assert!(
+                intersect(&ray, &s, &a).is_some() || intersect(&ray, &s, &b).is_some(),
+                "leak at {x}"
+            );
         }
     }
 

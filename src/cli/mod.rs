@@ -1,0 +1,44 @@
+//! Subcommands. Each file holds one command's arguments and its run function.
+
+pub mod render;
+
+use clap::{Parser, Subcommand};
+use strata::error::InputError;
+
+/// strata: a Monte Carlo distribution ray tracer.
+///
+/// With no command, renders scenes/seed.toml to render.png.
+#[derive(Debug, Parser)]
+#[command(name = "strata", version, about, long_about = None, args_conflicts_with_subcommands = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub render: render::RenderArgs,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
+    Render(render::RenderArgs),
+}
+
+pub enum CliError {
+    /// Bad input: exit code 2.
+    Input(InputError),
+    /// A bug or an environment failure: exit code 1.
+    Internal(String),
+}
+
+impl From<InputError> for CliError {
+    fn from(e: InputError) -> Self {
+        CliError::Input(e)
+    }
+}
+
+pub fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        Some(Command::Render(args)) => render::run(args),
+        None => render::run(cli.render),
+    }
+}

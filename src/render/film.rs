@@ -1,0 +1,205 @@
+//! Per-pixel sums in fixed point.
+//!
+//! Each sample's radiance is rounded to a multiple of 2⁻³² and added as an
+//! integer. Integer addition is associative, so the sum — and the image —
+//! is bit-identical however the samples are split over threads, passes,
+//! processes or resumed checkpoints, and in whatever order parts are merged.
+//! (Floating-point sums would depend on the order.) The rounding, 2.3e-10
+//! absolute, is far below what any output format stores. i128 leaves room
+//! for 2⁴⁸ per sample (values above are clamped and counted) times 2⁴⁷ samples.
+
+use glam::Vec3;
+
+pub const FIXED_SCALE: f64 = 4_294_967_296.0; // 2^32
+/// Largest radiance one sample may carry before it is clamped.
+pub const MAX_SAMPLE_VALUE: f64 = 281_474_976_710_656.0; // 2^48
+
+/// Where a sample went wrong, for the report and for `--debug-sample`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct BadSample {
+    pub x: u32,
+    pub y: u32,
+    pub sample: u32,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub sums: Vec<[i128; 3]>,
+    pub counts: Vec<u32>,
+    /// Samples dropped for NaN, infinity or negative values.
+    pub invalid: u64,
+    pub first_invalid: Option<BadSample>,
+    /// Samples clamped at [`MAX_SAMPLE_VALUE`].
+    pub clamped: u64,
+}
+
+/// One pixel's accumulator, owned by one worker at a time.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PixelSum {
+    pub sum: [i128; 3],
+    pub count: u32,
+    pub invalid: u32,
+    pub first_invalid: Option<u32>,
+    pub clamped: u32,
+}
+
+impl PixelSum {
+    #[inline]
+    pub fn add(&mut self, value: Vec3, sample: u32) {
+        if !value.is_finite() || value.min_element() < 0.0 {
+            self.invalid += 1;
+            self.first_invalid.get_or_insert(sample);
+            return;
+        }
+        for c in 0..3 {
+            let mut v = value[c] as f64;
+            if v > MAX_SAMPLE_VALUE {
+                v = MAX_SAMPLE_VALUE;
+                self.clamped += 1;
+            }
+            self.sum[c] += (v * FIXED_SCALE).round() as i128;
+        }
+        self.count += 1;
+    }
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            sums: vec![[0; 3]; n],
+            counts: vec![0; n],
+            invalid: 0,
+            first_invalid: None,
+            clamped: 0,
+        }
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.sums.len()
+    }
+
+    /// Fold one pixel's accumulator in.
+    pub fn add_pixel(&mut self, index: usize, p: &PixelSum) {
+        for c in 0..3 {
+            self.sums[index][c] += p.sum[c];
+        }
+        self.counts[index] += p.count;
+        self.clamped += p.clamped as u64;
+        if p.invalid > 0 {
+            self.invalid += p.invalid as u64;
+            let bad = BadSample {
+                x: index as u32 % self.width,
+                y: index as u32 / self.width,
+                sample: p.first_invalid.unwrap_or(0),
+            };
+            // Keep the first in (pixel, sample) order, so the report is deterministic.
+            if self
+                .first_invalid
+                .is_none_or(|f| (f.y, f.x, f.sample) > (bad.y, bad.x, bad.sample))
+            {
+                self.first_invalid = Some(bad);
+            }
+        }
+    }
+
+    /// Add another film of the same size (another slice of the same render).
+    pub fn merge(&mut self, other: &Film) {
+        assert_eq!((self.width, self.height), (other.width, other.height));
+        for i in 0..self.sums.len() {
+            for c in 0..3 {
+                self.sums[i][c] += other.sums[i][c];
+            }
+            self.counts[i] += other.counts[i];
+        }
+        self.invalid += other.invalid;
+        self.clamped += other.clamped;
+        if let Some(b) = other.first_invalid {
+            if self
+                .first_invalid
+                .is_none_or(|f| (f.y, f.x, f.sample) > (b.y, b.x, b.sample))
+            {
+                self.first_invalid = Some(b);
+            }
+        }
+    }
+
+    /// Mean radiance of pixel `index` (black if it has no valid sample).
+    pub fn mean(&self, index: usize) -> Vec3 {
+        let n = self.counts[index];
+        if n == 0 {
+            return Vec3::ZERO;
+        }
+        let s = &self.sums[index];
+        let k = 1.0 / (FIXED_SCALE * n as f64);
+        Vec3::new(
+            (s[0] as f64 * k) as f32,
+            (s[1] as f64 * k) as f32,
+            (s[2] as f64 * k) as f32,
+        )
+    }
+
+    /// Linear RGB, row-major from the top-left pixel.
+    pub fn to_rgb(&self) -> Vec<Vec3> {
+        (0..self.pixel_count()).map(|i| self.mean(i)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sums_do_not_depend_on_order_or_split() {
+        let values: Vec<Vec3> = (0..1000)
+            .map(|i| Vec3::splat(((i * 7919) % 1000) as f32 * 0.001 + 1e-7))
+            .collect();
+        let mut forward = PixelSum::default();
+        values
+            .iter()
+            .enumerate()
+            .for_each(|(i, v)| forward.add(*v, i as u32));
+        let mut a = PixelSum::default();
+        let mut b = PixelSum::default();
+        for (i, v) in values.iter().enumerate().rev() {
+            if i % 3 == 0 {
+                a.add(*v, i as u32)
+            } else {
+                b.add(*v, i as u32)
+            }
+        }
+        let mut f1 = Film::new(1, 1);
+        f1.add_pixel(0, &forward);
+        let mut f2 = Film::new(1, 1);
+        f2.add_pixel(0, &b);
+        f2.add_pixel(0, &a);
+        assert_eq!(f1, f2);
+        let exact: f64 = values.iter().map(|v| v.x as f64).sum::<f64>() / 1000.0;
+        assert!((f1.mean(0).x as f64 - exact).abs() < 1e-6);
+    }
+
+    #[test]
+    fn invalid_samples_are_dropped_and_located() {
+        let mut p = PixelSum::default();
+        p.add(Vec3::ONE, 0);
+        p.add(Vec3::new(f32::NAN, 0.0, 0.0), 5);
+        p.add(Vec3::splat(f32::INFINITY), 6);
+        p.add(Vec3::splat(-1.0), 7);
+        let mut film = Film::new(4, 4);
+        film.add_pixel(6, &p);
+        assert_eq!(film.invalid, 3);
+        assert_eq!(
+            film.first_invalid,
+            Some(BadSample {
+                x: 2,
+                y: 1,
+                sample: 5
+            })
+        );
+        assert_eq!(film.mean(6), Vec3::ONE);
+    }
+}

@@ -1,0 +1,8 @@
+//! Scheduling samples onto threads, accumulating them, and reporting progress.
+
+pub mod film;
+pub mod progress;
+pub mod schedule;
+
+pub use film::Film;
+pub use schedule::{render, RenderOptions, RenderOutcome, Schedule, SliceSpec};

@@ -1,0 +1,288 @@
+//! Work is (pixel batch × sample slice): a pass renders one slice of every
+//! pixel's samples, and rayon steals pixel batches within the pass. Because
+//! a slice is a range of indices of each pixel's one stratified set
+//! (`sampling::cmj`), splitting work never weakens stratification, and
+//! because sums are fixed point (`render::film`), the image does not depend
+//! on the thread count or on how slices are split across processes.
+//!
+//! `Schedule::Regions` is the classic baseline for `strata scaling`: the
+//! image cut into one band of rows per thread, no stealing.
+
+use super::film::{Film, PixelSum};
+use super::progress;
+use crate::sampling::{Dim, PixelSampler};
+use crate::scene::Scene;
+use crate::shade::integrator::{Integrator, RayCounts, SampleContext};
+use glam::Vec2;
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Pixels per work item: small enough that 64 threads stay busy on small images.
+pub const BATCH: usize = 64;
+/// Passes per render when the sample count allows (each is a progress tick and a checkpoint).
+pub const DEFAULT_PASSES: u32 = 16;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Schedule {
+    #[default]
+    Slices,
+    Regions,
+}
+
+impl std::str::FromStr for Schedule {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "slices" => Ok(Self::Slices),
+            "regions" => Ok(Self::Regions),
+            _ => Err(format!(
+                "unknown schedule '{s}' (expected slices or regions)"
+            )),
+        }
+    }
+}
+
+/// Slice `index` of `count` (0-based): this process renders only its share of every pixel's samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct SliceSpec {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl SliceSpec {
+    pub const WHOLE: SliceSpec = SliceSpec { index: 0, count: 1 };
+
+    /// The sample indices of this slice out of `spp`.
+    pub fn samples(&self, spp: u32) -> Range<u32> {
+        let lo = (self.index as u64 * spp as u64 / self.count as u64) as u32;
+        let hi = ((self.index as u64 + 1) * spp as u64 / self.count as u64) as u32;
+        lo..hi
+    }
+}
+
+impl std::str::FromStr for SliceSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (k, p) = s
+            .split_once('/')
+            .ok_or_else(|| format!("slice '{s}' is not of the form k/P"))?;
+        let index: u32 = k
+            .trim()
+            .parse()
+            .map_err(|_| format!("slice index '{k}' is not a number"))?;
+        let count: u32 = p
+            .trim()
+            .parse()
+            .map_err(|_| format!("slice count '{p}' is not a number"))?;
+        if count == 0 || index >= count {
+            return Err(format!("slice {index}/{count}: need 0 ≤ k < P"));
+        }
+        Ok(Self { index, count })
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct RenderOptions {
+    /// Worker threads; 0 = all cores.
+    pub threads: usize,
+    pub slice: SliceSpec,
+    pub schedule: Schedule,
+    pub quiet: bool,
+    /// Passes to split this process's samples into (capped by the sample count).
+    pub passes: u32,
+    /// Sample indices already rendered (from a checkpoint), skipped.
+    pub resume_from: Option<u32>,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            threads: 0,
+            slice: SliceSpec::WHOLE,
+            schedule: Schedule::Slices,
+            quiet: true,
+            passes: DEFAULT_PASSES,
+            resume_from: None,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct RenderOutcome {
+    pub film: Film,
+    pub counts: RayCounts,
+    pub seconds: f64,
+    pub threads: usize,
+    pub samples: Range<u32>,
+}
+
+/// The pass boundaries that split `range` into at most `passes` parts.
+pub fn pass_ranges(range: Range<u32>, passes: u32) -> Vec<Range<u32>> {
+    let n = range.end - range.start;
+    let passes = passes.clamp(1, n.max(1));
+    (0..passes)
+        .map(|i| {
+            let lo = range.start + (i as u64 * n as u64 / passes as u64) as u32;
+            let hi = range.start + ((i as u64 + 1) * n as u64 / passes as u64) as u32;
+            lo..hi
+        })
+        .filter(|r| !r.is_empty())
+        .collect()
+}
+
+/// Render this process's slice. `on_pass(film, samples_done_end)` runs after
+/// each pass (for checkpoints); `film` starts from `initial` when resuming.
+pub fn render(
+    scene: &Scene,
+    opts: &RenderOptions,
+    initial: Option<Film>,
+    mut on_pass: impl FnMut(&Film, u32),
+) -> RenderOutcome {
+    let s = &scene.settings;
+    let threads = if opts.threads == 0 {
+        rayon::current_num_threads().max(1)
+    } else {
+        opts.threads
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
+    let mut film = initial.unwrap_or_else(|| Film::new(s.width, s.height));
+    let full = opts.slice.samples(s.spp);
+    let start_sample = opts
+        .resume_from
+        .unwrap_or(full.start)
+        .clamp(full.start, full.end);
+    let passes = pass_ranges(start_sample..full.end, opts.passes);
+    let n = film.pixel_count();
+    let batches = n.div_ceil(BATCH) as u64;
+    let bar = progress::bar(batches * passes.len() as u64, opts.quiet, "render");
+    let rays = [
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+        AtomicU64::new(0),
+    ];
+    let mut scratch = vec![PixelSum::default(); n];
+    let start = Instant::now();
+    let chunk = match opts.schedule {
+        Schedule::Slices => BATCH,
+        Schedule::Regions => n.div_ceil(threads),
+    };
+    for (pass_index, pass) in passes.iter().enumerate() {
+        pool.install(|| {
+            scratch
+                .par_chunks_mut(chunk)
+                .enumerate()
+                .for_each(|(b, pixels)| {
+                    let mut integrator = Integrator::new(scene);
+                    for (j, acc) in pixels.iter_mut().enumerate() {
+                        *acc = PixelSum::default();
+                        let index = b * chunk + j;
+                        render_pixel(&mut integrator, scene, index, pass.clone(), acc);
+                        if opts.schedule == Schedule::Regions && (j + 1) % BATCH == 0 {
+                            bar.inc(1);
+                        }
+                    }
+                    let c = integrator.counts;
+                    for (a, v) in rays
+                        .iter()
+                        .zip([c.camera, c.shadow, c.reflection, c.refraction])
+                    {
+                        a.fetch_add(v, Ordering::Relaxed);
+                    }
+                    if opts.schedule == Schedule::Slices {
+                        bar.inc(1);
+                    }
+                });
+        });
+        for (i, acc) in scratch.iter().enumerate() {
+            film.add_pixel(i, acc);
+        }
+        let elapsed = start.elapsed().as_secs_f64();
+        let total: u64 = rays.iter().map(|a| a.load(Ordering::Relaxed)).sum();
+        bar.set_message(format!(
+            "pass {}/{} {:.1} Mrays/s",
+            pass_index + 1,
+            passes.len(),
+            total as f64 / elapsed / 1e6
+        ));
+        on_pass(&film, pass.end);
+    }
+    bar.finish_and_clear();
+    let load = |i: usize| rays[i].load(Ordering::Relaxed);
+    RenderOutcome {
+        film,
+        counts: RayCounts {
+            camera: load(0),
+            shadow: load(1),
+            reflection: load(2),
+            refraction: load(3),
+        },
+        seconds: start.elapsed().as_secs_f64(),
+        threads,
+        samples: full,
+    }
+}
+
+/// All samples of `samples` for one pixel.
+#[inline]
+pub fn render_pixel(
+    integrator: &mut Integrator,
+    scene: &Scene,
+    index: usize,
+    samples: Range<u32>,
+    acc: &mut PixelSum,
+) {
+    let s = &scene.settings;
+    let x = (index % s.width as usize) as u32;
+    let y = (index / s.width as usize) as u32;
+    let sampler = PixelSampler::new(s.sampler, s.seed, index as u32);
+    for sample in samples {
+        let ctx = SampleContext {
+            sampler,
+            sample,
+            spp: s.spp,
+        };
+        let jitter = sampler.get_2d(Dim::PIXEL, sample, s.spp);
+        let film = Vec2::new(x as f32, y as f32) + jitter;
+        acc.add(integrator.camera_sample(&ctx, film), sample);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slices_partition_the_samples() {
+        for spp in [1u32, 2, 7, 16, 1000] {
+            for p in 1..=6u32 {
+                let mut covered = Vec::new();
+                for k in 0..p {
+                    covered.extend(SliceSpec { index: k, count: p }.samples(spp));
+                }
+                assert_eq!(covered, (0..spp).collect::<Vec<_>>());
+            }
+        }
+        assert!("3/3".parse::<SliceSpec>().is_err());
+        assert!("a/3".parse::<SliceSpec>().is_err());
+        assert_eq!(
+            "1/4".parse::<SliceSpec>(),
+            Ok(SliceSpec { index: 1, count: 4 })
+        );
+    }
+
+    #[test]
+    fn passes_cover_the_range_in_order() {
+        let r = pass_ranges(3..40, 16);
+        assert_eq!(r.first().unwrap().start, 3);
+        assert_eq!(r.last().unwrap().end, 40);
+        assert!(r.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!(pass_ranges(0..1, 16), vec![0..1]);
+    }
+}

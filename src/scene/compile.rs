@@ -1,0 +1,657 @@
+//! Description → [`Scene`]: flatten the object tree into plain arrays,
+//! validate every number on the way, and build the BVH.
+//!
+//! Meshes are baked into world space. Analytic shapes keep their object
+//! space unless the transform is a similarity (then a sphere is baked into
+//! a new centre and radius, exactly). Infinite planes stay out of the BVH.
+
+use super::asset::{LoadedAsset, LoadedCamera};
+use super::description::*;
+use super::loaders::load_mesh_file;
+use super::world::{AnalyticPrim, MeshRange, RenderSettings, Scene, Shape, NO_TRANSFORM};
+use crate::accel::{BuildQuality, Bvh8};
+use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
+use crate::error::{InputError, InputResult};
+use crate::math::{Aabb, Frame, Transform};
+use crate::sampling::SamplerKind;
+use crate::shade::light::Light;
+use crate::shade::material::Material;
+use crate::shape::cylinder::Cylinder;
+use crate::shape::plane::Plane;
+use crate::shape::sphere::Sphere;
+use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// Command-line values that override the scene file's `[render]` table.
+#[derive(Debug, Clone, Default)]
+pub struct RenderOverrides {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub shadow_samples: Option<u32>,
+    pub reflection_samples: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub sampler: Option<SamplerKind>,
+    pub seed: Option<u32>,
+    pub bvh_quality: BuildQuality,
+}
+
+/// Wall time of each loading phase.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LoadTimings {
+    pub load: Duration,
+    pub bvh_build: Duration,
+}
+
+/// Read, validate and compile a scene file.
+pub fn load_scene(path: &Path, overrides: &RenderOverrides) -> InputResult<(Scene, LoadTimings)> {
+    let start = Instant::now();
+    let desc = super::parse::read_description(path)?;
+    compile(&desc, path, overrides, start)
+}
+
+/// Compile a parsed description; `path` is the scene file (meshes are relative to it).
+pub fn compile(
+    desc: &SceneDescription,
+    path: &Path,
+    overrides: &RenderOverrides,
+    start: Instant,
+) -> InputResult<(Scene, LoadTimings)> {
+    let mut c = Compiler::new(path);
+    for (name, m) in &desc.materials {
+        let key = format!("materials.{name}");
+        let material = c.material(m, &key)?;
+        c.add_material(name.clone(), material);
+    }
+    for (i, light) in desc.lights.iter().enumerate() {
+        let light = c.light(light, &format!("lights[{i}]"))?;
+        c.lights.push(light);
+    }
+    for (i, obj) in desc.objects.iter().enumerate() {
+        c.object(obj, &format!("objects[{i}]"), Affine3A::IDENTITY, 0)?;
+    }
+    let settings = c.settings(&desc.render, overrides)?;
+    let camera = c.camera(desc.camera.as_ref(), &settings)?;
+    let load = start.elapsed();
+
+    let build_start = Instant::now();
+    let boxes = c.primitive_boxes()?;
+    let bvh = Bvh8::build(&boxes, overrides.bvh_quality);
+    let timings = LoadTimings {
+        load,
+        bvh_build: build_start.elapsed(),
+    };
+    let scene = Scene {
+        triangles: c.triangles,
+        meshes: c.meshes,
+        shapes: c.shapes,
+        transforms: c.transforms,
+        planes: c.planes,
+        materials: c.materials,
+        lights: c.lights,
+        camera,
+        settings,
+        bvh,
+    };
+    Ok((scene, timings))
+}
+
+struct Compiler {
+    file: PathBuf,
+    base_dir: PathBuf,
+    triangles: Vec<[Vec3; 3]>,
+    meshes: Vec<MeshRange>,
+    shapes: Vec<AnalyticPrim>,
+    transforms: Vec<Transform>,
+    planes: Vec<Plane>,
+    materials: Vec<Material>,
+    material_ids: HashMap<String, u32>,
+    lights: Vec<Light>,
+    loaded_cameras: Vec<LoadedCamera>,
+    /// Mesh files already read, with the scene index of their first material.
+    assets: HashMap<PathBuf, (LoadedAsset, u32)>,
+}
+
+fn finite3(v: V3, key: &str, file: &Path) -> InputResult<Vec3> {
+    let v = Vec3::from(v);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(InputError::new(
+            file,
+            key,
+            format!("must be finite, got {v:?}"),
+        ))
+    }
+}
+
+impl Compiler {
+    fn new(path: &Path) -> Self {
+        let mut c = Self {
+            file: path.to_path_buf(),
+            base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            triangles: Vec::new(),
+            meshes: Vec::new(),
+            shapes: Vec::new(),
+            transforms: Vec::new(),
+            planes: Vec::new(),
+            materials: Vec::new(),
+            material_ids: HashMap::new(),
+            lights: Vec::new(),
+            loaded_cameras: Vec::new(),
+            assets: HashMap::new(),
+        };
+        // Material 0: what objects get when nothing names one.
+        c.materials.push(Material::default());
+        c
+    }
+
+    fn err(&self, key: &str, message: impl Into<String>) -> InputError {
+        InputError::new(&self.file, key, message)
+    }
+
+    fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {
+        finite3(v, key, &self.file)
+    }
+
+    fn finite(&self, x: f32, key: &str) -> InputResult<f32> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be finite, got {x}")))
+        }
+    }
+
+    fn positive(&self, x: f32, key: &str) -> InputResult<f32> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a positive finite number, got {x}")))
+        }
+    }
+
+    fn non_negative(&self, x: f32, key: &str) -> InputResult<f32> {
+        if x.is_finite() && x >= 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a finite number ≥ 0, got {x}")))
+        }
+    }
+
+    fn colour(&self, v: V3, key: &str) -> InputResult<Vec3> {
+        let c = self.v3(v, key)?;
+        if c.min_element() < 0.0 {
+            return Err(self.err(key, format!("must not be negative, got {c:?}")));
+        }
+        Ok(c)
+    }
+
+    fn direction(&self, v: V3, key: &str) -> InputResult<Vec3> {
+        let d = self.v3(v, key)?;
+        d.try_normalize()
+            .ok_or_else(|| self.err(key, "must be a non-zero vector"))
+    }
+
+    fn add_material(&mut self, name: String, m: Material) -> u32 {
+        let id = self.materials.len() as u32;
+        self.materials.push(m);
+        self.material_ids.insert(name, id);
+        id
+    }
+
+    fn material(&self, m: &MaterialDesc, key: &str) -> InputResult<Material> {
+        let k = |field: &str| format!("{key}.{field}");
+        Ok(Material {
+            diffuse: self.colour(m.diffuse, &k("diffuse"))?,
+            specular: self.colour(m.specular, &k("specular"))?,
+            shininess: self.non_negative(m.shininess, &k("shininess"))?,
+            reflectivity: self.non_negative(m.reflectivity, &k("reflectivity"))?,
+            glossiness: self.non_negative(m.glossiness, &k("glossiness"))?,
+            transparency: self.non_negative(m.transparency, &k("transparency"))?,
+            ior: self.positive(m.ior, &k("ior"))?,
+            fresnel: m.fresnel,
+            emission: self.colour(m.emission, &k("emission"))?,
+        })
+    }
+
+    fn light(&self, l: &LightDesc, key: &str) -> InputResult<Light> {
+        let k = |field: &str| format!("{key}.{field}");
+        Ok(match l {
+            LightDesc::Point {
+                position,
+                intensity,
+            } => Light::Point {
+                position: self.v3(*position, &k("position"))?,
+                intensity: self.colour(*intensity, &k("intensity"))?,
+            },
+            LightDesc::Directional {
+                direction,
+                irradiance,
+            } => Light::Directional {
+                direction: self.direction(*direction, &k("direction"))?,
+                irradiance: self.colour(*irradiance, &k("irradiance"))?,
+            },
+            LightDesc::Rect { .. } | LightDesc::Disk { .. } | LightDesc::Sphere { .. } => {
+                return Err(self.err(
+                    key,
+                    "area lights (rect, disk, sphere) are not supported yet",
+                ));
+            }
+        })
+    }
+
+    fn transform(&self, t: &TransformDesc, key: &str) -> InputResult<Affine3A> {
+        if let Some(m) = t.matrix {
+            if t.translate.is_some() || t.rotate.is_some() || t.scale.is_some() {
+                return Err(self.err(
+                    key,
+                    "give either `matrix` or translate/rotate/scale, not both",
+                ));
+            }
+            let mk = format!("{key}.matrix");
+            if m.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(self.err(&mk, "must be finite"));
+            }
+            if m[3] != [0.0, 0.0, 0.0, 1.0] {
+                return Err(self.err(
+                    &mk,
+                    "last row must be [0, 0, 0, 1] (affine transforms only)",
+                ));
+            }
+            // Row-major in the file; glam is column-major.
+            return Ok(Affine3A::from_mat4(
+                Mat4::from_cols_array_2d(&m).transpose(),
+            ));
+        }
+        let translate = match t.translate {
+            Some(v) => self.v3(v, &format!("{key}.translate"))?,
+            None => Vec3::ZERO,
+        };
+        let rotate = match t.rotate {
+            Some([x, y, z, deg]) => {
+                let rk = format!("{key}.rotate");
+                let axis = self.direction([x, y, z], &rk)?;
+                Quat::from_axis_angle(axis, self.finite(deg, &rk)?.to_radians())
+            }
+            None => Quat::IDENTITY,
+        };
+        let scale = match t.scale {
+            Some(ScaleDesc::Uniform(s)) => Vec3::splat(s),
+            Some(ScaleDesc::PerAxis(v)) => Vec3::from(v),
+            None => Vec3::ONE,
+        };
+        if !scale.is_finite() || scale.abs().min_element() == 0.0 {
+            return Err(self.err(
+                &format!("{key}.scale"),
+                format!("must be finite and non-zero, got {scale:?}"),
+            ));
+        }
+        Ok(Affine3A::from_scale_rotation_translation(
+            scale, rotate, translate,
+        ))
+    }
+
+    fn push_transform(&mut self, m: Affine3A, key: &str) -> InputResult<u32> {
+        let t = Transform::new(m)
+            .ok_or_else(|| self.err(key, "transform is singular or not finite"))?;
+        self.transforms.push(t);
+        Ok(self.transforms.len() as u32 - 1)
+    }
+
+    fn object(
+        &mut self,
+        obj: &ObjectDesc,
+        key: &str,
+        parent: Affine3A,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let shapes = [
+            obj.sphere.is_some(),
+            obj.plane.is_some(),
+            obj.cylinder.is_some(),
+            obj.triangle.is_some(),
+            obj.mesh.is_some(),
+            obj.group.is_some(),
+            obj.csg.is_some(),
+        ];
+        match shapes.iter().filter(|&&s| s).count() {
+            1 => {}
+            0 => {
+                return Err(self.err(
+                    key,
+                    "needs one of sphere, plane, cylinder, triangle, mesh, group or csg",
+                ));
+            }
+            _ => return Err(self.err(key, "has more than one shape key; use a group for several")),
+        }
+        let explicit_material = match &obj.material {
+            Some(name) => Some(*self.material_ids.get(name).ok_or_else(|| {
+                self.err(
+                    &format!("{key}.material"),
+                    format!("unknown material '{name}'"),
+                )
+            })?),
+            None => None,
+        };
+        let material = explicit_material.unwrap_or(inherited);
+        let m = match &obj.transform {
+            Some(t) => parent * self.transform(t, &format!("{key}.transform"))?,
+            None => parent,
+        };
+        if Transform::new(m).is_none() {
+            return Err(self.err(
+                &format!("{key}.transform"),
+                "transform is singular or not finite",
+            ));
+        }
+
+        if let Some(s) = &obj.sphere {
+            let center = self.v3(s.center, &format!("{key}.sphere.center"))?;
+            let radius = self.positive(s.radius, &format!("{key}.sphere.radius"))?;
+            self.sphere(Sphere { center, radius }, m, material, key)?;
+        } else if let Some(p) = &obj.plane {
+            let point = self.v3(p.point, &format!("{key}.plane.point"))?;
+            let normal = self.direction(p.normal, &format!("{key}.plane.normal"))?;
+            let t = Transform::new(m).expect("checked above");
+            self.planes.push(Plane {
+                point: t.point(point),
+                normal: t.normal(normal),
+                material,
+            });
+        } else if let Some(cyl) = &obj.cylinder {
+            let k = |f: &str| format!("{key}.cylinder.{f}");
+            let base = self.v3(cyl.base, &k("base"))?;
+            let axis = self.direction(cyl.axis, &k("axis"))?;
+            let radius = self.positive(cyl.radius, &k("radius"))?;
+            let height = self.positive(cyl.height, &k("height"))?;
+            // Canonical cylinder along +z from the origin, placed by a frame.
+            let f = Frame::from_z(axis);
+            let place = Affine3A::from_mat3_translation(Mat3::from_cols(f.x, f.y, f.z), base);
+            let t = self.push_transform(m * place, &format!("{key}.transform"))?;
+            self.shapes.push(AnalyticPrim {
+                shape: Shape::Cylinder(Cylinder {
+                    radius,
+                    height,
+                    caps: cyl.caps,
+                }),
+                transform: t,
+                material,
+            });
+        } else if let Some(tri) = &obj.triangle {
+            let mut v = [Vec3::ZERO; 3];
+            for (i, p) in tri.v.iter().enumerate() {
+                v[i] = m.transform_point3(self.v3(*p, &format!("{key}.triangle.v[{i}]"))?);
+            }
+            self.push_mesh(key.to_string(), vec![v], material, None);
+        } else if let Some(file) = &obj.mesh {
+            self.mesh_file(file, key, m, explicit_material, inherited)?;
+        } else if let Some(children) = &obj.group {
+            for (i, child) in children.iter().enumerate() {
+                self.object(child, &format!("{key}.group[{i}]"), m, material)?;
+            }
+        } else if obj.csg.is_some() {
+            return Err(self.err(&format!("{key}.csg"), "CSG is not supported yet"));
+        }
+        Ok(())
+    }
+
+    fn sphere(&mut self, s: Sphere, m: Affine3A, material: u32, key: &str) -> InputResult<()> {
+        if let Some(scale) = similarity_scale(&m) {
+            // Rotation, uniform scale and translation map a sphere to a sphere exactly.
+            let baked = Sphere {
+                center: m.transform_point3(s.center),
+                radius: s.radius * scale,
+            };
+            if !baked.center.is_finite() || !(baked.radius.is_finite() && baked.radius > 0.0) {
+                return Err(self.err(key, "sphere is not finite after its transform"));
+            }
+            self.shapes.push(AnalyticPrim {
+                shape: Shape::Sphere(baked),
+                transform: NO_TRANSFORM,
+                material,
+            });
+        } else {
+            let t = self.push_transform(m, &format!("{key}.transform"))?;
+            self.shapes.push(AnalyticPrim {
+                shape: Shape::Sphere(s),
+                transform: t,
+                material,
+            });
+        }
+        Ok(())
+    }
+
+    fn push_mesh(
+        &mut self,
+        name: String,
+        tris: Vec<[Vec3; 3]>,
+        material: u32,
+        normals: Option<super::asset::MeshNormals>,
+    ) {
+        if tris.is_empty() {
+            return;
+        }
+        let first = self.triangles.len() as u32;
+        let count = tris.len() as u32;
+        self.triangles.extend(tris);
+        self.meshes.push(MeshRange {
+            name,
+            first,
+            count,
+            material,
+            normals,
+        });
+    }
+
+    fn mesh_file(
+        &mut self,
+        file: &str,
+        key: &str,
+        m: Affine3A,
+        explicit_material: Option<u32>,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let path = self.base_dir.join(file);
+        if !self.assets.contains_key(&path) {
+            let asset = load_mesh_file(&path).map_err(|e| {
+                // Say which object pulled the file in, keeping the mesh file's own location.
+                if e.file == path.display().to_string() {
+                    e
+                } else {
+                    e.within(&format!("{key}.mesh"))
+                }
+            })?;
+            let first_material = self.materials.len() as u32;
+            for (name, mat) in &asset.materials {
+                self.materials.push(*mat);
+                self.material_ids
+                    .entry(format!("{file}:{name}"))
+                    .or_insert(self.materials.len() as u32 - 1);
+            }
+            self.assets.insert(path.clone(), (asset, first_material));
+        }
+        let (asset, first_material) = self.assets.get(&path).expect("inserted above").clone();
+        let t = Transform::new(m).expect("checked by the caller");
+        for mesh in &asset.meshes {
+            let n_vertices = mesh.positions.len();
+            let mut tris = Vec::with_capacity(mesh.indices.len());
+            for (f, idx) in mesh.indices.iter().enumerate() {
+                if idx.iter().any(|&i| i as usize >= n_vertices) {
+                    return Err(InputError::new(
+                        &path,
+                        format!("face {f}"),
+                        "vertex index out of range",
+                    ));
+                }
+                tris.push(idx.map(|i| t.point(mesh.positions[i as usize])));
+            }
+            let normals = mesh.normals.as_ref().map(|n| super::asset::MeshNormals {
+                values: n.values.iter().map(|&v| t.normal_to_world * v).collect(),
+                indices: n.indices.clone(),
+            });
+            let material = explicit_material
+                .or(mesh.material.map(|i| first_material + i as u32))
+                .unwrap_or(inherited);
+            let name = if mesh.name.is_empty() {
+                key.to_string()
+            } else {
+                mesh.name.clone()
+            };
+            self.push_mesh(name, tris, material, normals);
+        }
+        for light in &asset.point_lights {
+            self.lights.push(Light::Point {
+                position: t.point(light.position),
+                intensity: light.intensity,
+            });
+        }
+        for cam in &asset.cameras {
+            self.loaded_cameras.push(LoadedCamera {
+                position: t.point(cam.position),
+                forward: t.vector(cam.forward),
+                up: t.vector(cam.up),
+                ..cam.clone()
+            });
+        }
+        Ok(())
+    }
+
+    fn settings(&self, r: &RenderDesc, o: &RenderOverrides) -> InputResult<RenderSettings> {
+        let s = RenderSettings {
+            width: o.width.unwrap_or(r.width),
+            height: o.height.unwrap_or(r.height),
+            spp: o.spp.unwrap_or(r.spp),
+            shadow_samples: o.shadow_samples.unwrap_or(r.shadow_samples),
+            reflection_samples: o.reflection_samples.unwrap_or(r.reflection_samples),
+            max_depth: o.max_depth.unwrap_or(r.max_depth),
+            sampler: o.sampler.unwrap_or(r.sampler),
+            seed: o.seed.unwrap_or(r.seed),
+            background: self.colour(r.background, "render.background")?,
+        };
+        for (value, name) in [
+            (s.width, "width"),
+            (s.height, "height"),
+            (s.spp, "spp"),
+            (s.shadow_samples, "shadow_samples"),
+            (s.reflection_samples, "reflection_samples"),
+        ] {
+            if value == 0 {
+                return Err(self.err(&format!("render.{name}"), "must be at least 1"));
+            }
+        }
+        if s.width > 1 << 15 || s.height > 1 << 15 {
+            return Err(self.err("render.width", "image larger than 32768 pixels on a side"));
+        }
+        if s.spp > 1 << 22 {
+            return Err(self.err("render.spp", "more than 4194304 samples per pixel"));
+        }
+        Ok(s)
+    }
+
+    fn camera(&self, desc: Option<&CameraDesc>, s: &RenderSettings) -> InputResult<Camera> {
+        let (w, h) = (s.width, s.height);
+        let Some(d) = desc else {
+            if let Some(cam) = self.loaded_cameras.first() {
+                let view =
+                    View::looking(cam.position, cam.forward, cam.up, w, h).ok_or_else(|| {
+                        self.err(
+                            "camera",
+                            "the mesh file's camera has a degenerate orientation",
+                        )
+                    })?;
+                return Ok(match (cam.yfov_degrees, cam.ortho_height) {
+                    (_, Some(height)) => Camera::Orthographic(Orthographic::new(view, height)),
+                    (fov, None) => Camera::Perspective(Perspective::new(view, fov.unwrap_or(40.0))),
+                });
+            }
+            return self.camera(Some(&CameraDesc::default()), s);
+        };
+        let position = self.v3(d.position, "camera.position")?;
+        let look_at = self.v3(d.look_at, "camera.look_at")?;
+        let up = self.v3(d.up, "camera.up")?;
+        if position == look_at {
+            return Err(self.err(
+                "camera.look_at",
+                "equals camera.position, so there is no view direction",
+            ));
+        }
+        let view = View::look_at(position, look_at, up, w, h)
+            .ok_or_else(|| self.err("camera.up", "is zero or parallel to the view direction"))?;
+        let fov = |c: &Self| -> InputResult<f32> {
+            let f = c.finite(d.fov, "camera.fov")?;
+            if f > 0.0 && f < 180.0 {
+                Ok(f)
+            } else {
+                Err(c.err(
+                    "camera.fov",
+                    format!("must be between 0 and 180 degrees, got {f}"),
+                ))
+            }
+        };
+        Ok(match d.kind {
+            CameraType::Perspective => Camera::Perspective(Perspective::new(view, fov(self)?)),
+            CameraType::Orthographic => Camera::Orthographic(Orthographic::new(
+                view,
+                self.positive(d.height, "camera.height")?,
+            )),
+            CameraType::ThinLens => {
+                let focus_distance = match d.focus_distance {
+                    Some(f) => self.positive(f, "camera.focus_distance")?,
+                    None => (look_at - position).length(),
+                };
+                Camera::ThinLens(ThinLens {
+                    pinhole: Perspective::new(view, fov(self)?),
+                    aperture: self.non_negative(d.aperture, "camera.aperture")?,
+                    focus_distance,
+                })
+            }
+        })
+    }
+
+    fn primitive_boxes(&self) -> InputResult<Vec<Aabb>> {
+        let mut boxes = Vec::with_capacity(self.triangles.len() + self.shapes.len());
+        for (i, v) in self.triangles.iter().enumerate() {
+            let b = Aabb::from_points(v);
+            if !b.is_finite() {
+                let mesh = &self.meshes[self
+                    .meshes
+                    .partition_point(|m| m.first + m.count <= i as u32)];
+                return Err(self.err(
+                    &mesh.name,
+                    format!("triangle {} is not finite", i as u32 - mesh.first),
+                ));
+            }
+            boxes.push(b);
+        }
+        for (i, s) in self.shapes.iter().enumerate() {
+            let local = s.shape.bounds();
+            let b = if s.transform == NO_TRANSFORM {
+                local
+            } else {
+                let t = &self.transforms[s.transform as usize];
+                Aabb::from_points(&local.corners().map(|c| t.point(c)))
+            };
+            if !b.is_finite() {
+                return Err(self.err("objects", format!("shape {i} has infinite bounds")));
+            }
+            boxes.push(b);
+        }
+        Ok(boxes)
+    }
+}
+
+/// The uniform scale factor if `m`'s linear part is a similarity (rotation
+/// times uniform scale, no shear, no reflection issue for spheres).
+fn similarity_scale(m: &Affine3A) -> Option<f32> {
+    let c = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+    let l = [c[0].length(), c[1].length(), c[2].length()];
+    let s = l[0];
+    let tol = 1e-6 * s;
+    let equal = (l[1] - s).abs() <= tol && (l[2] - s).abs() <= tol;
+    let orthogonal = c[0].dot(c[1]).abs() <= tol * s
+        && c[1].dot(c[2]).abs() <= tol * s
+        && c[0].dot(c[2]).abs() <= tol * s;
+    (equal && orthogonal && s > 0.0).then_some(s)
+}

@@ -1,0 +1,274 @@
+//! The scene file, as serde types. Every field that can have a sensible
+//! default has one, and unknown keys are errors.
+//!
+//! ```toml
+//! [render]
+//! width = 640            # default 640
+//! height = 480           # default 480
+//! spp = 1                # camera (aperture) samples per pixel, default 1
+//! shadow_samples = 1     # samples per area light per hit, default 1
+//! reflection_samples = 1 # rays per glossy hit, default 1
+//! max_depth = 5          # reflection/refraction depth, default 5
+//! sampler = "stratified" # or "random"
+//! seed = 0
+//! background = [0.0, 0.0, 0.0]
+//!
+//! [camera]
+//! type = "perspective"   # "orthographic" | "thin_lens"
+//! position = [0.0, 1.0, 6.0]
+//! look_at = [0.0, 0.5, 0.0]
+//! up = [0.0, 1.0, 0.0]
+//! fov = 40.0             # vertical, degrees
+//! ```
+//! See the README for materials, lights and objects.
+
+use serde::Deserialize;
+
+pub type V3 = [f32; 3];
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDescription {
+    #[serde(default)]
+    pub render: RenderDesc,
+    #[serde(default)]
+    pub camera: Option<CameraDesc>,
+    #[serde(default)]
+    pub materials: std::collections::BTreeMap<String, MaterialDesc>,
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderDesc {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub shadow_samples: u32,
+    pub reflection_samples: u32,
+    pub max_depth: u32,
+    pub sampler: crate::sampling::SamplerKind,
+    pub seed: u32,
+    pub background: V3,
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            spp: 1,
+            shadow_samples: 1,
+            reflection_samples: 1,
+            max_depth: 5,
+            sampler: crate::sampling::SamplerKind::Stratified,
+            seed: 0,
+            background: [0.0; 3],
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum CameraType {
+    #[default]
+    Perspective,
+    Orthographic,
+    ThinLens,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraDesc {
+    #[serde(rename = "type")]
+    pub kind: CameraType,
+    pub position: V3,
+    pub look_at: V3,
+    pub up: V3,
+    /// Vertical field of view in degrees (perspective, thin lens).
+    pub fov: f32,
+    /// Lens radius (thin lens).
+    pub aperture: f32,
+    /// Distance to the plane in focus (thin lens); default: distance to `look_at`.
+    pub focus_distance: Option<f32>,
+    /// World-space height of the view (orthographic).
+    pub height: f32,
+}
+
+impl Default for CameraDesc {
+    fn default() -> Self {
+        Self {
+            kind: CameraType::Perspective,
+            position: [0.0, 1.0, 6.0],
+            look_at: [0.0, 0.5, 0.0],
+            up: [0.0, 1.0, 0.0],
+            fov: 40.0,
+            aperture: 0.0,
+            focus_distance: None,
+            height: 4.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialDesc {
+    pub diffuse: V3,
+    pub specular: V3,
+    pub shininess: f32,
+    pub reflectivity: f32,
+    pub glossiness: f32,
+    pub transparency: f32,
+    pub ior: f32,
+    pub fresnel: bool,
+    pub emission: V3,
+}
+
+impl Default for MaterialDesc {
+    fn default() -> Self {
+        let m = crate::shade::material::Material::default();
+        Self {
+            diffuse: m.diffuse.into(),
+            specular: m.specular.into(),
+            shininess: m.shininess,
+            reflectivity: m.reflectivity,
+            glossiness: m.glossiness,
+            transparency: m.transparency,
+            ior: m.ior,
+            fresnel: m.fresnel,
+            emission: m.emission.into(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, tag = "type", rename_all = "snake_case")]
+pub enum LightDesc {
+    /// Intensity I in W/sr: irradiance I cosθ / r².
+    Point { position: V3, intensity: V3 },
+    /// Light travelling along `direction`, with irradiance `irradiance`
+    /// (W/m²) on a surface facing it.
+    Directional {
+        direction: V3,
+        #[serde(alias = "intensity")]
+        irradiance: V3,
+    },
+    /// One-sided parallelogram emitting radiance towards `edge_u × edge_v`.
+    Rect {
+        corner: V3,
+        edge_u: V3,
+        edge_v: V3,
+        radiance: V3,
+    },
+    /// One-sided disk emitting radiance towards `normal`.
+    Disk {
+        center: V3,
+        normal: V3,
+        radius: f32,
+        radiance: V3,
+    },
+    /// Sphere emitting radiance outwards.
+    Sphere {
+        center: V3,
+        radius: f32,
+        radiance: V3,
+    },
+}
+
+/// An object: exactly one shape key, plus optional material and transform.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    pub sphere: Option<SphereDesc>,
+    pub plane: Option<PlaneDesc>,
+    pub cylinder: Option<CylinderDesc>,
+    pub triangle: Option<TriangleDesc>,
+    pub mesh: Option<String>,
+    pub group: Option<Vec<ObjectDesc>>,
+    pub csg: Option<Box<CsgDesc>>,
+    pub material: Option<String>,
+    pub transform: Option<TransformDesc>,
+    pub name: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereDesc {
+    #[serde(default)]
+    pub center: V3,
+    pub radius: f32,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneDesc {
+    #[serde(default)]
+    pub point: V3,
+    pub normal: V3,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CylinderDesc {
+    #[serde(default)]
+    pub base: V3,
+    #[serde(default = "default_axis")]
+    pub axis: V3,
+    pub radius: f32,
+    pub height: f32,
+    #[serde(default = "default_true")]
+    pub caps: bool,
+}
+
+fn default_axis() -> V3 {
+    [0.0, 1.0, 0.0]
+}
+
+fn default_true() -> bool {
+    true
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleDesc {
+    pub v: [V3; 3],
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CsgOp {
+    Union,
+    Intersection,
+    Difference,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CsgDesc {
+    pub op: CsgOp,
+    pub a: ObjectDesc,
+    pub b: ObjectDesc,
+}
+
+/// Applied as scale, then rotate, then translate (M = T·R·S), or a full
+/// row-major 4×4 `matrix` instead.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct TransformDesc {
+    pub translate: Option<V3>,
+    /// Axis-angle: [x, y, z, degrees].
+    pub rotate: Option<[f32; 4]>,
+    /// Per-axis scale, or one number for all axes.
+    pub scale: Option<ScaleDesc>,
+    pub matrix: Option<[[f32; 4]; 4]>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleDesc {
+    Uniform(f32),
+    PerAxis(V3),
+}

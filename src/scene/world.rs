@@ -1,0 +1,250 @@
+//! The compiled scene: flat arrays the hot loop reads, and the three
+//! queries the integrator needs (closest hit, occlusion, surface).
+
+use crate::accel::Bvh8;
+use crate::camera::Camera;
+use crate::math::offset::{barycentric_error, transformed_error};
+use crate::math::{Aabb, Ray, Transform};
+use crate::sampling::SamplerKind;
+use crate::scene::asset::MeshNormals;
+use crate::shade::light::Light;
+use crate::shade::material::Material;
+use crate::shape::cylinder::Cylinder;
+use crate::shape::plane::Plane;
+use crate::shape::sphere::Sphere;
+use crate::shape::triangle::{self, ShearedRay};
+use crate::shape::{PrimHit, Surface};
+use glam::Vec3;
+
+/// An analytic shape in its own object space. Closed set: the hot loop matches on it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    Sphere(Sphere),
+    Cylinder(Cylinder),
+}
+
+impl Shape {
+    fn intersect(&self, ray: &Ray) -> Option<(f32, u32)> {
+        match self {
+            Shape::Sphere(s) => s.intersect(ray).map(|t| (t, 0)),
+            Shape::Cylinder(c) => c.intersect(ray),
+        }
+    }
+
+    /// Object-space point, error bound and outward normal.
+    fn surface_at(&self, p: Vec3, part: u32) -> (Vec3, Vec3, Vec3) {
+        match self {
+            Shape::Sphere(s) => s.surface_at(p),
+            Shape::Cylinder(c) => c.surface_at(p, part),
+        }
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Shape::Sphere(s) => s.bounds(),
+            Shape::Cylinder(c) => c.bounds(),
+        }
+    }
+}
+
+pub const NO_TRANSFORM: u32 = u32::MAX;
+
+/// A bounded analytic primitive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnalyticPrim {
+    pub shape: Shape,
+    /// Index into [`Scene::transforms`], or [`NO_TRANSFORM`].
+    pub transform: u32,
+    pub material: u32,
+}
+
+/// A run of triangles from one mesh, sharing one material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshRange {
+    pub name: String,
+    pub first: u32,
+    pub count: u32,
+    pub material: u32,
+    /// Shading normals, only when the file had them.
+    pub normals: Option<MeshNormals>,
+}
+
+/// Render settings after the scene file and the command line are merged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub shadow_samples: u32,
+    pub reflection_samples: u32,
+    pub max_depth: u32,
+    pub sampler: SamplerKind,
+    pub seed: u32,
+    pub background: Vec3,
+}
+
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Triangle vertices in world space, in file order: triangle `i` is
+    /// primitive `i`.
+    pub triangles: Vec<[Vec3; 3]>,
+    /// Sorted by `first`; covers every triangle.
+    pub meshes: Vec<MeshRange>,
+    /// Primitive `triangles.len() + i`.
+    pub shapes: Vec<AnalyticPrim>,
+    pub transforms: Vec<Transform>,
+    /// Unbounded, outside the BVH.
+    pub planes: Vec<Plane>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    pub settings: RenderSettings,
+    pub bvh: Bvh8,
+}
+
+impl Scene {
+    pub fn primitive_count(&self) -> usize {
+        self.triangles.len() + self.shapes.len()
+    }
+
+    #[inline]
+    fn object_ray(&self, prim: &AnalyticPrim, ray: &Ray) -> Ray {
+        if prim.transform == NO_TRANSFORM {
+            *ray
+        } else {
+            let m = &self.transforms[prim.transform as usize].to_object;
+            // The direction is not renormalised, so t stays the world t.
+            Ray {
+                origin: m.transform_point3(ray.origin),
+                direction: m.transform_vector3(ray.direction),
+                tmin: ray.tmin,
+                tmax: ray.tmax,
+            }
+        }
+    }
+
+    #[inline]
+    fn hit_prim(&self, id: u32, ray: &Ray, sheared: &ShearedRay) -> Option<PrimHit> {
+        let n_tris = self.triangles.len() as u32;
+        if id < n_tris {
+            triangle::intersect_prim(ray, sheared, &self.triangles[id as usize], id)
+        } else {
+            let prim = &self.shapes[(id - n_tris) as usize];
+            let local = self.object_ray(prim, ray);
+            prim.shape.intersect(&local).map(|(t, part)| PrimHit {
+                t,
+                prim: id,
+                u: 0.0,
+                v: 0.0,
+                part,
+            })
+        }
+    }
+
+    /// The closest hit in `(ray.tmin, ray.tmax)`. Planes report prim ids
+    /// `u32::MAX - plane index`.
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        let sheared = ShearedRay::new(ray);
+        let mut best = self
+            .bvh
+            .closest(ray, |id, r| self.hit_prim(id, r, &sheared));
+        let mut tmax = best.map_or(ray.tmax, |h| h.t);
+        for (i, plane) in self.planes.iter().enumerate() {
+            let r = Ray { tmax, ..*ray };
+            if let Some(t) = plane.intersect(&r) {
+                tmax = t;
+                best = Some(PrimHit {
+                    t,
+                    prim: u32::MAX - i as u32,
+                    u: 0.0,
+                    v: 0.0,
+                    part: 0,
+                });
+            }
+        }
+        best
+    }
+
+    /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if self.planes.iter().any(|p| p.intersect(ray).is_some()) {
+            return true;
+        }
+        let sheared = ShearedRay::new(ray);
+        self.bvh
+            .any_hit(ray, |id, r| self.hit_prim(id, r, &sheared).is_some())
+    }
+
+    /// Planes are reported with ids counting down from `u32::MAX`.
+    pub fn plane_index(&self, prim: u32) -> Option<usize> {
+        let i = (u32::MAX - prim) as usize;
+        (i < self.planes.len()).then_some(i)
+    }
+
+    /// The mesh a triangle belongs to.
+    pub fn mesh_of(&self, tri: u32) -> &MeshRange {
+        let i = self.meshes.partition_point(|m| m.first + m.count <= tri);
+        &self.meshes[i]
+    }
+
+    /// Full geometry of a hit, computed once per closest hit.
+    pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> Surface {
+        let n_tris = self.triangles.len() as u32;
+        if let Some(i) = self.plane_index(hit.prim) {
+            let plane = &self.planes[i];
+            let (p, p_error) = plane.surface_at(ray.at(hit.t));
+            return Surface {
+                p,
+                p_error,
+                geometric_normal: plane.normal,
+                shading_normal: plane.normal,
+                material: plane.material,
+            };
+        }
+        if hit.prim < n_tris {
+            let v = &self.triangles[hit.prim as usize];
+            let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
+            let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
+            let ng = triangle::geometric_normal(v).normalize_or(Vec3::Z);
+            let mesh = self.mesh_of(hit.prim);
+            let mut ns = ng;
+            if let Some(normals) = &mesh.normals {
+                let idx = normals.indices[(hit.prim - mesh.first) as usize];
+                let n = b[0] * normals.values[idx[0] as usize]
+                    + b[1] * normals.values[idx[1] as usize]
+                    + b[2] * normals.values[idx[2] as usize];
+                if let Some(n) = n.try_normalize() {
+                    // Keep the shading normal on the geometric side.
+                    ns = if n.dot(ng) < 0.0 { -n } else { n };
+                }
+            }
+            return Surface {
+                p,
+                p_error: barycentric_error(b, *v),
+                geometric_normal: ng,
+                shading_normal: ns,
+                material: mesh.material,
+            };
+        }
+        let prim = &self.shapes[(hit.prim - n_tris) as usize];
+        let local = self.object_ray(prim, ray);
+        let (p, err, n) = prim.shape.surface_at(local.at(hit.t), hit.part);
+        let (p, p_error, n) = if prim.transform == NO_TRANSFORM {
+            (p, err, n)
+        } else {
+            let tr = &self.transforms[prim.transform as usize];
+            (
+                tr.point(p),
+                transformed_error(&tr.to_world, p, err),
+                tr.normal(n),
+            )
+        };
+        Surface {
+            p,
+            p_error,
+            geometric_normal: n,
+            shading_normal: n,
+            material: prim.material,
+        }
+    }
+}

@@ -1,0 +1,306 @@
+//! The distribution ray tracer: Whitted's recursion (1980) with Cook's
+//! distributed effects (Cook, Porter and Carpenter 1984).
+//!
+//! At each hit: emitted radiance, direct light from every light through
+//! shadow rays (radiometric Phong: ρ/π diffuse plus the normalised lobe
+//! (n+2)/(2π) k_s cosⁿα), then a mirror ray weighted by `reflectivity` and a
+//! refracted ray weighted by `transparency` (Snell's law, total internal
+//! reflection sends the refracted weight into the reflection).
+//! Recursion stops at `max_depth` or when the path weight falls below 1e-3.
+
+use crate::math::offset::spawn_origin;
+use crate::math::Ray;
+use crate::sampling::{Dim, PixelSampler};
+use crate::scene::Scene;
+use crate::shade::material::Material;
+use crate::shape::Surface;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// Paths whose weight falls below this stop.
+pub const MIN_PATH_WEIGHT: f32 = 1e-3;
+
+/// Rays traced, by kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct RayCounts {
+    pub camera: u64,
+    pub shadow: u64,
+    pub reflection: u64,
+    pub refraction: u64,
+}
+
+impl RayCounts {
+    pub fn total(&self) -> u64 {
+        self.camera + self.shadow + self.reflection + self.refraction
+    }
+
+    pub fn add(&mut self, o: &RayCounts) {
+        self.camera += o.camera;
+        self.shadow += o.shadow;
+        self.reflection += o.reflection;
+        self.refraction += o.refraction;
+    }
+}
+
+/// Identifies one camera sample: everything random in its path derives from this.
+#[derive(Debug, Clone, Copy)]
+pub struct SampleContext {
+    pub sampler: PixelSampler,
+    pub sample: u32,
+    pub spp: u32,
+}
+
+/// One path vertex, for `--debug-sample` replays.
+#[derive(Debug, Clone)]
+pub struct PathEvent {
+    pub depth: u32,
+    pub kind: &'static str,
+    pub ray: Ray,
+    pub hit: Option<(f32, u32, Vec3)>,
+    pub radiance: Vec3,
+}
+
+pub struct Integrator<'a> {
+    pub scene: &'a Scene,
+    pub counts: RayCounts,
+    /// When set, every path vertex is recorded (slow; for debugging one sample).
+    pub trace: Option<Vec<PathEvent>>,
+}
+
+impl<'a> Integrator<'a> {
+    pub fn new(scene: &'a Scene) -> Self {
+        Self {
+            scene,
+            counts: RayCounts::default(),
+            trace: None,
+        }
+    }
+
+    /// Radiance of one camera sample at film position `film`.
+    pub fn camera_sample(&mut self, ctx: &SampleContext, film: glam::Vec2) -> Vec3 {
+        let lens = if self.scene.camera.uses_lens() {
+            ctx.sampler.get_2d(Dim::LENS, ctx.sample, ctx.spp)
+        } else {
+            glam::Vec2::splat(0.5)
+        };
+        let ray = self.scene.camera.generate_ray(film, lens);
+        self.counts.camera += 1;
+        self.radiance(ctx, &ray, 0, 1.0, "camera")
+    }
+
+    /// Radiance arriving along `ray` at path depth `depth`.
+    pub fn radiance(
+        &mut self,
+        ctx: &SampleContext,
+        ray: &Ray,
+        depth: u32,
+        weight: f32,
+        kind: &'static str,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let Some(hit) = scene.intersect(ray) else {
+            self.record(depth, kind, ray, None, scene.settings.background);
+            return scene.settings.background;
+        };
+        let surface = scene.surface(ray, &hit);
+        let material = &scene.materials[surface.material as usize];
+        let wo = -ray.direction.normalize();
+        // Face the normals towards the viewer.
+        let entering = surface.geometric_normal.dot(wo) >= 0.0;
+        let (ng, ns) = if entering {
+            (surface.geometric_normal, surface.shading_normal)
+        } else {
+            (-surface.geometric_normal, -surface.shading_normal)
+        };
+
+        let mut l = material.emission;
+        l += self.direct_light(&surface, material, wo, ng, ns);
+
+        if depth < scene.settings.max_depth {
+            l += self
+                .specular_transport(ctx, &surface, material, wo, ng, ns, entering, depth, weight);
+        }
+        self.record(depth, kind, ray, Some((hit.t, hit.prim, surface.p)), l);
+        l
+    }
+
+    fn record(
+        &mut self,
+        depth: u32,
+        kind: &'static str,
+        ray: &Ray,
+        hit: Option<(f32, u32, Vec3)>,
+        radiance: Vec3,
+    ) {
+        if let Some(trace) = &mut self.trace {
+            trace.push(PathEvent {
+                depth,
+                kind,
+                ray: *ray,
+                hit,
+                radiance,
+            });
+        }
+    }
+
+    /// Phong direct lighting from every light, with one shadow ray per delta light.
+    fn direct_light(&mut self, s: &Surface, m: &Material, wo: Vec3, ng: Vec3, ns: Vec3) -> Vec3 {
+        let diffuse = m.diffuse.max_element() > 0.0;
+        let specular = m.has_specular_lobe();
+        if !diffuse && !specular {
+            return Vec3::ZERO;
+        }
+        let mut l = Vec3::ZERO;
+        for light in &self.scene.lights {
+            let Some(ls) = light.sample(s.p) else {
+                continue;
+            };
+            let cos_i = ns.dot(ls.wi);
+            // Both normals must agree that the light is in front, or shading normals leak light.
+            if cos_i <= 0.0 || ng.dot(ls.wi) <= 0.0 {
+                continue;
+            }
+            let f = self.phong_brdf(m, wo, ls.wi, ns, diffuse, specular);
+            if f.max_element() <= 0.0 {
+                continue;
+            }
+            self.counts.shadow += 1;
+            let origin = spawn_origin(s.p, s.p_error, ng, ls.wi);
+            let tmax = if ls.distance.is_finite() {
+                (ls.distance - (origin - s.p).length()).max(0.0)
+            } else {
+                f32::INFINITY
+            };
+            let shadow = Ray::segment(origin, ls.wi, tmax);
+            if !self.scene.occluded(&shadow) {
+                l += f * ls.irradiance * cos_i;
+            }
+        }
+        l
+    }
+
+    /// ρ/π + k_s (n+2)/(2π) cosⁿα, α between the mirror of `wi` and `wo`.
+    #[inline]
+    fn phong_brdf(
+        &self,
+        m: &Material,
+        wo: Vec3,
+        wi: Vec3,
+        n: Vec3,
+        diffuse: bool,
+        specular: bool,
+    ) -> Vec3 {
+        let mut f = if diffuse { m.diffuse / PI } else { Vec3::ZERO };
+        if specular {
+            let r = 2.0 * n.dot(wi) * n - wi;
+            let cos_a = r.dot(wo);
+            if cos_a > 0.0 {
+                f += m.specular * ((m.shininess + 2.0) / (2.0 * PI) * cos_a.powf(m.shininess));
+            }
+        }
+        f
+    }
+
+    /// Mirror reflection and refraction.
+    #[allow(clippy::too_many_arguments)]
+    fn specular_transport(
+        &mut self,
+        ctx: &SampleContext,
+        s: &Surface,
+        m: &Material,
+        wo: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+        entering: bool,
+        depth: u32,
+        weight: f32,
+    ) -> Vec3 {
+        let mut kr = m.reflectivity;
+        let mut kt = m.transparency;
+        let mut refracted = None;
+        if kt > 0.0 {
+            let eta = if entering { 1.0 / m.ior } else { m.ior };
+            match refract(wo, ns, eta) {
+                Some(t) => {
+                    if m.fresnel {
+                        let f = schlick(wo.dot(ns), if entering { m.ior } else { 1.0 / m.ior });
+                        kr += kt * f;
+                        kt *= 1.0 - f;
+                    }
+                    refracted = Some(t);
+                }
+                None => {
+                    // Total internal reflection: all transmitted energy reflects.
+                    kr += kt;
+                    kt = 0.0;
+                }
+            }
+        }
+        let mut l = Vec3::ZERO;
+        if kr > 0.0 && weight * kr >= MIN_PATH_WEIGHT {
+            let dir = 2.0 * ns.dot(wo) * ns - wo;
+            if dir.dot(ng) > 0.0 {
+                self.counts.reflection += 1;
+                let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
+                l += kr * self.radiance(ctx, &ray, depth + 1, weight * kr, "reflection");
+            }
+        }
+        if let Some(dir) = refracted {
+            if kt > 0.0 && weight * kt >= MIN_PATH_WEIGHT {
+                self.counts.refraction += 1;
+                let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
+                l += kt * self.radiance(ctx, &ray, depth + 1, weight * kt, "refraction");
+            }
+        }
+        l
+    }
+}
+
+/// Snell's law: the refracted direction of `wo` (pointing away from the
+/// surface, on the side of `n`) for relative index `eta` = n_outside/n_inside,
+/// or `None` on total internal reflection.
+pub fn refract(wo: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = n.dot(wo);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((-eta * wo + (eta * cos_i - cos_t) * n).normalize())
+}
+
+/// Schlick 1994, "An Inexpensive BRDF Model for Physically-based
+/// Rendering": F = F0 + (1 − F0)(1 − cosθ)⁵, for relative index `ior`.
+pub fn schlick(cos_i: f32, ior: f32) -> f32 {
+    let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+    f0 + (1.0 - f0) * (1.0 - cos_i.clamp(0.0, 1.0)).powi(5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn snell_bends_towards_the_normal_and_reflects_totally_past_the_critical_angle() {
+        let n = Vec3::Y;
+        let theta = 30f32.to_radians();
+        let wo = Vec3::new(theta.sin(), theta.cos(), 0.0);
+        let t = refract(wo, n, 1.0 / 1.5).unwrap();
+        let sin_t = t.x.abs();
+        assert!((sin_t - theta.sin() / 1.5).abs() < 1e-6);
+        assert!(
+            t.y < 0.0 && t.x < 0.0,
+            "goes through, on the other side of the normal"
+        );
+        // From inside glass at 60° (> critical 41.8°).
+        let theta = 60f32.to_radians();
+        let wo = Vec3::new(theta.sin(), theta.cos(), 0.0);
+        assert!(refract(wo, n, 1.5).is_none());
+    }
+
+    #[test]
+    fn schlick_matches_normal_incidence_and_grazing_limits() {
+        assert!((schlick(1.0, 1.5) - 0.04).abs() < 1e-6);
+        assert!((schlick(0.0, 1.5) - 1.0).abs() < 1e-6);
+    }
+}
