@@ -52,6 +52,12 @@ pub fn load_scene(path: &Path, overrides: &RenderOverrides) -> InputResult<(Scen
     compile(&desc, path, overrides, start)
 }
 
+/// Compile scene text as if read from `path` (meshes resolve relative to it).
+pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> InputResult<Scene> {
+    let desc = super::parse::parse_description(path, text)?;
+    compile(&desc, path, overrides, Instant::now()).map(|(scene, _)| scene)
+}
+
 /// Compile a parsed description; `path` is the scene file (meshes are relative to it).
 pub fn compile(
     desc: &SceneDescription,

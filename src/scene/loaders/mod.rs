@@ -1,0 +1,117 @@
+//! Mesh file loaders: each turns one file into a [`LoadedAsset`] of plain
+//! arrays in file order, or an [`InputError`] that names the file and, where
+//! one applies, the line (`line 12`) or glTF location (`accessors[5]`).
+//!
+//! | Extension       | Loader              |
+//! |-----------------|---------------------|
+//! | `.obj`          | [`obj::load_obj`]   |
+//! | `.gltf`, `.glb` | [`gltf::load_gltf`] |
+//!
+//! Loaders never panic on bad input and never allocate more than the file
+//! actually holds.
+
+pub mod gltf;
+pub mod obj;
+
+use crate::error::{InputError, InputResult};
+use crate::scene::asset::LoadedAsset;
+use std::path::Path;
+
+/// The extensions [`load_mesh_file`] understands, for error messages.
+pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb"];
+
+/// Load any supported mesh file, chosen by its extension (case-insensitive):
+/// `.obj`, `.gltf` or `.glb`. Any other extension is an [`InputError`]
+/// naming the file and listing the supported ones.
+pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    match extension.as_str() {
+        "obj" => obj::load_obj(path),
+        "gltf" | "glb" => gltf::load_gltf(path),
+        // "ply" => ply::load_ply(path),  // added by a later issue
+        _ => {
+            let supported = SUPPORTED_EXTENSIONS
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let found = if extension.is_empty() {
+                "a file without an extension".to_string()
+            } else {
+                format!("'.{extension}' files")
+            };
+            Err(InputError::file(
+                path,
+                format!("cannot load {found} as a mesh; supported mesh formats are {supported}"),
+            ))
+        }
+    }
+}
+
+/// An I/O error's text without the "(os error 2)" tail, for messages such
+/// as `cannot read: No such file or directory`.
+fn io_message(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes `name` into a fresh directory, removed again when dropped.
+    struct TempFile(std::path::PathBuf);
+
+    impl Drop for TempFile {
+        fn drop(&mut self) {
+            if let Some(dir) = self.0.parent() {
+                let _ = std::fs::remove_dir_all(dir);
+            }
+        }
+    }
+
+    fn temp_file(name: &str, contents: &[u8]) -> TempFile {
+        let dir = std::env::temp_dir().join(format!(
+            "strata-loaders-mod-{}-{}",
+            std::process::id(),
+            name.replace('.', "_")
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(&path, contents).unwrap();
+        TempFile(path)
+    }
+
+    #[test]
+    fn dispatches_by_extension_case_insensitively() {
+        let path = temp_file("tri.OBJ", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let asset = load_mesh_file(&path.0).unwrap();
+        assert_eq!(asset.triangle_count(), 1);
+    }
+
+    #[test]
+    fn gltf_extension_goes_to_the_gltf_loader() {
+        let path = temp_file("broken.gltf", b"{ not json");
+        let err = load_mesh_file(&path.0).unwrap_err();
+        assert!(err.file.ends_with("broken.gltf"), "{err}");
+        assert!(err.to_string().contains("JSON"), "{err}");
+    }
+
+    #[test]
+    fn unknown_extension_lists_supported_ones() {
+        let path = temp_file("bunny.ply", b"ply\n");
+        let err = load_mesh_file(&path.0).unwrap_err();
+        let text = err.to_string();
+        assert!(text.contains("bunny.ply"), "{text}");
+        assert!(text.contains(".obj, .gltf, .glb"), "{text}");
+        let err = load_mesh_file(Path::new("no_extension")).unwrap_err();
+        assert!(err.to_string().contains("without an extension"), "{err}");
+    }
+}

@@ -1,0 +1,118 @@
+//! Renders checked by properties, never by image hashes.
+
+mod common;
+
+use common::{render_rgb, scene};
+use glam::Vec3;
+
+const EMITTER: &str = "[materials.glow]\ndiffuse = [0.0, 0.0, 0.0]\nemission = [1.0, 1.0, 1.0]\n";
+
+fn covered(pixels: &[Vec3]) -> f64 {
+    // Pixel value = covered fraction (emission 1 on black): a sum of coverage, not a thresholded count.
+    pixels.iter().map(|p| p.x as f64).sum()
+}
+
+#[test]
+fn sphere_silhouette_matches_the_analytic_projected_area() {
+    // Perspective: a sphere of radius r at distance d on the view axis projects to a
+    // disk of radius r/√(d²−r²) on the image plane at distance 1.
+    let (r, d, fov, h) = (1.0f64, 6.0f64, 40.0f64, 400u32);
+    let text = format!(
+        "{EMITTER}[render]\nwidth = {h}\nheight = {h}\nspp = 16\n[camera]\nposition = [0.0, 0.0, {d}]\nlook_at = [0.0, 0.0, 0.0]\nfov = {fov}\n[[objects]]\nsphere = {{ radius = {r} }}\nmaterial = \"glow\"\n"
+    );
+    let s = scene(&text);
+    let rho = r / (d * d - r * r).sqrt();
+    let px_per_unit = h as f64 / (2.0 * (fov.to_radians() / 2.0).tan());
+    let expected = std::f64::consts::PI * (rho * px_per_unit).powi(2);
+    let got = covered(&render_rgb(&s, 0));
+    assert!((got - expected).abs() / expected < 0.01, "covered {got:.1} px, analytic {expected:.1} px");
+}
+
+#[test]
+fn orthographic_camera_shows_no_perspective_shrink() {
+    let render_at = |z: f32| {
+        let text = format!(
+            "{EMITTER}[render]\nwidth = 200\nheight = 200\nspp = 16\n[camera]\ntype = \"orthographic\"\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nheight = 4.0\n[[objects]]\nsphere = {{ center = [0.0, 0.0, {z}], radius = 1.0 }}\nmaterial = \"glow\"\n"
+        );
+        covered(&render_rgb(&scene(&text), 0))
+    };
+    let near = render_at(5.0);
+    let far = render_at(-20.0);
+    // Radius 1 in a 4-unit-high view of 200 px: 50 px radius.
+    let expected = std::f64::consts::PI * 50.0 * 50.0;
+    assert!((near - expected).abs() / expected < 0.01, "{near} vs {expected}");
+    assert!((near - far).abs() / expected < 0.002, "near {near} far {far}");
+}
+
+#[test]
+fn the_mirror_shows_the_object_it_faces() {
+    // Camera looks at a mirror wall; a red emitter sits behind the camera.
+    let base = "[render]\nwidth = 32\nheight = 32\n[camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\nfov = 20.0\n\
+        [materials.red]\ndiffuse = [0.0, 0.0, 0.0]\nemission = [1.0, 0.0, 0.0]\n\
+        [[objects]]\nsphere = { center = [0.0, 0.0, 4.0], radius = 2.0 }\nmaterial = \"red\"\n\
+        [[objects]]\nplane = { point = [0.0, 0.0, -5.0], normal = [0.0, 0.0, 1.0] }\nmaterial = \"wall\"\n";
+    let mirror = format!("{base}[materials.wall]\ndiffuse = [0.0, 0.0, 0.0]\nreflectivity = 1.0\n");
+    let matte = format!("{base}[materials.wall]\ndiffuse = [0.0, 0.0, 0.0]\n");
+    let centre = 16 * 32 + 16;
+    let m = render_rgb(&scene(&mirror), 0)[centre];
+    assert!(m.x > 0.99 && m.y == 0.0 && m.z == 0.0, "mirror shows red: {m}");
+    let w = render_rgb(&scene(&matte), 0)[centre];
+    assert_eq!(w, Vec3::ZERO, "a matte black wall shows nothing");
+}
+
+#[test]
+fn a_glass_sphere_inverts_the_background() {
+    // Emissive wall: red above y = 0, green below. A glass ball in front flips them.
+    let text = "[render]\nwidth = 101\nheight = 101\nmax_depth = 8\n\
+        [camera]\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 20.0\n\
+        [materials.red]\ndiffuse = [0.0, 0.0, 0.0]\nemission = [1.0, 0.0, 0.0]\n\
+        [materials.green]\ndiffuse = [0.0, 0.0, 0.0]\nemission = [0.0, 1.0, 0.0]\n\
+        [materials.glass]\ndiffuse = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5\n\
+        [[objects]]\ntriangle = { v = [[-50.0, 0.0, -10.0], [50.0, 0.0, -10.0], [0.0, 50.0, -10.0]] }\nmaterial = \"red\"\n\
+        [[objects]]\ntriangle = { v = [[-50.0, 0.0, -10.0], [0.0, -50.0, -10.0], [50.0, 0.0, -10.0]] }\nmaterial = \"green\"\n\
+        [[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"glass\"\n";
+    let img = render_rgb(&scene(text), 0);
+    let at = |x: usize, y: usize| img[y * 101 + x];
+    // Outside the ball (its image radius is about 28 px): upright.
+    assert!(at(50, 5).x > 0.9 && at(50, 95).y > 0.9, "outside: red above, green below");
+    // Inside the ball's image: inverted.
+    let above = at(50, 40);
+    let below = at(50, 60);
+    assert!(above.y > 0.5 && above.x < 0.1, "inside, above centre sees green: {above}");
+    assert!(below.x > 0.5 && below.y < 0.1, "inside, below centre sees red: {below}");
+}
+
+#[test]
+fn thin_lens_with_zero_aperture_is_exactly_the_pinhole() {
+    let body = "[render]\nwidth = 64\nheight = 48\nspp = 4\n[[lights]]\ntype = \"point\"\nposition = [2.0, 5.0, 3.0]\nintensity = [20.0, 20.0, 20.0]\n\
+        [[objects]]\nsphere = { center = [0.0, 0.5, 0.0], radius = 0.5 }\n[[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\n";
+    let pinhole = scene(&format!("{body}[camera]\ntype = \"perspective\"\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.5, 0.0]\n"));
+    let lens = scene(&format!(
+        "{body}[camera]\ntype = \"thin_lens\"\naperture = 0.0\nfocus_distance = 3.0\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.5, 0.0]\n"
+    ));
+    assert_eq!(render_rgb(&pinhole, 0), render_rgb(&lens, 0));
+}
+
+#[test]
+fn the_image_is_bit_identical_for_any_thread_count() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/seed.toml")).unwrap();
+    let mut s = scene(&text);
+    s.settings.width = 96;
+    s.settings.height = 72;
+    s.settings.spp = 3;
+    let one = render_rgb(&s, 1);
+    for threads in [2, 3, 8] {
+        assert_eq!(one, render_rgb(&s, threads), "{threads} threads");
+    }
+}
+
+#[test]
+fn point_light_irradiance_follows_the_inverse_square_law() {
+    // A white Lambertian floor under a point light: L = ρ/π · I cosθ / r².
+    let text = "[render]\nwidth = 1\nheight = 1\n[camera]\ntype = \"orthographic\"\nposition = [0.0, 5.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\nheight = 0.0001\n\
+        [materials.white]\ndiffuse = [0.5, 0.5, 0.5]\n[[lights]]\ntype = \"point\"\nposition = [0.0, 2.0, 0.0]\nintensity = [8.0, 8.0, 8.0]\n\
+        [[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\nmaterial = \"white\"\n";
+    let l = render_rgb(&scene(text), 0)[0];
+    let expected = 0.5 / std::f32::consts::PI * 8.0 / 4.0;
+    assert!((l.x - expected).abs() / expected < 1e-4, "{} vs {expected}", l.x);
+}
