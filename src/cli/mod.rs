@@ -1,6 +1,8 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod rays;
 pub mod render;
+pub mod trace;
 
 use clap::{Parser, Subcommand};
 use strata::error::InputError;
@@ -21,6 +23,10 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
     Render(render::RenderArgs),
+    /// Write a ray set for testing intersection against a mesh (RAYS.bin).
+    Rays(rays::RaysArgs),
+    /// Trace a ray file against a mesh with the renderer's own code (HITS.bin).
+    Trace(trace::TraceArgs),
 }
 
 pub enum CliError {
@@ -39,6 +45,8 @@ impl From<InputError> for CliError {
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Rays(args)) => rays::run(args),
+        Some(Command::Trace(args)) => trace::run(args),
         None => render::run(cli.render),
     }
 }
