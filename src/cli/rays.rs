@@ -101,7 +101,7 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
         });
         rays.extend(set);
     }
-    let closed = Topology::new(&scene.triangles).closed;
+    let closed = Topology::new(&scene.triangles, 0.0).closed;
     let description = Description {
         format: "strata-rays",
         mesh: args.mesh.display().to_string(),

@@ -1,13 +1,14 @@
 //! `edges`: rays aimed exactly at the edges and vertices that triangles
 //! share, the rays a non-watertight intersector lets through.
 //!
-//! Two rays in three aim at a point `a + s (b − a)` (computed in f32, with
-//! `s` uniform in [0.01, 0.99]) of a shared edge, one in three at a shared
+//! Two rays in three aim at a point `a + s (b − a)` of a shared edge (with
+//! `s` uniform in [0.01, 0.99], exact in f64), one in three at a shared
 //! vertex. The direction comes from a cone around the inward mean normal and
 //! is kept only if it meets every triangle around the target from the same
 //! side (`d · n < 0` with a margin), so the triangles' projections along the
 //! ray tile a neighbourhood of the target and a watertight intersector must
-//! hit one of them. The origin is 0.1 to 1 bounding radii back, and the ray
+//! hit one of them. Edges and vertices next to degenerate triangles or
+//! slivers are left out. The origin is 0.1 to 1 bounding radii back, and the ray
 //! reaches its target at `t = 1`: a ray whose first hit is beyond `t = 1`
 //! has passed through the surface.
 
@@ -15,6 +16,12 @@ use super::topology::{normal, Shared, Topology};
 use super::{aimed_ray, Generator, MeshInfo, Stream};
 use crate::math::Ray;
 use glam::{DVec3, Vec3};
+
+/// Triangles with an inradius below this fraction of the bounding radius
+/// are slivers that float32 cannot resolve: edges next to them are not
+/// aimed at (such a sliver closing a T-junction leaves a crack that no
+/// float32 intersector closes).
+const THIN: f64 = 1e-5;
 
 /// The least `−d̂ · n̂` for every triangle around the target.
 const FACING_MARGIN: f64 = 0.02;
@@ -27,7 +34,7 @@ pub struct Edges<'a> {
 
 impl<'a> Edges<'a> {
     pub fn new(mesh: &MeshInfo<'a>) -> Result<Self, String> {
-        let topology = Topology::new(mesh.triangles);
+        let topology = Topology::new(mesh.triangles, THIN * mesh.radius);
         if topology.edges.is_empty() {
             return Err(
                 "the mesh has no shared edges (no two consistently wound triangles meet)"
@@ -51,17 +58,18 @@ impl Generator for Edges<'_> {
     fn ray(&self, _index: u32, rng: &mut Stream) -> Option<Ray> {
         let vertices = &self.topology.vertices;
         let at_vertex = !vertices.is_empty() && rng.uniform() < 1.0 / 3.0;
-        let (target, tris): (Vec3, &[u32]) = if at_vertex {
+        let (target, tris): (DVec3, &[u32]) = if at_vertex {
             match &vertices[rng.below(vertices.len())] {
-                Shared::Vertex { p, tris } => (*p, tris),
+                Shared::Vertex { p, tris } => (p.as_dvec3(), tris),
                 Shared::Edge { .. } => unreachable!("vertices hold vertices"),
             }
         } else {
             let edges = &self.topology.edges;
             match &edges[rng.below(edges.len())] {
                 Shared::Edge { a, b, tris } => {
-                    let s = 0.01 + 0.98 * rng.uniform();
-                    (*a + s * (*b - *a), &tris[..])
+                    let s = 0.01 + 0.98 * rng.next_f64();
+                    let (a, b) = (a.as_dvec3(), b.as_dvec3());
+                    (a + s * (b - a), &tris[..])
                 }
                 Shared::Vertex { .. } => unreachable!("edges hold edges"),
             }
@@ -77,7 +85,7 @@ impl Generator for Edges<'_> {
             return None;
         }
         let back = self.radius * (0.1 + 0.9 * rng.next_f64());
-        aimed_ray(target.as_dvec3() - back * d, target)
+        aimed_ray(target - back * d, target)
     }
 }
 

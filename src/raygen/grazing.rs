@@ -62,7 +62,7 @@ impl Generator for Grazing<'_> {
         // A uniform point: the square-root warp of two uniforms.
         let (r1, r2) = (rng.next_f64().sqrt(), rng.next_f64());
         let [a, b, c] = tri.map(|v| v.as_dvec3());
-        let point = ((1.0 - r1) * a + r1 * (1.0 - r2) * b + r1 * r2 * c).as_vec3();
+        let point = (1.0 - r1) * a + r1 * (1.0 - r2) * b + r1 * r2 * c;
         // A tangent direction, tilted out of the plane.
         let r = rng.unit_vector();
         let tangent = (r - r.dot(n) * n).try_normalize()?;
@@ -71,6 +71,6 @@ impl Generator for Grazing<'_> {
         let side = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
         let d = tilt.cos() * tangent + side * tilt.sin() * n;
         let back = self.radius * (0.05 + 0.95 * rng.next_f64());
-        aimed_ray(point.as_dvec3() - back * d, point)
+        aimed_ray(point - back * d, point)
     }
 }

@@ -3,10 +3,11 @@
 //!
 //! Candidate origins are uniform in the bounding box. A point counts as
 //! inside when the winding number of the surface around it, counted along
-//! three random directions (+1 for each crossing out through the front,
-//! −1 through the back), is non-zero along all three. Signed counting keeps
-//! duplicated faces and degenerate triangles from flipping the answer, and
-//! needing three agreeing directions keeps rays through edges from doing so.
+//! three random directions and their opposites (+1 for each crossing out
+//! through the front, −1 through the back), is the same non-zero number
+//! along all six. Signed counting keeps duplicated faces and degenerate
+//! triangles from flipping the answer; needing six agreeing probes keeps
+//! rays through edges from doing so, and rejects points on the surface.
 
 use super::{Generator, MeshInfo, Stream};
 use crate::accel::{BuildQuality, Bvh8};
@@ -64,8 +65,12 @@ impl Generator for Inside<'_> {
         let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
         let origin = (self.lo + u * self.size).as_vec3();
         for _ in 0..3 {
-            let probe = Ray::new(origin, rng.unit_vector().as_vec3());
-            if self.winding(&probe) == 0 {
+            let d = rng.unit_vector().as_vec3();
+            let w = self.winding(&Ray::new(origin, d));
+            // Opposite probes agree unless a crossing sits at t = 0, that
+            // is, unless the point lies on the surface (common when the mesh
+            // is far from the origin and every coordinate is coarsely rounded).
+            if w == 0 || self.winding(&Ray::new(origin, -d)) != w {
                 return None;
             }
         }

@@ -10,7 +10,8 @@
 //! | `inside`  | from random points inside the mesh, in random directions                |
 //!
 //! `grazing` and `edges` rays reach their target at `t = 1`: the direction
-//! is `target − origin`. All rays have `tmin = 0` and `tmax = +inf`.
+//! is `target − origin`, computed from the exact target in f64 (see
+//! [`aimed_ray`]). All rays have `tmin = 0` and `tmax = +inf`.
 //!
 //! Every number is a pure function of (seed, kind, ray index, draw), so a
 //! set is reproducible on any machine and thread count, and (except for
@@ -206,12 +207,16 @@ fn run<G: Generator>(kind: RayKind, g: &G, n: usize, seed: u32) -> Result<Vec<Ra
         .collect()
 }
 
-/// A ray from `origin` whose direction is `target − origin` in f32, so that
-/// it reaches `target` at `t = 1` as nearly as f32 allows. `None` if the two
-/// points round to the same f32 point.
-pub fn aimed_ray(origin: DVec3, target: Vec3) -> Option<Ray> {
+/// A ray from `origin` (rounded to f32) towards `target`, an exact point
+/// in f64: the direction is `target − origin` computed in f64 and rounded
+/// once, so the ray's line passes within about 2⁻²⁴ |direction| of the
+/// target however far from the origin of coordinates the mesh is, and it
+/// reaches the target at `t = 1`. (Rounding the target itself to f32 would
+/// move it by half an f32 spacing: 0.004 at 1e5, more than a small
+/// triangle there.) `None` if the direction rounds to zero.
+pub fn aimed_ray(origin: DVec3, target: DVec3) -> Option<Ray> {
     let origin = origin.as_vec3();
-    let direction = target - origin;
+    let direction = (target - origin.as_dvec3()).as_vec3();
     (direction != Vec3::ZERO).then(|| Ray::new(origin, direction))
 }
 

@@ -2,8 +2,10 @@
 //!
 //! Vertices are welded by their f32 bit patterns, so two triangles share an
 //! edge exactly when a watertight intersector must not let a ray through
-//! between them, whatever the file's indexing. A triangle of zero area (in
-//! f64) is *degenerate*: it can never be hit, so it cannot close a gap.
+//! between them, whatever the file's indexing. A triangle is *degenerate*
+//! if its inradius (in f64) is at most a given size: a triangle of zero
+//! area can never be hit, and a sliver thinner than float rounding cannot
+//! be hit reliably, so neither can close a gap.
 
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
@@ -41,8 +43,21 @@ fn key(v: Vec3) -> [u32; 3] {
     (v + Vec3::ZERO).to_array().map(f32::to_bits)
 }
 
+/// Radius of the largest circle inside the triangle (0 if degenerate).
+pub fn inradius(t: &[Vec3; 3]) -> f64 {
+    let [a, b, c] = t.map(|v| v.as_dvec3());
+    let perimeter = (b - a).length() + (c - b).length() + (a - c).length();
+    if perimeter > 0.0 {
+        normal(t).length() / perimeter
+    } else {
+        0.0
+    }
+}
+
 impl Topology {
-    pub fn new(triangles: &[[Vec3; 3]]) -> Self {
+    /// Triangles with an inradius of at most `thin` count as degenerate
+    /// (exactly collinear ones always do).
+    pub fn new(triangles: &[[Vec3; 3]], thin: f64) -> Self {
         // Weld positions.
         let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
         let mut points: Vec<Vec3> = Vec::new();
@@ -60,7 +75,13 @@ impl Topology {
         let degenerate: Vec<bool> = triangles
             .iter()
             .zip(&welded)
-            .map(|(t, w)| w[0] == w[1] || w[1] == w[2] || w[0] == w[2] || normal(t) == DVec3::ZERO)
+            .map(|(t, w)| {
+                w[0] == w[1]
+                    || w[1] == w[2]
+                    || w[0] == w[2]
+                    || normal(t) == DVec3::ZERO
+                    || inradius(t) <= thin
+            })
             .collect();
 
         // Directed edges: (from, to) → triangles using it, any area.
@@ -137,7 +158,7 @@ mod tests {
 
     #[test]
     fn an_octahedron_is_closed_with_12_edges_and_6_vertices() {
-        let t = Topology::new(&octahedron(1.0, Vec3::ZERO));
+        let t = Topology::new(&octahedron(1.0, Vec3::ZERO), 0.0);
         assert!(t.closed);
         assert_eq!(t.edges.len(), 12);
         assert_eq!(t.vertices.len(), 6);
@@ -147,7 +168,7 @@ mod tests {
     fn open_and_degenerate_meshes() {
         let mut tris = octahedron(1.0, Vec3::ZERO);
         tris.pop();
-        let t = Topology::new(&tris);
+        let t = Topology::new(&tris, 0.0);
         assert!(!t.closed);
         assert_eq!(
             t.edges.len(),
@@ -158,7 +179,7 @@ mod tests {
         let mut tris = octahedron(1.0, Vec3::ZERO);
         let [a, b, _] = tris[0];
         tris.push([a, b, 0.5 * (a + b)]);
-        let t = Topology::new(&tris);
+        let t = Topology::new(&tris, 0.0);
         assert_eq!(t.edges.len(), 11);
         assert!(t.vertices.len() < 6);
     }
