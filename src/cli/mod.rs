@@ -1,5 +1,6 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod converge;
 pub mod render;
 
 use clap::{Parser, Subcommand};
@@ -21,6 +22,8 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
     Render(render::RenderArgs),
+    /// Error against time: RMSE per sampling method at spp 1, 2, 4, …; CSV and SVG chart.
+    Converge(converge::ConvergeArgs),
 }
 
 pub enum CliError {
@@ -39,6 +42,7 @@ impl From<InputError> for CliError {
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Converge(args)) => converge::run(args),
         None => render::run(cli.render),
     }
 }

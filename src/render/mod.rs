@@ -1,5 +1,6 @@
 //! Scheduling samples onto threads, accumulating them, and reporting progress.
 
+pub mod converge;
 pub mod film;
 pub mod progress;
 pub mod schedule;
