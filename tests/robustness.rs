@@ -6,7 +6,6 @@
 mod common;
 
 use common::{scene_at, Rng};
-use glam::Vec3;
 use std::path::Path;
 use strata::math::offset::spawn_origin;
 use strata::math::Ray;
