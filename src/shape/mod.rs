@@ -6,6 +6,7 @@
 //! [`Surface`] (point, error bound, normals) is computed once, for the
 //! closest hit only.
 
+pub mod csg;
 pub mod cylinder;
 pub mod plane;
 pub mod sphere;
