@@ -39,10 +39,7 @@ fn sphere_under_non_uniform_scale_and_rotation_matches_the_f64_ellipsoid() {
     assert_eq!(s.shapes.len(), 1, "the sphere stays one analytic primitive");
     let m = DAffine3::from_scale_rotation_translation(
         DVec3::from_array(scale.map(|x: f32| x as f64)),
-        DQuat::from_axis_angle(
-            DVec3::new(1.0, 2.0, -0.5).normalize(),
-            (deg as f64).to_radians(),
-        ),
+        DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), f64::to_radians(deg)),
         DVec3::from_array(translate.map(|x: f32| x as f64)),
     );
     let inv = m.inverse();

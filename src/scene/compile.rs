@@ -468,7 +468,7 @@ impl Compiler {
             center: m.transform_point3(s.center),
             radius: s.radius * scale,
         };
-        if !baked.center.is_finite() || !(baked.radius.is_finite() && baked.radius > 0.0) {
+        if !(baked.center.is_finite() && baked.radius.is_finite() && baked.radius > 0.0) {
             return Err(self.err(key, "sphere is not finite after its transform"));
         }
         Ok((baked, None))

@@ -33,7 +33,7 @@ impl Sphere {
         // Vector from the centre to the line's closest point.
         let l = f + (b / a) * d;
         let disc = a * (self.radius * self.radius - l.length_squared());
-        if !(disc >= 0.0) {
+        if disc.is_nan() || disc < 0.0 {
             return None;
         }
         let q = b + b.signum() * disc.sqrt();
