@@ -1,5 +1,6 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod converge;
 pub mod rays;
 pub mod render;
 pub mod trace;
@@ -23,6 +24,8 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
     Render(render::RenderArgs),
+    /// Error against time: RMSE per sampling method at spp 1, 2, 4, …; CSV and SVG chart.
+    Converge(converge::ConvergeArgs),
     /// Write a ray set for testing intersection against a mesh (RAYS.bin).
     Rays(rays::RaysArgs),
     /// Trace a ray file against a mesh with the renderer's own code (HITS.bin).
@@ -45,6 +48,7 @@ impl From<InputError> for CliError {
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Converge(args)) => converge::run(args),
         Some(Command::Rays(args)) => rays::run(args),
         Some(Command::Trace(args)) => trace::run(args),
         None => render::run(cli.render),

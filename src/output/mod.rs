@@ -3,5 +3,6 @@
 //! interrupted run never leaves a truncated file.
 
 pub mod atomic;
+pub mod chart;
 pub mod image;
 pub mod stats;
