@@ -133,12 +133,14 @@ impl RayBoxes {
 }
 
 impl Bvh8 {
-    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_prim(id, ray)` must return
-    /// a hit only if it is nearer than `ray.tmax`.
-    #[inline]
+    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_prim(slot, id, ray)` is
+    /// called for candidate primitive `id` stored at leaf slot `slot` (its
+    /// index in `prim_ids`, where a scene keeps the vertices the test reads)
+    /// and must return a hit only if it is nearer than `ray.tmax`.
+    #[inline(always)]
     pub fn closest<F>(&self, ray: &Ray, mut hit_prim: F) -> Option<PrimHit>
     where
-        F: FnMut(u32, &Ray) -> Option<PrimHit>,
+        F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
     {
         if self.nodes.is_empty() {
             return None;
@@ -176,8 +178,9 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
-                        if let Some(h) = hit_prim(prim, &ray) {
+                    for slot in start..start + count {
+                        let prim = self.prim_ids[slot as usize];
+                        if let Some(h) = hit_prim(slot, prim, &ray) {
                             ray.tmax = h.t;
                             best = Some(h);
                         }
@@ -189,11 +192,12 @@ impl Bvh8 {
         best
     }
 
-    /// True if any primitive blocks the ray in `(tmin, tmax)`.
-    #[inline]
+    /// True if any primitive blocks the ray in `(tmin, tmax)`;
+    /// `blocks(slot, id, ray)` as for [`Bvh8::closest`].
+    #[inline(always)]
     pub fn any_hit<F>(&self, ray: &Ray, mut blocks: F) -> bool
     where
-        F: FnMut(u32, &Ray) -> bool,
+        F: FnMut(u32, u32, &Ray) -> bool,
     {
         if self.nodes.is_empty() {
             return false;
@@ -213,8 +217,8 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
-                        if blocks(prim, ray) {
+                    for slot in start..start + count {
+                        if blocks(slot, self.prim_ids[slot as usize], ray) {
                             return true;
                         }
                     }
@@ -316,10 +320,10 @@ mod tests {
                 let brute = (0..500u32)
                     .filter_map(|i| hit(i, &ray))
                     .min_by(|a, b| a.t.total_cmp(&b.t));
-                let got = bvh.closest(&ray, hit);
+                let got = bvh.closest(&ray, |_, id, r| hit(id, r));
                 assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
                 assert_eq!(
-                    bvh.any_hit(&ray, |id, r| hit(id, r).is_some()),
+                    bvh.any_hit(&ray, |_, id, r| hit(id, r).is_some()),
                     brute.is_some()
                 );
             }
@@ -332,7 +336,7 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
         // A ray along +x exactly in the box's bottom face plane.
         let ray = Ray::new(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
-        let hit = bvh.closest(&ray, |id, _| {
+        let hit = bvh.closest(&ray, |_, id, _| {
             Some(PrimHit {
                 t: 1.0,
                 prim: id,
@@ -343,8 +347,8 @@ mod tests {
         });
         assert!(hit.is_some());
         let empty = Bvh8::build(&[], BuildQuality::Auto);
-        assert!(empty.closest(&ray, |_, _| None).is_none());
-        assert!(!empty.any_hit(&ray, |_, _| true));
+        assert!(empty.closest(&ray, |_, _, _| None).is_none());
+        assert!(!empty.any_hit(&ray, |_, _, _| true));
     }
 
     #[test]
@@ -377,7 +381,7 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
         let ray = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z);
         let mut visited = 0;
-        bvh.any_hit(&ray, |_, _| {
+        bvh.any_hit(&ray, |_, _, _| {
             visited += 1;
             false
         });
