@@ -1,7 +1,7 @@
 //! The compiled scene: flat arrays the hot loop reads, and the three
 //! queries the integrator needs (closest hit, occlusion, surface).
 
-use crate::accel::Bvh8;
+use crate::accel::{Bvh8, Packet, PACKET_SIZE};
 use crate::camera::Camera;
 use crate::math::offset::{barycentric_error, transformed_error};
 use crate::math::{Aabb, Ray, Transform};
@@ -216,9 +216,15 @@ impl Scene {
     /// `u32::MAX - plane index`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let sheared = ShearedRay::new(ray);
-        let mut best = self
+        let best = self
             .bvh
             .closest(ray, |slot, id, r| self.hit_prim(slot, id, r, &sheared));
+        self.closest_plane(ray, best)
+    }
+
+    /// `best`, or a plane hit nearer than it.
+    #[inline]
+    fn closest_plane(&self, ray: &Ray, mut best: Option<PrimHit>) -> Option<PrimHit> {
         let mut tmax = best.map_or(ray.tmax, |h| h.t);
         for (i, plane) in self.planes.iter().enumerate() {
             let r = Ray { tmax, ..*ray };
@@ -236,6 +242,26 @@ impl Scene {
         best
     }
 
+    /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. The rays traverse as one packet when
+    /// their directions agree in sign on every axis, else one by one.
+    pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        let Some(packet) = Packet::new(rays) else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.intersect(r);
+            }
+            return;
+        };
+        let sheared: [ShearedRay; PACKET_SIZE] =
+            std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
+        self.bvh.closest_packet(&packet, out, |lane, slot, id, r| {
+            self.hit_prim(slot, id, r, &sheared[lane])
+        });
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.closest_plane(r, *o);
+        }
+    }
+
     /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
     pub fn occluded(&self, ray: &Ray) -> bool {
         if self.planes.iter().any(|p| p.intersect(ray).is_some()) {
@@ -245,6 +271,27 @@ impl Scene {
         self.bvh.any_hit(ray, |slot, id, r| {
             self.hit_prim(slot, id, r, &sheared).is_some()
         })
+    }
+
+    /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
+    /// (`u32::MAX`: none): `out[i]` is exactly
+    /// `self.occluded_except(&rays[i], except)`. A packet when the rays'
+    /// directions agree in sign, else one by one.
+    pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        let Some(packet) = Packet::new(rays) else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.occluded_except(r, except);
+            }
+            return;
+        };
+        let sheared: [ShearedRay; PACKET_SIZE] =
+            std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
+        self.bvh.any_hit_packet(&packet, out, |lane, slot, id, r| {
+            id != except && self.hit_prim(slot, id, r, &sheared[lane]).is_some()
+        });
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
+        }
     }
 
     /// Planes are reported with ids counting down from `u32::MAX`.
