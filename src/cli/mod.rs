@@ -1,5 +1,6 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod bench;
 pub mod converge;
 pub mod render;
 
@@ -24,6 +25,8 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Error against time: RMSE per sampling method at spp 1, 2, 4, …; CSV and SVG chart.
     Converge(converge::ConvergeArgs),
+    /// Ray throughput suite: build time, bytes/triangle, Mrays/s single vs packet; CSV.
+    Bench(bench::BenchArgs),
 }
 
 pub enum CliError {
@@ -43,6 +46,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Converge(args)) => converge::run(args),
+        Some(Command::Bench(args)) => bench::run(args),
         None => render::run(cli.render),
     }
 }
