@@ -85,14 +85,16 @@ impl<'r> Packet<'r> {
             bounds[axis] = b;
         }
         // Unused lanes repeat ray 0 (they are never active).
-        for lane in 0..PACKET_SIZE {
-            let k = if lane < rays.len() { lane } else { 0 };
-            let (r, i) = (&rays[k], inv[k]);
-            for axis in 0..3 {
-                lanes[axis][lane] = r.origin[axis];
-                lanes[3 + axis][lane] = i[axis];
-            }
-            lanes[6][lane] = r.tmin;
+        let ray_of = |lane: usize| if lane < rays.len() { lane } else { 0 };
+        for (c, component) in lanes.iter_mut().enumerate() {
+            *component = std::array::from_fn(|lane| {
+                let k = ray_of(lane);
+                match c {
+                    0..=2 => rays[k].origin[c],
+                    3..=5 => inv[k][c - 3],
+                    _ => rays[k].tmin,
+                }
+            });
         }
         let sel = |axis: usize, near_side: bool| {
             // inv > 0: the near slab is smallest at the largest origin.
