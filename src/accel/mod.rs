@@ -11,6 +11,8 @@
 
 pub mod build;
 pub mod node;
+pub mod packet;
 pub mod traverse;
 
 pub use build::{BuildQuality, Bvh8};
+pub use packet::{Packet, PACKET_SIZE};

@@ -16,24 +16,24 @@ use wide::f32x8;
 
 /// A traversal stack that keeps 64 entries inline and spills to the heap
 /// rather than ever dropping a node.
-struct Stack {
-    inline: [(u32, f32); 64],
+pub(crate) struct Stack<T = (u32, f32)> {
+    inline: [T; 64],
     len: usize,
-    spill: Vec<(u32, f32)>,
+    spill: Vec<T>,
 }
 
-impl Stack {
+impl<T: Copy + Default> Stack<T> {
     #[inline]
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
-            inline: [(0, 0.0); 64],
+            inline: [T::default(); 64],
             len: 0,
             spill: Vec::new(),
         }
     }
 
     #[inline]
-    fn push(&mut self, e: (u32, f32)) {
+    pub(crate) fn push(&mut self, e: T) {
         if self.len < self.inline.len() {
             self.inline[self.len] = e;
             self.len += 1;
@@ -43,7 +43,7 @@ impl Stack {
     }
 
     #[inline]
-    fn pop(&mut self) -> Option<(u32, f32)> {
+    pub(crate) fn pop(&mut self) -> Option<T> {
         if let Some(e) = self.spill.pop() {
             return Some(e);
         }
@@ -56,24 +56,31 @@ impl Stack {
 }
 
 /// Per-ray values reused by every node test.
-struct RayBoxes {
+pub(crate) struct RayBoxes {
     origin: [f32x8; 3],
     inv: [f32x8; 3],
     near: [usize; 3],
     far: [usize; 3],
 }
 
+/// The reciprocal direction the slab tests use: zero components become
+/// ±f32::MAX (with the zero's sign), so no slab computes 0·∞ = NaN.
+#[inline(always)]
+pub(crate) fn safe_recip(d: Vec3) -> Vec3 {
+    Vec3::select(
+        d.cmpeq(Vec3::ZERO),
+        Vec3::new(
+            f32::MAX.copysign(d.x),
+            f32::MAX.copysign(d.y),
+            f32::MAX.copysign(d.z),
+        ),
+        d.recip(),
+    )
+}
+
 impl RayBoxes {
-    fn new(ray: &Ray) -> Self {
-        let inv = Vec3::select(
-            ray.direction.cmpeq(Vec3::ZERO),
-            Vec3::new(
-                f32::MAX.copysign(ray.direction.x),
-                f32::MAX.copysign(ray.direction.y),
-                f32::MAX.copysign(ray.direction.z),
-            ),
-            ray.direction.recip(),
-        );
+    pub(crate) fn new(ray: &Ray) -> Self {
+        let inv = safe_recip(ray.direction);
         let mut near = [0; 3];
         let mut far = [0; 3];
         for axis in 0..3 {
@@ -99,7 +106,7 @@ impl RayBoxes {
 
     /// Entry distances and the mask of children the ray may enter.
     #[inline(always)]
-    fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
+    pub(crate) fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
         let slab = |axis: usize, side: usize| {
             (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis]
         };
@@ -132,13 +139,41 @@ impl RayBoxes {
     }
 }
 
+/// The ray a candidate is tested with once `best` is known: its interval
+/// includes `best.t` itself, so a candidate at exactly the same distance is
+/// seen and [`closer`] can break the tie.
+#[inline(always)]
+pub(crate) fn tie_ray(ray: &Ray, best: Option<&PrimHit>) -> Ray {
+    match best {
+        Some(b) => Ray {
+            tmax: b.t.next_up(),
+            ..*ray
+        },
+        None => *ray,
+    }
+}
+
+/// The closest-hit order: smaller t, and on equal t (a ray through an edge
+/// shared by two triangles) the smaller primitive id. A total order, so the
+/// answer does not depend on the order the traversal visits leaves in:
+/// single rays and packets return identical hits.
+#[inline(always)]
+pub(crate) fn closer(h: &PrimHit, best: Option<&PrimHit>) -> bool {
+    match best {
+        Some(b) => h.t < b.t || (h.t == b.t && h.prim < b.prim),
+        None => true,
+    }
+}
+
 impl Bvh8 {
-    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_prim(id, ray)` must return
-    /// a hit only if it is nearer than `ray.tmax`.
-    #[inline]
+    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_prim(slot, id, ray)` is
+    /// called for candidate primitive `id` stored at leaf slot `slot` (its
+    /// index in `prim_ids`, where a scene keeps the vertices the test reads)
+    /// and must return a hit only if it is nearer than `ray.tmax`.
+    #[inline(always)]
     pub fn closest<F>(&self, ray: &Ray, mut hit_prim: F) -> Option<PrimHit>
     where
-        F: FnMut(u32, &Ray) -> Option<PrimHit>,
+        F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
     {
         if self.nodes.is_empty() {
             return None;
@@ -146,7 +181,7 @@ impl Bvh8 {
         let mut ray = *ray;
         let boxes = RayBoxes::new(&ray);
         let mut best = None;
-        let mut stack = Stack::new();
+        let mut stack: Stack = Stack::new();
         stack.push((0, f32::NEG_INFINITY));
         while let Some((child, t_enter)) = stack.pop() {
             if t_enter > ray.tmax {
@@ -176,10 +211,14 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
-                        if let Some(h) = hit_prim(prim, &ray) {
-                            ray.tmax = h.t;
-                            best = Some(h);
+                    for slot in start..start + count {
+                        let prim = self.prim_ids[slot as usize];
+                        let test = tie_ray(&ray, best.as_ref());
+                        if let Some(h) = hit_prim(slot, prim, &test) {
+                            if closer(&h, best.as_ref()) {
+                                ray.tmax = h.t;
+                                best = Some(h);
+                            }
                         }
                     }
                 }
@@ -189,17 +228,18 @@ impl Bvh8 {
         best
     }
 
-    /// True if any primitive blocks the ray in `(tmin, tmax)`.
-    #[inline]
+    /// True if any primitive blocks the ray in `(tmin, tmax)`;
+    /// `blocks(slot, id, ray)` as for [`Bvh8::closest`].
+    #[inline(always)]
     pub fn any_hit<F>(&self, ray: &Ray, mut blocks: F) -> bool
     where
-        F: FnMut(u32, &Ray) -> bool,
+        F: FnMut(u32, u32, &Ray) -> bool,
     {
         if self.nodes.is_empty() {
             return false;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack = Stack::new();
+        let mut stack: Stack = Stack::new();
         stack.push((0, 0.0));
         while let Some((child, _)) = stack.pop() {
             match decode(child) {
@@ -213,8 +253,8 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
-                        if blocks(prim, ray) {
+                    for slot in start..start + count {
+                        if blocks(slot, self.prim_ids[slot as usize], ray) {
                             return true;
                         }
                     }
@@ -237,7 +277,7 @@ impl Bvh8 {
             return;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack = Stack::new();
+        let mut stack: Stack = Stack::new();
         stack.push((0, 0.0));
         while let Some((child, _)) = stack.pop() {
             match decode(child) {
@@ -316,10 +356,10 @@ mod tests {
                 let brute = (0..500u32)
                     .filter_map(|i| hit(i, &ray))
                     .min_by(|a, b| a.t.total_cmp(&b.t));
-                let got = bvh.closest(&ray, hit);
+                let got = bvh.closest(&ray, |_, id, r| hit(id, r));
                 assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
                 assert_eq!(
-                    bvh.any_hit(&ray, |id, r| hit(id, r).is_some()),
+                    bvh.any_hit(&ray, |_, id, r| hit(id, r).is_some()),
                     brute.is_some()
                 );
             }
@@ -332,7 +372,7 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
         // A ray along +x exactly in the box's bottom face plane.
         let ray = Ray::new(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
-        let hit = bvh.closest(&ray, |id, _| {
+        let hit = bvh.closest(&ray, |_, id, _| {
             Some(PrimHit {
                 t: 1.0,
                 prim: id,
@@ -343,8 +383,8 @@ mod tests {
         });
         assert!(hit.is_some());
         let empty = Bvh8::build(&[], BuildQuality::Auto);
-        assert!(empty.closest(&ray, |_, _| None).is_none());
-        assert!(!empty.any_hit(&ray, |_, _| true));
+        assert!(empty.closest(&ray, |_, _, _| None).is_none());
+        assert!(!empty.any_hit(&ray, |_, _, _| true));
     }
 
     #[test]
@@ -377,7 +417,7 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
         let ray = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z);
         let mut visited = 0;
-        bvh.any_hit(&ray, |_, _| {
+        bvh.any_hit(&ray, |_, _, _| {
             visited += 1;
             false
         });

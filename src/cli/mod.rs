@@ -1,5 +1,6 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod bench;
 pub mod converge;
 pub mod rays;
 pub mod render;
@@ -30,6 +31,8 @@ pub enum Command {
     Rays(rays::RaysArgs),
     /// Trace a ray file against a mesh with the renderer's own code (HITS.bin).
     Trace(trace::TraceArgs),
+    /// Ray throughput suite: build time, bytes/triangle, Mrays/s single vs packet; CSV.
+    Bench(bench::BenchArgs),
 }
 
 pub enum CliError {
@@ -51,6 +54,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Converge(args)) => converge::run(args),
         Some(Command::Rays(args)) => rays::run(args),
         Some(Command::Trace(args)) => trace::run(args),
+        Some(Command::Bench(args)) => bench::run(args),
         None => render::run(cli.render),
     }
 }

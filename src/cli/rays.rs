@@ -88,10 +88,12 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
         KindArg::One(kind) => vec![kind],
         KindArg::All => RayKind::ALL.to_vec(),
     };
+    // Ray generation aims at triangles by their file-order index.
+    let triangles = scene.file_order_triangles();
     let mut rays = Vec::with_capacity(args.n * kinds.len());
     let mut groups = Vec::new();
     for kind in kinds {
-        let set = generate(kind, &scene.triangles, args.n, args.seed)
+        let set = generate(kind, &triangles, args.n, args.seed)
             .map_err(|e| InputError::file(&args.mesh, format!("cannot make {kind} rays: {e}")))?;
         groups.push(Group {
             kind: kind.name(),
@@ -101,11 +103,11 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
         });
         rays.extend(set);
     }
-    let closed = Topology::new(&scene.triangles, 0.0).closed;
+    let closed = Topology::new(&triangles, 0.0).closed;
     let description = Description {
         format: "strata-rays",
         mesh: args.mesh.display().to_string(),
-        triangles: scene.triangles.len(),
+        triangles: triangles.len(),
         closed,
         seed: args.seed,
         groups,
@@ -124,7 +126,7 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
             rays.len(),
             names.join(", "),
             args.mesh.display(),
-            scene.triangles.len(),
+            triangles.len(),
             if closed { "closed" } else { "not closed" },
             start.elapsed().as_secs_f64(),
             args.output.display(),

@@ -154,7 +154,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
                 bvh_build_s: timings.bvh_build.as_secs_f64(),
                 render_s: outcome.seconds,
             },
-            triangles: scene.triangles.len(),
+            triangles: scene.triangle_count as usize,
             analytic_shapes: scene.shapes.len(),
             planes: scene.planes.len(),
             bvh_nodes: scene.bvh.nodes.len(),

@@ -90,7 +90,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
             "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s) -> {}",
             rays.len(),
             if args.occlusion { "occlusion" } else { "closest hit" },
-            scene.triangles.len(),
+            scene.triangle_count,
             found,
             if args.occlusion { "occluded" } else { "hits" },
             seconds,

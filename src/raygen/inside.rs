@@ -45,7 +45,7 @@ impl<'a> Inside<'a> {
     fn winding(&self, ray: &Ray) -> i32 {
         let sheared = ShearedRay::new(ray);
         let mut winding = 0;
-        self.bvh.any_hit(ray, |id, r| {
+        self.bvh.any_hit(ray, |_slot, id, r| {
             let tri = &self.triangles[id as usize];
             if intersect(r, &sheared, tri).is_some() {
                 winding += if geometric_normal(tri).dot(r.direction) > 0.0 {

@@ -126,12 +126,26 @@ pub fn compile(
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
     let bvh = Bvh8::build(&boxes, overrides.bvh_quality);
+    drop(boxes);
+    // Store the vertices once, in the order the leaves read them.
+    let leaf_triangles: Vec<[Vec3; 3]> = bvh
+        .prim_ids
+        .iter()
+        .map(|&id| {
+            c.triangles
+                .get(id as usize)
+                .copied()
+                .unwrap_or([Vec3::ZERO; 3])
+        })
+        .collect();
+    drop(std::mem::take(&mut c.triangles));
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
     };
     let scene = Scene {
-        triangles: c.triangles,
+        leaf_triangles,
+        triangle_count: n_tris,
         meshes: c.meshes,
         shapes: c.shapes,
         transforms: c.transforms,

@@ -1,7 +1,7 @@
 //! The compiled scene: flat arrays the hot loop reads, and the three
 //! queries the integrator needs (closest hit, occlusion, surface).
 
-use crate::accel::Bvh8;
+use crate::accel::{Bvh8, Packet, PACKET_SIZE};
 use crate::camera::Camera;
 use crate::math::offset::{barycentric_error, transformed_error};
 use crate::math::{Aabb, Ray, Transform};
@@ -119,9 +119,16 @@ pub struct RenderSettings {
 
 #[derive(Debug, Clone)]
 pub struct Scene {
-    /// Triangle vertices in world space, in file order: triangle `i` is
-    /// primitive `i`.
-    pub triangles: Vec<[Vec3; 3]>,
+    /// Triangle vertices in world space, stored once, in BVH leaf order (the
+    /// order traversal reads them): slot `s` holds triangle `bvh.prim_ids[s]`
+    /// when that id is below `triangle_count`; the slots of analytic shapes
+    /// hold a zero triangle. Triangle ids stay in file order: triangle `i`
+    /// of the scene's meshes is primitive `i`. Use [`Scene::triangle`] for
+    /// a hit's vertices and [`Scene::file_order_triangles`] for a copy in
+    /// file order.
+    pub leaf_triangles: Vec<[Vec3; 3]>,
+    /// Triangles in the scene: primitives `0..triangle_count`.
+    pub triangle_count: u32,
     /// Sorted by `first`; covers every triangle.
     pub meshes: Vec<MeshRange>,
     /// Primitive `triangles.len() + i`.
@@ -140,7 +147,31 @@ pub struct Scene {
 
 impl Scene {
     pub fn primitive_count(&self) -> usize {
-        self.triangles.len() + self.shapes.len()
+        self.triangle_count as usize + self.shapes.len()
+    }
+
+    /// The vertices of a triangle hit (its `part` is the leaf slot).
+    #[inline]
+    pub fn triangle(&self, hit: &PrimHit) -> &[Vec3; 3] {
+        debug_assert_eq!(self.bvh.prim_ids[hit.part as usize], hit.prim);
+        &self.leaf_triangles[hit.part as usize]
+    }
+
+    /// Every triangle in file order (a copy; for tools, not the hot loop).
+    pub fn file_order_triangles(&self) -> Vec<[Vec3; 3]> {
+        let mut out = vec![[Vec3::ZERO; 3]; self.triangle_count as usize];
+        for (slot, &id) in self.bvh.prim_ids.iter().enumerate() {
+            if id < self.triangle_count {
+                out[id as usize] = self.leaf_triangles[slot];
+            }
+        }
+        out
+    }
+
+    /// Bytes held by the structures that traversal reads: BVH nodes, leaf
+    /// ids and the leaf-ordered triangles.
+    pub fn accel_bytes(&self) -> usize {
+        self.bvh.memory_bytes() + self.leaf_triangles.len() * std::mem::size_of::<[Vec3; 3]>()
     }
 
     #[inline]
@@ -159,12 +190,21 @@ impl Scene {
         }
     }
 
-    #[inline]
-    fn hit_prim(&self, id: u32, ray: &Ray, sheared: &ShearedRay) -> Option<PrimHit> {
-        let n_tris = self.triangles.len() as u32;
-        if id < n_tris {
-            triangle::intersect_prim(ray, sheared, &self.triangles[id as usize], id)
+    /// Test primitive `id`, stored at leaf slot `slot`. A triangle hit
+    /// records the slot in `part`, so [`Scene::surface`] finds its vertices.
+    #[inline(always)]
+    fn hit_prim(&self, slot: u32, id: u32, ray: &Ray, sheared: &ShearedRay) -> Option<PrimHit> {
+        if id < self.triangle_count {
+            let (t, u, v) = triangle::intersect(ray, sheared, &self.leaf_triangles[slot as usize])?;
+            Some(PrimHit {
+                t,
+                prim: id,
+                u,
+                v,
+                part: slot,
+            })
         } else {
+            let n_tris = self.triangle_count;
             let prim = &self.shapes[(id - n_tris) as usize];
             let local = self.object_ray(prim, ray);
             let hit = prim.shape.intersect(&local, &self.csg)?;
@@ -176,9 +216,15 @@ impl Scene {
     /// `u32::MAX - plane index`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let sheared = ShearedRay::new(ray);
-        let mut best = self
+        let best = self
             .bvh
-            .closest(ray, |id, r| self.hit_prim(id, r, &sheared));
+            .closest(ray, |slot, id, r| self.hit_prim(slot, id, r, &sheared));
+        self.closest_plane(ray, best)
+    }
+
+    /// `best`, or a plane hit nearer than it.
+    #[inline]
+    fn closest_plane(&self, ray: &Ray, mut best: Option<PrimHit>) -> Option<PrimHit> {
         let mut tmax = best.map_or(ray.tmax, |h| h.t);
         for (i, plane) in self.planes.iter().enumerate() {
             let r = Ray { tmax, ..*ray };
@@ -196,14 +242,56 @@ impl Scene {
         best
     }
 
+    /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. The rays traverse as one packet when
+    /// their directions agree in sign on every axis, else one by one.
+    pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        let Some(packet) = Packet::new(rays) else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.intersect(r);
+            }
+            return;
+        };
+        let sheared: [ShearedRay; PACKET_SIZE] =
+            std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
+        self.bvh.closest_packet(&packet, out, |lane, slot, id, r| {
+            self.hit_prim(slot, id, r, &sheared[lane])
+        });
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.closest_plane(r, *o);
+        }
+    }
+
     /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
     pub fn occluded(&self, ray: &Ray) -> bool {
         if self.planes.iter().any(|p| p.intersect(ray).is_some()) {
             return true;
         }
         let sheared = ShearedRay::new(ray);
-        self.bvh
-            .any_hit(ray, |id, r| self.hit_prim(id, r, &sheared).is_some())
+        self.bvh.any_hit(ray, |slot, id, r| {
+            self.hit_prim(slot, id, r, &sheared).is_some()
+        })
+    }
+
+    /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
+    /// (`u32::MAX`: none): `out[i]` is exactly
+    /// `self.occluded_except(&rays[i], except)`. A packet when the rays'
+    /// directions agree in sign, else one by one.
+    pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        let Some(packet) = Packet::new(rays) else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.occluded_except(r, except);
+            }
+            return;
+        };
+        let sheared: [ShearedRay; PACKET_SIZE] =
+            std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
+        self.bvh.any_hit_packet(&packet, out, |lane, slot, id, r| {
+            id != except && self.hit_prim(slot, id, r, &sheared[lane]).is_some()
+        });
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
+        }
     }
 
     /// Planes are reported with ids counting down from `u32::MAX`.
@@ -220,8 +308,8 @@ impl Scene {
             return true;
         }
         let sheared = ShearedRay::new(ray);
-        self.bvh.any_hit(ray, |id, r| {
-            id != except && self.hit_prim(id, r, &sheared).is_some()
+        self.bvh.any_hit(ray, |slot, id, r| {
+            id != except && self.hit_prim(slot, id, r, &sheared).is_some()
         })
     }
 
@@ -233,7 +321,7 @@ impl Scene {
 
     /// Full geometry of a hit, computed once per closest hit.
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> Surface {
-        let n_tris = self.triangles.len() as u32;
+        let n_tris = self.triangle_count;
         if let Some(i) = self.plane_index(hit.prim) {
             let plane = &self.planes[i];
             let (p, p_error) = plane.surface_at(ray.at(hit.t));
@@ -246,7 +334,7 @@ impl Scene {
             };
         }
         if hit.prim < n_tris {
-            let v = &self.triangles[hit.prim as usize];
+            let v = self.triangle(hit);
             let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
             let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
             let ng = triangle::geometric_normal(v).normalize_or(Vec3::Z);

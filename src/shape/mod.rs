@@ -25,7 +25,8 @@ pub struct PrimHit {
     /// Barycentrics of v1 and v2 for triangles; shape-specific otherwise.
     pub u: f32,
     pub v: f32,
-    /// Which part of a shape was hit (a cylinder cap, a CSG operand).
+    /// Which part of a shape was hit (a cylinder cap, a CSG operand); for a
+    /// scene triangle, the BVH leaf slot that stores its vertices.
     pub part: u32,
 }
 

@@ -46,7 +46,7 @@ impl ShearedRay {
 
 /// Intersect one triangle. Returns `(t, u, v)` with `u`, `v` the barycentric
 /// weights of `v1` and `v2`, for `t` strictly inside `(tmin, tmax)`.
-#[inline]
+#[inline(always)]
 pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
     // Vertices relative to the ray origin.
     let a = v[0] - ray.origin;
@@ -122,7 +122,7 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
 /// directions: a ray whose direction is 1e-6 long (a mesh at scale 1e-6)
 /// would get a bound a million times too large and lose every hit.
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 fn origin_error_bound(
     ax: f32,
     ay: f32,

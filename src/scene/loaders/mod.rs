@@ -6,19 +6,21 @@
 //! |-----------------|---------------------|
 //! | `.obj`          | [`obj::load_obj`]   |
 //! | `.gltf`, `.glb` | [`gltf::load_gltf`] |
+//! | `.ply`          | [`ply::load_ply`]   |
 //!
 //! Loaders never panic on bad input and never allocate more than the file
 //! actually holds.
 
 pub mod gltf;
 pub mod obj;
+pub mod ply;
 
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::LoadedAsset;
 use std::path::Path;
 
 /// The extensions [`load_mesh_file`] understands, for error messages.
-pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb"];
+pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "ply"];
 
 /// Load any supported mesh file, chosen by its extension (case-insensitive):
 /// `.obj`, `.gltf` or `.glb`. Any other extension is an [`InputError`]
@@ -32,7 +34,7 @@ pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
     match extension.as_str() {
         "obj" => obj::load_obj(path),
         "gltf" | "glb" => gltf::load_gltf(path),
-        // "ply" => ply::load_ply(path),  // added by a later issue
+        "ply" => ply::load_ply(path),
         _ => {
             let supported = SUPPORTED_EXTENSIONS
                 .iter()
@@ -106,11 +108,11 @@ mod tests {
 
     #[test]
     fn unknown_extension_lists_supported_ones() {
-        let path = temp_file("bunny.ply", b"ply\n");
+        let path = temp_file("bunny.stl", b"solid\n");
         let err = load_mesh_file(&path.0).unwrap_err();
         let text = err.to_string();
-        assert!(text.contains("bunny.ply"), "{text}");
-        assert!(text.contains(".obj, .gltf, .glb"), "{text}");
+        assert!(text.contains("bunny.stl"), "{text}");
+        assert!(text.contains(".obj, .gltf, .glb, .ply"), "{text}");
         let err = load_mesh_file(Path::new("no_extension")).unwrap_err();
         assert!(err.to_string().contains("without an extension"), "{err}");
     }

@@ -1,0 +1,132 @@
+//! The throughput suite behind `strata bench`: per mesh, BVH build time,
+//! bytes per triangle, and Mrays/s for closest hit and occlusion on
+//! coherent rays (the lens samples of one pixel, 8 per batch) and
+//! incoherent rays (random chords of the bounding sphere), traced one by
+//! one and as packets, at 1 thread and at all threads.
+//!
+//! Ray sets are seeded, so every run traces the same rays.
+
+use crate::accel::PACKET_SIZE;
+use crate::math::Ray;
+use crate::scene::Scene;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Coherent or incoherent rays, in batches of [`PACKET_SIZE`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RayKind {
+    /// A `side`² pixel camera looking at the mesh; each batch is the 8 lens
+    /// samples (a lens of 2% of the scene radius) of one pixel.
+    Camera,
+    /// Chords between two uniform points on the bounding sphere.
+    Random,
+}
+
+impl RayKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Camera => "coherent",
+            Self::Random => "incoherent",
+        }
+    }
+}
+
+fn hash(x: u32) -> f32 {
+    crate::sampling::hash::unit_float(crate::sampling::hash::hash_u32(x))
+}
+
+fn sphere_point(i: u32) -> Vec3 {
+    let z = 2.0 * hash(2 * i) - 1.0;
+    let phi = std::f32::consts::TAU * hash(2 * i + 1);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// `batches` batches of 8 rays of `kind` around the scene's BVH bounds.
+pub fn rays(scene: &Scene, kind: RayKind, batches: usize, seed: u32) -> Vec<[Ray; PACKET_SIZE]> {
+    let b = scene.bvh.bounds;
+    let center = (b.min + b.max) * 0.5;
+    let radius = ((b.max - b.min).length() * 0.5).max(1e-6);
+    let side = (batches as f64).sqrt().ceil() as usize;
+    (0..batches)
+        .map(|k| {
+            let base = seed.wrapping_mul(0x9e37_79b9) ^ (k as u32).wrapping_mul(64);
+            std::array::from_fn(|lane| {
+                let s = base.wrapping_add(lane as u32 * 8);
+                match kind {
+                    RayKind::Camera => {
+                        let (px, py) = (k % side, k / side);
+                        let fx = ((px as f32 + 0.5) / side as f32 * 2.0 - 1.0) * radius;
+                        let fy = (1.0 - (py as f32 + 0.5) / side as f32 * 2.0) * radius;
+                        let focus = center + Vec3::new(fx, fy, 0.0);
+                        let lens = 0.02 * radius;
+                        let o = center
+                            + Vec3::new(
+                                (hash(s) * 2.0 - 1.0) * lens,
+                                (hash(s + 1) * 2.0 - 1.0) * lens,
+                                2.5 * radius,
+                            );
+                        Ray::new(o, focus - o)
+                    }
+                    RayKind::Random => {
+                        let a = center + sphere_point(s) * radius;
+                        let c = center + sphere_point(s + 3) * radius;
+                        Ray::segment(a, c - a, 1.0)
+                    }
+                }
+            })
+        })
+        .collect()
+}
+
+/// Closest hit or any hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Query {
+    Closest,
+    Occlusion,
+}
+
+/// Trace every batch once; returns (seconds, hits). `packet` traces each
+/// batch with [`Scene::intersect_packet`] / [`Scene::occluded_packet`],
+/// else ray by ray.
+pub fn trace(
+    scene: &Scene,
+    batches: &[[Ray; PACKET_SIZE]],
+    query: Query,
+    packet: bool,
+    pool: &rayon::ThreadPool,
+) -> (f64, u64) {
+    let start = Instant::now();
+    let hits: u64 = pool.install(|| {
+        batches
+            .par_chunks(64)
+            .map(|chunk| {
+                let mut hits = 0u64;
+                for batch in chunk {
+                    hits += match (query, packet) {
+                        (Query::Closest, false) => batch
+                            .iter()
+                            .filter(|r| scene.intersect(r).is_some())
+                            .count(),
+                        (Query::Occlusion, false) => {
+                            batch.iter().filter(|r| scene.occluded(r)).count()
+                        }
+                        (Query::Closest, true) => {
+                            let mut out = [None; PACKET_SIZE];
+                            scene.intersect_packet(batch, &mut out);
+                            out.iter().filter(|h| h.is_some()).count()
+                        }
+                        (Query::Occlusion, true) => {
+                            let mut out = [false; PACKET_SIZE];
+                            scene.occluded_packet(batch, u32::MAX, &mut out);
+                            out.iter().filter(|&&b| b).count()
+                        }
+                    } as u64;
+                }
+                hits
+            })
+            .sum()
+    });
+    (start.elapsed().as_secs_f64(), hits)
+}

@@ -1,0 +1,198 @@
+//! Packets and single rays return identical hits: the same primitive, t,
+//! u, v bit for bit, and the same occlusion answer, on coherent (lens
+//! samples of a pixel, shadow rays from one point to an area light),
+//! incoherent (random chords) and tie-heavy (aimed at shared vertices and
+//! edges) ray sets, for every BVH quality.
+
+mod common;
+
+use common::{scene_at, temp_dir, Rng};
+use glam::Vec3;
+use strata::accel::{BuildQuality, PACKET_SIZE};
+use strata::math::Ray;
+use strata::scene::{scene_from_str, RenderOverrides, Scene};
+
+/// A bumpy UV sphere (shared edges everywhere) and a flat grid (rays aimed
+/// at its vertices hit several triangles at exactly the same t).
+fn write_meshes(dir: &std::path::Path) {
+    let mut obj = String::new();
+    let (nu, nv) = (48, 24);
+    for j in 0..=nv {
+        for i in 0..nu {
+            let th = std::f32::consts::PI * j as f32 / nv as f32;
+            let ph = std::f32::consts::TAU * i as f32 / nu as f32;
+            let r = 1.0 + 0.05 * ((5.0 * ph).sin() * (3.0 * th).cos());
+            obj += &format!(
+                "v {} {} {}\n",
+                r * th.sin() * ph.cos(),
+                r * th.cos(),
+                r * th.sin() * ph.sin()
+            );
+        }
+    }
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * nu + i + 1;
+            let b = j * nu + (i + 1) % nu + 1;
+            let (c, d) = (a + nu, b + nu);
+            obj += &format!("f {a} {b} {d}\nf {a} {d} {c}\n");
+        }
+    }
+    std::fs::write(dir.join("bumpy.obj"), obj).unwrap();
+    let mut grid = String::new();
+    let n = 16;
+    for j in 0..=n {
+        for i in 0..=n {
+            grid += &format!("v {} -1.5 {}\n", i as f32 / 4.0 - 2.0, j as f32 / 4.0 - 2.0);
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            let (b, c, d) = (a + 1, a + n + 1, a + n + 2);
+            grid += &format!("f {a} {b} {d}\nf {a} {d} {c}\n");
+        }
+    }
+    std::fs::write(dir.join("grid.obj"), grid).unwrap();
+}
+
+fn scenes() -> Vec<(BuildQuality, Scene)> {
+    let dir = temp_dir("packets");
+    write_meshes(&dir);
+    let text = r#"
+[[objects]]
+mesh = "bumpy.obj"
+[[objects]]
+mesh = "grid.obj"
+[[objects]]
+sphere = { center = [1.2, 0.8, 0.5], radius = 0.3 }
+[[objects]]
+plane = { point = [0.0, -3.0, 0.0], normal = [0.0, 1.0, 0.0] }
+"#;
+    let path = dir.join("scene.toml");
+    let mut out = vec![(BuildQuality::Auto, scene_at(text, &path))];
+    for q in [
+        BuildQuality::Fastest,
+        BuildQuality::Fast,
+        BuildQuality::Medium,
+        BuildQuality::High,
+    ] {
+        let o = RenderOverrides {
+            bvh_quality: q,
+            ..RenderOverrides::default()
+        };
+        out.push((q, scene_from_str(text, &path, &o).unwrap()));
+    }
+    out
+}
+
+/// Batches of up to eight rays.
+fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
+    let mut rng = Rng(7);
+    // Lens samples of one pixel: origins on a 0.1 lens, aimed at one focus point.
+    let camera: Vec<Vec<Ray>> = (0..400)
+        .map(|p| {
+            let focus = Vec3::new(
+                (p % 20) as f32 / 10.0 - 1.0,
+                (p / 20) as f32 / 10.0 - 1.0,
+                0.0,
+            );
+            (0..PACKET_SIZE)
+                .map(|_| {
+                    let o = Vec3::new(rng.range(-0.1, 0.1), rng.range(-0.1, 0.1), 3.0);
+                    Ray::new(o, focus - o)
+                })
+                .collect()
+        })
+        .collect();
+    // Shadow rays from points on the mesh to a square light, with tmax short of it.
+    let shadow: Vec<Vec<Ray>> = camera
+        .iter()
+        .filter_map(|b| scene.intersect(&b[0]).map(|h| b[0].at(h.t * 0.999)))
+        .map(|p| {
+            (0..PACKET_SIZE - (rng.next() * 4.0) as usize)
+                .map(|_| {
+                    let l = Vec3::new(rng.range(-0.5, 0.5), 3.0, rng.range(-0.5, 0.5));
+                    Ray::segment(p, l - p, 0.999)
+                })
+                .collect()
+        })
+        .collect();
+    // Random chords of the bounding sphere, all in one octant (so they form
+    // packets) and in any direction (so most fall back to single rays).
+    let mut chords = |octant: bool| -> Vec<Vec<Ray>> {
+        (0..300)
+            .map(|_| {
+                (0..PACKET_SIZE)
+                    .map(|_| {
+                        let a = rng.unit_vector() * 3.0;
+                        let mut d = rng.unit_vector() * 3.0 - a;
+                        if octant {
+                            d = d.abs() * Vec3::new(-1.0, 1.0, -1.0);
+                        }
+                        Ray::new(a, d)
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let one_octant = chords(true);
+    let any = chords(false);
+    // Aimed exactly at the grid's vertices and edge midpoints from one point.
+    let mut aimed = Vec::new();
+    for j in 0..=16 {
+        let o = Vec3::new(0.1, 1.5, 0.05 * j as f32);
+        aimed.push(
+            (0..=16)
+                .step_by(2)
+                .take(PACKET_SIZE)
+                .map(|i| {
+                    let t = Vec3::new(
+                        i as f32 / 4.0 - 2.0 + if j % 2 == 1 { 0.125 } else { 0.0 },
+                        -1.5,
+                        j as f32 / 4.0 - 2.0,
+                    );
+                    Ray::new(o, t - o)
+                })
+                .collect(),
+        );
+    }
+    vec![
+        ("camera", camera),
+        ("shadow", shadow),
+        ("chords-one-octant", one_octant),
+        ("chords", any),
+        ("aimed-at-vertices", aimed),
+    ]
+}
+
+#[test]
+fn packets_and_single_rays_return_identical_hits() {
+    for (quality, scene) in scenes() {
+        for (name, batches) in ray_sets(&scene) {
+            let mut hits = 0;
+            for batch in &batches {
+                let mut got = [None; PACKET_SIZE];
+                scene.intersect_packet(batch, &mut got);
+                let mut blocked = [false; PACKET_SIZE];
+                let except = scene.triangle_count; // the sphere
+                scene.occluded_packet(batch, except, &mut blocked);
+                for (i, ray) in batch.iter().enumerate() {
+                    let want = scene.intersect(ray);
+                    assert_eq!(
+                        got[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                        want.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                        "{quality:?} {name}: ray {ray:?}"
+                    );
+                    assert_eq!(
+                        blocked[i],
+                        scene.occluded_except(ray, except),
+                        "{quality:?} {name} occlusion: ray {ray:?}"
+                    );
+                    hits += want.is_some() as usize;
+                }
+            }
+            assert!(hits > 0, "{name}: the set should hit something");
+        }
+    }
+}
