@@ -91,3 +91,34 @@ fn coordinates_near_1e30_render_without_nan_or_panic() {
         [[objects]]\nsphere = { radius = 0.5 }\n";
     assert_eq!(render_invalid(text, &dir), 0);
 }
+
+#[test]
+fn every_scene_in_scenes_renders_without_nan_or_infinity() {
+    let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes"));
+    let mut rendered = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        // Small and quick, but with every effect the scene asks for.
+        let overrides = strata::scene::RenderOverrides {
+            width: Some(48),
+            height: Some(36),
+            spp: Some(4),
+            ..Default::default()
+        };
+        let (scene, _) =
+            strata::scene::load_scene(&path, &overrides).unwrap_or_else(|e| panic!("{e}"));
+        let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
+        assert_eq!(
+            film.invalid,
+            0,
+            "{}: first bad sample {:?}",
+            path.display(),
+            film.first_invalid
+        );
+        rendered += 1;
+    }
+    assert!(rendered >= 8, "found the scenes ({rendered})");
+}

@@ -11,7 +11,8 @@ use strata::math::offset::spawn_origin;
 use strata::math::Ray;
 use strata::scene::Scene;
 
-/// One object of each primitive type, in unit size around the origin.
+/// One object of each primitive type, in unit size around the origin (area
+/// light surfaces are placed by the caller, since lights take no transform).
 fn objects() -> Vec<(&'static str, String)> {
     let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
     vec![
@@ -29,6 +30,16 @@ fn objects() -> Vec<(&'static str, String)> {
         (
             "plane",
             "plane = { point = [0.0, 0.1, 0.0], normal = [0.1, 1.0, 0.2] }".to_string(),
+        ),
+        (
+            "rect light",
+            "[[lights]]\ntype = \"rect\"\ncorner = CORNER\nedge_u = EDGE_U\nedge_v = EDGE_V\nradiance = [1.0, 1.0, 1.0]\n"
+                .to_string(),
+        ),
+        (
+            "disk light",
+            "[[lights]]\ntype = \"disk\"\ncenter = CORNER\nnormal = NORMAL\nradius = RADIUS\nradiance = [1.0, 1.0, 1.0]\n"
+                .to_string(),
         ),
     ]
 }
@@ -73,10 +84,22 @@ fn spawned_rays_never_hit_their_own_surface_at_any_scale() {
         for scale in [1e-4f32, 1.0, 1e5] {
             for _ in 0..1000 {
                 // 1000 random transforms per (shape, scale), each probed by 2 rays.
-                let text = format!(
-                    "[[objects]]\n{shape}\n{}\n",
-                    random_transform(&mut rng, scale)
-                );
+                let text = if shape.starts_with("[[lights]]") {
+                    // Light surfaces take no transform: place them by random edges instead.
+                    let (e1, e2) = (rng.unit_vector() * scale, rng.unit_vector() * scale);
+                    let c = rng.unit_vector() * rng.range(0.0, 2.0) * scale - 0.5 * (e1 + e2);
+                    shape
+                        .replace("CORNER", &format!("{:?}", c.to_array()))
+                        .replace("EDGE_U", &format!("{:?}", e1.to_array()))
+                        .replace("EDGE_V", &format!("{:?}", e2.to_array()))
+                        .replace("NORMAL", &format!("{:?}", e1.cross(e2).to_array()))
+                        .replace("RADIUS", &format!("{}", 0.8 * scale))
+                } else {
+                    format!(
+                        "[[objects]]\n{shape}\n{}\n",
+                        random_transform(&mut rng, scale)
+                    )
+                };
                 let scene = scene_at(&text, Path::new("robust.toml"));
                 for _ in 0..2 {
                     let target = rng.unit_vector() * rng.range(0.0, 0.8) * scale;
