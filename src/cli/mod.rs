@@ -1,6 +1,8 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod merge;
 pub mod render;
+pub mod scaling;
 
 use clap::{Parser, Subcommand};
 use strata::error::InputError;
@@ -21,6 +23,10 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
     Render(render::RenderArgs),
+    /// Combine the .strata parts of a sliced render into the image one process would make.
+    Merge(merge::MergeArgs),
+    /// Measure speedup and efficiency against threads (and processes); writes CSV and SVG.
+    Scaling(scaling::ScalingArgs),
 }
 
 pub enum CliError {
@@ -39,6 +45,8 @@ impl From<InputError> for CliError {
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Merge(args)) => merge::run(args),
+        Some(Command::Scaling(args)) => scaling::run(args),
         None => render::run(cli.render),
     }
 }
