@@ -3,6 +3,10 @@
 //! The data flow is describe → compile → accelerate → sample → shade →
 //! schedule → output; see the README's architecture section.
 
+// `!(x > 0.0)` is how this crate says "not positive, or NaN": rejecting NaN
+// is the point, so the partial-order lint would make the code wrong.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod accel;
 pub mod camera;
 pub mod error;

@@ -6,7 +6,11 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-fn run_render(dir: &Path, scene_text: Option<&str>, extra_files: &[(&str, &[u8])]) -> (i32, String, bool) {
+fn run_render(
+    dir: &Path,
+    scene_text: Option<&str>,
+    extra_files: &[(&str, &[u8])],
+) -> (i32, String, bool) {
     let scene = dir.join("scene.toml");
     if let Some(text) = scene_text {
         std::fs::write(&scene, text).unwrap();
@@ -17,7 +21,13 @@ fn run_render(dir: &Path, scene_text: Option<&str>, extra_files: &[(&str, &[u8])
     let out = dir.join("out.png");
     let _ = std::fs::remove_file(&out);
     let output = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"])
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr).to_string();
@@ -28,73 +38,179 @@ fn run_render(dir: &Path, scene_text: Option<&str>, extra_files: &[(&str, &[u8])
     (output.status.code().unwrap_or(-1), stderr, leftovers)
 }
 
-fn assert_rejected(name: &str, scene: Option<&str>, files: &[(&str, &[u8])], must_mention: &[&str]) {
+fn assert_rejected(
+    name: &str,
+    scene: Option<&str>,
+    files: &[(&str, &[u8])],
+    must_mention: &[&str],
+) {
     let dir = common::temp_dir(&format!("bad-{name}"));
     let (code, stderr, leftovers) = run_render(&dir, scene, files);
     assert_eq!(code, 2, "{name}: exit code, stderr: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{name}: one line, got: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "{name}: one line, got: {stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     for m in must_mention {
         assert!(stderr.contains(m), "{name}: '{m}' missing from: {stderr}");
     }
-    assert!(!leftovers, "{name}: an output or temporary file was left behind");
+    assert!(
+        !leftovers,
+        "{name}: an output or temporary file was left behind"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn malformed_toml_names_the_line() {
-    assert_rejected("syntax", Some("[render]\nwidth = 10\n[camera\n"), &[], &["scene.toml", "line 3"]);
+    assert_rejected(
+        "syntax",
+        Some("[render]\nwidth = 10\n[camera\n"),
+        &[],
+        &["scene.toml", "line 3"],
+    );
 }
 
 #[test]
 fn unknown_keys_name_the_key_and_line() {
-    assert_rejected("unknown", Some("[render]\nwidth = 10\nwdth = 3\n"), &[], &["scene.toml", "line 3", "wdth"]);
-    assert_rejected("unknown-obj", Some("[[objects]]\nsphere = { radius = 1.0, centre = [0.0, 0.0, 0.0] }\n"), &[], &["centre"]);
+    assert_rejected(
+        "unknown",
+        Some("[render]\nwidth = 10\nwdth = 3\n"),
+        &[],
+        &["scene.toml", "line 3", "wdth"],
+    );
+    assert_rejected(
+        "unknown-obj",
+        Some("[[objects]]\nsphere = { radius = 1.0, centre = [0.0, 0.0, 0.0] }\n"),
+        &[],
+        &["centre"],
+    );
 }
 
 #[test]
 fn nan_infinite_and_negative_numbers_name_the_key() {
-    assert_rejected("nan", Some("[[objects]]\nsphere = { radius = nan }\n"), &[], &["objects[0].sphere.radius"]);
-    assert_rejected("inf", Some("[[objects]]\nsphere = { center = [inf, 0.0, 0.0], radius = 1.0 }\n"), &[], &["objects[0].sphere.center"]);
-    assert_rejected("neg", Some("[[objects]]\ncylinder = { radius = -1.0, height = 1.0 }\n"), &[], &["objects[0].cylinder.radius"]);
-    assert_rejected("neg-light", Some("[[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [-1.0, 1.0, 1.0]\n"), &[], &["lights[0].intensity"]);
+    assert_rejected(
+        "nan",
+        Some("[[objects]]\nsphere = { radius = nan }\n"),
+        &[],
+        &["objects[0].sphere.radius"],
+    );
+    assert_rejected(
+        "inf",
+        Some("[[objects]]\nsphere = { center = [inf, 0.0, 0.0], radius = 1.0 }\n"),
+        &[],
+        &["objects[0].sphere.center"],
+    );
+    assert_rejected(
+        "neg",
+        Some("[[objects]]\ncylinder = { radius = -1.0, height = 1.0 }\n"),
+        &[],
+        &["objects[0].cylinder.radius"],
+    );
+    assert_rejected(
+        "neg-light",
+        Some("[[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [-1.0, 1.0, 1.0]\n"),
+        &[],
+        &["lights[0].intensity"],
+    );
 }
 
 #[test]
 fn zero_length_normals_and_axes_are_rejected() {
-    assert_rejected("normal", Some("[[objects]]\nplane = { normal = [0.0, 0.0, 0.0] }\n"), &[], &["objects[0].plane.normal"]);
-    assert_rejected("axis", Some("[[objects]]\ncylinder = { axis = [0.0, 0.0, 0.0], radius = 1.0, height = 1.0 }\n"), &[], &["objects[0].cylinder.axis"]);
-    assert_rejected("scale", Some("[[objects]]\nsphere = { radius = 1.0 }\ntransform = { scale = [1.0, 0.0, 1.0] }\n"), &[], &["objects[0].transform.scale"]);
+    assert_rejected(
+        "normal",
+        Some("[[objects]]\nplane = { normal = [0.0, 0.0, 0.0] }\n"),
+        &[],
+        &["objects[0].plane.normal"],
+    );
+    assert_rejected(
+        "axis",
+        Some("[[objects]]\ncylinder = { axis = [0.0, 0.0, 0.0], radius = 1.0, height = 1.0 }\n"),
+        &[],
+        &["objects[0].cylinder.axis"],
+    );
+    assert_rejected(
+        "scale",
+        Some("[[objects]]\nsphere = { radius = 1.0 }\ntransform = { scale = [1.0, 0.0, 1.0] }\n"),
+        &[],
+        &["objects[0].transform.scale"],
+    );
 }
 
 #[test]
 fn a_camera_up_parallel_to_the_view_is_rejected() {
-    let text = "[camera]\nposition = [0.0, 5.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\n";
+    let text =
+        "[camera]\nposition = [0.0, 5.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\n";
     assert_rejected("up", Some(text), &[], &["camera.up"]);
 }
 
 #[test]
 fn missing_files_are_named() {
     assert_rejected("no-scene", None, &[], &["scene.toml", "cannot read"]);
-    assert_rejected("no-mesh", Some("[[objects]]\nmesh = \"gone.obj\"\n"), &[], &["gone.obj"]);
+    assert_rejected(
+        "no-mesh",
+        Some("[[objects]]\nmesh = \"gone.obj\"\n"),
+        &[],
+        &["gone.obj"],
+    );
 }
 
 #[test]
 fn malformed_obj_and_gltf_name_the_file_and_line_or_location() {
     let scene = "[[objects]]\nmesh = \"bad.obj\"\n";
-    assert_rejected("obj", Some(scene), &[("bad.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")], &["bad.obj", "line 4"]);
-    assert_rejected("obj-nan", Some(scene), &[("bad.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n")], &["bad.obj", "line 2"]);
+    assert_rejected(
+        "obj",
+        Some(scene),
+        &[("bad.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")],
+        &["bad.obj", "line 4"],
+    );
+    assert_rejected(
+        "obj-nan",
+        Some(scene),
+        &[("bad.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n")],
+        &["bad.obj", "line 2"],
+    );
     let scene = "[[objects]]\nmesh = \"bad.gltf\"\n";
-    assert_rejected("gltf", Some(scene), &[("bad.gltf", b"{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [")], &["bad.gltf"]);
+    assert_rejected(
+        "gltf",
+        Some(scene),
+        &[(
+            "bad.gltf",
+            b"{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [",
+        )],
+        &["bad.gltf"],
+    );
     let scene = "[[objects]]\nmesh = \"bad.glb\"\n";
-    assert_rejected("glb", Some(scene), &[("bad.glb", b"glTF\x02\x00\x00\x00\x05\x00\x00\x00")], &["bad.glb"]);
+    assert_rejected(
+        "glb",
+        Some(scene),
+        &[("bad.glb", b"glTF\x02\x00\x00\x00\x05\x00\x00\x00")],
+        &["bad.glb"],
+    );
 }
 
 #[test]
 fn unknown_materials_and_shapeless_objects_are_rejected() {
-    assert_rejected("mat", Some("[[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"nope\"\n"), &[], &["objects[0].material", "nope"]);
-    assert_rejected("shapeless", Some("[[objects]]\nmaterial = \"x\"\n"), &[], &["objects[0]"]);
-    assert_rejected("two", Some("[[objects]]\nsphere = { radius = 1.0 }\nplane = { normal = [0.0, 1.0, 0.0] }\n"), &[], &["objects[0]"]);
+    assert_rejected(
+        "mat",
+        Some("[[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"nope\"\n"),
+        &[],
+        &["objects[0].material", "nope"],
+    );
+    assert_rejected(
+        "shapeless",
+        Some("[[objects]]\nmaterial = \"x\"\n"),
+        &[],
+        &["objects[0]"],
+    );
+    assert_rejected(
+        "two",
+        Some("[[objects]]\nsphere = { radius = 1.0 }\nplane = { normal = [0.0, 1.0, 0.0] }\n"),
+        &[],
+        &["objects[0]"],
+    );
 }
 
 #[test]
@@ -102,7 +218,12 @@ fn a_bad_output_extension_writes_nothing() {
     let dir = common::temp_dir("bad-ext");
     std::fs::write(dir.join("s.toml"), "").unwrap();
     let output = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(["render", dir.join("s.toml").to_str().unwrap(), "-o", dir.join("out.jpg").to_str().unwrap()])
+        .args([
+            "render",
+            dir.join("s.toml").to_str().unwrap(),
+            "-o",
+            dir.join("out.jpg").to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert_eq!(output.status.code(), Some(2));

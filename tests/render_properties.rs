@@ -25,7 +25,10 @@ fn sphere_silhouette_matches_the_analytic_projected_area() {
     let px_per_unit = h as f64 / (2.0 * (fov.to_radians() / 2.0).tan());
     let expected = std::f64::consts::PI * (rho * px_per_unit).powi(2);
     let got = covered(&render_rgb(&s, 0));
-    assert!((got - expected).abs() / expected < 0.01, "covered {got:.1} px, analytic {expected:.1} px");
+    assert!(
+        (got - expected).abs() / expected < 0.01,
+        "covered {got:.1} px, analytic {expected:.1} px"
+    );
 }
 
 #[test]
@@ -40,8 +43,14 @@ fn orthographic_camera_shows_no_perspective_shrink() {
     let far = render_at(-20.0);
     // Radius 1 in a 4-unit-high view of 200 px: 50 px radius.
     let expected = std::f64::consts::PI * 50.0 * 50.0;
-    assert!((near - expected).abs() / expected < 0.01, "{near} vs {expected}");
-    assert!((near - far).abs() / expected < 0.002, "near {near} far {far}");
+    assert!(
+        (near - expected).abs() / expected < 0.01,
+        "{near} vs {expected}"
+    );
+    assert!(
+        (near - far).abs() / expected < 0.002,
+        "near {near} far {far}"
+    );
 }
 
 #[test]
@@ -55,7 +64,10 @@ fn the_mirror_shows_the_object_it_faces() {
     let matte = format!("{base}[materials.wall]\ndiffuse = [0.0, 0.0, 0.0]\n");
     let centre = 16 * 32 + 16;
     let m = render_rgb(&scene(&mirror), 0)[centre];
-    assert!(m.x > 0.99 && m.y == 0.0 && m.z == 0.0, "mirror shows red: {m}");
+    assert!(
+        m.x > 0.99 && m.y == 0.0 && m.z == 0.0,
+        "mirror shows red: {m}"
+    );
     let w = render_rgb(&scene(&matte), 0)[centre];
     assert_eq!(w, Vec3::ZERO, "a matte black wall shows nothing");
 }
@@ -74,19 +86,30 @@ fn a_glass_sphere_inverts_the_background() {
     let img = render_rgb(&scene(text), 0);
     let at = |x: usize, y: usize| img[y * 101 + x];
     // Outside the ball (its image radius is about 28 px): upright.
-    assert!(at(50, 5).x > 0.9 && at(50, 95).y > 0.9, "outside: red above, green below");
+    assert!(
+        at(50, 5).x > 0.9 && at(50, 95).y > 0.9,
+        "outside: red above, green below"
+    );
     // Inside the ball's image: inverted.
     let above = at(50, 40);
     let below = at(50, 60);
-    assert!(above.y > 0.5 && above.x < 0.1, "inside, above centre sees green: {above}");
-    assert!(below.x > 0.5 && below.y < 0.1, "inside, below centre sees red: {below}");
+    assert!(
+        above.y > 0.5 && above.x < 0.1,
+        "inside, above centre sees green: {above}"
+    );
+    assert!(
+        below.x > 0.5 && below.y < 0.1,
+        "inside, below centre sees red: {below}"
+    );
 }
 
 #[test]
 fn thin_lens_with_zero_aperture_is_exactly_the_pinhole() {
     let body = "[render]\nwidth = 64\nheight = 48\nspp = 4\n[[lights]]\ntype = \"point\"\nposition = [2.0, 5.0, 3.0]\nintensity = [20.0, 20.0, 20.0]\n\
         [[objects]]\nsphere = { center = [0.0, 0.5, 0.0], radius = 0.5 }\n[[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\n";
-    let pinhole = scene(&format!("{body}[camera]\ntype = \"perspective\"\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.5, 0.0]\n"));
+    let pinhole = scene(&format!(
+        "{body}[camera]\ntype = \"perspective\"\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.5, 0.0]\n"
+    ));
     let lens = scene(&format!(
         "{body}[camera]\ntype = \"thin_lens\"\naperture = 0.0\nfocus_distance = 3.0\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.5, 0.0]\n"
     ));
@@ -95,7 +118,8 @@ fn thin_lens_with_zero_aperture_is_exactly_the_pinhole() {
 
 #[test]
 fn the_image_is_bit_identical_for_any_thread_count() {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/seed.toml")).unwrap();
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/seed.toml")).unwrap();
     let mut s = scene(&text);
     s.settings.width = 96;
     s.settings.height = 72;
@@ -114,5 +138,9 @@ fn point_light_irradiance_follows_the_inverse_square_law() {
         [[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\nmaterial = \"white\"\n";
     let l = render_rgb(&scene(text), 0)[0];
     let expected = 0.5 / std::f32::consts::PI * 8.0 / 4.0;
-    assert!((l.x - expected).abs() / expected < 1e-4, "{} vs {expected}", l.x);
+    assert!(
+        (l.x - expected).abs() / expected < 1e-4,
+        "{} vs {expected}",
+        l.x
+    );
 }

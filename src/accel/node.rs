@@ -48,7 +48,7 @@ pub enum ChildRef {
 }
 
 pub fn encode_leaf(start: u32, count: u32) -> u32 {
-    debug_assert!(count >= 1 && count <= MAX_LEAF_PRIMS && start <= START_MASK);
+    debug_assert!((1..=MAX_LEAF_PRIMS).contains(&count) && start <= START_MASK);
     LEAF_BIT | ((count - 1) << COUNT_SHIFT) | start
 }
 

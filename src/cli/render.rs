@@ -40,6 +40,12 @@ pub struct RenderArgs {
     /// random | stratified (correlated multi-jittered, any sample count).
     #[arg(long)]
     pub sampler: Option<SamplerKind>,
+    /// solid_angle (default: spherical rectangles, sphere cones) | area.
+    #[arg(long)]
+    pub light_sampling: Option<strata::shade::light::LightSampling>,
+    /// lobe (default: importance-sample the cosⁿ lobe) | uniform (hemisphere; a baseline).
+    #[arg(long)]
+    pub glossy_sampling: Option<strata::shade::integrator::GlossySampling>,
     /// Seed of every random number: same seed, same image.
     #[arg(long)]
     pub seed: Option<u32>,
@@ -127,6 +133,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         max_depth: args.max_depth,
         sampler: args.sampler,
         seed: args.seed,
+        light_sampling: args.light_sampling,
+        glossy_sampling: args.glossy_sampling,
         bvh_quality: args.bvh_quality,
     };
     let (scene, timings) = load_scene(&scene_path, &overrides)?;

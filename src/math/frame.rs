@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 /// An orthonormal frame whose `z` axis is a given unit vector.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Frame {
     pub x: Vec3,
     pub y: Vec3,

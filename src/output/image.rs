@@ -111,7 +111,7 @@ mod tests {
     fn exr_round_trips_linear_values_and_png_is_srgb() {
         let dir = std::env::temp_dir().join(format!("strata-img-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let pixels = vec![Vec3::new(0.0, 0.5, 2.0), Vec3::new(0.214, 1e-3, 100.0)];
+        let pixels = vec![Vec3::new(0.0, 0.5, 2.0), Vec3::new(0.2158, 1e-3, 100.0)];
         let exr = dir.join("a.exr");
         write_image(&exr, &pixels, 2, 1).unwrap();
         let (back, w, h) = read_image(&exr).unwrap();
@@ -120,7 +120,7 @@ mod tests {
         let png = dir.join("a.png");
         write_image(&png, &pixels, 2, 1).unwrap();
         let raw = image::open(&png).unwrap().to_rgb8();
-        // Linear 0.214 is sRGB ≈ 0.5; values above 1 clamp to 255.
+        // Linear 0.2158 is sRGB 128/255; values above 1 clamp to 255.
         assert_eq!(raw.get_pixel(1, 0)[0], 128);
         assert_eq!(raw.get_pixel(0, 0)[2], 255);
         assert!(write_image(&dir.join("a.jpg"), &pixels, 2, 1).is_err());

@@ -166,6 +166,7 @@ pub fn render(
         AtomicU64::new(0),
         AtomicU64::new(0),
         AtomicU64::new(0),
+        AtomicU64::new(0),
     ];
     let mut scratch = vec![PixelSum::default(); n];
     let start = Instant::now();
@@ -189,10 +190,13 @@ pub fn render(
                         }
                     }
                     let c = integrator.counts;
-                    for (a, v) in rays
-                        .iter()
-                        .zip([c.camera, c.shadow, c.reflection, c.refraction])
-                    {
+                    for (a, v) in rays.iter().zip([
+                        c.camera,
+                        c.shadow,
+                        c.reflection,
+                        c.refraction,
+                        c.glossy_rejected,
+                    ]) {
                         a.fetch_add(v, Ordering::Relaxed);
                     }
                     if opts.schedule == Schedule::Slices {
@@ -204,7 +208,7 @@ pub fn render(
             film.add_pixel(i, acc);
         }
         let elapsed = start.elapsed().as_secs_f64();
-        let total: u64 = rays.iter().map(|a| a.load(Ordering::Relaxed)).sum();
+        let total: u64 = rays[..4].iter().map(|a| a.load(Ordering::Relaxed)).sum();
         bar.set_message(format!(
             "pass {}/{} {:.1} Mrays/s",
             pass_index + 1,
@@ -222,6 +226,7 @@ pub fn render(
             shadow: load(1),
             reflection: load(2),
             refraction: load(3),
+            glossy_rejected: load(4),
         },
         seconds: start.elapsed().as_secs_f64(),
         threads,
@@ -243,11 +248,7 @@ pub fn render_pixel(
     let y = (index / s.width as usize) as u32;
     let sampler = PixelSampler::new(s.sampler, s.seed, index as u32);
     for sample in samples {
-        let ctx = SampleContext {
-            sampler,
-            sample,
-            spp: s.spp,
-        };
+        let ctx = SampleContext::new(sampler, sample, s.spp);
         let jitter = sampler.get_2d(Dim::PIXEL, sample, s.spp);
         let film = Vec2::new(x as f32, y as f32) + jitter;
         acc.add(integrator.camera_sample(&ctx, film), sample);

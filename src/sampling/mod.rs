@@ -6,6 +6,7 @@
 pub mod cmj;
 pub mod hash;
 pub mod sampler;
+pub mod spherical_rect;
 pub mod warp;
 
 pub use sampler::{Dim, PixelSampler, SamplerKind};

@@ -17,7 +17,9 @@ use crate::sampling::SamplerKind;
 use crate::shade::light::Light;
 use crate::shade::material::Material;
 use crate::shape::cylinder::Cylinder;
+use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
+use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
@@ -35,6 +37,8 @@ pub struct RenderOverrides {
     pub max_depth: Option<u32>,
     pub sampler: Option<SamplerKind>,
     pub seed: Option<u32>,
+    pub light_sampling: Option<crate::shade::light::LightSampling>,
+    pub glossy_sampling: Option<crate::shade::integrator::GlossySampling>,
     pub bvh_quality: BuildQuality,
 }
 
@@ -72,8 +76,7 @@ pub fn compile(
         c.add_material(name.clone(), material);
     }
     for (i, light) in desc.lights.iter().enumerate() {
-        let light = c.light(light, &format!("lights[{i}]"))?;
-        c.lights.push(light);
+        c.light(light, &format!("lights[{i}]"))?;
     }
     for (i, obj) in desc.objects.iter().enumerate() {
         c.object(obj, &format!("objects[{i}]"), Affine3A::IDENTITY, 0)?;
@@ -81,6 +84,16 @@ pub fn compile(
     let settings = c.settings(&desc.render, overrides)?;
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
     let load = start.elapsed();
+
+    // Area lights were recorded by shape index; make them global primitive ids.
+    let n_tris = c.triangles.len() as u32;
+    for light in &mut c.lights {
+        if let Light::Rect { prim, .. } | Light::Disk { prim, .. } | Light::Sphere { prim, .. } =
+            light
+        {
+            *prim += n_tris;
+        }
+    }
 
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
@@ -219,12 +232,15 @@ impl Compiler {
             ior: self.positive(m.ior, &k("ior"))?,
             fresnel: m.fresnel,
             emission: self.colour(m.emission, &k("emission"))?,
+            one_sided: false,
         })
     }
 
-    fn light(&self, l: &LightDesc, key: &str) -> InputResult<Light> {
+    /// Validate a light and add it; area lights also become visible,
+    /// one-sided emitting primitives.
+    fn light(&mut self, l: &LightDesc, key: &str) -> InputResult<()> {
         let k = |field: &str| format!("{key}.{field}");
-        Ok(match l {
+        let light = match l {
             LightDesc::Point {
                 position,
                 intensity,
@@ -239,13 +255,84 @@ impl Compiler {
                 direction: self.direction(*direction, &k("direction"))?,
                 irradiance: self.colour(*irradiance, &k("irradiance"))?,
             },
-            LightDesc::Rect { .. } | LightDesc::Disk { .. } | LightDesc::Sphere { .. } => {
-                return Err(self.err(
-                    key,
-                    "area lights (rect, disk, sphere) are not supported yet",
-                ));
+            LightDesc::Rect {
+                corner,
+                edge_u,
+                edge_v,
+                radiance,
+            } => {
+                let corner = self.v3(*corner, &k("corner"))?;
+                let eu = self.v3(*edge_u, &k("edge_u"))?;
+                let ev = self.v3(*edge_v, &k("edge_v"))?;
+                let rect = Rect::new(corner, eu, ev).ok_or_else(|| {
+                    self.err(key, "edge_u and edge_v must be non-zero and not parallel")
+                })?;
+                let radiance = self.colour(*radiance, &k("radiance"))?;
+                let prim = self.emitter(Shape::Rect(rect), radiance, true);
+                Light::Rect {
+                    rect,
+                    radiance,
+                    prim,
+                }
             }
-        })
+            LightDesc::Disk {
+                center,
+                normal,
+                radius,
+                radiance,
+            } => {
+                let disk = Disk::new(
+                    self.v3(*center, &k("center"))?,
+                    self.direction(*normal, &k("normal"))?,
+                    self.positive(*radius, &k("radius"))?,
+                );
+                let radiance = self.colour(*radiance, &k("radiance"))?;
+                let prim = self.emitter(Shape::Disk(disk), radiance, true);
+                Light::Disk {
+                    disk,
+                    radiance,
+                    prim,
+                }
+            }
+            LightDesc::Sphere {
+                center,
+                radius,
+                radiance,
+            } => {
+                let center = self.v3(*center, &k("center"))?;
+                let radius = self.positive(*radius, &k("radius"))?;
+                let radiance = self.colour(*radiance, &k("radiance"))?;
+                let prim = self.emitter(Shape::Sphere(Sphere { center, radius }), radiance, false);
+                Light::Sphere {
+                    center,
+                    radius,
+                    radiance,
+                    prim,
+                }
+            }
+        };
+        self.lights.push(light);
+        Ok(())
+    }
+
+    /// Add the visible surface of an area light: an emitting primitive that
+    /// reflects nothing. Returns its index among the analytic shapes; the
+    /// global primitive id is fixed up once the triangle count is known.
+    fn emitter(&mut self, shape: Shape, radiance: Vec3, one_sided: bool) -> u32 {
+        let material = Material {
+            diffuse: Vec3::ZERO,
+            emission: radiance,
+            one_sided,
+            ..Material::default()
+        };
+        self.materials.push(material);
+        let material = self.materials.len() as u32 - 1;
+        self.shapes.push(AnalyticPrim {
+            shape,
+            transform: NO_TRANSFORM,
+            material,
+        });
+        self.shapes.len() as u32 - 1
     }
 
     fn transform(&self, t: &TransformDesc, key: &str) -> InputResult<Affine3A> {
@@ -410,7 +497,7 @@ impl Compiler {
                 center: m.transform_point3(s.center),
                 radius: s.radius * scale,
             };
-            if !baked.center.is_finite() || !(baked.radius.is_finite() && baked.radius > 0.0) {
+            if !(baked.center.is_finite() && baked.radius.is_finite() && baked.radius > 0.0) {
                 return Err(self.err(key, "sphere is not finite after its transform"));
             }
             self.shapes.push(AnalyticPrim {
@@ -535,6 +622,8 @@ impl Compiler {
             sampler: o.sampler.unwrap_or(r.sampler),
             seed: o.seed.unwrap_or(r.seed),
             background: self.colour(r.background, "render.background")?,
+            light_sampling: o.light_sampling.unwrap_or(r.light_sampling),
+            glossy_sampling: o.glossy_sampling.unwrap_or(r.glossy_sampling),
         };
         for (value, name) in [
             (s.width, "width"),

@@ -53,6 +53,8 @@ pub struct RenderDesc {
     pub sampler: crate::sampling::SamplerKind,
     pub seed: u32,
     pub background: V3,
+    pub light_sampling: crate::shade::light::LightSampling,
+    pub glossy_sampling: crate::shade::integrator::GlossySampling,
 }
 
 impl Default for RenderDesc {
@@ -67,6 +69,8 @@ impl Default for RenderDesc {
             sampler: crate::sampling::SamplerKind::Stratified,
             seed: 0,
             background: [0.0; 3],
+            light_sampling: Default::default(),
+            glossy_sampling: Default::default(),
         }
     }
 }

@@ -10,7 +10,9 @@ use crate::scene::asset::MeshNormals;
 use crate::shade::light::Light;
 use crate::shade::material::Material;
 use crate::shape::cylinder::Cylinder;
+use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
+use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
 use crate::shape::triangle::{self, ShearedRay};
 use crate::shape::{PrimHit, Surface};
@@ -21,6 +23,10 @@ use glam::Vec3;
 pub enum Shape {
     Sphere(Sphere),
     Cylinder(Cylinder),
+    /// The visible surface of a `rect` area light.
+    Rect(Rect),
+    /// The visible surface of a `disk` area light.
+    Disk(Disk),
 }
 
 impl Shape {
@@ -28,6 +34,8 @@ impl Shape {
         match self {
             Shape::Sphere(s) => s.intersect(ray).map(|t| (t, 0)),
             Shape::Cylinder(c) => c.intersect(ray),
+            Shape::Rect(r) => r.intersect(ray).map(|t| (t, 0)),
+            Shape::Disk(d) => d.intersect(ray).map(|t| (t, 0)),
         }
     }
 
@@ -36,6 +44,8 @@ impl Shape {
         match self {
             Shape::Sphere(s) => s.surface_at(p),
             Shape::Cylinder(c) => c.surface_at(p, part),
+            Shape::Rect(r) => r.surface_at(p),
+            Shape::Disk(d) => d.surface_at(p),
         }
     }
 
@@ -43,6 +53,8 @@ impl Shape {
         match self {
             Shape::Sphere(s) => s.bounds(),
             Shape::Cylinder(c) => c.bounds(),
+            Shape::Rect(r) => r.bounds(),
+            Shape::Disk(d) => d.bounds(),
         }
     }
 }
@@ -81,6 +93,8 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     pub seed: u32,
     pub background: Vec3,
+    pub light_sampling: crate::shade::light::LightSampling,
+    pub glossy_sampling: crate::shade::integrator::GlossySampling,
 }
 
 #[derive(Debug, Clone)]
@@ -179,6 +193,19 @@ impl Scene {
     pub fn plane_index(&self, prim: u32) -> Option<usize> {
         let i = (u32::MAX - prim) as usize;
         (i < self.planes.len()).then_some(i)
+    }
+
+    /// True if anything other than primitive `except` (the light being
+    /// sampled) blocks the ray. Skipping the light's own primitive is exact,
+    /// where stopping the shadow ray a little short of it would need an epsilon.
+    pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
+        if self.planes.iter().any(|p| p.intersect(ray).is_some()) {
+            return true;
+        }
+        let sheared = ShearedRay::new(ray);
+        self.bvh.any_hit(ray, |id, r| {
+            id != except && self.hit_prim(id, r, &sheared).is_some()
+        })
     }
 
     /// The mesh a triangle belongs to.

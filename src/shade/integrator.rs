@@ -7,14 +7,25 @@
 //! refracted ray weighted by `transparency` (Snell's law, total internal
 //! reflection sends the refracted weight into the reflection).
 //! Recursion stops at `max_depth` or when the path weight falls below 1e-3.
+//!
+//! Distributed effects, each stratified over the pixel's one sample set:
+//! area lights take `shadow_samples` M samples per hit; a glossy surface
+//! (`glossiness` n > 0) replaces the mirror ray by rays importance-sampled
+//! from the normalised cosⁿ lobe around the mirror direction (Lafortune and
+//! Willems 1994), and the reflected radiance is the lobe-weighted average of
+//! incoming radiance. The first glossy hit of a path branches into
+//! `reflection_samples` K rays; deeper glossy hits trace one ray each, so
+//! the cost grows by K once, not Kᵈᵉᵖᵗʰ. Lobe directions that fall below the
+//! surface are rejected (they contribute nothing) and counted.
 
 use crate::math::offset::spawn_origin;
-use crate::math::Ray;
+use crate::math::{Frame, Ray};
+use crate::sampling::warp::{phong_lobe, phong_lobe_pdf, uniform_hemisphere};
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
 use crate::shade::material::Material;
 use crate::shape::Surface;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// Paths whose weight falls below this stop.
@@ -27,6 +38,8 @@ pub struct RayCounts {
     pub shadow: u64,
     pub reflection: u64,
     pub refraction: u64,
+    /// Glossy directions that fell below the surface (not traced, not leaked).
+    pub glossy_rejected: u64,
 }
 
 impl RayCounts {
@@ -39,15 +52,67 @@ impl RayCounts {
         self.shadow += o.shadow;
         self.reflection += o.reflection;
         self.refraction += o.refraction;
+        self.glossy_rejected += o.glossy_rejected;
     }
 }
 
-/// Identifies one camera sample: everything random in its path derives from this.
+/// How fuzzy reflections pick directions. `lobe` importance-samples the
+/// cosⁿ lobe; `uniform` samples the hemisphere uniformly (a baseline for
+/// `strata converge` and the variance tests).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GlossySampling {
+    #[default]
+    Lobe,
+    Uniform,
+}
+
+impl std::str::FromStr for GlossySampling {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "lobe" => Ok(Self::Lobe),
+            "uniform" => Ok(Self::Uniform),
+            _ => Err(format!(
+                "unknown glossy sampling '{s}' (expected lobe or uniform)"
+            )),
+        }
+    }
+}
+
+/// Identifies one camera sample and, after a glossy branch, one of its K
+/// branches: everything random in the path derives from this.
 #[derive(Debug, Clone, Copy)]
 pub struct SampleContext {
     pub sampler: PixelSampler,
     pub sample: u32,
     pub spp: u32,
+    /// Which branch of the first glossy split this path follows, of `branches`.
+    pub branch: u32,
+    pub branches: u32,
+}
+
+impl SampleContext {
+    pub fn new(sampler: PixelSampler, sample: u32, spp: u32) -> Self {
+        Self {
+            sampler,
+            sample,
+            spp,
+            branch: 0,
+            branches: 1,
+        }
+    }
+
+    /// This path's index in the pixel's set of `count()` paths.
+    #[inline]
+    pub fn index(&self) -> u32 {
+        self.sample * self.branches + self.branch
+    }
+
+    #[inline]
+    pub fn count(&self) -> u32 {
+        self.spp * self.branches
+    }
 }
 
 /// One path vertex, for `--debug-sample` replays.
@@ -58,6 +123,16 @@ pub struct PathEvent {
     pub ray: Ray,
     pub hit: Option<(f32, u32, Vec3)>,
     pub radiance: Vec3,
+}
+
+/// The shading point with its normals turned towards the incoming ray.
+struct Shading<'s> {
+    surface: &'s Surface,
+    material: &'s Material,
+    wo: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    entering: bool,
 }
 
 pub struct Integrator<'a> {
@@ -77,11 +152,11 @@ impl<'a> Integrator<'a> {
     }
 
     /// Radiance of one camera sample at film position `film`.
-    pub fn camera_sample(&mut self, ctx: &SampleContext, film: glam::Vec2) -> Vec3 {
+    pub fn camera_sample(&mut self, ctx: &SampleContext, film: Vec2) -> Vec3 {
         let lens = if self.scene.camera.uses_lens() {
             ctx.sampler.get_2d(Dim::LENS, ctx.sample, ctx.spp)
         } else {
-            glam::Vec2::splat(0.5)
+            Vec2::splat(0.5)
         };
         let ray = self.scene.camera.generate_ray(film, lens);
         self.counts.camera += 1;
@@ -112,13 +187,23 @@ impl<'a> Integrator<'a> {
         } else {
             (-surface.geometric_normal, -surface.shading_normal)
         };
+        let sh = Shading {
+            surface: &surface,
+            material,
+            wo,
+            ng,
+            ns,
+            entering,
+        };
 
-        let mut l = material.emission;
-        l += self.direct_light(&surface, material, wo, ng, ns);
-
+        let mut l = if entering || !material.one_sided {
+            material.emission
+        } else {
+            Vec3::ZERO
+        };
+        l += self.direct_light(ctx, depth, &sh);
         if depth < scene.settings.max_depth {
-            l += self
-                .specular_transport(ctx, &surface, material, wo, ng, ns, entering, depth, weight);
+            l += self.specular_transport(ctx, &sh, depth, weight);
         }
         self.record(depth, kind, ray, Some((hit.t, hit.prim, surface.p)), l);
         l
@@ -143,87 +228,85 @@ impl<'a> Integrator<'a> {
         }
     }
 
-    /// Phong direct lighting from every light, with one shadow ray per delta light.
-    fn direct_light(&mut self, s: &Surface, m: &Material, wo: Vec3, ng: Vec3, ns: Vec3) -> Vec3 {
+    /// Phong direct lighting: one shadow ray per delta light, M stratified
+    /// samples per area light.
+    fn direct_light(&mut self, ctx: &SampleContext, depth: u32, sh: &Shading) -> Vec3 {
+        let m = sh.material;
         let diffuse = m.diffuse.max_element() > 0.0;
         let specular = m.has_specular_lobe();
         if !diffuse && !specular {
             return Vec3::ZERO;
         }
+        let scene = self.scene;
+        let s = sh.surface;
+        let method = scene.settings.light_sampling;
         let mut l = Vec3::ZERO;
-        for light in &self.scene.lights {
-            let Some(ls) = light.sample(s.p) else {
-                continue;
-            };
-            let cos_i = ns.dot(ls.wi);
-            // Both normals must agree that the light is in front, or shading normals leak light.
-            if cos_i <= 0.0 || ng.dot(ls.wi) <= 0.0 {
-                continue;
-            }
-            let f = self.phong_brdf(m, wo, ls.wi, ns, diffuse, specular);
-            if f.max_element() <= 0.0 {
-                continue;
-            }
-            self.counts.shadow += 1;
-            let origin = spawn_origin(s.p, s.p_error, ng, ls.wi);
-            let tmax = if ls.distance.is_finite() {
-                (ls.distance - (origin - s.p).length()).max(0.0)
+        for (light_index, light) in scene.lights.iter().enumerate() {
+            let m_samples = if light.is_area() {
+                scene.settings.shadow_samples
             } else {
-                f32::INFINITY
+                1
             };
-            let shadow = Ray::segment(origin, ls.wi, tmax);
-            if !self.scene.occluded(&shadow) {
-                l += f * ls.irradiance * cos_i;
+            let dim = Dim::light(depth, light_index as u32);
+            let mut sum = Vec3::ZERO;
+            for j in 0..m_samples {
+                let u = if light.is_area() {
+                    ctx.sampler
+                        .get_2d(dim, ctx.index() * m_samples + j, ctx.count() * m_samples)
+                } else {
+                    Vec2::ZERO
+                };
+                let Some(ls) = light.sample(s.p, u, method) else {
+                    continue;
+                };
+                let cos_i = sh.ns.dot(ls.wi);
+                // Both normals must agree that the light is in front, or shading normals leak light.
+                if cos_i <= 0.0 || sh.ng.dot(ls.wi) <= 0.0 {
+                    continue;
+                }
+                let f = phong_brdf(m, sh.wo, ls.wi, sh.ns, diffuse, specular);
+                if f.max_element() <= 0.0 {
+                    continue;
+                }
+                self.counts.shadow += 1;
+                let origin = spawn_origin(s.p, s.p_error, sh.ng, ls.wi);
+                let tmax = if ls.distance.is_finite() {
+                    (ls.distance - (origin - s.p).length()).max(0.0)
+                } else {
+                    f32::INFINITY
+                };
+                let shadow = Ray::segment(origin, ls.wi, tmax);
+                let blocked = match light.prim() {
+                    Some(own) => scene.occluded_except(&shadow, own),
+                    None => scene.occluded(&shadow),
+                };
+                if !blocked {
+                    sum += f * ls.weight * cos_i;
+                }
             }
+            l += sum / m_samples as f32;
         }
         l
     }
 
-    /// ρ/π + k_s (n+2)/(2π) cosⁿα, α between the mirror of `wi` and `wo`.
-    #[inline]
-    fn phong_brdf(
-        &self,
-        m: &Material,
-        wo: Vec3,
-        wi: Vec3,
-        n: Vec3,
-        diffuse: bool,
-        specular: bool,
-    ) -> Vec3 {
-        let mut f = if diffuse { m.diffuse / PI } else { Vec3::ZERO };
-        if specular {
-            let r = 2.0 * n.dot(wi) * n - wi;
-            let cos_a = r.dot(wo);
-            if cos_a > 0.0 {
-                f += m.specular * ((m.shininess + 2.0) / (2.0 * PI) * cos_a.powf(m.shininess));
-            }
-        }
-        f
-    }
-
-    /// Mirror reflection and refraction.
-    #[allow(clippy::too_many_arguments)]
+    /// Mirror (or glossy) reflection and refraction.
     fn specular_transport(
         &mut self,
         ctx: &SampleContext,
-        s: &Surface,
-        m: &Material,
-        wo: Vec3,
-        ng: Vec3,
-        ns: Vec3,
-        entering: bool,
+        sh: &Shading,
         depth: u32,
         weight: f32,
     ) -> Vec3 {
+        let (m, s, wo, ng, ns) = (sh.material, sh.surface, sh.wo, sh.ng, sh.ns);
         let mut kr = m.reflectivity;
         let mut kt = m.transparency;
         let mut refracted = None;
         if kt > 0.0 {
-            let eta = if entering { 1.0 / m.ior } else { m.ior };
+            let eta = if sh.entering { 1.0 / m.ior } else { m.ior };
             match refract(wo, ns, eta) {
                 Some(t) => {
                     if m.fresnel {
-                        let f = schlick(wo.dot(ns), if entering { m.ior } else { 1.0 / m.ior });
+                        let f = schlick(wo.dot(ns), if sh.entering { m.ior } else { 1.0 / m.ior });
                         kr += kt * f;
                         kt *= 1.0 - f;
                     }
@@ -238,10 +321,12 @@ impl<'a> Integrator<'a> {
         }
         let mut l = Vec3::ZERO;
         if kr > 0.0 && weight * kr >= MIN_PATH_WEIGHT {
-            let dir = 2.0 * ns.dot(wo) * ns - wo;
-            if dir.dot(ng) > 0.0 {
+            let mirror = 2.0 * ns.dot(wo) * ns - wo;
+            if m.glossiness > 0.0 {
+                l += kr * self.glossy(ctx, s, m.glossiness, mirror, ng, depth, weight * kr);
+            } else if mirror.dot(ng) > 0.0 {
                 self.counts.reflection += 1;
-                let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
+                let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, mirror), mirror);
                 l += kr * self.radiance(ctx, &ray, depth + 1, weight * kr, "reflection");
             }
         }
@@ -254,6 +339,76 @@ impl<'a> Integrator<'a> {
         }
         l
     }
+
+    /// Lobe-weighted average of incoming radiance around `mirror`, with K
+    /// branches at the first glossy hit of the path and one ray after that.
+    #[allow(clippy::too_many_arguments)]
+    fn glossy(
+        &mut self,
+        ctx: &SampleContext,
+        s: &Surface,
+        exponent: f32,
+        mirror: Vec3,
+        ng: Vec3,
+        depth: u32,
+        weight: f32,
+    ) -> Vec3 {
+        let k = if ctx.branches == 1 {
+            self.scene.settings.reflection_samples
+        } else {
+            1
+        };
+        let lobe = Frame::from_z(mirror);
+        let hemisphere = Frame::from_z(ng);
+        let mut sum = Vec3::ZERO;
+        for b in 0..k {
+            let child = if k > 1 {
+                SampleContext {
+                    branch: b,
+                    branches: k,
+                    ..*ctx
+                }
+            } else {
+                *ctx
+            };
+            let u = ctx
+                .sampler
+                .get_2d(Dim::glossy(depth), child.index(), child.count());
+            let (dir, w) = match self.scene.settings.glossy_sampling {
+                GlossySampling::Lobe => (lobe.to_world(phong_lobe(u, exponent)), 1.0),
+                GlossySampling::Uniform => {
+                    let d = hemisphere.to_world(uniform_hemisphere(u));
+                    // Lobe density over the uniform density 1/(2π).
+                    (d, phong_lobe_pdf(d.dot(mirror), exponent) * 2.0 * PI)
+                }
+            };
+            if dir.dot(ng) <= 0.0 {
+                self.counts.glossy_rejected += 1;
+                continue;
+            }
+            if !(w > 0.0) {
+                continue;
+            }
+            self.counts.reflection += 1;
+            let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
+            sum += w * self.radiance(&child, &ray, depth + 1, weight, "glossy");
+        }
+        sum / k as f32
+    }
+}
+
+/// ρ/π + k_s (n+2)/(2π) cosⁿα, α between the mirror of `wi` and `wo`.
+#[inline]
+fn phong_brdf(m: &Material, wo: Vec3, wi: Vec3, n: Vec3, diffuse: bool, specular: bool) -> Vec3 {
+    let mut f = if diffuse { m.diffuse / PI } else { Vec3::ZERO };
+    if specular {
+        let r = 2.0 * n.dot(wi) * n - wi;
+        let cos_a = r.dot(wo);
+        if cos_a > 0.0 {
+            f += m.specular * ((m.shininess + 2.0) / (2.0 * PI) * cos_a.powf(m.shininess));
+        }
+    }
+    f
 }
 
 /// Snell's law: the refracted direction of `wo` (pointing away from the

@@ -32,6 +32,8 @@ pub struct Material {
     pub ior: f32,
     pub fresnel: bool,
     pub emission: Vec3,
+    /// Emit only from the front face (the surfaces of rect and disk lights).
+    pub one_sided: bool,
 }
 
 impl Default for Material {
@@ -47,6 +49,7 @@ impl Default for Material {
             ior: 1.5,
             fresnel: false,
             emission: Vec3::ZERO,
+            one_sided: false,
         }
     }
 }

@@ -7,7 +7,9 @@
 //! closest hit only.
 
 pub mod cylinder;
+pub mod disk;
 pub mod plane;
+pub mod rect;
 pub mod sphere;
 pub mod triangle;
 

@@ -7,7 +7,8 @@ use strata::render::{render, RenderOptions};
 use strata::scene::{scene_from_str, RenderOverrides, Scene};
 
 pub fn scene(text: &str) -> Scene {
-    scene_from_str(text, Path::new("test.toml"), &RenderOverrides::default()).unwrap_or_else(|e| panic!("{e}"))
+    scene_from_str(text, Path::new("test.toml"), &RenderOverrides::default())
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 pub fn scene_at(text: &str, path: &Path) -> Scene {
@@ -16,7 +17,10 @@ pub fn scene_at(text: &str, path: &Path) -> Scene {
 
 /// Render with `threads` threads and return linear RGB.
 pub fn render_rgb(scene: &Scene, threads: usize) -> Vec<Vec3> {
-    let opts = RenderOptions { threads, ..RenderOptions::default() };
+    let opts = RenderOptions {
+        threads,
+        ..RenderOptions::default()
+    };
     render(scene, &opts, None, |_, _| {}).film.to_rgb()
 }
 
@@ -43,7 +47,11 @@ impl Rng {
 
     pub fn unit_vector(&mut self) -> Vec3 {
         loop {
-            let v = Vec3::new(self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0));
+            let v = Vec3::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            );
             let l = v.length();
             if l > 0.1 && l <= 1.0 {
                 return v / l;

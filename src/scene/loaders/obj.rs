@@ -172,6 +172,7 @@ fn mtl_to_material(m: &tobj::Material) -> Material {
             .unwrap_or(defaults.ior),
         fresnel: matches!(illum, 5 | 7),
         emission: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
+        ..defaults
     }
 }
 
@@ -788,9 +789,8 @@ mod tests {
               newmtl glass\nKd 0.1\nd 0.25\nNi 1.33\nillum 7\n\
               newmtl lamp\nKe 4 3 2\nTr 0.5\n",
         );
-        let obj = format!(
-            "mtllib looks.mtl\n{SQUARE}o a\nusemtl mirror\nf 1 2 3\no b\nusemtl lamp\nf 1 3 4\no c\nf 2 3 4\n"
-        );
+        let obj =
+            format!("mtllib looks.mtl\n{SQUARE}o a\nusemtl mirror\nf 1 2 3\no b\nusemtl lamp\nf 1 3 4\no c\nf 2 3 4\n");
         let asset = load_obj(&write(&dir, "scene.obj", obj.as_bytes())).unwrap();
         let names: Vec<&str> = asset.materials.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["matte", "mirror", "glass", "lamp"]);
