@@ -159,6 +159,8 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         sampler: _,
         seed: _,
         background,
+        light_sampling,
+        glossy_sampling,
     } = settings;
     let mut h = Hasher64::new();
     h.write(b"strata scene v1\0");
@@ -208,6 +210,9 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     h.write_debug("lights", lights);
     h.write_debug("camera", camera);
     h.write_debug("background", background);
+    // Sampling strategies change the noise, so parts must agree on them.
+    h.write_debug("light_sampling", light_sampling);
+    h.write_debug("glossy_sampling", glossy_sampling);
     h.finish()
 }
 
