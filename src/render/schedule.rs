@@ -174,7 +174,18 @@ pub fn render(
         Schedule::Slices => BATCH,
         Schedule::Regions => n.div_ceil(threads),
     };
+    // Rays and time at the end of the previous pass, for the current rate.
+    let (mut last_rays, mut last_time) = (0u64, 0.0f64);
+    let mut rate = String::new();
     for (pass_index, pass) in passes.iter().enumerate() {
+        bar.set_message(format!(
+            "pass {}/{} (samples {}..{} of {}){rate}",
+            pass_index + 1,
+            passes.len(),
+            pass.start,
+            pass.end,
+            s.spp
+        ));
         pool.install(|| {
             scratch
                 .par_chunks_mut(chunk)
@@ -209,12 +220,11 @@ pub fn render(
         }
         let elapsed = start.elapsed().as_secs_f64();
         let total: u64 = rays[..4].iter().map(|a| a.load(Ordering::Relaxed)).sum();
-        bar.set_message(format!(
-            "pass {}/{} {:.1} Mrays/s",
-            pass_index + 1,
-            passes.len(),
-            total as f64 / elapsed / 1e6
-        ));
+        rate = format!(
+            " {:.2} Mrays/s",
+            (total - last_rays) as f64 / (elapsed - last_time).max(1e-9) / 1e6
+        );
+        (last_rays, last_time) = (total, elapsed);
         on_pass(&film, pass.end);
     }
     bar.finish_and_clear();
