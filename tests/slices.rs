@@ -326,6 +326,16 @@ fn merge_writes_the_one_process_image_and_refuses_bad_parts() {
     f[bytes.len() / 2] ^= 1;
     std::fs::write(&flipped, f).unwrap();
     refused(&t.dir, &[&p0, &flipped, &p2], &flipped, "corrupt");
+    let mut ck = read_partial(&p1).unwrap();
+    ck.header.samples.end -= 1;
+    let unfinished = t.dir.join("unfinished_1.strata");
+    strata::render::partial::write_partial(&unfinished, &ck.header, &ck.film).unwrap();
+    refused(
+        &t.dir,
+        &[&p0, &unfinished, &p2],
+        &unfinished,
+        "unfinished checkpoint",
+    );
     let garbage = t.dir.join("garbage.strata");
     std::fs::write(&garbage, b"this is not a partial render at all\n").unwrap();
     refused(&t.dir, &[&p0, &garbage, &p2], &garbage, "garbage");

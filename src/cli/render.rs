@@ -162,10 +162,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             (Some(part.film), Some(done))
         }
         (Some(ck), true) => {
-            eprintln!(
-                "note: no checkpoint at {} yet; starting from the first sample",
-                ck.display()
-            );
+            if !args.quiet {
+                eprintln!(
+                    "no checkpoint at {} yet; starting from the first sample",
+                    ck.display()
+                );
+            }
             (None, None)
         }
         _ => (None, None),
