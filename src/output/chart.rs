@@ -31,12 +31,12 @@ fn draw_scaling(
             modes.push(&r.mode);
         }
     }
-    let max_threads = rows.iter().map(|r| r.threads).max().unwrap_or(1).max(2) as f64;
+    let max_threads = rows.iter().map(|r| r.threads).max().unwrap_or(1).max(2) as u32;
     let max_speedup = rows
         .iter()
         .map(|r| r.speedup)
         .filter(|s| s.is_finite())
-        .fold(max_threads, f64::max);
+        .fold(max_threads as f64, f64::max);
 
     let root = SVGBackend::with_string(svg, (960, 420)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -49,15 +49,17 @@ fn draw_scaling(
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(44)
-        .build_cartesian_2d(1.0..max_threads, 0.0..max_speedup * 1.05)?;
+        .build_cartesian_2d(1..max_threads, 0.0..max_speedup * 1.05)?;
     chart
         .configure_mesh()
+        .light_line_style(WHITE)
+        .x_labels(max_threads as usize)
         .x_desc("threads (or processes)")
         .y_desc("speedup over 1")
         .draw()?;
     chart
         .draw_series(DashedLineSeries::new(
-            [(1.0, 1.0), (max_threads, max_threads)],
+            [(1, 1.0), (max_threads, max_threads as f64)],
             6,
             4,
             BLACK.mix(0.5).stroke_width(1),
@@ -66,10 +68,10 @@ fn draw_scaling(
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
     for (i, mode) in modes.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
-        let points: Vec<(f64, f64)> = rows
+        let points: Vec<(u32, f64)> = rows
             .iter()
             .filter(|r| r.mode == *mode)
-            .map(|r| (r.threads as f64, r.speedup))
+            .map(|r| (r.threads as u32, r.speedup))
             .collect();
         chart
             .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
@@ -91,18 +93,20 @@ fn draw_scaling(
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(44)
-        .build_cartesian_2d(1.0..max_threads, 0.0..110.0)?;
+        .build_cartesian_2d(1..max_threads, 0.0..110.0)?;
     chart
         .configure_mesh()
+        .light_line_style(WHITE)
+        .x_labels(max_threads as usize)
         .x_desc("threads (or processes)")
         .y_desc("efficiency (%)")
         .draw()?;
     for (i, mode) in modes.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
-        let points: Vec<(f64, f64)> = rows
+        let points: Vec<(u32, f64)> = rows
             .iter()
             .filter(|r| r.mode == *mode)
-            .map(|r| (r.threads as f64, 100.0 * r.efficiency))
+            .map(|r| (r.threads as u32, 100.0 * r.efficiency))
             .collect();
         chart
             .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
