@@ -1,5 +1,6 @@
 //! Scheduling samples onto threads, accumulating them, and reporting progress.
 
+pub mod cputime;
 pub mod film;
 pub mod fingerprint;
 pub mod merge;

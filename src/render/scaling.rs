@@ -5,6 +5,16 @@
 //! interleaved, are what compare. Speedup is against the same schedule's
 //! 1-thread (or 1-process) median; efficiency is speedup / threads.
 //!
+//! Wall time on a machine shared with other work measures the neighbours as
+//! much as the scheduler. So in-process runs also record CPU time
+//! (`render::cputime`) along the critical path: per pass, the busiest
+//! worker's CPU time, plus the serial work between passes. That is the wall
+//! time the render would take with a core per thread, and the 1-thread CPU
+//! time over it (`cpu_speedup`) is the speedup that load balance and
+//! parallel overheads allow. A static schedule that leaves a thread idle
+//! shows up there whatever the machine's load; contention for shared
+//! caches, memory bandwidth or a hyperthread's sibling still counts.
+//!
 //! In-process timings cover rendering only (the scene is loaded and the BVH
 //! built once). Process timings are wall time from spawning P children of
 //! the `strata` executable (`render --slice k/P --threads 1`) until their
@@ -64,6 +74,9 @@ impl Mode {
 pub struct Timing {
     pub seconds: f64,
     pub rays: u64,
+    /// CPU seconds of all threads together, and along the critical path
+    /// (see [`CpuTimes`](super::schedule::CpuTimes); in-process runs on Linux).
+    pub cpu: Option<(f64, f64)>,
 }
 
 /// Render `scene` once in this process.
@@ -78,6 +91,7 @@ pub fn time_threads(scene: &Scene, schedule: Schedule, threads: usize) -> Timing
     Timing {
         seconds: outcome.seconds,
         rays: outcome.counts.total(),
+        cpu: outcome.cpu.map(|c| (c.total, c.critical_path)),
     }
 }
 
@@ -144,7 +158,11 @@ pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, 
         let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
         rays += json["rays_total"].as_u64().unwrap_or(0);
     }
-    Ok(Timing { seconds, rays })
+    Ok(Timing {
+        seconds,
+        rays,
+        cpu: None,
+    })
 }
 
 /// One line of the scaling table.
@@ -158,6 +176,13 @@ pub struct ScalingRow {
     pub speedup: f64,
     pub efficiency: f64,
     pub mrays_per_s: f64,
+    /// Median CPU time along the critical path: the wall time if every
+    /// thread had a core of its own (in-process runs on Linux).
+    pub cpu_path_s: Option<f64>,
+    /// The 1-thread run's CPU time over `cpu_path_s`: the speedup that
+    /// load balance and parallel overheads allow, whatever else the machine
+    /// is running.
+    pub cpu_speedup: Option<f64>,
     /// Every repeat's time, for the CSV.
     pub runs: Vec<f64>,
 }
@@ -171,6 +196,11 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
         .collect();
     let base =
         medians.first().copied().unwrap_or(f64::NAN) * counts.first().copied().unwrap_or(1) as f64;
+    let cpu_median = |t: &Vec<Timing>, pick: fn((f64, f64)) -> f64| {
+        let v: Option<Vec<f64>> = t.iter().map(|x| x.cpu.map(pick)).collect();
+        v.map(|v| median(&v))
+    };
+    let cpu_base = timings.first().and_then(|t| cpu_median(t, |c| c.0));
     counts
         .iter()
         .zip(timings)
@@ -178,6 +208,7 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
         .map(|((&threads, t), &seconds)| {
             let rays = t.first().map_or(0, |x| x.rays);
             let speedup = base / seconds;
+            let cpu_path_s = cpu_median(t, |c| c.1);
             ScalingRow {
                 mode: mode.name().to_string(),
                 threads,
@@ -185,6 +216,8 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
                 speedup,
                 efficiency: speedup / threads as f64,
                 mrays_per_s: rays as f64 / seconds / 1e6,
+                cpu_path_s,
+                cpu_speedup: cpu_base.zip(cpu_path_s).map(|(b, m)| b / m),
                 runs: t.iter().map(|x| x.seconds).collect(),
             }
         })
@@ -194,18 +227,29 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
 /// The table `strata scaling` prints.
 pub fn table(rows: &[ScalingRow]) -> String {
     let mut s = format!(
-        "{:<10} {:>7} {:>9} {:>8} {:>10} {:>8}\n",
-        "schedule", "threads", "seconds", "speedup", "efficiency", "Mrays/s"
+        "{:<10} {:>7} {:>9} {:>8} {:>10} {:>8} {:>12} {:>11}\n",
+        "schedule",
+        "threads",
+        "seconds",
+        "speedup",
+        "efficiency",
+        "Mrays/s",
+        "cpu-path",
+        "cpu-speedup"
     );
     for r in rows {
+        let path = r.cpu_path_s.map_or("-".into(), |x| format!("{x:.3}"));
+        let cpu = r.cpu_speedup.map_or("-".into(), |x| format!("{x:.2}x"));
         s += &format!(
-            "{:<10} {:>7} {:>9.3} {:>7.2}x {:>9.1}% {:>8.2}\n",
+            "{:<10} {:>7} {:>9.3} {:>7.2}x {:>9.1}% {:>8.2} {:>12} {:>11}\n",
             r.mode,
             r.threads,
             r.seconds,
             r.speedup,
             100.0 * r.efficiency,
-            r.mrays_per_s
+            r.mrays_per_s,
+            path,
+            cpu
         );
     }
     s
@@ -213,17 +257,22 @@ pub fn table(rows: &[ScalingRow]) -> String {
 
 /// The CSV `strata scaling` writes: one line per (schedule, threads).
 pub fn csv(rows: &[ScalingRow]) -> String {
-    let mut s = String::from("schedule,threads,seconds,speedup,efficiency,mrays_per_s,runs\n");
+    let mut s = String::from(
+        "schedule,threads,seconds,speedup,efficiency,mrays_per_s,cpu_path_s,cpu_speedup,runs\n",
+    );
+    let opt = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
     for r in rows {
         let runs: Vec<String> = r.runs.iter().map(|x| format!("{x:.6}")).collect();
         s += &format!(
-            "{},{},{:.6},{:.4},{:.4},{:.4},{}\n",
+            "{},{},{:.6},{:.4},{:.4},{:.4},{},{},{}\n",
             r.mode,
             r.threads,
             r.seconds,
             r.speedup,
             r.efficiency,
             r.mrays_per_s,
+            opt(r.cpu_path_s),
+            opt(r.cpu_speedup),
             runs.join(" ")
         );
     }
@@ -268,6 +317,7 @@ mod tests {
         let t = |s: f64| Timing {
             seconds: s,
             rays: 1_000_000,
+            cpu: Some((s, s / 2.0)),
         };
         let r = rows(
             Mode::Threads(Schedule::Slices),
@@ -279,6 +329,9 @@ mod tests {
         assert_eq!(r[1].speedup, 2.0);
         assert_eq!(r[1].efficiency, 1.0);
         assert_eq!(r[1].mrays_per_s, 1.0);
+        // 1-thread CPU 2.0 s in total; critical path at two threads 0.55 s (median).
+        assert_eq!(r[1].cpu_path_s, Some(0.55));
+        assert_eq!(r[1].cpu_speedup, Some(2.0 / 0.55));
         assert!(csv(&r).lines().count() == 3);
         assert!(table(&r).contains("slices"));
     }
