@@ -329,9 +329,9 @@ mod tests {
         assert_eq!(r[1].speedup, 2.0);
         assert_eq!(r[1].efficiency, 1.0);
         assert_eq!(r[1].mrays_per_s, 1.0);
-        // 1-thread CPU 2.0 s in total; critical path at two threads 0.55 s (median).
-        assert_eq!(r[1].cpu_path_s, Some(0.55));
-        assert_eq!(r[1].cpu_speedup, Some(2.0 / 0.55));
+        // 1-thread CPU 2.0 s in total (median); critical path at two threads 0.5 s.
+        assert_eq!(r[1].cpu_path_s, Some(0.5));
+        assert_eq!(r[1].cpu_speedup, Some(4.0));
         assert!(csv(&r).lines().count() == 3);
         assert!(table(&r).contains("slices"));
     }
