@@ -22,6 +22,7 @@
 //! scene load, BVH build and part write: the real cost of splitting a render
 //! across processes.
 
+use super::cputime::{thread_cpu_ns, waited_children_cpu_seconds};
 use super::merge::merge_partials;
 use super::partial::read_partial;
 use super::schedule::{render, RenderOptions, Schedule};
@@ -75,7 +76,8 @@ pub struct Timing {
     pub seconds: f64,
     pub rays: u64,
     /// CPU seconds of all threads together, and along the critical path
-    /// (see [`CpuTimes`](super::schedule::CpuTimes); in-process runs on Linux).
+    /// (see [`CpuTimes`](super::schedule::CpuTimes); for processes, the
+    /// slowest child plus the merge, in 10 ms ticks). Linux only.
     pub cpu: Option<(f64, f64)>,
 }
 
@@ -133,16 +135,24 @@ pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, 
                 .map_err(|e| format!("cannot start {}: {e}", setup.exe.display()))
         })
         .collect::<Result<_, _>>()?;
+    // Each child's CPU time: the growth of this process's waited-for
+    // children's time as each one is reaped.
     let mut failures = Vec::new();
+    let mut child_cpu = Vec::new();
+    let mut reaped = waited_children_cpu_seconds();
     for child in children {
         let out = child.wait_with_output().map_err(|e| e.to_string())?;
         if !out.status.success() {
             failures.push(String::from_utf8_lossy(&out.stderr).trim().to_string());
         }
+        let now = waited_children_cpu_seconds();
+        child_cpu.push(reaped.zip(now).map(|(a, b)| b - a));
+        reaped = now;
     }
     if let Some(f) = failures.first() {
         return Err(format!("a child render failed: {f}"));
     }
+    let merge_cpu_start = thread_cpu_ns();
     let parts = (0..processes)
         .map(|k| {
             read_partial(&part(k))
@@ -152,17 +162,28 @@ pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, 
         .collect::<Result<Vec<_>, _>>()?;
     merge_partials(parts, true).map_err(|e| e.to_string())?;
     let seconds = start.elapsed().as_secs_f64();
+    let merge_cpu = merge_cpu_start
+        .zip(thread_cpu_ns())
+        .map(|(a, b)| b.saturating_sub(a) as f64 * 1e-9);
+    // Children run in parallel, then the merge: the critical path is the
+    // slowest child plus the merge (reading the parts included).
+    let cpu = child_cpu
+        .into_iter()
+        .collect::<Option<Vec<f64>>>()
+        .zip(merge_cpu)
+        .map(|(c, m)| {
+            (
+                c.iter().sum::<f64>() + m,
+                c.iter().copied().fold(0.0, f64::max) + m,
+            )
+        });
     let mut rays = 0;
     for k in 0..processes {
         let text = std::fs::read_to_string(stats(k)).map_err(|e| e.to_string())?;
         let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
         rays += json["rays_total"].as_u64().unwrap_or(0);
     }
-    Ok(Timing {
-        seconds,
-        rays,
-        cpu: None,
-    })
+    Ok(Timing { seconds, rays, cpu })
 }
 
 /// One line of the scaling table.
@@ -177,7 +198,7 @@ pub struct ScalingRow {
     pub efficiency: f64,
     pub mrays_per_s: f64,
     /// Median CPU time along the critical path: the wall time if every
-    /// thread had a core of its own (in-process runs on Linux).
+    /// thread (or process) had a core of its own (Linux).
     pub cpu_path_s: Option<f64>,
     /// The 1-thread run's CPU time over `cpu_path_s`: the speedup that
     /// load balance and parallel overheads allow, whatever else the machine
