@@ -135,8 +135,8 @@ fn a_killed_render_resumes_to_the_same_bits() {
     // SIGINT after the first checkpoint: the default action ends the process.
     let mut child = start_render();
     wait_for(&ck, &mut child);
-    let sigint = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+    let sigint = Command::new("sh")
+        .args(["-c", &format!("kill -INT {}", child.id())])
         .status()
         .unwrap();
     assert!(sigint.success());
