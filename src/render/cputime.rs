@@ -9,6 +9,67 @@ pub fn thread_cpu_ns() -> Option<u64> {
     text.split_whitespace().next()?.parse().ok()
 }
 
+/// CPU time of a render: what it would take with a core per thread, apart
+/// from what else the machine runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CpuTimes {
+    /// All threads together.
+    pub total: f64,
+    /// The critical path: for each pass, the busiest worker's CPU time (a
+    /// pass ends when its slowest thread does), plus the calling thread's
+    /// serial work between passes. With a core per thread, the wall time.
+    pub critical_path: f64,
+}
+
+/// Accumulates [`CpuTimes`] from per-thread CPU clocks read at pass
+/// boundaries: `start` before the first pass, `pass` after each, `finish`
+/// at the end. Each reading is one rayon broadcast (microseconds).
+pub struct CpuMeter {
+    workers: Option<Vec<u64>>,
+    caller: Option<u64>,
+    total: f64,
+    critical: f64,
+}
+
+impl CpuMeter {
+    pub fn start(pool: &rayon::ThreadPool) -> Self {
+        Self {
+            workers: Self::read(pool),
+            caller: thread_cpu_ns(),
+            total: 0.0,
+            critical: 0.0,
+        }
+    }
+
+    fn read(pool: &rayon::ThreadPool) -> Option<Vec<u64>> {
+        pool.broadcast(|_| thread_cpu_ns()).into_iter().collect()
+    }
+
+    /// Close a pass: add its busiest worker's time.
+    pub fn pass(&mut self, pool: &rayon::ThreadPool) {
+        let now = Self::read(pool);
+        if let (Some(before), Some(after)) = (&self.workers, &now) {
+            let deltas = before
+                .iter()
+                .zip(after)
+                .map(|(a, b)| b.saturating_sub(*a) as f64 * 1e-9);
+            let (sum, max) = deltas.fold((0.0, 0.0f64), |(s, m), d| (s + d, m.max(d)));
+            self.total += sum;
+            self.critical += max;
+        }
+        self.workers = now;
+    }
+
+    pub fn finish(self) -> Option<CpuTimes> {
+        self.workers.as_ref()?;
+        let serial = thread_cpu_ns()?.saturating_sub(self.caller?) as f64 * 1e-9;
+        Some(CpuTimes {
+            total: self.total + serial,
+            critical_path: self.critical + serial,
+        })
+    }
+}
+
 /// Clock ticks per second of `/proc/*/stat` times: Linux fixes USER_HZ at
 /// 100 for user space, whatever the kernel's internal tick rate.
 const USER_HZ: f64 = 100.0;

@@ -118,68 +118,7 @@ pub struct RenderOutcome {
     pub threads: usize,
     pub samples: Range<u32>,
     /// CPU time spent, where the system reports it (Linux).
-    pub cpu: Option<CpuTimes>,
-}
-
-/// CPU time of a render: what it would take with a core per thread, apart
-/// from what else the machine runs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CpuTimes {
-    /// All threads together.
-    pub total: f64,
-    /// The critical path: for each pass, the busiest worker's CPU time (a
-    /// pass ends when its slowest thread does), plus the calling thread's
-    /// serial work between passes. With a core per thread, the wall time.
-    pub critical_path: f64,
-}
-
-/// Accumulates [`CpuTimes`] from per-thread CPU clocks read at pass boundaries.
-struct CpuMeter {
-    workers: Option<Vec<u64>>,
-    caller: Option<u64>,
-    total: f64,
-    critical: f64,
-}
-
-impl CpuMeter {
-    fn start(pool: &rayon::ThreadPool) -> Self {
-        Self {
-            workers: Self::read(pool),
-            caller: super::cputime::thread_cpu_ns(),
-            total: 0.0,
-            critical: 0.0,
-        }
-    }
-
-    fn read(pool: &rayon::ThreadPool) -> Option<Vec<u64>> {
-        pool.broadcast(|_| super::cputime::thread_cpu_ns())
-            .into_iter()
-            .collect()
-    }
-
-    /// Close a pass: add its busiest worker's time.
-    fn pass(&mut self, pool: &rayon::ThreadPool) {
-        let now = Self::read(pool);
-        if let (Some(before), Some(after)) = (&self.workers, &now) {
-            let deltas = before
-                .iter()
-                .zip(after)
-                .map(|(a, b)| b.saturating_sub(*a) as f64 * 1e-9);
-            let (sum, max) = deltas.fold((0.0, 0.0f64), |(s, m), d| (s + d, m.max(d)));
-            self.total += sum;
-            self.critical += max;
-        }
-        self.workers = now;
-    }
-
-    fn finish(self) -> Option<CpuTimes> {
-        self.workers.as_ref()?;
-        let serial = super::cputime::thread_cpu_ns()?.saturating_sub(self.caller?) as f64 * 1e-9;
-        Some(CpuTimes {
-            total: self.total + serial,
-            critical_path: self.critical + serial,
-        })
-    }
+    pub cpu: Option<super::cputime::CpuTimes>,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -232,7 +171,7 @@ pub fn render(
         AtomicU64::new(0),
     ];
     let mut scratch = vec![PixelSum::default(); n];
-    let mut cpu = CpuMeter::start(&pool);
+    let mut cpu = super::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
     let chunk = match opts.schedule {
         Schedule::Slices => BATCH,
