@@ -358,6 +358,11 @@ fn bad_slices_and_outputs_are_refused_on_one_line() {
         let o = strata_bin(&[&["render", s(&t.scene), "-q"], args.as_slice()].concat());
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(
+            err.trim_end().lines().count(),
+            1,
+            "{args:?}: one line: {err}"
+        );
         assert!(err.contains(mention), "{args:?}: {err}");
     }
     assert!(!Path::new("part.png").exists());

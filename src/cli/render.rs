@@ -54,8 +54,8 @@ pub struct RenderArgs {
     pub threads: usize,
     /// Render only slice k of P of every pixel's samples (0-based k), e.g. 3/8,
     /// into a .strata part; `strata merge` combines the P parts.
-    #[arg(long)]
-    pub slice: Option<SliceSpec>,
+    #[arg(long, value_name = "k/P")]
+    pub slice: Option<String>,
     /// Save the accumulated film to FILE (.strata) after every pass, atomically.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
@@ -105,7 +105,13 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         )
         .into());
     }
-    let slice = args.slice.unwrap_or(SliceSpec::WHOLE);
+    // Parsed here, not by clap, so that a bad value is one line like every other input error.
+    let slice = match &args.slice {
+        None => SliceSpec::WHOLE,
+        Some(text) => text
+            .parse::<SliceSpec>()
+            .map_err(|e| InputError::new("<command line>", "--slice", e))?,
+    };
     if slice.count > 1 && !partial_output {
         return Err(InputError::new(
             "<command line>",
