@@ -157,7 +157,7 @@ fn every_method_is_unbiased_on_penumbra_glossy_highlight_and_defocused_edge() {
         let (r, r_se) = reference(&scene);
         assert!(r > 0.01, "{region}: the reference sees light ({r})");
         for m in METHODS {
-            for spp in [1u32, 2, 3, 7, 16] {
+            for spp in [1u32, 2, 3, 7, 16, 32] {
                 let values: Vec<f64> = (0..64).map(|seed| pixel(&scene, m, seed, spp)).collect();
                 let (mean, se) = mean_and_se(&values);
                 let z = (mean - r) / (se * se + r_se * r_se).sqrt().max(1e-12);

@@ -112,6 +112,24 @@ impl RayBoxes {
         let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
         (tn, tn.simd_le(tf).to_bitmask())
     }
+
+    /// Like [`RayBoxes::test`] for a line that may run through boxes at
+    /// negative t: both ends are widened by their own magnitude, so a
+    /// box behind the origin is not culled by rounding either.
+    #[inline(always)]
+    fn test_line(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> u32 {
+        let slab = |axis: usize, side: usize| {
+            (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis]
+        };
+        let tn = slab(0, self.near[0])
+            .max(slab(1, self.near[1]))
+            .max(slab(2, self.near[2]).max(f32x8::splat(tmin)));
+        let tf = slab(0, self.far[0])
+            .min(slab(1, self.far[1]))
+            .min(slab(2, self.far[2]).min(f32x8::splat(tmax)));
+        let g = f32x8::splat(2.0 * gamma(3));
+        (tn - g * tn.abs()).simd_le(tf + g * tf.abs()).to_bitmask()
+    }
 }
 
 impl Bvh8 {
@@ -206,6 +224,41 @@ impl Bvh8 {
         }
         false
     }
+
+    /// Calls `visit` for every primitive whose box the line
+    /// `origin + t·direction` may meet for t in `[tmin, tmax]`, which may be
+    /// infinite: CSG needs the crossings of the whole line, behind the
+    /// origin too. No order; `visit` sees each candidate once.
+    pub fn visit_line<F>(&self, ray: &Ray, mut visit: F)
+    where
+        F: FnMut(u32),
+    {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let boxes = RayBoxes::new(ray);
+        let mut stack = Stack::new();
+        stack.push((0, 0.0));
+        while let Some((child, _)) = stack.pop() {
+            match decode(child) {
+                ChildRef::Node(n) => {
+                    let node = &self.nodes[n as usize];
+                    let mut mask = boxes.test_line(&node.bounds, ray.tmin, ray.tmax);
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack.push((node.child[slot], 0.0));
+                    }
+                }
+                ChildRef::Leaf { start, count } => {
+                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
+                        visit(prim);
+                    }
+                }
+                ChildRef::Empty => {}
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -292,6 +345,29 @@ mod tests {
         let empty = Bvh8::build(&[], BuildQuality::Auto);
         assert!(empty.closest(&ray, |_, _| None).is_none());
         assert!(!empty.any_hit(&ray, |_, _| true));
+    }
+
+    #[test]
+    fn visit_line_finds_every_box_the_line_meets_on_both_sides_of_the_origin() {
+        let boxes: Vec<Aabb> = (0..200)
+            .map(|i| {
+                let c = Vec3::new(i as f32 - 100.0, (i % 7) as f32, 0.0);
+                Aabb::new(c - Vec3::splat(0.4), c + Vec3::splat(0.4))
+            })
+            .collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
+        let mut line = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+        line.tmin = f32::NEG_INFINITY;
+        let mut seen = Vec::new();
+        bvh.visit_line(&line, |id| seen.push(id));
+        seen.sort();
+        let expected: Vec<u32> = (0..200).filter(|i| i % 7 == 0).collect();
+        assert!(expected.iter().all(|i| seen.contains(i)), "{seen:?}");
+        // Clipped to t ≥ 0 only the boxes ahead remain candidates.
+        line.tmin = 0.0;
+        let mut ahead = Vec::new();
+        bvh.visit_line(&line, |id| ahead.push(id));
+        assert!(ahead.iter().all(|&i| boxes[i as usize].max.x >= 0.0));
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Subcommands. Each file holds one command's arguments and its run function.
 
+pub mod converge;
 pub mod merge;
 pub mod render;
 pub mod scaling;
@@ -27,6 +28,8 @@ pub enum Command {
     Merge(merge::MergeArgs),
     /// Measure speedup and efficiency against threads (and processes); writes CSV and SVG.
     Scaling(scaling::ScalingArgs),
+    /// Error against time: RMSE per sampling method at spp 1, 2, 4, …; CSV and SVG chart.
+    Converge(converge::ConvergeArgs),
 }
 
 pub enum CliError {
@@ -47,6 +50,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Merge(args)) => merge::run(args),
         Some(Command::Scaling(args)) => scaling::run(args),
+        Some(Command::Converge(args)) => converge::run(args),
         None => render::run(cli.render),
     }
 }

@@ -78,6 +78,9 @@ pub struct RenderArgs {
     /// Write statistics (rays by kind, Mrays/s, phase times, peak RSS) as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Replay one sample (pixel x, y and sample index) and print its path instead of rendering.
+    #[arg(long, value_name = "X,Y,SAMPLE")]
+    pub debug_sample: Option<strata::render::debug::SampleId>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -144,6 +147,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         bvh_quality: args.bvh_quality,
     };
     let (scene, timings) = load_scene(&scene_path, &overrides)?;
+    if let Some(id) = args.debug_sample {
+        let (value, events) = strata::render::debug::replay(&scene, id)
+            .map_err(|e| InputError::new("<command line>", "--debug-sample", e))?;
+        print!("{}", strata::render::debug::describe(id, value, &events));
+        return Ok(());
+    }
     let s = &scene.settings;
     let full = slice.samples(s.spp);
     let header = PartialHeader::for_scene(&scene, slice, full.clone());
@@ -213,10 +222,16 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
 
     let total = outcome.counts.total();
     let mrays = total as f64 / outcome.seconds.max(1e-9) / 1e6;
+    if outcome.counts.glossy_rejected > 0 && !args.quiet {
+        eprintln!(
+            "note: {} glossy directions fell below their surface and were rejected (counted, not traced)",
+            outcome.counts.glossy_rejected
+        );
+    }
     if let Some(bad) = outcome.film.first_invalid {
         eprintln!(
-            "warning: {} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {}",
-            outcome.film.invalid, bad.x, bad.y, bad.sample
+            "warning: {} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {} (replay it with --debug-sample {},{},{})",
+            outcome.film.invalid, bad.x, bad.y, bad.sample, bad.x, bad.y, bad.sample
         );
     }
     if let Some(path) = &args.stats {

@@ -4,10 +4,10 @@ use super::CliError;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use strata::error::InputError;
-use strata::output::chart::write_scaling_svg;
+use strata::output::chart::write_svg;
 use strata::render::scaling::{
-    csv, rows, table, thread_counts, time_processes, time_threads, Mode, ProcessSetup, ScratchDir,
-    Timing,
+    chart_panels, csv, rows, table, thread_counts, time_processes, time_threads, Mode,
+    ProcessSetup, ScratchDir, Timing,
 };
 use strata::render::Schedule;
 use strata::scene::{load_scene, RenderOverrides};
@@ -170,7 +170,8 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         s.height,
         s.spp
     );
-    write_scaling_svg(&args.chart, &title, &all).map_err(|e| InputError::file(&args.chart, e))?;
+    write_svg(&args.chart, &chart_panels(&title, &all), 520, 420)
+        .map_err(|e| InputError::file(&args.chart, e))?;
     if !args.quiet {
         eprintln!("wrote {} and {}", args.csv.display(), args.chart.display());
     }

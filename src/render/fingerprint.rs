@@ -26,6 +26,7 @@
 
 use crate::scene::world::MeshRange;
 use crate::scene::{RenderSettings, Scene};
+use crate::shape::csg::Csg;
 use std::fmt;
 
 const K1: u64 = 0x9e37_79b9_7f4a_7c15;
@@ -141,6 +142,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         meshes,
         shapes,
         transforms,
+        csg,
         planes,
         materials,
         lights,
@@ -202,6 +204,27 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
                 }
             }
         }
+    }
+    let Csg {
+        nodes: csg_nodes,
+        leaves: csg_leaves,
+        triangles: csg_triangles,
+        triangle_materials: csg_materials,
+        mesh_bvhs: _, // acceleration only
+    } = csg;
+    h.write_debug("csg nodes", csg_nodes);
+    h.write_debug("csg leaves", csg_leaves);
+    h.write_u64(csg_triangles.len() as u64);
+    for tri in csg_triangles {
+        for v in tri {
+            for c in v.to_array() {
+                h.write_f32(c);
+            }
+        }
+    }
+    h.write_u64(csg_materials.len() as u64);
+    for m in csg_materials {
+        h.write_u32(*m);
     }
     h.write_debug("shapes", shapes);
     h.write_debug("transforms", transforms);

@@ -1,6 +1,8 @@
 //! Scheduling samples onto threads, accumulating them, and reporting progress.
 
+pub mod converge;
 pub mod cputime;
+pub mod debug;
 pub mod film;
 pub mod fingerprint;
 pub mod merge;

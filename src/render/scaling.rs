@@ -26,6 +26,7 @@ use super::cputime::{thread_cpu_ns, waited_children_cpu_seconds};
 use super::merge::merge_partials;
 use super::partial::read_partial;
 use super::schedule::{render, RenderOptions, Schedule};
+use crate::output::chart::{Panel, Series};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -245,6 +246,65 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
         .collect()
 }
 
+/// The chart `strata scaling` draws: speedup (with the ideal) and
+/// efficiency against threads, a line per schedule from wall time and, where
+/// measured, one from the CPU critical path.
+pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
+    let mut modes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !modes.contains(&r.mode.as_str()) {
+            modes.push(&r.mode);
+        }
+    }
+    let max_threads = rows.iter().map(|r| r.threads).max().unwrap_or(1);
+    let lines = |value: &dyn Fn(&ScalingRow, f64) -> f64| {
+        let mut series = Vec::new();
+        for mode in &modes {
+            let of = |pick: &dyn Fn(&ScalingRow) -> Option<f64>| -> Vec<(f64, f64)> {
+                rows.iter()
+                    .filter(|r| r.mode == *mode)
+                    .filter_map(|r| Some((r.threads as f64, value(r, pick(r)?))))
+                    .collect()
+            };
+            series.push(Series {
+                label: format!("{mode} (wall)"),
+                points: of(&|r| Some(r.speedup)),
+            });
+            let cpu = of(&|r| r.cpu_speedup);
+            if !cpu.is_empty() {
+                series.push(Series {
+                    label: format!("{mode} (CPU critical path)"),
+                    points: cpu,
+                });
+            }
+        }
+        series
+    };
+    let mut speedup = vec![Series {
+        label: "ideal".into(),
+        points: vec![(1.0, 1.0), (max_threads as f64, max_threads as f64)],
+    }];
+    speedup.extend(lines(&|_, s| s));
+    vec![
+        Panel {
+            title: format!("speedup: {title}"),
+            x_label: "threads (or processes)".into(),
+            y_label: "speedup over 1".into(),
+            log_x: false,
+            log_y: false,
+            series: speedup,
+        },
+        Panel {
+            title: "efficiency".into(),
+            x_label: "threads (or processes)".into(),
+            y_label: "efficiency (%)".into(),
+            log_x: false,
+            log_y: false,
+            series: lines(&|r, s| 100.0 * s / r.threads as f64),
+        },
+    ]
+}
+
 /// The table `strata scaling` prints.
 pub fn table(rows: &[ScalingRow]) -> String {
     let mut s = format!(
@@ -355,5 +415,8 @@ mod tests {
         assert_eq!(r[1].cpu_speedup, Some(4.0));
         assert!(csv(&r).lines().count() == 3);
         assert!(table(&r).contains("slices"));
+        let panels = chart_panels("t", &r);
+        assert_eq!(panels[0].series.len(), 3, "ideal, wall, CPU");
+        assert_eq!(panels[1].series[0].points, vec![(1.0, 100.0), (2.0, 100.0)]);
     }
 }

@@ -16,6 +16,7 @@ use crate::math::{Aabb, Frame, Transform};
 use crate::sampling::SamplerKind;
 use crate::shade::light::Light;
 use crate::shade::material::Material;
+use crate::shape::csg::Csg;
 use crate::shape::cylinder::Cylinder;
 use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
@@ -25,6 +26,8 @@ use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+
+mod csg;
 
 /// Command-line values that override the scene file's `[render]` table.
 #[derive(Debug, Clone, Default)]
@@ -107,6 +110,7 @@ pub fn compile(
         meshes: c.meshes,
         shapes: c.shapes,
         transforms: c.transforms,
+        csg: c.csg,
         planes: c.planes,
         materials: c.materials,
         lights: c.lights,
@@ -124,6 +128,7 @@ struct Compiler {
     meshes: Vec<MeshRange>,
     shapes: Vec<AnalyticPrim>,
     transforms: Vec<Transform>,
+    csg: Csg,
     planes: Vec<Plane>,
     materials: Vec<Material>,
     material_ids: HashMap<String, u32>,
@@ -146,6 +151,16 @@ fn finite3(v: V3, key: &str, file: &Path) -> InputResult<Vec3> {
     }
 }
 
+/// An object's transform and material, after [`Compiler::placement`].
+struct Placement {
+    /// Object to world, including every enclosing transform.
+    m: Affine3A,
+    /// Its own material, or the inherited one.
+    material: u32,
+    /// Its own `material` key, if it has one.
+    explicit_material: Option<u32>,
+}
+
 impl Compiler {
     fn new(path: &Path) -> Self {
         let mut c = Self {
@@ -155,6 +170,7 @@ impl Compiler {
             meshes: Vec::new(),
             shapes: Vec::new(),
             transforms: Vec::new(),
+            csg: Csg::default(),
             planes: Vec::new(),
             materials: Vec::new(),
             material_ids: HashMap::new(),
@@ -393,13 +409,15 @@ impl Compiler {
         Ok(self.transforms.len() as u32 - 1)
     }
 
-    fn object(
-        &mut self,
+    /// What every object has besides its shape: exactly one shape key, a
+    /// known material (or the inherited one) and an invertible transform.
+    fn placement(
+        &self,
         obj: &ObjectDesc,
         key: &str,
         parent: Affine3A,
         inherited: u32,
-    ) -> InputResult<()> {
+    ) -> InputResult<Placement> {
         let shapes = [
             obj.sphere.is_some(),
             obj.plane.is_some(),
@@ -428,7 +446,6 @@ impl Compiler {
             })?),
             None => None,
         };
-        let material = explicit_material.unwrap_or(inherited);
         let m = match &obj.transform {
             Some(t) => parent * self.transform(t, &format!("{key}.transform"))?,
             None => parent,
@@ -439,11 +456,29 @@ impl Compiler {
                 "transform is singular or not finite",
             ));
         }
+        Ok(Placement {
+            m,
+            material: explicit_material.unwrap_or(inherited),
+            explicit_material,
+        })
+    }
+
+    fn object(
+        &mut self,
+        obj: &ObjectDesc,
+        key: &str,
+        parent: Affine3A,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let Placement {
+            m,
+            material,
+            explicit_material,
+        } = self.placement(obj, key, parent, inherited)?;
 
         if let Some(s) = &obj.sphere {
-            let center = self.v3(s.center, &format!("{key}.sphere.center"))?;
-            let radius = self.positive(s.radius, &format!("{key}.sphere.radius"))?;
-            self.sphere(Sphere { center, radius }, m, material, key)?;
+            let sphere = self.sphere_desc(s, key)?;
+            self.sphere(sphere, m, material, key)?;
         } else if let Some(p) = &obj.plane {
             let point = self.v3(p.point, &format!("{key}.plane.point"))?;
             let normal = self.direction(p.normal, &format!("{key}.plane.normal"))?;
@@ -454,21 +489,10 @@ impl Compiler {
                 material,
             });
         } else if let Some(cyl) = &obj.cylinder {
-            let k = |f: &str| format!("{key}.cylinder.{f}");
-            let base = self.v3(cyl.base, &k("base"))?;
-            let axis = self.direction(cyl.axis, &k("axis"))?;
-            let radius = self.positive(cyl.radius, &k("radius"))?;
-            let height = self.positive(cyl.height, &k("height"))?;
-            // Canonical cylinder along +z from the origin, placed by a frame.
-            let f = Frame::from_z(axis);
-            let place = Affine3A::from_mat3_translation(Mat3::from_cols(f.x, f.y, f.z), base);
+            let (cylinder, place) = self.cylinder_desc(cyl, key)?;
             let t = self.push_transform(m * place, &format!("{key}.transform"))?;
             self.shapes.push(AnalyticPrim {
-                shape: Shape::Cylinder(Cylinder {
-                    radius,
-                    height,
-                    caps: cyl.caps,
-                }),
+                shape: Shape::Cylinder(cylinder),
                 transform: t,
                 material,
             });
@@ -484,35 +508,70 @@ impl Compiler {
             for (i, child) in children.iter().enumerate() {
                 self.object(child, &format!("{key}.group[{i}]"), m, material)?;
             }
-        } else if obj.csg.is_some() {
-            return Err(self.err(&format!("{key}.csg"), "CSG is not supported yet"));
+        } else if let Some(c) = &obj.csg {
+            self.csg_object(c, key, m, material, explicit_material)?;
         }
         Ok(())
     }
 
-    fn sphere(&mut self, s: Sphere, m: Affine3A, material: u32, key: &str) -> InputResult<()> {
-        if let Some(scale) = similarity_scale(&m) {
-            // Rotation, uniform scale and translation map a sphere to a sphere exactly.
-            let baked = Sphere {
-                center: m.transform_point3(s.center),
-                radius: s.radius * scale,
-            };
-            if !(baked.center.is_finite() && baked.radius.is_finite() && baked.radius > 0.0) {
-                return Err(self.err(key, "sphere is not finite after its transform"));
-            }
-            self.shapes.push(AnalyticPrim {
-                shape: Shape::Sphere(baked),
-                transform: NO_TRANSFORM,
-                material,
-            });
-        } else {
-            let t = self.push_transform(m, &format!("{key}.transform"))?;
-            self.shapes.push(AnalyticPrim {
-                shape: Shape::Sphere(s),
-                transform: t,
-                material,
-            });
+    fn sphere_desc(&self, s: &SphereDesc, key: &str) -> InputResult<Sphere> {
+        Ok(Sphere {
+            center: self.v3(s.center, &format!("{key}.sphere.center"))?,
+            radius: self.positive(s.radius, &format!("{key}.sphere.radius"))?,
+        })
+    }
+
+    /// The canonical cylinder (along +z from the origin) and the frame that
+    /// places it at `base` along `axis`.
+    fn cylinder_desc(&self, cyl: &CylinderDesc, key: &str) -> InputResult<(Cylinder, Affine3A)> {
+        let k = |f: &str| format!("{key}.cylinder.{f}");
+        let base = self.v3(cyl.base, &k("base"))?;
+        let axis = self.direction(cyl.axis, &k("axis"))?;
+        let radius = self.positive(cyl.radius, &k("radius"))?;
+        let height = self.positive(cyl.height, &k("height"))?;
+        let f = Frame::from_z(axis);
+        let place = Affine3A::from_mat3_translation(Mat3::from_cols(f.x, f.y, f.z), base);
+        let cylinder = Cylinder {
+            radius,
+            height,
+            caps: cyl.caps,
+        };
+        Ok((cylinder, place))
+    }
+
+    /// A sphere under `m`: baked into a new centre and radius when `m` is a
+    /// similarity, else kept in object space with `m` returned.
+    fn placed_sphere(
+        &self,
+        s: Sphere,
+        m: Affine3A,
+        key: &str,
+    ) -> InputResult<(Sphere, Option<Affine3A>)> {
+        let Some(scale) = similarity_scale(&m) else {
+            return Ok((s, Some(m)));
+        };
+        // Rotation, uniform scale and translation map a sphere to a sphere exactly.
+        let baked = Sphere {
+            center: m.transform_point3(s.center),
+            radius: s.radius * scale,
+        };
+        if !(baked.center.is_finite() && baked.radius.is_finite() && baked.radius > 0.0) {
+            return Err(self.err(key, "sphere is not finite after its transform"));
         }
+        Ok((baked, None))
+    }
+
+    fn sphere(&mut self, s: Sphere, m: Affine3A, material: u32, key: &str) -> InputResult<()> {
+        let (sphere, transform) = self.placed_sphere(s, m, key)?;
+        let transform = match transform {
+            Some(m) => self.push_transform(m, &format!("{key}.transform"))?,
+            None => NO_TRANSFORM,
+        };
+        self.shapes.push(AnalyticPrim {
+            shape: Shape::Sphere(sphere),
+            transform,
+            material,
+        });
         Ok(())
     }
 
@@ -538,14 +597,9 @@ impl Compiler {
         });
     }
 
-    fn mesh_file(
-        &mut self,
-        file: &str,
-        key: &str,
-        m: Affine3A,
-        explicit_material: Option<u32>,
-        inherited: u32,
-    ) -> InputResult<()> {
+    /// A mesh file's contents and the scene index of its first material,
+    /// read (and its materials registered) once per file.
+    fn asset(&mut self, file: &str, key: &str) -> InputResult<(LoadedAsset, u32, PathBuf)> {
         let path = self.base_dir.join(file);
         if !self.assets.contains_key(&path) {
             let asset = load_mesh_file(&path).map_err(|e| {
@@ -566,20 +620,24 @@ impl Compiler {
             self.assets.insert(path.clone(), (asset, first_material));
         }
         let (asset, first_material) = self.assets.get(&path).expect("inserted above").clone();
+        Ok((asset, first_material, path))
+    }
+
+    fn mesh_file(
+        &mut self,
+        file: &str,
+        key: &str,
+        m: Affine3A,
+        explicit_material: Option<u32>,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let (asset, first_material, path) = self.asset(file, key)?;
         let t = Transform::new(m).expect("checked by the caller");
         for mesh in &asset.meshes {
-            let n_vertices = mesh.positions.len();
-            let mut tris = Vec::with_capacity(mesh.indices.len());
-            for (f, idx) in mesh.indices.iter().enumerate() {
-                if idx.iter().any(|&i| i as usize >= n_vertices) {
-                    return Err(InputError::new(
-                        &path,
-                        format!("face {f}"),
-                        "vertex index out of range",
-                    ));
-                }
-                tris.push(idx.map(|i| t.point(mesh.positions[i as usize])));
-            }
+            let tris = mesh_triangles(mesh, &path)?
+                .into_iter()
+                .map(|v| v.map(|p| t.point(p)))
+                .collect();
             let normals = mesh.normals.as_ref().map(|n| super::asset::MeshNormals {
                 values: n.values.iter().map(|&v| t.normal_to_world * v).collect(),
                 indices: n.indices.clone(),
@@ -721,7 +779,7 @@ impl Compiler {
             boxes.push(b);
         }
         for (i, s) in self.shapes.iter().enumerate() {
-            let local = s.shape.bounds();
+            let local = s.shape.bounds(&self.csg);
             let b = if s.transform == NO_TRANSFORM {
                 local
             } else {
@@ -735,6 +793,25 @@ impl Compiler {
         }
         Ok(boxes)
     }
+}
+
+/// A loaded mesh's triangles in file space, with every index checked.
+fn mesh_triangles(mesh: &super::asset::LoadedMesh, path: &Path) -> InputResult<Vec<[Vec3; 3]>> {
+    let n_vertices = mesh.positions.len();
+    mesh.indices
+        .iter()
+        .enumerate()
+        .map(|(f, idx)| {
+            if idx.iter().any(|&i| i as usize >= n_vertices) {
+                return Err(InputError::new(
+                    path,
+                    format!("face {f}"),
+                    "vertex index out of range",
+                ));
+            }
+            Ok(idx.map(|i| mesh.positions[i as usize]))
+        })
+        .collect()
 }
 
 /// The uniform scale factor if `m`'s linear part is a similarity (rotation

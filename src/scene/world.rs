@@ -9,6 +9,7 @@ use crate::sampling::SamplerKind;
 use crate::scene::asset::MeshNormals;
 use crate::shade::light::Light;
 use crate::shade::material::Material;
+use crate::shape::csg::Csg;
 use crate::shape::cylinder::Cylinder;
 use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
@@ -27,34 +28,53 @@ pub enum Shape {
     Rect(Rect),
     /// The visible surface of a `disk` area light.
     Disk(Disk),
+    /// The root node of a tree in [`Scene::csg`].
+    Csg(u32),
 }
 
 impl Shape {
-    fn intersect(&self, ray: &Ray) -> Option<(f32, u32)> {
-        match self {
-            Shape::Sphere(s) => s.intersect(ray).map(|t| (t, 0)),
-            Shape::Cylinder(c) => c.intersect(ray),
-            Shape::Rect(r) => r.intersect(ray).map(|t| (t, 0)),
-            Shape::Disk(d) => d.intersect(ray).map(|t| (t, 0)),
-        }
+    /// The first hit in `(tmin, tmax)`; the caller fills in `prim`.
+    #[inline]
+    fn intersect(&self, ray: &Ray, csg: &Csg) -> Option<PrimHit> {
+        let (t, part) = match self {
+            Shape::Sphere(s) => (s.intersect(ray)?, 0),
+            Shape::Cylinder(c) => c.intersect(ray)?,
+            Shape::Rect(r) => (r.intersect(ray)?, 0),
+            Shape::Disk(d) => (d.intersect(ray)?, 0),
+            Shape::Csg(root) => return csg.intersect(*root, ray),
+        };
+        Some(PrimHit {
+            t,
+            prim: 0,
+            u: 0.0,
+            v: 0.0,
+            part,
+        })
     }
 
-    /// Object-space point, error bound and outward normal.
-    fn surface_at(&self, p: Vec3, part: u32) -> (Vec3, Vec3, Vec3) {
-        match self {
-            Shape::Sphere(s) => s.surface_at(p),
-            Shape::Cylinder(c) => c.surface_at(p, part),
-            Shape::Rect(r) => r.surface_at(p),
-            Shape::Disk(d) => d.surface_at(p),
-        }
+    /// Object-space point, error bound and outward normal, and the material
+    /// if the shape chooses it per part.
+    fn surface_at(&self, ray: &Ray, hit: &PrimHit, csg: &Csg) -> (Vec3, Vec3, Vec3, Option<u32>) {
+        let (p, err, n) = match self {
+            Shape::Sphere(s) => s.surface_at(ray.at(hit.t)),
+            Shape::Cylinder(c) => c.surface_at(ray.at(hit.t), hit.part),
+            Shape::Rect(r) => r.surface_at(ray.at(hit.t)),
+            Shape::Disk(d) => d.surface_at(ray.at(hit.t)),
+            Shape::Csg(_) => {
+                let (p, err, n, material) = csg.surface_at(ray, hit);
+                return (p, err, n, Some(material));
+            }
+        };
+        (p, err, n, None)
     }
 
-    pub fn bounds(&self) -> Aabb {
+    pub fn bounds(&self, csg: &Csg) -> Aabb {
         match self {
             Shape::Sphere(s) => s.bounds(),
             Shape::Cylinder(c) => c.bounds(),
             Shape::Rect(r) => r.bounds(),
             Shape::Disk(d) => d.bounds(),
+            Shape::Csg(root) => csg.bounds(*root),
         }
     }
 }
@@ -107,6 +127,8 @@ pub struct Scene {
     /// Primitive `triangles.len() + i`.
     pub shapes: Vec<AnalyticPrim>,
     pub transforms: Vec<Transform>,
+    /// The CSG trees that [`Shape::Csg`] primitives name, with their operands.
+    pub csg: Csg,
     /// Unbounded, outside the BVH.
     pub planes: Vec<Plane>,
     pub materials: Vec<Material>,
@@ -145,13 +167,8 @@ impl Scene {
         } else {
             let prim = &self.shapes[(id - n_tris) as usize];
             let local = self.object_ray(prim, ray);
-            prim.shape.intersect(&local).map(|(t, part)| PrimHit {
-                t,
-                prim: id,
-                u: 0.0,
-                v: 0.0,
-                part,
-            })
+            let hit = prim.shape.intersect(&local, &self.csg)?;
+            Some(PrimHit { prim: id, ..hit })
         }
     }
 
@@ -255,7 +272,7 @@ impl Scene {
         }
         let prim = &self.shapes[(hit.prim - n_tris) as usize];
         let local = self.object_ray(prim, ray);
-        let (p, err, n) = prim.shape.surface_at(local.at(hit.t), hit.part);
+        let (p, err, n, material) = prim.shape.surface_at(&local, hit, &self.csg);
         let (p, p_error, n) = if prim.transform == NO_TRANSFORM {
             (p, err, n)
         } else {
@@ -271,7 +288,7 @@ impl Scene {
             p_error,
             geometric_normal: n,
             shading_normal: n,
-            material: prim.material,
+            material: material.unwrap_or(prim.material),
         }
     }
 }

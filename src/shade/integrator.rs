@@ -173,8 +173,9 @@ impl<'a> Integrator<'a> {
         kind: &'static str,
     ) -> Vec3 {
         let scene = self.scene;
+        let slot = self.begin_record(depth, kind, ray);
         let Some(hit) = scene.intersect(ray) else {
-            self.record(depth, kind, ray, None, scene.settings.background);
+            self.finish_record(slot, None, scene.settings.background);
             return scene.settings.background;
         };
         let surface = scene.surface(ray, &hit);
@@ -205,26 +206,32 @@ impl<'a> Integrator<'a> {
         if depth < scene.settings.max_depth {
             l += self.specular_transport(ctx, &sh, depth, weight);
         }
-        self.record(depth, kind, ray, Some((hit.t, hit.prim, surface.p)), l);
+        self.finish_record(slot, Some((hit.t, hit.prim, surface.p)), l);
         l
     }
 
-    fn record(
-        &mut self,
-        depth: u32,
-        kind: &'static str,
-        ray: &Ray,
-        hit: Option<(f32, u32, Vec3)>,
-        radiance: Vec3,
-    ) {
-        if let Some(trace) = &mut self.trace {
-            trace.push(PathEvent {
-                depth,
-                kind,
-                ray: *ray,
-                hit,
-                radiance,
-            });
+    /// Path vertices are recorded in pre-order (a parent before its
+    /// children), so a replayed path prints as a tree.
+    fn begin_record(&mut self, depth: u32, kind: &'static str, ray: &Ray) -> usize {
+        match &mut self.trace {
+            Some(trace) => {
+                trace.push(PathEvent {
+                    depth,
+                    kind,
+                    ray: *ray,
+                    hit: None,
+                    radiance: Vec3::ZERO,
+                });
+                trace.len() - 1
+            }
+            None => usize::MAX,
+        }
+    }
+
+    fn finish_record(&mut self, slot: usize, hit: Option<(f32, u32, Vec3)>, radiance: Vec3) {
+        if let Some(e) = self.trace.as_mut().and_then(|t| t.get_mut(slot)) {
+            e.hit = hit;
+            e.radiance = radiance;
         }
     }
 

@@ -139,7 +139,7 @@ impl Light {
             } => {
                 let to = position - p;
                 let d2 = to.length_squared();
-                if !(d2 > 0.0) {
+                if d2.is_nan() || d2 <= 0.0 {
                     return None;
                 }
                 let distance = d2.sqrt();

@@ -6,6 +6,7 @@
 //! [`Surface`] (point, error bound, normals) is computed once, for the
 //! closest hit only.
 
+pub mod csg;
 pub mod cylinder;
 pub mod disk;
 pub mod plane;
@@ -40,12 +41,4 @@ pub struct Surface {
     /// Unit shading normal, on the same side as `geometric_normal`.
     pub shading_normal: Vec3,
     pub material: u32,
-}
-
-/// One crossing of a closed surface along a ray, for CSG: entering the solid or leaving it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Crossing {
-    pub t: f32,
-    pub entering: bool,
-    pub part: u32,
 }

@@ -11,7 +11,6 @@
 //! the distance of the line to the centre, and the two roots from the stable
 //! pair q/a and c/q, so far-away and grazing rays stay accurate.
 
-use super::Crossing;
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use glam::Vec3;
@@ -33,7 +32,7 @@ impl Sphere {
         // Vector from the centre to the line's closest point.
         let l = f + (b / a) * d;
         let disc = a * (self.radius * self.radius - l.length_squared());
-        if !(disc >= 0.0) {
+        if disc.is_nan() || disc < 0.0 {
             return None;
         }
         let q = b + b.signum() * disc.sqrt();
@@ -56,22 +55,6 @@ impl Sphere {
             Some(t1)
         } else {
             None
-        }
-    }
-
-    /// Entry and exit along the whole line, for CSG.
-    pub fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
-        if let Some((t0, t1)) = self.roots(ray) {
-            out.push(Crossing {
-                t: t0,
-                entering: true,
-                part: 0,
-            });
-            out.push(Crossing {
-                t: t1,
-                entering: false,
-                part: 0,
-            });
         }
     }
 

@@ -89,7 +89,42 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
     if !(t > ray.tmin && t < ray.tmax) {
         return None;
     }
+    // A hit within the rounding error of t = 0 is the ray's own origin
+    // surface: reject it, with the bound of pbrt-v4 (section 6.8.4,
+    // "Conservative Ray–Triangle t Values"). Without it, a ray spawned
+    // from a point exactly on the triangle's plane (zero error bound) can
+    // re-hit the plane at t = 1e-9.
+    if t <= origin_error_bound(ax, ay, bx, by, cx, cy, [az, bz, cz], [e0, e1, e2], inv_det) {
+        return None;
+    }
     Some((t, e1 * inv_det, e2 * inv_det))
+}
+
+/// δt: the error bound of the computed t, from the bounds on the sheared
+/// coordinates and edge functions.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn origin_error_bound(
+    ax: f32,
+    ay: f32,
+    bx: f32,
+    by: f32,
+    cx: f32,
+    cy: f32,
+    z: [f32; 3],
+    e: [f32; 3],
+    inv_det: f32,
+) -> f32 {
+    use crate::math::offset::gamma;
+    let max_z = z[0].abs().max(z[1].abs()).max(z[2].abs());
+    let delta_z = gamma(3) * max_z;
+    let max_x = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_y = ay.abs().max(by.abs()).max(cy.abs());
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
+    3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
 }
 
 /// Intersect and package as a [`PrimHit`].
@@ -170,6 +205,27 @@ mod tests {
             assert!(
                 intersect(&ray, &s, &a).is_some() || intersect(&ray, &s, &b).is_some(),
                 "leak at {x}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_ray_leaving_the_triangle_plane_does_not_rehit_it() {
+        let v = [
+            Vec3::new(-10.0, 0.0, -10.0),
+            Vec3::new(-10.0, 0.0, 10.0),
+            Vec3::new(10.0, 0.0, 10.0),
+        ];
+        for i in 0..1000 {
+            let x = -9.0 + (i as f32) * 0.017;
+            // Starts exactly on the plane, leaves at a grazing angle.
+            let ray = Ray::new(
+                Vec3::new(-x * 0.3, 0.0, x),
+                Vec3::new(-0.99996, 0.0087265, 0.0),
+            );
+            assert!(
+                intersect(&ray, &ShearedRay::new(&ray), &v).is_none(),
+                "re-hit at {x}"
             );
         }
     }

@@ -1,0 +1,163 @@
+//! `strata converge`: error against time and against spp, per sampling method.
+
+use super::CliError;
+use clap::Args;
+use std::path::PathBuf;
+use strata::error::InputError;
+use strata::output::chart::{log_log_slope, write_svg, Panel, Series};
+use strata::render::converge::{self, Point, METHODS};
+use strata::scene::{load_scene, RenderOverrides};
+
+#[derive(Debug, Args, Clone)]
+pub struct ConvergeArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Reference image (linear EXR) of the same size. Without it, a reference
+    /// is rendered first with --reference-spp samples and saved beside the CSV.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of a rendered reference.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_spp: u32,
+    /// Largest spp measured (powers of two from 1).
+    #[arg(long, default_value_t = 256)]
+    pub max_spp: u32,
+    /// Output CSV: method, spp, seconds, RMSE, relative MSE.
+    #[arg(long, default_value = "converge.csv")]
+    pub csv: PathBuf,
+    /// Output chart (SVG): RMSE against time and against spp, log-log, slope in the legend.
+    #[arg(long, default_value = "converge.svg")]
+    pub chart: PathBuf,
+    /// Image width (overrides the scene).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (overrides the scene).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Renders per point; the median time is reported (machines are noisy).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// No progress output.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
+    let overrides = RenderOverrides {
+        width: args.width,
+        height: args.height,
+        ..RenderOverrides::default()
+    };
+    let (scene, _) = load_scene(&args.scene, &overrides)?;
+    let (w, h) = (scene.settings.width, scene.settings.height);
+    if args.max_spp == 0 || args.reference_spp == 0 {
+        return Err(InputError::new("<command line>", "--max-spp", "must be at least 1").into());
+    }
+    let reference = match &args.reference {
+        Some(path) => {
+            let (pixels, rw, rh) =
+                strata::output::image::read_image(path).map_err(|e| InputError::file(path, e))?;
+            if (rw, rh) != (w, h) {
+                return Err(
+                    InputError::file(path, format!("is {rw}x{rh}, the render is {w}x{h}")).into(),
+                );
+            }
+            pixels
+        }
+        None => {
+            let path = args.csv.with_extension("reference.exr");
+            eprintln!(
+                "no --reference given: rendering a {}-spp reference with {} sampling, saved to {}",
+                args.reference_spp,
+                converge::REFERENCE_METHOD.name,
+                path.display()
+            );
+            let pixels = converge::reference(&scene, args.reference_spp, args.threads, args.quiet);
+            strata::output::image::write_image(&path, &pixels, w, h)
+                .map_err(|e| InputError::file(&path, e))?;
+            pixels
+        }
+    };
+    if !args.quiet {
+        println!(
+            "{:<28} {:>6} {:>10} {:>12} {:>12}",
+            "method", "spp", "seconds", "RMSE", "relMSE"
+        );
+    }
+    let points = converge::measure(
+        &scene,
+        &reference,
+        &METHODS,
+        args.max_spp,
+        args.threads,
+        args.repeats,
+        |p| {
+            if !args.quiet {
+                println!(
+                    "{:<28} {:>6} {:>10.4} {:>12.4e} {:>12.4e}",
+                    p.method, p.spp, p.seconds, p.rmse, p.rel_mse
+                );
+            }
+        },
+    );
+    write_outputs(&args, &points)
+}
+
+fn write_outputs(args: &ConvergeArgs, points: &[Point]) -> Result<(), CliError> {
+    let mut csv = String::from("method,spp,seconds,rmse,rel_mse\n");
+    for p in points {
+        csv.push_str(&format!(
+            "{},{},{},{},{}\n",
+            p.method, p.spp, p.seconds, p.rmse, p.rel_mse
+        ));
+    }
+    strata::output::atomic::write_bytes_atomic(&args.csv, csv.as_bytes())
+        .map_err(|e| InputError::file(&args.csv, format!("cannot write: {e}")))?;
+    let mut by_time = Vec::new();
+    let mut by_spp = Vec::new();
+    for m in METHODS {
+        let pts: Vec<&Point> = points.iter().filter(|p| p.method == m.name).collect();
+        let spp_pts: Vec<(f64, f64)> = pts.iter().map(|p| (p.spp as f64, p.rmse)).collect();
+        let slope = log_log_slope(&spp_pts).map_or("n/a".to_string(), |s| format!("{s:.2}"));
+        let label = format!("{} (slope {slope})", m.name);
+        by_spp.push(Series {
+            label: label.clone(),
+            points: spp_pts,
+        });
+        by_time.push(Series {
+            label,
+            points: pts.iter().map(|p| (p.seconds, p.rmse)).collect(),
+        });
+    }
+    let title = args
+        .scene
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let panels = [
+        Panel {
+            title: format!("{title}: RMSE against time"),
+            x_label: "seconds".into(),
+            y_label: "RMSE".into(),
+            log_x: true,
+            log_y: true,
+            series: by_time,
+        },
+        Panel {
+            title: format!("{title}: RMSE against samples per pixel"),
+            x_label: "spp".into(),
+            y_label: "RMSE".into(),
+            log_x: true,
+            log_y: true,
+            series: by_spp,
+        },
+    ];
+    write_svg(&args.chart, &panels, 560, 420).map_err(|e| InputError::file(&args.chart, e))?;
+    if !args.quiet {
+        println!("wrote {} and {}", args.csv.display(), args.chart.display());
+    }
+    Ok(())
+}

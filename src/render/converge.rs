@@ -1,0 +1,158 @@
+//! Error against time: render at spp 1, 2, 4, … for each sampling method
+//! and measure RMSE against a reference (pbrt-v4 logs the same per pass
+//! with `--mse-reference-image`).
+
+use super::schedule::{render, RenderOptions};
+use crate::sampling::SamplerKind;
+use crate::scene::Scene;
+use crate::shade::integrator::GlossySampling;
+use crate::shade::light::LightSampling;
+use glam::Vec3;
+
+/// One sampling configuration compared by `strata converge`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Method {
+    pub name: &'static str,
+    pub sampler: SamplerKind,
+    pub light: LightSampling,
+    pub glossy: GlossySampling,
+}
+
+/// Random; stratified; stratified plus importance sampling (lobe-sampled
+/// glossy rays, solid-angle light samples); and the same with area light
+/// sampling, to isolate what solid-angle sampling buys.
+pub const METHODS: [Method; 4] = [
+    Method {
+        name: "random",
+        sampler: SamplerKind::Random,
+        light: LightSampling::Area,
+        glossy: GlossySampling::Uniform,
+    },
+    Method {
+        name: "stratified",
+        sampler: SamplerKind::Stratified,
+        light: LightSampling::Area,
+        glossy: GlossySampling::Uniform,
+    },
+    Method {
+        name: "stratified+is",
+        sampler: SamplerKind::Stratified,
+        light: LightSampling::SolidAngle,
+        glossy: GlossySampling::Lobe,
+    },
+    Method {
+        name: "stratified+is/area-lights",
+        sampler: SamplerKind::Stratified,
+        light: LightSampling::Area,
+        glossy: GlossySampling::Lobe,
+    },
+];
+
+/// The best method, used for references.
+pub const REFERENCE_METHOD: Method = METHODS[2];
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    pub method: &'static str,
+    pub spp: u32,
+    pub seconds: f64,
+    pub rmse: f64,
+    pub rel_mse: f64,
+}
+
+/// RMSE and relative MSE (mean of (x − r)² / (r² + 0.01), per channel).
+pub fn image_error(image: &[Vec3], reference: &[Vec3]) -> (f64, f64) {
+    assert_eq!(image.len(), reference.len());
+    let mut se = 0.0f64;
+    let mut rel = 0.0f64;
+    for (x, r) in image.iter().zip(reference) {
+        for c in 0..3 {
+            let d = (x[c] - r[c]) as f64;
+            se += d * d;
+            rel += d * d / ((r[c] as f64).powi(2) + 0.01);
+        }
+    }
+    let n = (image.len() * 3) as f64;
+    ((se / n).sqrt(), rel / n)
+}
+
+/// The scene with one method's sampling and a sample count.
+pub fn configured(scene: &Scene, method: &Method, spp: u32) -> Scene {
+    let mut s = scene.clone();
+    s.settings.sampler = method.sampler;
+    s.settings.light_sampling = method.light;
+    s.settings.glossy_sampling = method.glossy;
+    s.settings.spp = spp;
+    s
+}
+
+/// Render a reference image with the best method.
+pub fn reference(scene: &Scene, spp: u32, threads: usize, quiet: bool) -> Vec<Vec3> {
+    let s = configured(scene, &REFERENCE_METHOD, spp);
+    let opts = RenderOptions {
+        threads,
+        quiet,
+        ..RenderOptions::default()
+    };
+    render(&s, &opts, None, |_, _| {}).film.to_rgb()
+}
+
+/// Measure every method at spp 1, 2, 4, … `max_spp`, calling `on_point` as
+/// results arrive. Each render is repeated `repeats` times and the median
+/// time kept: the image is the same every time (same seed), the time is not.
+pub fn measure(
+    scene: &Scene,
+    reference: &[Vec3],
+    methods: &[Method],
+    max_spp: u32,
+    threads: usize,
+    repeats: u32,
+    mut on_point: impl FnMut(&Point),
+) -> Vec<Point> {
+    let mut points = Vec::new();
+    for method in methods {
+        let mut spp = 1;
+        while spp <= max_spp {
+            let s = configured(scene, method, spp);
+            let opts = RenderOptions {
+                threads,
+                passes: 1,
+                ..RenderOptions::default()
+            };
+            let mut times = Vec::new();
+            let mut image = Vec::new();
+            for _ in 0..repeats.max(1) {
+                let outcome = render(&s, &opts, None, |_, _| {});
+                times.push(outcome.seconds);
+                image = outcome.film.to_rgb();
+            }
+            times.sort_by(f64::total_cmp);
+            let (rmse, rel_mse) = image_error(&image, reference);
+            let p = Point {
+                method: method.name,
+                spp,
+                seconds: times[times.len() / 2],
+                rmse,
+                rel_mse,
+            };
+            on_point(&p);
+            points.push(p);
+            spp *= 2;
+        }
+    }
+    points
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_is_zero_for_identical_images_and_scales_with_the_difference() {
+        let r = vec![Vec3::splat(0.5); 10];
+        assert_eq!(image_error(&r, &r), (0.0, 0.0));
+        let x: Vec<Vec3> = r.iter().map(|v| *v + Vec3::splat(0.1)).collect();
+        let (rmse, _) = image_error(&x, &r);
+        assert!((rmse - 0.1).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,93 @@
+//! Degenerate geometry: none of it crashes; each case renders (with no NaN
+//! or infinite sample) or fails with a clear error.
+
+mod common;
+
+use common::{scene_at, temp_dir};
+use std::path::Path;
+use strata::render::{render, RenderOptions};
+
+/// Render a scene file's text (meshes resolved in `dir`) and return the film's invalid-sample count.
+fn render_invalid(text: &str, dir: &Path) -> u64 {
+    let scene = scene_at(text, &dir.join("scene.toml"));
+    let outcome = render(&scene, &RenderOptions::default(), None, |_, _| {});
+    outcome.film.invalid
+}
+
+const VIEW: &str = "[render]\nwidth = 48\nheight = 36\nspp = 2\n[[lights]]\ntype = \"point\"\nposition = [1.0, 3.0, 2.0]\nintensity = [10.0, 10.0, 10.0]\n[[lights]]\ntype = \"rect\"\ncorner = [-0.5, 2.5, -0.5]\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, 1.0]\nradiance = [3.0, 3.0, 3.0]\n";
+
+#[test]
+fn zero_area_sliver_and_duplicate_vertex_triangles_render_cleanly() {
+    let dir = temp_dir("degenerate-mesh");
+    std::fs::write(
+        dir.join("bad.obj"),
+        "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 0 1 0\nv 1e-9 1 0\nv 0.5 0.5 0\n\
+         f 1 2 3\nf 1 4 5\nf 1 4 6\nf 1 2 4\nf 4 4 4\nf 1 2 7\n",
+    )
+    .unwrap();
+    let text = format!("{VIEW}[[objects]]\nmesh = \"bad.obj\"\n");
+    assert_eq!(render_invalid(&text, &dir), 0);
+}
+
+#[test]
+fn one_triangle_meshes_empty_meshes_and_empty_scenes_render() {
+    let dir = temp_dir("degenerate-small");
+    std::fs::write(dir.join("one.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(dir.join("empty.obj"), "# nothing here\n").unwrap();
+    assert_eq!(
+        render_invalid(&format!("{VIEW}[[objects]]\nmesh = \"one.obj\"\n"), &dir),
+        0
+    );
+    assert_eq!(
+        render_invalid(&format!("{VIEW}[[objects]]\nmesh = \"empty.obj\"\n"), &dir),
+        0
+    );
+    assert_eq!(render_invalid(VIEW, &dir), 0);
+    assert_eq!(
+        render_invalid("", &dir),
+        0,
+        "an empty file is a valid, empty scene"
+    );
+}
+
+#[test]
+fn a_camera_inside_an_object_and_a_light_inside_a_closed_mesh() {
+    let dir = temp_dir("degenerate-inside");
+    let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
+    // The camera sits inside a sphere: it sees the inside, lit by a light also inside.
+    let inside = "[render]\nwidth = 32\nheight = 24\n[camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\n\
+        [[lights]]\ntype = \"point\"\nposition = [0.0, 0.5, 0.0]\nintensity = [1.0, 1.0, 1.0]\n\
+        [[objects]]\nsphere = { radius = 2.0 }\n";
+    let scene = scene_at(inside, &dir.join("s.toml"));
+    let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
+    assert_eq!(film.invalid, 0);
+    assert!(
+        film.to_rgb().iter().all(|p| p.x > 0.0),
+        "every pixel sees the lit inside wall"
+    );
+    // A light enclosed by a closed mesh leaves the floor outside dark.
+    let enclosed = format!(
+        "[render]\nwidth = 32\nheight = 24\n[camera]\nposition = [0.0, 2.0, 6.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+         [[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [50.0, 50.0, 50.0]\n\
+         [[objects]]\nmesh = \"{mesh}\"\ntransform = {{ translate = [0.0, 1.0, 0.0] }}\n\
+         [[objects]]\nplane = {{ normal = [0.0, 1.0, 0.0] }}\n"
+    );
+    let scene = scene_at(&enclosed, &dir.join("s.toml"));
+    let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
+    assert_eq!(film.invalid, 0);
+    assert!(
+        film.to_rgb().iter().all(|p| p.x == 0.0),
+        "no light escapes a closed mesh"
+    );
+}
+
+#[test]
+fn coordinates_near_1e30_render_without_nan_or_panic() {
+    let dir = temp_dir("degenerate-huge");
+    let text = "[render]\nwidth = 24\nheight = 16\n[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+        [[lights]]\ntype = \"point\"\nposition = [1e30, 1e30, 1e30]\nintensity = [1e30, 1e30, 1e30]\n\
+        [[objects]]\ntriangle = { v = [[-1e30, -1e30, -1e29], [1e30, -1e30, -1e29], [0.0, 1e30, -1e29]] }\n\
+        [[objects]]\nsphere = { center = [0.0, 0.0, -1e30], radius = 1e29 }\n\
+        [[objects]]\nsphere = { radius = 0.5 }\n";
+    assert_eq!(render_invalid(text, &dir), 0);
+}
