@@ -12,6 +12,8 @@ pub mod camera;
 pub mod error;
 pub mod math;
 pub mod output;
+pub mod rayfile;
+pub mod raygen;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -2,8 +2,10 @@
 
 pub mod converge;
 pub mod merge;
+pub mod rays;
 pub mod render;
 pub mod scaling;
+pub mod trace;
 
 use clap::{Parser, Subcommand};
 use strata::error::InputError;
@@ -30,6 +32,10 @@ pub enum Command {
     Scaling(scaling::ScalingArgs),
     /// Error against time: RMSE per sampling method at spp 1, 2, 4, …; CSV and SVG chart.
     Converge(converge::ConvergeArgs),
+    /// Write a ray set for testing intersection against a mesh (RAYS.bin).
+    Rays(rays::RaysArgs),
+    /// Trace a ray file against a mesh with the renderer's own code (HITS.bin).
+    Trace(trace::TraceArgs),
 }
 
 pub enum CliError {
@@ -51,6 +57,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Merge(args)) => merge::run(args),
         Some(Command::Scaling(args)) => scaling::run(args),
         Some(Command::Converge(args)) => converge::run(args),
+        Some(Command::Rays(args)) => rays::run(args),
+        Some(Command::Trace(args)) => trace::run(args),
         None => render::run(cli.render),
     }
 }

@@ -65,6 +65,31 @@ pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> I
     compile(&desc, path, overrides, Instant::now()).map(|(scene, _)| scene)
 }
 
+/// A scene of one mesh file used as it is (no transform, default camera and
+/// materials), compiled exactly as a scene file holding only
+/// `[[objects]] mesh = "PATH"` would be. Triangle `i` of the file is
+/// primitive `i`. This is what `strata trace` and `strata rays` intersect,
+/// so they exercise the renderer's own code path.
+pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene, LoadTimings)> {
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| InputError::file(path, "is not a file name"))?;
+    let desc = SceneDescription {
+        objects: vec![ObjectDesc {
+            mesh: Some(file_name.to_string_lossy().into_owned()),
+            ..ObjectDesc::default()
+        }],
+        ..SceneDescription::default()
+    };
+    let overrides = RenderOverrides {
+        bvh_quality: quality,
+        ..RenderOverrides::default()
+    };
+    // The "scene file" is the mesh itself, so the mesh resolves to `path`
+    // and every error names it.
+    compile(&desc, path, &overrides, Instant::now())
+}
+
 /// Compile a parsed description; `path` is the scene file (meshes are relative to it).
 pub fn compile(
     desc: &SceneDescription,

@@ -8,5 +8,5 @@ pub mod loaders;
 pub mod parse;
 pub mod world;
 
-pub use compile::{load_scene, scene_from_str, LoadTimings, RenderOverrides};
+pub use compile::{load_mesh_scene, load_scene, scene_from_str, LoadTimings, RenderOverrides};
 pub use world::{RenderSettings, Scene};

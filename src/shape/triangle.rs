@@ -94,7 +94,19 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
     // "Conservative Ray–Triangle t Values"). Without it, a ray spawned
     // from a point exactly on the triangle's plane (zero error bound) can
     // re-hit the plane at t = 1e-9.
-    if t <= origin_error_bound(ax, ay, bx, by, cx, cy, [az, bz, cz], [e0, e1, e2], inv_det) {
+    let world_z = [a[s.kz], b[s.kz], c[s.kz]];
+    if t <= origin_error_bound(
+        ax,
+        ay,
+        bx,
+        by,
+        cx,
+        cy,
+        world_z,
+        [az, bz, cz],
+        [e0, e1, e2],
+        inv_det,
+    ) {
         return None;
     }
     Some((t, e1 * inv_det, e2 * inv_det))
@@ -102,6 +114,13 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
 
 /// δt: the error bound of the computed t, from the bounds on the sheared
 /// coordinates and edge functions.
+///
+/// pbrt adds the largest |z| to the largest |x| and |y| in δx and δy, for
+/// the shear `x − sx·z`; that z is in world units (`world_z`, before the
+/// scaling by `sz = 1/d_z`), while the z of t (`z`) is in units of t. pbrt
+/// uses the scaled z for both, which is the same only for unit-length
+/// directions: a ray whose direction is 1e-6 long (a mesh at scale 1e-6)
+/// would get a bound a million times too large and lose every hit.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn origin_error_bound(
@@ -111,6 +130,7 @@ fn origin_error_bound(
     by: f32,
     cx: f32,
     cy: f32,
+    world_z: [f32; 3],
     z: [f32; 3],
     e: [f32; 3],
     inv_det: f32,
@@ -118,10 +138,11 @@ fn origin_error_bound(
     use crate::math::offset::gamma;
     let max_z = z[0].abs().max(z[1].abs()).max(z[2].abs());
     let delta_z = gamma(3) * max_z;
+    let max_world_z = world_z[0].abs().max(world_z[1].abs()).max(world_z[2].abs());
     let max_x = ax.abs().max(bx.abs()).max(cx.abs());
     let max_y = ay.abs().max(by.abs()).max(cy.abs());
-    let delta_x = gamma(5) * (max_x + max_z);
-    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_x = gamma(5) * (max_x + max_world_z);
+    let delta_y = gamma(5) * (max_y + max_world_z);
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
     3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
@@ -227,6 +248,27 @@ mod tests {
                 intersect(&ray, &ShearedRay::new(&ray), &v).is_none(),
                 "re-hit at {x}"
             );
+        }
+    }
+
+    #[test]
+    fn the_answer_does_not_depend_on_the_direction_length_or_the_scale() {
+        // The same rays with directions scaled by powers of two hit at t
+        // scaled exactly inversely, for triangles at 1, 1e-6 and 1e5.
+        for (scale, offset) in [(1.0, 0.0), (1e-6, 0.0), (1.0, 1e5)] {
+            let v = tri().map(|p| p * scale + Vec3::splat(offset));
+            let target = (v[0] + v[1] + v[2]) / 3.0;
+            let origin = target + Vec3::new(0.3, -0.2, 2.0) * scale;
+            for k in [-24, -10, 0, 10] {
+                let f = 2f32.powi(k);
+                let ray = Ray::new(origin, (target - origin) * f);
+                let hit = intersect(&ray, &ShearedRay::new(&ray), &v);
+                let (t, _, _) = hit.unwrap_or_else(|| panic!("miss at scale {scale}, 2^{k}"));
+                assert!(
+                    (t * f - 1.0).abs() < 1e-5,
+                    "t = {t} at scale {scale}, 2^{k}"
+                );
+            }
         }
     }
 

@@ -1,0 +1,105 @@
+//! `strata trace MESH --rays RAYS.bin --hits HITS.bin [--occlusion] [--threads T]`:
+//! trace a ray file against one mesh with the renderer's own queries
+//! ([`Scene::intersect`] and [`Scene::occluded`]) and write one hit record
+//! per ray (see [`strata::rayfile`]).
+
+use super::CliError;
+use clap::Args;
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::time::Instant;
+use strata::accel::BuildQuality;
+use strata::error::InputError;
+use strata::rayfile::{encode_hits, read_rays, write_file, HitRecord};
+use strata::scene::{load_mesh_scene, Scene};
+
+#[derive(Debug, Args, Clone)]
+pub struct TraceArgs {
+    /// Mesh file (.obj, .gltf or .glb), used as it is: triangle i of the file is primitive i.
+    pub mesh: PathBuf,
+    /// Ray file: records of 8 little-endian f32 (ox oy oz dx dy dz tmin tmax).
+    #[arg(long)]
+    pub rays: PathBuf,
+    /// Hit file to write: per ray t (f32, +inf on a miss), prim (u32, u32::MAX on a miss), u, v (f32).
+    #[arg(long)]
+    pub hits: PathBuf,
+    /// Answer occlusion queries instead: each record is t = 0, prim = 0 if
+    /// anything lies in (tmin, tmax), else the miss record.
+    #[arg(long)]
+    pub occlusion: bool,
+    /// Worker threads (default: all cores). The hits are identical for any count.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// BVH build effort: fastest | fast | auto | medium | high.
+    #[arg(long, default_value = "auto")]
+    pub bvh_quality: BuildQuality,
+    /// No summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Trace every ray with `threads` threads (0: all cores); returns the
+/// records and the thread count used.
+pub fn trace(
+    scene: &Scene,
+    rays: &[strata::math::Ray],
+    occlusion: bool,
+    threads: usize,
+) -> Result<(Vec<HitRecord>, usize), CliError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))?;
+    let hits = pool.install(|| {
+        rays.par_iter()
+            .with_min_len(256)
+            .map(|ray| {
+                if occlusion {
+                    if scene.occluded(ray) {
+                        HitRecord::OCCLUDED
+                    } else {
+                        HitRecord::MISS
+                    }
+                } else {
+                    HitRecord::from_hit(scene.intersect(ray))
+                }
+            })
+            .collect()
+    });
+    Ok((hits, pool.current_num_threads()))
+}
+
+pub fn run(args: TraceArgs) -> Result<(), CliError> {
+    let (scene, timings) = load_mesh_scene(&args.mesh, args.bvh_quality)?;
+    let rays = read_rays(&args.rays)?;
+    if args.hits == args.rays {
+        return Err(InputError::new(
+            "<command line>",
+            "--hits",
+            "must not be the ray file it reads",
+        )
+        .into());
+    }
+    let start = Instant::now();
+    let (hits, threads) = trace(&scene, &rays, args.occlusion, args.threads)?;
+    let seconds = start.elapsed().as_secs_f64();
+    write_file(&args.hits, &encode_hits(&hits))?;
+    if !args.quiet {
+        let found = hits.iter().filter(|h| h.is_hit()).count();
+        println!(
+            "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s) -> {}",
+            rays.len(),
+            if args.occlusion { "occlusion" } else { "closest hit" },
+            scene.triangles.len(),
+            found,
+            if args.occlusion { "occluded" } else { "hits" },
+            seconds,
+            rays.len() as f64 / seconds.max(1e-9) / 1e6,
+            threads,
+            timings.load.as_secs_f64(),
+            timings.bvh_build.as_secs_f64(),
+            args.hits.display()
+        );
+    }
+    Ok(())
+}
