@@ -2,8 +2,10 @@
 
 pub mod bench;
 pub mod converge;
+pub mod merge;
 pub mod rays;
 pub mod render;
+pub mod scaling;
 pub mod trace;
 
 use clap::{Parser, Subcommand};
@@ -25,6 +27,10 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
     Render(render::RenderArgs),
+    /// Combine the .strata parts of a sliced render into the image one process would make.
+    Merge(merge::MergeArgs),
+    /// Measure speedup and efficiency against threads (and processes); writes CSV and SVG.
+    Scaling(scaling::ScalingArgs),
     /// Error against time: RMSE per sampling method at spp 1, 2, 4, …; CSV and SVG chart.
     Converge(converge::ConvergeArgs),
     /// Write a ray set for testing intersection against a mesh (RAYS.bin).
@@ -51,6 +57,8 @@ impl From<InputError> for CliError {
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
+        Some(Command::Merge(args)) => merge::run(args),
+        Some(Command::Scaling(args)) => scaling::run(args),
         Some(Command::Converge(args)) => converge::run(args),
         Some(Command::Rays(args)) => rays::run(args),
         Some(Command::Trace(args)) => trace::run(args),

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use strata::error::InputError;
 use strata::output::image::write_image;
 use strata::output::stats::{peak_rss_bytes, PhaseTimes, RenderStats};
+use strata::render::partial::{read_partial, write_partial, PartialHeader};
 use strata::render::{render, RenderOptions, Schedule, SliceSpec};
 use strata::sampling::SamplerKind;
 use strata::scene::{load_scene, RenderOverrides};
@@ -14,7 +15,8 @@ use strata::scene::{load_scene, RenderOverrides};
 pub struct RenderArgs {
     /// Scene file (TOML). Default: scenes/seed.toml.
     pub scene: Option<PathBuf>,
-    /// Output image: .png (sRGB, 8-bit) or .exr (linear float).
+    /// Output: .png (sRGB, 8-bit), .exr (linear float), or .strata (the
+    /// film's exact sums, for `strata merge`; required with --slice k/P, P > 1).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
     /// Image width in pixels (overrides [render] width).
@@ -50,9 +52,23 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores). The image is identical for any count.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// Render only slice k of P of every pixel's samples (0-based k), e.g. 3/8.
-    #[arg(long)]
-    pub slice: Option<SliceSpec>,
+    /// Render only slice k of P of every pixel's samples (0-based k), e.g. 3/8,
+    /// into a .strata part; `strata merge` combines the P parts.
+    #[arg(long, value_name = "k/P")]
+    pub slice: Option<String>,
+    /// Save the accumulated film to FILE (.strata) after every pass, atomically.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Continue from the --checkpoint file if it exists (it must be of the
+    /// same scene, settings and slice); the result is bit-identical to an
+    /// uninterrupted render.
+    #[arg(long, requires = "checkpoint")]
+    pub resume: bool,
+    /// Progressive passes (each a progress tick and a checkpoint); capped by
+    /// the sample count.
+    #[arg(long, default_value_t = strata::render::schedule::DEFAULT_PASSES,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub passes: u32,
     /// slices (default, work stealing over sample slices) | regions (static bands, a baseline).
     #[arg(long, default_value = "slices")]
     pub schedule: Schedule,
@@ -83,10 +99,39 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         .scene
         .clone()
         .unwrap_or_else(|| PathBuf::from("scenes/seed.toml"));
-    if strata::output::image::ImageFormat::from_path(&args.output).is_none() {
-        return Err(
-            InputError::new("<command line>", "--output", "must end in .png or .exr").into(),
-        );
+    let partial_output = is_partial_path(&args.output);
+    if !partial_output && strata::output::image::ImageFormat::from_path(&args.output).is_none() {
+        return Err(InputError::new(
+            "<command line>",
+            "--output",
+            "must end in .png, .exr or .strata",
+        )
+        .into());
+    }
+    // Parsed here, not by clap, so that a bad value is one line like every other input error.
+    let slice = match &args.slice {
+        None => SliceSpec::WHOLE,
+        Some(text) => text
+            .parse::<SliceSpec>()
+            .map_err(|e| InputError::new("<command line>", "--slice", e))?,
+    };
+    if slice.count > 1 && !partial_output {
+        return Err(InputError::new(
+            "<command line>",
+            "--slice",
+            format!(
+                "slice {}/{} is a partial render: write it to a .strata file (-o part_{}.strata) and combine the parts with `strata merge`",
+                slice.index, slice.count, slice.index
+            ),
+        )
+        .into());
+    }
+    if let Some(ck) = &args.checkpoint {
+        if !is_partial_path(ck) {
+            return Err(
+                InputError::new("<command line>", "--checkpoint", "must end in .strata").into(),
+            );
+        }
     }
     let overrides = RenderOverrides {
         width: args.width,
@@ -108,17 +153,72 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         print!("{}", strata::render::debug::describe(id, value, &events));
         return Ok(());
     }
+    let s = &scene.settings;
+    let full = slice.samples(s.spp);
+    let header = PartialHeader::for_scene(&scene, slice, full.clone());
+
+    let (initial, resume_from) = match (&args.checkpoint, args.resume) {
+        (Some(ck), true) if ck.exists() => {
+            let part = read_partial(ck).map_err(|e| InputError::file(ck, e))?;
+            let done = part
+                .header
+                .resume_point(&header)
+                .map_err(|e| InputError::file(ck, e))?;
+            if !args.quiet {
+                eprintln!(
+                    "resuming from {}: samples {}..{} of {}..{} done",
+                    ck.display(),
+                    full.start,
+                    done,
+                    full.start,
+                    full.end
+                );
+            }
+            (Some(part.film), Some(done))
+        }
+        (Some(ck), true) => {
+            if !args.quiet {
+                eprintln!(
+                    "no checkpoint at {} yet; starting from the first sample",
+                    ck.display()
+                );
+            }
+            (None, None)
+        }
+        _ => (None, None),
+    };
+
     let opts = RenderOptions {
         threads: args.threads,
-        slice: args.slice.unwrap_or(SliceSpec::WHOLE),
+        slice,
         schedule: args.schedule,
         quiet: args.quiet,
-        ..RenderOptions::default()
+        passes: args.passes,
+        resume_from,
     };
-    let outcome = render(&scene, &opts, None, |_, _| {});
-    let s = &scene.settings;
-    write_image(&args.output, &outcome.film.to_rgb(), s.width, s.height)
-        .map_err(|e| InputError::file(&args.output, e))?;
+    let mut checkpoint_failed = false;
+    let outcome = render(&scene, &opts, initial, |film, done| {
+        let Some(ck) = &args.checkpoint else {
+            return;
+        };
+        let h = PartialHeader {
+            samples: full.start..done,
+            ..header.clone()
+        };
+        if let Err(e) = write_partial(ck, &h, film) {
+            if !checkpoint_failed {
+                eprintln!("warning: {}: cannot write checkpoint: {e}", ck.display());
+                checkpoint_failed = true;
+            }
+        }
+    });
+    if partial_output {
+        write_partial(&args.output, &header, &outcome.film)
+            .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
+    } else {
+        write_image(&args.output, &outcome.film.to_rgb(), s.width, s.height)
+            .map_err(|e| InputError::file(&args.output, e))?;
+    }
 
     let total = outcome.counts.total();
     let mrays = total as f64 / outcome.seconds.max(1e-9) / 1e6;
@@ -140,7 +240,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             width: s.width,
             height: s.height,
             spp: s.spp,
-            samples_rendered: [outcome.samples.start, outcome.samples.end],
+            samples_rendered: [resume_from.unwrap_or(full.start), full.end],
             sampler: format!("{:?}", s.sampler).to_lowercase(),
             seed: s.seed,
             threads: outcome.threads,
@@ -189,4 +289,11 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// Whether `path` names a partial render (`.strata`).
+pub fn is_partial_path(path: &std::path::Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("strata"))
 }

@@ -1,4 +1,4 @@
-//! Writing results: images (PNG, EXR), statistics JSON. Every file is written
+//! Writing results: images (PNG, EXR), statistics JSON, SVG charts. Every file is written
 //! to a temporary name beside its target and renamed into place, so an
 //! interrupted run never leaves a truncated file.
 

@@ -117,6 +117,8 @@ pub struct RenderOutcome {
     pub seconds: f64,
     pub threads: usize,
     pub samples: Range<u32>,
+    /// CPU time spent, where the system reports it (Linux).
+    pub cpu: Option<super::cputime::CpuTimes>,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -169,12 +171,24 @@ pub fn render(
         AtomicU64::new(0),
     ];
     let mut scratch = vec![PixelSum::default(); n];
+    let mut cpu = super::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
     let chunk = match opts.schedule {
         Schedule::Slices => BATCH,
         Schedule::Regions => n.div_ceil(threads),
     };
+    // Rays and time at the end of the previous pass, for the current rate.
+    let (mut last_rays, mut last_time) = (0u64, 0.0f64);
+    let mut rate = String::new();
     for (pass_index, pass) in passes.iter().enumerate() {
+        bar.set_message(format!(
+            "pass {}/{} (samples {}..{} of {}){rate}",
+            pass_index + 1,
+            passes.len(),
+            pass.start,
+            pass.end,
+            s.spp
+        ));
         pool.install(|| {
             scratch
                 .par_chunks_mut(chunk)
@@ -209,15 +223,16 @@ pub fn render(
         }
         let elapsed = start.elapsed().as_secs_f64();
         let total: u64 = rays[..4].iter().map(|a| a.load(Ordering::Relaxed)).sum();
-        bar.set_message(format!(
-            "pass {}/{} {:.1} Mrays/s",
-            pass_index + 1,
-            passes.len(),
-            total as f64 / elapsed / 1e6
-        ));
+        rate = format!(
+            " {:.2} Mrays/s",
+            (total - last_rays) as f64 / (elapsed - last_time).max(1e-9) / 1e6
+        );
+        (last_rays, last_time) = (total, elapsed);
+        cpu.pass(&pool);
         on_pass(&film, pass.end);
     }
     bar.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
     let load = |i: usize| rays[i].load(Ordering::Relaxed);
     RenderOutcome {
         film,
@@ -228,9 +243,10 @@ pub fn render(
             refraction: load(3),
             glossy_rejected: load(4),
         },
-        seconds: start.elapsed().as_secs_f64(),
+        seconds,
         threads,
         samples: full,
+        cpu: cpu.finish(),
     }
 }
 

@@ -1,0 +1,114 @@
+//! Merging partial renders (`strata merge`).
+//!
+//! Parts must come from the same render (same strata version, scene
+//! fingerprint and settings, and the same P), each must be complete (not an
+//! unfinished checkpoint), and their slices must not overlap or leave gaps.
+//! The sums are fixed point, so the merged film does not depend on the order
+//! of the parts and equals the film of one process rendering every slice.
+
+use super::partial::Partial;
+use crate::error::{InputError, InputResult};
+use std::path::PathBuf;
+
+/// Slices `range` of `count` as text: `2/5`, `2-3/5`.
+fn slices_text(range: std::ops::Range<u32>, count: u32) -> String {
+    if range.len() == 1 {
+        format!("{}/{count}", range.start)
+    } else {
+        format!("{}-{}/{count}", range.start, range.end - 1)
+    }
+}
+
+/// Sum `parts` (path, contents) into one partial covering a contiguous run
+/// of slices; with `require_all`, every slice 0..P. Errors name the
+/// offending file.
+pub fn merge_partials(
+    mut parts: Vec<(PathBuf, Partial)>,
+    require_all: bool,
+) -> InputResult<Partial> {
+    if parts.is_empty() {
+        return Err(InputError::file("<command line>", "no parts to merge"));
+    }
+    for (path, p) in &parts {
+        let h = &p.header;
+        if !h.is_complete() {
+            let full = h.slice_samples();
+            return Err(InputError::file(
+                path,
+                format!(
+                    "an unfinished checkpoint: holds samples {}..{} of slice {}'s {}..{}; finish it with --resume",
+                    h.samples.start, h.samples.end, h.slices_text(), full.start, full.end
+                ),
+            ));
+        }
+    }
+    let (first_path, first) = (parts[0].0.clone(), parts[0].1.header.clone());
+    for (path, p) in &parts[1..] {
+        if let Some(m) = p.header.render_mismatch(&first) {
+            return Err(InputError::file(
+                path,
+                format!(
+                    "not part of the same render as {}: {m} (this file vs that one)",
+                    first_path.display()
+                ),
+            ));
+        }
+    }
+    parts.sort_by_key(|(_, p)| p.header.slices.start);
+    let count = parts[0].1.header.slice_count;
+    for pair in parts.windows(2) {
+        let (prev_path, prev) = (&pair[0].0, &pair[0].1.header);
+        let (path, next) = (&pair[1].0, &pair[1].1.header);
+        if next.slices.start < prev.slices.end {
+            let overlap = next.slices.start..prev.slices.end.min(next.slices.end);
+            return Err(InputError::file(
+                path,
+                format!(
+                    "duplicate slice {}: also in {}",
+                    slices_text(overlap, count),
+                    prev_path.display()
+                ),
+            ));
+        }
+        if next.slices.start > prev.slices.end {
+            return Err(InputError::file(
+                path,
+                format!(
+                    "missing slice {} between {} and this part",
+                    slices_text(prev.slices.end..next.slices.start, count),
+                    prev_path.display()
+                ),
+            ));
+        }
+    }
+    if require_all {
+        let (lo_path, lo) = (&parts[0].0, &parts[0].1.header);
+        let (hi_path, hi) = (&parts[parts.len() - 1].0, &parts[parts.len() - 1].1.header);
+        if lo.slices.start > 0 {
+            return Err(InputError::file(
+                lo_path,
+                format!(
+                    "missing slice {} before this part",
+                    slices_text(0..lo.slices.start, count)
+                ),
+            ));
+        }
+        if hi.slices.end < count {
+            return Err(InputError::file(
+                hi_path,
+                format!(
+                    "missing slice {} after this part",
+                    slices_text(hi.slices.end..count, count)
+                ),
+            ));
+        }
+    }
+    let mut iter = parts.into_iter();
+    let (_, mut merged) = iter.next().expect("at least one part");
+    for (_, p) in iter {
+        merged.film.merge(&p.film);
+        merged.header.slices.end = p.header.slices.end;
+    }
+    merged.header.samples = merged.header.slice_samples();
+    Ok(merged)
+}

@@ -1,0 +1,558 @@
+//! Partial renders on disk (`.strata`): a slice's (or a checkpoint's) film
+//! with everything needed to check that parts belong together.
+//!
+//! `strata render --slice k/P -o part_k.strata` writes one; `strata merge`
+//! sums them; `--checkpoint FILE` writes the same format after every pass,
+//! with the sample range done so far. Because film sums are fixed point,
+//! merging is exact and order-independent.
+//!
+//! Layout, all little-endian:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 8 | magic `STRATAPT` |
+//! | 4 | format version (1) |
+//! | 2 + n | strata version that wrote it (u16 length, UTF-8) |
+//! | 8 | scene fingerprint (`render::fingerprint`) |
+//! | 4 × 8 | width, height, spp, seed, sampler (0 random, 1 stratified), shadow samples, reflection samples, max depth |
+//! | 4 × 3 | slices `first..end` of `count`: a part holds one (`k..k+1`), a merged part a run of them |
+//! | 4 × 2 | sample indices `start..end` summed: the slices' samples, or less in an unfinished checkpoint |
+//! | 8 × 2 | invalid samples dropped, samples clamped |
+//! | 4 × 4 | first invalid sample: present (0/1), x, y, sample |
+//! | 52 × w·h | per pixel, row-major: sums r, g, b as i128 (units of 2⁻³²), valid sample count u32 |
+//! | 8 | checksum: `fingerprint::Hasher64` of every byte before it |
+//!
+//! Reading checks the magic, the version and the header's numbers, then
+//! that the file is exactly as long as the header implies *before*
+//! allocating anything (a corrupt header claiming 10¹² pixels allocates
+//! nothing), then the checksum.
+
+use super::film::{BadSample, Film};
+use super::fingerprint::{scene_fingerprint, Hasher64};
+use super::schedule::SliceSpec;
+use crate::sampling::SamplerKind;
+use crate::scene::Scene;
+use std::io::{Read, Write};
+use std::ops::Range;
+use std::path::Path;
+
+pub const MAGIC: [u8; 8] = *b"STRATAPT";
+pub const FORMAT_VERSION: u32 = 1;
+/// Bytes per pixel record: three i128 sums and a u32 count.
+pub const PIXEL_BYTES: u64 = 52;
+const MAX_VERSION_BYTES: usize = 256;
+
+/// What a partial file says about the render it belongs to.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PartialHeader {
+    /// The strata version that wrote the file (`CARGO_PKG_VERSION`).
+    pub strata_version: String,
+    pub scene_hash: u64,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u32,
+    pub sampler: SamplerKind,
+    pub shadow_samples: u32,
+    pub reflection_samples: u32,
+    pub max_depth: u32,
+    /// Slices `first..end` of `slice_count`.
+    pub slices: Range<u32>,
+    pub slice_count: u32,
+    /// Sample indices whose sums the file holds.
+    pub samples: Range<u32>,
+}
+
+/// A header and its film.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Partial {
+    pub header: PartialHeader,
+    pub film: Film,
+}
+
+impl PartialHeader {
+    /// The header of `scene`'s render of `slice`, holding `samples`.
+    pub fn for_scene(scene: &Scene, slice: SliceSpec, samples: Range<u32>) -> Self {
+        let s = &scene.settings;
+        Self {
+            strata_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene_hash: scene_fingerprint(scene),
+            width: s.width,
+            height: s.height,
+            spp: s.spp,
+            seed: s.seed,
+            sampler: s.sampler,
+            shadow_samples: s.shadow_samples,
+            reflection_samples: s.reflection_samples,
+            max_depth: s.max_depth,
+            slices: slice.index..slice.index + 1,
+            slice_count: slice.count,
+            samples,
+        }
+    }
+
+    /// Check that a checkpoint with this header continues the render that
+    /// `expected` describes (same render, same slice), and return the end
+    /// of the samples it has done.
+    pub fn resume_point(&self, expected: &PartialHeader) -> Result<u32, String> {
+        if let Some(m) = self.render_mismatch(expected) {
+            return Err(format!(
+                "the checkpoint is of a different render: {m} (checkpoint vs now)"
+            ));
+        }
+        if self.slices != expected.slices {
+            return Err(format!(
+                "the checkpoint is of slice {}, this render is slice {}",
+                self.slices_text(),
+                expected.slices_text()
+            ));
+        }
+        Ok(self.samples.end)
+    }
+
+    /// The samples that the slices `slices` of `slice_count` cover.
+    pub fn slice_samples(&self) -> Range<u32> {
+        let lo = SliceSpec {
+            index: self.slices.start,
+            count: self.slice_count,
+        }
+        .samples(self.spp);
+        let hi = SliceSpec {
+            index: self.slices.end - 1,
+            count: self.slice_count,
+        }
+        .samples(self.spp);
+        lo.start..hi.end
+    }
+
+    /// Whether every sample of its slices is in (not an unfinished checkpoint).
+    pub fn is_complete(&self) -> bool {
+        self.samples == self.slice_samples()
+    }
+
+    /// Slices as text: `3/8`, or `0-3/8` for a merged run.
+    pub fn slices_text(&self) -> String {
+        if self.slices.len() == 1 {
+            format!("{}/{}", self.slices.start, self.slice_count)
+        } else {
+            format!(
+                "{}-{}/{}",
+                self.slices.start,
+                self.slices.end - 1,
+                self.slice_count
+            )
+        }
+    }
+
+    /// The first way in which `self` belongs to a different render than
+    /// `other` (ignoring which slices and samples each holds), as
+    /// "what: mine vs theirs".
+    pub fn render_mismatch(&self, other: &PartialHeader) -> Option<String> {
+        let pairs: [(&str, String, String); 10] = [
+            (
+                "strata version",
+                self.strata_version.clone(),
+                other.strata_version.clone(),
+            ),
+            (
+                "scene (fingerprint of geometry, materials, lights, camera)",
+                format!("{:016x}", self.scene_hash),
+                format!("{:016x}", other.scene_hash),
+            ),
+            (
+                "resolution",
+                format!("{}x{}", self.width, self.height),
+                format!("{}x{}", other.width, other.height),
+            ),
+            ("spp", self.spp.to_string(), other.spp.to_string()),
+            ("seed", self.seed.to_string(), other.seed.to_string()),
+            (
+                "sampler",
+                format!("{:?}", self.sampler).to_lowercase(),
+                format!("{:?}", other.sampler).to_lowercase(),
+            ),
+            (
+                "shadow samples",
+                self.shadow_samples.to_string(),
+                other.shadow_samples.to_string(),
+            ),
+            (
+                "reflection samples",
+                self.reflection_samples.to_string(),
+                other.reflection_samples.to_string(),
+            ),
+            (
+                "max depth",
+                self.max_depth.to_string(),
+                other.max_depth.to_string(),
+            ),
+            (
+                "slice count P",
+                self.slice_count.to_string(),
+                other.slice_count.to_string(),
+            ),
+        ];
+        pairs
+            .into_iter()
+            .find(|(_, a, b)| a != b)
+            .map(|(what, a, b)| format!("{what}: {a} vs {b}"))
+    }
+
+    fn header_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(128);
+        b.extend_from_slice(&MAGIC);
+        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        let v = self.strata_version.as_bytes();
+        let v = &v[..v.len().min(MAX_VERSION_BYTES)];
+        b.extend_from_slice(&(v.len() as u16).to_le_bytes());
+        b.extend_from_slice(v);
+        b.extend_from_slice(&self.scene_hash.to_le_bytes());
+        let sampler = match self.sampler {
+            SamplerKind::Random => 0u32,
+            SamplerKind::Stratified => 1,
+        };
+        for x in [
+            self.width,
+            self.height,
+            self.spp,
+            self.seed,
+            sampler,
+            self.shadow_samples,
+            self.reflection_samples,
+            self.max_depth,
+            self.slices.start,
+            self.slices.end,
+            self.slice_count,
+            self.samples.start,
+            self.samples.end,
+        ] {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+        b
+    }
+}
+
+/// A writer that hashes what passes through it.
+struct HashingWriter<W: Write> {
+    inner: W,
+    hash: Hasher64,
+}
+
+impl<W: Write> Write for HashingWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.hash.write(&buf[..n]);
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Serialise a header and its film into `w`.
+pub fn write_partial_to(
+    w: &mut impl Write,
+    header: &PartialHeader,
+    film: &Film,
+) -> std::io::Result<()> {
+    assert_eq!((header.width, header.height), (film.width, film.height));
+    let mut w = HashingWriter {
+        inner: w,
+        hash: Hasher64::new(),
+    };
+    w.write_all(&header.header_bytes())?;
+    w.write_all(&film.invalid.to_le_bytes())?;
+    w.write_all(&film.clamped.to_le_bytes())?;
+    let bad = film.first_invalid;
+    for x in [
+        bad.is_some() as u32,
+        bad.map_or(0, |b| b.x),
+        bad.map_or(0, |b| b.y),
+        bad.map_or(0, |b| b.sample),
+    ] {
+        w.write_all(&x.to_le_bytes())?;
+    }
+    let mut record = [0u8; PIXEL_BYTES as usize];
+    for (sum, count) in film.sums.iter().zip(&film.counts) {
+        for (c, v) in sum.iter().enumerate() {
+            record[16 * c..16 * c + 16].copy_from_slice(&v.to_le_bytes());
+        }
+        record[48..52].copy_from_slice(&count.to_le_bytes());
+        w.write_all(&record)?;
+    }
+    let checksum = w.hash.finish();
+    w.inner.write_all(&checksum.to_le_bytes())
+}
+
+/// Write a partial file atomically (temporary file, then rename): a kill
+/// during the write leaves the previous file intact.
+pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> std::io::Result<()> {
+    crate::output::atomic::write_atomic(path, |w| write_partial_to(w, header, film))
+}
+
+/// Reads fields in order, hashing them, and names truncation.
+struct FieldReader<R: Read> {
+    inner: R,
+    hash: Hasher64,
+}
+
+impl<R: Read> FieldReader<R> {
+    fn bytes<const N: usize>(&mut self) -> Result<[u8; N], String> {
+        let mut b = [0u8; N];
+        self.inner.read_exact(&mut b).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                "truncated: the file ends inside its header".to_string()
+            } else {
+                format!("cannot read: {e}")
+            }
+        })?;
+        self.hash.write(&b);
+        Ok(b)
+    }
+    fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.bytes()?))
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.bytes()?))
+    }
+}
+
+/// Read and verify a partial file. The error is one line, without the path.
+pub fn read_partial(path: &Path) -> Result<Partial, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
+    let file_len = file
+        .metadata()
+        .map_err(|e| format!("cannot read: {e}"))?
+        .len();
+    read_partial_from(std::io::BufReader::new(file), file_len)
+}
+
+/// Read and verify a partial of `file_len` bytes from `r`.
+pub fn read_partial_from(r: impl Read, file_len: u64) -> Result<Partial, String> {
+    let mut r = FieldReader {
+        inner: r,
+        hash: Hasher64::new(),
+    };
+    let not_partial = "not a strata partial file (no STRATAPT magic)";
+    if file_len < MAGIC.len() as u64 {
+        return Err(not_partial.to_string());
+    }
+    if r.bytes::<8>()? != MAGIC {
+        return Err(not_partial.to_string());
+    }
+    let version = r.u32()?;
+    if version != FORMAT_VERSION {
+        return Err(format!(
+            "partial format version {version}; this strata reads version {FORMAT_VERSION}"
+        ));
+    }
+    let vlen = u16::from_le_bytes(r.bytes()?) as usize;
+    if vlen > MAX_VERSION_BYTES {
+        return Err(format!("corrupt header: version string of {vlen} bytes"));
+    }
+    let mut vbytes = Vec::with_capacity(vlen);
+    for _ in 0..vlen {
+        vbytes.push(r.bytes::<1>()?[0]);
+    }
+    let strata_version = String::from_utf8(vbytes)
+        .map_err(|_| "corrupt header: version string is not UTF-8".to_string())?;
+    let scene_hash = r.u64()?;
+    let mut f = [0u32; 13];
+    for x in &mut f {
+        *x = r.u32()?;
+    }
+    let [width, height, spp, seed, sampler, shadow_samples, reflection_samples, max_depth, s0, s1, slice_count, n0, n1] =
+        f;
+    let sampler = match sampler {
+        0 => SamplerKind::Random,
+        1 => SamplerKind::Stratified,
+        other => return Err(format!("corrupt header: sampler {other}")),
+    };
+    let header = PartialHeader {
+        strata_version,
+        scene_hash,
+        width,
+        height,
+        spp,
+        seed,
+        sampler,
+        shadow_samples,
+        reflection_samples,
+        max_depth,
+        slices: s0..s1,
+        slice_count,
+        samples: n0..n1,
+    };
+    if width == 0 || height == 0 {
+        return Err(format!("corrupt header: image size {width}x{height}"));
+    }
+    if slice_count == 0 || s0 >= s1 || s1 > slice_count {
+        return Err(format!(
+            "corrupt header: slices {s0}..{s1} of {slice_count}"
+        ));
+    }
+    let covered = header.slice_samples();
+    if n0 != covered.start || n1 < n0 || n1 > covered.end {
+        return Err(format!(
+            "corrupt header: samples {n0}..{n1} outside slices' {}..{}",
+            covered.start, covered.end
+        ));
+    }
+    let invalid = r.u64()?;
+    let clamped = r.u64()?;
+    let [has_bad, bx, by, bs] = [r.u32()?, r.u32()?, r.u32()?, r.u32()?];
+    let first_invalid = (has_bad != 0).then_some(BadSample {
+        x: bx,
+        y: by,
+        sample: bs,
+    });
+
+    // Check the length before allocating: the header may be garbage.
+    let head_len = (8 + 4 + 2 + vlen + 8 + 13 * 4 + 2 * 8 + 4 * 4) as u128;
+    let pixels = width as u128 * height as u128;
+    let expected = head_len + pixels * PIXEL_BYTES as u128 + 8;
+    if (file_len as u128) < expected {
+        return Err(format!(
+            "truncated: {file_len} bytes, but a {width}x{height} partial needs {expected}"
+        ));
+    }
+    if file_len as u128 > expected {
+        return Err(format!(
+            "corrupt: {file_len} bytes, but a {width}x{height} partial has {expected}"
+        ));
+    }
+
+    let mut film = Film::new(width, height);
+    film.invalid = invalid;
+    film.clamped = clamped;
+    film.first_invalid = first_invalid;
+    for i in 0..pixels as usize {
+        let rec: [u8; PIXEL_BYTES as usize] = r.bytes().map_err(|_| {
+            "truncated: the file ends inside its pixels (did it shrink while read?)".to_string()
+        })?;
+        for c in 0..3 {
+            film.sums[i][c] = i128::from_le_bytes(rec[16 * c..16 * c + 16].try_into().unwrap());
+        }
+        film.counts[i] = u32::from_le_bytes(rec[48..52].try_into().unwrap());
+    }
+    let computed = r.hash.finish();
+    let mut stored = [0u8; 8];
+    r.inner
+        .read_exact(&mut stored)
+        .map_err(|_| "truncated: the checksum is missing".to_string())?;
+    if u64::from_le_bytes(stored) != computed {
+        return Err("checksum mismatch: the file is corrupt".to_string());
+    }
+    Ok(Partial { header, film })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_partial() -> Partial {
+        let mut film = Film::new(3, 2);
+        for i in 0..6 {
+            film.sums[i] = [
+                i as i128 * 1_000_000_007,
+                -(i as i128),
+                i128::MAX - i as i128,
+            ];
+            film.counts[i] = 10 + i as u32;
+        }
+        film.invalid = 4;
+        film.clamped = 1;
+        film.first_invalid = Some(BadSample {
+            x: 2,
+            y: 1,
+            sample: 7,
+        });
+        Partial {
+            header: PartialHeader {
+                strata_version: "0.1.0".into(),
+                scene_hash: 0x0123_4567_89ab_cdef,
+                width: 3,
+                height: 2,
+                spp: 16,
+                seed: 9,
+                sampler: SamplerKind::Stratified,
+                shadow_samples: 4,
+                reflection_samples: 2,
+                max_depth: 5,
+                slices: 1..2,
+                slice_count: 4,
+                samples: 4..8,
+            },
+            film,
+        }
+    }
+
+    fn bytes(p: &Partial) -> Vec<u8> {
+        let mut v = Vec::new();
+        write_partial_to(&mut v, &p.header, &p.film).unwrap();
+        v
+    }
+
+    fn read(b: &[u8]) -> Result<Partial, String> {
+        read_partial_from(b, b.len() as u64)
+    }
+
+    #[test]
+    fn round_trips_exactly() {
+        let p = sample_partial();
+        let b = bytes(&p);
+        assert_eq!(
+            b.len() as u64,
+            8 + 4 + 2 + 5 + 8 + 52 + 16 + 16 + 6 * 52 + 8
+        );
+        assert_eq!(read(&b).unwrap(), p);
+        assert!(p.header.is_complete());
+    }
+
+    #[test]
+    fn truncation_corruption_and_garbage_are_refused() {
+        let b = bytes(&sample_partial());
+        for len in [0, 5, 8, 20, 60, b.len() - 60, b.len() - 1] {
+            let e = read(&b[..len]).unwrap_err();
+            assert!(
+                e.contains("truncated") || e.contains("not a strata"),
+                "{len}: {e}"
+            );
+        }
+        for i in [0usize, 9, 40, 150, b.len() - 30, b.len() - 3] {
+            let mut c = b.clone();
+            c[i] ^= 0x04;
+            assert!(read(&c).is_err(), "flipped byte {i} accepted");
+        }
+        let mut longer = b.clone();
+        longer.push(0);
+        assert!(read(&longer).unwrap_err().contains("corrupt"));
+        assert!(read(b"P6\n3 2\n255\n......").is_err());
+    }
+
+    #[test]
+    fn a_huge_claimed_size_allocates_nothing() {
+        let mut p = sample_partial();
+        p.header.width = 1_000_000;
+        p.header.height = 1_000_000;
+        let head = p.header.header_bytes();
+        let mut b = head.clone();
+        b.extend_from_slice(&[0u8; 32]);
+        let e = read(&b).unwrap_err();
+        assert!(e.contains("truncated"), "{e}");
+    }
+
+    #[test]
+    fn mismatches_name_the_setting() {
+        let a = sample_partial().header;
+        let mut b = a.clone();
+        b.slices = 2..3;
+        b.samples = 8..12;
+        assert_eq!(a.render_mismatch(&b), None);
+        b.seed = 10;
+        assert_eq!(a.render_mismatch(&b).unwrap(), "seed: 9 vs 10");
+        let mut c = a.clone();
+        c.scene_hash ^= 1;
+        assert!(a.render_mismatch(&c).unwrap().starts_with("scene"));
+    }
+}

@@ -1,0 +1,422 @@
+//! Measuring how rendering scales with threads and processes (`strata scaling`).
+//!
+//! Each configuration is rendered `repeats` times and the median kept: on a
+//! shared machine single timings are noisy, and ratios measured in one run,
+//! interleaved, are what compare. Speedup is against the same schedule's
+//! 1-thread (or 1-process) median; efficiency is speedup / threads.
+//!
+//! Wall time on a machine shared with other work measures the neighbours as
+//! much as the scheduler. So in-process runs also record CPU time
+//! (`render::cputime`) along the critical path: per pass, the busiest
+//! worker's CPU time, plus the serial work between passes. That is the wall
+//! time the render would take with a core per thread, and the 1-thread CPU
+//! time over it (`cpu_speedup`) is the speedup that load balance and
+//! parallel overheads allow. A static schedule that leaves a thread idle
+//! shows up there whatever the machine's load; contention for shared
+//! caches, memory bandwidth or a hyperthread's sibling still counts.
+//!
+//! In-process timings cover rendering only (the scene is loaded and the BVH
+//! built once). Process timings are wall time from spawning P children of
+//! the `strata` executable (`render --slice k/P --threads 1`) until their
+//! parts are read back and merged, so they include each child's start,
+//! scene load, BVH build and part write: the real cost of splitting a render
+//! across processes.
+
+use super::cputime::{thread_cpu_ns, waited_children_cpu_seconds};
+use super::merge::merge_partials;
+use super::partial::read_partial;
+use super::schedule::{render, RenderOptions, Schedule};
+use crate::output::chart::{Panel, Series};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+/// 1, 2, 4, … up to `max`, and `max` itself.
+pub fn thread_counts(max: usize) -> Vec<usize> {
+    let max = max.max(1);
+    let mut v: Vec<usize> = std::iter::successors(Some(1usize), |&t| Some(t * 2))
+        .take_while(|&t| t < max)
+        .collect();
+    v.push(max);
+    v
+}
+
+/// The median (mean of the middle two for an even count).
+pub fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// What a scaling run compares: one of the in-process schedules, or P processes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    Threads(Schedule),
+    Processes,
+}
+
+impl Mode {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Mode::Threads(Schedule::Slices) => "slices",
+            Mode::Threads(Schedule::Regions) => "regions",
+            Mode::Processes => "processes",
+        }
+    }
+}
+
+/// One timed run.
+#[derive(Debug, Clone, Copy)]
+pub struct Timing {
+    pub seconds: f64,
+    pub rays: u64,
+    /// CPU seconds of all threads together, and along the critical path
+    /// (see [`CpuTimes`](super::schedule::CpuTimes); for processes, the
+    /// slowest child plus the merge, in 10 ms ticks). Linux only.
+    pub cpu: Option<(f64, f64)>,
+}
+
+/// Render `scene` once in this process.
+pub fn time_threads(scene: &Scene, schedule: Schedule, threads: usize) -> Timing {
+    let opts = RenderOptions {
+        threads,
+        schedule,
+        quiet: true,
+        ..RenderOptions::default()
+    };
+    let outcome = render(scene, &opts, None, |_, _| {});
+    Timing {
+        seconds: outcome.seconds,
+        rays: outcome.counts.total(),
+        cpu: outcome.cpu.map(|c| (c.total, c.critical_path)),
+    }
+}
+
+/// How to start child renders for [`time_processes`].
+#[derive(Debug, Clone)]
+pub struct ProcessSetup {
+    /// The `strata` executable (normally `std::env::current_exe()`).
+    pub exe: PathBuf,
+    pub scene: PathBuf,
+    /// Extra `render` flags (setting overrides such as `--spp 8`).
+    pub args: Vec<String>,
+    /// Where parts and stats go (created; files are overwritten).
+    pub work_dir: PathBuf,
+}
+
+/// Render with `processes` single-threaded children, one slice each, and
+/// merge their parts. Errors carry the failing child's message.
+pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, String> {
+    let dir = &setup.work_dir;
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let part = |k: usize| dir.join(format!("part_{k}.strata"));
+    let stats = |k: usize| dir.join(format!("stats_{k}.json"));
+    let start = Instant::now();
+    let children: Vec<_> = (0..processes)
+        .map(|k| {
+            Command::new(&setup.exe)
+                .arg("render")
+                .arg(&setup.scene)
+                .args(["--threads", "1", "--quiet", "--slice"])
+                .arg(format!("{k}/{processes}"))
+                .arg("-o")
+                .arg(part(k))
+                .arg("--stats")
+                .arg(stats(k))
+                .args(&setup.args)
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .map_err(|e| format!("cannot start {}: {e}", setup.exe.display()))
+        })
+        .collect::<Result<_, _>>()?;
+    // Each child's CPU time: the growth of this process's waited-for
+    // children's time as each one is reaped.
+    let mut failures = Vec::new();
+    let mut child_cpu = Vec::new();
+    let mut reaped = waited_children_cpu_seconds();
+    for child in children {
+        let out = child.wait_with_output().map_err(|e| e.to_string())?;
+        if !out.status.success() {
+            failures.push(String::from_utf8_lossy(&out.stderr).trim().to_string());
+        }
+        let now = waited_children_cpu_seconds();
+        child_cpu.push(reaped.zip(now).map(|(a, b)| b - a));
+        reaped = now;
+    }
+    if let Some(f) = failures.first() {
+        return Err(format!("a child render failed: {f}"));
+    }
+    let merge_cpu_start = thread_cpu_ns();
+    let parts = (0..processes)
+        .map(|k| {
+            read_partial(&part(k))
+                .map(|p| (part(k), p))
+                .map_err(|e| format!("{}: {e}", part(k).display()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    merge_partials(parts, true).map_err(|e| e.to_string())?;
+    let seconds = start.elapsed().as_secs_f64();
+    let merge_cpu = merge_cpu_start
+        .zip(thread_cpu_ns())
+        .map(|(a, b)| b.saturating_sub(a) as f64 * 1e-9);
+    // Children run in parallel, then the merge: the critical path is the
+    // slowest child plus the merge (reading the parts included).
+    let cpu = child_cpu
+        .into_iter()
+        .collect::<Option<Vec<f64>>>()
+        .zip(merge_cpu)
+        .map(|(c, m)| {
+            (
+                c.iter().sum::<f64>() + m,
+                c.iter().copied().fold(0.0, f64::max) + m,
+            )
+        });
+    let mut rays = 0;
+    for k in 0..processes {
+        let text = std::fs::read_to_string(stats(k)).map_err(|e| e.to_string())?;
+        let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+        rays += json["rays_total"].as_u64().unwrap_or(0);
+    }
+    Ok(Timing { seconds, rays, cpu })
+}
+
+/// One line of the scaling table.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ScalingRow {
+    pub mode: String,
+    /// Threads, or processes of one thread each.
+    pub threads: usize,
+    /// Median wall time of the render.
+    pub seconds: f64,
+    pub speedup: f64,
+    pub efficiency: f64,
+    pub mrays_per_s: f64,
+    /// Median CPU time along the critical path: the wall time if every
+    /// thread (or process) had a core of its own (Linux).
+    pub cpu_path_s: Option<f64>,
+    /// The 1-thread run's CPU time over `cpu_path_s`: the speedup that
+    /// load balance and parallel overheads allow, whatever else the machine
+    /// is running.
+    pub cpu_speedup: Option<f64>,
+    /// Every repeat's time, for the CSV.
+    pub runs: Vec<f64>,
+}
+
+/// Rows for one mode from its timings (`timings[i]` are the repeats at
+/// `counts[i]`). Speedup is against the first count's median.
+pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<ScalingRow> {
+    let medians: Vec<f64> = timings
+        .iter()
+        .map(|t| median(&t.iter().map(|x| x.seconds).collect::<Vec<_>>()))
+        .collect();
+    let base =
+        medians.first().copied().unwrap_or(f64::NAN) * counts.first().copied().unwrap_or(1) as f64;
+    let cpu_median = |t: &Vec<Timing>, pick: fn((f64, f64)) -> f64| {
+        let v: Option<Vec<f64>> = t.iter().map(|x| x.cpu.map(pick)).collect();
+        v.map(|v| median(&v))
+    };
+    let cpu_base = timings.first().and_then(|t| cpu_median(t, |c| c.0));
+    counts
+        .iter()
+        .zip(timings)
+        .zip(&medians)
+        .map(|((&threads, t), &seconds)| {
+            let rays = t.first().map_or(0, |x| x.rays);
+            let speedup = base / seconds;
+            let cpu_path_s = cpu_median(t, |c| c.1);
+            ScalingRow {
+                mode: mode.name().to_string(),
+                threads,
+                seconds,
+                speedup,
+                efficiency: speedup / threads as f64,
+                mrays_per_s: rays as f64 / seconds / 1e6,
+                cpu_path_s,
+                cpu_speedup: cpu_base.zip(cpu_path_s).map(|(b, m)| b / m),
+                runs: t.iter().map(|x| x.seconds).collect(),
+            }
+        })
+        .collect()
+}
+
+/// The chart `strata scaling` draws: speedup (with the ideal) and
+/// efficiency against threads, a line per schedule from wall time and, where
+/// measured, one from the CPU critical path.
+pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
+    let mut modes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !modes.contains(&r.mode.as_str()) {
+            modes.push(&r.mode);
+        }
+    }
+    let max_threads = rows.iter().map(|r| r.threads).max().unwrap_or(1);
+    let lines = |value: &dyn Fn(&ScalingRow, f64) -> f64| {
+        let mut series = Vec::new();
+        for mode in &modes {
+            let of = |pick: &dyn Fn(&ScalingRow) -> Option<f64>| -> Vec<(f64, f64)> {
+                rows.iter()
+                    .filter(|r| r.mode == *mode)
+                    .filter_map(|r| Some((r.threads as f64, value(r, pick(r)?))))
+                    .collect()
+            };
+            series.push(Series {
+                label: format!("{mode} (wall)"),
+                points: of(&|r| Some(r.speedup)),
+            });
+            let cpu = of(&|r| r.cpu_speedup);
+            if !cpu.is_empty() {
+                series.push(Series {
+                    label: format!("{mode} (CPU critical path)"),
+                    points: cpu,
+                });
+            }
+        }
+        series
+    };
+    let mut speedup = vec![Series {
+        label: "ideal".into(),
+        points: vec![(1.0, 1.0), (max_threads as f64, max_threads as f64)],
+    }];
+    speedup.extend(lines(&|_, s| s));
+    vec![
+        Panel {
+            title: format!("speedup: {title}"),
+            x_label: "threads (or processes)".into(),
+            y_label: "speedup over 1".into(),
+            log_x: false,
+            log_y: false,
+            series: speedup,
+        },
+        Panel {
+            title: "efficiency".into(),
+            x_label: "threads (or processes)".into(),
+            y_label: "efficiency (%)".into(),
+            log_x: false,
+            log_y: false,
+            series: lines(&|r, s| 100.0 * s / r.threads as f64),
+        },
+    ]
+}
+
+/// The table `strata scaling` prints.
+pub fn table(rows: &[ScalingRow]) -> String {
+    let mut s = format!(
+        "{:<10} {:>7} {:>9} {:>8} {:>10} {:>8} {:>12} {:>11}\n",
+        "schedule",
+        "threads",
+        "seconds",
+        "speedup",
+        "efficiency",
+        "Mrays/s",
+        "cpu-path",
+        "cpu-speedup"
+    );
+    for r in rows {
+        let path = r.cpu_path_s.map_or("-".into(), |x| format!("{x:.3}"));
+        let cpu = r.cpu_speedup.map_or("-".into(), |x| format!("{x:.2}x"));
+        s += &format!(
+            "{:<10} {:>7} {:>9.3} {:>7.2}x {:>9.1}% {:>8.2} {:>12} {:>11}\n",
+            r.mode,
+            r.threads,
+            r.seconds,
+            r.speedup,
+            100.0 * r.efficiency,
+            r.mrays_per_s,
+            path,
+            cpu
+        );
+    }
+    s
+}
+
+/// The CSV `strata scaling` writes: one line per (schedule, threads).
+pub fn csv(rows: &[ScalingRow]) -> String {
+    let mut s = String::from(
+        "schedule,threads,seconds,speedup,efficiency,mrays_per_s,cpu_path_s,cpu_speedup,runs\n",
+    );
+    let opt = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
+    for r in rows {
+        let runs: Vec<String> = r.runs.iter().map(|x| format!("{x:.6}")).collect();
+        s += &format!(
+            "{},{},{:.6},{:.4},{:.4},{:.4},{},{},{}\n",
+            r.mode,
+            r.threads,
+            r.seconds,
+            r.speedup,
+            r.efficiency,
+            r.mrays_per_s,
+            opt(r.cpu_path_s),
+            opt(r.cpu_speedup),
+            runs.join(" ")
+        );
+    }
+    s
+}
+
+/// A scratch directory for process runs, removed on drop.
+pub struct ScratchDir(pub PathBuf);
+
+impl ScratchDir {
+    pub fn new(tag: &str) -> std::io::Result<Self> {
+        let dir = std::env::temp_dir().join(format!("strata-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        Ok(Self(dir))
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thread_counts_double_up_to_the_maximum() {
+        assert_eq!(thread_counts(1), vec![1]);
+        assert_eq!(thread_counts(2), vec![1, 2]);
+        assert_eq!(thread_counts(8), vec![1, 2, 4, 8]);
+        assert_eq!(thread_counts(6), vec![1, 2, 4, 6]);
+    }
+
+    #[test]
+    fn rows_compute_speedup_and_efficiency_from_medians() {
+        let t = |s: f64| Timing {
+            seconds: s,
+            rays: 1_000_000,
+            cpu: Some((s, s / 2.0)),
+        };
+        let r = rows(
+            Mode::Threads(Schedule::Slices),
+            &[1, 2],
+            &[vec![t(2.0), t(9.0), t(1.9)], vec![t(1.0), t(1.1), t(0.5)]],
+        );
+        assert_eq!(r[0].seconds, 2.0);
+        assert_eq!(r[1].seconds, 1.0);
+        assert_eq!(r[1].speedup, 2.0);
+        assert_eq!(r[1].efficiency, 1.0);
+        assert_eq!(r[1].mrays_per_s, 1.0);
+        // 1-thread CPU 2.0 s in total (median); critical path at two threads 0.5 s.
+        assert_eq!(r[1].cpu_path_s, Some(0.5));
+        assert_eq!(r[1].cpu_speedup, Some(4.0));
+        assert!(csv(&r).lines().count() == 3);
+        assert!(table(&r).contains("slices"));
+        let panels = chart_panels("t", &r);
+        assert_eq!(panels[0].series.len(), 3, "ideal, wall, CPU");
+        assert_eq!(panels[1].series[0].points, vec![(1.0, 100.0), (2.0, 100.0)]);
+    }
+}
