@@ -138,7 +138,10 @@ impl fmt::Write for Hasher64 {
 /// the settings stored in a partial header. See the module docs.
 pub fn scene_fingerprint(scene: &Scene) -> u64 {
     let Scene {
-        triangles,
+        // Hashed in file order below, so the fingerprint does not depend on
+        // the BVH's leaf order (which varies with --bvh-quality).
+        leaf_triangles: _,
+        triangle_count,
         meshes,
         shapes,
         transforms,
@@ -166,8 +169,10 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     } = settings;
     let mut h = Hasher64::new();
     h.write(b"strata scene v1\0");
+    let triangles = scene.file_order_triangles();
+    debug_assert_eq!(triangles.len(), *triangle_count as usize);
     h.write_u64(triangles.len() as u64);
-    for tri in triangles {
+    for tri in &triangles {
         for v in tri {
             for c in v.to_array() {
                 h.write_f32(c);
