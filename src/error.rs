@@ -68,3 +68,13 @@ impl fmt::Display for InputError {
 impl std::error::Error for InputError {}
 
 pub type InputResult<T> = Result<T, InputError>;
+
+/// An I/O error's text without the "(os error 2)" tail, for one-line
+/// messages such as `cannot read: No such file or directory`.
+pub fn io_message(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    }
+}

@@ -15,6 +15,7 @@
 //! (`strata trace --occlusion`) is [`HitRecord::OCCLUDED`] (`t = 0`,
 //! `prim = 0`) or the miss record.
 
+use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::math::Ray;
 use crate::shape::PrimHit;
@@ -176,19 +177,11 @@ pub fn parse_hits(path: &Path, bytes: &[u8]) -> InputResult<Vec<HitRecord>> {
 /// Write bytes to `path` atomically (temporary file, then rename).
 pub fn write_file(path: &Path, bytes: &[u8]) -> InputResult<()> {
     crate::output::atomic::write_atomic(path, |w| w.write_all(bytes))
-        .map_err(|e| InputError::file(path, format!("cannot write: {}", strip_os_error(&e))))
+        .map_err(|e| InputError::file(path, format!("cannot write: {}", io_message(&e))))
 }
 
 fn read_error(e: &std::io::Error) -> String {
-    format!("cannot read: {}", strip_os_error(e))
-}
-
-fn strip_os_error(e: &std::io::Error) -> String {
-    let text = e.to_string();
-    match text.find(" (os error") {
-        Some(i) => text[..i].to_string(),
-        None => text,
-    }
+    format!("cannot read: {}", io_message(e))
 }
 
 #[cfg(test)]

@@ -104,9 +104,9 @@ impl RayBoxes {
         }
     }
 
-    /// Entry distances and the mask of children the ray may enter.
+    /// The eight children's entry and exit distances, clipped to [tmin, tmax].
     #[inline(always)]
-    pub(crate) fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
+    fn slabs(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, f32x8) {
         let slab = |axis: usize, side: usize| {
             (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis]
         };
@@ -116,6 +116,13 @@ impl RayBoxes {
         let tf = slab(0, self.far[0])
             .min(slab(1, self.far[1]))
             .min(slab(2, self.far[2]).min(f32x8::splat(tmax)));
+        (tn, tf)
+    }
+
+    /// Entry distances and the mask of children the ray may enter.
+    #[inline(always)]
+    pub(crate) fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
+        let (tn, tf) = self.slabs(bounds, tmin, tmax);
         let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
         (tn, tn.simd_le(tf).to_bitmask())
     }
@@ -125,15 +132,7 @@ impl RayBoxes {
     /// box behind the origin is not culled by rounding either.
     #[inline(always)]
     fn test_line(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> u32 {
-        let slab = |axis: usize, side: usize| {
-            (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis]
-        };
-        let tn = slab(0, self.near[0])
-            .max(slab(1, self.near[1]))
-            .max(slab(2, self.near[2]).max(f32x8::splat(tmin)));
-        let tf = slab(0, self.far[0])
-            .min(slab(1, self.far[1]))
-            .min(slab(2, self.far[2]).min(f32x8::splat(tmax)));
+        let (tn, tf) = self.slabs(bounds, tmin, tmax);
         let g = f32x8::splat(2.0 * gamma(3));
         (tn - g * tn.abs()).simd_le(tf + g * tf.abs()).to_bitmask()
     }
