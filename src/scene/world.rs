@@ -264,13 +264,8 @@ impl Scene {
 
     /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        if self.planes.iter().any(|p| p.intersect(ray).is_some()) {
-            return true;
-        }
-        let sheared = ShearedRay::new(ray);
-        self.bvh.any_hit(ray, |slot, id, r| {
-            self.hit_prim(slot, id, r, &sheared).is_some()
-        })
+        // No primitive has id u32::MAX (planes count down from it, outside the BVH).
+        self.occluded_except(ray, u32::MAX)
     }
 
     /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
