@@ -3,6 +3,7 @@
 //! and Boulos 2008, "Getting Rid of Packets").
 
 use super::node::{encode_leaf, Node8, EMPTY, MAX_LEAF_PRIMS, MAX_PRIMS};
+use crate::shape::triangle8::NO_PRIM;
 use crate::math::Aabb;
 use glam::Vec3A;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -52,7 +53,9 @@ impl BuildQuality {
     }
 }
 
-/// The 8-wide BVH. `prim_ids` lists primitive ids in leaf order.
+/// The 8-wide BVH. `prim_ids` lists primitive ids in leaf order, in
+/// blocks of [`LEAF_BLOCK`] slots that no leaf straddles; unused slots
+/// hold [`NO_PRIM`].
 #[derive(Debug, Clone)]
 pub struct Bvh8 {
     pub nodes: Vec<Node8>,
@@ -112,6 +115,7 @@ impl Bvh8 {
             bvh2: &bvh2,
             counts: &counts,
             out: &mut out,
+            packer: LanePacker::default(),
         };
         collapse.root();
         out
@@ -153,6 +157,7 @@ struct Collapse<'a> {
     bvh2: &'a Bvh2,
     counts: &'a [u32],
     out: &'a mut Bvh8,
+    packer: LanePacker,
 }
 
 impl Collapse<'_> {
@@ -177,10 +182,9 @@ impl Collapse<'_> {
                     node.bounds[2 * axis + 1][slot] = b.max[axis];
                 }
                 if self.is_leaf_candidate(c) {
-                    let start = self.out.prim_ids.len() as u32;
-                    self.gather_prims(c);
-                    let count = self.out.prim_ids.len() as u32 - start;
-                    self.out.nodes[dst].child[slot] = encode_leaf(start, count);
+                    let prims = self.gather_prims(c);
+                    let start = self.packer.place(&prims, &mut self.out.prim_ids);
+                    self.out.nodes[dst].child[slot] = encode_leaf(start, prims.len() as u32);
                 } else {
                     let new = self.out.nodes.len();
                     self.out.nodes.push(Node8::EMPTY);
@@ -204,7 +208,7 @@ impl Collapse<'_> {
             let best = children
                 .iter()
                 .enumerate()
-                .filter(|(_, &c)| !self.is_leaf_candidate(c))
+                .filter(|(_, &c)| self.bvh2.nodes[c].prim_count == 0)
                 .max_by(|a, b| {
                     self.bvh2.nodes[*a.1]
                         .aabb
@@ -221,23 +225,68 @@ impl Collapse<'_> {
         children
     }
 
-    fn gather_prims(&mut self, i: usize) {
+    fn gather_prims(&self, i: usize) -> Vec<u32> {
+        let mut prims = Vec::with_capacity(LEAF_PRIMS as usize);
         let mut stack = vec![i];
         while let Some(i) = stack.pop() {
             let node = &self.bvh2.nodes[i];
             if node.prim_count > 0 {
                 let s = node.first_index as usize;
-                self.out.prim_ids.extend_from_slice(
-                    &self.bvh2.primitive_indices[s..s + node.prim_count as usize],
-                );
+                prims.extend_from_slice(&self.bvh2.primitive_indices[s..s + node.prim_count as usize]);
             } else {
                 stack.push(node.first_index as usize + 1);
                 stack.push(node.first_index as usize);
             }
         }
+        prims
     }
 }
 
+/// Places leaves into blocks of [`LEAF_BLOCK`] slots so that no leaf
+/// straddles two blocks: a leaf is then one 8-wide triangle test over one
+/// contiguous block (see `shape::triangle8`). First fit among the last few
+/// blocks that still have room keeps the padding small (a fraction of a
+/// percent on scanned meshes) and keeps leaves that are near in the tree
+/// near in memory.
+#[derive(Default)]
+struct LanePacker {
+    /// Blocks with free slots: (first free slot, end of block).
+    open: Vec<(u32, u32)>,
+}
+
+impl LanePacker {
+    /// Blocks kept open for first fit.
+    const OPEN_BLOCKS: usize = 8;
+
+    /// Writes `prims` into free slots of `prim_ids` (growing it by whole
+    /// blocks padded with [`NO_PRIM`]) and returns the first slot.
+    fn place(&mut self, prims: &[u32], prim_ids: &mut Vec<u32>) -> u32 {
+        let n = prims.len() as u32;
+        let i = match self.open.iter().position(|&(free, end)| end - free >= n) {
+            Some(i) => i,
+            None => {
+                let start = prim_ids.len() as u32;
+                prim_ids.resize(prim_ids.len() + LEAF_BLOCK, NO_PRIM);
+                if self.open.len() == Self::OPEN_BLOCKS {
+                    self.open.remove(0);
+                }
+                self.open.push((start, start + LEAF_BLOCK as u32));
+                self.open.len() - 1
+            }
+        };
+        let start = self.open[i].0;
+        prim_ids[start as usize..(start + n) as usize].copy_from_slice(prims);
+        self.open[i].0 += n;
+        if self.open[i].0 == self.open[i].1 {
+            self.open.remove(i);
+        }
+        start
+    }
+}
+
+/// Slots per leaf block: one `f32x8` lane each.
+pub const LEAF_BLOCK: usize = crate::shape::triangle8::LANES;
+
 /// Subtrees with at most this many primitives become one leaf.
-const LEAF_PRIMS: u32 = 4;
-const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS);
+const LEAF_PRIMS: u32 = 8;
+const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEAF_BLOCK);

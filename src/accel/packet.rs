@@ -9,11 +9,11 @@
 //! interval test computed in f32 accepts every box that any lane's own
 //! single-ray test accepts. Children the packet enters are then tested lane
 //! by lane (eight rays in the `f32x8` lanes against one box) to find which
-//! rays continue into them, and leaves run the scalar watertight test for
-//! those lanes only.
+//! rays continue into them, and leaves run the same leaf test as single
+//! rays for those lanes only.
 //!
 //! Exactness: every lane tests a superset of the primitives its single ray
-//! would test, with the same scalar test, and the closest hit is the minimum
+//! would test, with the same leaf test, and the closest hit is the minimum
 //! of a total order (t, then primitive id; see [`super::traverse::closer`]),
 //! so each lane's answer is bit-identical to [`Bvh8::closest`] /
 //! [`Bvh8::any_hit`] on that ray.
@@ -171,9 +171,9 @@ fn lanes(mut mask: u32) -> impl Iterator<Item = usize> {
 
 impl Bvh8 {
     /// Closest hits of a packet: `out[i]` is exactly what
-    /// [`Bvh8::closest`] returns for `packet`'s ray `i`. `hit_prim(lane,
-    /// slot, id, ray)` is the per-ray primitive test.
-    pub fn closest_packet<F>(&self, packet: &Packet, out: &mut [Option<PrimHit>], mut hit_prim: F)
+    /// [`Bvh8::closest`] returns for `packet`'s ray `i`. `hit_leaf(lane,
+    /// start, count, ray)` is the per-ray leaf test of [`Bvh8::closest`].
+    pub fn closest_packet<F>(&self, packet: &Packet, out: &mut [Option<PrimHit>], mut hit_leaf: F)
     where
         F: FnMut(usize, u32, u32, &Ray) -> Option<PrimHit>,
     {
@@ -225,19 +225,15 @@ impl Bvh8 {
                     for lane in lanes(mask) {
                         let mut ray = rays[lane];
                         ray.tmax = tmax[lane];
-                        for slot in start..start + count {
-                            let id = self.prim_ids[slot as usize];
-                            let best = out[lane].as_ref();
-                            let test = tie_ray(&ray, best);
-                            if let Some(h) = hit_prim(lane, slot, id, &test) {
-                                if closer(&h, best) {
-                                    ray.tmax = h.t;
-                                    out[lane] = Some(h);
-                                    changed = true;
-                                }
+                        let best = out[lane].as_ref();
+                        let test = tie_ray(&ray, best);
+                        if let Some(h) = hit_leaf(lane, start, count, &test) {
+                            if closer(&h, best) {
+                                tmax[lane] = h.t;
+                                out[lane] = Some(h);
+                                changed = true;
                             }
                         }
-                        tmax[lane] = ray.tmax;
                     }
                     if changed {
                         tmax_v = f32x8::from(tmax);
@@ -250,8 +246,9 @@ impl Bvh8 {
     }
 
     /// Occlusion for a packet: `out[i]` is exactly what [`Bvh8::any_hit`]
-    /// returns for ray `i`. Lanes stop as soon as they are blocked.
-    pub fn any_hit_packet<F>(&self, packet: &Packet, out: &mut [bool], mut blocks: F)
+    /// returns for ray `i`, with `blocks_leaf(lane, start, count, ray)` its
+    /// leaf test. Lanes stop as soon as they are blocked.
+    pub fn any_hit_packet<F>(&self, packet: &Packet, out: &mut [bool], mut blocks_leaf: F)
     where
         F: FnMut(usize, u32, u32, &Ray) -> bool,
     {
@@ -289,13 +286,9 @@ impl Bvh8 {
                 }
                 ChildRef::Leaf { start, count } => {
                     for lane in lanes(mask) {
-                        let ray = &rays[lane];
-                        for slot in start..start + count {
-                            if blocks(lane, slot, self.prim_ids[slot as usize], ray) {
-                                out[lane] = true;
-                                open &= !(1 << lane);
-                                break;
-                            }
+                        if blocks_leaf(lane, start, count, &rays[lane]) {
+                            out[lane] = true;
+                            open &= !(1 << lane);
                         }
                     }
                     if open == 0 {

@@ -165,12 +165,14 @@ pub(crate) fn closer(h: &PrimHit, best: Option<&PrimHit>) -> bool {
 }
 
 impl Bvh8 {
-    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_prim(slot, id, ray)` is
-    /// called for candidate primitive `id` stored at leaf slot `slot` (its
-    /// index in `prim_ids`, where a scene keeps the vertices the test reads)
-    /// and must return a hit only if it is nearer than `ray.tmax`.
+    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_leaf(start, count, ray)`
+    /// tests the leaf holding slots `start..start + count` of `prim_ids`
+    /// (where a scene keeps the vertices the test reads, in the same
+    /// order) and returns its closest hit nearer than `ray.tmax`, ties
+    /// broken by the smaller primitive id ([`Bvh8::closest_in_leaf`] does
+    /// that for a per-primitive test).
     #[inline(always)]
-    pub fn closest<F>(&self, ray: &Ray, mut hit_prim: F) -> Option<PrimHit>
+    pub fn closest<F>(&self, ray: &Ray, mut hit_leaf: F) -> Option<PrimHit>
     where
         F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
     {
@@ -210,14 +212,11 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for slot in start..start + count {
-                        let prim = self.prim_ids[slot as usize];
-                        let test = tie_ray(&ray, best.as_ref());
-                        if let Some(h) = hit_prim(slot, prim, &test) {
-                            if closer(&h, best.as_ref()) {
-                                ray.tmax = h.t;
-                                best = Some(h);
-                            }
+                    let test = tie_ray(&ray, best.as_ref());
+                    if let Some(h) = hit_leaf(start, count, &test) {
+                        if closer(&h, best.as_ref()) {
+                            ray.tmax = h.t;
+                            best = Some(h);
                         }
                     }
                 }
@@ -227,10 +226,32 @@ impl Bvh8 {
         best
     }
 
-    /// True if any primitive blocks the ray in `(tmin, tmax)`;
-    /// `blocks(slot, id, ray)` as for [`Bvh8::closest`].
+    /// A leaf test for [`Bvh8::closest`] from a per-primitive one:
+    /// `hit_prim(slot, id, ray)` must return a hit only if it is nearer
+    /// than `ray.tmax`.
     #[inline(always)]
-    pub fn any_hit<F>(&self, ray: &Ray, mut blocks: F) -> bool
+    pub fn closest_in_leaf<F>(&self, start: u32, count: u32, ray: &Ray, mut hit_prim: F) -> Option<PrimHit>
+    where
+        F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
+    {
+        let mut ray = *ray;
+        let mut best: Option<PrimHit> = None;
+        for slot in start..start + count {
+            let test = tie_ray(&ray, best.as_ref());
+            if let Some(h) = hit_prim(slot, self.prim_ids[slot as usize], &test) {
+                if closer(&h, best.as_ref()) {
+                    ray.tmax = h.t;
+                    best = Some(h);
+                }
+            }
+        }
+        best
+    }
+
+    /// True if any leaf reports a blocker in `(tmin, tmax)`;
+    /// `blocks_leaf(start, count, ray)` as for [`Bvh8::closest`].
+    #[inline(always)]
+    pub fn any_hit<F>(&self, ray: &Ray, mut blocks_leaf: F) -> bool
     where
         F: FnMut(u32, u32, &Ray) -> bool,
     {
@@ -238,9 +259,9 @@ impl Bvh8 {
             return false;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack: Stack = Stack::new();
-        stack.push((0, 0.0));
-        while let Some((child, _)) = stack.pop() {
+        let mut stack: Stack<u32> = Stack::new();
+        stack.push(0);
+        while let Some(child) = stack.pop() {
             match decode(child) {
                 ChildRef::Node(n) => {
                     let node = &self.nodes[n as usize];
@@ -248,20 +269,25 @@ impl Bvh8 {
                     while mask != 0 {
                         let slot = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack.push((node.child[slot], 0.0));
+                        stack.push(node.child[slot]);
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for slot in start..start + count {
-                        if blocks(slot, self.prim_ids[slot as usize], ray) {
-                            return true;
-                        }
+                    if blocks_leaf(start, count, ray) {
+                        return true;
                     }
                 }
                 ChildRef::Empty => {}
             }
         }
         false
+    }
+
+    /// The primitives of leaf `start..start + count`, for per-primitive
+    /// tests: (slot, id).
+    #[inline(always)]
+    pub fn leaf_prims(&self, start: u32, count: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (start..start + count).map(|slot| (slot, self.prim_ids[slot as usize]))
     }
 
     /// Calls `visit` for every primitive whose box the line
@@ -276,9 +302,9 @@ impl Bvh8 {
             return;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack: Stack = Stack::new();
-        stack.push((0, 0.0));
-        while let Some((child, _)) = stack.pop() {
+        let mut stack: Stack<u32> = Stack::new();
+        stack.push(0);
+        while let Some(child) = stack.pop() {
             match decode(child) {
                 ChildRef::Node(n) => {
                     let node = &self.nodes[n as usize];
@@ -286,7 +312,7 @@ impl Bvh8 {
                     while mask != 0 {
                         let slot = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack.push((node.child[slot], 0.0));
+                        stack.push(node.child[slot]);
                     }
                 }
                 ChildRef::Leaf { start, count } => {
@@ -306,6 +332,7 @@ mod tests {
     use super::*;
     use crate::math::Aabb;
     use crate::shape::sphere::Sphere;
+    use crate::shape::triangle8::NO_PRIM;
 
     /// Random spheres, checked against brute force for every preset.
     #[test]
@@ -331,7 +358,7 @@ mod tests {
             BuildQuality::High,
         ] {
             let bvh = Bvh8::build(&boxes, quality);
-            let mut seen = bvh.prim_ids.clone();
+            let mut seen: Vec<u32> = bvh.prim_ids.iter().copied().filter(|&id| id != NO_PRIM).collect();
             seen.sort();
             assert_eq!(
                 seen,
@@ -355,10 +382,14 @@ mod tests {
                 let brute = (0..500u32)
                     .filter_map(|i| hit(i, &ray))
                     .min_by(|a, b| a.t.total_cmp(&b.t));
-                let got = bvh.closest(&ray, |_, id, r| hit(id, r));
+                let got = bvh.closest(&ray, |start, count, r| {
+                    bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
+                });
                 assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
                 assert_eq!(
-                    bvh.any_hit(&ray, |_, id, r| hit(id, r).is_some()),
+                    bvh.any_hit(&ray, |start, count, r| {
+                        bvh.leaf_prims(start, count).any(|(_, id)| hit(id, r).is_some())
+                    }),
                     brute.is_some()
                 );
             }
@@ -371,10 +402,10 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
         // A ray along +x exactly in the box's bottom face plane.
         let ray = Ray::new(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
-        let hit = bvh.closest(&ray, |_, id, _| {
+        let hit = bvh.closest(&ray, |start, _, _| {
             Some(PrimHit {
                 t: 1.0,
-                prim: id,
+                prim: bvh.prim_ids[start as usize],
                 u: 0.0,
                 v: 0.0,
                 part: 0,
@@ -416,8 +447,8 @@ mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
         let ray = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z);
         let mut visited = 0;
-        bvh.any_hit(&ray, |_, _, _| {
-            visited += 1;
+        bvh.any_hit(&ray, |_, count, _| {
+            visited += count;
             false
         });
         assert_eq!(visited, 10_000, "no node dropped however deep the tree");

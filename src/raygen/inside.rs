@@ -45,14 +45,16 @@ impl<'a> Inside<'a> {
     fn winding(&self, ray: &Ray) -> i32 {
         let sheared = ShearedRay::new(ray);
         let mut winding = 0;
-        self.bvh.any_hit(ray, |_slot, id, r| {
-            let tri = &self.triangles[id as usize];
-            if intersect(r, &sheared, tri).is_some() {
-                winding += if geometric_normal(tri).dot(r.direction) > 0.0 {
-                    1
-                } else {
-                    -1
-                };
+        self.bvh.any_hit(ray, |start, count, r| {
+            for (_, id) in self.bvh.leaf_prims(start, count) {
+                let tri = &self.triangles[id as usize];
+                if intersect(r, &sheared, tri).is_some() {
+                    winding += if geometric_normal(tri).dot(r.direction) > 0.0 {
+                        1
+                    } else {
+                        -1
+                    };
+                }
             }
             false
         });

@@ -140,7 +140,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     let Scene {
         // Hashed in file order below, so the fingerprint does not depend on
         // the BVH's leaf order (which varies with --bvh-quality).
-        leaf_triangles: _,
+        leaf_blocks: _,
         triangle_count,
         meshes,
         shapes,

@@ -22,6 +22,7 @@ use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
+use crate::shape::triangle8::{TriangleBlock, LANES};
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -125,26 +126,19 @@ pub fn compile(
 
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
-    let bvh = Bvh8::build(&boxes, overrides.bvh_quality);
+    let mut bvh = Bvh8::build(&boxes, overrides.bvh_quality);
     drop(boxes);
-    // Store the vertices once, in the order the leaves read them.
-    let leaf_triangles: Vec<[Vec3; 3]> = bvh
-        .prim_ids
-        .iter()
-        .map(|&id| {
-            c.triangles
-                .get(id as usize)
-                .copied()
-                .unwrap_or([Vec3::ZERO; 3])
-        })
-        .collect();
+    // Store the vertices once, in the order the leaves read them, with the
+    // leaf ids beside them; the BVH's own copy of the ids is then redundant.
+    let leaf_blocks = leaf_blocks(&bvh.prim_ids, &c.triangles);
+    bvh.prim_ids = Vec::new();
     drop(std::mem::take(&mut c.triangles));
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
     };
     let scene = Scene {
-        leaf_triangles,
+        leaf_blocks,
         triangle_count: n_tris,
         meshes: c.meshes,
         shapes: c.shapes,
@@ -865,4 +859,21 @@ fn similarity_scale(m: &Affine3A) -> Option<f32> {
         && c[1].dot(c[2]).abs() <= tol * s
         && c[0].dot(c[2]).abs() <= tol * s;
     (equal && orthogonal && s > 0.0).then_some(s)
+}
+
+/// The BVH's leaf slots as 8-wide triangle blocks (see [`Scene::leaf_blocks`]).
+fn leaf_blocks(prim_ids: &[u32], triangles: &[[Vec3; 3]]) -> Vec<TriangleBlock> {
+    prim_ids
+        .chunks(LANES)
+        .map(|ids| {
+            let mut block = TriangleBlock::EMPTY;
+            for (lane, &id) in ids.iter().enumerate() {
+                match triangles.get(id as usize) {
+                    Some(tri) => block.set(lane, tri, id),
+                    None => block.id[lane] = id,
+                }
+            }
+            block
+        })
+        .collect()
 }

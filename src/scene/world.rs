@@ -15,7 +15,9 @@ use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
+use crate::accel::traverse::closer;
 use crate::shape::triangle::{self, ShearedRay};
+use crate::shape::triangle8::{self, TriangleBlock, LANES};
 use crate::shape::{PrimHit, Surface};
 use glam::Vec3;
 
@@ -119,14 +121,17 @@ pub struct RenderSettings {
 
 #[derive(Debug, Clone)]
 pub struct Scene {
-    /// Triangle vertices in world space, stored once, in BVH leaf order (the
-    /// order traversal reads them): slot `s` holds triangle `bvh.prim_ids[s]`
-    /// when that id is below `triangle_count`; the slots of analytic shapes
-    /// hold a zero triangle. Triangle ids stay in file order: triangle `i`
-    /// of the scene's meshes is primitive `i`. Use [`Scene::triangle`] for
-    /// a hit's vertices and [`Scene::file_order_triangles`] for a copy in
-    /// file order.
-    pub leaf_triangles: Vec<[Vec3; 3]>,
+    /// The BVH's leaves, eight slots to a block: slot `s` is lane `s % 8`
+    /// of block `s / 8` and holds primitive `id[lane]` with, for a
+    /// triangle (an id below `triangle_count`), its world-space vertices,
+    /// stored once, in the order traversal reads them. The slots of
+    /// analytic shapes and padding hold NaN vertices. These ids are the
+    /// BVH's leaf order (its own `prim_ids` is emptied once they are
+    /// here). Triangle ids stay in file order: triangle `i` of the scene's
+    /// meshes is primitive `i`. Use [`Scene::triangle`] for a hit's
+    /// vertices and [`Scene::file_order_triangles`] for a copy in file
+    /// order.
+    pub leaf_blocks: Vec<TriangleBlock>,
     /// Triangles in the scene: primitives `0..triangle_count`.
     pub triangle_count: u32,
     /// Sorted by `first`; covers every triangle.
@@ -152,26 +157,29 @@ impl Scene {
 
     /// The vertices of a triangle hit (its `part` is the leaf slot).
     #[inline]
-    pub fn triangle(&self, hit: &PrimHit) -> &[Vec3; 3] {
-        debug_assert_eq!(self.bvh.prim_ids[hit.part as usize], hit.prim);
-        &self.leaf_triangles[hit.part as usize]
+    pub fn triangle(&self, hit: &PrimHit) -> [Vec3; 3] {
+        let block = &self.leaf_blocks[hit.part as usize / LANES];
+        debug_assert_eq!(block.id[hit.part as usize % LANES], hit.prim);
+        block.triangle(hit.part as usize % LANES)
     }
 
     /// Every triangle in file order (a copy; for tools, not the hot loop).
     pub fn file_order_triangles(&self) -> Vec<[Vec3; 3]> {
         let mut out = vec![[Vec3::ZERO; 3]; self.triangle_count as usize];
-        for (slot, &id) in self.bvh.prim_ids.iter().enumerate() {
-            if id < self.triangle_count {
-                out[id as usize] = self.leaf_triangles[slot];
+        for block in &self.leaf_blocks {
+            for (lane, &id) in block.id.iter().enumerate() {
+                if id < self.triangle_count {
+                    out[id as usize] = block.triangle(lane);
+                }
             }
         }
         out
     }
 
-    /// Bytes held by the structures that traversal reads: BVH nodes, leaf
-    /// ids and the leaf-ordered triangles.
+    /// Bytes held by the structures that traversal reads: BVH nodes and
+    /// the leaf blocks (vertices and ids).
     pub fn accel_bytes(&self) -> usize {
-        self.bvh.memory_bytes() + self.leaf_triangles.len() * std::mem::size_of::<[Vec3; 3]>()
+        self.bvh.memory_bytes() + std::mem::size_of_val(self.leaf_blocks.as_slice())
     }
 
     #[inline]
@@ -190,26 +198,83 @@ impl Scene {
         }
     }
 
-    /// Test primitive `id`, stored at leaf slot `slot`. A triangle hit
-    /// records the slot in `part`, so [`Scene::surface`] finds its vertices.
+    /// Test analytic primitive `id` (not a triangle).
+    #[inline]
+    fn hit_analytic(&self, id: u32, ray: &Ray) -> Option<PrimHit> {
+        let prim = &self.shapes[(id - self.triangle_count) as usize];
+        let local = self.object_ray(prim, ray);
+        let hit = prim.shape.intersect(&local, &self.csg)?;
+        Some(PrimHit { prim: id, ..hit })
+    }
+
+    /// The lanes of leaf `start..start + count` in its block.
     #[inline(always)]
-    fn hit_prim(&self, slot: u32, id: u32, ray: &Ray, sheared: &ShearedRay) -> Option<PrimHit> {
-        if id < self.triangle_count {
-            let (t, u, v) = triangle::intersect(ray, sheared, &self.leaf_triangles[slot as usize])?;
-            Some(PrimHit {
-                t,
-                prim: id,
-                u,
-                v,
-                part: slot,
-            })
-        } else {
-            let n_tris = self.triangle_count;
-            let prim = &self.shapes[(id - n_tris) as usize];
-            let local = self.object_ray(prim, ray);
-            let hit = prim.shape.intersect(&local, &self.csg)?;
-            Some(PrimHit { prim: id, ..hit })
+    fn leaf_lanes(start: u32, count: u32) -> (usize, u32) {
+        let lo = start % LANES as u32;
+        ((start / LANES as u32) as usize, ((1u32 << count) - 1) << lo)
+    }
+
+    /// The closest hit in leaf `start..start + count`: its triangles in one
+    /// 8-wide test, then any analytic shapes it holds. A triangle hit
+    /// records its slot in `part`, so [`Scene::surface`] finds its vertices.
+    #[inline(always)]
+    fn hit_leaf(&self, start: u32, count: u32, ray: &Ray, sheared: &ShearedRay) -> Option<PrimHit> {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut best = triangle8::closest(ray, sheared, block, lanes).map(|h| PrimHit {
+            t: h.t,
+            prim: block.id[h.lane],
+            u: h.u,
+            v: h.v,
+            part: (b * LANES + h.lane) as u32,
+        });
+        if !self.shapes.is_empty() {
+            let mut ray = Ray {
+                tmax: best.map_or(ray.tmax, |h| h.t.next_up()),
+                ..*ray
+            };
+            let mut m = lanes;
+            while m != 0 {
+                let id = block.id[m.trailing_zeros() as usize];
+                m &= m - 1;
+                if id >= self.triangle_count {
+                    if let Some(h) = self.hit_analytic(id, &ray) {
+                        if closer(&h, best.as_ref()) {
+                            ray.tmax = h.t.next_up();
+                            best = Some(h);
+                        }
+                    }
+                }
+            }
         }
+        best
+    }
+
+    /// True if something in leaf `start..start + count` other than
+    /// primitive `except` blocks the ray.
+    #[inline(always)]
+    fn blocks_leaf(&self, start: u32, count: u32, ray: &Ray, sheared: &ShearedRay, except: u32) -> bool {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut hit = triangle8::intersect(ray, sheared, block, lanes).0;
+        while hit != 0 {
+            let lane = hit.trailing_zeros() as usize;
+            hit &= hit - 1;
+            if block.id[lane] != except {
+                return true;
+            }
+        }
+        if !self.shapes.is_empty() {
+            let mut m = lanes;
+            while m != 0 {
+                let id = block.id[m.trailing_zeros() as usize];
+                m &= m - 1;
+                if id >= self.triangle_count && id != except && self.hit_analytic(id, ray).is_some() {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// The closest hit in `(ray.tmin, ray.tmax)`. Planes report prim ids
@@ -218,7 +283,7 @@ impl Scene {
         let sheared = ShearedRay::new(ray);
         let best = self
             .bvh
-            .closest(ray, |slot, id, r| self.hit_prim(slot, id, r, &sheared));
+            .closest(ray, |start, count, r| self.hit_leaf(start, count, r, &sheared));
         self.closest_plane(ray, best)
     }
 
@@ -254,8 +319,8 @@ impl Scene {
         };
         let sheared: [ShearedRay; PACKET_SIZE] =
             std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
-        self.bvh.closest_packet(&packet, out, |lane, slot, id, r| {
-            self.hit_prim(slot, id, r, &sheared[lane])
+        self.bvh.closest_packet(&packet, out, |lane, start, count, r| {
+            self.hit_leaf(start, count, r, &sheared[lane])
         });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.closest_plane(r, *o);
@@ -281,8 +346,8 @@ impl Scene {
         };
         let sheared: [ShearedRay; PACKET_SIZE] =
             std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
-        self.bvh.any_hit_packet(&packet, out, |lane, slot, id, r| {
-            id != except && self.hit_prim(slot, id, r, &sheared[lane]).is_some()
+        self.bvh.any_hit_packet(&packet, out, |lane, start, count, r| {
+            self.blocks_leaf(start, count, r, &sheared[lane], except)
         });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
@@ -303,9 +368,8 @@ impl Scene {
             return true;
         }
         let sheared = ShearedRay::new(ray);
-        self.bvh.any_hit(ray, |slot, id, r| {
-            id != except && self.hit_prim(slot, id, r, &sheared).is_some()
-        })
+        self.bvh
+            .any_hit(ray, |start, count, r| self.blocks_leaf(start, count, r, &sheared, except))
     }
 
     /// The mesh a triangle belongs to.
@@ -332,7 +396,7 @@ impl Scene {
             let v = self.triangle(hit);
             let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
             let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-            let ng = triangle::geometric_normal(v).normalize_or(Vec3::Z);
+            let ng = triangle::geometric_normal(&v).normalize_or(Vec3::Z);
             let mesh = self.mesh_of(hit.prim);
             let mut ns = ng;
             if let Some(normals) = &mesh.normals {
@@ -347,7 +411,7 @@ impl Scene {
             }
             return Surface {
                 p,
-                p_error: barycentric_error(b, *v),
+                p_error: barycentric_error(b, v),
                 geometric_normal: ng,
                 shading_normal: ns,
                 material: mesh.material,

@@ -13,6 +13,7 @@ pub mod plane;
 pub mod rect;
 pub mod sphere;
 pub mod triangle;
+pub mod triangle8;
 
 use glam::Vec3;
 
