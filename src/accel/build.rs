@@ -3,8 +3,8 @@
 //! and Boulos 2008, "Getting Rid of Packets").
 
 use super::node::{encode_leaf, Node8, EMPTY, MAX_LEAF_PRIMS, MAX_PRIMS};
-use crate::shape::triangle8::NO_PRIM;
 use crate::math::Aabb;
+use crate::shape::triangle8::NO_PRIM;
 use glam::Vec3A;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
@@ -232,7 +232,9 @@ impl Collapse<'_> {
             let node = &self.bvh2.nodes[i];
             if node.prim_count > 0 {
                 let s = node.first_index as usize;
-                prims.extend_from_slice(&self.bvh2.primitive_indices[s..s + node.prim_count as usize]);
+                prims.extend_from_slice(
+                    &self.bvh2.primitive_indices[s..s + node.prim_count as usize],
+                );
             } else {
                 stack.push(node.first_index as usize + 1);
                 stack.push(node.first_index as usize);

@@ -52,16 +52,31 @@ pub fn encode_leaf(start: u32, count: u32) -> u32 {
     LEAF_BIT | ((count - 1) << COUNT_SHIFT) | start
 }
 
+/// True for a leaf (or the empty slot, which traversal never reaches:
+/// its inverted box fails every slab test).
+#[inline(always)]
+pub fn is_leaf(c: u32) -> bool {
+    c & LEAF_BIT != 0
+}
+
+/// The `(start, count)` of a leaf reference.
+#[inline(always)]
+pub fn leaf_range(c: u32) -> (u32, u32) {
+    (c & START_MASK, ((c >> COUNT_SHIFT) & COUNT_MASK) + 1)
+}
+
 #[inline]
 pub fn decode(c: u32) -> ChildRef {
-    if c == EMPTY {
-        ChildRef::Empty
-    } else if c & LEAF_BIT != 0 {
+    // Inner nodes first: traversal meets them most, and one bit test
+    // tells them apart.
+    if c & LEAF_BIT == 0 {
+        ChildRef::Node(c)
+    } else if c != EMPTY {
         ChildRef::Leaf {
             start: c & START_MASK,
             count: ((c >> COUNT_SHIFT) & COUNT_MASK) + 1,
         }
     } else {
-        ChildRef::Node(c)
+        ChildRef::Empty
     }
 }

@@ -39,19 +39,23 @@ pub struct TraceArgs {
 }
 
 /// Trace every ray with `threads` threads (0: all cores); returns the
-/// records and the thread count used.
+/// records, the thread count used and the seconds the tracing took (the
+/// thread pool's start is not counted, as embreex's timing does not count
+/// Embree's).
 pub fn trace(
     scene: &Scene,
     rays: &[strata::math::Ray],
     occlusion: bool,
     threads: usize,
-) -> Result<(Vec<HitRecord>, usize), CliError> {
+) -> Result<(Vec<HitRecord>, usize, f64), CliError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))?;
-    let hits = pool.install(|| {
-        rays.par_iter()
+    let (hits, seconds) = pool.install(|| {
+        let start = Instant::now();
+        let hits: Vec<HitRecord> = rays
+            .par_iter()
             .with_min_len(256)
             .map(|ray| {
                 if occlusion {
@@ -64,9 +68,10 @@ pub fn trace(
                     HitRecord::from_hit(scene.intersect(ray))
                 }
             })
-            .collect()
+            .collect();
+        (hits, start.elapsed().as_secs_f64())
     });
-    Ok((hits, pool.current_num_threads()))
+    Ok((hits, pool.current_num_threads(), seconds))
 }
 
 pub fn run(args: TraceArgs) -> Result<(), CliError> {
@@ -80,9 +85,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
         )
         .into());
     }
-    let start = Instant::now();
-    let (hits, threads) = trace(&scene, &rays, args.occlusion, args.threads)?;
-    let seconds = start.elapsed().as_secs_f64();
+    let (hits, threads, seconds) = trace(&scene, &rays, args.occlusion, args.threads)?;
     write_file(&args.hits, &encode_hits(&hits))?;
     if !args.quiet {
         let found = hits.iter().filter(|h| h.is_hit()).count();

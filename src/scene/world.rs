@@ -1,6 +1,7 @@
 //! The compiled scene: flat arrays the hot loop reads, and the three
 //! queries the integrator needs (closest hit, occlusion, surface).
 
+use crate::accel::traverse::closer;
 use crate::accel::{Bvh8, Packet, PACKET_SIZE};
 use crate::camera::Camera;
 use crate::math::offset::{barycentric_error, transformed_error};
@@ -15,7 +16,6 @@ use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
-use crate::accel::traverse::closer;
 use crate::shape::triangle::{self, ShearedRay};
 use crate::shape::triangle8::{self, TriangleBlock, LANES};
 use crate::shape::{PrimHit, Surface};
@@ -253,7 +253,14 @@ impl Scene {
     /// True if something in leaf `start..start + count` other than
     /// primitive `except` blocks the ray.
     #[inline(always)]
-    fn blocks_leaf(&self, start: u32, count: u32, ray: &Ray, sheared: &ShearedRay, except: u32) -> bool {
+    fn blocks_leaf(
+        &self,
+        start: u32,
+        count: u32,
+        ray: &Ray,
+        sheared: &ShearedRay,
+        except: u32,
+    ) -> bool {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
         let mut hit = triangle8::intersect(ray, sheared, block, lanes).0;
@@ -269,7 +276,8 @@ impl Scene {
             while m != 0 {
                 let id = block.id[m.trailing_zeros() as usize];
                 m &= m - 1;
-                if id >= self.triangle_count && id != except && self.hit_analytic(id, ray).is_some() {
+                if id >= self.triangle_count && id != except && self.hit_analytic(id, ray).is_some()
+                {
                     return true;
                 }
             }
@@ -281,9 +289,9 @@ impl Scene {
     /// `u32::MAX - plane index`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let sheared = ShearedRay::new(ray);
-        let best = self
-            .bvh
-            .closest(ray, |start, count, r| self.hit_leaf(start, count, r, &sheared));
+        let best = self.bvh.closest(ray, |start, count, r| {
+            self.hit_leaf(start, count, r, &sheared)
+        });
         self.closest_plane(ray, best)
     }
 
@@ -319,9 +327,10 @@ impl Scene {
         };
         let sheared: [ShearedRay; PACKET_SIZE] =
             std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
-        self.bvh.closest_packet(&packet, out, |lane, start, count, r| {
-            self.hit_leaf(start, count, r, &sheared[lane])
-        });
+        self.bvh
+            .closest_packet(&packet, out, |lane, start, count, r| {
+                self.hit_leaf(start, count, r, &sheared[lane])
+            });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.closest_plane(r, *o);
         }
@@ -346,9 +355,10 @@ impl Scene {
         };
         let sheared: [ShearedRay; PACKET_SIZE] =
             std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
-        self.bvh.any_hit_packet(&packet, out, |lane, start, count, r| {
-            self.blocks_leaf(start, count, r, &sheared[lane], except)
-        });
+        self.bvh
+            .any_hit_packet(&packet, out, |lane, start, count, r| {
+                self.blocks_leaf(start, count, r, &sheared[lane], except)
+            });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
         }
@@ -368,8 +378,9 @@ impl Scene {
             return true;
         }
         let sheared = ShearedRay::new(ray);
-        self.bvh
-            .any_hit(ray, |start, count, r| self.blocks_leaf(start, count, r, &sheared, except))
+        self.bvh.any_hit(ray, |start, count, r| {
+            self.blocks_leaf(start, count, r, &sheared, except)
+        })
     }
 
     /// The mesh a triangle belongs to.

@@ -86,7 +86,8 @@ pub fn intersect(
 ) -> (u32, [f32; LANES], [f32; LANES], [f32; LANES]) {
     let origin = [ray.origin.x, ray.origin.y, ray.origin.z];
     // Vertex `k` relative to the ray origin, along world axis `axis`.
-    let rel = |k: usize, axis: usize| f32x8::from(block.v[3 * k + axis]) - f32x8::splat(origin[axis]);
+    let rel =
+        |k: usize, axis: usize| f32x8::from(block.v[3 * k + axis]) - f32x8::splat(origin[axis]);
     let (sx, sy) = (f32x8::splat(s.sx), f32x8::splat(s.sy));
     let (az_w, bz_w, cz_w) = (rel(0, s.kz), rel(1, s.kz), rel(2, s.kz));
     let ax = rel(0, s.kx) - sx * az_w;
@@ -99,8 +100,7 @@ pub fn intersect(
     let mut e1 = ax * cy - ay * cx;
     let mut e2 = bx * ay - by * ax;
     let zero = f32x8::ZERO;
-    let on_edge =
-        (e0.simd_eq(zero) | e1.simd_eq(zero) | e2.simd_eq(zero)).to_bitmask() & lanes;
+    let on_edge = (e0.simd_eq(zero) | e1.simd_eq(zero) | e2.simd_eq(zero)).to_bitmask() & lanes;
     if on_edge != 0 {
         // Rare: recompute the three edge functions of those lanes in f64,
         // as the scalar test does.
@@ -250,8 +250,14 @@ mod tests {
                 0 => target_tri[0],
                 1 => (target_tri[1] + target_tri[2]) * 0.5,
                 _ => {
-                    let (b1, b2) = if b1 + b2 > 1.0 { (1.0 - b1, 1.0 - b2) } else { (b1, b2) };
-                    target_tri[0] + (target_tri[1] - target_tri[0]) * b1 + (target_tri[2] - target_tri[0]) * b2
+                    let (b1, b2) = if b1 + b2 > 1.0 {
+                        (1.0 - b1, 1.0 - b2)
+                    } else {
+                        (b1, b2)
+                    };
+                    target_tri[0]
+                        + (target_tri[1] - target_tri[0]) * b1
+                        + (target_tri[2] - target_tri[0]) * b2
                 }
             };
             let origin = target + rng.v(scale * 4.0);
@@ -260,7 +266,9 @@ mod tests {
                 ray.tmax = rng.f() * 1.5;
             }
             check(&ray, &block);
-            hits += intersect(&ray, &ShearedRay::new(&ray), &block, 0xff).0.count_ones();
+            hits += intersect(&ray, &ShearedRay::new(&ray), &block, 0xff)
+                .0
+                .count_ones();
         }
         assert!(hits > 2000, "the cases must exercise hits, got {hits}");
     }
@@ -292,7 +300,11 @@ mod tests {
 
     #[test]
     fn closest_breaks_ties_by_primitive_id_not_lane() {
-        let tri = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let tri = [
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
         let mut block = TriangleBlock::EMPTY;
         block.set(2, &tri, 9);
         block.set(5, &tri, 4);
