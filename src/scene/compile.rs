@@ -13,6 +13,7 @@ use crate::accel::{BuildQuality, Bvh8};
 use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
 use crate::error::{InputError, InputResult};
 use crate::math::{Aabb, Frame, Transform};
+use crate::output::stats::PeakMeter;
 use crate::sampling::SamplerKind;
 use crate::shade::light::Light;
 use crate::shade::material::Material;
@@ -45,11 +46,21 @@ pub struct RenderOverrides {
     pub bvh_quality: BuildQuality,
 }
 
-/// Wall time of each loading phase.
+/// Wall time of each loading phase, and how far resident memory rose above
+/// its level before loading during each (see [`PeakMeter`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LoadTimings {
     pub load: Duration,
     pub bvh_build: Duration,
+    pub load_peak_bytes: Option<u64>,
+    pub build_peak_bytes: Option<u64>,
+}
+
+impl LoadTimings {
+    /// Peak memory of loading and building together, above the level before.
+    pub fn peak_bytes(&self) -> Option<u64> {
+        self.load_peak_bytes.max(self.build_peak_bytes)
+    }
 }
 
 /// Read, validate and compile a scene file.
@@ -97,6 +108,7 @@ pub fn compile(
     overrides: &RenderOverrides,
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
+    let mut memory = PeakMeter::start();
     let mut c = Compiler::new(path);
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
@@ -112,6 +124,7 @@ pub fn compile(
     let settings = c.settings(&desc.render, overrides)?;
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
     let load = start.elapsed();
+    let load_peak_bytes = memory.next_phase();
 
     // Area lights were recorded by shape index; make them global primitive ids.
     let n_tris = c.triangles.len() as u32;
@@ -142,6 +155,8 @@ pub fn compile(
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
+        load_peak_bytes,
+        build_peak_bytes: memory.phase_peak(),
     };
     let scene = Scene {
         leaf_triangles,
