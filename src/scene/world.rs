@@ -168,10 +168,22 @@ impl Scene {
         out
     }
 
-    /// Bytes held by the structures that traversal reads: BVH nodes, leaf
-    /// ids and the leaf-ordered triangles.
+    /// Bytes held by the per-triangle structures that tracing and shading
+    /// read: BVH nodes, leaf ids, the leaf-ordered triangles and the
+    /// shading normals of meshes that have them (materials are per mesh).
     pub fn accel_bytes(&self) -> usize {
-        self.bvh.memory_bytes() + self.leaf_triangles.len() * std::mem::size_of::<[Vec3; 3]>()
+        let normals: usize = self
+            .meshes
+            .iter()
+            .filter_map(|m| m.normals.as_ref())
+            .map(|n| {
+                n.values.len() * std::mem::size_of::<Vec3>()
+                    + n.indices.len() * std::mem::size_of::<[u32; 3]>()
+            })
+            .sum();
+        self.bvh.memory_bytes()
+            + self.leaf_triangles.len() * std::mem::size_of::<[Vec3; 3]>()
+            + normals
     }
 
     #[inline]
