@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Ray throughput of strata against Embree (embreex) on the same rays.
 
-    bench_embree.py MESH [RAYS.bin] [MESH [RAYS.bin] ...] [-n 20000] [--seed 1]
+    bench_embree.py MESH [RAYS.bin] [MESH [RAYS.bin] ...] [-n 100000] [--seed 1]
                     [--strata target/release/strata] [--repeats 3] [--csv embree_bench.csv]
 
 Each MESH (OBJ or PLY) is traced with the rays of the RAYS.bin that follows
@@ -12,7 +12,7 @@ occlusion) both engines trace the same rays on one thread: strata through
 `strata trace --threads 1` (its own timing of the trace phase, after load
 and BVH build), Embree through embreex's single-threaded loop after a
 warm-up query has built its BVH. Each measurement is the median of
---repeats runs. One row per mesh x kind x query: Mrays/s per engine and the
+--repeats runs, strata's and Embree's alternating. One row per mesh x kind x query: Mrays/s per engine and the
 ratio strata / Embree (above 1: strata is faster), then the geometric mean
 of the ratios per mesh; the rows are also saved as CSV.
 
@@ -42,37 +42,42 @@ def embree_scene(vertices, triangles):
     return scene
 
 
-def time_embree(scene, rays, query, repeats):
+def embree_rate(scene, rays, query):
+    """Mrays/s of one embreex pass over `rays`."""
     origins = np.ascontiguousarray(rays[:, 0:3])
     directions = np.ascontiguousarray(rays[:, 3:6])
-    times = []
-    for _ in range(repeats):
-        dists = rays[:, 7].copy()
-        start = time.perf_counter()
-        if query == "closest":
-            scene.run(origins, directions, dists=dists, output=1)
-        else:
-            scene.run(origins, directions, dists=dists, query="OCCLUDED")
-        times.append(time.perf_counter() - start)
-    return len(rays) / statistics.median(times) / 1e6
+    dists = rays[:, 7].copy()
+    start = time.perf_counter()
+    if query == "closest":
+        scene.run(origins, directions, dists=dists, output=1)
+    else:
+        scene.run(origins, directions, dists=dists, query="OCCLUDED")
+    return len(rays) / (time.perf_counter() - start) / 1e6
 
 
-def time_strata(strata, mesh, rays, query, repeats):
+def strata_rate(args, mesh):
+    """Mrays/s that one `strata trace` run reports for its trace phase."""
+    out = subprocess.run(args, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise InputError(mesh, f"strata trace failed: {out.stderr.strip()}")
+    # "... in 0.123 s = 4.56 Mrays/s on 1 threads ..."
+    return float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
+
+
+def time_both(strata, mesh, scene, rays, query, repeats):
+    """Median Mrays/s of strata and of Embree, their runs alternating so
+    that a change in the machine's load falls on both."""
     with tempfile.TemporaryDirectory() as tmp:
         rays_path = os.path.join(tmp, "rays.bin")
         rays.astype("<f4").tofile(rays_path)
         args = [strata, "trace", mesh, "--rays", rays_path, "--hits", os.path.join(tmp, "hits.bin"), "--threads", "1"]
         if query == "occlusion":
             args.append("--occlusion")
-        rates = []
+        s, e = [], []
         for _ in range(repeats):
-            out = subprocess.run(args, capture_output=True, text=True)
-            if out.returncode != 0:
-                raise InputError(mesh, f"strata trace failed: {out.stderr.strip()}")
-            # "... in 0.123 s = 4.56 Mrays/s on 1 threads ..."
-            rate = out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1]
-            rates.append(float(rate))
-        return statistics.median(rates)
+            s.append(strata_rate(args, mesh))
+            e.append(embree_rate(scene, rays, query))
+        return statistics.median(s), statistics.median(e)
 
 
 def make_rays(strata, mesh, n, seed, workdir):
@@ -100,7 +105,7 @@ def pairs(items):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="MESH [RAYS.bin]", help="meshes (OBJ or PLY), each optionally followed by its ray file")
-    p.add_argument("-n", type=int, default=20000, help="rays of each kind to make for a mesh without a ray file (default 20000)")
+    p.add_argument("-n", type=int, default=100000, help="rays of each kind to make for a mesh without a ray file (default 100000)")
     p.add_argument("--seed", type=int, default=1, help="seed of the rays made here (default 1)")
     p.add_argument("--strata", default="target/release/strata", help="the strata executable")
     p.add_argument("--repeats", type=int, default=3, help="runs per measurement; the median is kept")
@@ -123,8 +128,7 @@ def main(argv=None):
                 for kind, first, count, _ in groups:
                     sub = rays[first:first + count]
                     for query in ("closest", "occlusion"):
-                        s = time_strata(a.strata, mesh, sub, query, a.repeats)
-                        e = time_embree(scene, sub, query, a.repeats)
+                        s, e = time_both(a.strata, mesh, scene, sub, query, a.repeats)
                         ratios.append(s / e)
                         rows.append((name, len(triangles), kind, query, count, s, e))
                         print(f"{name:<18} {len(triangles):>9} {kind:<8} {query:<10} {count:>7} {s:>8.2f} {e:>8.2f} {s / e:>13.2f}x", flush=True)
