@@ -3,8 +3,8 @@
 
     validate_embree.py MESH RAYS.bin HITS.bin [--occlusion OCC.bin] [--json REPORT.json]
 
-MESH is an OBJ file, read here independently of strata but in strata's
-triangle order (file order, polygons fan-triangulated). RAYS.bin comes from
+MESH is an OBJ or PLY file, read here independently of strata but in
+strata's triangle order (file order, polygons fan-triangulated). RAYS.bin comes from
 `strata rays`, HITS.bin from `strata trace` and OCC.bin from `strata trace
 --occlusion`. Embree traces the same rays against the same triangles
 (closest hit and occlusion) and every ray is compared: hit or miss,
@@ -165,11 +165,129 @@ def load_obj(path):
     return vertices, triangles
 
 
+PLY_SCALARS = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+
+def ply_header(path, data):
+    """(format, [(element, count, [(name, type) or (name, (count type, item type))])], body offset)."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise InputError(path, "not a PLY file (no 'ply' magic or no end_header)")
+    body = data.index(b"\n", end) + 1
+    fmt, elements = None, []
+    for line in data[:end].decode("ascii", "replace").splitlines()[1:]:
+        w = line.split()
+        if not w or w[0] in ("comment", "obj_info"):
+            continue
+        if w[0] == "format":
+            fmt = w[1]
+        elif w[0] == "element":
+            elements.append((w[1], int(w[2]), []))
+        elif w[0] == "property" and elements:
+            if w[1] == "list":
+                elements[-1][2].append((w[4], (PLY_SCALARS[w[2]], PLY_SCALARS[w[3]])))
+            else:
+                elements[-1][2].append((w[2], PLY_SCALARS[w[1]]))
+    if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise InputError(path, f"unknown PLY format '{fmt}'")
+    return fmt, elements, body
+
+
+def fan(faces):
+    """Fan-triangulate index lists as strata does: (p0, pk, pk+1)."""
+    return [(f[0], f[k], f[k + 1]) for f in faces for k in range(1, len(f) - 1)]
+
+
+def load_ply(path):
+    """Vertices (float32, (n, 3)) and triangles (int64, (m, 3)) of a PLY file in strata's order.
+
+    `vertex` x, y, z and the `face` vertex_indices (or vertex_index) list,
+    fan-triangulated; other elements and properties are skipped. Binary
+    faces that are all triangles with no other property are read in one
+    numpy pass, the rest face by face.
+    """
+    try:
+        data = open(path, "rb").read()
+    except OSError as e:
+        raise InputError(path, f"cannot read: {e.strerror}")
+    try:
+        fmt, elements, pos = ply_header(path, data)
+    except (KeyError, IndexError, ValueError) as e:
+        raise InputError(path, f"bad PLY header: {e}")
+    vertices, faces = np.zeros((0, 3), np.float32), []
+    triangles = None
+    if fmt == "ascii":
+        lines = data[pos:].decode("ascii", "replace").split("\n")
+        row = 0
+        for name, count, props in elements:
+            rows = [l.split() for l in lines[row : row + count]]
+            row += count
+            if name == "vertex":
+                cols = [i for i, (p, _) in enumerate(props) if p in ("x", "y", "z")]
+                vertices = parse_f32([r[i] for r in rows for i in cols]).reshape(-1, 3)
+            elif name == "face":
+                faces = []
+                for r in rows:
+                    # Only a leading list is supported in ASCII, as written by every tool we know.
+                    n = int(r[0])
+                    faces.append([int(x) for x in r[1 : 1 + n]])
+                triangles = np.array(fan(faces), dtype=np.int64).reshape(-1, 3)
+    else:
+        end = "<" if fmt == "binary_little_endian" else ">"
+        for name, count, props in elements:
+            lists = [p for p in props if isinstance(p[1], tuple)]
+            if not lists:
+                dtype = np.dtype([(p, end + t) for p, t in props])
+                table = np.frombuffer(data, dtype, count, pos)
+                pos += dtype.itemsize * count
+                if name == "vertex":
+                    vertices = np.stack([table[c] for c in "xyz"], axis=1).astype(np.float32)
+                continue
+            if name == "face" and len(props) == 1:
+                n_type, i_type = props[0][1]
+                tri = np.dtype([("n", end + n_type), ("v", end + i_type, (3,))])
+                if pos + tri.itemsize * count <= len(data):
+                    table = np.frombuffer(data, tri, count, pos)
+                    if (table["n"] == 3).all():
+                        triangles = table["v"].astype(np.int64)
+                        pos += tri.itemsize * count
+                        continue
+            # General case: one record at a time.
+            rows = []
+            for _ in range(count):
+                record = {}
+                for p, t in props:
+                    if isinstance(t, tuple):
+                        n = int(np.frombuffer(data, end + t[0], 1, pos)[0])
+                        pos += np.dtype(t[0]).itemsize
+                        record[p] = np.frombuffer(data, end + t[1], n, pos).astype(np.int64).tolist()
+                        pos += np.dtype(t[1]).itemsize * n
+                    else:
+                        pos += np.dtype(t).itemsize
+                rows.append(record.get("vertex_indices", record.get("vertex_index", [])))
+            if name == "face":
+                triangles = np.array(fan(rows), dtype=np.int64).reshape(-1, 3)
+    if triangles is None:
+        triangles = np.zeros((0, 3), np.int64)
+    if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
+        raise InputError(path, "a face refers to a vertex that does not exist")
+    if not np.isfinite(vertices).all():
+        raise InputError(path, "a vertex coordinate is not finite")
+    return vertices, triangles
+
+
 def load_mesh(path):
     ext = os.path.splitext(path)[1].lower()
-    if ext != ".obj":
-        raise InputError(path, f"validate_embree.py reads .obj meshes only, not '{ext}'")
-    return load_obj(path)
+    if ext == ".obj":
+        return load_obj(path)
+    if ext == ".ply":
+        return load_ply(path)
+    raise InputError(path, f"validate_embree.py reads .obj and .ply meshes only, not '{ext}'")
 
 
 def read_records(path, dtype, what):
@@ -643,7 +761,7 @@ def main(argv=None):
         epilog=__doc__.split("\n\n", 2)[2],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("mesh", help="OBJ mesh that strata traced")
+    ap.add_argument("mesh", help="OBJ or PLY mesh that strata traced")
     ap.add_argument("rays", help="ray file from `strata rays` (RAYS.bin; RAYS.bin.json names the kinds)")
     ap.add_argument("hits", help="hit file from `strata trace` (closest hits)")
     ap.add_argument("--occlusion", metavar="OCC.bin", help="hit file from `strata trace --occlusion`; without it strata's occlusion answers are taken from HITS.bin")

@@ -68,11 +68,11 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         })
         .collect::<Result<_, CliError>>()?;
     let mut csv = String::from(
-        "mesh,triangles,build_s,bytes_per_triangle,peak_rss_mb,query,rays,mode,threads,mrays_per_s\n",
+        "mesh,triangles,load_s,build_s,bytes_per_triangle,peak_load_build_bytes_per_triangle,peak_rss_mb,query,rays,mode,threads,mrays_per_s\n",
     );
     println!(
-        "{:<22} {:>9} {:>8} {:>7} {:>9} {:>10} {:>6} {:>3} {:>9}",
-        "mesh", "tris", "build s", "B/tri", "query", "rays", "mode", "thr", "Mrays/s"
+        "{:<22} {:>9} {:>8} {:>7} {:>8} {:>9} {:>10} {:>6} {:>3} {:>9}",
+        "mesh", "tris", "build s", "B/tri", "peak/tri", "query", "rays", "mode", "thr", "Mrays/s"
     );
     for mesh in meshes(&args)? {
         let abs = std::fs::canonicalize(&mesh)
@@ -88,12 +88,23 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         let rss = peak_rss_bytes().unwrap_or(0) as f64 / (1 << 20) as f64;
         let tris = scene.triangle_count as usize;
         let bpt = scene.accel_bytes() as f64 / tris.max(1) as f64;
+        // Peak memory of load + build above the level before, per triangle.
+        let peak = timings.peak_bytes().map(|b| b as f64 / tris.max(1) as f64);
+        let peak_text = peak.map_or("-".to_string(), |p| format!("{p:.0}"));
+        let load = timings.load.as_secs_f64();
         let name = mesh
             .file_name()
             .unwrap_or_default()
             .to_string_lossy()
             .to_string();
         let build = timings.bvh_build.as_secs_f64();
+        let mb =
+            |b: Option<u64>| b.map_or("-".to_string(), |b| format!("{:.0} MB", b as f64 / 1e6));
+        println!(
+            "# {name}: load {load:.3} s (peak +{}), BVH build {build:.3} s (peak +{}); final {bpt:.1} B/tri, peak {peak_text} B/tri",
+            mb(timings.load_peak_bytes),
+            mb(timings.build_peak_bytes),
+        );
         for kind in [RayKind::Camera, RayKind::Random] {
             let batches = rays(&scene, kind, args.batches, 1);
             for query in [Query::Closest, Query::Occlusion] {
@@ -111,11 +122,12 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
                         };
                         let mode = if packet { "packet" } else { "single" };
                         println!(
-                            "{name:<22} {tris:>9} {build:>8.3} {bpt:>7.1} {q:>9} {:>10} {mode:>6} {threads:>3} {mrays:>9.2}",
+                            "{name:<22} {tris:>9} {build:>8.3} {bpt:>7.1} {peak_text:>8} {q:>9} {:>10} {mode:>6} {threads:>3} {mrays:>9.2}",
                             kind.name()
                         );
                         csv += &format!(
-                            "{name},{tris},{build:.4},{bpt:.1},{rss:.0},{q},{},{mode},{threads},{mrays:.3}\n",
+                            "{name},{tris},{load:.4},{build:.4},{bpt:.1},{},{rss:.0},{q},{},{mode},{threads},{mrays:.3}\n",
+                            peak.map_or(String::new(), |p| format!("{p:.1}")),
                             kind.name()
                         );
                     }

@@ -5,7 +5,7 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::error::InputError;
 use strata::output::image::write_image;
-use strata::output::stats::{peak_rss_bytes, PhaseTimes, RenderStats};
+use strata::output::stats::{peak_rss_bytes, BuildMemory, PhaseTimes, RenderStats};
 use strata::render::partial::{read_partial, write_partial, PartialHeader};
 use strata::render::{render, RenderOptions, Schedule, SliceSpec};
 use strata::sampling::SamplerKind;
@@ -260,6 +260,15 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             bvh_nodes: scene.bvh.nodes.len(),
             bvh_bytes: scene.bvh.memory_bytes(),
             peak_rss_bytes: peak_rss_bytes(),
+            memory: BuildMemory {
+                final_bytes_per_triangle: scene.accel_bytes() as f64
+                    / (scene.triangle_count.max(1)) as f64,
+                load_peak_bytes: timings.load_peak_bytes,
+                build_peak_bytes: timings.build_peak_bytes,
+                peak_bytes_per_triangle: timings
+                    .peak_bytes()
+                    .map(|b| b as f64 / scene.triangle_count.max(1) as f64),
+            },
             invalid_samples: outcome.film.invalid,
             first_invalid_sample: outcome.film.first_invalid,
             clamped_samples: outcome.film.clamped,
@@ -271,7 +280,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     }
     if !args.quiet {
         println!(
-            "{}x{} {} spp: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s) -> {}",
+            "{}x{} {} spp: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s{}) -> {}",
             s.width,
             s.height,
             s.spp,
@@ -285,6 +294,14 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             outcome.threads,
             timings.load.as_secs_f64(),
             timings.bvh_build.as_secs_f64(),
+            match timings.peak_bytes() {
+                Some(b) if scene.triangle_count > 0 => format!(
+                    ", peak +{:.0} MB = {:.0} B/triangle",
+                    b as f64 / 1e6,
+                    b as f64 / scene.triangle_count as f64
+                ),
+                _ => String::new(),
+            },
             args.output.display()
         );
     }

@@ -2,6 +2,7 @@
 
 use crate::shade::integrator::RayCounts;
 use serde::Serialize;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 #[derive(Debug, Clone, Serialize)]
 pub struct PhaseTimes {
@@ -32,15 +33,88 @@ pub struct RenderStats {
     pub bvh_nodes: usize,
     pub bvh_bytes: usize,
     pub peak_rss_bytes: Option<u64>,
+    pub memory: BuildMemory,
     pub invalid_samples: u64,
     pub first_invalid_sample: Option<crate::render::film::BadSample>,
     pub clamped_samples: u64,
 }
 
+/// Memory of loading and building, as `strata render --stats` reports it.
+#[derive(Debug, Clone, Serialize)]
+pub struct BuildMemory {
+    /// Bytes per triangle of the structures traversal reads
+    /// ([`crate::scene::Scene::accel_bytes`]).
+    pub final_bytes_per_triangle: f64,
+    /// Peak resident memory above the level before loading, while loading
+    /// the meshes and while building the BVH (None where Linux's
+    /// `/proc/self/clear_refs` cannot reset the peak and it did not rise).
+    pub load_peak_bytes: Option<u64>,
+    pub build_peak_bytes: Option<u64>,
+    /// The larger of the two, per triangle.
+    pub peak_bytes_per_triangle: Option<f64>,
+}
+
+/// The highest `VmHWM` seen before [`PeakMeter`] last reset it, so that
+/// [`peak_rss_bytes`] stays the whole process's peak.
+static PEAK_BEFORE_RESET: AtomicU64 = AtomicU64::new(0);
+
 /// Peak resident set size of this process (Linux `VmHWM`), if known.
 pub fn peak_rss_bytes() -> Option<u64> {
+    let hwm = status_kb("VmHWM:")?;
+    Some(hwm.max(PEAK_BEFORE_RESET.load(Ordering::Relaxed)))
+}
+
+/// A `/proc/self/status` field in bytes (`VmHWM:`, `VmRSS:`).
+fn status_kb(field: &str) -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let line = status.lines().find(|l| l.starts_with(field))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+/// Set `VmHWM` back to the current RSS (Linux ≥ 4.0: write 5 to
+/// `/proc/self/clear_refs`); false where that is not possible.
+fn reset_peak() -> bool {
+    if let Some(hwm) = status_kb("VmHWM:") {
+        PEAK_BEFORE_RESET.fetch_max(hwm, Ordering::Relaxed);
+    }
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// How far resident memory rises above its level at [`PeakMeter::start`]
+/// during a phase: the kernel's own peak (`VmHWM`), reset at the start of
+/// each phase. Process-wide, so threads allocating beside the phase count
+/// too. Where the peak cannot be reset, a phase's peak is known only if
+/// it exceeds every earlier one; otherwise it is None.
+#[derive(Debug)]
+pub struct PeakMeter {
+    base: Option<u64>,
+    reset: bool,
+    hwm_at_phase_start: u64,
+}
+
+impl PeakMeter {
+    pub fn start() -> Self {
+        let reset = reset_peak();
+        Self {
+            base: status_kb("VmRSS:"),
+            reset,
+            hwm_at_phase_start: status_kb("VmHWM:").unwrap_or(u64::MAX),
+        }
+    }
+
+    /// Peak RSS of the phase so far, above the level at `start`.
+    pub fn phase_peak(&self) -> Option<u64> {
+        let base = self.base?;
+        let hwm = status_kb("VmHWM:")?;
+        (self.reset || hwm > self.hwm_at_phase_start).then(|| hwm.saturating_sub(base))
+    }
+
+    /// End a phase: its peak, and a fresh peak for the next one (same base).
+    pub fn next_phase(&mut self) -> Option<u64> {
+        let peak = self.phase_peak();
+        self.reset = reset_peak();
+        self.hwm_at_phase_start = status_kb("VmHWM:").unwrap_or(u64::MAX);
+        peak
+    }
 }

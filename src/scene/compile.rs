@@ -13,6 +13,7 @@ use crate::accel::{BuildQuality, Bvh8};
 use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
 use crate::error::{InputError, InputResult};
 use crate::math::{Aabb, Frame, Transform};
+use crate::output::stats::PeakMeter;
 use crate::sampling::SamplerKind;
 use crate::shade::light::Light;
 use crate::shade::material::Material;
@@ -26,6 +27,7 @@ use crate::shape::triangle8::{TriangleBlock, LANES};
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 mod csg;
@@ -46,11 +48,21 @@ pub struct RenderOverrides {
     pub bvh_quality: BuildQuality,
 }
 
-/// Wall time of each loading phase.
+/// Wall time of each loading phase, and how far resident memory rose above
+/// its level before loading during each (see [`PeakMeter`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LoadTimings {
     pub load: Duration,
     pub bvh_build: Duration,
+    pub load_peak_bytes: Option<u64>,
+    pub build_peak_bytes: Option<u64>,
+}
+
+impl LoadTimings {
+    /// Peak memory of loading and building together, above the level before.
+    pub fn peak_bytes(&self) -> Option<u64> {
+        self.load_peak_bytes.max(self.build_peak_bytes)
+    }
 }
 
 /// Read, validate and compile a scene file.
@@ -98,6 +110,7 @@ pub fn compile(
     overrides: &RenderOverrides,
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
+    let mut memory = PeakMeter::start();
     let mut c = Compiler::new(path);
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
@@ -112,10 +125,13 @@ pub fn compile(
     }
     let settings = c.settings(&desc.render, overrides)?;
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
+    // Every object holds what it needs from its mesh files by now.
+    drop(std::mem::take(&mut c.assets));
     let load = start.elapsed();
+    let load_peak_bytes = memory.next_phase();
 
     // Area lights were recorded by shape index; make them global primitive ids.
-    let n_tris = c.triangles.len() as u32;
+    let n_tris = c.meshes.last().map_or(0, |m| m.first + m.count);
     for light in &mut c.lights {
         if let Light::Rect { prim, .. } | Light::Disk { prim, .. } | Light::Sphere { prim, .. } =
             light
@@ -128,14 +144,19 @@ pub fn compile(
     let boxes = c.primitive_boxes()?;
     let mut bvh = Bvh8::build(&boxes, overrides.bvh_quality);
     drop(boxes);
-    // Store the vertices once, in the order the leaves read them, with the
-    // leaf ids beside them; the BVH's own copy of the ids is then redundant.
-    let leaf_blocks = leaf_blocks(&bvh.prim_ids, &c.triangles);
+    // The builder reserves room for more nodes than the collapse makes.
+    bvh.nodes.shrink_to_fit();
+    // Store the vertices once, in the order the leaves read them, straight
+    // from the (indexed) sources, with the leaf ids beside them: never two
+    // copies of the triangles, and the BVH's own ids become redundant.
+    let leaf_blocks = leaf_blocks(&c.meshes, &c.sources, &bvh.prim_ids);
     bvh.prim_ids = Vec::new();
-    drop(std::mem::take(&mut c.triangles));
+    drop(std::mem::take(&mut c.sources));
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
+        load_peak_bytes,
+        build_peak_bytes: memory.phase_peak(),
     };
     let scene = Scene {
         leaf_blocks,
@@ -157,7 +178,8 @@ pub fn compile(
 struct Compiler {
     file: PathBuf,
     base_dir: PathBuf,
-    triangles: Vec<[Vec3; 3]>,
+    /// The triangles of each entry of `meshes`.
+    sources: Vec<TriangleSource>,
     meshes: Vec<MeshRange>,
     shapes: Vec<AnalyticPrim>,
     transforms: Vec<Transform>,
@@ -168,7 +190,63 @@ struct Compiler {
     lights: Vec<Light>,
     loaded_cameras: Vec<LoadedCamera>,
     /// Mesh files already read, with the scene index of their first material.
-    assets: HashMap<PathBuf, (LoadedAsset, u32)>,
+    assets: HashMap<PathBuf, (Rc<LoadedAsset>, u32)>,
+}
+
+/// The triangles of one [`MeshRange`] until the BVH is built. A mesh file's
+/// meshes stay indexed (world-space positions and the file's indices, about
+/// 18 bytes per triangle instead of 36), so the build runs beside half the
+/// memory and the triangles are expanded once, in leaf order, afterwards.
+enum TriangleSource {
+    Soup(Vec<[Vec3; 3]>),
+    Indexed {
+        positions: Vec<Vec3>,
+        /// Checked against `positions` when made.
+        indices: Vec<[u32; 3]>,
+    },
+}
+
+impl TriangleSource {
+    fn len(&self) -> usize {
+        match self {
+            Self::Soup(t) => t.len(),
+            Self::Indexed { indices, .. } => indices.len(),
+        }
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> [Vec3; 3] {
+        match self {
+            Self::Soup(t) => t[i],
+            Self::Indexed { positions, indices } => indices[i].map(|k| positions[k as usize]),
+        }
+    }
+}
+
+/// The BVH's leaf slots as 8-wide triangle blocks (see
+/// [`Scene::leaf_blocks`]), read from the indexed sources.
+fn leaf_blocks(
+    meshes: &[MeshRange],
+    sources: &[TriangleSource],
+    prim_ids: &[u32],
+) -> Vec<TriangleBlock> {
+    use rayon::prelude::*;
+    prim_ids
+        .par_chunks(LANES)
+        .map(|ids| {
+            let mut block = TriangleBlock::EMPTY;
+            for (lane, &id) in ids.iter().enumerate() {
+                let k = meshes.partition_point(|m| m.first + m.count <= id);
+                match (meshes.get(k), sources.get(k)) {
+                    (Some(m), Some(src)) if id >= m.first => {
+                        block.set(lane, &src.get((id - m.first) as usize), id)
+                    }
+                    _ => block.id[lane] = id,
+                }
+            }
+            block
+        })
+        .collect()
 }
 
 fn finite3(v: V3, key: &str, file: &Path) -> InputResult<Vec3> {
@@ -199,7 +277,7 @@ impl Compiler {
         let mut c = Self {
             file: path.to_path_buf(),
             base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
-            triangles: Vec::new(),
+            sources: Vec::new(),
             meshes: Vec::new(),
             shapes: Vec::new(),
             transforms: Vec::new(),
@@ -534,7 +612,12 @@ impl Compiler {
             for (i, p) in tri.v.iter().enumerate() {
                 v[i] = m.transform_point3(self.v3(*p, &format!("{key}.triangle.v[{i}]"))?);
             }
-            self.push_mesh(key.to_string(), vec![v], material, None);
+            self.push_mesh(
+                key.to_string(),
+                TriangleSource::Soup(vec![v]),
+                material,
+                None,
+            );
         } else if let Some(file) = &obj.mesh {
             self.mesh_file(file, key, m, explicit_material, inherited)?;
         } else if let Some(children) = &obj.group {
@@ -611,16 +694,16 @@ impl Compiler {
     fn push_mesh(
         &mut self,
         name: String,
-        tris: Vec<[Vec3; 3]>,
+        tris: TriangleSource,
         material: u32,
         normals: Option<super::asset::MeshNormals>,
     ) {
-        if tris.is_empty() {
+        if tris.len() == 0 {
             return;
         }
-        let first = self.triangles.len() as u32;
+        let first = self.meshes.last().map_or(0, |m| m.first + m.count);
         let count = tris.len() as u32;
-        self.triangles.extend(tris);
+        self.sources.push(tris);
         self.meshes.push(MeshRange {
             name,
             first,
@@ -632,7 +715,7 @@ impl Compiler {
 
     /// A mesh file's contents and the scene index of its first material,
     /// read (and its materials registered) once per file.
-    fn asset(&mut self, file: &str, key: &str) -> InputResult<(LoadedAsset, u32, PathBuf)> {
+    fn asset(&mut self, file: &str, key: &str) -> InputResult<(Rc<LoadedAsset>, u32, PathBuf)> {
         let path = self.base_dir.join(file);
         if !self.assets.contains_key(&path) {
             let asset = load_mesh_file(&path).map_err(|e| {
@@ -650,7 +733,8 @@ impl Compiler {
                     .entry(format!("{file}:{name}"))
                     .or_insert(self.materials.len() as u32 - 1);
             }
-            self.assets.insert(path.clone(), (asset, first_material));
+            self.assets
+                .insert(path.clone(), (Rc::new(asset), first_material));
         }
         let (asset, first_material) = self.assets.get(&path).expect("inserted above").clone();
         Ok((asset, first_material, path))
@@ -667,10 +751,11 @@ impl Compiler {
         let (asset, first_material, path) = self.asset(file, key)?;
         let t = Transform::new(m).expect("checked by the caller");
         for mesh in &asset.meshes {
-            let tris = mesh_triangles(mesh, &path)?
-                .into_iter()
-                .map(|v| v.map(|p| t.point(p)))
-                .collect();
+            check_indices(mesh, &path)?;
+            let tris = TriangleSource::Indexed {
+                positions: mesh.positions.iter().map(|&p| t.point(p)).collect(),
+                indices: mesh.indices.clone(),
+            };
             let normals = mesh.normals.as_ref().map(|n| super::asset::MeshNormals {
                 values: n.values.iter().map(|&v| t.normal_to_world * v).collect(),
                 indices: n.indices.clone(),
@@ -797,19 +882,19 @@ impl Compiler {
     }
 
     fn primitive_boxes(&self) -> InputResult<Vec<Aabb>> {
-        let mut boxes = Vec::with_capacity(self.triangles.len() + self.shapes.len());
-        for (i, v) in self.triangles.iter().enumerate() {
-            let b = Aabb::from_points(v);
-            if !b.is_finite() {
-                let mesh = &self.meshes[self
-                    .meshes
-                    .partition_point(|m| m.first + m.count <= i as u32)];
-                return Err(self.err(
-                    &mesh.name,
-                    format!("triangle {} is not finite", i as u32 - mesh.first),
-                ));
+        let n_tris = self
+            .meshes
+            .last()
+            .map_or(0, |m| (m.first + m.count) as usize);
+        let mut boxes = Vec::with_capacity(n_tris + self.shapes.len());
+        for (mesh, source) in self.meshes.iter().zip(&self.sources) {
+            for i in 0..source.len() {
+                let b = Aabb::from_points(&source.get(i));
+                if !b.is_finite() {
+                    return Err(self.err(&mesh.name, format!("triangle {i} is not finite")));
+                }
+                boxes.push(b);
             }
-            boxes.push(b);
         }
         for (i, s) in self.shapes.iter().enumerate() {
             let local = s.shape.bounds(&self.csg);
@@ -828,23 +913,31 @@ impl Compiler {
     }
 }
 
+/// Every vertex index of a loaded mesh is in range.
+fn check_indices(mesh: &super::asset::LoadedMesh, path: &Path) -> InputResult<()> {
+    let n_vertices = mesh.positions.len();
+    match mesh
+        .indices
+        .iter()
+        .position(|idx| idx.iter().any(|&i| i as usize >= n_vertices))
+    {
+        Some(f) => Err(InputError::new(
+            path,
+            format!("face {f}"),
+            "vertex index out of range",
+        )),
+        None => Ok(()),
+    }
+}
+
 /// A loaded mesh's triangles in file space, with every index checked.
 fn mesh_triangles(mesh: &super::asset::LoadedMesh, path: &Path) -> InputResult<Vec<[Vec3; 3]>> {
-    let n_vertices = mesh.positions.len();
-    mesh.indices
+    check_indices(mesh, path)?;
+    Ok(mesh
+        .indices
         .iter()
-        .enumerate()
-        .map(|(f, idx)| {
-            if idx.iter().any(|&i| i as usize >= n_vertices) {
-                return Err(InputError::new(
-                    path,
-                    format!("face {f}"),
-                    "vertex index out of range",
-                ));
-            }
-            Ok(idx.map(|i| mesh.positions[i as usize]))
-        })
-        .collect()
+        .map(|idx| idx.map(|i| mesh.positions[i as usize]))
+        .collect())
 }
 
 /// The uniform scale factor if `m`'s linear part is a similarity (rotation
@@ -859,21 +952,4 @@ fn similarity_scale(m: &Affine3A) -> Option<f32> {
         && c[1].dot(c[2]).abs() <= tol * s
         && c[0].dot(c[2]).abs() <= tol * s;
     (equal && orthogonal && s > 0.0).then_some(s)
-}
-
-/// The BVH's leaf slots as 8-wide triangle blocks (see [`Scene::leaf_blocks`]).
-fn leaf_blocks(prim_ids: &[u32], triangles: &[[Vec3; 3]]) -> Vec<TriangleBlock> {
-    prim_ids
-        .chunks(LANES)
-        .map(|ids| {
-            let mut block = TriangleBlock::EMPTY;
-            for (lane, &id) in ids.iter().enumerate() {
-                match triangles.get(id as usize) {
-                    Some(tri) => block.set(lane, tri, id),
-                    None => block.id[lane] = id,
-                }
-            }
-            block
-        })
-        .collect()
 }

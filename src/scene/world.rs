@@ -176,10 +176,20 @@ impl Scene {
         out
     }
 
-    /// Bytes held by the structures that traversal reads: BVH nodes and
-    /// the leaf blocks (vertices and ids).
+    /// Bytes held by the per-triangle structures that tracing and shading
+    /// read: BVH nodes, the leaf blocks (vertices and ids) and the shading
+    /// normals of meshes that have them (materials are per mesh).
     pub fn accel_bytes(&self) -> usize {
-        self.bvh.memory_bytes() + std::mem::size_of_val(self.leaf_blocks.as_slice())
+        let normals: usize = self
+            .meshes
+            .iter()
+            .filter_map(|m| m.normals.as_ref())
+            .map(|n| {
+                n.values.len() * std::mem::size_of::<Vec3>()
+                    + n.indices.len() * std::mem::size_of::<[u32; 3]>()
+            })
+            .sum();
+        self.bvh.memory_bytes() + std::mem::size_of_val(self.leaf_blocks.as_slice()) + normals
     }
 
     #[inline]

@@ -66,13 +66,16 @@ pub fn python() -> &'static Path {
     })
 }
 
-/// assets/bunny.obj, through tools/fetch-assets (which checks its SHA-256
-/// and downloads it only if it is missing or different).
+/// assets/bunny.obj, through `tools/fetch-assets --only bunny` (which checks
+/// its SHA-256 and downloads it only if it is missing or different; the
+/// tests need no other mesh, so they never reach the npm registry).
 pub fn bunny() -> PathBuf {
     static LOCK: Mutex<()> = Mutex::new(());
     let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
     run(
-        Command::new("python3").arg(repo().join("tools/fetch-assets")),
+        Command::new("python3")
+            .arg(repo().join("tools/fetch-assets"))
+            .args(["--only", "bunny"]),
         "fetching the Stanford bunny (tools/fetch-assets)",
     );
     let path = repo().join("assets/bunny.obj");

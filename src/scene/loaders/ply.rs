@@ -46,16 +46,49 @@ impl Vertex {
     }
 }
 
-/// Vertex indices as i64, so negative `int` indices are caught, not wrapped.
+/// A face's vertex indices. Triangles, the bulk of big meshes, are stored
+/// inline (24 bytes a face and no allocation); longer polygons on the heap.
+/// An index that is no `u32` (a negative `int`) is kept, as i64, to be
+/// reported, not wrapped.
 #[derive(Default)]
-struct Face(Vec<i64>);
+enum Face {
+    #[default]
+    Empty,
+    Triangle([u32; 3]),
+    Polygon(Box<[u32]>),
+    Invalid(i64),
+}
 
 impl Face {
     fn set<T: Into<i64>>(&mut self, name: &str, v: Vec<T>) -> ply_rs_bw::ply::PropertyAccessResult {
         if name == "vertex_indices" || name == "vertex_index" {
-            self.0 = v.into_iter().map(Into::into).collect();
+            let mut idx = Vec::with_capacity(v.len());
+            for k in v {
+                let k: i64 = k.into();
+                match u32::try_from(k) {
+                    Ok(k) => idx.push(k),
+                    Err(_) => {
+                        *self = Face::Invalid(k);
+                        return ply_rs_bw::ply::PropertyAccessResult::Ignored;
+                    }
+                }
+            }
+            *self = match <[u32; 3]>::try_from(idx.as_slice()) {
+                Ok(tri) => Face::Triangle(tri),
+                Err(_) => Face::Polygon(idx.into_boxed_slice()),
+            };
         }
         ply_rs_bw::ply::PropertyAccessResult::Ignored
+    }
+
+    /// The first index outside `0..n`, if any.
+    fn bad_index(&self, n: usize) -> Option<i64> {
+        match self {
+            Face::Empty => None,
+            Face::Triangle(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
+            Face::Polygon(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
+            Face::Invalid(k) => Some(*k),
+        }
     }
 }
 
@@ -152,19 +185,26 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
             }
         }
     }
-    let n = positions.len() as i64;
+    let n = positions.len();
     let mut indices = Vec::with_capacity(faces.len());
     for (i, f) in faces.iter().enumerate() {
-        if let Some(&bad) = f.0.iter().find(|&&k| k < 0 || k >= n) {
+        if let Some(bad) = f.bad_index(n) {
             return Err(InputError::file(
                 path,
                 format!("face {i}: vertex index {bad} is out of range (the file has {n} vertices)"),
             ));
         }
-        for k in 1..f.0.len().saturating_sub(1) {
-            indices.push([f.0[0] as u32, f.0[k] as u32, f.0[k + 1] as u32]);
+        match f {
+            Face::Triangle(t) => indices.push(*t),
+            Face::Polygon(p) => {
+                for k in 1..p.len().saturating_sub(1) {
+                    indices.push([p[0], p[k], p[k + 1]]);
+                }
+            }
+            Face::Empty | Face::Invalid(_) => {}
         }
     }
+    drop(faces);
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().to_string());
