@@ -9,8 +9,9 @@ it, or, if none follows, with `strata rays all MESH -n N --seed S` (N rays
 of each kind: random, camera, grazing, edges, inside); RAYS.bin.json names
 the kind of each run of rays. For every mesh, kind and query (closest hit,
 occlusion) both engines trace the same rays on one thread: strata through
-`strata trace --threads 1` (its own timing of the trace phase, after load
-and BVH build), Embree through embreex's single-threaded loop after a
+`strata trace --threads 1 --repeats 3` (its own timing of the trace phase,
+after load and BVH build, the median of three passes in one process, as
+Embree's passes share one process), Embree through embreex's single-threaded loop after a
 warm-up query has built its BVH. Each measurement is the median of
 --repeats runs, strata's and Embree's alternating. One row per mesh x kind x query: Mrays/s per engine and the
 ratio strata / Embree (above 1: strata is faster), then the geometric mean
@@ -70,7 +71,7 @@ def time_both(strata, mesh, scene, rays, query, repeats):
     with tempfile.TemporaryDirectory() as tmp:
         rays_path = os.path.join(tmp, "rays.bin")
         rays.astype("<f4").tofile(rays_path)
-        args = [strata, "trace", mesh, "--rays", rays_path, "--hits", os.path.join(tmp, "hits.bin"), "--threads", "1"]
+        args = [strata, "trace", mesh, "--rays", rays_path, "--hits", os.path.join(tmp, "hits.bin"), "--threads", "1", "--repeats", "3"]
         if query == "occlusion":
             args.append("--occlusion")
         s, e = [], []
