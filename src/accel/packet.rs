@@ -24,7 +24,7 @@
 
 use super::build::Bvh8;
 use super::node::{decode, ChildRef};
-use super::traverse::{closer, safe_recip, tie_ray, Stack};
+use super::traverse::Stack;
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use crate::shape::PrimHit;
@@ -58,57 +58,63 @@ impl<'r> Packet<'r> {
         if rays.is_empty() || rays.len() > PACKET_SIZE {
             return None;
         }
-        let inv: Vec<glam::Vec3> = rays.iter().map(|r| safe_recip(r.direction)).collect();
+        Self::from_lanes(rays, &crate::math::ray::ray_lanes(rays).map(f32x8::from))
+    }
+
+    /// [`Packet::new`] given `rays` already in lanes
+    /// ([`crate::math::ray::ray_lanes`]; unused lanes repeat ray 0).
+    pub fn from_lanes(rays: &'r [Ray], soa: &[f32x8; 8]) -> Option<Self> {
+        if rays.is_empty() || rays.len() > PACKET_SIZE {
+            return None;
+        }
+        let origin = [soa[0], soa[1], soa[2]];
+        let dir = [soa[3], soa[4], soa[5]];
+        // The single-ray reciprocal, lane by lane: zero components become
+        // ±f32::MAX with the zero's sign (see `safe_recip`).
+        let inv = dir.map(|d| {
+            let max = f32x8::splat(f32::MAX) | (d & f32x8::splat(-0.0));
+            d.simd_eq(f32x8::ZERO).select(max, f32x8::splat(1.0) / d)
+        });
         let mut near = [0; 3];
         let mut far = [0; 3];
-        let mut lanes = [[0.0f32; 8]; 7];
         let mut bounds = [[0.0f32; 4]; 3]; // o_lo, o_hi, inv_lo, inv_hi per axis
         for axis in 0..3 {
-            let neg = inv[0][axis] < 0.0;
-            if inv.iter().any(|i| (i[axis] < 0.0) != neg) {
+            let negative = inv[axis].simd_lt(f32x8::ZERO).to_bitmask();
+            let all = (1u32 << PACKET_SIZE) - 1;
+            if negative != 0 && negative != all {
                 return None;
             }
+            let neg = negative != 0;
             near[axis] = 2 * axis + neg as usize;
             far[axis] = 2 * axis + 1 - neg as usize;
-            let mut b = [
-                f32::INFINITY,
-                f32::NEG_INFINITY,
-                f32::INFINITY,
-                f32::NEG_INFINITY,
-            ];
-            for (r, i) in rays.iter().zip(&inv) {
-                b[0] = b[0].min(r.origin[axis]);
-                b[1] = b[1].max(r.origin[axis]);
-                b[2] = b[2].min(i[axis]);
-                b[3] = b[3].max(i[axis]);
-            }
-            bounds[axis] = b;
-        }
-        // Unused lanes repeat ray 0 (they are never active).
-        let ray_of = |lane: usize| if lane < rays.len() { lane } else { 0 };
-        for (c, component) in lanes.iter_mut().enumerate() {
-            *component = std::array::from_fn(|lane| {
-                let k = ray_of(lane);
-                match c {
-                    0..=2 => rays[k].origin[c],
-                    3..=5 => inv[k][c - 3],
-                    _ => rays[k].tmin,
-                }
-            });
+            let (o, i) = (origin[axis].to_array(), inv[axis].to_array());
+            // Finite values: plain comparisons, no NaN handling.
+            let lo = |v: &[f32; 8]| {
+                v.iter()
+                    .copied()
+                    .fold(f32::INFINITY, |a, b| if b < a { b } else { a })
+            };
+            let hi = |v: &[f32; 8]| {
+                v.iter()
+                    .copied()
+                    .fold(f32::NEG_INFINITY, |a, b| if b > a { b } else { a })
+            };
+            bounds[axis] = [lo(&o), hi(&o), lo(&i), hi(&i)];
         }
         let sel = |axis: usize, near_side: bool| {
             // inv > 0: the near slab is smallest at the largest origin.
-            let neg = inv[0][axis] < 0.0;
+            let neg = near[axis] % 2 == 1;
             let b = bounds[axis];
             f32x8::splat(if near_side != neg { b[1] } else { b[0] })
         };
-        let packet_tmin = rays.iter().map(|r| r.tmin).fold(f32::INFINITY, f32::min);
+        let tmin = soa[6];
+        let packet_tmin = tmin.to_array().into_iter().fold(f32::INFINITY, f32::min);
         Some(Self {
             rays,
             live: (1u32 << rays.len()) - 1,
-            origin: [0, 1, 2].map(|a| f32x8::from(lanes[a])),
-            inv: [0, 1, 2].map(|a| f32x8::from(lanes[3 + a])),
-            tmin: f32x8::from(lanes[6]),
+            origin,
+            inv,
+            tmin,
             near_o: [0, 1, 2].map(|a| sel(a, true)),
             far_o: [0, 1, 2].map(|a| sel(a, false)),
             inv_lo: [0, 1, 2].map(|a| f32x8::splat(bounds[a][2])),
@@ -128,8 +134,9 @@ impl<'r> Packet<'r> {
         for axis in 0..3 {
             let dn = f32x8::from(bounds[self.near[axis]]) - self.near_o[axis];
             let df = f32x8::from(bounds[self.far[axis]]) - self.far_o[axis];
-            tn = tn.max((dn * self.inv_lo[axis]).min(dn * self.inv_hi[axis]));
-            tf = tf.min((df * self.inv_lo[axis]).max(df * self.inv_hi[axis]));
+            // No NaN arises (see `RayBoxes::slabs`): plain min/max.
+            tn = tn.fast_max((dn * self.inv_lo[axis]).fast_min(dn * self.inv_hi[axis]));
+            tf = tf.fast_min((df * self.inv_lo[axis]).fast_max(df * self.inv_hi[axis]));
         }
         let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
         (tn, tn.simd_le(tf).to_bitmask())
@@ -144,8 +151,8 @@ impl<'r> Packet<'r> {
         for axis in 0..3 {
             let bn = f32x8::splat(bounds[self.near[axis]][slot]);
             let bf = f32x8::splat(bounds[self.far[axis]][slot]);
-            tn = tn.max((bn - self.origin[axis]) * self.inv[axis]);
-            tf = tf.min((bf - self.origin[axis]) * self.inv[axis]);
+            tn = tn.fast_max((bn - self.origin[axis]) * self.inv[axis]);
+            tf = tf.fast_min((bf - self.origin[axis]) * self.inv[axis]);
         }
         let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
         tn.simd_le(tf).to_bitmask()
@@ -171,11 +178,13 @@ fn lanes(mut mask: u32) -> impl Iterator<Item = usize> {
 
 impl Bvh8 {
     /// Closest hits of a packet: `out[i]` is exactly what
-    /// [`Bvh8::closest`] returns for `packet`'s ray `i`. `hit_leaf(lane,
-    /// start, count, ray)` is the per-ray leaf test of [`Bvh8::closest`].
+    /// [`Bvh8::closest`] returns for `packet`'s ray `i`.
+    /// `hit_leaf(start, count, lanes, out)` tests the leaf for the rays in
+    /// the bits of `lanes`, replacing `out[lane]` by any hit [`closer`](super::traverse::closer)
+    /// than it within the ray's interval, and returns whether any changed.
     pub fn closest_packet<F>(&self, packet: &Packet, out: &mut [Option<PrimHit>], mut hit_leaf: F)
     where
-        F: FnMut(usize, u32, u32, &Ray) -> Option<PrimHit>,
+        F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
     {
         let rays = packet.rays;
         out[..rays.len()].fill(None);
@@ -221,21 +230,10 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    let mut changed = false;
-                    for lane in lanes(mask) {
-                        let mut ray = rays[lane];
-                        ray.tmax = tmax[lane];
-                        let best = out[lane].as_ref();
-                        let test = tie_ray(&ray, best);
-                        if let Some(h) = hit_leaf(lane, start, count, &test) {
-                            if closer(&h, best) {
-                                tmax[lane] = h.t;
-                                out[lane] = Some(h);
-                                changed = true;
-                            }
+                    if hit_leaf(start, count, mask, out) {
+                        for lane in lanes(mask) {
+                            tmax[lane] = out[lane].map_or(rays[lane].tmax, |h| h.t);
                         }
-                    }
-                    if changed {
                         tmax_v = f32x8::from(tmax);
                         packet_tmax = max_lane(&tmax);
                     }
@@ -246,11 +244,12 @@ impl Bvh8 {
     }
 
     /// Occlusion for a packet: `out[i]` is exactly what [`Bvh8::any_hit`]
-    /// returns for ray `i`, with `blocks_leaf(lane, start, count, ray)` its
-    /// leaf test. Lanes stop as soon as they are blocked.
+    /// returns for ray `i`, with `blocks_leaf(start, count, lanes)` its
+    /// leaf test for the rays in the bits of `lanes`, returning the lanes
+    /// it blocks. Lanes stop as soon as they are blocked.
     pub fn any_hit_packet<F>(&self, packet: &Packet, out: &mut [bool], mut blocks_leaf: F)
     where
-        F: FnMut(usize, u32, u32, &Ray) -> bool,
+        F: FnMut(u32, u32, u32) -> u32,
     {
         let rays = packet.rays;
         out[..rays.len()].fill(false);
@@ -285,12 +284,11 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    for lane in lanes(mask) {
-                        if blocks_leaf(lane, start, count, &rays[lane]) {
-                            out[lane] = true;
-                            open &= !(1 << lane);
-                        }
+                    let blocked = blocks_leaf(start, count, mask) & mask;
+                    for lane in lanes(blocked) {
+                        out[lane] = true;
                     }
+                    open &= !blocked;
                     if open == 0 {
                         return;
                     }

@@ -12,6 +12,30 @@ pub struct Ray {
     pub tmax: f32,
 }
 
+/// Up to eight rays transposed into lanes for 8-wide SIMD:
+/// `[ox, oy, oz, dx, dy, dz, tmin, tmax][lane]`. Lanes past the last ray
+/// repeat the first one (callers mask them off).
+pub fn ray_lanes(rays: &[Ray]) -> [[f32; 8]; 8] {
+    let mut out = [[0.0f32; 8]; 8];
+    for lane in 0..8 {
+        let r = &rays[if lane < rays.len() { lane } else { 0 }];
+        let values = [
+            r.origin.x,
+            r.origin.y,
+            r.origin.z,
+            r.direction.x,
+            r.direction.y,
+            r.direction.z,
+            r.tmin,
+            r.tmax,
+        ];
+        for (component, v) in out.iter_mut().zip(values) {
+            component[lane] = v;
+        }
+    }
+    out
+}
+
 impl Ray {
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
         Self {

@@ -5,6 +5,7 @@ use crate::accel::traverse::closer;
 use crate::accel::{Bvh8, Packet, PACKET_SIZE};
 use crate::camera::Camera;
 use crate::math::offset::{barycentric_error, transformed_error};
+use crate::math::ray::ray_lanes;
 use crate::math::{Aabb, Ray, Transform};
 use crate::sampling::SamplerKind;
 use crate::scene::asset::MeshNormals;
@@ -17,9 +18,10 @@ use crate::shape::plane::Plane;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
 use crate::shape::triangle::{self, ShearedRay};
-use crate::shape::triangle8::{self, TriangleBlock, LANES};
+use crate::shape::triangle8::{self, ShearedRays, TriangleBlock, LANES};
 use crate::shape::{PrimHit, Surface};
 use glam::Vec3;
+use wide::f32x8;
 
 /// An analytic shape in its own object space. Closed set: the hot loop matches on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -295,6 +297,120 @@ impl Scene {
         false
     }
 
+    /// [`Scene::hit_leaf`] for the packet rays in the bits of `rays_mask`:
+    /// each triangle of the leaf against all those rays in one 8-wide test
+    /// (rays in lanes), updating `out[ray]` with any hit [`closer`] than
+    /// it. Returns whether any changed. The result per ray is the minimum
+    /// of the same total order over the same candidates as
+    /// [`Scene::hit_leaf`], so it is bit for bit the single-ray answer.
+    #[inline(always)]
+    fn hit_leaf_packet(
+        &self,
+        rays: &[Ray],
+        sheared: &ShearedRays,
+        start: u32,
+        count: u32,
+        rays_mask: u32,
+        out: &mut [Option<PrimHit>],
+    ) -> bool {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut changed = false;
+        // Each ray's interval: up to and including its best t, for ties.
+        let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
+        for (i, r) in rays.iter().enumerate() {
+            tmax[i] = out[i].map_or(r.tmax, |h| h.t.next_up());
+        }
+        let mut m = lanes;
+        while m != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let id = block.id[lane];
+            if id < self.triangle_count {
+                let tri = block.triangle(lane);
+                let (mut hit, t, u, v) = sheared.intersect(&tri, tmax.into(), rays_mask);
+                while hit != 0 {
+                    let i = hit.trailing_zeros() as usize;
+                    hit &= hit - 1;
+                    let h = PrimHit {
+                        t: t[i],
+                        prim: id,
+                        u: u[i],
+                        v: v[i],
+                        part: (b * LANES + lane) as u32,
+                    };
+                    if closer(&h, out[i].as_ref()) {
+                        out[i] = Some(h);
+                        tmax[i] = h.t.next_up();
+                        changed = true;
+                    }
+                }
+            } else {
+                let mut r = rays_mask;
+                while r != 0 {
+                    let i = r.trailing_zeros() as usize;
+                    r &= r - 1;
+                    let ray = Ray {
+                        tmax: tmax[i],
+                        ..rays[i]
+                    };
+                    if let Some(h) = self.hit_analytic(id, &ray) {
+                        if closer(&h, out[i].as_ref()) {
+                            out[i] = Some(h);
+                            tmax[i] = h.t.next_up();
+                            changed = true;
+                        }
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    /// [`Scene::blocks_leaf`] for the packet rays in the bits of
+    /// `rays_mask`; returns the rays blocked.
+    #[inline(always)]
+    fn blocks_leaf_packet(
+        &self,
+        rays: &[Ray],
+        sheared: &ShearedRays,
+        start: u32,
+        count: u32,
+        rays_mask: u32,
+        except: u32,
+    ) -> u32 {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
+        for (i, r) in rays.iter().enumerate() {
+            tmax[i] = r.tmax;
+        }
+        let tmax = tmax.into();
+        let mut open = rays_mask;
+        let mut m = lanes;
+        while m != 0 && open != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let id = block.id[lane];
+            if id == except {
+                continue;
+            }
+            if id < self.triangle_count {
+                open &= !sheared.intersect(&block.triangle(lane), tmax, open).0;
+            } else {
+                let mut r = open;
+                while r != 0 {
+                    let i = r.trailing_zeros() as usize;
+                    r &= r - 1;
+                    if self.hit_analytic(id, &rays[i]).is_some() {
+                        open &= !(1 << i);
+                    }
+                }
+            }
+        }
+        rays_mask & !open
+    }
+
     /// The closest hit in `(ray.tmin, ray.tmax)`. Planes report prim ids
     /// `u32::MAX - plane index`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
@@ -329,17 +445,18 @@ impl Scene {
     /// `self.intersect(&rays[i])`. The rays traverse as one packet when
     /// their directions agree in sign on every axis, else one by one.
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        let Some(packet) = Packet::new(rays) else {
+        let soa = (!rays.is_empty() && rays.len() <= PACKET_SIZE)
+            .then(|| ray_lanes(rays).map(f32x8::from));
+        let Some(packet) = soa.as_ref().and_then(|soa| Packet::from_lanes(rays, soa)) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.intersect(r);
             }
             return;
         };
-        let sheared: [ShearedRay; PACKET_SIZE] =
-            std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
+        let sheared = ShearedRays::from_lanes(soa.as_ref().expect("a packet has lanes"));
         self.bvh
-            .closest_packet(&packet, out, |lane, start, count, r| {
-                self.hit_leaf(start, count, r, &sheared[lane])
+            .closest_packet(&packet, out, |start, count, lanes, out| {
+                self.hit_leaf_packet(rays, &sheared, start, count, lanes, out)
             });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.closest_plane(r, *o);
@@ -357,17 +474,18 @@ impl Scene {
     /// `self.occluded_except(&rays[i], except)`. A packet when the rays'
     /// directions agree in sign, else one by one.
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        let Some(packet) = Packet::new(rays) else {
+        let soa = (!rays.is_empty() && rays.len() <= PACKET_SIZE)
+            .then(|| ray_lanes(rays).map(f32x8::from));
+        let Some(packet) = soa.as_ref().and_then(|soa| Packet::from_lanes(rays, soa)) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.occluded_except(r, except);
             }
             return;
         };
-        let sheared: [ShearedRay; PACKET_SIZE] =
-            std::array::from_fn(|i| ShearedRay::new(&rays[i.min(rays.len() - 1)]));
+        let sheared = ShearedRays::from_lanes(soa.as_ref().expect("a packet has lanes"));
         self.bvh
-            .any_hit_packet(&packet, out, |lane, start, count, r| {
-                self.blocks_leaf(start, count, r, &sheared[lane], except)
+            .any_hit_packet(&packet, out, |start, count, lanes| {
+                self.blocks_leaf_packet(rays, &sheared, start, count, lanes, except)
             });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());

@@ -96,6 +96,56 @@ pub fn intersect(
     let by = rel(1, s.ky) - sy * bz_w;
     let cx = rel(2, s.kx) - sx * cz_w;
     let cy = rel(2, s.ky) - sy * cz_w;
+    finish(
+        [ax, ay, bx, by, cx, cy],
+        [az_w, bz_w, cz_w],
+        f32x8::splat(s.sz),
+        f32x8::splat(ray.tmin),
+        f32x8::splat(ray.tmax),
+        lanes,
+    )
+}
+
+/// The closest hit among `lanes`: smallest t, then smallest primitive id
+/// (the traversal's total order, so the answer does not depend on which
+/// lane a triangle sits in).
+#[inline(always)]
+pub fn closest(ray: &Ray, s: &ShearedRay, block: &TriangleBlock, lanes: u32) -> Option<LaneHit> {
+    let (mut hit, t, u, v) = intersect(ray, s, block, lanes);
+    let mut best: Option<LaneHit> = None;
+    while hit != 0 {
+        let lane = hit.trailing_zeros() as usize;
+        hit &= hit - 1;
+        let better = match best {
+            None => true,
+            Some(b) => t[lane] < b.t || (t[lane] == b.t && block.id[lane] < block.id[b.lane]),
+        };
+        if better {
+            best = Some(LaneHit {
+                lane,
+                t: t[lane],
+                u: u[lane],
+                v: v[lane],
+            });
+        }
+    }
+    best
+}
+
+/// The watertight test from the sheared coordinates on: edge functions
+/// (with the f64 fallback on exact zeros), signs, t and its error bound.
+/// Shared by both lane layouts so they cannot drift apart.
+#[inline(always)]
+fn finish(
+    sheared: [f32x8; 6],
+    world_z: [f32x8; 3],
+    sz: f32x8,
+    tmin: f32x8,
+    tmax: f32x8,
+    lanes: u32,
+) -> (u32, [f32; LANES], [f32; LANES], [f32; LANES]) {
+    let [ax, ay, bx, by, cx, cy] = sheared;
+    let [az_w, bz_w, cz_w] = world_z;
     let mut e0 = cx * by - cy * bx;
     let mut e1 = ax * cy - ay * cx;
     let mut e2 = bx * ay - by * ax;
@@ -135,12 +185,11 @@ pub fn intersect(
     let positive = e0.simd_gt(zero) | e1.simd_gt(zero) | e2.simd_gt(zero);
     let outside = (negative & positive).to_bitmask();
     let det = e0 + e1 + e2;
-    let sz = f32x8::splat(s.sz);
     let (az, bz, cz) = (sz * az_w, sz * bz_w, sz * cz_w);
     let t_scaled = e0 * az + e1 * bz + e2 * cz;
     let inv_det = f32x8::splat(1.0) / det;
     let t = t_scaled * inv_det;
-    let in_range = t.simd_gt(f32x8::splat(ray.tmin)) & t.simd_lt(f32x8::splat(ray.tmax));
+    let in_range = t.simd_gt(tmin) & t.simd_lt(tmax);
     let mut hit = (in_range.to_bitmask() & !outside & !det.simd_eq(zero).to_bitmask()) & lanes;
     if hit == 0 {
         return (0, [0.0; LANES], [0.0; LANES], [0.0; LANES]);
@@ -171,30 +220,97 @@ pub fn intersect(
     )
 }
 
-/// The closest hit among `lanes`: smallest t, then smallest primitive id
-/// (the traversal's total order, so the answer does not depend on which
-/// lane a triangle sits in).
-#[inline(always)]
-pub fn closest(ray: &Ray, s: &ShearedRay, block: &TriangleBlock, lanes: u32) -> Option<LaneHit> {
-    let (mut hit, t, u, v) = intersect(ray, s, block, lanes);
-    let mut best: Option<LaneHit> = None;
-    while hit != 0 {
-        let lane = hit.trailing_zeros() as usize;
-        hit &= hit - 1;
-        let better = match best {
-            None => true,
-            Some(b) => t[lane] < b.t || (t[lane] == b.t && block.id[lane] < block.id[b.lane]),
-        };
-        if better {
-            best = Some(LaneHit {
-                lane,
-                t: t[lane],
-                u: u[lane],
-                v: v[lane],
-            });
+/// Up to eight rays in lanes, sheared as [`ShearedRay`] does for each:
+/// the other way round from [`intersect`], for testing one triangle
+/// against a packet of coherent rays (eight rays for the price of about
+/// one 8-wide test). Each ray keeps its own axis permutation, chosen by
+/// per-lane selects, so every lane is again exactly the scalar test.
+pub struct ShearedRays {
+    origin: [f32x8; 3],
+    /// Per permuted axis (kx, ky, kz): lane masks of "world axis 0" and
+    /// "world axis 1" (else axis 2).
+    is_axis0: [f32x8; 3],
+    is_axis1: [f32x8; 3],
+    sx: f32x8,
+    sy: f32x8,
+    sz: f32x8,
+    tmin: f32x8,
+}
+
+impl ShearedRays {
+    /// `rays` (at most [`LANES`]); unused lanes repeat the first ray.
+    /// [`ShearedRay::new`] in lanes: the same dominant axis (the first
+    /// largest |d|), the same winding swap and the same divisions.
+    pub fn new(rays: &[Ray]) -> Self {
+        Self::from_lanes(&crate::math::ray::ray_lanes(rays).map(f32x8::from))
+    }
+
+    /// [`ShearedRays::new`] given the rays already in lanes
+    /// ([`crate::math::ray::ray_lanes`]).
+    pub fn from_lanes(soa: &[f32x8; 8]) -> Self {
+        let d = [soa[3], soa[4], soa[5]];
+        let (ax, ay, az) = (d[0].abs(), d[1].abs(), d[2].abs());
+        let y_wins = ay.simd_gt(ax);
+        let z_wins = az.simd_gt(y_wins.select(ay, ax));
+        // kz's lane masks: axis 0, 1 or 2.
+        let kz2 = z_wins;
+        let kz1 = y_wins & !z_wins;
+        let kz0 = !(kz1 | kz2);
+        let dz = kz0.select(d[0], kz1.select(d[1], d[2]));
+        let swap = dz.simd_lt(f32x8::ZERO);
+        let keep = !swap;
+        // kx = kz + 1 and ky = kz + 2 (mod 3), exchanged when d[kz] < 0.
+        let kx0 = (kz2 & keep) | (kz1 & swap);
+        let kx1 = (kz0 & keep) | (kz2 & swap);
+        let ky0 = (kz2 & swap) | (kz1 & keep);
+        let ky1 = (kz0 & swap) | (kz2 & keep);
+        let pick = |m0: f32x8, m1: f32x8| m0.select(d[0], m1.select(d[1], d[2]));
+        let sz = f32x8::splat(1.0) / dz;
+        Self {
+            origin: [soa[0], soa[1], soa[2]],
+            is_axis0: [kx0, ky0, kz0],
+            is_axis1: [kx1, ky1, kz1],
+            sx: pick(kx0, kx1) * sz,
+            sy: pick(ky0, ky1) * sz,
+            sz,
+            tmin: soa[6],
         }
     }
-    best
+
+    /// The lanes of `active` whose ray hits `tri` in `(tmin, tmax[lane])`,
+    /// with t, u and v per lane, exactly as [`super::triangle::intersect`].
+    #[inline(always)]
+    pub fn intersect(
+        &self,
+        tri: &[Vec3; 3],
+        tmax: f32x8,
+        active: u32,
+    ) -> (u32, [f32; LANES], [f32; LANES], [f32; LANES]) {
+        // Vertex k relative to each ray's origin, per world axis.
+        let rel = |k: usize| -> [f32x8; 3] {
+            std::array::from_fn(|axis| f32x8::splat(tri[k][axis]) - self.origin[axis])
+        };
+        let (va, vb, vc) = (rel(0), rel(1), rel(2));
+        // Component k (0: kx, 1: ky, 2: kz) of each lane's permutation.
+        let pick = |v: &[f32x8; 3], k: usize| {
+            self.is_axis0[k].select(v[0], self.is_axis1[k].select(v[1], v[2]))
+        };
+        let (az_w, bz_w, cz_w) = (pick(&va, 2), pick(&vb, 2), pick(&vc, 2));
+        let ax = pick(&va, 0) - self.sx * az_w;
+        let ay = pick(&va, 1) - self.sy * az_w;
+        let bx = pick(&vb, 0) - self.sx * bz_w;
+        let by = pick(&vb, 1) - self.sy * bz_w;
+        let cx = pick(&vc, 0) - self.sx * cz_w;
+        let cy = pick(&vc, 1) - self.sy * cz_w;
+        finish(
+            [ax, ay, bx, by, cx, cy],
+            [az_w, bz_w, cz_w],
+            self.sz,
+            self.tmin,
+            tmax,
+            active,
+        )
+    }
 }
 
 #[cfg(test)]
@@ -271,6 +387,58 @@ mod tests {
                 .count_ones();
         }
         assert!(hits > 2000, "the cases must exercise hits, got {hits}");
+    }
+
+    /// Rays in lanes, each with its own dominant axis and so its own
+    /// permutation, agree with the scalar test bit for bit.
+    #[test]
+    fn ray_lanes_match_the_scalar_test_bit_for_bit() {
+        let mut rng = Rng(11);
+        let mut hits = 0;
+        for round in 0..3000 {
+            let scale = [1e-4, 1.0, 1e5][round % 3];
+            let c = rng.v(scale);
+            let tri = [c + rng.v(scale), c + rng.v(scale), c + rng.v(scale)];
+            let rays: Vec<Ray> = (0..LANES)
+                .map(|lane| {
+                    let (b1, b2) = (rng.f(), rng.f());
+                    let (b1, b2) = if b1 + b2 > 1.0 {
+                        (1.0 - b1, 1.0 - b2)
+                    } else {
+                        (b1, b2)
+                    };
+                    let target = match (round + lane) % 5 {
+                        0 => tri[1],
+                        1 => (tri[0] + tri[2]) * 0.5,
+                        _ => tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2,
+                    };
+                    let origin = target + rng.v(scale * 4.0);
+                    let mut ray = Ray::new(origin, target - origin);
+                    ray.tmin = if lane % 3 == 0 { 0.5 } else { 0.0 };
+                    ray
+                })
+                .collect();
+            let tmax: [f32; LANES] =
+                std::array::from_fn(|i| if i % 4 == 1 { 0.9 } else { f32::INFINITY });
+            let active = if round % 2 == 0 { 0xff } else { 0b1011_0110 };
+            let (hit, t, u, v) = ShearedRays::new(&rays).intersect(&tri, tmax.into(), active);
+            for lane in 0..LANES {
+                let ray = Ray {
+                    tmax: tmax[lane],
+                    ..rays[lane]
+                };
+                let scalar = triangle::intersect(&ray, &ShearedRay::new(&ray), &tri)
+                    .filter(|_| active >> lane & 1 == 1);
+                let simd = (hit >> lane & 1 == 1).then(|| (t[lane], u[lane], v[lane]));
+                assert_eq!(
+                    scalar.map(|(t, u, v)| (t.to_bits(), u.to_bits(), v.to_bits())),
+                    simd.map(|(t, u, v)| (t.to_bits(), u.to_bits(), v.to_bits())),
+                    "lane {lane}: {tri:?} ray {ray:?}"
+                );
+            }
+            hits += hit.count_ones();
+        }
+        assert!(hits > 4000, "the cases must exercise hits, got {hits}");
     }
 
     #[test]
