@@ -86,6 +86,7 @@ pub(crate) fn safe_recip(d: Vec3) -> Vec3 {
 }
 
 impl RayBoxes {
+    #[inline(always)]
     pub(crate) fn new(ray: &Ray) -> Self {
         let inv = safe_recip(ray.direction);
         let mut near = [0; 3];
