@@ -14,14 +14,13 @@ use strata::render::film::Film;
 use strata::render::{render, RenderOptions, SliceSpec};
 use strata::sampling::{Dim, PixelSampler};
 use strata::scene::Scene;
-use strata::shade::integrator::{PacketMode, CAMERA_PACKET_MIN};
+use strata::shade::integrator::{PacketMode, CAMERA_PACKET_MIN, CAMERA_PACKET_MIN_NODES};
 
 const MODES: [PacketMode; 3] = [PacketMode::Off, PacketMode::On, PacketMode::Auto];
 
-/// A bumpy sphere of 2 × 40 × 20 triangles with shared edges everywhere.
-fn write_bumpy(path: &std::path::Path) {
+/// A bumpy sphere of 2 × `nu` × `nv` triangles with shared edges everywhere.
+fn write_bumpy(path: &std::path::Path, nu: u32, nv: u32) {
     let mut obj = String::new();
-    let (nu, nv) = (40, 20);
     for j in 0..=nv {
         for i in 0..nu {
             let th = std::f32::consts::PI * j as f32 / nv as f32;
@@ -51,7 +50,8 @@ fn write_bumpy(path: &std::path::Path) {
 /// glass. 37 × 23 pixels, so batches break at row ends and at odd tails.
 fn busy_scene() -> Scene {
     let dir = temp_dir("render-packets");
-    write_bumpy(&dir.join("bumpy.obj"));
+    // 14,400 triangles: enough BVH nodes for `auto` to trace camera packets.
+    write_bumpy(&dir.join("bumpy.obj"), 120, 60);
     let icosphere = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
     let text = format!(
         r#"
@@ -146,6 +146,7 @@ fn film(scene: &Scene, packets: PacketMode, threads: usize, passes: u32, slice: 
 #[test]
 fn packets_on_off_and_auto_render_the_same_film() {
     let base = busy_scene();
+    assert!(base.bvh.nodes.len() >= CAMERA_PACKET_MIN_NODES);
     // Shadow batches of 1, 3, 5 and 8 rays and two of 8 + 3; one sample per
     // pixel per pass (batches span pixels), three, and all twelve at once.
     for shadow_samples in [1, 3, 5, 8, 11] {
@@ -254,7 +255,7 @@ fn mesh_scene(aperture: f32) -> (Scene, String) {
     let (mesh, name) = if std::path::Path::new(bunny).exists() {
         (bunny.to_string(), "bunny")
     } else {
-        write_bumpy(&dir.join("bumpy.obj"));
+        write_bumpy(&dir.join("bumpy.obj"), 160, 80);
         ("bumpy.obj".to_string(), "bumpy sphere")
     };
     let text = format!(

@@ -92,9 +92,9 @@ impl std::str::FromStr for GlossySampling {
 #[serde(rename_all = "lowercase")]
 pub enum PacketMode {
     /// Packets where they were measured to pay: camera batches of at least
-    /// [`CAMERA_PACKET_MIN`] rays in a scene whose BVH has more than one
-    /// node; shadow batches of at least [`SHADOW_PACKET_MIN`]. Single rays
-    /// otherwise.
+    /// [`CAMERA_PACKET_MIN`] rays in a scene whose BVH has at least
+    /// [`CAMERA_PACKET_MIN_NODES`] nodes, and shadow batches of at least
+    /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
     #[default]
     Auto,
     /// Every batch as a packet, however few rays it holds.
@@ -107,12 +107,15 @@ pub enum PacketMode {
 // own batches (README, "Packets in the renderer"; reproduce with `cargo test
 // --release --test render_packets -- --ignored --nocapture`). With the
 // packet kernel of src/accel/packet.rs as it is, on a shared 2-core machine,
-// medians of 15 alternating runs:
-// - camera batches (one pixel's 8 pixel and lens samples): below 8 rays a
-//   packet always lost (0.2-0.9x at 1-5 rays, 0.7-1.1x at 6-7); at 8 it was
-//   1.06x (bunny, thin lens) and 1.20x (bunny, pinhole), 0.99x on
-//   scenes/mesh.toml and 0.92x on scenes/thin-lens.toml, whose BVH is one
-//   node: nothing for the packet to share;
+// medians of 15 alternating runs, two runs:
+// - camera batches (one pixel's pixel and lens samples): below 8 rays a
+//   packet lost almost everywhere (0.2-0.9x at 1-5 rays, 0.8-1.1x at 6-7).
+//   At 8 it was 0.99-1.06x on the bunny (69,666 triangles, 6,996 BVH
+//   nodes) through a thin lens and 1.09-1.20x through a pinhole, about 1.0x
+//   on generated meshes of 960 to 17,000 nodes, but 0.88-0.99x on
+//   scenes/mesh.toml (44 nodes) and 0.91x on scenes/thin-lens.toml (one
+//   node): with a shallow tree there is little traversal for a packet to
+//   share, and building it (about 35 ns a ray) does not pay;
 // - shadow batches (8 stratified samples from one hit towards a rect light):
 //   0.5-0.98x at every size, never a gain; about half of them differ in
 //   direction sign (the light straddles the point) and fall back to single
@@ -121,6 +124,8 @@ pub enum PacketMode {
 
 /// Fewest rays a camera batch must hold for `auto` to trace it as a packet.
 pub const CAMERA_PACKET_MIN: usize = PACKET_SIZE;
+/// Fewest BVH nodes a scene needs for `auto` to trace camera packets.
+pub const CAMERA_PACKET_MIN_NODES: usize = 1000;
 /// Fewest rays a shadow batch must hold for `auto` to trace it as a packet:
 /// more than a packet holds, so never (see above).
 pub const SHADOW_PACKET_MIN: usize = PACKET_SIZE + 1;
@@ -271,8 +276,8 @@ impl<'a> Integrator<'a> {
         }
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];
-        // A one-node BVH leaves the packet nothing to share (see PacketMode).
-        let min = if self.scene.bvh.nodes.len() > 1 {
+        // A shallow BVH leaves the packet little to share (see PacketMode).
+        let min = if self.scene.bvh.nodes.len() >= CAMERA_PACKET_MIN_NODES {
             CAMERA_PACKET_MIN
         } else {
             usize::MAX
