@@ -270,25 +270,24 @@ impl<'a> Integrator<'a> {
     pub fn camera_batch(&mut self, batch: &[CameraSample], out: &mut [Vec3]) {
         let n = batch.len();
         assert!(n <= PACKET_SIZE && out.len() >= n);
-        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE];
-        for (r, s) in rays.iter_mut().zip(batch) {
-            *r = self.camera_ray(&s.ctx, s.film);
-        }
-        let rays = &rays[..n];
-        let mut hits = [None; PACKET_SIZE];
         // A shallow BVH leaves the packet little to share (see PacketMode).
         let min = if self.scene.bvh.nodes.len() >= CAMERA_PACKET_MIN_NODES {
             CAMERA_PACKET_MIN
         } else {
             usize::MAX
         };
-        if self.packets.use_packet(n, min) {
-            self.scene.intersect_packet(rays, &mut hits[..n]);
-        } else {
-            for (h, r) in hits.iter_mut().zip(rays) {
-                *h = self.scene.intersect(r);
+        if !self.packets.use_packet(n, min) {
+            for (o, s) in out.iter_mut().zip(batch) {
+                *o = self.camera_sample(&s.ctx, s.film);
             }
+            return;
         }
+        let rays: [Ray; PACKET_SIZE] = std::array::from_fn(|i| {
+            self.camera_ray(&batch[i.min(n - 1)].ctx, batch[i.min(n - 1)].film)
+        });
+        let rays = &rays[..n];
+        let mut hits = [None; PACKET_SIZE];
+        self.scene.intersect_packet(rays, &mut hits[..n]);
         self.counts.camera += n as u64;
         for i in 0..n {
             let slot = self.begin_record(0, "camera", &rays[i]);
@@ -404,9 +403,14 @@ impl<'a> Integrator<'a> {
             };
             let dim = Dim::light(depth, light_index as u32);
             let except = light.prim().unwrap_or(u32::MAX);
-            // Shadow rays wait in `batch` and are traced PACKET_SIZE at a
-            // time; contributions are added in sample order either way.
-            let mut batch = ShadowBatch::default();
+            // Where a batch may be traced as a packet, shadow rays wait in
+            // `batch` and are traced PACKET_SIZE at a time; else each is
+            // traced at once. Contributions are added in sample order either way.
+            let full = (m_samples as usize).min(PACKET_SIZE);
+            let mut batch = self
+                .packets
+                .use_packet(full, SHADOW_PACKET_MIN)
+                .then(ShadowBatch::default);
             let mut sum = Vec3::ZERO;
             for j in 0..m_samples {
                 let u = if light.is_area() {
@@ -435,14 +439,25 @@ impl<'a> Integrator<'a> {
                     f32::INFINITY
                 };
                 let shadow = Ray::segment(origin, ls.wi, tmax);
-                batch.rays[batch.len] = shadow;
-                batch.contribution[batch.len] = f * ls.weight * cos_i;
-                batch.len += 1;
-                if batch.len == PACKET_SIZE {
-                    self.flush_shadows(&mut batch, except, &mut sum);
+                match &mut batch {
+                    Some(b) => {
+                        b.rays[b.len] = shadow;
+                        b.contribution[b.len] = f * ls.weight * cos_i;
+                        b.len += 1;
+                        if b.len == PACKET_SIZE {
+                            self.flush_shadows(b, except, &mut sum);
+                        }
+                    }
+                    None => {
+                        if !scene.occluded_except(&shadow, except) {
+                            sum += f * ls.weight * cos_i;
+                        }
+                    }
                 }
             }
-            self.flush_shadows(&mut batch, except, &mut sum);
+            if let Some(b) = &mut batch {
+                self.flush_shadows(b, except, &mut sum);
+            }
             l += sum / m_samples as f32;
         }
         l
