@@ -282,9 +282,10 @@ impl<'a> Integrator<'a> {
             }
             return;
         }
-        let rays: [Ray; PACKET_SIZE] = std::array::from_fn(|i| {
-            self.camera_ray(&batch[i.min(n - 1)].ctx, batch[i.min(n - 1)].film)
-        });
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE];
+        for (r, s) in rays.iter_mut().zip(batch) {
+            *r = self.camera_ray(&s.ctx, s.film);
+        }
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];
         self.scene.intersect_packet(rays, &mut hits[..n]);
