@@ -109,7 +109,7 @@ pub enum PacketMode {
 // packet kernel of src/accel/packet.rs as it is, on a shared 2-core machine,
 // medians of 15 alternating runs, two runs:
 // - camera batches (one pixel's pixel and lens samples): below 8 rays a
-//   packet lost almost everywhere (0.2-0.9x at 1-5 rays, 0.8-1.1x at 6-7).
+//   packet lost almost everywhere (0.2-0.9x at 1-5 rays, 0.6-1.1x at 6-7).
 //   At 8 it was 0.99-1.06x on the bunny (69,666 triangles, 6,996 BVH
 //   nodes) through a thin lens and 1.09-1.20x through a pinhole, about 1.0x
 //   on generated meshes of 960 to 17,000 nodes, but 0.88-0.99x on
