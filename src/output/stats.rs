@@ -23,6 +23,8 @@ pub struct RenderStats {
     pub threads: usize,
     pub schedule: String,
     pub slice: String,
+    /// `--packets`: auto, on or off (the image does not depend on it).
+    pub packets: crate::shade::integrator::PacketMode,
     pub rays: RayCounts,
     pub rays_total: u64,
     pub mrays_per_s: f64,

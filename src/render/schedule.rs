@@ -10,10 +10,11 @@
 
 use super::film::{Film, PixelSum};
 use super::progress;
+use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
-use crate::shade::integrator::{Integrator, RayCounts, SampleContext};
-use glam::Vec2;
+use crate::shade::integrator::{CameraSample, Integrator, PacketMode, RayCounts, SampleContext};
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -95,6 +96,9 @@ pub struct RenderOptions {
     pub passes: u32,
     /// Sample indices already rendered (from a checkpoint), skipped.
     pub resume_from: Option<u32>,
+    /// Trace coherent batches (camera rays, shadow rays to one light) as
+    /// packets; the image is bit-identical for every mode.
+    pub packets: PacketMode,
 }
 
 impl Default for RenderOptions {
@@ -106,6 +110,7 @@ impl Default for RenderOptions {
             quiet: true,
             passes: DEFAULT_PASSES,
             resume_from: None,
+            packets: PacketMode::Auto,
         }
     }
 }
@@ -194,12 +199,12 @@ pub fn render(
                 .par_chunks_mut(chunk)
                 .enumerate()
                 .for_each(|(b, pixels)| {
-                    let mut integrator = Integrator::new(scene);
-                    for (j, acc) in pixels.iter_mut().enumerate() {
-                        *acc = PixelSum::default();
-                        let index = b * chunk + j;
-                        render_pixel(&mut integrator, scene, index, pass.clone(), acc);
-                        if opts.schedule == Schedule::Regions && (j + 1) % BATCH == 0 {
+                    let mut integrator = Integrator::with_packets(scene, opts.packets);
+                    for (k, accs) in pixels.chunks_mut(BATCH).enumerate() {
+                        accs.fill(PixelSum::default());
+                        let first = b * chunk + k * BATCH;
+                        render_pixels(&mut integrator, scene, first, accs, pass.clone());
+                        if opts.schedule == Schedule::Regions && accs.len() == BATCH {
                             bar.inc(1);
                         }
                     }
@@ -259,15 +264,49 @@ pub fn render_pixel(
     samples: Range<u32>,
     acc: &mut PixelSum,
 ) {
+    render_pixels(integrator, scene, index, std::slice::from_mut(acc), samples);
+}
+
+/// All samples of `samples` for the pixels `first..first + accs.len()`
+/// (row-major indices), into `accs`.
+///
+/// Each pixel's samples go to the integrator [`PACKET_SIZE`] at a time,
+/// in index order: a batch is the pixel and lens samples of one pixel,
+/// whose rays start close together and point nearly the same way. (Not
+/// continued into the next pixel when a pass holds fewer than eight
+/// samples per pixel: eight neighbouring pixels' rays spread too far for
+/// packets to pay; see `PacketMode`.) Each sample is still computed from
+/// its own index alone and added in the same order, so the sums are those
+/// of sample-by-sample rendering.
+pub fn render_pixels(
+    integrator: &mut Integrator,
+    scene: &Scene,
+    first: usize,
+    accs: &mut [PixelSum],
+    samples: Range<u32>,
+) {
     let s = &scene.settings;
-    let x = (index % s.width as usize) as u32;
-    let y = (index / s.width as usize) as u32;
-    let sampler = PixelSampler::new(s.sampler, s.seed, index as u32);
-    for sample in samples {
-        let ctx = SampleContext::new(sampler, sample, s.spp);
-        let jitter = sampler.get_2d(Dim::PIXEL, sample, s.spp);
-        let film = Vec2::new(x as f32, y as f32) + jitter;
-        acc.add(integrator.camera_sample(&ctx, film), sample);
+    let width = s.width as usize;
+    let mut batch: Vec<CameraSample> = Vec::with_capacity(PACKET_SIZE);
+    let mut out = [Vec3::ZERO; PACKET_SIZE];
+    for (j, acc) in accs.iter_mut().enumerate() {
+        let index = first + j;
+        let (x, y) = ((index % width) as f32, (index / width) as f32);
+        let sampler = PixelSampler::new(s.sampler, s.seed, index as u32);
+        let mut start = samples.start;
+        while start < samples.end {
+            let end = samples.end.min(start + PACKET_SIZE as u32);
+            batch.clear();
+            batch.extend((start..end).map(|sample| CameraSample {
+                ctx: SampleContext::new(sampler, sample, s.spp),
+                film: Vec2::new(x, y) + sampler.get_2d(Dim::PIXEL, sample, s.spp),
+            }));
+            integrator.camera_batch(&batch, &mut out);
+            for (v, sample) in out.iter().zip(start..end) {
+                acc.add(*v, sample);
+            }
+            start = end;
+        }
     }
 }
 

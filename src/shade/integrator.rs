@@ -17,14 +17,21 @@
 //! `reflection_samples` K rays; deeper glossy hits trace one ray each, so
 //! the cost grows by K once, not Kᵈᵉᵖᵗʰ. Lobe directions that fall below the
 //! surface are rejected (they contribute nothing) and counted.
+//!
+//! Coherent batches are traced as packets ([`PacketMode`]): the camera rays
+//! of neighbouring samples ([`Integrator::camera_batch`]) and the shadow rays
+//! from one hit point towards one light. Packets return exactly the hits of
+//! single rays and every batch is shaded in sample order, so the image is
+//! bit-identical with packets on or off.
 
+use crate::accel::PACKET_SIZE;
 use crate::math::offset::spawn_origin;
 use crate::math::{Frame, Ray};
 use crate::sampling::warp::{phong_lobe, phong_lobe_pdf, uniform_hemisphere};
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
 use crate::shade::material::Material;
-use crate::shape::Surface;
+use crate::shape::{PrimHit, Surface};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -78,6 +85,83 @@ impl std::str::FromStr for GlossySampling {
             )),
         }
     }
+}
+
+/// Whether coherent batches of rays are traced as packets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PacketMode {
+    /// Packets where they were measured to pay: camera batches of at least
+    /// [`CAMERA_PACKET_MIN`] rays in a scene whose BVH has at least
+    /// [`CAMERA_PACKET_MIN_NODES`] nodes, and shadow batches of at least
+    /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
+    #[default]
+    Auto,
+    /// Every batch as a packet, however few rays it holds.
+    On,
+    /// Single rays only.
+    Off,
+}
+
+// The `auto` thresholds, from the packet/single throughput of the renderer's
+// own batches (README, "Packets in the renderer"; reproduce with `cargo test
+// --release --test render_packets -- --ignored --nocapture`). With the
+// packet kernel of src/accel/packet.rs as it is, on a shared 2-core machine,
+// medians of 15 alternating runs, two runs:
+// - camera batches (one pixel's pixel and lens samples): below 8 rays a
+//   packet lost almost everywhere (0.2-0.9x at 1-5 rays, 0.6-1.1x at 6-7).
+//   At 8 it was 0.99-1.06x on the bunny (69,666 triangles, 6,996 BVH
+//   nodes) through a thin lens and 1.09-1.20x through a pinhole, about 1.0x
+//   on generated meshes of 960 to 17,000 nodes, but 0.88-0.99x on
+//   scenes/mesh.toml (44 nodes) and 0.91x on scenes/thin-lens.toml (one
+//   node): with a shallow tree there is little traversal for a packet to
+//   share, and building it (about 35 ns a ray) does not pay;
+// - shadow batches (8 stratified samples from one hit towards a rect light):
+//   0.5-0.98x at every size, never a gain; about half of them differ in
+//   direction sign (the light straddles the point) and fall back to single
+//   rays inside `Scene::occluded_packet` anyway.
+// Re-measure when the packet kernel changes.
+
+/// Fewest rays a camera batch must hold for `auto` to trace it as a packet.
+pub const CAMERA_PACKET_MIN: usize = PACKET_SIZE;
+/// Fewest BVH nodes a scene needs for `auto` to trace camera packets.
+pub const CAMERA_PACKET_MIN_NODES: usize = 1000;
+/// Fewest rays a shadow batch must hold for `auto` to trace it as a packet:
+/// more than a packet holds, so never (see above).
+pub const SHADOW_PACKET_MIN: usize = PACKET_SIZE + 1;
+
+impl PacketMode {
+    /// Trace a batch of `live` rays as a packet, where `auto` asks for at
+    /// least `auto_min`?
+    #[inline]
+    pub fn use_packet(self, live: usize, auto_min: usize) -> bool {
+        match self {
+            Self::Auto => live >= auto_min,
+            Self::On => live > 0,
+            Self::Off => false,
+        }
+    }
+}
+
+impl std::str::FromStr for PacketMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "on" => Ok(Self::On),
+            "off" => Ok(Self::Off),
+            _ => Err(format!(
+                "unknown packet mode '{s}' (expected auto, on or off)"
+            )),
+        }
+    }
+}
+
+/// One camera sample of a batch: its context and film position.
+#[derive(Debug, Clone, Copy)]
+pub struct CameraSample {
+    pub ctx: SampleContext,
+    pub film: Vec2,
 }
 
 /// Identifies one camera sample and, after a glossy branch, one of its K
@@ -138,6 +222,8 @@ struct Shading<'s> {
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
     pub counts: RayCounts,
+    /// Packets or single rays for coherent batches (the image is the same).
+    pub packets: PacketMode,
     /// When set, every path vertex is recorded (slow; for debugging one sample).
     pub trace: Option<Vec<PathEvent>>,
 }
@@ -147,20 +233,67 @@ impl<'a> Integrator<'a> {
         Self {
             scene,
             counts: RayCounts::default(),
+            packets: PacketMode::Auto,
             trace: None,
         }
     }
 
-    /// Radiance of one camera sample at film position `film`.
-    pub fn camera_sample(&mut self, ctx: &SampleContext, film: Vec2) -> Vec3 {
+    pub fn with_packets(scene: &'a Scene, packets: PacketMode) -> Self {
+        Self {
+            packets,
+            ..Self::new(scene)
+        }
+    }
+
+    /// The primary ray of one camera sample.
+    #[inline]
+    fn camera_ray(&self, ctx: &SampleContext, film: Vec2) -> Ray {
         let lens = if self.scene.camera.uses_lens() {
             ctx.sampler.get_2d(Dim::LENS, ctx.sample, ctx.spp)
         } else {
             Vec2::splat(0.5)
         };
-        let ray = self.scene.camera.generate_ray(film, lens);
+        self.scene.camera.generate_ray(film, lens)
+    }
+
+    /// Radiance of one camera sample at film position `film`.
+    pub fn camera_sample(&mut self, ctx: &SampleContext, film: Vec2) -> Vec3 {
+        let ray = self.camera_ray(ctx, film);
         self.counts.camera += 1;
         self.radiance(ctx, &ray, 0, 1.0, "camera")
+    }
+
+    /// Radiance of up to [`PACKET_SIZE`] camera samples, `out[i]` for
+    /// `batch[i]`: exactly what [`Integrator::camera_sample`] returns for
+    /// each, with the primary rays traced together as a packet when
+    /// `self.packets` says so. Samples are shaded in batch order.
+    pub fn camera_batch(&mut self, batch: &[CameraSample], out: &mut [Vec3]) {
+        let n = batch.len();
+        assert!(n <= PACKET_SIZE && out.len() >= n);
+        // A shallow BVH leaves the packet little to share (see PacketMode).
+        let min = if self.scene.bvh.nodes.len() >= CAMERA_PACKET_MIN_NODES {
+            CAMERA_PACKET_MIN
+        } else {
+            usize::MAX
+        };
+        if !self.packets.use_packet(n, min) {
+            for (o, s) in out.iter_mut().zip(batch) {
+                *o = self.camera_sample(&s.ctx, s.film);
+            }
+            return;
+        }
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE];
+        for (r, s) in rays.iter_mut().zip(batch) {
+            *r = self.camera_ray(&s.ctx, s.film);
+        }
+        let rays = &rays[..n];
+        let mut hits = [None; PACKET_SIZE];
+        self.scene.intersect_packet(rays, &mut hits[..n]);
+        self.counts.camera += n as u64;
+        for i in 0..n {
+            let slot = self.begin_record(0, "camera", &rays[i]);
+            out[i] = self.shade(&batch[i].ctx, &rays[i], hits[i], 0, 1.0, slot);
+        }
     }
 
     /// Radiance arriving along `ray` at path depth `depth`.
@@ -172,9 +305,24 @@ impl<'a> Integrator<'a> {
         weight: f32,
         kind: &'static str,
     ) -> Vec3 {
-        let scene = self.scene;
         let slot = self.begin_record(depth, kind, ray);
-        let Some(hit) = scene.intersect(ray) else {
+        let hit = self.scene.intersect(ray);
+        self.shade(ctx, ray, hit, depth, weight, slot)
+    }
+
+    /// Radiance arriving along `ray`, given its closest hit (traced by the
+    /// caller, alone or in a packet); `slot` is its [`Integrator::begin_record`].
+    fn shade(
+        &mut self,
+        ctx: &SampleContext,
+        ray: &Ray,
+        hit: Option<PrimHit>,
+        depth: u32,
+        weight: f32,
+        slot: usize,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let Some(hit) = hit else {
             self.finish_record(slot, None, scene.settings.background);
             return scene.settings.background;
         };
@@ -255,6 +403,15 @@ impl<'a> Integrator<'a> {
                 1
             };
             let dim = Dim::light(depth, light_index as u32);
+            let except = light.prim().unwrap_or(u32::MAX);
+            // Where a batch may be traced as a packet, shadow rays wait in
+            // `batch` and are traced PACKET_SIZE at a time; else each is
+            // traced at once. Contributions are added in sample order either way.
+            let full = (m_samples as usize).min(PACKET_SIZE);
+            let mut batch = self
+                .packets
+                .use_packet(full, SHADOW_PACKET_MIN)
+                .then(ShadowBatch::default);
             let mut sum = Vec3::ZERO;
             for j in 0..m_samples {
                 let u = if light.is_area() {
@@ -283,17 +440,53 @@ impl<'a> Integrator<'a> {
                     f32::INFINITY
                 };
                 let shadow = Ray::segment(origin, ls.wi, tmax);
-                let blocked = match light.prim() {
-                    Some(own) => scene.occluded_except(&shadow, own),
-                    None => scene.occluded(&shadow),
-                };
-                if !blocked {
-                    sum += f * ls.weight * cos_i;
+                match &mut batch {
+                    Some(b) => {
+                        b.rays[b.len] = shadow;
+                        b.contribution[b.len] = f * ls.weight * cos_i;
+                        b.len += 1;
+                        if b.len == PACKET_SIZE {
+                            self.flush_shadows(b, except, &mut sum);
+                        }
+                    }
+                    None => {
+                        if !scene.occluded_except(&shadow, except) {
+                            sum += f * ls.weight * cos_i;
+                        }
+                    }
                 }
+            }
+            if let Some(b) = &mut batch {
+                self.flush_shadows(b, except, &mut sum);
             }
             l += sum / m_samples as f32;
         }
         l
+    }
+
+    /// Trace the waiting shadow rays (ignoring primitive `except`, the
+    /// light's own surface) and add the contributions of those that reach
+    /// the light to `sum`, in order.
+    fn flush_shadows(&mut self, batch: &mut ShadowBatch, except: u32, sum: &mut Vec3) {
+        let n = batch.len;
+        if n == 0 {
+            return;
+        }
+        let rays = &batch.rays[..n];
+        let mut blocked = [false; PACKET_SIZE];
+        if self.packets.use_packet(n, SHADOW_PACKET_MIN) {
+            self.scene.occluded_packet(rays, except, &mut blocked[..n]);
+        } else {
+            for (b, r) in blocked.iter_mut().zip(rays) {
+                *b = self.scene.occluded_except(r, except);
+            }
+        }
+        for (c, b) in batch.contribution[..n].iter().zip(&blocked) {
+            if !b {
+                *sum += *c;
+            }
+        }
+        batch.len = 0;
     }
 
     /// Mirror (or glossy) reflection and refraction.
@@ -401,6 +594,24 @@ impl<'a> Integrator<'a> {
             sum += w * self.radiance(&child, &ray, depth + 1, weight, "glossy");
         }
         sum / k as f32
+    }
+}
+
+/// Shadow rays from one hit point towards one light, waiting to be traced,
+/// with what each adds if it reaches the light.
+struct ShadowBatch {
+    rays: [Ray; PACKET_SIZE],
+    contribution: [Vec3; PACKET_SIZE],
+    len: usize,
+}
+
+impl Default for ShadowBatch {
+    fn default() -> Self {
+        Self {
+            rays: [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE],
+            contribution: [Vec3::ZERO; PACKET_SIZE],
+            len: 0,
+        }
     }
 }
 

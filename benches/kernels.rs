@@ -1,0 +1,246 @@
+//! Criterion benches of the innermost kernels: the 8-wide ray–box node
+//! test and the watertight ray–triangle test.
+//!
+//! `cargo bench --bench kernels` (add `-- --quick` for a fast look).
+//!
+//! The node test (`RayBoxes::test`, `Packet::test_node`/`test_lanes`) and
+//! the packet setup are crate-private, so the node test is measured
+//! through the nearest public API: `Bvh8::closest` / `Bvh8::any_hit` /
+//! `Bvh8::closest_packet` on a hand-built BVH of one node whose eight
+//! children are one-primitive leaves, with a primitive test that never
+//! hits. Per ray that is one 8-wide slab test, the child sort and a visit
+//! of each entered leaf. strata has no SIMD packet ray–triangle kernel
+//! (packet leaves run the scalar test per lane), so the packet triangle
+//! bench compares `Scene::intersect` on 8 rays with `Scene::intersect_packet`
+//! on a one-triangle scene: the packet path's fixed cost.
+
+mod common;
+
+use common::Rng;
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use glam::Vec3;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+use strata::accel::node::{encode_leaf, Node8};
+use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
+use strata::math::{Aabb, Ray};
+use strata::scene::{scene_from_str, RenderOverrides};
+use strata::shape::triangle::{intersect, ShearedRay};
+use strata::shape::PrimHit;
+
+/// One node, eight leaf children with random boxes in [-1, 1]³.
+fn one_node_bvh(rng: &mut Rng) -> Bvh8 {
+    let mut node = Node8::EMPTY;
+    let mut bounds = Aabb::EMPTY;
+    for slot in 0..8 {
+        let c = Vec3::new(
+            rng.range(-0.7, 0.7),
+            rng.range(-0.7, 0.7),
+            rng.range(-0.7, 0.7),
+        );
+        let h = Vec3::new(
+            rng.range(0.1, 0.3),
+            rng.range(0.1, 0.3),
+            rng.range(0.1, 0.3),
+        );
+        let b = Aabb::new(c - h, c + h);
+        for axis in 0..3 {
+            node.bounds[2 * axis][slot] = b.min[axis];
+            node.bounds[2 * axis + 1][slot] = b.max[axis];
+        }
+        node.child[slot] = encode_leaf(slot as u32, 1);
+        bounds = bounds.union(b);
+    }
+    Bvh8 {
+        nodes: vec![node],
+        prim_ids: (0..8).collect(),
+        bounds,
+        depth: 1,
+    }
+}
+
+/// `batches` batches of 8 rays: each batch from one point on a sphere of
+/// radius 4, towards nearby points of the box cluster (so batches are
+/// coherent, and some rays enter several boxes while others miss).
+fn node_rays(rng: &mut Rng, batches: usize) -> Vec<[Ray; PACKET_SIZE]> {
+    (0..batches)
+        .map(|_| {
+            let origin = rng.unit_vector() * 4.0;
+            let aim = Vec3::new(
+                rng.range(-0.8, 0.8),
+                rng.range(-0.8, 0.8),
+                rng.range(-0.8, 0.8),
+            );
+            std::array::from_fn(|_| {
+                let jitter = Vec3::new(
+                    rng.range(-0.1, 0.1),
+                    rng.range(-0.1, 0.1),
+                    rng.range(-0.1, 0.1),
+                );
+                Ray::new(origin, aim + jitter - origin)
+            })
+        })
+        .collect()
+}
+
+fn ray_box(c: &mut Criterion) {
+    let mut rng = Rng(7);
+    let bvh = one_node_bvh(&mut rng);
+    let mut batches = node_rays(&mut rng, 160);
+    // Packets need one direction sign per axis: keep the batches that have it.
+    batches.retain(|b| Packet::new(b).is_some());
+    batches.truncate(128);
+    let rays = (batches.len() * PACKET_SIZE) as u64;
+    let mut g = c.benchmark_group("ray_box");
+    g.throughput(Throughput::Elements(rays));
+    g.bench_function("node8_closest_single", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for batch in &batches {
+                for r in batch {
+                    n += bvh.closest(r, |_, _, _| None).is_some() as u32;
+                }
+            }
+            black_box(n)
+        })
+    });
+    g.bench_function("node8_any_hit_single", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for batch in &batches {
+                for r in batch {
+                    n += bvh.any_hit(r, |_, _, _| false) as u32;
+                }
+            }
+            black_box(n)
+        })
+    });
+    // Packets built once, outside the timed loop: the node tests alone.
+    let packets: Vec<Packet> = batches.iter().filter_map(|b| Packet::new(b)).collect();
+    g.bench_function("node8_closest_packet", |b| {
+        b.iter(|| {
+            let mut out = [None::<PrimHit>; PACKET_SIZE];
+            let mut n = 0;
+            for p in &packets {
+                bvh.closest_packet(p, &mut out, |_, _, _, _| None);
+                n += out.iter().filter(|h| h.is_some()).count();
+            }
+            black_box(n)
+        })
+    });
+    g.bench_function("node8_any_hit_packet", |b| {
+        b.iter(|| {
+            let mut out = [false; PACKET_SIZE];
+            let mut n = 0;
+            for p in &packets {
+                bvh.any_hit_packet(p, &mut out, |_, _, _, _| false);
+                n += out.iter().filter(|&&o| o).count();
+            }
+            black_box(n)
+        })
+    });
+    g.bench_function("packet_setup", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for batch in &batches {
+                n += black_box(Packet::new(batch)).is_some() as u32;
+            }
+            black_box(n)
+        })
+    });
+    g.finish();
+}
+
+fn ray_triangle(c: &mut Criterion) {
+    // Triangles of the bench mesh (or the icosphere), each with a ray from
+    // a random point towards a point of its plane near it: about half hit.
+    let (scene, _) = common::mesh_scene(BuildQuality::Fastest);
+    let tris = scene.file_order_triangles();
+    let mut rng = Rng(11);
+    let cases: Vec<([Vec3; 3], Ray, ShearedRay)> = (0..1024)
+        .map(|i| {
+            let t = tris[(i * 7919) % tris.len()];
+            let (u, v) = (rng.range(-0.3, 1.0), rng.range(-0.3, 1.0));
+            let target = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]);
+            let size = (t[1] - t[0]).length().max(1e-6);
+            let origin = target + rng.unit_vector() * 50.0 * size;
+            let ray = Ray::new(origin, target - origin);
+            (t, ray, ShearedRay::new(&ray))
+        })
+        .collect();
+    let mut g = c.benchmark_group("ray_triangle");
+    g.throughput(Throughput::Elements(cases.len() as u64));
+    g.bench_function("single", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for (t, r, s) in &cases {
+                n += intersect(r, s, t).is_some() as u32;
+            }
+            black_box(n)
+        })
+    });
+    g.bench_function("single_with_shear", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for (t, r, _) in &cases {
+                n += intersect(r, &ShearedRay::new(r), t).is_some() as u32;
+            }
+            black_box(n)
+        })
+    });
+    g.finish();
+
+    // One triangle as a scene: 8 coherent rays one by one and as a packet.
+    let one = scene_from_str(
+        "[[objects]]\ntriangle = { v = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]] }\n",
+        Path::new("one.toml"),
+        &RenderOverrides::default(),
+    )
+    .unwrap();
+    let batches: Vec<[Ray; PACKET_SIZE]> = (0..128)
+        .map(|_| {
+            let aim = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0);
+            std::array::from_fn(|_| {
+                let j = Vec3::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05), 0.0);
+                let o = Vec3::new(0.0, 0.0, 3.0);
+                Ray::new(o, aim + j - o)
+            })
+        })
+        .collect();
+    let mut g = c.benchmark_group("ray_triangle_scene");
+    g.throughput(Throughput::Elements((batches.len() * PACKET_SIZE) as u64));
+    g.bench_function("single8", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for batch in &batches {
+                for r in batch {
+                    n += one.intersect(r).is_some() as u32;
+                }
+            }
+            black_box(n)
+        })
+    });
+    g.bench_function("packet8", |b| {
+        b.iter(|| {
+            let mut out = [None; PACKET_SIZE];
+            let mut n = 0;
+            for batch in &batches {
+                one.intersect_packet(batch, &mut out);
+                n += out.iter().filter(|h| h.is_some()).count();
+            }
+            black_box(n)
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(30)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    targets = ray_box, ray_triangle
+}
+criterion_main!(benches);
