@@ -9,12 +9,17 @@
 //! `Bvh8::closest_packet` on a hand-built BVH of one node whose eight
 //! children are one-primitive leaves, with a primitive test that never
 //! hits. Per ray that is one 8-wide slab test, the child sort and a visit
-//! of each entered leaf. strata has no SIMD packet ray–triangle kernel
-//! (packet leaves run the scalar test per lane), so the packet triangle
-//! bench compares `Scene::intersect` on 8 rays with `Scene::intersect_packet`
-//! on a one-triangle scene: the packet path's fixed cost.
+//! of each entered leaf.
+//!
+//! Ray–triangle: the scalar watertight test; the 8-wide leaf test (one ray
+//! against a block of eight triangles, `triangle8::intersect`); the packet
+//! test (one triangle against eight rays in lanes, `ShearedRays`); and
+//! `Scene::intersect` on 8 rays against `Scene::intersect_packet` on a
+//! one-triangle scene, the packet path's fixed cost.
 
 mod common;
+
+use strata::shape::triangle8::{self, ShearedRays, TriangleBlock, LANES};
 
 use common::Rng;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -123,7 +128,7 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [None::<PrimHit>; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.closest_packet(p, &mut out, |_, _, _, _| None);
+                bvh.closest_packet(p, &mut out, |_, _, _, _| false);
                 n += out.iter().filter(|h| h.is_some()).count();
             }
             black_box(n)
@@ -134,7 +139,7 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [false; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.any_hit_packet(p, &mut out, |_, _, _, _| false);
+                bvh.any_hit_packet(p, &mut out, |_, _, _| 0);
                 n += out.iter().filter(|&&o| o).count();
             }
             black_box(n)
@@ -185,6 +190,44 @@ fn ray_triangle(c: &mut Criterion) {
             let mut n = 0;
             for (t, r, _) in &cases {
                 n += intersect(r, &ShearedRay::new(r), t).is_some() as u32;
+            }
+            black_box(n)
+        })
+    });
+    // The same cases eight triangles at a time: one ray against a block
+    // (the leaf test), and one triangle against eight rays (the packet
+    // leaf test). Throughput counts ray–triangle tests.
+    let blocks: Vec<(TriangleBlock, Ray, ShearedRay)> = cases
+        .chunks(LANES)
+        .map(|chunk| {
+            let mut block = TriangleBlock::EMPTY;
+            for (lane, (t, _, _)) in chunk.iter().enumerate() {
+                block.set(lane, t, lane as u32);
+            }
+            (block, chunk[0].1, chunk[0].2)
+        })
+        .collect();
+    g.bench_function("block8_one_ray", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for (block, r, s) in &blocks {
+                n += triangle8::intersect(r, s, block, 0xff).0.count_ones();
+            }
+            black_box(n)
+        })
+    });
+    let ray_lanes: Vec<([Vec3; 3], ShearedRays, [f32; LANES])> = cases
+        .chunks(LANES)
+        .map(|chunk| {
+            let rays: Vec<Ray> = chunk.iter().map(|c| c.1).collect();
+            (chunk[0].0, ShearedRays::new(&rays), [f32::INFINITY; LANES])
+        })
+        .collect();
+    g.bench_function("eight_rays_one_triangle", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for (t, rays, tmax) in &ray_lanes {
+                n += rays.intersect(t, (*tmax).into(), 0xff).0.count_ones();
             }
             black_box(n)
         })

@@ -14,7 +14,7 @@ use strata::render::film::Film;
 use strata::render::{render, RenderOptions, SliceSpec};
 use strata::sampling::{Dim, PixelSampler};
 use strata::scene::Scene;
-use strata::shade::integrator::{PacketMode, CAMERA_PACKET_MIN, CAMERA_PACKET_MIN_NODES};
+use strata::shade::integrator::{PacketMode, CAMERA_PACKET_MIN};
 
 const MODES: [PacketMode; 3] = [PacketMode::Off, PacketMode::On, PacketMode::Auto];
 
@@ -48,9 +48,11 @@ fn write_bumpy(path: &std::path::Path, nu: u32, nv: u32) {
 /// Thin-lens depth of field, three kinds of area light (rect, disk,
 /// sphere) and a point light, two meshes, a glossy floor and Fresnel
 /// glass. 37 × 23 pixels, so batches break at row ends and at odd tails.
-fn busy_scene() -> Scene {
-    let dir = temp_dir("render-packets");
-    // 14,400 triangles: enough BVH nodes for `auto` to trace camera packets.
+/// `tag` names the scene's temporary directory: tests run in parallel,
+/// and two sharing one would delete each other's files.
+fn busy_scene(tag: &str) -> Scene {
+    let dir = temp_dir(&format!("render-packets-{tag}"));
+    // 14,400 triangles: a BVH deep enough for packets to share traversal.
     write_bumpy(&dir.join("bumpy.obj"), 120, 60);
     let icosphere = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
     let text = format!(
@@ -145,8 +147,7 @@ fn film(scene: &Scene, packets: PacketMode, threads: usize, passes: u32, slice: 
 
 #[test]
 fn packets_on_off_and_auto_render_the_same_film() {
-    let base = busy_scene();
-    assert!(base.bvh.nodes.len() >= CAMERA_PACKET_MIN_NODES);
+    let base = busy_scene("films");
     // Shadow batches of 1, 3, 5 and 8 rays and two of 8 + 3; one sample per
     // pixel per pass (batches span pixels), three, and all twelve at once.
     for shadow_samples in [1, 3, 5, 8, 11] {
@@ -168,7 +169,7 @@ fn packets_on_off_and_auto_render_the_same_film() {
 
 #[test]
 fn packets_render_the_same_film_on_any_thread_count_and_slicing() {
-    let scene = busy_scene();
+    let scene = busy_scene("threads");
     let whole = film(&scene, PacketMode::On, 1, 16, SliceSpec::WHOLE);
     for threads in [2, 3, 8] {
         assert!(

@@ -92,8 +92,7 @@ impl std::str::FromStr for GlossySampling {
 #[serde(rename_all = "lowercase")]
 pub enum PacketMode {
     /// Packets where they were measured to pay: camera batches of at least
-    /// [`CAMERA_PACKET_MIN`] rays in a scene whose BVH has at least
-    /// [`CAMERA_PACKET_MIN_NODES`] nodes, and shadow batches of at least
+    /// [`CAMERA_PACKET_MIN`] rays, and shadow batches of at least
     /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
     #[default]
     Auto,
@@ -105,27 +104,22 @@ pub enum PacketMode {
 
 // The `auto` thresholds, from the packet/single throughput of the renderer's
 // own batches (README, "Packets in the renderer"; reproduce with `cargo test
-// --release --test render_packets -- --ignored --nocapture`). With the
-// packet kernel of src/accel/packet.rs as it is, on a shared 2-core machine,
-// medians of 15 alternating runs, two runs:
-// - camera batches (one pixel's pixel and lens samples): below 8 rays a
-//   packet lost almost everywhere (0.2-0.9x at 1-5 rays, 0.6-1.1x at 6-7).
-//   At 8 it was 0.99-1.06x on the bunny (69,666 triangles, 6,996 BVH
-//   nodes) through a thin lens and 1.09-1.20x through a pinhole, about 1.0x
-//   on generated meshes of 960 to 17,000 nodes, but 0.88-0.99x on
-//   scenes/mesh.toml (44 nodes) and 0.91x on scenes/thin-lens.toml (one
-//   node): with a shallow tree there is little traversal for a packet to
-//   share, and building it (about 35 ns a ray) does not pay;
-// - shadow batches (8 stratified samples from one hit towards a rect light):
-//   0.5-0.98x at every size, never a gain; about half of them differ in
-//   direction sign (the light straddles the point) and fall back to single
-//   rays inside `Scene::occluded_packet` anyway.
-// Re-measure when the packet kernel changes.
+// --release --test render_packets -- --ignored --nocapture`), medians of 15
+// alternating runs on a shared 2-core machine. Re-measured after packets
+// began testing each leaf triangle against all their rays at once:
+// - camera batches (one pixel's pixel and lens samples): at 8 rays 1.15x
+//   (bunny, thin lens), 1.44x (bunny, pinhole), 1.13x (scenes/thin-lens.toml,
+//   one node) and 1.66x (scenes/mesh.toml); at 7 rays 1.00-1.37x; at 6 rays
+//   1.00-1.25x; below 6 rays 0.3-1.0x. Scene size no longer matters;
+// - shadow batches (8 stratified samples from one hit towards a rect
+//   light): 0.83-1.05x at every size, never a clear gain; about half of
+//   them differ in direction sign (the light straddles the point) and fall
+//   back to single rays inside `Scene::occluded_packet` anyway.
+// (Before that change packets lost below 8 camera rays everywhere and won
+// only on 1000+ node scenes at 8, so `auto` needed a node threshold.)
 
 /// Fewest rays a camera batch must hold for `auto` to trace it as a packet.
-pub const CAMERA_PACKET_MIN: usize = PACKET_SIZE;
-/// Fewest BVH nodes a scene needs for `auto` to trace camera packets.
-pub const CAMERA_PACKET_MIN_NODES: usize = 1000;
+pub const CAMERA_PACKET_MIN: usize = 7;
 /// Fewest rays a shadow batch must hold for `auto` to trace it as a packet:
 /// more than a packet holds, so never (see above).
 pub const SHADOW_PACKET_MIN: usize = PACKET_SIZE + 1;
@@ -270,13 +264,7 @@ impl<'a> Integrator<'a> {
     pub fn camera_batch(&mut self, batch: &[CameraSample], out: &mut [Vec3]) {
         let n = batch.len();
         assert!(n <= PACKET_SIZE && out.len() >= n);
-        // A shallow BVH leaves the packet little to share (see PacketMode).
-        let min = if self.scene.bvh.nodes.len() >= CAMERA_PACKET_MIN_NODES {
-            CAMERA_PACKET_MIN
-        } else {
-            usize::MAX
-        };
-        if !self.packets.use_packet(n, min) {
+        if !self.packets.use_packet(n, CAMERA_PACKET_MIN) {
             for (o, s) in out.iter_mut().zip(batch) {
                 *o = self.camera_sample(&s.ctx, s.film);
             }
