@@ -196,3 +196,59 @@ fn packets_and_single_rays_return_identical_hits() {
         }
     }
 }
+
+/// Every kind of ray `strata rays` makes (on a closed icosphere), sorted
+/// by direction octant and batched eight at a time so that they really
+/// travel as packets: the same hits and occlusion answers as single rays.
+#[test]
+fn packets_match_single_rays_on_every_strata_rays_kind() {
+    use strata::accel::Packet;
+    use strata::raygen::{generate, RayKind};
+    let dir = temp_dir("packets-kinds");
+    let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
+    let scene = scene_at(
+        &format!("[[objects]]\nmesh = {mesh:?}\n"),
+        &dir.join("scene.toml"),
+    );
+    let triangles = scene.file_order_triangles();
+    for kind in RayKind::ALL {
+        let mut rays = generate(kind, &triangles, 2000, 5).unwrap();
+        let octant = |r: &Ray| {
+            (r.direction.x < 0.0) as u8
+                | ((r.direction.y < 0.0) as u8) << 1
+                | ((r.direction.z < 0.0) as u8) << 2
+        };
+        rays.sort_by_key(octant);
+        let (mut packets, mut hits) = (0, 0);
+        for batch in rays
+            .chunk_by(|a, b| octant(a) == octant(b))
+            .flat_map(|g| g.chunks(PACKET_SIZE))
+        {
+            packets += Packet::new(batch).is_some() as usize;
+            let mut got = [None; PACKET_SIZE];
+            scene.intersect_packet(batch, &mut got);
+            let mut blocked = [false; PACKET_SIZE];
+            scene.occluded_packet(batch, u32::MAX, &mut blocked);
+            for (i, ray) in batch.iter().enumerate() {
+                let want = scene.intersect(ray);
+                assert_eq!(
+                    got[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                    want.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                    "{kind}: ray {ray:?}"
+                );
+                assert_eq!(
+                    blocked[i],
+                    scene.occluded(ray),
+                    "{kind} occlusion: ray {ray:?}"
+                );
+                hits += want.is_some() as usize;
+            }
+        }
+        assert!(
+            packets >= 2000 / PACKET_SIZE - 8,
+            "{kind}: only {packets} packets formed"
+        );
+        assert!(hits > 100, "{kind}: only {hits} of 2000 rays hit");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

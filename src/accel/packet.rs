@@ -24,7 +24,7 @@
 
 use super::build::Bvh8;
 use super::node::{decode, ChildRef};
-use super::traverse::Stack;
+use super::traverse::{Stack, WIDEN};
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use crate::shape::PrimHit;
@@ -200,7 +200,8 @@ impl Bvh8 {
         let mut stack: Stack<(u32, f32, u32)> = Stack::new();
         stack.push((0, f32::NEG_INFINITY, packet.live));
         while let Some((child, t_enter, mask)) = stack.pop() {
-            if t_enter > packet_tmax {
+            // Widened as in `Bvh8::closest`, so ties across leaves are seen.
+            if t_enter > packet_tmax * WIDEN {
                 continue;
             }
             match decode(child) {

@@ -62,6 +62,9 @@ impl<T: Copy + Default> Stack<T> {
     }
 }
 
+/// The factor far distances are widened by, 1 + 2γ(3) (Ize 2013).
+pub(crate) const WIDEN: f32 = 1.0 + 2.0 * gamma(3);
+
 /// Per-ray values reused by every node test.
 pub(crate) struct RayBoxes {
     origin: [f32x8; 3],
@@ -134,7 +137,7 @@ impl RayBoxes {
     #[inline(always)]
     pub(crate) fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
         let (tn, tf) = self.slabs(bounds, tmin, tmax);
-        let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
+        let tf = tf * f32x8::splat(WIDEN);
         (tn, tn.simd_le(tf).to_bitmask())
     }
 
@@ -238,11 +241,17 @@ impl Bvh8 {
                     }
                 }
             }
-            // Next: the nearest pushed child the ray can still reach.
+            // Next: the nearest pushed child the ray can still reach. The
+            // entry distance carries rounding error like the box test's far
+            // distance, so it is compared with the same widening: a child
+            // whose box holds a triangle at exactly the best t (a ray along
+            // an edge shared across two leaves) must still be visited, or
+            // the tie would go to whichever leaf came first.
+            let reach = ray.tmax * WIDEN;
             loop {
                 match stack.pop() {
                     None => return best,
-                    Some((child, t_enter)) if t_enter <= ray.tmax => {
+                    Some((child, t_enter)) if t_enter <= reach => {
                         current = child;
                         break;
                     }
