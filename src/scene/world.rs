@@ -152,6 +152,18 @@ pub struct Scene {
     pub bvh: Bvh8,
 }
 
+/// The packet and the per-lane shears of up to [`PACKET_SIZE`] rays,
+/// from one transposition of the rays; `None` where they cannot travel as
+/// a packet (see [`Packet::new`]).
+fn packet_of(rays: &[Ray]) -> Option<(Packet<'_>, ShearedRays)> {
+    if rays.is_empty() || rays.len() > PACKET_SIZE {
+        return None;
+    }
+    let soa = ray_lanes(rays).map(f32x8::from);
+    let packet = Packet::from_lanes(rays, &soa)?;
+    Some((packet, ShearedRays::from_lanes(&soa)))
+}
+
 impl Scene {
     pub fn primitive_count(&self) -> usize {
         self.triangle_count as usize + self.shapes.len()
@@ -445,15 +457,12 @@ impl Scene {
     /// `self.intersect(&rays[i])`. The rays traverse as one packet when
     /// their directions agree in sign on every axis, else one by one.
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        let soa = (!rays.is_empty() && rays.len() <= PACKET_SIZE)
-            .then(|| ray_lanes(rays).map(f32x8::from));
-        let Some(packet) = soa.as_ref().and_then(|soa| Packet::from_lanes(rays, soa)) else {
+        let Some((packet, sheared)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.intersect(r);
             }
             return;
         };
-        let sheared = ShearedRays::from_lanes(soa.as_ref().expect("a packet has lanes"));
         self.bvh
             .closest_packet(&packet, out, |start, count, lanes, out| {
                 self.hit_leaf_packet(rays, &sheared, start, count, lanes, out)
@@ -474,15 +483,12 @@ impl Scene {
     /// `self.occluded_except(&rays[i], except)`. A packet when the rays'
     /// directions agree in sign, else one by one.
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        let soa = (!rays.is_empty() && rays.len() <= PACKET_SIZE)
-            .then(|| ray_lanes(rays).map(f32x8::from));
-        let Some(packet) = soa.as_ref().and_then(|soa| Packet::from_lanes(rays, soa)) else {
+        let Some((packet, sheared)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.occluded_except(r, except);
             }
             return;
         };
-        let sheared = ShearedRays::from_lanes(soa.as_ref().expect("a packet has lanes"));
         self.bvh
             .any_hit_packet(&packet, out, |start, count, lanes| {
                 self.blocks_leaf_packet(rays, &sheared, start, count, lanes, except)
