@@ -121,16 +121,7 @@ pub fn read_rays(path: &Path) -> InputResult<Vec<Ray>> {
 pub fn encode_rays(rays: &[Ray]) -> Vec<u8> {
     let mut out = Vec::with_capacity(rays.len() * RAY_BYTES);
     for r in rays {
-        for x in [
-            r.origin.x,
-            r.origin.y,
-            r.origin.z,
-            r.direction.x,
-            r.direction.y,
-            r.direction.z,
-            r.tmin,
-            r.tmax,
-        ] {
+        for x in r.components() {
             out.extend_from_slice(&x.to_le_bytes());
         }
     }

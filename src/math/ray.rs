@@ -19,17 +19,7 @@ pub fn ray_lanes(rays: &[Ray]) -> [[f32; 8]; 8] {
     let mut out = [[0.0f32; 8]; 8];
     for lane in 0..8 {
         let r = &rays[if lane < rays.len() { lane } else { 0 }];
-        let values = [
-            r.origin.x,
-            r.origin.y,
-            r.origin.z,
-            r.direction.x,
-            r.direction.y,
-            r.direction.z,
-            r.tmin,
-            r.tmax,
-        ];
-        for (component, v) in out.iter_mut().zip(values) {
+        for (component, v) in out.iter_mut().zip(r.components()) {
             component[lane] = v;
         }
     }
@@ -37,6 +27,22 @@ pub fn ray_lanes(rays: &[Ray]) -> [[f32; 8]; 8] {
 }
 
 impl Ray {
+    /// `[ox, oy, oz, dx, dy, dz, tmin, tmax]`: the order of ray files'
+    /// records and of [`ray_lanes`].
+    #[inline]
+    pub fn components(&self) -> [f32; 8] {
+        [
+            self.origin.x,
+            self.origin.y,
+            self.origin.z,
+            self.direction.x,
+            self.direction.y,
+            self.direction.z,
+            self.tmin,
+            self.tmax,
+        ]
+    }
+
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
         Self {
             origin,
