@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{scene_at, temp_dir, Rng};
+use common::{bumpy_sphere_obj, scene_at, temp_dir, Rng};
 use glam::Vec3;
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::math::Ray;
@@ -15,29 +15,7 @@ use strata::scene::{scene_from_str, RenderOverrides, Scene};
 /// A bumpy UV sphere (shared edges everywhere) and a flat grid (rays aimed
 /// at its vertices hit several triangles at exactly the same t).
 fn write_meshes(dir: &std::path::Path) {
-    let mut obj = String::new();
-    let (nu, nv) = (48, 24);
-    for j in 0..=nv {
-        for i in 0..nu {
-            let th = std::f32::consts::PI * j as f32 / nv as f32;
-            let ph = std::f32::consts::TAU * i as f32 / nu as f32;
-            let r = 1.0 + 0.05 * ((5.0 * ph).sin() * (3.0 * th).cos());
-            obj += &format!(
-                "v {} {} {}\n",
-                r * th.sin() * ph.cos(),
-                r * th.cos(),
-                r * th.sin() * ph.sin()
-            );
-        }
-    }
-    for j in 0..nv {
-        for i in 0..nu {
-            let a = j * nu + i + 1;
-            let b = j * nu + (i + 1) % nu + 1;
-            let (c, d) = (a + nu, b + nu);
-            obj += &format!("f {a} {b} {d}\nf {a} {d} {c}\n");
-        }
-    }
+    let obj = bumpy_sphere_obj(48, 24, 1.0, 0.05);
     std::fs::write(dir.join("bumpy.obj"), obj).unwrap();
     let mut grid = String::new();
     let n = 16;

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{scene_at, temp_dir};
+use common::{bumpy_sphere_obj, scene_at, temp_dir};
 use glam::Vec2;
 use strata::accel::{Packet, PACKET_SIZE};
 use strata::math::offset::spawn_origin;
@@ -18,31 +18,9 @@ use strata::shade::integrator::{PacketMode, CAMERA_PACKET_MIN};
 
 const MODES: [PacketMode; 3] = [PacketMode::Off, PacketMode::On, PacketMode::Auto];
 
-/// A bumpy sphere of 2 × `nu` × `nv` triangles with shared edges everywhere.
+/// The bumpy sphere of `common::bumpy_sphere_obj` (radius 0.5) as a file.
 fn write_bumpy(path: &std::path::Path, nu: u32, nv: u32) {
-    let mut obj = String::new();
-    for j in 0..=nv {
-        for i in 0..nu {
-            let th = std::f32::consts::PI * j as f32 / nv as f32;
-            let ph = std::f32::consts::TAU * i as f32 / nu as f32;
-            let r = 0.5 + 0.04 * ((5.0 * ph).sin() * (3.0 * th).cos());
-            obj += &format!(
-                "v {} {} {}\n",
-                r * th.sin() * ph.cos(),
-                r * th.cos(),
-                r * th.sin() * ph.sin()
-            );
-        }
-    }
-    for j in 0..nv {
-        for i in 0..nu {
-            let a = j * nu + i + 1;
-            let b = j * nu + (i + 1) % nu + 1;
-            let (c, d) = (a + nu, b + nu);
-            obj += &format!("f {a} {b} {d}\nf {a} {d} {c}\n");
-        }
-    }
-    std::fs::write(path, obj).unwrap();
+    std::fs::write(path, bumpy_sphere_obj(nu, nv, 0.5, 0.04)).unwrap();
 }
 
 /// Thin-lens depth of field, three kinds of area light (rect, disk,

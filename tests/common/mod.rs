@@ -24,6 +24,34 @@ pub fn render_rgb(scene: &Scene, threads: usize) -> Vec<Vec3> {
     render(scene, &opts, None, |_, _| {}).film.to_rgb()
 }
 
+/// OBJ text of a bumpy UV sphere of 2 × `nu` × `nv` triangles with shared
+/// edges everywhere: radius `radius`, bumps of amplitude `bump`.
+pub fn bumpy_sphere_obj(nu: u32, nv: u32, radius: f32, bump: f32) -> String {
+    let mut obj = String::new();
+    for j in 0..=nv {
+        for i in 0..nu {
+            let th = std::f32::consts::PI * j as f32 / nv as f32;
+            let ph = std::f32::consts::TAU * i as f32 / nu as f32;
+            let r = radius + bump * ((5.0 * ph).sin() * (3.0 * th).cos());
+            obj += &format!(
+                "v {} {} {}\n",
+                r * th.sin() * ph.cos(),
+                r * th.cos(),
+                r * th.sin() * ph.sin()
+            );
+        }
+    }
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * nu + i + 1;
+            let b = j * nu + (i + 1) % nu + 1;
+            let (c, d) = (a + nu, b + nu);
+            obj += &format!("f {a} {b} {d}\nf {a} {d} {c}\n");
+        }
+    }
+    obj
+}
+
 /// A fresh, empty temporary directory for one test.
 pub fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("strata-test-{}-{}", name, std::process::id()));
