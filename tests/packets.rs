@@ -175,9 +175,11 @@ fn packets_and_single_rays_return_identical_hits() {
     }
 }
 
-/// Every kind of ray `strata rays` makes (on a closed icosphere), sorted
-/// by direction octant and batched eight at a time so that they really
-/// travel as packets: the same hits and occlusion answers as single rays.
+/// Every kind of ray `strata rays` makes (on a closed icosphere), batched
+/// eight at a time two ways: sorted by direction octant (every axis agrees
+/// in sign), and in generation order, where most packets differ in sign on
+/// one or two axes. Either way: the same hits and occlusion answers as
+/// single rays.
 #[test]
 fn packets_match_single_rays_on_every_strata_rays_kind() {
     use strata::accel::Packet;
@@ -189,20 +191,19 @@ fn packets_match_single_rays_on_every_strata_rays_kind() {
         &dir.join("scene.toml"),
     );
     let triangles = scene.file_order_triangles();
-    for kind in RayKind::ALL {
-        let mut rays = generate(kind, &triangles, 2000, 5).unwrap();
-        let octant = |r: &Ray| {
-            (r.direction.x < 0.0) as u8
-                | ((r.direction.y < 0.0) as u8) << 1
-                | ((r.direction.z < 0.0) as u8) << 2
-        };
-        rays.sort_by_key(octant);
-        let (mut packets, mut hits) = (0, 0);
-        for batch in rays
-            .chunk_by(|a, b| octant(a) == octant(b))
-            .flat_map(|g| g.chunks(PACKET_SIZE))
-        {
-            packets += Packet::new(batch).is_some() as usize;
+    let octant = |r: &Ray| {
+        (r.direction.x < 0.0) as u8
+            | ((r.direction.y < 0.0) as u8) << 1
+            | ((r.direction.z < 0.0) as u8) << 2
+    };
+    // Packets formed, of those with mixed signs, and rays that hit.
+    let check = |kind: RayKind, batches: &mut dyn Iterator<Item = &[Ray]>| {
+        let (mut packets, mut mixed, mut hits) = (0, 0, 0);
+        for batch in batches {
+            if Packet::new(batch).is_some() {
+                packets += 1;
+                mixed += batch.iter().any(|r| octant(r) != octant(&batch[0])) as usize;
+            }
             let mut got = [None; PACKET_SIZE];
             scene.intersect_packet(batch, &mut got);
             let mut blocked = [false; PACKET_SIZE];
@@ -222,11 +223,55 @@ fn packets_match_single_rays_on_every_strata_rays_kind() {
                 hits += want.is_some() as usize;
             }
         }
+        (packets, mixed, hits)
+    };
+    for kind in RayKind::ALL {
+        let mut rays = generate(kind, &triangles, 2000, 5).unwrap();
+        let (_, _, hits) = check(kind, &mut rays.chunks(PACKET_SIZE));
+        assert!(hits > 100, "{kind}: only {hits} of 2000 rays hit");
+        rays.sort_by_key(octant);
+        let (packets, mixed, _) = check(
+            kind,
+            &mut rays
+                .chunk_by(|a, b| octant(a) == octant(b))
+                .flat_map(|g| g.chunks(PACKET_SIZE)),
+        );
         assert!(
             packets >= 2000 / PACKET_SIZE - 8,
             "{kind}: only {packets} packets formed"
         );
-        assert!(hits > 100, "{kind}: only {hits} of 2000 rays hit");
+        assert_eq!(mixed, 0);
     }
+    // Mixed-sign packets really form (only three mixed axes fall back to
+    // single rays): narrow fans of rays whose x and y components straddle
+    // zero, some exactly ±0, like the lens samples of a pixel at the centre
+    // of the image.
+    let mut rng = Rng(17);
+    let fans: Vec<Ray> = (0..300)
+        .flat_map(|_| {
+            let eye = Vec3::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -4.0);
+            let (ax, ay) = (rng.range(-0.05, 0.05), rng.range(-0.05, 0.05));
+            let spread = rng.range(0.0, 0.1);
+            let jitter: [f32; 2 * PACKET_SIZE] = std::array::from_fn(|_| rng.range(-0.5, 0.5));
+            (0..PACKET_SIZE).map(move |lane| {
+                let mut d = Vec3::new(
+                    ax + spread * jitter[2 * lane],
+                    ay + spread * jitter[2 * lane + 1],
+                    1.0,
+                );
+                match lane {
+                    0 => d.x = 0.0,
+                    1 => d.x = -0.0,
+                    _ => {}
+                }
+                Ray::new(eye, d)
+            })
+        })
+        .collect();
+    let (packets, mixed, hits) = check(RayKind::Camera, &mut fans.chunks(PACKET_SIZE));
+    assert!(
+        packets == 300 && mixed > 200 && hits > 500,
+        "{packets} packets, {mixed} of them mixed, {hits} hits"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -421,7 +421,7 @@ fn measure_packet_against_single_rays_by_batch_size() {
             }
             let coherent = set.iter().filter(|r| Packet::new(r).is_some()).count();
             let label = format!(
-                "{name}, {kind} ({}% same signs)",
+                "{name}, {kind} ({}% form packets)",
                 100 * coherent / set.len()
             );
             print!("{label:44}");

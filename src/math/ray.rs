@@ -1,6 +1,7 @@
 //! A ray with an explicit parametric interval `[tmin, tmax]`.
 
 use glam::Vec3;
+use wide::f32x8;
 
 /// `origin + t * direction` for `t` in `[tmin, tmax]`. The direction need not
 /// be unit length: rays moved into object space keep world-space `t`.
@@ -14,16 +15,13 @@ pub struct Ray {
 
 /// Up to eight rays transposed into lanes for 8-wide SIMD:
 /// `[ox, oy, oz, dx, dy, dz, tmin, tmax][lane]`. Lanes past the last ray
-/// repeat the first one (callers mask them off).
-pub fn ray_lanes(rays: &[Ray]) -> [[f32; 8]; 8] {
-    let mut out = [[0.0f32; 8]; 8];
-    for lane in 0..8 {
-        let r = &rays[if lane < rays.len() { lane } else { 0 }];
-        for (component, v) in out.iter_mut().zip(r.components()) {
-            component[lane] = v;
-        }
-    }
-    out
+/// repeat the first one (callers mask them off). One 8×8 transpose in
+/// registers: a ray's eight components are exactly one `f32x8`.
+#[inline(always)]
+pub fn ray_lanes(rays: &[Ray]) -> [f32x8; 8] {
+    f32x8::transpose(std::array::from_fn(|lane| {
+        f32x8::from(rays[if lane < rays.len() { lane } else { 0 }].components())
+    }))
 }
 
 impl Ray {

@@ -21,7 +21,6 @@ use crate::shape::triangle::{self, ShearedRay};
 use crate::shape::triangle8::{self, ShearedRays, TriangleBlock, LANES};
 use crate::shape::{PrimHit, Surface};
 use glam::Vec3;
-use wide::f32x8;
 
 /// An analytic shape in its own object space. Closed set: the hot loop matches on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -155,11 +154,12 @@ pub struct Scene {
 /// The packet and the per-lane shears of up to [`PACKET_SIZE`] rays,
 /// from one transposition of the rays; `None` where they cannot travel as
 /// a packet (see [`Packet::new`]).
+#[inline(always)]
 fn packet_of(rays: &[Ray]) -> Option<(Packet<'_>, ShearedRays)> {
     if rays.is_empty() || rays.len() > PACKET_SIZE {
         return None;
     }
-    let soa = ray_lanes(rays).map(f32x8::from);
+    let soa = ray_lanes(rays);
     let packet = Packet::from_lanes(rays, &soa)?;
     Some((packet, ShearedRays::from_lanes(&soa)))
 }
@@ -454,8 +454,8 @@ impl Scene {
     }
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
-    /// `self.intersect(&rays[i])`. The rays traverse as one packet when
-    /// their directions agree in sign on every axis, else one by one.
+    /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
+    /// their directions differ in sign on every axis (see [`Packet::new`]).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         let Some((packet, sheared)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
@@ -480,8 +480,8 @@ impl Scene {
 
     /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. A packet when the rays'
-    /// directions agree in sign, else one by one.
+    /// `self.occluded_except(&rays[i], except)`. One packet unless the
+    /// rays' directions differ in sign on every axis.
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         let Some((packet, sheared)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {

@@ -184,6 +184,10 @@ fn finish(
     let negative = e0.simd_lt(zero) | e1.simd_lt(zero) | e2.simd_lt(zero);
     let positive = e0.simd_gt(zero) | e1.simd_gt(zero) | e2.simd_gt(zero);
     let outside = (negative & positive).to_bitmask();
+    // Most leaf tests miss every triangle: stop before the division.
+    if lanes & !outside == 0 {
+        return (0, [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    }
     let det = e0 + e1 + e2;
     let (az, bz, cz) = (sz * az_w, sz * bz_w, sz * cz_w);
     let t_scaled = e0 * az + e1 * bz + e2 * cz;
@@ -242,11 +246,12 @@ impl ShearedRays {
     /// [`ShearedRay::new`] in lanes: the same dominant axis (the first
     /// largest |d|), the same winding swap and the same divisions.
     pub fn new(rays: &[Ray]) -> Self {
-        Self::from_lanes(&crate::math::ray::ray_lanes(rays).map(f32x8::from))
+        Self::from_lanes(&crate::math::ray::ray_lanes(rays))
     }
 
     /// [`ShearedRays::new`] given the rays already in lanes
     /// ([`crate::math::ray::ray_lanes`]).
+    #[inline(always)]
     pub fn from_lanes(soa: &[f32x8; 8]) -> Self {
         let d = [soa[3], soa[4], soa[5]];
         let (ax, ay, az) = (d[0].abs(), d[1].abs(), d[2].abs());
