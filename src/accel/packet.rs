@@ -1,18 +1,27 @@
 //! Packet traversal: up to eight coherent rays walk the tree together.
 //!
-//! A node is tested once for the whole packet with interval arithmetic over
-//! the packet's origins and reciprocal directions (the "frustum" of the
-//! packet; Wald, Boulos and Shirley 2007, "Ray Tracing Deformable Scenes
-//! Using Dynamic Bounding Volume Hierarchies", and Reshetov, Soupikov and
-//! Hurley 2005 use the same idea). Slab distances are monotone in the origin
-//! and linear in the reciprocal direction, and rounding is monotone, so the
-//! interval test computed in f32 accepts every box that any lane's own
-//! single-ray test accepts. Children the packet enters are then tested lane
-//! by lane (eight rays in the `f32x8` lanes against one box) to find which
-//! rays continue into them, and leaves run the same leaf test as single
-//! rays for those lanes only.
+//! A node is tested once for the whole packet with interval arithmetic
+//! (the "frustum" of the packet; Wald, Boulos and Shirley 2007, "Ray
+//! Tracing Deformable Scenes Using Dynamic Bounding Volume Hierarchies",
+//! and Reshetov, Soupikov and Hurley 2005 use the same idea). Children the
+//! packet may enter are then tested lane by lane (eight rays in the `f32x8`
+//! lanes against one box) to find which rays continue into them, and
+//! leaves run the same leaf test as single rays for those lanes.
 //!
-//! Exactness: every lane tests a superset of the primitives its single ray
+//! The interval test measures slabs from an apex F, a point the rays pass
+//! near (for a pixel's lens samples the focus point, for rays from one
+//! origin that origin): lane i's slab distance to plane x is
+//! (x − oᵢ)·invᵢ = (x − F)·invᵢ + cᵢ with cᵢ = (F − oᵢ)·invᵢ, bounded over
+//! the lanes by (x − F)·[inv_lo, inv_hi] + [c_lo, c_hi]. Rays through one
+//! point share cᵢ, so that bound is exact on each axis. Bounding origins
+//! and reciprocals separately instead, as a ray with the largest origin and
+//! the smallest reciprocal that no lane has, let three times as many
+//! children through to the lane tests as entered them (bench camera
+//! batches), and the lane tests were a third of a packet's instructions.
+//! Rounding is covered by widening both intervals (see [`SLACK`]).
+//!
+//! Exactness: the interval test accepts every box a lane's own test
+//! accepts, every lane tests a superset of the primitives its single ray
 //! would test, with the same leaf test, and the closest hit is the minimum
 //! of a total order (t, then primitive id; see [`super::traverse::closer`]),
 //! so each lane's answer is bit-identical to [`Bvh8::closest`] /
@@ -23,9 +32,11 @@
 //! whose rays run nearly parallel to a coordinate plane) is left out of it:
 //! the reciprocals there span both signs and huge magnitudes, so that axis
 //! would cull nothing anyway, and the lane tests, which pick each lane's
-//! near and far slab by min/max, still cull on it exactly. Only where all
-//! three axes are mixed does [`Packet::new`] return `None`, and the caller
-//! traces the rays one by one.
+//! near and far slab by min/max, still cull on it exactly. So is an axis
+//! whose reciprocals or offsets are too large to bound without overflow (a
+//! direction component of zero). Only where all three axes are left out
+//! does [`Packet::new`] return `None`, and the caller traces the rays one
+//! by one.
 
 use super::build::Bvh8;
 use super::node::{decode, ChildRef};
@@ -33,6 +44,7 @@ use super::traverse::{Stack, WIDEN};
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use crate::shape::PrimHit;
+use glam::DVec3;
 use wide::f32x8;
 
 /// Rays per packet: one per `f32x8` lane.
@@ -46,16 +58,53 @@ pub struct Packet<'r> {
     origin: [f32x8; 3],
     inv: [f32x8; 3],
     tmin: f32x8,
-    /// Per axis: the origin bound and box side for the near and far slabs.
-    near_o: [f32x8; 3],
-    far_o: [f32x8; 3],
+    /// Per axis, splat: the apex, and the widened bounds of the lanes'
+    /// reciprocals and of their offsets cᵢ (module docs).
+    apex: [f32x8; 3],
     inv_lo: [f32x8; 3],
     inv_hi: [f32x8; 3],
+    c_lo: [f32x8; 3],
+    c_hi: [f32x8; 3],
     near: [usize; 3],
     far: [usize; 3],
-    /// Bit `axis` set: the lanes' directions differ in sign on that axis.
-    mixed: u32,
+    /// Bit `axis` set: the interval test leaves the axis out (mixed signs
+    /// or unbounded values) and the lane tests take min/max of its slabs.
+    skipped: u32,
     packet_tmin: f32x8,
+}
+
+/// The relative widening of the reciprocal and offset intervals. A lane's
+/// slab distance and the interval bound each carry a few roundings
+/// relative to |x − F|·max|inv| + max|c| (the differences, the products,
+/// the offsets, the sum): γ(6) covers them to first order; γ(12) doubles
+/// that, and still costs nothing measurable in culling.
+const SLACK: f32 = gamma(12);
+
+/// Values the interval bounds may reach without overflowing to ±∞ on
+/// the way (and so without ∞ − ∞ = NaN).
+const BOUNDED: f32 = 1e30;
+
+/// A point both lines pass near: the point of `a`'s line closest to
+/// `b`'s (Eberly's line distance formulas, in f64). For rays from one
+/// origin that origin; for a pixel's lens samples the focus point; `a`'s
+/// origin where the lines are near parallel or the result is not finite,
+/// which makes the offsets cᵢ the origins' spread in t.
+fn apex(a: &Ray, b: &Ray) -> DVec3 {
+    let (oa, da) = (a.origin.as_dvec3(), a.direction.as_dvec3());
+    let (ob, db) = (b.origin.as_dvec3(), b.direction.as_dvec3());
+    let w = oa - ob;
+    let (aa, ab, bb) = (da.dot(da), da.dot(db), db.dot(db));
+    let denom = aa * bb - ab * ab;
+    if !(denom > 1e-12 * aa * bb) {
+        return oa;
+    }
+    let s = (ab * db.dot(w) - bb * da.dot(w)) / denom;
+    let p = oa + s * da;
+    if p.is_finite() {
+        p
+    } else {
+        oa
+    }
 }
 
 impl<'r> Packet<'r> {
@@ -83,14 +132,18 @@ impl<'r> Packet<'r> {
             let max = f32x8::splat(f32::MAX) | (d & f32x8::splat(-0.0));
             d.simd_eq(f32x8::ZERO).select(max, f32x8::splat(1.0) / d)
         });
-        // Lane minima and maxima of origins and reciprocals, all at once:
+        // Lanes past the last ray repeat ray 0, so the first and last ray
+        // give the apex.
+        let f = apex(&rays[0], &rays[rays.len() - 1]).as_vec3();
+        let apex = [f.x, f.y, f.z].map(f32x8::splat);
+        let c: [f32x8; 3] = std::array::from_fn(|a| (apex[a] - origin[a]) * inv[a]);
+        // Lane minima and maxima of offsets and reciprocals, all at once:
         // transposed, lane k of the vertical min (max) over the eight
         // vectors is the minimum (maximum) of quantity k over the rays.
-        // All finite (reciprocals are ±f32::MAX at worst): no NaN handling.
-        // The last slot only pads the eight.
-        let quantities = [
-            origin[0], origin[1], origin[2], inv[0], inv[1], inv[2], soa[6], soa[6],
-        ];
+        // Offsets may be ±∞ or NaN (a zero direction component gives a
+        // reciprocal of ±f32::MAX); such an axis is skipped below. The
+        // last slot only pads the eight.
+        let quantities = [c[0], c[1], c[2], inv[0], inv[1], inv[2], soa[6], soa[6]];
         let across = f32x8::transpose(quantities);
         let (mut lo, mut hi) = (across[0], across[0]);
         for v in &across[1..] {
@@ -100,26 +153,26 @@ impl<'r> Packet<'r> {
         let (lo, hi) = (lo.to_array(), hi.to_array());
         let mut near = [0; 3];
         let mut far = [0; 3];
-        let mut mixed = 0;
-        let mut near_o = [f32x8::ZERO; 3];
-        let mut far_o = [f32x8::ZERO; 3];
+        let mut skipped = 0;
+        let mut bounds = [[f32x8::ZERO; 4]; 3];
         for axis in 0..3 {
-            // Both signs present: the smallest reciprocal is negative and
-            // the largest positive.
-            let neg = hi[3 + axis] < 0.0;
-            mixed |= ((lo[3 + axis] < 0.0 && !neg) as u32) << axis;
+            let (inv_lo, inv_hi) = (lo[3 + axis], hi[3 + axis]);
+            let (c_lo, c_hi) = (lo[axis], hi[axis]);
+            let neg = inv_hi < 0.0;
+            let mixed = inv_lo < 0.0 && !neg;
+            let inv_max = inv_lo.abs().max(inv_hi.abs());
+            let c_max = c_lo.abs().max(c_hi.abs());
+            // fast_min/fast_max may drop a NaN: check every lane's offset.
+            let every = (1 << PACKET_SIZE) - 1;
+            let bounded = inv_max < BOUNDED
+                && c[axis].abs().simd_lt(f32x8::splat(BOUNDED)).to_bitmask() == every;
+            skipped |= ((mixed || !bounded) as u32) << axis;
             near[axis] = 2 * axis + neg as usize;
             far[axis] = 2 * axis + 1 - neg as usize;
-            // inv > 0: the near slab is smallest at the largest origin.
-            let (o_near, o_far) = if neg {
-                (lo[axis], hi[axis])
-            } else {
-                (hi[axis], lo[axis])
-            };
-            near_o[axis] = f32x8::splat(o_near);
-            far_o[axis] = f32x8::splat(o_far);
+            let (gi, gc) = (SLACK * inv_max, SLACK * c_max);
+            bounds[axis] = [inv_lo - gi, inv_hi + gi, c_lo - gc, c_hi + gc].map(f32x8::splat);
         }
-        if mixed == 0b111 {
+        if skipped == 0b111 {
             return None;
         }
         Some(Self {
@@ -128,48 +181,53 @@ impl<'r> Packet<'r> {
             origin,
             inv,
             tmin: soa[6],
-            near_o,
-            far_o,
-            inv_lo: [0, 1, 2].map(|a| f32x8::splat(lo[3 + a])),
-            inv_hi: [0, 1, 2].map(|a| f32x8::splat(hi[3 + a])),
+            apex,
+            inv_lo: bounds.map(|b| b[0]),
+            inv_hi: bounds.map(|b| b[1]),
+            c_lo: bounds.map(|b| b[2]),
+            c_hi: bounds.map(|b| b[3]),
             near,
             far,
-            mixed,
+            skipped,
             packet_tmin: f32x8::splat(lo[6]),
         })
     }
 
     /// Entry distances (lower bounds over the packet) and the mask of the
     /// node's children that some ray with tmax ≤ `tmax` may enter.
-    /// `MIXED`: whether any axis is mixed, a constant so that the common
+    /// `SKIP`: whether any axis is skipped, a constant so that the common
     /// case compiles without the per-axis checks (they cost 20% there).
+    /// An empty slot (an inverted infinite box) may pass where an interval
+    /// spans zero; its lane test rejects it on an axis that is not skipped.
     #[inline(always)]
-    fn test_node<const MIXED: bool>(&self, bounds: &[[f32; 8]; 6], tmax: f32) -> (f32x8, u32) {
+    fn test_node<const SKIP: bool>(&self, bounds: &[[f32; 8]; 6], tmax: f32) -> (f32x8, u32) {
         let mut tn = self.packet_tmin;
         let mut tf = f32x8::splat(tmax);
         for axis in 0..3 {
-            if MIXED && self.mixed & (1 << axis) != 0 {
+            if SKIP && self.skipped & (1 << axis) != 0 {
                 continue;
             }
-            let dn = f32x8::from(bounds[self.near[axis]]) - self.near_o[axis];
-            let df = f32x8::from(bounds[self.far[axis]]) - self.far_o[axis];
-            // No NaN arises (see `RayBoxes::slabs`): plain min/max.
-            tn = tn.fast_max((dn * self.inv_lo[axis]).fast_min(dn * self.inv_hi[axis]));
-            tf = tf.fast_min((df * self.inv_lo[axis]).fast_max(df * self.inv_hi[axis]));
+            let dn = f32x8::from(bounds[self.near[axis]]) - self.apex[axis];
+            let df = f32x8::from(bounds[self.far[axis]]) - self.apex[axis];
+            // No NaN on a real box (finite sides, bounded intervals).
+            let entry = (dn * self.inv_lo[axis]).fast_min(dn * self.inv_hi[axis]);
+            let exit = (df * self.inv_lo[axis]).fast_max(df * self.inv_hi[axis]);
+            tn = tn.fast_max(entry + self.c_lo[axis]);
+            tf = tf.fast_min(exit + self.c_hi[axis]);
         }
-        let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
+        let tf = tf * f32x8::splat(WIDEN);
         (tn, tn.simd_le(tf).to_bitmask())
     }
 
     /// Which lanes enter child `slot` of a node: each lane's own slab test,
-    /// the same arithmetic as the single-ray test. On a mixed axis each
+    /// the same arithmetic as the single-ray test. On a skipped axis each
     /// lane takes the smaller of its two slab distances as near and the
     /// larger as far; rounding is monotone and the box's min ≤ max, so that
     /// is exactly the slab the single-ray test picks by the sign of its
-    /// direction. (Only empty slots have min > max, and [`Packet::test_node`] rejects
-    /// those on an axis that is not mixed.)
+    /// direction. Only empty slots have min > max, and an axis that is not
+    /// skipped rejects them (its near slab is +∞).
     #[inline(always)]
-    fn test_lanes<const MIXED: bool>(
+    fn test_lanes<const SKIP: bool>(
         &self,
         bounds: &[[f32; 8]; 6],
         slot: usize,
@@ -182,7 +240,7 @@ impl<'r> Packet<'r> {
             let bf = f32x8::splat(bounds[self.far[axis]][slot]);
             let tnear = (bn - self.origin[axis]) * self.inv[axis];
             let tfar = (bf - self.origin[axis]) * self.inv[axis];
-            if MIXED && self.mixed & (1 << axis) != 0 {
+            if SKIP && self.skipped & (1 << axis) != 0 {
                 tn = tn.fast_max(tnear.fast_min(tfar));
                 tf = tf.fast_min(tnear.fast_max(tfar));
             } else {
@@ -190,7 +248,7 @@ impl<'r> Packet<'r> {
                 tf = tf.fast_min(tfar);
             }
         }
-        let tf = tf * f32x8::splat(1.0 + 2.0 * gamma(3));
+        let tf = tf * f32x8::splat(WIDEN);
         tn.simd_le(tf).to_bitmask()
     }
 }
@@ -222,7 +280,7 @@ impl Bvh8 {
     where
         F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
     {
-        if packet.mixed == 0 {
+        if packet.skipped == 0 {
             self.closest_packet_in::<false, F>(packet, out, hit_leaf)
         } else {
             self.closest_packet_in::<true, F>(packet, out, hit_leaf)
@@ -230,7 +288,7 @@ impl Bvh8 {
     }
 
     #[inline(always)]
-    fn closest_packet_in<const MIXED: bool, F>(
+    fn closest_packet_in<const SKIP: bool, F>(
         &self,
         packet: &Packet,
         out: &mut [Option<PrimHit>],
@@ -259,14 +317,14 @@ impl Bvh8 {
             match decode(child) {
                 ChildRef::Node(n) => {
                     let node = &self.nodes[n as usize];
-                    let (tn, mut hit) = packet.test_node::<MIXED>(&node.bounds, packet_tmax);
+                    let (tn, mut hit) = packet.test_node::<SKIP>(&node.bounds, packet_tmax);
                     let tn = tn.to_array();
                     let mut order = [(0u32, 0.0f32, 0u32); 8];
                     let mut count = 0;
                     while hit != 0 {
                         let slot = hit.trailing_zeros() as usize;
                         hit &= hit - 1;
-                        let m = mask & packet.test_lanes::<MIXED>(&node.bounds, slot, tmax_v);
+                        let m = mask & packet.test_lanes::<SKIP>(&node.bounds, slot, tmax_v);
                         if m == 0 {
                             continue;
                         }
@@ -304,7 +362,7 @@ impl Bvh8 {
     where
         F: FnMut(u32, u32, u32) -> u32,
     {
-        if packet.mixed == 0 {
+        if packet.skipped == 0 {
             self.any_hit_packet_in::<false, F>(packet, out, blocks_leaf)
         } else {
             self.any_hit_packet_in::<true, F>(packet, out, blocks_leaf)
@@ -312,7 +370,7 @@ impl Bvh8 {
     }
 
     #[inline(always)]
-    fn any_hit_packet_in<const MIXED: bool, F>(
+    fn any_hit_packet_in<const SKIP: bool, F>(
         &self,
         packet: &Packet,
         out: &mut [bool],
@@ -342,11 +400,11 @@ impl Bvh8 {
             match decode(child) {
                 ChildRef::Node(n) => {
                     let node = &self.nodes[n as usize];
-                    let (_, mut hit) = packet.test_node::<MIXED>(&node.bounds, packet_tmax);
+                    let (_, mut hit) = packet.test_node::<SKIP>(&node.bounds, packet_tmax);
                     while hit != 0 {
                         let slot = hit.trailing_zeros() as usize;
                         hit &= hit - 1;
-                        let m = mask & packet.test_lanes::<MIXED>(&node.bounds, slot, tmax_v);
+                        let m = mask & packet.test_lanes::<SKIP>(&node.bounds, slot, tmax_v);
                         if m != 0 {
                             stack.push((node.child[slot], m));
                         }
@@ -365,5 +423,157 @@ impl Bvh8 {
                 ChildRef::Empty => {}
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::node::Node8;
+    use super::super::traverse::RayBoxes;
+    use super::*;
+    use crate::sampling::hash::{hash_u32, unit_float};
+    use glam::Vec3;
+
+    struct Rng(u32);
+    impl Rng {
+        fn f(&mut self) -> f32 {
+            self.0 = hash_u32(self.0.wrapping_add(0x9e37_79b9));
+            unit_float(self.0)
+        }
+        fn v(&mut self) -> Vec3 {
+            Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5)
+        }
+    }
+
+    /// Eight rays of one kind around `centre` at `scale`.
+    fn packet_rays(rng: &mut Rng, kind: usize, centre: Vec3, scale: f32) -> Vec<Ray> {
+        let eye = centre + Vec3::new(0.3, -0.2, -3.0) * scale;
+        let focus = centre + rng.v() * scale;
+        let axis = focus - eye + rng.v() * 0.2 * scale;
+        (0..PACKET_SIZE)
+            .map(|lane| {
+                let mut ray = match kind {
+                    // A pixel's lens samples, converging on the focus.
+                    0 => {
+                        let o = eye + rng.v() * 0.05 * scale;
+                        Ray::new(o, focus - o)
+                    }
+                    // One origin (pinhole pixel, shadow rays).
+                    1 => Ray::new(eye, axis + rng.v() * 0.05 * scale),
+                    // Parallel (orthographic pixel).
+                    2 => Ray::new(eye + rng.v() * 0.05 * scale, axis),
+                    // Skew: neither.
+                    _ => Ray::new(eye + rng.v() * 0.1 * scale, axis + rng.v() * 0.1 * scale),
+                };
+                if lane == 3 && kind != 1 && kind != 3 {
+                    ray.direction.x = 0.0; // ±f32::MAX reciprocal: axis skipped
+                }
+                if lane % 3 == 1 {
+                    ray.tmax = (0.5 + 3.0 * rng.f()) * if kind == 0 { 1.0 } else { scale };
+                }
+                ray
+            })
+            .collect()
+    }
+
+    /// A node whose boxes sit on or near the rays: small, large, flat,
+    /// a point on a ray (entered or not by rounding alone) and an empty
+    /// slot.
+    fn node_near(rng: &mut Rng, rays: &[Ray], scale: f32) -> Node8 {
+        let mut node = Node8::EMPTY;
+        for slot in 0..7 {
+            let ray = rays[(slot + rng.0 as usize) % rays.len()];
+            let t = rng.f()
+                * 3.0
+                * if ray.tmax.is_finite() {
+                    1.0
+                } else {
+                    1.0 / ray.direction.length() * scale
+                };
+            let on_ray = ray.origin + ray.direction * t.min(ray.tmax);
+            if slot == 6 {
+                for axis in 0..3 {
+                    node.bounds[2 * axis][slot] = on_ray[axis];
+                    node.bounds[2 * axis + 1][slot] = on_ray[axis];
+                }
+                continue;
+            }
+            let c = on_ray + rng.v() * 0.02 * scale;
+            let half = Vec3::new(rng.f(), rng.f(), rng.f()) * scale * [1e-6, 1e-3, 0.05][slot % 3];
+            let half = if slot == 5 {
+                half * Vec3::new(1.0, 0.0, 1.0)
+            } else {
+                half
+            };
+            for axis in 0..3 {
+                node.bounds[2 * axis][slot] = c[axis] - half[axis];
+                node.bounds[2 * axis + 1][slot] = c[axis] + half[axis];
+            }
+        }
+        node
+    }
+
+    /// Every child a lane's single-ray test enters passes the packet's
+    /// interval test and that lane's lane test, whatever the packet: the
+    /// bound behind the packet/single identity.
+    #[test]
+    fn interval_and_lane_tests_accept_every_box_a_lane_enters() {
+        let mut rng = Rng(5);
+        let (mut entered, mut skipped) = (0, 0);
+        for round in 0..4000 {
+            let kind = round % 4;
+            let (centre, scale) = [
+                (Vec3::ZERO, 1.0),
+                (Vec3::splat(1e5), 10.0),
+                (Vec3::new(3e5, -2e5, 1e5), 1e-2),
+                (Vec3::splat(-3.0), 1e-3),
+            ][round / 4 % 4];
+            let rays = packet_rays(&mut rng, kind, centre, scale);
+            let Some(packet) = Packet::new(&rays) else {
+                continue;
+            };
+            let node = node_near(&mut rng, &rays, scale);
+            let tmax_v = f32x8::from(std::array::from_fn(|i| rays[i].tmax));
+            let packet_tmax = rays
+                .iter()
+                .map(|r| r.tmax)
+                .fold(f32::NEG_INFINITY, f32::max);
+            let check = |node_mask: u32, lanes: &dyn Fn(usize) -> u32| {
+                let mut n = 0;
+                for (i, ray) in rays.iter().enumerate() {
+                    let (_, single) = RayBoxes::new(ray).test(&node.bounds, ray.tmin, ray.tmax);
+                    for slot in 0..8 {
+                        if single >> slot & 1 == 1 {
+                            n += 1;
+                            assert_eq!(
+                                node_mask >> slot & 1,
+                                1,
+                                "kind {kind}: slot {slot} lane {i}"
+                            );
+                            assert_eq!(
+                                lanes(slot) >> i & 1,
+                                1,
+                                "kind {kind}: slot {slot} lane {i}"
+                            );
+                        }
+                    }
+                }
+                n
+            };
+            entered += if packet.skipped == 0 {
+                let (_, m) = packet.test_node::<false>(&node.bounds, packet_tmax);
+                check(m, &|slot| {
+                    packet.test_lanes::<false>(&node.bounds, slot, tmax_v)
+                })
+            } else {
+                let (_, m) = packet.test_node::<true>(&node.bounds, packet_tmax);
+                check(m, &|slot| {
+                    packet.test_lanes::<true>(&node.bounds, slot, tmax_v)
+                })
+            };
+            skipped += (packet.skipped != 0) as usize;
+        }
+        assert!(entered > 10_000, "the cases must enter boxes: {entered}");
+        assert!(skipped > 500, "and exercise skipped axes: {skipped}");
     }
 }

@@ -21,6 +21,7 @@ use crate::shape::triangle::{self, ShearedRay};
 use crate::shape::triangle8::{self, ShearedRays, TriangleBlock, LANES};
 use crate::shape::{PrimHit, Surface};
 use glam::Vec3;
+use wide::f32x8;
 
 /// An analytic shape in its own object space. Closed set: the hot loop matches on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -151,17 +152,17 @@ pub struct Scene {
     pub bvh: Bvh8,
 }
 
-/// The packet and the per-lane shears of up to [`PACKET_SIZE`] rays,
-/// from one transposition of the rays; `None` where they cannot travel as
-/// a packet (see [`Packet::new`]).
+/// The packet of up to [`PACKET_SIZE`] rays and the rays in lanes, from
+/// which a leaf test makes the per-lane shears ([`ShearedRays::from_lanes`])
+/// once a leaf is reached; `None` where the rays cannot travel as a packet
+/// (see [`Packet::new`]).
 #[inline(always)]
-fn packet_of(rays: &[Ray]) -> Option<(Packet<'_>, ShearedRays)> {
+fn packet_of(rays: &[Ray]) -> Option<(Packet<'_>, [f32x8; 8])> {
     if rays.is_empty() || rays.len() > PACKET_SIZE {
         return None;
     }
     let soa = ray_lanes(rays);
-    let packet = Packet::from_lanes(rays, &soa)?;
-    Some((packet, ShearedRays::from_lanes(&soa)))
+    Some((Packet::from_lanes(rays, &soa)?, soa))
 }
 
 impl Scene {
@@ -426,9 +427,12 @@ impl Scene {
     /// The closest hit in `(ray.tmin, ray.tmax)`. Planes report prim ids
     /// `u32::MAX - plane index`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        let sheared = ShearedRay::new(ray);
+        // The shear is made at the first leaf: most rays of a sparse view
+        // miss every leaf box.
+        let mut sheared = None;
         let best = self.bvh.closest(ray, |start, count, r| {
-            self.hit_leaf(start, count, r, &sheared)
+            let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
+            self.hit_leaf(start, count, r, s)
         });
         self.closest_plane(ray, best)
     }
@@ -457,15 +461,17 @@ impl Scene {
     /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
     /// their directions differ in sign on every axis (see [`Packet::new`]).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        let Some((packet, sheared)) = packet_of(rays) else {
+        let Some((packet, soa)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.intersect(r);
             }
             return;
         };
+        let mut sheared = None;
         self.bvh
             .closest_packet(&packet, out, |start, count, lanes, out| {
-                self.hit_leaf_packet(rays, &sheared, start, count, lanes, out)
+                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(&soa));
+                self.hit_leaf_packet(rays, s, start, count, lanes, out)
             });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.closest_plane(r, *o);
@@ -483,15 +489,17 @@ impl Scene {
     /// `self.occluded_except(&rays[i], except)`. One packet unless the
     /// rays' directions differ in sign on every axis.
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        let Some((packet, sheared)) = packet_of(rays) else {
+        let Some((packet, soa)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.occluded_except(r, except);
             }
             return;
         };
+        let mut sheared = None;
         self.bvh
             .any_hit_packet(&packet, out, |start, count, lanes| {
-                self.blocks_leaf_packet(rays, &sheared, start, count, lanes, except)
+                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(&soa));
+                self.blocks_leaf_packet(rays, s, start, count, lanes, except)
             });
         for (o, r) in out.iter_mut().zip(rays) {
             *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
@@ -511,9 +519,10 @@ impl Scene {
         if self.planes.iter().any(|p| p.intersect(ray).is_some()) {
             return true;
         }
-        let sheared = ShearedRay::new(ray);
+        let mut sheared = None;
         self.bvh.any_hit(ray, |start, count, r| {
-            self.blocks_leaf(start, count, r, &sheared, except)
+            let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
+            self.blocks_leaf(start, count, r, s, except)
         })
     }
 
