@@ -108,8 +108,9 @@ fn apex(a: &Ray, b: &Ray) -> DVec3 {
 }
 
 impl<'r> Packet<'r> {
-    /// `None` if there are no rays, more than eight, or their directions
-    /// differ in sign on every axis.
+    /// `None` if there are no rays, more than eight, or the interval test
+    /// would skip every axis (directions differ in sign, or have a zero
+    /// component, on each; module docs).
     pub fn new(rays: &'r [Ray]) -> Option<Self> {
         if rays.is_empty() || rays.len() > PACKET_SIZE {
             return None;

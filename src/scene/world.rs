@@ -459,7 +459,8 @@ impl Scene {
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
     /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
-    /// their directions differ in sign on every axis (see [`Packet::new`]).
+    /// [`Packet::new`] refuses them (directions differing in sign on every
+    /// axis).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         let Some((packet, soa)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
@@ -487,7 +488,7 @@ impl Scene {
     /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
     /// `self.occluded_except(&rays[i], except)`. One packet unless the
-    /// rays' directions differ in sign on every axis.
+    /// rays' directions differ in sign on every axis ([`Packet::new`]).
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         let Some((packet, soa)) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {

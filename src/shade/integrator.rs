@@ -113,10 +113,15 @@ pub enum PacketMode {
 //   1.00-1.25x; below 6 rays 0.3-1.0x. Scene size no longer matters;
 // - shadow batches (8 stratified samples from one hit towards a rect
 //   light): 0.83-1.05x at every size, never a clear gain; about half of
-//   them differ in direction sign (the light straddles the point) and fall
-//   back to single rays inside `Scene::occluded_packet` anyway.
+//   them differed in direction sign (the light straddles the point) and
+//   then fell back to single rays inside `Scene::occluded_packet`.
 // (Before that change packets lost below 8 camera rays everywhere and won
 // only on 1000+ node scenes at 8, so `auto` needed a node threshold.)
+// Re-measured after packets began travelling with mixed signs and
+// measuring slabs from an apex: camera batches at 8 rays 1.14-2.50x, at 7
+// rays 1.00-1.67x, at 6 rays 1.00-1.67x; shadow batches 0.76-0.87x at 3
+// to 8 rays (one origin, but eight points on the light spread too wide).
+// The thresholds stand.
 
 /// Fewest rays a camera batch must hold for `auto` to trace it as a packet.
 pub const CAMERA_PACKET_MIN: usize = 7;
