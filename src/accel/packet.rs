@@ -432,39 +432,31 @@ mod tests {
     use super::super::node::Node8;
     use super::super::traverse::RayBoxes;
     use super::*;
-    use crate::sampling::hash::{hash_u32, unit_float};
+    use crate::sampling::hash::TestRng as Rng;
     use glam::Vec3;
-
-    struct Rng(u32);
-    impl Rng {
-        fn f(&mut self) -> f32 {
-            self.0 = hash_u32(self.0.wrapping_add(0x9e37_79b9));
-            unit_float(self.0)
-        }
-        fn v(&mut self) -> Vec3 {
-            Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5)
-        }
-    }
 
     /// Eight rays of one kind around `centre` at `scale`.
     fn packet_rays(rng: &mut Rng, kind: usize, centre: Vec3, scale: f32) -> Vec<Ray> {
         let eye = centre + Vec3::new(0.3, -0.2, -3.0) * scale;
-        let focus = centre + rng.v() * scale;
-        let axis = focus - eye + rng.v() * 0.2 * scale;
+        let focus = centre + rng.v(1.0) * scale;
+        let axis = focus - eye + rng.v(1.0) * 0.2 * scale;
         (0..PACKET_SIZE)
             .map(|lane| {
                 let mut ray = match kind {
                     // A pixel's lens samples, converging on the focus.
                     0 => {
-                        let o = eye + rng.v() * 0.05 * scale;
+                        let o = eye + rng.v(1.0) * 0.05 * scale;
                         Ray::new(o, focus - o)
                     }
                     // One origin (pinhole pixel, shadow rays).
-                    1 => Ray::new(eye, axis + rng.v() * 0.05 * scale),
+                    1 => Ray::new(eye, axis + rng.v(1.0) * 0.05 * scale),
                     // Parallel (orthographic pixel).
-                    2 => Ray::new(eye + rng.v() * 0.05 * scale, axis),
+                    2 => Ray::new(eye + rng.v(1.0) * 0.05 * scale, axis),
                     // Skew: neither.
-                    _ => Ray::new(eye + rng.v() * 0.1 * scale, axis + rng.v() * 0.1 * scale),
+                    _ => Ray::new(
+                        eye + rng.v(1.0) * 0.1 * scale,
+                        axis + rng.v(1.0) * 0.1 * scale,
+                    ),
                 };
                 if lane == 3 && kind != 1 && kind != 3 {
                     ray.direction.x = 0.0; // ±f32::MAX reciprocal: axis skipped
@@ -499,7 +491,7 @@ mod tests {
                 }
                 continue;
             }
-            let c = on_ray + rng.v() * 0.02 * scale;
+            let c = on_ray + rng.v(1.0) * 0.02 * scale;
             let half = Vec3::new(rng.f(), rng.f(), rng.f()) * scale * [1e-6, 1e-3, 0.05][slot % 3];
             let half = if slot == 5 {
                 half * Vec3::new(1.0, 0.0, 1.0)

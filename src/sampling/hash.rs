@@ -28,3 +28,21 @@ pub fn unit_float(bits: u32) -> f32 {
     // The top 24 bits fill the mantissa exactly; the result is < 1.
     (bits >> 8) as f32 * (1.0 / 16_777_216.0)
 }
+
+/// A seeded stream of uniform floats for unit tests of geometry kernels.
+#[cfg(test)]
+pub(crate) struct TestRng(pub u32);
+
+#[cfg(test)]
+impl TestRng {
+    /// A float in [0, 1).
+    pub fn f(&mut self) -> f32 {
+        self.0 = hash_u32(self.0.wrapping_add(0x9e37_79b9));
+        unit_float(self.0)
+    }
+
+    /// A point of the cube of side `scale` centred on the origin.
+    pub fn v(&mut self, scale: f32) -> glam::Vec3 {
+        glam::Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * scale
+    }
+}

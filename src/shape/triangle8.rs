@@ -322,18 +322,7 @@ impl ShearedRays {
 mod tests {
     use super::super::triangle;
     use super::*;
-    use crate::sampling::hash::{hash_u32, unit_float};
-
-    struct Rng(u32);
-    impl Rng {
-        fn f(&mut self) -> f32 {
-            self.0 = hash_u32(self.0.wrapping_add(0x9e37_79b9));
-            unit_float(self.0)
-        }
-        fn v(&mut self, scale: f32) -> Vec3 {
-            Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * scale
-        }
-    }
+    use crate::sampling::hash::TestRng as Rng;
 
     /// Every lane agrees with the scalar test bit for bit.
     fn check(ray: &Ray, block: &TriangleBlock) {
