@@ -144,32 +144,46 @@ fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
     ]
 }
 
+/// Asserts that `batch` as a packet gets exactly the single rays' closest
+/// hits (t, prim, u, v bit for bit) and occlusion answers (ignoring
+/// primitive `except`); returns how many rays hit.
+fn assert_packet_matches_single_rays(
+    scene: &Scene,
+    batch: &[Ray],
+    except: u32,
+    label: &str,
+) -> usize {
+    let bits = |h: Option<strata::shape::PrimHit>| {
+        h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()))
+    };
+    let mut got = [None; PACKET_SIZE];
+    scene.intersect_packet(batch, &mut got);
+    let mut blocked = [false; PACKET_SIZE];
+    scene.occluded_packet(batch, except, &mut blocked);
+    let mut hits = 0;
+    for (i, ray) in batch.iter().enumerate() {
+        let want = scene.intersect(ray);
+        assert_eq!(bits(got[i]), bits(want), "{label}: ray {ray:?}");
+        assert_eq!(
+            blocked[i],
+            scene.occluded_except(ray, except),
+            "{label} occlusion: ray {ray:?}"
+        );
+        hits += want.is_some() as usize;
+    }
+    hits
+}
+
 #[test]
 fn packets_and_single_rays_return_identical_hits() {
     for (quality, scene) in scenes() {
         for (name, batches) in ray_sets(&scene) {
-            let mut hits = 0;
-            for batch in &batches {
-                let mut got = [None; PACKET_SIZE];
-                scene.intersect_packet(batch, &mut got);
-                let mut blocked = [false; PACKET_SIZE];
-                let except = scene.triangle_count; // the sphere
-                scene.occluded_packet(batch, except, &mut blocked);
-                for (i, ray) in batch.iter().enumerate() {
-                    let want = scene.intersect(ray);
-                    assert_eq!(
-                        got[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
-                        want.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
-                        "{quality:?} {name}: ray {ray:?}"
-                    );
-                    assert_eq!(
-                        blocked[i],
-                        scene.occluded_except(ray, except),
-                        "{quality:?} {name} occlusion: ray {ray:?}"
-                    );
-                    hits += want.is_some() as usize;
-                }
-            }
+            let except = scene.triangle_count; // the sphere
+            let label = format!("{quality:?} {name}");
+            let hits: usize = batches
+                .iter()
+                .map(|batch| assert_packet_matches_single_rays(&scene, batch, except, &label))
+                .sum();
             assert!(hits > 0, "{name}: the set should hit something");
         }
     }
@@ -204,24 +218,7 @@ fn packets_match_single_rays_on_every_strata_rays_kind() {
                 packets += 1;
                 mixed += batch.iter().any(|r| octant(r) != octant(&batch[0])) as usize;
             }
-            let mut got = [None; PACKET_SIZE];
-            scene.intersect_packet(batch, &mut got);
-            let mut blocked = [false; PACKET_SIZE];
-            scene.occluded_packet(batch, u32::MAX, &mut blocked);
-            for (i, ray) in batch.iter().enumerate() {
-                let want = scene.intersect(ray);
-                assert_eq!(
-                    got[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
-                    want.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
-                    "{kind}: ray {ray:?}"
-                );
-                assert_eq!(
-                    blocked[i],
-                    scene.occluded(ray),
-                    "{kind} occlusion: ray {ray:?}"
-                );
-                hits += want.is_some() as usize;
-            }
+            hits += assert_packet_matches_single_rays(&scene, batch, u32::MAX, &kind.to_string());
         }
         (packets, mixed, hits)
     };
