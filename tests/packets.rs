@@ -88,7 +88,7 @@ fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
         .iter()
         .filter_map(|b| scene.intersect(&b[0]).map(|h| b[0].at(h.t * 0.999)))
         .map(|p| {
-            (0..PACKET_SIZE - (rng.next() * 4.0) as usize)
+            (0..PACKET_SIZE - (rng.unit() * 4.0) as usize)
                 .map(|_| {
                     let l = Vec3::new(rng.range(-0.5, 0.5), 3.0, rng.range(-0.5, 0.5));
                     Ray::segment(p, l - p, 0.999)

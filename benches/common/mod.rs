@@ -1,7 +1,7 @@
 //! What the criterion benches share: the mesh they trace (the bunny when
 //! `tools/fetch-assets` has fetched it, else a generated icosphere, so the
 //! benches never fail for a missing asset) and seeded ray sets.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
 use glam::Vec3;
 use std::collections::HashMap;
@@ -108,29 +108,4 @@ pub fn mesh_scene(quality: BuildQuality) -> (Scene, String) {
 }
 
 /// Tiny deterministic generator for bench inputs.
-pub struct Rng(pub u32);
-
-impl Rng {
-    pub fn next(&mut self) -> f32 {
-        self.0 = strata::sampling::hash::hash_u32(self.0.wrapping_add(0x9e37_79b9));
-        strata::sampling::hash::unit_float(self.0)
-    }
-
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-
-    pub fn unit_vector(&mut self) -> Vec3 {
-        loop {
-            let v = Vec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-}
+pub use strata::sampling::hash::HashRng as Rng;

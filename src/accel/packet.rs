@@ -432,37 +432,37 @@ mod tests {
     use super::super::node::Node8;
     use super::super::traverse::RayBoxes;
     use super::*;
-    use crate::sampling::hash::TestRng as Rng;
+    use crate::sampling::hash::HashRng as Rng;
     use glam::Vec3;
 
     /// Eight rays of one kind around `centre` at `scale`.
     fn packet_rays(rng: &mut Rng, kind: usize, centre: Vec3, scale: f32) -> Vec<Ray> {
         let eye = centre + Vec3::new(0.3, -0.2, -3.0) * scale;
-        let focus = centre + rng.v(1.0) * scale;
-        let axis = focus - eye + rng.v(1.0) * 0.2 * scale;
+        let focus = centre + rng.cube(1.0) * scale;
+        let axis = focus - eye + rng.cube(1.0) * 0.2 * scale;
         (0..PACKET_SIZE)
             .map(|lane| {
                 let mut ray = match kind {
                     // A pixel's lens samples, converging on the focus.
                     0 => {
-                        let o = eye + rng.v(1.0) * 0.05 * scale;
+                        let o = eye + rng.cube(1.0) * 0.05 * scale;
                         Ray::new(o, focus - o)
                     }
                     // One origin (pinhole pixel, shadow rays).
-                    1 => Ray::new(eye, axis + rng.v(1.0) * 0.05 * scale),
+                    1 => Ray::new(eye, axis + rng.cube(1.0) * 0.05 * scale),
                     // Parallel (orthographic pixel).
-                    2 => Ray::new(eye + rng.v(1.0) * 0.05 * scale, axis),
+                    2 => Ray::new(eye + rng.cube(1.0) * 0.05 * scale, axis),
                     // Skew: neither.
                     _ => Ray::new(
-                        eye + rng.v(1.0) * 0.1 * scale,
-                        axis + rng.v(1.0) * 0.1 * scale,
+                        eye + rng.cube(1.0) * 0.1 * scale,
+                        axis + rng.cube(1.0) * 0.1 * scale,
                     ),
                 };
                 if lane == 3 && kind != 1 && kind != 3 {
                     ray.direction.x = 0.0; // ±f32::MAX reciprocal: axis skipped
                 }
                 if lane % 3 == 1 {
-                    ray.tmax = (0.5 + 3.0 * rng.f()) * if kind == 0 { 1.0 } else { scale };
+                    ray.tmax = (0.5 + 3.0 * rng.unit()) * if kind == 0 { 1.0 } else { scale };
                 }
                 ray
             })
@@ -476,7 +476,7 @@ mod tests {
         let mut node = Node8::EMPTY;
         for slot in 0..7 {
             let ray = rays[(slot + rng.0 as usize) % rays.len()];
-            let t = rng.f()
+            let t = rng.unit()
                 * 3.0
                 * if ray.tmax.is_finite() {
                     1.0
@@ -491,8 +491,10 @@ mod tests {
                 }
                 continue;
             }
-            let c = on_ray + rng.v(1.0) * 0.02 * scale;
-            let half = Vec3::new(rng.f(), rng.f(), rng.f()) * scale * [1e-6, 1e-3, 0.05][slot % 3];
+            let c = on_ray + rng.cube(1.0) * 0.02 * scale;
+            let half = Vec3::new(rng.unit(), rng.unit(), rng.unit())
+                * scale
+                * [1e-6, 1e-3, 0.05][slot % 3];
             let half = if slot == 5 {
                 half * Vec3::new(1.0, 0.0, 1.0)
             } else {

@@ -386,11 +386,8 @@ mod tests {
     #[test]
     fn closest_and_any_hit_agree_with_brute_force_for_every_quality() {
         let mut spheres = Vec::new();
-        let mut h = 1u32;
-        let mut rnd = || {
-            h = crate::sampling::hash::hash_u32(h.wrapping_add(0x9e37_79b9));
-            crate::sampling::hash::unit_float(h)
-        };
+        let mut rng = crate::sampling::hash::HashRng(1);
+        let mut rnd = || rng.unit();
         for _ in 0..500 {
             let c = Vec3::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
             spheres.push(Sphere {

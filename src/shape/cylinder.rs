@@ -193,11 +193,8 @@ mod tests {
 
     #[test]
     fn solid_span_matches_the_first_and_last_hit() {
-        let mut h = 9u32;
-        let mut rnd = || {
-            h = crate::sampling::hash::hash_u32(h.wrapping_add(0x9e37_79b9));
-            crate::sampling::hash::unit_float(h) * 2.0 - 1.0
-        };
+        let mut rng = crate::sampling::hash::HashRng(9);
+        let mut rnd = || rng.range(-1.0, 1.0);
         let mut spans = 0;
         for _ in 0..5000 {
             let o = Vec3::new(rnd() * 3.0, rnd() * 3.0, 1.0 + rnd() * 3.0);

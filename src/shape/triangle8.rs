@@ -322,7 +322,7 @@ impl ShearedRays {
 mod tests {
     use super::super::triangle;
     use super::*;
-    use crate::sampling::hash::TestRng as Rng;
+    use crate::sampling::hash::HashRng as Rng;
 
     /// Every lane agrees with the scalar test bit for bit.
     fn check(ray: &Ray, block: &TriangleBlock) {
@@ -348,14 +348,18 @@ mod tests {
             let scale = [1e-4, 1.0, 1e5][round % 3];
             let mut block = TriangleBlock::EMPTY;
             for lane in 0..LANES {
-                let c = rng.v(scale);
-                let tri = [c + rng.v(scale), c + rng.v(scale), c + rng.v(scale)];
+                let c = rng.cube(scale);
+                let tri = [
+                    c + rng.cube(scale),
+                    c + rng.cube(scale),
+                    c + rng.cube(scale),
+                ];
                 block.set(lane, &tri, lane as u32);
             }
             // Aim at a random point of a random lane's triangle, or at one
             // of its vertices or edge midpoints (exact-zero edge functions).
             let target_tri = block.triangle(round % LANES);
-            let (b1, b2) = (rng.f(), rng.f());
+            let (b1, b2) = (rng.unit(), rng.unit());
             let target = match round % 4 {
                 0 => target_tri[0],
                 1 => (target_tri[1] + target_tri[2]) * 0.5,
@@ -370,10 +374,10 @@ mod tests {
                         + (target_tri[2] - target_tri[0]) * b2
                 }
             };
-            let origin = target + rng.v(scale * 4.0);
+            let origin = target + rng.cube(scale * 4.0);
             let mut ray = Ray::new(origin, target - origin);
             if round % 5 == 0 {
-                ray.tmax = rng.f() * 1.5;
+                ray.tmax = rng.unit() * 1.5;
             }
             check(&ray, &block);
             hits += intersect(&ray, &ShearedRay::new(&ray), &block, 0xff)
@@ -391,11 +395,15 @@ mod tests {
         let mut hits = 0;
         for round in 0..3000 {
             let scale = [1e-4, 1.0, 1e5][round % 3];
-            let c = rng.v(scale);
-            let tri = [c + rng.v(scale), c + rng.v(scale), c + rng.v(scale)];
+            let c = rng.cube(scale);
+            let tri = [
+                c + rng.cube(scale),
+                c + rng.cube(scale),
+                c + rng.cube(scale),
+            ];
             let rays: Vec<Ray> = (0..LANES)
                 .map(|lane| {
-                    let (b1, b2) = (rng.f(), rng.f());
+                    let (b1, b2) = (rng.unit(), rng.unit());
                     let (b1, b2) = if b1 + b2 > 1.0 {
                         (1.0 - b1, 1.0 - b2)
                     } else {
@@ -406,7 +414,7 @@ mod tests {
                         1 => (tri[0] + tri[2]) * 0.5,
                         _ => tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2,
                     };
-                    let origin = target + rng.v(scale * 4.0);
+                    let origin = target + rng.cube(scale * 4.0);
                     let mut ray = Ray::new(origin, target - origin);
                     ray.tmin = if lane % 3 == 0 { 0.5 } else { 0.0 };
                     ray

@@ -232,11 +232,8 @@ pub(crate) mod tests {
     #[test]
     fn toward_means_the_winding_normal_faces_the_ray() {
         let tris = cube();
-        let mut h = 5u32;
-        let mut rnd = || {
-            h = crate::sampling::hash::hash_u32(h.wrapping_add(0x9e37_79b9));
-            crate::sampling::hash::unit_float(h) * 2.0 - 1.0
-        };
+        let mut rng = crate::sampling::hash::HashRng(5);
+        let mut rnd = || rng.range(-1.0, 1.0);
         let mut seen = 0;
         for _ in 0..2000 {
             let o = Vec3::new(rnd(), rnd(), rnd()) * 4.0;
