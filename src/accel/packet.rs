@@ -128,7 +128,7 @@ impl<'r> Packet<'r> {
         let origin = [soa[0], soa[1], soa[2]];
         let dir = [soa[3], soa[4], soa[5]];
         // The single-ray reciprocal, lane by lane: zero components become
-        // ±f32::MAX with the zero's sign (see `safe_recip`).
+        // ±f32::MAX with the zero's sign (as `RayBoxes::new` does).
         let inv = dir.map(|d| {
             let max = f32x8::splat(f32::MAX) | (d & f32x8::splat(-0.0));
             d.simd_eq(f32x8::ZERO).select(max, f32x8::splat(1.0) / d)

@@ -11,22 +11,26 @@ use super::node::{decode, is_leaf, leaf_range, ChildRef};
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use crate::shape::PrimHit;
-use glam::Vec3;
-use wide::f32x8;
+use wide::{f32x8, u32x8};
 
-/// A traversal stack that keeps [`STACK_INLINE`] entries inline and
-/// spills to the heap rather than ever dropping a node.
-pub(crate) struct Stack<T = (u32, f32)> {
+/// A traversal stack that keeps its top [`STACK_INLINE`] entries inline
+/// and moves older ones to the heap rather than ever dropping a node.
+///
+/// The heap part holds the *bottom* of the stack, so the hot operations
+/// test one length: a push spills the older half when the inline part is
+/// full, and a pop refills from the heap only when it is empty.
+pub(crate) struct Stack<T> {
     inline: [T; STACK_INLINE],
     len: usize,
     spill: Vec<T>,
 }
 
-/// Entries a stack holds before it spills. A ray needs at most seven per
-/// level of an 8-wide tree (about 45 on a 14M-triangle mesh, depth 7 to 8
-/// in practice, and far fewer on average); every ray pays for zeroing
-/// these, so 32 is the compromise: 64 made the zeroing a `memset` call
-/// costing 6% of a random ray's instructions on the bunny.
+/// Entries a stack holds inline. A ray needs at most seven per level of an
+/// 8-wide tree (about 45 on a 14M-triangle mesh, depth 7 to 8 in practice,
+/// and far fewer on average); every ray pays for zeroing these, so 32 is
+/// the compromise: 64 made the zeroing a `memset` call costing 6% of a
+/// random ray's instructions on the bunny. A power of two, so indices are
+/// masked instead of bounds-checked.
 const STACK_INLINE: usize = 32;
 
 impl<T: Copy + Default> Stack<T> {
@@ -39,26 +43,57 @@ impl<T: Copy + Default> Stack<T> {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn push(&mut self, e: T) {
-        if self.len < self.inline.len() {
-            self.inline[self.len] = e;
-            self.len += 1;
-        } else {
-            self.spill.push(e);
+        if self.len == STACK_INLINE {
+            self.spill_bottom();
+        }
+        self.inline[self.len % STACK_INLINE] = e;
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    pub(crate) fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            if self.spill.is_empty() {
+                return None;
+            }
+            self.refill();
+        }
+        self.len -= 1;
+        Some(self.inline[self.len % STACK_INLINE])
+    }
+
+    /// Makes room for `n` (at most half the inline part) more pushes that
+    /// stay inline: the entries of one node, which [`Stack::top_mut`] can
+    /// then reorder.
+    #[inline(always)]
+    fn reserve(&mut self, n: usize) {
+        debug_assert!(n <= STACK_INLINE / 2);
+        if self.len + n > STACK_INLINE {
+            self.spill_bottom();
         }
     }
 
-    #[inline]
-    pub(crate) fn pop(&mut self) -> Option<T> {
-        if let Some(e) = self.spill.pop() {
-            return Some(e);
-        }
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        Some(self.inline[self.len])
+    /// Moves the older half of the inline entries to the heap.
+    #[cold]
+    #[inline(never)]
+    fn spill_bottom(&mut self) {
+        let half = STACK_INLINE / 2;
+        self.spill.extend_from_slice(&self.inline[..half]);
+        self.inline.copy_within(half..self.len, 0);
+        self.len -= half;
+    }
+
+    /// Moves up to half an inline stack back from the (non-empty) heap.
+    #[cold]
+    #[inline(never)]
+    fn refill(&mut self) {
+        let k = self.spill.len().min(STACK_INLINE / 2);
+        let rest = self.spill.len() - k;
+        self.inline[..k].copy_from_slice(&self.spill[rest..]);
+        self.spill.truncate(rest);
+        self.len = k;
     }
 }
 
@@ -73,43 +108,26 @@ pub(crate) struct RayBoxes {
     far: [usize; 3],
 }
 
-/// The reciprocal direction the slab tests use: zero components become
-/// ±f32::MAX (with the zero's sign), so no slab computes 0·∞ = NaN.
-#[inline(always)]
-pub(crate) fn safe_recip(d: Vec3) -> Vec3 {
-    Vec3::select(
-        d.cmpeq(Vec3::ZERO),
-        Vec3::new(
-            f32::MAX.copysign(d.x),
-            f32::MAX.copysign(d.y),
-            f32::MAX.copysign(d.z),
-        ),
-        d.recip(),
-    )
-}
-
 impl RayBoxes {
     #[inline(always)]
     pub(crate) fn new(ray: &Ray) -> Self {
-        let inv = safe_recip(ray.direction);
-        let mut near = [0; 3];
-        let mut far = [0; 3];
-        for axis in 0..3 {
-            let neg = (inv[axis] < 0.0) as usize;
-            near[axis] = 2 * axis + neg;
-            far[axis] = 2 * axis + 1 - neg;
-        }
+        // The whole ray in one register: [o, d, tmin, tmax]. Lanes 3 to 5
+        // become the reciprocal direction, with zero components replaced
+        // by ±f32::MAX (the zero's sign) so no slab computes 0·∞ = NaN
+        // (the other lanes' quotients are unused).
+        let c = f32x8::from(ray.components());
+        let zero_d = c.simd_eq(f32x8::ZERO);
+        let signed_max = (c & f32x8::splat(-0.0)) | f32x8::splat(f32::MAX);
+        let inv = zero_d.select(signed_max, f32x8::splat(1.0) / c).to_array();
+        // Row 2·axis holds the minima and 2·axis + 1 the maxima: a negative
+        // direction enters through the maximum.
+        let neg = zero_d.select(signed_max, c).to_bitmask() as usize >> 3;
+        let near = [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)];
+        let far = near.map(|row| row ^ 1);
+        let c = c.to_array();
         Self {
-            origin: [
-                f32x8::splat(ray.origin.x),
-                f32x8::splat(ray.origin.y),
-                f32x8::splat(ray.origin.z),
-            ],
-            inv: [
-                f32x8::splat(inv.x),
-                f32x8::splat(inv.y),
-                f32x8::splat(inv.z),
-            ],
+            origin: [c[0], c[1], c[2]].map(f32x8::splat),
+            inv: [inv[3], inv[4], inv[5]].map(f32x8::splat),
             near,
             far,
         }
@@ -178,6 +196,84 @@ pub(crate) fn closer(h: &PrimHit, best: Option<&PrimHit>) -> bool {
     }
 }
 
+/// `t` as a key whose unsigned order is the order of t (negative values
+/// flipped below the positive ones), for sorting distances as integers.
+#[inline(always)]
+fn order_key(t: f32) -> u32 {
+    let bits = t.to_bits();
+    if bits >> 31 == 1 {
+        !bits
+    } else {
+        bits | 1 << 31
+    }
+}
+
+/// One compare-exchange stage of an 8-lane bitonic sorting network (Batcher
+/// 1968) that sorts descending: lane i meets lane i ^ j, and keeps the larger
+/// if it is first in its pair within a run of 2k lanes sorting down.
+const fn bitonic_stage(k: usize, j: usize) -> ([u32; 8], [u32; 8]) {
+    let mut partner = [0; 8];
+    let mut keep_max = [0; 8];
+    let mut i = 0;
+    while i < 8 {
+        partner[i] = (i ^ j) as u32;
+        let first = i < i ^ j;
+        let down = i & k == 0;
+        keep_max[i] = if first == down { u32::MAX } else { 0 };
+        i += 1;
+    }
+    (partner, keep_max)
+}
+
+const BITONIC: [([u32; 8], [u32; 8]); 6] = [
+    bitonic_stage(2, 1),
+    bitonic_stage(4, 2),
+    bitonic_stage(4, 1),
+    bitonic_stage(8, 4),
+    bitonic_stage(8, 2),
+    bitonic_stage(8, 1),
+];
+
+/// The children in `mask` as stack entries (child | key << 32, key the
+/// entry distance's [`order_key`] with its low three bits replaced by the
+/// slot), sorted farthest first; the lanes after the last child hold
+/// nothing of use. Branch-free: a sorting network in one register and a permute of
+/// the child references, where an insertion sort mispredicted about one
+/// branch per node that has several children (callgrind's branch
+/// simulation on random dragon rays).
+///
+/// Clearing the key's low bits moves it toward smaller t (for negative t
+/// too), so comparing it with a limit's key with those bits set (`| 7`)
+/// never culls a child whose entry is within the limit.
+#[inline(always)]
+fn nearest_last(tn: f32x8, mask: u32, child: &[u32; 8]) -> [u64; 8] {
+    let bits = tn.to_bits();
+    let sign = u32x8::splat(1 << 31);
+    let negative = (bits & sign).simd_eq(sign);
+    let keys = negative.select(!bits, bits | sign);
+    let slot = u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
+    let lane_bit = u32x8::splat(1) << slot;
+    let hit = (u32x8::splat(mask) & lane_bit).simd_eq(lane_bit);
+    let mut keys = hit.select((keys & u32x8::splat(!7)) | slot, u32x8::ZERO);
+    for (partner, keep_max) in BITONIC {
+        let other = keys.shuffle(u32x8::new(partner));
+        keys = u32x8::new(keep_max).select(keys.max(other), keys.min(other));
+    }
+    let children = u32x8::from(*child).shuffle(keys & u32x8::splat(7));
+    let (lo, hi) = (
+        children.unpack_lo(keys).to_array(),
+        children.unpack_hi(keys).to_array(),
+    );
+    std::array::from_fn(|i| {
+        let pair = if i < 4 {
+            &lo[2 * i..]
+        } else {
+            &hi[2 * (i - 4)..]
+        };
+        pair[0] as u64 | (pair[1] as u64) << 32
+    })
+}
+
 impl Bvh8 {
     /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_leaf(start, count, ray)`
     /// tests the leaf holding slots `start..start + count` of `prim_ids`
@@ -196,7 +292,7 @@ impl Bvh8 {
         let mut ray = *ray;
         let boxes = RayBoxes::new(&ray);
         let mut best = None;
-        let mut stack: Stack = Stack::new();
+        let mut stack: Stack<u64> = Stack::new();
         // The node or leaf being visited. A node descends straight into its
         // nearest hit child and pushes only the others (farthest first), so
         // a ray that enters one child per level never touches the stack.
@@ -204,31 +300,21 @@ impl Bvh8 {
         loop {
             if !is_leaf(current) {
                 let node = &self.nodes[current as usize];
-                let (tn, mut mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
+                let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
-                        current = node.child[mask.trailing_zeros() as usize];
+                        current = node.child[mask.trailing_zeros() as usize % 8];
                         continue;
                     }
-                    let tn = tn.to_array();
-                    // Sorted by entry distance, farthest first.
-                    let mut hits = [(0u32, 0.0f32); 8];
-                    let mut count = 0;
-                    while mask != 0 {
-                        let slot = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        let mut j = count;
-                        while j > 0 && hits[j - 1].1 < tn[slot] {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = (node.child[slot], tn[slot]);
-                        count += 1;
-                    }
-                    for &h in &hits[..count - 1] {
-                        stack.push(h);
-                    }
-                    current = hits[count - 1].0;
+                    // Two or more: all of them go onto the stack farthest
+                    // first, and the nearest comes straight back off.
+                    stack.reserve(8);
+                    let entries = nearest_last(tn, mask, &node.child);
+                    let n = mask.count_ones() as usize;
+                    let top = &mut stack.inline[stack.len..stack.len + 8];
+                    top.copy_from_slice(&entries);
+                    current = top[n - 1] as u32;
+                    stack.len += n - 1;
                     continue;
                 }
             } else {
@@ -247,12 +333,13 @@ impl Bvh8 {
             // whose box holds a triangle at exactly the best t (a ray along
             // an edge shared across two leaves) must still be visited, or
             // the tie would go to whichever leaf came first.
-            let reach = ray.tmax * WIDEN;
+            // Keys carry a slot in their low bits (see `nearest_last`).
+            let reach = order_key(ray.tmax * WIDEN) | 7;
             loop {
                 match stack.pop() {
                     None => return best,
-                    Some((child, t_enter)) if t_enter <= reach => {
-                        current = child;
+                    Some(entry) if (entry >> 32) as u32 <= reach => {
+                        current = entry as u32;
                         break;
                     }
                     Some(_) => {}
@@ -300,22 +387,25 @@ impl Bvh8 {
             return false;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack: Stack<u32> = Stack::new();
+        let mut stack: Stack<u64> = Stack::new();
         // As in `closest`: descend into one hit child, push the others.
         let mut current = 0u32;
         loop {
             if !is_leaf(current) {
                 let node = &self.nodes[current as usize];
-                let (_, mut mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
+                let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
                 if mask != 0 {
-                    let first = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    while mask != 0 {
-                        let slot = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        stack.push(node.child[slot]);
+                    if mask & (mask - 1) == 0 {
+                        current = node.child[mask.trailing_zeros() as usize % 8];
+                        continue;
                     }
-                    current = node.child[first];
+                    stack.reserve(8);
+                    let entries = nearest_last(tn, mask, &node.child);
+                    let n = mask.count_ones() as usize;
+                    let top = &mut stack.inline[stack.len..stack.len + 8];
+                    top.copy_from_slice(&entries);
+                    current = top[n - 1] as u32;
+                    stack.len += n - 1;
                     continue;
                 }
             } else {
@@ -325,7 +415,7 @@ impl Bvh8 {
                 }
             }
             match stack.pop() {
-                Some(child) => current = child,
+                Some(entry) => current = entry as u32,
                 None => return false,
             }
         }
@@ -381,6 +471,7 @@ mod tests {
     use crate::math::Aabb;
     use crate::shape::sphere::Sphere;
     use crate::shape::triangle8::NO_PRIM;
+    use glam::Vec3;
 
     /// Random spheres, checked against brute force for every preset.
     #[test]
@@ -443,6 +534,48 @@ mod tests {
                     }),
                     brute.is_some()
                 );
+            }
+        }
+    }
+
+    /// The sorting network orders every subset of children farthest first
+    /// (up to the three low bits of the key), pairs each key with its own
+    /// child, and never raises a distance.
+    #[test]
+    fn nearest_last_sorts_every_mask_farthest_first() {
+        let mut rng = crate::sampling::hash::HashRng(7);
+        let child: [u32; 8] = std::array::from_fn(|i| 100 + i as u32);
+        for round in 0..2000 {
+            let tn: [f32; 8] = std::array::from_fn(|i| match round % 4 {
+                // Ties, zeros of both signs and negative distances too.
+                0 => (rng.range(0.0, 4.0) as i32) as f32,
+                1 => rng.range(-10.0, 10.0),
+                2 => [0.0, -0.0, 1e-40, -1e-40, f32::INFINITY, 3.0, 3.0, 1e30][i],
+                _ => rng.range(0.0, 1e6),
+            });
+            for mask in 1..=255u32 {
+                let entries = nearest_last(f32x8::from(tn), mask, &child);
+                let n = mask.count_ones() as usize;
+                let mut slots: Vec<usize> = Vec::new();
+                for (k, &e) in entries[..n].iter().enumerate() {
+                    let key = (e >> 32) as u32;
+                    let slot = (key & 7) as usize;
+                    assert_eq!(e as u32, child[slot], "entry {k} keeps its own child");
+                    assert!(
+                        key & !7 <= order_key(tn[slot]),
+                        "a key never raises the distance"
+                    );
+                    if k > 0 {
+                        let prev = (entries[k - 1] >> 32) as u32;
+                        assert!(prev > key, "farthest first: {tn:?} {mask:#b}");
+                        let bucket = |slot: usize| order_key(tn[slot]) & !7;
+                        assert!(bucket((prev & 7) as usize) >= bucket(slot));
+                    }
+                    slots.push(slot);
+                }
+                slots.sort();
+                let expected: Vec<usize> = (0..8).filter(|i| mask >> i & 1 == 1).collect();
+                assert_eq!(slots, expected, "each child exactly once");
             }
         }
     }
