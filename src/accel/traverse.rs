@@ -64,6 +64,14 @@ impl<T: Copy + Default> Stack<T> {
         Some(self.inline[self.len % STACK_INLINE])
     }
 
+    /// A push after a [`Stack::reserve`]: no length test.
+    #[inline(always)]
+    fn push_reserved(&mut self, e: T) {
+        debug_assert!(self.len < STACK_INLINE);
+        self.inline[self.len % STACK_INLINE] = e;
+        self.len += 1;
+    }
+
     /// Makes room for `n` (at most half the inline part) more pushes that
     /// stay inline: the entries of one node, which [`Stack::top_mut`] can
     /// then reorder.
@@ -387,25 +395,25 @@ impl Bvh8 {
             return false;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack: Stack<u64> = Stack::new();
-        // As in `closest`: descend into one hit child, push the others.
+        let mut stack: Stack<u32> = Stack::new();
+        // As in `closest`: descend into one hit child, push the others, but
+        // unsorted. Sorting them (with `nearest_last`) was a wash: +10% on
+        // random dragon rays, -3 to -6% on camera, inside and edge rays.
         let mut current = 0u32;
         loop {
             if !is_leaf(current) {
                 let node = &self.nodes[current as usize];
-                let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
+                let (_, mut mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
                 if mask != 0 {
-                    if mask & (mask - 1) == 0 {
-                        current = node.child[mask.trailing_zeros() as usize % 8];
-                        continue;
-                    }
+                    let first = mask.trailing_zeros() as usize % 8;
+                    mask &= mask - 1;
                     stack.reserve(8);
-                    let entries = nearest_last(tn, mask, &node.child);
-                    let n = mask.count_ones() as usize;
-                    let top = &mut stack.inline[stack.len..stack.len + 8];
-                    top.copy_from_slice(&entries);
-                    current = top[n - 1] as u32;
-                    stack.len += n - 1;
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize % 8;
+                        mask &= mask - 1;
+                        stack.push_reserved(node.child[slot]);
+                    }
+                    current = node.child[first];
                     continue;
                 }
             } else {
@@ -415,7 +423,7 @@ impl Bvh8 {
                 }
             }
             match stack.pop() {
-                Some(entry) => current = entry as u32,
+                Some(child) => current = child,
                 None => return false,
             }
         }
