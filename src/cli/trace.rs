@@ -15,7 +15,7 @@ use strata::scene::{load_mesh_scene, Scene};
 
 #[derive(Debug, Args, Clone)]
 pub struct TraceArgs {
-    /// Mesh file (.obj, .gltf or .glb), used as it is: triangle i of the file is primitive i.
+    /// Mesh file (.obj, .ply, .gltf or .glb), used as it is: triangle i of the file is primitive i.
     pub mesh: PathBuf,
     /// Ray file: records of 8 little-endian f32 (ox oy oz dx dy dz tmin tmax).
     #[arg(long)]
