@@ -73,14 +73,26 @@ impl<T: Copy + Default> Stack<T> {
     }
 
     /// Makes room for `n` (at most half the inline part) more pushes that
-    /// stay inline: the entries of one node, which [`Stack::top_mut`] can
-    /// then reorder.
+    /// stay inline: the children of one node.
     #[inline(always)]
     fn reserve(&mut self, n: usize) {
         debug_assert!(n <= STACK_INLINE / 2);
         if self.len + n > STACK_INLINE {
             self.spill_bottom();
         }
+    }
+
+    /// Pushes the first `n - 1` of `entries` (in order, so the last of
+    /// them ends on top) and returns entry `n - 1` without pushing it: one
+    /// block write for a node's sorted children, the nearest kept back.
+    #[inline(always)]
+    fn push_all_but_nth(&mut self, entries: &[T; 8], n: usize) -> T {
+        debug_assert!((1..=8).contains(&n));
+        self.reserve(8);
+        let top = &mut self.inline[self.len..self.len + 8];
+        top.copy_from_slice(entries);
+        self.len += n - 1;
+        entries[(n - 1) % 8]
     }
 
     /// Moves the older half of the inline entries to the heap.
@@ -245,10 +257,10 @@ const BITONIC: [([u32; 8], [u32; 8]); 6] = [
 /// The children in `mask` as stack entries (child | key << 32, key the
 /// entry distance's [`order_key`] with its low three bits replaced by the
 /// slot), sorted farthest first; the lanes after the last child hold
-/// nothing of use. Branch-free: a sorting network in one register and a permute of
-/// the child references, where an insertion sort mispredicted about one
-/// branch per node that has several children (callgrind's branch
-/// simulation on random dragon rays).
+/// nothing of use. Branch-free: a sorting network in one register and a
+/// permute of the child references, where an insertion sort mispredicted
+/// about one branch per node that has several children (callgrind's
+/// branch simulation on random dragon rays).
 ///
 /// Clearing the key's low bits moves it toward smaller t (for negative t
 /// too), so comparing it with a limit's key with those bits set (`| 7`)
@@ -314,15 +326,10 @@ impl Bvh8 {
                         current = node.child[mask.trailing_zeros() as usize % 8];
                         continue;
                     }
-                    // Two or more: all of them go onto the stack farthest
-                    // first, and the nearest comes straight back off.
-                    stack.reserve(8);
+                    // Two or more: the others go onto the stack farthest
+                    // first, and the ray descends into the nearest.
                     let entries = nearest_last(tn, mask, &node.child);
-                    let n = mask.count_ones() as usize;
-                    let top = &mut stack.inline[stack.len..stack.len + 8];
-                    top.copy_from_slice(&entries);
-                    current = top[n - 1] as u32;
-                    stack.len += n - 1;
+                    current = stack.push_all_but_nth(&entries, mask.count_ones() as usize) as u32;
                     continue;
                 }
             } else {
@@ -544,6 +551,37 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Pushes past the inline part spill to the heap and come back in
+    /// last-in first-out order, with block pushes mixed in.
+    #[test]
+    fn stack_spills_and_refills_in_order() {
+        let mut stack: Stack<u64> = Stack::new();
+        let mut model: Vec<u64> = Vec::new();
+        let mut next = 0u64;
+        for round in 0..200u64 {
+            if round % 3 == 0 {
+                let block: [u64; 8] = std::array::from_fn(|i| next + i as u64);
+                let n = (round % 8 + 1) as usize;
+                let kept = stack.push_all_but_nth(&block, n);
+                assert_eq!(kept, block[n - 1]);
+                model.extend_from_slice(&block[..n - 1]);
+                next += 8;
+            } else {
+                stack.push(next);
+                model.push(next);
+                next += 1;
+            }
+            if round % 5 == 4 {
+                assert_eq!(stack.pop(), model.pop());
+            }
+        }
+        assert!(model.len() > 2 * STACK_INLINE, "the test reaches the heap");
+        while let Some(e) = model.pop() {
+            assert_eq!(stack.pop(), Some(e));
+        }
+        assert_eq!(stack.pop(), None);
     }
 
     /// The sorting network orders every subset of children farthest first
