@@ -138,10 +138,11 @@ impl RayBoxes {
         let c = f32x8::from(ray.components());
         let zero_d = c.simd_eq(f32x8::ZERO);
         let signed_max = (c & f32x8::splat(-0.0)) | f32x8::splat(f32::MAX);
-        let inv = zero_d.select(signed_max, f32x8::splat(1.0) / c).to_array();
+        let inv = zero_d.select(signed_max, f32x8::splat(1.0) / c);
         // Row 2·axis holds the minima and 2·axis + 1 the maxima: a negative
-        // direction enters through the maximum.
-        let neg = zero_d.select(signed_max, c).to_bitmask() as usize >> 3;
+        // direction (the reciprocal keeps its sign) enters through the maximum.
+        let neg = inv.to_bitmask() as usize >> 3;
+        let inv = inv.to_array();
         let near = [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)];
         let far = near.map(|row| row ^ 1);
         let c = c.to_array();
