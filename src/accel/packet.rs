@@ -61,8 +61,11 @@ pub struct Packet<'r> {
     /// Per axis, splat: the apex, and the widened bounds of the lanes'
     /// reciprocals and of their offsets cᵢ (module docs).
     apex: [f32x8; 3],
-    inv_lo: [f32x8; 3],
-    inv_hi: [f32x8; 3],
+    /// Minus the reciprocal bounds, so the node test computes (F − x)·(−r),
+    /// the value of (x − F)·r (negation is exact), with the bound x as the
+    /// subtraction's memory operand, as `RayBoxes` does.
+    neg_inv_lo: [f32x8; 3],
+    neg_inv_hi: [f32x8; 3],
     c_lo: [f32x8; 3],
     c_hi: [f32x8; 3],
     near: [usize; 3],
@@ -183,8 +186,8 @@ impl<'r> Packet<'r> {
             inv,
             tmin: soa[6],
             apex,
-            inv_lo: bounds.map(|b| b[0]),
-            inv_hi: bounds.map(|b| b[1]),
+            neg_inv_lo: bounds.map(|b| -b[0]),
+            neg_inv_hi: bounds.map(|b| -b[1]),
             c_lo: bounds.map(|b| b[2]),
             c_hi: bounds.map(|b| b[3]),
             near,
@@ -208,11 +211,12 @@ impl<'r> Packet<'r> {
             if SKIP && self.skipped & (1 << axis) != 0 {
                 continue;
             }
-            let dn = f32x8::from(bounds[self.near[axis]]) - self.apex[axis];
-            let df = f32x8::from(bounds[self.far[axis]]) - self.apex[axis];
+            let dn = self.apex[axis] - f32x8::from(bounds[self.near[axis]]);
+            let df = self.apex[axis] - f32x8::from(bounds[self.far[axis]]);
             // No NaN on a real box (finite sides, bounded intervals).
-            let entry = (dn * self.inv_lo[axis]).fast_min(dn * self.inv_hi[axis]);
-            let exit = (df * self.inv_lo[axis]).fast_max(df * self.inv_hi[axis]);
+            let (lo, hi) = (self.neg_inv_lo[axis], self.neg_inv_hi[axis]);
+            let entry = (dn * lo).fast_min(dn * hi);
+            let exit = (df * lo).fast_max(df * hi);
             tn = tn.fast_max(entry + self.c_lo[axis]);
             tf = tf.fast_min(exit + self.c_hi[axis]);
         }

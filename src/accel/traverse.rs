@@ -123,7 +123,13 @@ pub(crate) const WIDEN: f32 = 1.0 + 2.0 * gamma(3);
 /// Per-ray values reused by every node test.
 pub(crate) struct RayBoxes {
     origin: [f32x8; 3],
-    inv: [f32x8; 3],
+    /// Minus the reciprocal direction. A slab is computed as
+    /// (origin − bound)·(−1/d): the value of (bound − origin)·(1/d), since
+    /// negation is exact (only a zero's sign may differ), with the bound as
+    /// the subtraction's second operand, which x86 reads straight from
+    /// memory (6 fewer loads per node test, 630 → 611 instructions per
+    /// random dragon ray).
+    neg_inv: [f32x8; 3],
     near: [usize; 3],
     far: [usize; 3],
 }
@@ -148,7 +154,7 @@ impl RayBoxes {
         let c = c.to_array();
         Self {
             origin: [c[0], c[1], c[2]].map(f32x8::splat),
-            inv: [inv[3], inv[4], inv[5]].map(f32x8::splat),
+            neg_inv: [-inv[3], -inv[4], -inv[5]].map(f32x8::splat),
             near,
             far,
         }
@@ -158,7 +164,7 @@ impl RayBoxes {
     #[inline(always)]
     fn slabs(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, f32x8) {
         let slab = |axis: usize, side: usize| {
-            (f32x8::from(bounds[side]) - self.origin[axis]) * self.inv[axis]
+            (self.origin[axis] - f32x8::from(bounds[side])) * self.neg_inv[axis]
         };
         // No slab is NaN (finite bounds or ±∞ for empty slots, finite
         // nonzero reciprocals), so the plain min/max instructions suffice;
