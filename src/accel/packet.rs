@@ -55,9 +55,10 @@ pub struct Packet<'r> {
     rays: &'r [Ray],
     /// Lanes holding a ray.
     live: u32,
-    origin: [f32x8; 3],
+    /// The rays in lanes ([`crate::math::ray::ray_lanes`]): origin,
+    /// direction, tmin, tmax.
+    lanes: [f32x8; 8],
     inv: [f32x8; 3],
-    tmin: f32x8,
     /// Per axis, splat: the apex, and the widened bounds of the lanes'
     /// reciprocals and of their offsets cᵢ (module docs).
     apex: [f32x8; 3],
@@ -182,9 +183,8 @@ impl<'r> Packet<'r> {
         Some(Self {
             rays,
             live: (1u32 << rays.len()) - 1,
-            origin,
+            lanes: *soa,
             inv,
-            tmin: soa[6],
             apex,
             neg_inv_lo: bounds.map(|b| -b[0]),
             neg_inv_hi: bounds.map(|b| -b[1]),
@@ -195,6 +195,12 @@ impl<'r> Packet<'r> {
             skipped,
             packet_tmin: f32x8::splat(lo[6]),
         })
+    }
+
+    /// The rays in lanes: `[ox, oy, oz, dx, dy, dz, tmin, tmax][lane]`.
+    #[inline(always)]
+    pub fn lanes(&self) -> &[f32x8; 8] {
+        &self.lanes
     }
 
     /// Entry distances (lower bounds over the packet) and the mask of the
@@ -238,13 +244,13 @@ impl<'r> Packet<'r> {
         slot: usize,
         tmax: f32x8,
     ) -> u32 {
-        let mut tn = self.tmin;
+        let mut tn = self.lanes[6];
         let mut tf = tmax;
         for axis in 0..3 {
             let bn = f32x8::splat(bounds[self.near[axis]][slot]);
             let bf = f32x8::splat(bounds[self.far[axis]][slot]);
-            let tnear = (bn - self.origin[axis]) * self.inv[axis];
-            let tfar = (bf - self.origin[axis]) * self.inv[axis];
+            let tnear = (bn - self.lanes[axis]) * self.inv[axis];
+            let tfar = (bf - self.lanes[axis]) * self.inv[axis];
             if SKIP && self.skipped & (1 << axis) != 0 {
                 tn = tn.fast_max(tnear.fast_min(tfar));
                 tf = tf.fast_min(tnear.fast_max(tfar));
@@ -388,12 +394,11 @@ impl Bvh8 {
         if self.nodes.is_empty() {
             return;
         }
-        let mut tmax = [f32::NEG_INFINITY; 8];
-        for (t, r) in tmax.iter_mut().zip(rays) {
-            *t = r.tmax;
-        }
-        let tmax_v = f32x8::from(tmax);
-        let packet_tmax = max_lane(&tmax);
+        // The rays' tmax straight from the lanes (unused lanes repeat ray
+        // 0, which leaves the maximum alone): filling an array lane by lane
+        // and loading it whole would stall on store forwarding.
+        let tmax_v = packet.lanes[7];
+        let packet_tmax = max_lane(&tmax_v.to_array());
         let mut open = packet.live;
         let mut stack: Stack<(u32, u32)> = Stack::new();
         stack.push((0, open));

@@ -21,7 +21,6 @@ use crate::shape::triangle::{self, ShearedRay};
 use crate::shape::triangle8::{self, ShearedRays, TriangleBlock, LANES};
 use crate::shape::{PrimHit, Surface};
 use glam::Vec3;
-use wide::f32x8;
 
 /// An analytic shape in its own object space. Closed set: the hot loop matches on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -152,17 +151,16 @@ pub struct Scene {
     pub bvh: Bvh8,
 }
 
-/// The packet of up to [`PACKET_SIZE`] rays and the rays in lanes, from
-/// which a leaf test makes the per-lane shears ([`ShearedRays::from_lanes`])
-/// once a leaf is reached; `None` where the rays cannot travel as a packet
-/// (see [`Packet::new`]).
+/// The packet of up to [`PACKET_SIZE`] rays, whose lanes a leaf test makes
+/// the per-lane shears from ([`ShearedRays::from_lanes`]) once a leaf is
+/// reached; `None` where the rays cannot travel as a packet (see
+/// [`Packet::new`]).
 #[inline(always)]
-fn packet_of(rays: &[Ray]) -> Option<(Packet<'_>, [f32x8; 8])> {
+fn packet_of(rays: &[Ray]) -> Option<Packet<'_>> {
     if rays.is_empty() || rays.len() > PACKET_SIZE {
         return None;
     }
-    let soa = ray_lanes(rays);
-    Some((Packet::from_lanes(rays, &soa)?, soa))
+    Packet::from_lanes(rays, &ray_lanes(rays))
 }
 
 impl Scene {
@@ -462,7 +460,7 @@ impl Scene {
     /// [`Packet::new`] refuses them (directions differing in sign on every
     /// axis).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        let Some((packet, soa)) = packet_of(rays) else {
+        let Some(packet) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.intersect(r);
             }
@@ -471,11 +469,13 @@ impl Scene {
         let mut sheared = None;
         self.bvh
             .closest_packet(&packet, out, |start, count, lanes, out| {
-                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(&soa));
+                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
                 self.hit_leaf_packet(rays, s, start, count, lanes, out)
             });
-        for (o, r) in out.iter_mut().zip(rays) {
-            *o = self.closest_plane(r, *o);
+        if !self.planes.is_empty() {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.closest_plane(r, *o);
+            }
         }
     }
 
@@ -490,7 +490,7 @@ impl Scene {
     /// `self.occluded_except(&rays[i], except)`. One packet unless the
     /// rays' directions differ in sign on every axis ([`Packet::new`]).
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        let Some((packet, soa)) = packet_of(rays) else {
+        let Some(packet) = packet_of(rays) else {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.occluded_except(r, except);
             }
@@ -499,11 +499,13 @@ impl Scene {
         let mut sheared = None;
         self.bvh
             .any_hit_packet(&packet, out, |start, count, lanes| {
-                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(&soa));
+                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
                 self.blocks_leaf_packet(rays, s, start, count, lanes, except)
             });
-        for (o, r) in out.iter_mut().zip(rays) {
-            *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
+        if !self.planes.is_empty() {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
+            }
         }
     }
 
