@@ -1,11 +1,12 @@
-//! Building: obvhs PLOC into a binary tree, then a greedy collapse into
-//! 8-wide nodes (largest-area child opened first, the rule of Wald, Benthin
-//! and Boulos 2008, "Getting Rid of Packets").
+//! Building: obvhs PLOC into a binary tree, then a collapse into 8-wide
+//! nodes chosen by the surface area heuristic over the whole subtree
+//! (Ylitie, Karras and Laine 2017), see [`CollapseCosts`].
 
-use super::node::{encode_leaf, Node8, EMPTY, MAX_LEAF_PRIMS, MAX_PRIMS};
+use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS, MAX_PRIMS};
 use crate::math::Aabb;
 use crate::shape::triangle8::NO_PRIM;
 use glam::Vec3A;
+use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
 use obvhs::ploc::PlocBuilder;
@@ -86,29 +87,21 @@ impl Bvh8 {
             "too many primitives for one BVH: {}",
             boxes.len()
         );
-        let params = quality.params(boxes.len());
-        // obvhs reads our boxes through `Boundable`: no converted copy
-        // (32 bytes a primitive) at the build's memory peak.
-        let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
-            params.ploc_search_distance,
-            boxes,
-            (0..boxes.len() as u32).collect(),
-            params.sort_precision,
-            params.search_depth_threshold,
-        );
-        if params.reinsertion_batch_ratio > 0.0 {
-            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-        }
+        let bvh2 = binary_tree(boxes, quality);
+        Self::collapse(&bvh2, boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b)))
+    }
+
+    /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
+    fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Self {
         let mut out = Self {
             nodes: Vec::with_capacity(bvh2.nodes.len() / 4 + 1),
-            prim_ids: Vec::with_capacity(boxes.len()),
-            bounds: boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
+            prim_ids: Vec::with_capacity(bvh2.primitive_indices.len()),
+            bounds,
             depth: 0,
         };
-        let counts = subtree_counts(&bvh2);
         let mut collapse = Collapse {
-            bvh2: &bvh2,
-            counts: &counts,
+            bvh2,
+            costs: CollapseCosts::new(bvh2),
             out: &mut out,
             packer: LanePacker::default(),
         };
@@ -119,6 +112,69 @@ impl Bvh8 {
     /// Bytes held by the final structure.
     pub fn memory_bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<Node8>() + self.prim_ids.len() * 4
+    }
+
+    /// Counts and the expected traversal cost of the tree, for reports.
+    pub fn stats(&self) -> TreeStats {
+        let mut stats = TreeStats {
+            nodes: self.nodes.len(),
+            ..TreeStats::default()
+        };
+        let root_area = self.bounds.half_area();
+        let mut cost = 0.0f64;
+        for node in &self.nodes {
+            for slot in 0..8 {
+                let child = node.child[slot];
+                if child == EMPTY {
+                    continue;
+                }
+                stats.children += 1;
+                let b = |row: usize| node.bounds[row][slot];
+                let (dx, dy, dz) = (b(1) - b(0), b(3) - b(2), b(5) - b(4));
+                let area = (dx * dy + dy * dz + dz * dx) as f64;
+                if is_leaf(child) {
+                    let count = leaf_range(child).1;
+                    stats.leaves += 1;
+                    stats.leaf_prims += count as usize;
+                    cost += LEAF_COST as f64 * area;
+                } else {
+                    cost += NODE_COST as f64 * area;
+                }
+            }
+        }
+        if root_area > 0.0 {
+            stats.sah_cost = NODE_COST as f64 + cost / root_area as f64;
+        }
+        stats
+    }
+}
+
+/// What [`Bvh8::stats`] reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TreeStats {
+    pub nodes: usize,
+    /// Occupied child slots over all nodes.
+    pub children: usize,
+    pub leaves: usize,
+    /// Primitives over all leaves.
+    pub leaf_prims: usize,
+    /// The surface area heuristic's expected cost of one ray that enters
+    /// the root, in node tests (the constants the collapse weighs).
+    pub sah_cost: f64,
+}
+
+impl std::fmt::Display for TreeStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let per = |a: usize, b: usize| a as f64 / b.max(1) as f64;
+        write!(
+            f,
+            "{} nodes ({:.2} children each), {} leaves ({:.2} primitives each), SAH cost {:.1}",
+            self.nodes,
+            per(self.children, self.nodes),
+            self.leaves,
+            per(self.leaf_prims, self.leaves),
+            self.sah_cost
+        )
     }
 }
 
@@ -132,53 +188,247 @@ impl obvhs::Boundable for Aabb {
     }
 }
 
-/// Primitive count under every BVH2 node (iterative: trees can be deep).
-fn subtree_counts(bvh2: &Bvh2) -> Vec<u32> {
+/// obvhs's binary tree over `boxes` (not empty), one primitive a leaf.
+fn binary_tree(boxes: &[Aabb], quality: BuildQuality) -> Bvh2 {
+    let params = quality.params(boxes.len());
+    // obvhs reads our boxes through `Boundable`: no converted copy
+    // (32 bytes a primitive) at the build's memory peak.
+    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+        params.ploc_search_distance,
+        boxes,
+        (0..boxes.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    if params.reinsertion_batch_ratio > 0.0 {
+        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    }
+    bvh2
+}
+
+/// The relative costs the collapse weighs, per unit of surface area (the
+/// chance a ray enters a box): an 8-wide node test, and a leaf test, which
+/// is one 8-wide triangle test whatever the leaf's size (up to
+/// [`LEAF_PRIMS`]). On this code a node test with its share of child
+/// ordering and stack work is about 70 instructions and four cache lines,
+/// a leaf test about 110 and five. Instructions per dragon ray hardly move
+/// for LEAF_COST from 1 to 2.5; a cost per triangle in the leaf (0.05 or
+/// 0.15 of a node test) only added some (callgrind, random, grazing and
+/// camera rays).
+const NODE_COST: f32 = 1.0;
+const LEAF_COST: f32 = 1.5;
+
+/// Post-order of the BVH2 (children before parents), by an explicit stack:
+/// trees can be deep.
+fn post_order(bvh2: &Bvh2) -> Vec<u32> {
     let n = bvh2.nodes.len();
-    let mut counts = vec![0u32; n];
-    // Post-order by an explicit stack.
     let mut order = Vec::with_capacity(n);
-    let mut stack = vec![0usize];
+    let mut stack = vec![0u32];
     while let Some(i) = stack.pop() {
         order.push(i);
-        let node = &bvh2.nodes[i];
+        let node = &bvh2.nodes[i as usize];
         if node.prim_count == 0 {
-            stack.push(node.first_index as usize);
-            stack.push(node.first_index as usize + 1);
+            stack.push(node.first_index);
+            stack.push(node.first_index + 1);
         }
     }
-    for &i in order.iter().rev() {
-        let node = &bvh2.nodes[i];
-        counts[i] = if node.prim_count > 0 {
+    order.reverse();
+    order
+}
+
+/// The SAH cost tables of the collapse (Ylitie, Karras and Laine 2017,
+/// "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
+/// BVHs", §3.1), computed bottom-up over the binary tree. `cost[n][i - 1]`
+/// is the least cost of representing BVH2 node `n`'s subtree as at most
+/// `i` children of one 8-wide node:
+///
+/// - one child (`i = 1`): `n` as a leaf (if it holds at most
+///   [`LEAF_PRIMS`] primitives) or as an 8-wide node of its own, whose
+///   cost is its test plus the best distribution of its two children over
+///   eight slots;
+/// - more (`i > 1`): the better of using one slot fewer, and splitting the
+///   `i` slots between `n`'s two children.
+///
+/// Costs are areas times the constants above, all relative to one tree, so
+/// no division by the root's area is needed. The greedy collapse this
+/// replaces (open the largest child until there are eight) filled every
+/// node and made leaves of 2.5 triangles on average, paying an 8-wide
+/// leaf test for each; the tables instead weigh a bigger leaf's larger box
+/// against the node tests it saves.
+struct CollapseCosts<'a> {
+    bvh2: &'a Bvh2,
+    /// Per inner node, at [`CollapseCosts::slot`]: only inner nodes have
+    /// tables (a leaf's is its leaf cost in every entry), which halves
+    /// their memory (36 bytes a primitive at the build's peak, not 72).
+    cost: Vec<[f32; 8]>,
+    counts: Vec<u32>,
+}
+
+impl<'a> CollapseCosts<'a> {
+    fn new(bvh2: &'a Bvh2) -> Self {
+        let inner = bvh2.nodes.len() / 2;
+        let mut costs = Self {
+            bvh2,
+            cost: vec![[0.0f32; 8]; inner],
+            counts: vec![0u32; inner],
+        };
+        for i in post_order(bvh2) {
+            let node = &bvh2.nodes[i as usize];
+            if node.prim_count > 0 {
+                continue;
+            }
+            let (l, r) = children(node);
+            let count = costs.count(l) + costs.count(r);
+            let area = node.aabb.half_area();
+            let (left, right) = (costs.table(l), costs.table(r));
+            let split = |j: usize| split_cost(&left, &right, j).0;
+            let as_node = NODE_COST * area + split(8);
+            let mut c = [0.0f32; 8];
+            c[0] = if count <= LEAF_PRIMS {
+                as_node.min(leaf_cost(area))
+            } else {
+                as_node
+            };
+            for j in 2..=8 {
+                c[j - 1] = c[j - 2].min(split(j));
+            }
+            let slot = Self::slot(node);
+            costs.cost[slot] = c;
+            costs.counts[slot] = count;
+        }
+        costs
+    }
+
+    /// Where an inner node's table is kept: obvhs stores the two children
+    /// of a node side by side with the left one at an odd index, so half
+    /// of it numbers the inner nodes from 0.
+    #[inline]
+    fn slot(node: &Bvh2Node) -> usize {
+        node.first_index as usize / 2
+    }
+
+    fn count(&self, i: usize) -> u32 {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
             node.prim_count
         } else {
-            counts[node.first_index as usize] + counts[node.first_index as usize + 1]
-        };
+            self.counts[Self::slot(node)]
+        }
     }
-    counts
+
+    fn table(&self, i: usize) -> [f32; 8] {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            [leaf_cost(node.aabb.half_area()); 8]
+        } else {
+            self.cost[Self::slot(node)]
+        }
+    }
+
+    /// The least cost of sharing `slots` children between inner node
+    /// `i`'s two children, and the left one's share.
+    fn split(&self, i: usize, slots: usize) -> (f32, usize) {
+        let (l, r) = children(&self.bvh2.nodes[i]);
+        split_cost(&self.table(l), &self.table(r), slots)
+    }
+
+    /// True if BVH2 node `i`, as one child slot, is best a leaf.
+    fn is_leaf(&self, i: usize) -> bool {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            return true;
+        }
+        if self.count(i) > LEAF_PRIMS {
+            return false;
+        }
+        let area = node.aabb.half_area();
+        leaf_cost(area) <= NODE_COST * area + self.split(i, 8).0
+    }
+
+    /// The children of BVH2 node `i` made an 8-wide node: its two children
+    /// share eight slots as the tables chose. Only the root can instead be
+    /// its own only child, a leaf, when that is cheaper (a tree of a few
+    /// primitives); any other node made a node is one the tables found
+    /// cheaper opened.
+    fn node_children(&self, i: usize, out: &mut Vec<usize>) {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            out.push(i);
+            return;
+        }
+        let (split, k) = self.split(i, 8);
+        if self.count(i) <= LEAF_PRIMS && leaf_cost(node.aabb.half_area()) <= split {
+            out.push(i);
+            return;
+        }
+        let (l, r) = children(node);
+        self.distribute(l, k, out);
+        self.distribute(r, 8 - k, out);
+    }
+
+    /// The BVH2 nodes that fill at most `slots` children of one 8-wide
+    /// node for `i`'s subtree, following the choices the tables made.
+    fn distribute(&self, i: usize, slots: usize, out: &mut Vec<usize>) {
+        let mut work = vec![(i, slots)];
+        while let Some((i, slots)) = work.pop() {
+            let node = &self.bvh2.nodes[i];
+            if slots == 1 || node.prim_count > 0 {
+                out.push(i);
+                continue;
+            }
+            let (split, k) = self.split(i, slots);
+            if self.table(i)[slots - 2] <= split {
+                work.push((i, slots - 1));
+            } else {
+                let (l, r) = children(node);
+                work.push((r, slots - k));
+                work.push((l, k));
+            }
+        }
+    }
+}
+
+/// An inner BVH2 node's two children.
+#[inline]
+fn children(node: &Bvh2Node) -> (usize, usize) {
+    (node.first_index as usize, node.first_index as usize + 1)
+}
+
+#[inline]
+fn leaf_cost(area: f32) -> f32 {
+    area * LEAF_COST
+}
+
+/// The least cost of sharing `slots` children between two subtrees, and
+/// the left one's share.
+#[inline]
+fn split_cost(left: &[f32; 8], right: &[f32; 8], slots: usize) -> (f32, usize) {
+    (1..slots)
+        .map(|k| (left[k - 1] + right[slots - k - 1], k))
+        .fold(
+            (f32::INFINITY, 1),
+            |best, c| if c.0 < best.0 { c } else { best },
+        )
 }
 
 struct Collapse<'a> {
     bvh2: &'a Bvh2,
-    counts: &'a [u32],
+    costs: CollapseCosts<'a>,
     out: &'a mut Bvh8,
     packer: LanePacker,
 }
 
 impl Collapse<'_> {
-    fn is_leaf_candidate(&self, i: usize) -> bool {
-        let node = &self.bvh2.nodes[i];
-        node.prim_count > 0 || self.counts[i] <= LEAF_PRIMS
-    }
-
     fn root(&mut self) {
         self.out.nodes.push(Node8::EMPTY);
         // Work list of (BVH2 node, Node8 slot to fill, depth): iterative, so
         // degenerate deep trees cannot overflow the call stack.
         let mut work = vec![(0usize, 0usize, 1u32)];
+        let mut children = Vec::with_capacity(8);
         while let Some((src, dst, depth)) = work.pop() {
             self.out.depth = self.out.depth.max(depth);
-            let children = self.open(src);
+            children.clear();
+            self.costs.node_children(src, &mut children);
             for (slot, &c) in children.iter().enumerate() {
                 let b = self.bvh2.nodes[c].aabb;
                 let node = &mut self.out.nodes[dst];
@@ -186,7 +436,7 @@ impl Collapse<'_> {
                     node.bounds[2 * axis][slot] = b.min[axis];
                     node.bounds[2 * axis + 1][slot] = b.max[axis];
                 }
-                if self.is_leaf_candidate(c) {
+                if self.costs.is_leaf(c) {
                     let prims = self.gather_prims(c);
                     let start = self.packer.place(&prims, &mut self.out.prim_ids);
                     self.out.nodes[dst].child[slot] = encode_leaf(start, prims.len() as u32);
@@ -199,35 +449,6 @@ impl Collapse<'_> {
             }
             debug_assert!(self.out.nodes[dst].child.iter().any(|&c| c != EMPTY));
         }
-    }
-
-    /// The up-to-8 BVH2 nodes that become children of one Node8: start from
-    /// `src`'s children and keep opening the one with the largest area.
-    fn open(&self, src: usize) -> Vec<usize> {
-        let node = &self.bvh2.nodes[src];
-        if node.prim_count > 0 || self.is_leaf_candidate(src) && src == 0 {
-            return vec![src];
-        }
-        let mut children = vec![node.first_index as usize, node.first_index as usize + 1];
-        while children.len() < 8 {
-            let best = children
-                .iter()
-                .enumerate()
-                .filter(|(_, &c)| self.bvh2.nodes[c].prim_count == 0)
-                .max_by(|a, b| {
-                    self.bvh2.nodes[*a.1]
-                        .aabb
-                        .half_area()
-                        .total_cmp(&self.bvh2.nodes[*b.1].aabb.half_area())
-                })
-                .map(|(i, _)| i);
-            let Some(i) = best else { break };
-            let c = children.swap_remove(i);
-            let first = self.bvh2.nodes[c].first_index as usize;
-            children.push(first);
-            children.push(first + 1);
-        }
-        children
     }
 
     fn gather_prims(&self, i: usize) -> Vec<u32> {
@@ -297,3 +518,74 @@ pub const LEAF_BLOCK: usize = crate::shape::triangle8::LANES;
 /// Subtrees with at most this many primitives become one leaf.
 const LEAF_PRIMS: u32 = 8;
 const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEAF_BLOCK);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn random_boxes(n: usize, seed: u32) -> Vec<Aabb> {
+        let mut rng = crate::sampling::hash::HashRng(seed);
+        (0..n)
+            .map(|_| {
+                let c = rng.cube(50.0);
+                let h = rng.cube(2.0).abs() + 0.01;
+                Aabb::new(c - h, c + h)
+            })
+            .collect()
+    }
+
+    /// The tree the collapse writes has exactly the cost its tables
+    /// promised for the root: the reconstruction follows the choices the
+    /// dynamic programme made, for every preset.
+    #[test]
+    fn collapse_builds_the_tree_its_cost_tables_chose() {
+        for (quality, seed) in [
+            (BuildQuality::Fastest, 1),
+            (BuildQuality::Medium, 2),
+            (BuildQuality::High, 3),
+        ] {
+            let boxes = random_boxes(3000, seed);
+            let bvh2 = binary_tree(&boxes, quality);
+            let costs = CollapseCosts::new(&bvh2);
+            let area = bvh2.nodes[0].aabb.half_area();
+            let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / area as f64;
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            let stats = Bvh8::collapse(&bvh2, bounds).stats();
+            assert!(
+                (stats.sah_cost - promised).abs() < 1e-4 * promised,
+                "{quality:?}: built {} promised {promised}",
+                stats.sah_cost
+            );
+            assert_eq!(stats.leaf_prims, 3000);
+        }
+    }
+
+    /// Eight coincident boxes are one leaf (eight node slots would cost
+    /// eight leaf tests for the same box); eight boxes far apart are eight
+    /// leaves (one leaf would be entered by every ray that enters the root).
+    #[test]
+    fn collapse_keeps_coincident_boxes_together_and_separates_distant_ones() {
+        let same = vec![Aabb::new(Vec3::ZERO, Vec3::ONE); 8];
+        let bvh = Bvh8::build(&same, BuildQuality::Medium);
+        let stats = bvh.stats();
+        assert_eq!(
+            (stats.nodes, stats.leaves, stats.leaf_prims),
+            (1, 1, 8),
+            "{stats}"
+        );
+
+        let apart: Vec<Aabb> = (0..8)
+            .map(|i| {
+                let c = Vec3::new(100.0 * i as f32, 0.0, 0.0);
+                Aabb::new(c, c + Vec3::ONE)
+            })
+            .collect();
+        let stats = Bvh8::build(&apart, BuildQuality::Medium).stats();
+        assert_eq!(
+            (stats.nodes, stats.leaves, stats.leaf_prims),
+            (1, 8, 8),
+            "{stats}"
+        );
+    }
+}

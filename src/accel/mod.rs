@@ -14,5 +14,5 @@ pub mod node;
 pub mod packet;
 pub mod traverse;
 
-pub use build::{BuildQuality, Bvh8};
+pub use build::{BuildQuality, Bvh8, TreeStats};
 pub use packet::{Packet, PACKET_SIZE};

@@ -105,6 +105,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
             mb(timings.load_peak_bytes),
             mb(timings.build_peak_bytes),
         );
+        println!("# {name}: tree {}", scene.bvh.stats());
         for kind in [RayKind::Camera, RayKind::Random] {
             let batches = rays(&scene, kind, args.batches, 1);
             for query in [Query::Closest, Query::Occlusion] {
