@@ -94,7 +94,8 @@ def pairs(items):
     """[(MESH, RAYS.bin or None)] from the positional arguments."""
     out = []
     for item in items:
-        if item.endswith(".bin"):
+        # Anything but a mesh is a ray file (`strata rays -o` takes any name).
+        if not item.lower().endswith((".obj", ".ply")):
             if not out or out[-1][1] is not None:
                 raise InputError(item, "a ray file must follow the mesh it was made for")
             out[-1] = (out[-1][0], item)

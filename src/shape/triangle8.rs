@@ -200,7 +200,10 @@ fn finish(
     }
     // The pbrt-v4 bound on t's rounding error (see the scalar test's
     // `origin_error_bound` for why z appears in two units).
-    let max3 = |a: f32x8, b: f32x8, c: f32x8| a.abs().max(b.abs()).max(c.abs());
+    // Plain `vmaxps`: a NaN here would have made t NaN and the lane a miss
+    // already, so the NaN handling of `f32x8::max` (a compare and a blend
+    // per call) cannot change a reported lane.
+    let max3 = |a: f32x8, b: f32x8, c: f32x8| a.abs().fast_max(b.abs()).fast_max(c.abs());
     let max_z = max3(az, bz, cz);
     let delta_z = f32x8::splat(gamma(3)) * max_z;
     let max_world_z = max3(az_w, bz_w, cz_w);
