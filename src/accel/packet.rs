@@ -59,22 +59,24 @@ pub struct Packet<'r> {
     /// direction, tmin, tmax.
     lanes: [f32x8; 8],
     inv: [f32x8; 3],
-    /// Per axis, splat: the apex, and the widened bounds of the lanes'
-    /// reciprocals and of their offsets cᵢ (module docs).
-    apex: [f32x8; 3],
+    /// Per axis: the apex, and the widened bounds of the lanes'
+    /// reciprocals and of their offsets cᵢ (module docs). Scalars, which
+    /// the node test broadcasts from memory: stored as splats they cost
+    /// the setup a broadcast and a 32-byte store each.
+    apex: [f32; 3],
     /// Minus the reciprocal bounds, so the node test computes (F − x)·(−r),
     /// the value of (x − F)·r (negation is exact), with the bound x as the
     /// subtraction's memory operand, as `RayBoxes` does.
-    neg_inv_lo: [f32x8; 3],
-    neg_inv_hi: [f32x8; 3],
-    c_lo: [f32x8; 3],
-    c_hi: [f32x8; 3],
+    neg_inv_lo: [f32; 3],
+    neg_inv_hi: [f32; 3],
+    c_lo: [f32; 3],
+    c_hi: [f32; 3],
     near: [usize; 3],
     far: [usize; 3],
     /// Bit `axis` set: the interval test leaves the axis out (mixed signs
     /// or unbounded values) and the lane tests take min/max of its slabs.
     skipped: u32,
-    packet_tmin: f32x8,
+    packet_tmin: f32,
 }
 
 /// The relative widening of the reciprocal and offset intervals. A lane's
@@ -159,7 +161,7 @@ impl<'r> Packet<'r> {
         let mut near = [0; 3];
         let mut far = [0; 3];
         let mut skipped = 0;
-        let mut bounds = [[f32x8::ZERO; 4]; 3];
+        let mut bounds = [[0.0f32; 4]; 3];
         for axis in 0..3 {
             let (inv_lo, inv_hi) = (lo[3 + axis], hi[3 + axis]);
             let (c_lo, c_hi) = (lo[axis], hi[axis]);
@@ -175,7 +177,7 @@ impl<'r> Packet<'r> {
             near[axis] = 2 * axis + neg as usize;
             far[axis] = 2 * axis + 1 - neg as usize;
             let (gi, gc) = (SLACK * inv_max, SLACK * c_max);
-            bounds[axis] = [inv_lo - gi, inv_hi + gi, c_lo - gc, c_hi + gc].map(f32x8::splat);
+            bounds[axis] = [inv_lo - gi, inv_hi + gi, c_lo - gc, c_hi + gc];
         }
         if skipped == 0b111 {
             return None;
@@ -185,7 +187,7 @@ impl<'r> Packet<'r> {
             live: (1u32 << rays.len()) - 1,
             lanes: *soa,
             inv,
-            apex,
+            apex: f.to_array(),
             neg_inv_lo: bounds.map(|b| -b[0]),
             neg_inv_hi: bounds.map(|b| -b[1]),
             c_lo: bounds.map(|b| b[2]),
@@ -193,7 +195,7 @@ impl<'r> Packet<'r> {
             near,
             far,
             skipped,
-            packet_tmin: f32x8::splat(lo[6]),
+            packet_tmin: lo[6],
         })
     }
 
@@ -211,20 +213,22 @@ impl<'r> Packet<'r> {
     /// spans zero; its lane test rejects it on an axis that is not skipped.
     #[inline(always)]
     fn test_node<const SKIP: bool>(&self, bounds: &[[f32; 8]; 6], tmax: f32) -> (f32x8, u32) {
-        let mut tn = self.packet_tmin;
+        let mut tn = f32x8::splat(self.packet_tmin);
         let mut tf = f32x8::splat(tmax);
         for axis in 0..3 {
             if SKIP && self.skipped & (1 << axis) != 0 {
                 continue;
             }
-            let dn = self.apex[axis] - f32x8::from(bounds[self.near[axis]]);
-            let df = self.apex[axis] - f32x8::from(bounds[self.far[axis]]);
+            let apex = f32x8::splat(self.apex[axis]);
+            let dn = apex - f32x8::from(bounds[self.near[axis]]);
+            let df = apex - f32x8::from(bounds[self.far[axis]]);
             // No NaN on a real box (finite sides, bounded intervals).
-            let (lo, hi) = (self.neg_inv_lo[axis], self.neg_inv_hi[axis]);
+            let lo = f32x8::splat(self.neg_inv_lo[axis]);
+            let hi = f32x8::splat(self.neg_inv_hi[axis]);
             let entry = (dn * lo).fast_min(dn * hi);
             let exit = (df * lo).fast_max(df * hi);
-            tn = tn.fast_max(entry + self.c_lo[axis]);
-            tf = tf.fast_min(exit + self.c_hi[axis]);
+            tn = tn.fast_max(entry + f32x8::splat(self.c_lo[axis]));
+            tf = tf.fast_min(exit + f32x8::splat(self.c_hi[axis]));
         }
         let tf = tf * f32x8::splat(WIDEN);
         (tn, tn.simd_le(tf).to_bitmask())

@@ -5,7 +5,10 @@ use wide::f32x8;
 
 /// `origin + t * direction` for `t` in `[tmin, tmax]`. The direction need not
 /// be unit length: rays moved into object space keep world-space `t`.
+/// `repr(C)`: the fields lie in [`Ray::components`]'s order, so a ray is
+/// one 32-byte load into an `f32x8`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     pub origin: Vec3,
     pub direction: Vec3,
@@ -19,9 +22,15 @@ pub struct Ray {
 /// registers: a ray's eight components are exactly one `f32x8`.
 #[inline(always)]
 pub fn ray_lanes(rays: &[Ray]) -> [f32x8; 8] {
-    f32x8::transpose(std::array::from_fn(|lane| {
-        f32x8::from(rays[if lane < rays.len() { lane } else { 0 }].components())
-    }))
+    // A full packet (the common case) indexes with no per-lane choice or
+    // bounds check.
+    let rows = match <&[Ray; 8]>::try_from(rays) {
+        Ok(full) => full.each_ref().map(|r| f32x8::from(r.components())),
+        Err(_) => std::array::from_fn(|lane| {
+            f32x8::from(rays[if lane < rays.len() { lane } else { 0 }].components())
+        }),
+    };
+    f32x8::transpose(rows)
 }
 
 impl Ray {
