@@ -120,7 +120,7 @@ impl Bvh8 {
             nodes: self.nodes.len(),
             ..TreeStats::default()
         };
-        let root_area = self.bounds.half_area();
+        let root_area = self.bounds.half_area() as f64;
         let mut cost = 0.0f64;
         for node in &self.nodes {
             for slot in 0..8 {
@@ -129,9 +129,9 @@ impl Bvh8 {
                     continue;
                 }
                 stats.children += 1;
-                let b = |row: usize| node.bounds[row][slot];
+                let b = |row: usize| node.bounds[row][slot] as f64;
                 let (dx, dy, dz) = (b(1) - b(0), b(3) - b(2), b(5) - b(4));
-                let area = (dx * dy + dy * dz + dz * dx) as f64;
+                let area = dx * dy + dy * dz + dz * dx;
                 if is_leaf(child) {
                     let count = leaf_range(child).1;
                     stats.leaves += 1;
@@ -143,7 +143,7 @@ impl Bvh8 {
             }
         }
         if root_area > 0.0 {
-            stats.sah_cost = NODE_COST as f64 + cost / root_area as f64;
+            stats.sah_cost = NODE_COST as f64 + cost / root_area;
         }
         stats
     }
@@ -257,6 +257,11 @@ fn post_order(bvh2: &Bvh2) -> Vec<u32> {
 /// against the node tests it saves.
 struct CollapseCosts<'a> {
     bvh2: &'a Bvh2,
+    /// Areas are measured in units of the largest coordinate, so they
+    /// neither overflow (coordinates near 1e20 have areas past f32::MAX)
+    /// nor flush to zero (near 1e-20), and the choices do not depend on
+    /// the scene's scale.
+    unit: f32,
     /// Per inner node, at [`CollapseCosts::slot`]: only inner nodes have
     /// tables (a leaf's is its leaf cost in every entry), which halves
     /// their memory (36 bytes a primitive at the build's peak, not 72).
@@ -267,8 +272,11 @@ struct CollapseCosts<'a> {
 impl<'a> CollapseCosts<'a> {
     fn new(bvh2: &'a Bvh2) -> Self {
         let inner = bvh2.nodes.len() / 2;
+        let root = &bvh2.nodes[0].aabb;
+        let largest = root.min.abs().max(root.max.abs()).max_element();
         let mut costs = Self {
             bvh2,
+            unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
             cost: vec![[0.0f32; 8]; inner],
             counts: vec![0u32; inner],
         };
@@ -279,7 +287,7 @@ impl<'a> CollapseCosts<'a> {
             }
             let (l, r) = children(node);
             let count = costs.count(l) + costs.count(r);
-            let area = node.aabb.half_area();
+            let area = costs.area(i as usize);
             let (left, right) = (costs.table(l), costs.table(r));
             let split = |j: usize| split_cost(&left, &right, j).0;
             let as_node = NODE_COST * area + split(8);
@@ -307,6 +315,13 @@ impl<'a> CollapseCosts<'a> {
         node.first_index as usize / 2
     }
 
+    /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
+    fn area(&self, i: usize) -> f32 {
+        let b = &self.bvh2.nodes[i].aabb;
+        let d = b.max * self.unit - b.min * self.unit;
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
     fn count(&self, i: usize) -> u32 {
         let node = &self.bvh2.nodes[i];
         if node.prim_count > 0 {
@@ -319,7 +334,7 @@ impl<'a> CollapseCosts<'a> {
     fn table(&self, i: usize) -> [f32; 8] {
         let node = &self.bvh2.nodes[i];
         if node.prim_count > 0 {
-            [leaf_cost(node.aabb.half_area()); 8]
+            [leaf_cost(self.area(i)); 8]
         } else {
             self.cost[Self::slot(node)]
         }
@@ -341,7 +356,7 @@ impl<'a> CollapseCosts<'a> {
         if self.count(i) > LEAF_PRIMS {
             return false;
         }
-        let area = node.aabb.half_area();
+        let area = self.area(i);
         leaf_cost(area) <= NODE_COST * area + self.split(i, 8).0
     }
 
@@ -357,7 +372,7 @@ impl<'a> CollapseCosts<'a> {
             return;
         }
         let (split, k) = self.split(i, 8);
-        if self.count(i) <= LEAF_PRIMS && leaf_cost(node.aabb.half_area()) <= split {
+        if self.count(i) <= LEAF_PRIMS && leaf_cost(self.area(i)) <= split {
             out.push(i);
             return;
         }
@@ -548,8 +563,7 @@ mod tests {
             let boxes = random_boxes(3000, seed);
             let bvh2 = binary_tree(&boxes, quality);
             let costs = CollapseCosts::new(&bvh2);
-            let area = bvh2.nodes[0].aabb.half_area();
-            let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / area as f64;
+            let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
             let stats = Bvh8::collapse(&bvh2, bounds).stats();
             assert!(
@@ -587,5 +601,27 @@ mod tests {
             (1, 8, 8),
             "{stats}"
         );
+    }
+
+    /// The collapse makes the same choices at any scale: the same binary
+    /// tree scaled by 2^±60 (exactly, a power of two) collapses to the same
+    /// shape, where raw areas would overflow to infinity or flush to zero.
+    #[test]
+    fn collapse_does_not_depend_on_the_scale_of_the_scene() {
+        let boxes = random_boxes(2000, 4);
+        let bvh2 = binary_tree(&boxes, BuildQuality::Medium);
+        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
+        let reference = Bvh8::collapse(&bvh2, bounds).stats();
+        for scale in [2f32.powi(60), 2f32.powi(-60)] {
+            let mut scaled = bvh2.clone();
+            for node in &mut scaled.nodes {
+                node.aabb.min *= scale;
+                node.aabb.max *= scale;
+            }
+            let bounds = Aabb::new(bounds.min * scale, bounds.max * scale);
+            let stats = Bvh8::collapse(&scaled, bounds).stats();
+            assert_eq!(shape(&stats), shape(&reference), "scale {scale}");
+        }
     }
 }
