@@ -64,14 +64,6 @@ impl<T: Copy + Default> Stack<T> {
         Some(self.inline[self.len % STACK_INLINE])
     }
 
-    /// A push after a [`Stack::reserve`]: no length test.
-    #[inline(always)]
-    fn push_reserved(&mut self, e: T) {
-        debug_assert!(self.len < STACK_INLINE);
-        self.inline[self.len % STACK_INLINE] = e;
-        self.len += 1;
-    }
-
     /// Makes room for `n` (at most half the inline part) more pushes that
     /// stay inline: the children of one node.
     #[inline(always)]
@@ -400,6 +392,15 @@ impl Bvh8 {
 
     /// True if any leaf reports a blocker in `(tmin, tmax)`;
     /// `blocks_leaf(start, count, ray)` as for [`Bvh8::closest`].
+    ///
+    /// Children are visited nearest first, as in [`Bvh8::closest`] (no
+    /// culling: the first blocker ends the walk). The sort costs 9–17% more
+    /// instructions than pushing the children unsorted, yet on the dragon
+    /// it was faster in wall time on every ray kind (camera +17%, edges +7%,
+    /// inside +5%, random +2–4%, grazing +1%; the bunny even): the nearest
+    /// boxes hold the blocker more often, and each box not visited is a
+    /// cache miss saved. On the greedy tree before the SAH collapse it had
+    /// been a wash.
     #[inline(always)]
     pub fn any_hit<F>(&self, ray: &Ray, mut blocks_leaf: F) -> bool
     where
@@ -409,25 +410,19 @@ impl Bvh8 {
             return false;
         }
         let boxes = RayBoxes::new(ray);
-        let mut stack: Stack<u32> = Stack::new();
-        // As in `closest`: descend into one hit child, push the others, but
-        // unsorted. Sorting them (with `nearest_last`) was a wash: +10% on
-        // random dragon rays, -3 to -6% on camera, inside and edge rays.
+        let mut stack: Stack<u64> = Stack::new();
         let mut current = 0u32;
         loop {
             if !is_leaf(current) {
                 let node = &self.nodes[current as usize];
-                let (_, mut mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
+                let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
                 if mask != 0 {
-                    let first = mask.trailing_zeros() as usize % 8;
-                    mask &= mask - 1;
-                    stack.reserve(8);
-                    while mask != 0 {
-                        let slot = mask.trailing_zeros() as usize % 8;
-                        mask &= mask - 1;
-                        stack.push_reserved(node.child[slot]);
+                    if mask & (mask - 1) == 0 {
+                        current = node.child[mask.trailing_zeros() as usize % 8];
+                        continue;
                     }
-                    current = node.child[first];
+                    let entries = nearest_last(tn, mask, &node.child);
+                    current = stack.push_all_but_nth(&entries, mask.count_ones() as usize) as u32;
                     continue;
                 }
             } else {
@@ -437,7 +432,7 @@ impl Bvh8 {
                 }
             }
             match stack.pop() {
-                Some(child) => current = child,
+                Some(entry) => current = entry as u32,
                 None => return false,
             }
         }
