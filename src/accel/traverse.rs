@@ -397,8 +397,11 @@ impl Bvh8 {
     /// culling: the first blocker ends the walk). The sort costs 9–17% more
     /// instructions than pushing the children unsorted, yet on the dragon's
     /// `strata rays` sets it was faster in wall time on every kind (camera
-    /// +17%, edges +7%, inside +5%, random +2–4%, grazing +1%) and even on
-    /// `strata bench`'s sets and the bunny: the branch-free network replaces
+    /// +17%, edges +5–7%, inside +3–5%, random +2–4%, grazing +1%), even on
+    /// `strata bench`'s sets, and mixed on the bunny (edges +9%, camera
+    /// +1%, random even, grazing −2%, inside −8%: from inside a closed mesh
+    /// every direction is blocked, so any order finds a blocker and the
+    /// sort is pure cost). The branch-free network replaces
     /// a push loop whose trip count mispredicts (dragon camera rays: 1.49 →
     /// 1.09 mispredicted branches per ray in callgrind's simulation), and
     /// the nearest boxes hold the blocker a little more often (about 5%
