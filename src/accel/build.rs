@@ -100,7 +100,6 @@ impl Bvh8 {
             depth: 0,
         };
         let mut collapse = Collapse {
-            bvh2,
             costs: CollapseCosts::new(bvh2),
             out: &mut out,
             packer: LanePacker::default(),
@@ -347,17 +346,13 @@ impl<'a> CollapseCosts<'a> {
         split_cost(&self.table(l), &self.table(r), slots)
     }
 
-    /// True if BVH2 node `i`, as one child slot, is best a leaf.
+    /// True if BVH2 node `i`, as one child slot, is best a leaf: its
+    /// one-slot cost is the leaf's (`min` returns one of its operands, so
+    /// the equality is exact, and a tie goes to the leaf as in the table).
     fn is_leaf(&self, i: usize) -> bool {
         let node = &self.bvh2.nodes[i];
-        if node.prim_count > 0 {
-            return true;
-        }
-        if self.count(i) > LEAF_PRIMS {
-            return false;
-        }
-        let area = self.area(i);
-        leaf_cost(area) <= NODE_COST * area + self.split(i, 8).0
+        node.prim_count > 0
+            || self.count(i) <= LEAF_PRIMS && self.table(i)[0] == leaf_cost(self.area(i))
     }
 
     /// The children of BVH2 node `i` made an 8-wide node: its two children
@@ -427,7 +422,6 @@ fn split_cost(left: &[f32; 8], right: &[f32; 8], slots: usize) -> (f32, usize) {
 }
 
 struct Collapse<'a> {
-    bvh2: &'a Bvh2,
     costs: CollapseCosts<'a>,
     out: &'a mut Bvh8,
     packer: LanePacker,
@@ -445,7 +439,7 @@ impl Collapse<'_> {
             children.clear();
             self.costs.node_children(src, &mut children);
             for (slot, &c) in children.iter().enumerate() {
-                let b = self.bvh2.nodes[c].aabb;
+                let b = self.costs.bvh2.nodes[c].aabb;
                 let node = &mut self.out.nodes[dst];
                 for axis in 0..3 {
                     node.bounds[2 * axis][slot] = b.min[axis];
@@ -470,11 +464,11 @@ impl Collapse<'_> {
         let mut prims = Vec::with_capacity(LEAF_PRIMS as usize);
         let mut stack = vec![i];
         while let Some(i) = stack.pop() {
-            let node = &self.bvh2.nodes[i];
+            let node = &self.costs.bvh2.nodes[i];
             if node.prim_count > 0 {
                 let s = node.first_index as usize;
                 prims.extend_from_slice(
-                    &self.bvh2.primitive_indices[s..s + node.prim_count as usize],
+                    &self.costs.bvh2.primitive_indices[s..s + node.prim_count as usize],
                 );
             } else {
                 stack.push(node.first_index as usize + 1);

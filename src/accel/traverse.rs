@@ -293,6 +293,18 @@ fn nearest_last(tn: f32x8, mask: u32, child: &[u32; 8]) -> [u64; 8] {
     })
 }
 
+/// The nearest of the children in `mask` (not empty), with the others
+/// pushed onto `stack` farthest first: the step both traversals take at a
+/// node. One child needs no sort; two or more go through [`nearest_last`].
+#[inline(always)]
+fn descend_nearest(stack: &mut Stack<u64>, child: &[u32; 8], tn: f32x8, mask: u32) -> u32 {
+    if mask & (mask - 1) == 0 {
+        return child[mask.trailing_zeros() as usize % 8];
+    }
+    let entries = nearest_last(tn, mask, child);
+    stack.push_all_but_nth(&entries, mask.count_ones() as usize) as u32
+}
+
 impl Bvh8 {
     /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_leaf(start, count, ray)`
     /// tests the leaf holding slots `start..start + count` of `prim_ids`
@@ -321,14 +333,7 @@ impl Bvh8 {
                 let node = &self.nodes[current as usize];
                 let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
                 if mask != 0 {
-                    if mask & (mask - 1) == 0 {
-                        current = node.child[mask.trailing_zeros() as usize % 8];
-                        continue;
-                    }
-                    // Two or more: the others go onto the stack farthest
-                    // first, and the ray descends into the nearest.
-                    let entries = nearest_last(tn, mask, &node.child);
-                    current = stack.push_all_but_nth(&entries, mask.count_ones() as usize) as u32;
+                    current = descend_nearest(&mut stack, &node.child, tn, mask);
                     continue;
                 }
             } else {
@@ -423,12 +428,7 @@ impl Bvh8 {
                 let node = &self.nodes[current as usize];
                 let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
                 if mask != 0 {
-                    if mask & (mask - 1) == 0 {
-                        current = node.child[mask.trailing_zeros() as usize % 8];
-                        continue;
-                    }
-                    let entries = nearest_last(tn, mask, &node.child);
-                    current = stack.push_all_but_nth(&entries, mask.count_ones() as usize) as u32;
+                    current = descend_nearest(&mut stack, &node.child, tn, mask);
                     continue;
                 }
             } else {
