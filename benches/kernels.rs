@@ -62,6 +62,8 @@ fn one_node_bvh(rng: &mut Rng) -> Bvh8 {
         prim_ids: (0..8).collect(),
         bounds,
         depth: 1,
+        // The node test alone: one node, nothing to fetch ahead.
+        prefetch: false,
     }
 }
 
@@ -104,7 +106,7 @@ fn ray_box(c: &mut Criterion) {
             let mut n = 0;
             for batch in &batches {
                 for r in batch {
-                    n += bvh.closest(r, |_, _, _| None).is_some() as u32;
+                    n += bvh.closest(r, &[] as &[()], |_, _, _| None).is_some() as u32;
                 }
             }
             black_box(n)
@@ -115,7 +117,7 @@ fn ray_box(c: &mut Criterion) {
             let mut n = 0;
             for batch in &batches {
                 for r in batch {
-                    n += bvh.any_hit(r, |_, _, _| false) as u32;
+                    n += bvh.any_hit(r, &[] as &[()], |_, _, _| false) as u32;
                 }
             }
             black_box(n)
@@ -128,7 +130,7 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [None::<PrimHit>; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.closest_packet(p, &mut out, |_, _, _, _| false);
+                bvh.closest_packet(p, &mut out, &[] as &[()], |_, _, _, _| false);
                 n += out.iter().filter(|h| h.is_some()).count();
             }
             black_box(n)
@@ -139,7 +141,7 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [false; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.any_hit_packet(p, &mut out, |_, _, _| 0);
+                bvh.any_hit_packet(p, &mut out, &[] as &[()], |_, _, _| 0);
                 n += out.iter().filter(|&&o| o).count();
             }
             black_box(n)

@@ -6,6 +6,8 @@
 // `!(x > 0.0)` is how this crate says "not positive, or NaN": rejecting NaN
 // is the point, so the partial-order lint would make the code wrong.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+// `unsafe` lives in one module, `accel::prefetch`, which allows it for itself.
+#![deny(unsafe_code)]
 
 pub mod accel;
 pub mod bench;

@@ -189,6 +189,45 @@ fn packets_and_single_rays_return_identical_hits() {
     }
 }
 
+/// Software prefetching (the crate's one `unsafe`) is a hint only: rays
+/// traced with it and with its safe fallback (prefetching off) get the
+/// same closest hits, bit for bit, and the same occlusion answers, single
+/// and as packets. The test scenes are small enough that `auto` leaves it
+/// off, so both settings are forced.
+#[test]
+fn prefetching_changes_no_hit() {
+    let bits = |h: Option<strata::shape::PrimHit>| {
+        h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()))
+    };
+    for (quality, mut scene) in scenes() {
+        let sets = ray_sets(&scene);
+        let trace = |scene: &Scene| {
+            let mut answers = Vec::new();
+            for batch in sets.iter().flat_map(|(_, batches)| batches) {
+                let mut hits = [None; PACKET_SIZE];
+                scene.intersect_packet(batch, &mut hits);
+                let mut blocked = [false; PACKET_SIZE];
+                scene.occluded_packet(batch, u32::MAX, &mut blocked);
+                for (i, ray) in batch.iter().enumerate() {
+                    answers.push((
+                        bits(scene.intersect(ray)),
+                        scene.occluded(ray),
+                        bits(hits[i]),
+                        blocked[i],
+                    ));
+                }
+            }
+            answers
+        };
+        scene.bvh.prefetch = true;
+        let with = trace(&scene);
+        scene.bvh.prefetch = false;
+        let without = trace(&scene);
+        assert!(with.iter().filter(|a| a.0.is_some()).count() > 1000);
+        assert_eq!(with, without, "{quality:?}");
+    }
+}
+
 /// Every kind of ray `strata rays` makes (on a closed icosphere), batched
 /// eight at a time two ways: sorted by direction octant (every axis agrees
 /// in sign), and in generation order, where most packets differ in sign on

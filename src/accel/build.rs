@@ -64,6 +64,10 @@ pub struct Bvh8 {
     pub bounds: Aabb,
     /// Deepest node level, for sizing traversal stacks.
     pub depth: u32,
+    /// Whether traversal prefetches the children it defers (see
+    /// [`super::prefetch`]). On after a build; a scene turns it off when
+    /// its tree fits the caches ([`super::prefetch::Prefetch::Auto`]).
+    pub prefetch: bool,
 }
 
 impl Bvh8 {
@@ -73,6 +77,7 @@ impl Bvh8 {
             prim_ids: Vec::new(),
             bounds: Aabb::EMPTY,
             depth: 0,
+            prefetch: true,
         }
     }
 
@@ -98,6 +103,7 @@ impl Bvh8 {
             prim_ids: Vec::with_capacity(bvh2.primitive_indices.len()),
             bounds,
             depth: 0,
+            prefetch: true,
         };
         let mut collapse = Collapse {
             costs: CollapseCosts::new(bvh2),

@@ -12,6 +12,7 @@
 pub mod build;
 pub mod node;
 pub mod packet;
+pub mod prefetch;
 pub mod traverse;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};

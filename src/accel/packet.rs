@@ -291,22 +291,30 @@ impl Bvh8 {
     /// `hit_leaf(start, count, lanes, out)` tests the leaf for the rays in
     /// the bits of `lanes`, replacing `out[lane]` by any hit [`closer`](super::traverse::closer)
     /// than it within the ray's interval, and returns whether any changed.
-    pub fn closest_packet<F>(&self, packet: &Packet, out: &mut [Option<PrimHit>], hit_leaf: F)
-    where
+    /// `leaf_data` as for [`Bvh8::closest`]: the children pushed for later
+    /// are prefetched.
+    pub fn closest_packet<L, F>(
+        &self,
+        packet: &Packet,
+        out: &mut [Option<PrimHit>],
+        leaf_data: &[L],
+        hit_leaf: F,
+    ) where
         F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
     {
         if packet.skipped == 0 {
-            self.closest_packet_in::<false, F>(packet, out, hit_leaf)
+            self.closest_packet_in::<false, L, F>(packet, out, leaf_data, hit_leaf)
         } else {
-            self.closest_packet_in::<true, F>(packet, out, hit_leaf)
+            self.closest_packet_in::<true, L, F>(packet, out, leaf_data, hit_leaf)
         }
     }
 
     #[inline(always)]
-    fn closest_packet_in<const SKIP: bool, F>(
+    fn closest_packet_in<const SKIP: bool, L, F>(
         &self,
         packet: &Packet,
         out: &mut [Option<PrimHit>],
+        leaf_data: &[L],
         mut hit_leaf: F,
     ) where
         F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
@@ -352,6 +360,9 @@ impl Bvh8 {
                         count += 1;
                     }
                     for &e in &order[..count] {
+                        if self.prefetch {
+                            self.prefetch_child(e.0, leaf_data);
+                        }
                         stack.push(e);
                     }
                 }
@@ -372,23 +383,30 @@ impl Bvh8 {
     /// Occlusion for a packet: `out[i]` is exactly what [`Bvh8::any_hit`]
     /// returns for ray `i`, with `blocks_leaf(start, count, lanes)` its
     /// leaf test for the rays in the bits of `lanes`, returning the lanes
-    /// it blocks. Lanes stop as soon as they are blocked.
-    pub fn any_hit_packet<F>(&self, packet: &Packet, out: &mut [bool], blocks_leaf: F)
-    where
+    /// it blocks. Lanes stop as soon as they are blocked. `leaf_data` as
+    /// for [`Bvh8::closest_packet`].
+    pub fn any_hit_packet<L, F>(
+        &self,
+        packet: &Packet,
+        out: &mut [bool],
+        leaf_data: &[L],
+        blocks_leaf: F,
+    ) where
         F: FnMut(u32, u32, u32) -> u32,
     {
         if packet.skipped == 0 {
-            self.any_hit_packet_in::<false, F>(packet, out, blocks_leaf)
+            self.any_hit_packet_in::<false, L, F>(packet, out, leaf_data, blocks_leaf)
         } else {
-            self.any_hit_packet_in::<true, F>(packet, out, blocks_leaf)
+            self.any_hit_packet_in::<true, L, F>(packet, out, leaf_data, blocks_leaf)
         }
     }
 
     #[inline(always)]
-    fn any_hit_packet_in<const SKIP: bool, F>(
+    fn any_hit_packet_in<const SKIP: bool, L, F>(
         &self,
         packet: &Packet,
         out: &mut [bool],
+        leaf_data: &[L],
         mut blocks_leaf: F,
     ) where
         F: FnMut(u32, u32, u32) -> u32,
@@ -420,6 +438,9 @@ impl Bvh8 {
                         hit &= hit - 1;
                         let m = mask & packet.test_lanes::<SKIP>(&node.bounds, slot, tmax_v);
                         if m != 0 {
+                            if self.prefetch {
+                                self.prefetch_child(node.child[slot], leaf_data);
+                            }
                             stack.push((node.child[slot], m));
                         }
                     }

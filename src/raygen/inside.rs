@@ -45,7 +45,8 @@ impl<'a> Inside<'a> {
     fn winding(&self, ray: &Ray) -> i32 {
         let sheared = ShearedRay::new(ray);
         let mut winding = 0;
-        self.bvh.any_hit(ray, |start, count, r| {
+        // Triangles are read by id, not in leaf blocks: nodes are prefetched only.
+        self.bvh.any_hit(ray, &[] as &[()], |start, count, r| {
             for (_, id) in self.bvh.leaf_prims(start, count) {
                 let tri = &self.triangles[id as usize];
                 if intersect(r, &sheared, tri).is_some() {

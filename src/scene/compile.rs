@@ -9,6 +9,7 @@ use super::asset::{LoadedAsset, LoadedCamera};
 use super::description::*;
 use super::loaders::load_mesh_file;
 use super::world::{AnalyticPrim, MeshRange, RenderSettings, Scene, Shape, NO_TRANSFORM};
+use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
 use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
 use crate::error::{InputError, InputResult};
@@ -158,7 +159,7 @@ pub fn compile(
         load_peak_bytes,
         build_peak_bytes: memory.phase_peak(),
     };
-    let scene = Scene {
+    let mut scene = Scene {
         leaf_blocks,
         triangle_count: n_tris,
         meshes: c.meshes,
@@ -172,6 +173,7 @@ pub fn compile(
         settings,
         bvh,
     };
+    scene.bvh.prefetch = Prefetch::Auto.enabled(scene.traversal_bytes());
     Ok((scene, timings))
 }
 

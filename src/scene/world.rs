@@ -202,7 +202,13 @@ impl Scene {
                     + n.indices.len() * std::mem::size_of::<[u32; 3]>()
             })
             .sum();
-        self.bvh.memory_bytes() + std::mem::size_of_val(self.leaf_blocks.as_slice()) + normals
+        self.traversal_bytes() + normals
+    }
+
+    /// Bytes traversal reads: BVH nodes and leaf blocks (what decides
+    /// whether it prefetches, see [`crate::accel::prefetch`]).
+    pub fn traversal_bytes(&self) -> usize {
+        self.bvh.memory_bytes() + std::mem::size_of_val(self.leaf_blocks.as_slice())
     }
 
     #[inline]
@@ -428,7 +434,7 @@ impl Scene {
         // The shear is made at the first leaf: most rays of a sparse view
         // miss every leaf box.
         let mut sheared = None;
-        let best = self.bvh.closest(ray, |start, count, r| {
+        let best = self.bvh.closest(ray, &self.leaf_blocks, |start, count, r| {
             let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
             self.hit_leaf(start, count, r, s)
         });
@@ -467,11 +473,15 @@ impl Scene {
             return;
         };
         let mut sheared = None;
-        self.bvh
-            .closest_packet(&packet, out, |start, count, lanes, out| {
+        self.bvh.closest_packet(
+            &packet,
+            out,
+            &self.leaf_blocks,
+            |start, count, lanes, out| {
                 let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
                 self.hit_leaf_packet(rays, s, start, count, lanes, out)
-            });
+            },
+        );
         if !self.planes.is_empty() {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = self.closest_plane(r, *o);
@@ -498,7 +508,7 @@ impl Scene {
         };
         let mut sheared = None;
         self.bvh
-            .any_hit_packet(&packet, out, |start, count, lanes| {
+            .any_hit_packet(&packet, out, &self.leaf_blocks, |start, count, lanes| {
                 let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
                 self.blocks_leaf_packet(rays, s, start, count, lanes, except)
             });
@@ -523,7 +533,7 @@ impl Scene {
             return true;
         }
         let mut sheared = None;
-        self.bvh.any_hit(ray, |start, count, r| {
+        self.bvh.any_hit(ray, &self.leaf_blocks, |start, count, r| {
             let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
             self.blocks_leaf(start, count, r, s, except)
         })
