@@ -302,7 +302,7 @@ impl Bvh8 {
     /// [`nearest_last`], and all of them are prefetched first (see
     /// [`super::prefetch`]). The nearest one included, and before the sort:
     /// prefetching only the pushed ones, after the sort, was 1–7% slower on
-    /// random dragon rays, and only the two nearest 3–11% slower
+    /// random dragon rays, and only the two nearest 2–11% slower
     /// (interleaved wall-time A/B).
     #[inline(always)]
     fn descend_nearest<L>(

@@ -105,7 +105,12 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
             mb(timings.load_peak_bytes),
             mb(timings.build_peak_bytes),
         );
-        println!("# {name}: tree {}", scene.bvh.stats());
+        println!(
+            "# {name}: tree {}; prefetch {} ({:.1} MB of nodes and leaf blocks)",
+            scene.bvh.stats(),
+            if scene.bvh.prefetch { "on" } else { "off" },
+            scene.traversal_bytes() as f64 / 1e6
+        );
         for kind in [RayKind::Camera, RayKind::Random] {
             let batches = rays(&scene, kind, args.batches, 1);
             for query in [Query::Closest, Query::Occlusion] {
