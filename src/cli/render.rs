@@ -267,6 +267,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             planes: scene.planes.len(),
             bvh_nodes: scene.bvh.nodes.len(),
             bvh_bytes: scene.bvh.memory_bytes(),
+            bvh_prefetch: scene.bvh.prefetch,
             peak_rss_bytes: peak_rss_bytes(),
             memory: BuildMemory {
                 final_bytes_per_triangle: scene.accel_bytes() as f64

@@ -34,6 +34,9 @@ pub struct RenderStats {
     pub planes: usize,
     pub bvh_nodes: usize,
     pub bvh_bytes: usize,
+    /// Whether traversal prefetched (`accel::prefetch`: on for trees of
+    /// 8 MiB and more of nodes and leaf blocks; the image does not depend on it).
+    pub bvh_prefetch: bool,
     pub peak_rss_bytes: Option<u64>,
     pub memory: BuildMemory,
     pub invalid_samples: u64,
