@@ -96,6 +96,25 @@ impl Bvh8 {
         Self::collapse(&bvh2, boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b)))
     }
 
+    /// [`Bvh8::build`] that takes the boxes and frees them once the binary
+    /// tree is built, before the collapse: they are not needed after it,
+    /// and 24 bytes a primitive less at the collapse lowers the build's
+    /// peak where the collapse is the peak (small meshes).
+    pub fn build_from(boxes: Vec<Aabb>, quality: BuildQuality) -> Self {
+        if boxes.is_empty() {
+            return Self::empty();
+        }
+        assert!(
+            boxes.len() <= MAX_PRIMS,
+            "too many primitives for one BVH: {}",
+            boxes.len()
+        );
+        let bvh2 = binary_tree(&boxes, quality);
+        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        drop(boxes);
+        Self::collapse(&bvh2, bounds)
+    }
+
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
     fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Self {
         let mut out = Self {
@@ -208,6 +227,10 @@ fn binary_tree(boxes: &[Aabb], quality: BuildQuality) -> Bvh2 {
     if params.reinsertion_batch_ratio > 0.0 {
         ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
     }
+    // The collapse reads nodes and primitive indices only: free the maps
+    // reinsertion kept (parents: 8 bytes a primitive) before it.
+    bvh2.parents = Vec::new();
+    bvh2.primitives_to_nodes = Vec::new();
     bvh2
 }
 
@@ -573,6 +596,24 @@ mod tests {
             );
             assert_eq!(stats.leaf_prims, 3000);
         }
+    }
+
+    /// Taking the boxes (and freeing them before the collapse) builds the
+    /// same tree as borrowing them.
+    #[test]
+    fn build_from_owned_boxes_matches_build() {
+        let boxes = random_boxes(2000, 5);
+        let borrowed = Bvh8::build(&boxes, BuildQuality::Medium);
+        let owned = Bvh8::build_from(boxes.clone(), BuildQuality::Medium);
+        assert_eq!(owned.stats(), borrowed.stats());
+        assert_eq!(owned.prim_ids, borrowed.prim_ids);
+        assert_eq!(
+            (owned.bounds, owned.depth),
+            (borrowed.bounds, borrowed.depth)
+        );
+        assert!(Bvh8::build_from(Vec::new(), BuildQuality::Auto)
+            .nodes
+            .is_empty());
     }
 
     /// Eight coincident boxes are one leaf (eight node slots would cost

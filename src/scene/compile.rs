@@ -143,8 +143,7 @@ pub fn compile(
 
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
-    let mut bvh = Bvh8::build(&boxes, overrides.bvh_quality);
-    drop(boxes);
+    let mut bvh = Bvh8::build_from(boxes, overrides.bvh_quality);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.nodes.shrink_to_fit();
     // Store the vertices once, in the order the leaves read them, straight
