@@ -84,16 +84,10 @@ impl Bvh8 {
     /// Build over primitive boxes; primitive `i` is reported as id `i`.
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
-        if boxes.is_empty() {
-            return Self::empty();
+        match binary_tree_and_bounds(boxes, quality) {
+            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds),
+            None => Self::empty(),
         }
-        assert!(
-            boxes.len() <= MAX_PRIMS,
-            "too many primitives for one BVH: {}",
-            boxes.len()
-        );
-        let bvh2 = binary_tree(boxes, quality);
-        Self::collapse(&bvh2, boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b)))
     }
 
     /// [`Bvh8::build`] that takes the boxes and frees them once the binary
@@ -101,18 +95,13 @@ impl Bvh8 {
     /// and 24 bytes a primitive less at the collapse lowers the build's
     /// peak where the collapse is the peak (small meshes).
     pub fn build_from(boxes: Vec<Aabb>, quality: BuildQuality) -> Self {
-        if boxes.is_empty() {
-            return Self::empty();
+        match binary_tree_and_bounds(&boxes, quality) {
+            Some((bvh2, bounds)) => {
+                drop(boxes);
+                Self::collapse(&bvh2, bounds)
+            }
+            None => Self::empty(),
         }
-        assert!(
-            boxes.len() <= MAX_PRIMS,
-            "too many primitives for one BVH: {}",
-            boxes.len()
-        );
-        let bvh2 = binary_tree(&boxes, quality);
-        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-        drop(boxes);
-        Self::collapse(&bvh2, bounds)
     }
 
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
@@ -210,6 +199,21 @@ impl obvhs::Boundable for Aabb {
             max: Vec3A::from(self.max),
         }
     }
+}
+
+/// obvhs's binary tree over `boxes` and their union; `None` if there are
+/// no boxes.
+fn binary_tree_and_bounds(boxes: &[Aabb], quality: BuildQuality) -> Option<(Bvh2, Aabb)> {
+    if boxes.is_empty() {
+        return None;
+    }
+    assert!(
+        boxes.len() <= MAX_PRIMS,
+        "too many primitives for one BVH: {}",
+        boxes.len()
+    );
+    let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+    Some((binary_tree(boxes, quality), bounds))
 }
 
 /// obvhs's binary tree over `boxes` (not empty), one primitive a leaf.
