@@ -144,6 +144,11 @@ fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
     ]
 }
 
+/// A hit as exact bits (t, prim, u, v), for bit-for-bit comparisons.
+fn hit_bits(h: Option<strata::shape::PrimHit>) -> Option<(u32, u32, u32, u32)> {
+    h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()))
+}
+
 /// Asserts that `batch` as a packet gets exactly the single rays' closest
 /// hits (t, prim, u, v bit for bit) and occlusion answers (ignoring
 /// primitive `except`); returns how many rays hit.
@@ -153,9 +158,6 @@ fn assert_packet_matches_single_rays(
     except: u32,
     label: &str,
 ) -> usize {
-    let bits = |h: Option<strata::shape::PrimHit>| {
-        h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()))
-    };
     let mut got = [None; PACKET_SIZE];
     scene.intersect_packet(batch, &mut got);
     let mut blocked = [false; PACKET_SIZE];
@@ -163,7 +165,7 @@ fn assert_packet_matches_single_rays(
     let mut hits = 0;
     for (i, ray) in batch.iter().enumerate() {
         let want = scene.intersect(ray);
-        assert_eq!(bits(got[i]), bits(want), "{label}: ray {ray:?}");
+        assert_eq!(hit_bits(got[i]), hit_bits(want), "{label}: ray {ray:?}");
         assert_eq!(
             blocked[i],
             scene.occluded_except(ray, except),
@@ -196,9 +198,6 @@ fn packets_and_single_rays_return_identical_hits() {
 /// off, so both settings are forced.
 #[test]
 fn prefetching_changes_no_hit() {
-    let bits = |h: Option<strata::shape::PrimHit>| {
-        h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()))
-    };
     for (quality, mut scene) in scenes() {
         let sets = ray_sets(&scene);
         let trace = |scene: &Scene| {
@@ -210,9 +209,9 @@ fn prefetching_changes_no_hit() {
                 scene.occluded_packet(batch, u32::MAX, &mut blocked);
                 for (i, ray) in batch.iter().enumerate() {
                     answers.push((
-                        bits(scene.intersect(ray)),
+                        hit_bits(scene.intersect(ray)),
                         scene.occluded(ray),
-                        bits(hits[i]),
+                        hit_bits(hits[i]),
                         blocked[i],
                     ));
                 }
