@@ -18,6 +18,7 @@ use strata::math::Aabb;
 fn build(c: &mut Criterion) {
     let (scene, name) = common::mesh_scene(BuildQuality::Fastest);
     let boxes: Vec<Aabb> = scene
+        .geometry
         .file_order_triangles()
         .iter()
         .map(|t| Aabb::from_points(t))

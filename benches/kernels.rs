@@ -28,11 +28,11 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 use strata::accel::node::{encode_leaf, Node8};
+use strata::accel::PrimHit;
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
 use strata::math::{Aabb, Ray};
 use strata::scene::{scene_from_str, RenderOverrides};
 use strata::shape::triangle::{intersect, ShearedRay};
-use strata::shape::PrimHit;
 
 /// One node, eight leaf children with random boxes in [-1, 1]³.
 fn one_node_bvh(rng: &mut Rng) -> Bvh8 {
@@ -163,7 +163,7 @@ fn ray_triangle(c: &mut Criterion) {
     // Triangles of the bench mesh (or the icosphere), each with a ray from
     // a random point towards a point of its plane near it: about half hit.
     let (scene, _) = common::mesh_scene(BuildQuality::Fastest);
-    let tris = scene.file_order_triangles();
+    let tris = scene.geometry.file_order_triangles();
     let mut rng = Rng(11);
     let cases: Vec<([Vec3; 3], Ray, ShearedRay)> = (0..1024)
         .map(|i| {
@@ -260,7 +260,7 @@ fn ray_triangle(c: &mut Criterion) {
             let mut n = 0;
             for batch in &batches {
                 for r in batch {
-                    n += one.intersect(r).is_some() as u32;
+                    n += one.geometry.intersect(r).is_some() as u32;
                 }
             }
             black_box(n)
@@ -271,7 +271,7 @@ fn ray_triangle(c: &mut Criterion) {
             let mut out = [None; PACKET_SIZE];
             let mut n = 0;
             for batch in &batches {
-                one.intersect_packet(batch, &mut out);
+                one.geometry.intersect_packet(batch, &mut out);
                 n += out.iter().filter(|h| h.is_some()).count();
             }
             black_box(n)

@@ -28,7 +28,7 @@ fn traversal(c: &mut Criterion) {
                 let mut n = 0;
                 for batch in &batches {
                     for r in batch {
-                        n += scene.intersect(r).is_some() as u32;
+                        n += scene.geometry.intersect(r).is_some() as u32;
                     }
                 }
                 black_box(n)
@@ -39,7 +39,7 @@ fn traversal(c: &mut Criterion) {
                 let mut out = [None; PACKET_SIZE];
                 let mut n = 0;
                 for batch in &batches {
-                    scene.intersect_packet(batch, &mut out);
+                    scene.geometry.intersect_packet(batch, &mut out);
                     n += out.iter().filter(|h| h.is_some()).count();
                 }
                 black_box(n)
@@ -50,7 +50,7 @@ fn traversal(c: &mut Criterion) {
                 let mut n = 0;
                 for batch in &batches {
                     for r in batch {
-                        n += scene.occluded(r) as u32;
+                        n += scene.geometry.occluded(r) as u32;
                     }
                 }
                 black_box(n)
@@ -61,7 +61,7 @@ fn traversal(c: &mut Criterion) {
                 let mut out = [false; PACKET_SIZE];
                 let mut n = 0;
                 for batch in &batches {
-                    scene.occluded_packet(batch, u32::MAX, &mut out);
+                    scene.geometry.occluded_packet(batch, u32::MAX, &mut out);
                     n += out.iter().filter(|&&o| o).count();
                 }
                 black_box(n)

@@ -30,6 +30,7 @@ fn main() {
         compile::compile(&desc, &p, &RenderOverrides::default(), Instant::now()).unwrap();
     let rays = strata::rayfile::read_rays(std::path::Path::new(rays_path)).unwrap();
     let tris: Vec<Triangle> = scene
+        .geometry
         .file_order_triangles()
         .iter()
         .map(|t| Triangle {
@@ -60,7 +61,7 @@ fn main() {
                 if cw(&bvh, &tris, ray, &mut hit) {
                     hits += 1;
                 }
-            } else if scene.intersect(r).is_some() {
+            } else if scene.geometry.intersect(r).is_some() {
                 hits += 1;
             }
         }

@@ -15,10 +15,10 @@
 //! (`strata trace --occlusion`) is [`HitRecord::OCCLUDED`] (`t = 0`,
 //! `prim = 0`) or the miss record.
 
+use crate::accel::PrimHit;
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::math::Ray;
-use crate::shape::PrimHit;
 use glam::Vec3;
 use std::io::Write;
 use std::path::Path;

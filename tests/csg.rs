@@ -244,7 +244,7 @@ fn next_boundary(s: &Scene, o: Vec3, d: Vec3) -> impl Fn(f64) -> Option<f64> + '
             tmin: t as f32,
             ..Ray::new(o, d)
         };
-        s.intersect(&ray).map(|h| h.t as f64)
+        s.geometry.intersect(&ray).map(|h| h.t as f64)
     }
 }
 
@@ -270,7 +270,7 @@ fn random_rays(node: &Node, rays: usize, seed: u32) -> Tally {
             o,
             d,
             0.0,
-            s.intersect(&ray).map(|h| h.t),
+            s.geometry.intersect(&ray).map(|h| h.t),
             next_boundary(&s, o, d),
         );
     }
@@ -348,8 +348,9 @@ fn the_lens_is_as_thick_along_its_axis_as_two_radii_minus_the_centre_distance() 
             tilt.to_radians().cos() as f32,
         );
         let ray = Ray::new(10.0 * axis, -axis);
-        let entry = s.intersect(&ray).expect("the axis meets the lens");
+        let entry = s.geometry.intersect(&ray).expect("the axis meets the lens");
         let exit = s
+            .geometry
             .intersect(&Ray {
                 tmin: entry.t,
                 ..ray
@@ -362,11 +363,12 @@ fn the_lens_is_as_thick_along_its_axis_as_two_radii_minus_the_centre_distance() 
         );
         assert!(((10.0 - entry.t as f64) - (r - d / 2.0)).abs() < 2e-5 * r);
         // Outward normals: towards the ray on entry, away from it on exit.
-        assert!(s.surface(&ray, &entry).geometric_normal.dot(axis) > 0.9999);
-        assert!(s.surface(&ray, &exit).geometric_normal.dot(axis) < -0.9999);
+        assert!(s.geometry.surface(&ray, &entry).geometric_normal.dot(axis) > 0.9999);
+        assert!(s.geometry.surface(&ray, &exit).geometric_normal.dot(axis) < -0.9999);
         // From the lens centre, either way, the face is half the thickness away.
         for dir in [axis, -axis] {
             let h = s
+                .geometry
                 .intersect(&Ray::new(Vec3::ZERO, dir))
                 .expect("a ray from inside leaves");
             assert!((h.t as f64 - (r - d / 2.0)).abs() < 2e-5 * r);
@@ -380,26 +382,31 @@ fn a_ray_down_the_drilled_hole_passes_and_its_wall_faces_the_hole() {
     // Along the hole: nothing, also off-centre inside the hole's radius.
     for (y, z) in [(0.0, 0.0), (0.2, 0.1), (-0.1, -0.35)] {
         assert!(
-            s.intersect(&Ray::new(Vec3::new(-5.0, y, z), Vec3::X))
+            s.geometry
+                .intersect(&Ray::new(Vec3::new(-5.0, y, z), Vec3::X))
                 .is_none(),
             "({y}, {z})"
         );
-        assert!(!s.occluded(&Ray::segment(Vec3::new(-5.0, y, z), Vec3::X, 10.0)));
+        assert!(!s
+            .geometry
+            .occluded(&Ray::segment(Vec3::new(-5.0, y, z), Vec3::X, 10.0)));
     }
     // Beside the hole: the cylinder's side, where x² + z² = 1.
     let h = s
+        .geometry
         .intersect(&Ray::new(Vec3::new(-5.0, 0.6, 0.0), Vec3::X))
         .unwrap();
     assert!((h.t - 4.0).abs() < 1e-5);
     // Down through the top cap into the hole's upper wall at y = 0.4, whose
     // normal is the drill's, flipped: it points down into the hole.
     let ray = Ray::new(Vec3::new(0.1, 5.0, 0.0), -Vec3::Y);
-    let cap = s.intersect(&ray).unwrap();
+    let cap = s.geometry.intersect(&ray).unwrap();
     assert!((cap.t - 4.0).abs() < 1e-5);
-    let wall = s.intersect(&Ray { tmin: cap.t, ..ray }).unwrap();
+    let wall = s.geometry.intersect(&Ray { tmin: cap.t, ..ray }).unwrap();
     assert!((wall.t - 4.6).abs() < 1e-5, "{}", wall.t);
-    assert!((s.surface(&ray, &wall).geometric_normal + Vec3::Y).length() < 1e-5);
+    assert!((s.geometry.surface(&ray, &wall).geometric_normal + Vec3::Y).length() < 1e-5);
     let floor = s
+        .geometry
         .intersect(&Ray {
             tmin: wall.t,
             ..ray
@@ -409,7 +416,7 @@ fn a_ray_down_the_drilled_hole_passes_and_its_wall_faces_the_hole() {
         (floor.t - 5.4).abs() < 1e-5,
         "hole's lower wall at y = −0.4"
     );
-    assert!((s.surface(&ray, &floor).geometric_normal - Vec3::Y).length() < 1e-5);
+    assert!((s.geometry.surface(&ray, &floor).geometric_normal - Vec3::Y).length() < 1e-5);
 }
 
 #[test]
@@ -418,13 +425,13 @@ fn a_ray_into_the_die_pit_hits_at_the_pit_depth() {
     let s = csg_scene(&die(), "");
     // Straight down the face centre, which lies on the face's diagonal edge.
     let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!(
         (h.t - 4.3).abs() < 1e-5,
         "pit bottom at z = 0.7, got t = {}",
         h.t
     );
-    let n = s.surface(&ray, &h).geometric_normal;
+    let n = s.geometry.surface(&ray, &h).geometric_normal;
     assert!(
         (n - Vec3::Z).length() < 1e-5,
         "the pit's floor faces out of the die: {n}"
@@ -432,23 +439,25 @@ fn a_ray_into_the_die_pit_hits_at_the_pit_depth() {
     // On the pit's wall: z = 1.2 − √(0.25 − x²).
     let x = 0.45f32;
     let h = s
+        .geometry
         .intersect(&Ray::new(Vec3::new(x, 0.0, 5.0), -Vec3::Z))
         .unwrap();
     let z = 1.2 - (0.25 - x * x).sqrt();
     assert!((5.0 - h.t - z).abs() < 1e-5);
     // Beside the pit: the flat face of the cube mesh, then the far face.
     let ray = Ray::new(Vec3::new(0.6, -0.5, 5.0), -Vec3::Z);
-    let face = s.intersect(&ray).unwrap();
+    let face = s.geometry.intersect(&ray).unwrap();
     assert!((face.t - 4.0).abs() < 1e-5);
-    assert!((s.surface(&ray, &face).geometric_normal - Vec3::Z).length() < 1e-6);
+    assert!((s.geometry.surface(&ray, &face).geometric_normal - Vec3::Z).length() < 1e-6);
     let back = s
+        .geometry
         .intersect(&Ray {
             tmin: face.t,
             ..ray
         })
         .unwrap();
     assert!((back.t - 6.0).abs() < 1e-5);
-    assert!((s.surface(&ray, &back).geometric_normal + Vec3::Z).length() < 1e-6);
+    assert!((s.geometry.surface(&ray, &back).geometric_normal + Vec3::Z).length() < 1e-6);
 }
 
 #[test]
@@ -469,15 +478,18 @@ fn the_difference_of_identical_spheres_is_empty_with_no_nan() {
             rng.range(-2.0, 2.0),
         );
         let d = rng.unit_vector();
-        assert!(s.intersect(&Ray::new(o, d)).is_none());
-        assert!(!s.occluded(&Ray::segment(o, d, 10.0)));
+        assert!(s.geometry.intersect(&Ray::new(o, d)).is_none());
+        assert!(!s.geometry.occluded(&Ray::segment(o, d, 10.0)));
     }
     // The same with the copy under an identity transform given as a matrix.
     let text = "[[objects]]\ncsg = { op = \"difference\", a = { sphere = { radius = 1.0 } }, b = { sphere = { radius = 1.0 }, transform = { matrix = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]] } } }\n";
     let s2 = scene(text);
     for _ in 0..2000 {
         let o = rng.unit_vector() * rng.range(0.0, 3.0);
-        assert!(s2.intersect(&Ray::new(o, rng.unit_vector())).is_none());
+        assert!(s2
+            .geometry
+            .intersect(&Ray::new(o, rng.unit_vector()))
+            .is_none());
     }
     let img = render_rgb(&s, 0);
     assert!(
@@ -526,11 +538,11 @@ fn spawned_rays(node: &Node, seed: u32, paths: usize) -> Tally {
         );
         let mut ray = Ray::new(target + 4.0 * rng.unit_vector(), Vec3::ZERO);
         ray.direction = (target - ray.origin).normalize();
-        let Some(mut hit) = s.intersect(&ray) else {
+        let Some(mut hit) = s.geometry.intersect(&ray) else {
             continue;
         };
         for bounce in 0..6 {
-            let surf = s.surface(&ray, &hit);
+            let surf = s.geometry.surface(&ray, &hit);
             let n = surf.geometric_normal;
             let wo = -ray.direction;
             let dir = match bounce % 3 {
@@ -555,7 +567,7 @@ fn spawned_rays(node: &Node, seed: u32, paths: usize) -> Tally {
                 }
             };
             let next = Ray::new(spawn_origin(surf.p, surf.p_error, n, dir), dir);
-            let got = s.intersect(&next);
+            let got = s.geometry.intersect(&next);
             tally.judge(
                 &reference,
                 next.origin,
@@ -605,8 +617,8 @@ fn surfaces_keep_their_operands_materials_unless_the_csg_names_one() {
     let a = "{ sphere = { radius = 1.0 }, material = \"red\" }";
     let b = "{ sphere = { center = [0.0, 0.0, 1.0], radius = 0.5 }, material = \"blue\" }";
     let colour = |s: &Scene, ray: Ray| {
-        let h = s.intersect(&ray).expect("hit");
-        s.materials[s.surface(&ray, &h).material as usize].diffuse
+        let h = s.geometry.intersect(&ray).expect("hit");
+        s.materials[s.geometry.surface(&ray, &h).material as usize].diffuse
     };
     let down_the_pit = Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
     let from_the_side = Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::X);
@@ -642,8 +654,8 @@ fn a_csg_object_is_one_primitive_with_a_tight_bound() {
         let s = scene(&format!(
             "[[objects]]\ncsg = {{ op = \"{o}\", a = {a}, b = {b} }}\n"
         ));
-        assert_eq!(s.primitive_count(), 1);
-        (s.bvh.bounds.min, s.bvh.bounds.max)
+        assert_eq!(s.geometry.primitive_count(), 1);
+        (s.geometry.bvh.bounds.min, s.geometry.bvh.bounds.max)
     };
     let close = |(lo, hi): (Vec3, Vec3), elo: Vec3, ehi: Vec3| {
         assert!(
@@ -668,7 +680,7 @@ fn a_csg_object_is_one_primitive_with_a_tight_bound() {
     );
     // Disjoint operands: the intersection is provably empty and not traced at all.
     let s = scene("[[objects]]\ncsg = { op = \"intersection\", a = { sphere = { center = [-2.0, 0.0, 0.0], radius = 1.0 } }, b = { sphere = { center = [2.0, 0.0, 0.0], radius = 1.0 } } }\n");
-    assert_eq!(s.primitive_count(), 0);
+    assert_eq!(s.geometry.primitive_count(), 0);
 }
 
 #[test]
@@ -689,11 +701,13 @@ fn a_group_operand_is_the_union_of_its_members() {
     let s = scene_at(&text, &scenes_dir().join("csg-test.toml"));
     for x in [-4.0f32, -2.0, 0.0, 2.0, 4.0] {
         let h = s
+            .geometry
             .intersect(&Ray::new(Vec3::new(x, 0.0, 5.0), -Vec3::Z))
             .unwrap();
         assert!((h.t - 4.3).abs() < 1e-5, "pit at x = {x}");
     }
     let h = s
+        .geometry
         .intersect(&Ray::new(Vec3::new(-3.0, 0.0, 5.0), -Vec3::Z))
         .unwrap();
     assert!((h.t - 4.0).abs() < 1e-5, "flat between pits");
@@ -813,9 +827,10 @@ fn the_example_scene_compiles_to_csg_primitives() {
     let path = scenes_dir().join("csg.toml");
     let s = scene_at(&std::fs::read_to_string(&path).unwrap(), &path);
     let csg = s
+        .geometry
         .shapes
         .iter()
-        .filter(|p| matches!(p.shape, strata::scene::world::Shape::Csg(_)))
+        .filter(|p| matches!(p.shape, strata::geometry::Shape::Csg(_)))
         .count();
     assert_eq!(csg, 3, "lens, die and drilled cylinder");
 }

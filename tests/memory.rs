@@ -159,7 +159,7 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
         Vec3::new(3.0, 0.0, 0.0),
     );
     let placed = corners(&|p| m.transform_point3(p));
-    let got = compiled.file_order_triangles();
+    let got = compiled.geometry.file_order_triangles();
     assert_eq!(got.len(), 1 + 2 * grid.indices.len());
     assert_eq!(&got[..1 + grid.indices.len()], &expected[..]);
     for (g, e) in got[1 + grid.indices.len()..].iter().zip(&placed) {
@@ -169,7 +169,7 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
     }
     // Every triangle sits in exactly one leaf slot.
     let mut seen = vec![0; got.len()];
-    for block in &compiled.leaf_blocks {
+    for block in &compiled.geometry.leaf_blocks {
         for &id in &block.id {
             if (id as usize) < seen.len() {
                 seen[id as usize] += 1;

@@ -12,12 +12,13 @@ mod common;
 
 use common::scene;
 use glam::Vec3;
+use strata::light::LightSampling;
 use strata::render::film::PixelSum;
 use strata::render::schedule::render_pixel;
 use strata::sampling::SamplerKind;
+use strata::scene::settings::GlossySampling;
 use strata::scene::Scene;
-use strata::shade::integrator::{GlossySampling, Integrator};
-use strata::shade::light::LightSampling;
+use strata::shade::integrator::Integrator;
 
 #[derive(Debug, Clone, Copy)]
 struct Method {
@@ -381,7 +382,7 @@ fn stability_where_methods_fail() {
         (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
     };
     let exact = std::f64::consts::PI * l * 4.0 * f(a / h, a / h);
-    let light = strata::shade::light::Light::Rect {
+    let light = strata::light::Light::Rect {
         rect: strata::shape::rect::Rect::new(
             Vec3::new(-a as f32, h as f32, -a as f32),
             Vec3::X * (2.0 * a as f32),

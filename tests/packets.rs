@@ -86,7 +86,12 @@ fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
     // Shadow rays from points on the mesh to a square light, with tmax short of it.
     let shadow: Vec<Vec<Ray>> = camera
         .iter()
-        .filter_map(|b| scene.intersect(&b[0]).map(|h| b[0].at(h.t * 0.999)))
+        .filter_map(|b| {
+            scene
+                .geometry
+                .intersect(&b[0])
+                .map(|h| b[0].at(h.t * 0.999))
+        })
         .map(|p| {
             (0..PACKET_SIZE - (rng.unit() * 4.0) as usize)
                 .map(|_| {
@@ -145,7 +150,7 @@ fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
 }
 
 /// A hit as exact bits (t, prim, u, v), for bit-for-bit comparisons.
-fn hit_bits(h: Option<strata::shape::PrimHit>) -> Option<(u32, u32, u32, u32)> {
+fn hit_bits(h: Option<strata::accel::PrimHit>) -> Option<(u32, u32, u32, u32)> {
     h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()))
 }
 
@@ -159,16 +164,16 @@ fn assert_packet_matches_single_rays(
     label: &str,
 ) -> usize {
     let mut got = [None; PACKET_SIZE];
-    scene.intersect_packet(batch, &mut got);
+    scene.geometry.intersect_packet(batch, &mut got);
     let mut blocked = [false; PACKET_SIZE];
-    scene.occluded_packet(batch, except, &mut blocked);
+    scene.geometry.occluded_packet(batch, except, &mut blocked);
     let mut hits = 0;
     for (i, ray) in batch.iter().enumerate() {
-        let want = scene.intersect(ray);
+        let want = scene.geometry.intersect(ray);
         assert_eq!(hit_bits(got[i]), hit_bits(want), "{label}: ray {ray:?}");
         assert_eq!(
             blocked[i],
-            scene.occluded_except(ray, except),
+            scene.geometry.occluded_except(ray, except),
             "{label} occlusion: ray {ray:?}"
         );
         hits += want.is_some() as usize;
@@ -180,7 +185,7 @@ fn assert_packet_matches_single_rays(
 fn packets_and_single_rays_return_identical_hits() {
     for (quality, scene) in scenes() {
         for (name, batches) in ray_sets(&scene) {
-            let except = scene.triangle_count; // the sphere
+            let except = scene.geometry.triangle_count; // the sphere
             let label = format!("{quality:?} {name}");
             let hits: usize = batches
                 .iter()
@@ -204,13 +209,15 @@ fn prefetching_changes_no_hit() {
             let mut answers = Vec::new();
             for batch in sets.iter().flat_map(|(_, batches)| batches) {
                 let mut hits = [None; PACKET_SIZE];
-                scene.intersect_packet(batch, &mut hits);
+                scene.geometry.intersect_packet(batch, &mut hits);
                 let mut blocked = [false; PACKET_SIZE];
-                scene.occluded_packet(batch, u32::MAX, &mut blocked);
+                scene
+                    .geometry
+                    .occluded_packet(batch, u32::MAX, &mut blocked);
                 for (i, ray) in batch.iter().enumerate() {
                     answers.push((
-                        hit_bits(scene.intersect(ray)),
-                        scene.occluded(ray),
+                        hit_bits(scene.geometry.intersect(ray)),
+                        scene.geometry.occluded(ray),
                         hit_bits(hits[i]),
                         blocked[i],
                     ));
@@ -218,9 +225,9 @@ fn prefetching_changes_no_hit() {
             }
             answers
         };
-        scene.bvh.prefetch = true;
+        scene.geometry.bvh.prefetch = true;
         let with = trace(&scene);
-        scene.bvh.prefetch = false;
+        scene.geometry.bvh.prefetch = false;
         let without = trace(&scene);
         assert!(with.iter().filter(|a| a.0.is_some()).count() > 1000);
         assert_eq!(with, without, "{quality:?}");
@@ -242,7 +249,7 @@ fn packets_match_single_rays_on_every_strata_rays_kind() {
         &format!("[[objects]]\nmesh = {mesh:?}\n"),
         &dir.join("scene.toml"),
     );
-    let triangles = scene.file_order_triangles();
+    let triangles = scene.geometry.file_order_triangles();
     let octant = |r: &Ray| {
         (r.direction.x < 0.0) as u8
             | ((r.direction.y < 0.0) as u8) << 1

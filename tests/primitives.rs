@@ -43,7 +43,11 @@ fn sphere_under_non_uniform_scale_and_rotation_matches_the_f64_ellipsoid() {
         ),
     );
     let s = scene(&text);
-    assert_eq!(s.shapes.len(), 1, "the sphere stays one analytic primitive");
+    assert_eq!(
+        s.geometry.shapes.len(),
+        1,
+        "the sphere stays one analytic primitive"
+    );
     let m = DAffine3::from_scale_rotation_translation(
         DVec3::from_array(scale.map(|x: f32| x as f64)),
         DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), deg.to_radians()),
@@ -63,7 +67,7 @@ fn sphere_under_non_uniform_scale_and_rotation_matches_the_f64_ellipsoid() {
         let ray = Ray::new(o, d);
         let (od, dd) = (o.as_dvec3(), d.as_dvec3());
         let expected = unit_sphere_t(inv.transform_point3(od), inv.transform_vector3(dd));
-        let got = s.intersect(&ray);
+        let got = s.geometry.intersect(&ray);
         match (expected, got) {
             (Some(te), Some(h)) => {
                 hits += 1;
@@ -75,7 +79,7 @@ fn sphere_under_non_uniform_scale_and_rotation_matches_the_f64_ellipsoid() {
                 // The normal is the gradient of |M⁻¹x|² at the hit.
                 let p = od + te * dd;
                 let grad = (inv.matrix3.transpose() * inv.transform_point3(p)).normalize();
-                let n = s.surface(&ray, &h).geometric_normal.as_dvec3();
+                let n = s.geometry.surface(&ray, &h).geometric_normal.as_dvec3();
                 assert!(n.dot(grad) > 1.0 - 1e-5, "normal {n} vs {grad}");
             }
             (None, None) => {}
@@ -104,8 +108,11 @@ fn sphere_rays_from_inside_hit_the_far_side_facing_away() {
     for _ in 0..200 {
         let d = rng.unit_vector();
         let ray = Ray::new(Vec3::new(1.0, 2.0, 3.0) + 0.5 * rng.unit_vector(), d);
-        let h = s.intersect(&ray).expect("a ray from inside always hits");
-        let surf = s.surface(&ray, &h);
+        let h = s
+            .geometry
+            .intersect(&ray)
+            .expect("a ray from inside always hits");
+        let surf = s.geometry.surface(&ray, &h);
         assert!(((surf.p - Vec3::new(1.0, 2.0, 3.0)).length() - 2.0).abs() < 1e-5);
         assert!(
             surf.geometric_normal.dot(d) > 0.0,
@@ -122,16 +129,17 @@ fn tangent_and_grazing_sphere_rays() {
     ));
     // Exactly tangent along x at y = 1: touches (or misses by rounding), never hits deep.
     let ray = Ray::new(Vec3::new(-5.0, 1.0, 0.0), Vec3::X);
-    if let Some(h) = s.intersect(&ray) {
+    if let Some(h) = s.geometry.intersect(&ray) {
         assert!((h.t - 5.0).abs() < 1e-2);
     }
     // Just inside the silhouette: hits near x = 0.
     let ray = Ray::new(Vec3::new(-5.0, 0.9999, 0.0), Vec3::X);
-    let h = s.intersect(&ray).expect("grazing hit");
+    let h = s.geometry.intersect(&ray).expect("grazing hit");
     let p = ray.at(h.t);
     assert!(p.x.abs() < 0.02 && (p.length() - 1.0).abs() < 1e-5);
     // Just outside: misses.
     assert!(s
+        .geometry
         .intersect(&Ray::new(Vec3::new(-5.0, 1.0001, 0.0), Vec3::X))
         .is_none());
 }
@@ -146,22 +154,23 @@ fn cylinder_with_caps_under_transform_matches_analytic_answers() {
     let s = scene(&text);
     // Down the y axis onto the side at x = 2: the side is at y = 2·0.5 = 1 after scaling.
     let ray = Ray::new(Vec3::new(2.0, 5.0, 0.0), -Vec3::Y);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 4.0).abs() < 1e-5, "t {}", h.t);
-    let n = s.surface(&ray, &h).geometric_normal;
+    let n = s.geometry.surface(&ray, &h).geometric_normal;
     assert!((n - Vec3::Y).length() < 1e-5, "{n}");
     // Along the axis onto the bottom cap at x = 1.
     let ray = Ray::new(Vec3::new(-3.0, 0.1, 0.1), Vec3::X);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 4.0).abs() < 1e-5);
-    assert!((s.surface(&ray, &h).geometric_normal + Vec3::X).length() < 1e-5);
+    assert!((s.geometry.surface(&ray, &h).geometric_normal + Vec3::X).length() < 1e-5);
     // From inside out through the top cap at x = 3.
     let ray = Ray::new(Vec3::new(2.0, 0.0, 0.0), Vec3::X);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 1.0).abs() < 1e-5);
-    assert!(s.surface(&ray, &h).geometric_normal.dot(Vec3::X) > 0.999);
+    assert!(s.geometry.surface(&ray, &h).geometric_normal.dot(Vec3::X) > 0.999);
     // Just past the rim misses.
     assert!(s
+        .geometry
         .intersect(&Ray::new(
             Vec3::new(2.0, 1.001 * 2.0 * 0.5 + 0.001, 5.0),
             -Vec3::Z
@@ -177,12 +186,19 @@ fn open_cylinder_is_seen_from_inside() {
     ));
     // Looking down the axis from above: passes through the open top, no hit.
     assert!(s
+        .geometry
         .intersect(&Ray::new(Vec3::new(0.0, 5.0, 0.0), -Vec3::Y))
         .is_none());
     // Slanted from above into the opening: hits the inside wall, normal facing away.
     let ray = Ray::new(Vec3::new(0.0, 2.0, 0.0), Vec3::new(1.0, -1.5, 0.0));
-    let h = s.intersect(&ray).unwrap();
-    assert!(s.surface(&ray, &h).geometric_normal.dot(ray.direction) > 0.0);
+    let h = s.geometry.intersect(&ray).unwrap();
+    assert!(
+        s.geometry
+            .surface(&ray, &h)
+            .geometric_normal
+            .dot(ray.direction)
+            > 0.0
+    );
 }
 
 #[test]
@@ -201,12 +217,12 @@ fn plane_and_triangle_under_rotation_and_scale() {
     let s = scene(&text);
     // The plane y = -1 rotated 90° about z becomes x = +1 with normal -x.
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 1.0).abs() < 1e-6);
-    assert!((s.surface(&ray, &h).geometric_normal + Vec3::X).length() < 1e-6);
+    assert!((s.geometry.surface(&ray, &h).geometric_normal + Vec3::X).length() < 1e-6);
     // The triangle now spans (0,0),(3,0),(0,2) at z = -2; barycentrics follow.
     let ray = Ray::new(Vec3::new(1.5, 0.5, 0.0), -Vec3::Z);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 2.0).abs() < 1e-6);
     assert!(
         (h.u - 0.5).abs() < 1e-6 && (h.v - 0.25).abs() < 1e-6,
@@ -215,6 +231,7 @@ fn plane_and_triangle_under_rotation_and_scale() {
         h.v
     );
     assert!(s
+        .geometry
         .intersect(&Ray::new(Vec3::new(2.0, 1.5, 0.0), -Vec3::Z))
         .is_none());
 }
@@ -236,8 +253,8 @@ fn matrix_transforms_equal_their_trs_form() {
             rng.unit_vector(),
         );
         assert_eq!(
-            trs.intersect(&ray).map(|h| h.t),
-            mat.intersect(&ray).map(|h| h.t)
+            trs.geometry.intersect(&ray).map(|h| h.t),
+            mat.geometry.intersect(&ray).map(|h| h.t)
         );
     }
 }
@@ -256,15 +273,16 @@ group = [
 ]
 "#;
     let s = scene(text);
-    assert_eq!(s.shapes.len(), 2);
+    assert_eq!(s.geometry.shapes.len(), 2);
     let ray = Ray::new(Vec3::new(10.0, 5.0, 10.0), -Vec3::Z);
-    let h = s.intersect(&ray).unwrap();
+    let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 9.0).abs() < 1e-5);
     assert_eq!(
-        s.materials[s.surface(&ray, &h).material as usize].diffuse,
+        s.materials[s.geometry.surface(&ray, &h).material as usize].diffuse,
         Vec3::X
     );
     let h = s
+        .geometry
         .intersect(&Ray::new(Vec3::new(10.0, 0.0, 10.0), -Vec3::Z))
         .unwrap();
     assert!(

@@ -154,7 +154,7 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
     for (i, ray) in rays.iter().enumerate() {
         assert_eq!(
             hits[i],
-            HitRecord::from_hit(scene.intersect(ray)),
+            HitRecord::from_hit(scene.geometry.intersect(ray)),
             "ray {i}"
         );
         let expected = if hits[i].is_hit() {

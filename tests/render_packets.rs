@@ -290,8 +290,8 @@ fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
                 row.push((0..n).map(|k| camera_ray(x + k, y, 0)).collect());
             }
             // Shadow rays from the first sample's hit, as direct_light makes them.
-            if let (true, Some(hit)) = (light.is_area(), scene.intersect(&rays[0])) {
-                let sf = scene.surface(&rays[0], &hit);
+            if let (true, Some(hit)) = (light.is_area(), scene.geometry.intersect(&rays[0])) {
+                let sf = scene.geometry.surface(&rays[0], &hit);
                 let wo = -rays[0].direction.normalize();
                 let ng = if sf.geometric_normal.dot(wo) >= 0.0 {
                     sf.geometric_normal
@@ -352,9 +352,9 @@ fn time_batches(
         for b in set.iter().cycle().take(loops * set.len()) {
             for r in &b[..n] {
                 sink += if closest {
-                    scene.intersect(r).is_some() as usize
+                    scene.geometry.intersect(r).is_some() as usize
                 } else {
-                    scene.occluded_except(r, except) as usize
+                    scene.geometry.occluded_except(r, except) as usize
                 };
             }
         }
@@ -363,11 +363,13 @@ fn time_batches(
         for b in set.iter().cycle().take(loops * set.len()) {
             if closest {
                 let mut out = [None; PACKET_SIZE];
-                scene.intersect_packet(&b[..n], &mut out[..n]);
+                scene.geometry.intersect_packet(&b[..n], &mut out[..n]);
                 sink += out.iter().filter(|h| h.is_some()).count();
             } else {
                 let mut out = [false; PACKET_SIZE];
-                scene.occluded_packet(&b[..n], except, &mut out[..n]);
+                scene
+                    .geometry
+                    .occluded_packet(&b[..n], except, &mut out[..n]);
                 sink += out.iter().filter(|&&o| o).count();
             }
         }
@@ -406,8 +408,8 @@ fn measure_packet_against_single_rays_by_batch_size() {
     for (scene, name) in &scenes {
         println!(
             "{name}: {} primitives, {} BVH nodes",
-            scene.primitive_count(),
-            scene.bvh.nodes.len()
+            scene.geometry.primitive_count(),
+            scene.geometry.bvh.nodes.len()
         );
         let except = scene.lights[0].prim().unwrap_or(u32::MAX);
         let [pixel, row, shadow] = batches(scene);

@@ -71,6 +71,7 @@ fn random_transform(rng: &mut Rng, scale: f32) -> String {
 /// can only be a self-intersection.
 fn self_hit(scene: &Scene, ray: &Ray, prim: u32, scale: f32) -> Option<f32> {
     scene
+        .geometry
         .intersect(ray)
         .filter(|h| h.prim == prim && h.t * ray.direction.length() < 1e-4 * scale)
         .map(|h| h.t)
@@ -105,10 +106,10 @@ fn spawned_rays_never_hit_their_own_surface_at_any_scale() {
                     let target = rng.unit_vector() * rng.range(0.0, 0.8) * scale;
                     let origin = target + rng.unit_vector() * 20.0 * scale;
                     let ray = Ray::new(origin, (target - origin).normalize());
-                    let Some(hit) = scene.intersect(&ray) else {
+                    let Some(hit) = scene.geometry.intersect(&ray) else {
                         continue;
                     };
-                    let s = scene.surface(&ray, &hit);
+                    let s = scene.geometry.surface(&ray, &hit);
                     let n = s.geometric_normal;
                     let wo = -ray.direction;
                     let front = if n.dot(wo) >= 0.0 { n } else { -n };
@@ -137,9 +138,10 @@ fn spawned_rays_never_hit_their_own_surface_at_any_scale() {
                         checked += 1;
                         if kind == "refraction in" {
                             // Leaving again from the far side of a closed shape.
-                            if let Some(inner) = scene.intersect(&r).filter(|h| h.prim == hit.prim)
+                            if let Some(inner) =
+                                scene.geometry.intersect(&r).filter(|h| h.prim == hit.prim)
                             {
-                                let s2 = scene.surface(&r, &inner);
+                                let s2 = scene.geometry.surface(&r, &inner);
                                 let out_dir = r.direction;
                                 let o2 =
                                     spawn_origin(s2.p, s2.p_error, s2.geometric_normal, out_dir);

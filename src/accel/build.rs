@@ -4,7 +4,6 @@
 
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS, MAX_PRIMS};
 use crate::math::Aabb;
-use crate::shape::triangle8::NO_PRIM;
 use glam::Vec3A;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -554,8 +553,13 @@ impl LanePacker {
     }
 }
 
-/// Slots per leaf block: one `f32x8` lane each.
-pub const LEAF_BLOCK: usize = crate::shape::triangle8::LANES;
+/// Slots per leaf block. A leaf is a run of slots inside one block, so the
+/// scene can store each block as one 8-lane triangle block
+/// ([`crate::shape::triangle8`]) and test a whole leaf at once.
+pub const LEAF_BLOCK: usize = 8;
+
+/// The id of a slot that holds no primitive (padding at the end of a block).
+pub const NO_PRIM: u32 = u32::MAX;
 
 /// Subtrees with at most this many primitives become one leaf.
 const LEAF_PRIMS: u32 = 8;

@@ -39,11 +39,11 @@
 //! by one.
 
 use super::build::Bvh8;
+use super::hit::PrimHit;
 use super::node::{decode, ChildRef};
 use super::traverse::{Stack, WIDEN};
 use crate::math::offset::gamma;
 use crate::math::Ray;
-use crate::shape::PrimHit;
 use glam::DVec3;
 use wide::f32x8;
 

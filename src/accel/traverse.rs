@@ -8,11 +8,11 @@
 
 use super::build::Bvh8;
 use super::build::LEAF_BLOCK;
+use super::hit::{closer, tie_ray, PrimHit};
 use super::node::{decode, is_leaf, leaf_range, ChildRef};
 use super::prefetch::prefetch;
 use crate::math::offset::gamma;
 use crate::math::Ray;
-use crate::shape::PrimHit;
 use wide::{f32x8, u32x8};
 
 /// A traversal stack that keeps its top [`STACK_INLINE`] entries inline
@@ -188,32 +188,6 @@ impl RayBoxes {
         let (tn, tf) = self.slabs(bounds, tmin, tmax);
         let g = f32x8::splat(2.0 * gamma(3));
         (tn - g * tn.abs()).simd_le(tf + g * tf.abs()).to_bitmask()
-    }
-}
-
-/// The ray a candidate is tested with once `best` is known: its interval
-/// includes `best.t` itself, so a candidate at exactly the same distance is
-/// seen and [`closer`] can break the tie.
-#[inline(always)]
-pub(crate) fn tie_ray(ray: &Ray, best: Option<&PrimHit>) -> Ray {
-    match best {
-        Some(b) => Ray {
-            tmax: b.t.next_up(),
-            ..*ray
-        },
-        None => *ray,
-    }
-}
-
-/// The closest-hit order: smaller t, and on equal t (a ray through an edge
-/// shared by two triangles) the smaller primitive id. A total order, so the
-/// answer does not depend on the order the traversal visits leaves in:
-/// single rays and packets return identical hits.
-#[inline(always)]
-pub(crate) fn closer(h: &PrimHit, best: Option<&PrimHit>) -> bool {
-    match best {
-        Some(b) => h.t < b.t || (h.t == b.t && h.prim < b.prim),
-        None => true,
     }
 }
 
@@ -532,9 +506,9 @@ impl Bvh8 {
 mod tests {
     use super::super::build::BuildQuality;
     use super::*;
+    use crate::accel::NO_PRIM;
     use crate::math::Aabb;
     use crate::shape::sphere::Sphere;
-    use crate::shape::triangle8::NO_PRIM;
     use glam::Vec3;
 
     /// Leaf tests here read spheres by id: no block-shaped leaf data.

@@ -45,7 +45,7 @@ fn sphere_point(i: u32) -> Vec3 {
 
 /// `batches` batches of 8 rays of `kind` around the scene's BVH bounds.
 pub fn rays(scene: &Scene, kind: RayKind, batches: usize, seed: u32) -> Vec<[Ray; PACKET_SIZE]> {
-    let b = scene.bvh.bounds;
+    let b = scene.geometry.bvh.bounds;
     let center = (b.min + b.max) * 0.5;
     let radius = ((b.max - b.min).length() * 0.5).max(1e-6);
     let side = (batches as f64).sqrt().ceil() as usize;
@@ -107,19 +107,19 @@ pub fn trace(
                     hits += match (query, packet) {
                         (Query::Closest, false) => batch
                             .iter()
-                            .filter(|r| scene.intersect(r).is_some())
+                            .filter(|r| scene.geometry.intersect(r).is_some())
                             .count(),
                         (Query::Occlusion, false) => {
-                            batch.iter().filter(|r| scene.occluded(r)).count()
+                            batch.iter().filter(|r| scene.geometry.occluded(r)).count()
                         }
                         (Query::Closest, true) => {
                             let mut out = [None; PACKET_SIZE];
-                            scene.intersect_packet(batch, &mut out);
+                            scene.geometry.intersect_packet(batch, &mut out);
                             out.iter().filter(|h| h.is_some()).count()
                         }
                         (Query::Occlusion, true) => {
                             let mut out = [false; PACKET_SIZE];
-                            scene.occluded_packet(batch, u32::MAX, &mut out);
+                            scene.geometry.occluded_packet(batch, u32::MAX, &mut out);
                             out.iter().filter(|&&b| b).count()
                         }
                     } as u64;

@@ -86,8 +86,8 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         };
         let (scene, timings) = compile::compile(&desc, &scene_path, &overrides, Instant::now())?;
         let rss = peak_rss_bytes().unwrap_or(0) as f64 / (1 << 20) as f64;
-        let tris = scene.triangle_count as usize;
-        let bpt = scene.accel_bytes() as f64 / tris.max(1) as f64;
+        let tris = scene.geometry.triangle_count as usize;
+        let bpt = scene.geometry.accel_bytes() as f64 / tris.max(1) as f64;
         // Peak memory of load + build above the level before, per triangle.
         let peak = timings.peak_bytes().map(|b| b as f64 / tris.max(1) as f64);
         let peak_text = peak.map_or("-".to_string(), |p| format!("{p:.0}"));
@@ -107,9 +107,13 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         );
         println!(
             "# {name}: tree {}; prefetch {} ({:.1} MB of nodes and leaf blocks)",
-            scene.bvh.stats(),
-            if scene.bvh.prefetch { "on" } else { "off" },
-            scene.traversal_bytes() as f64 / 1e6
+            scene.geometry.bvh.stats(),
+            if scene.geometry.bvh.prefetch {
+                "on"
+            } else {
+                "off"
+            },
+            scene.geometry.traversal_bytes() as f64 / 1e6
         );
         for kind in [RayKind::Camera, RayKind::Random] {
             let batches = rays(&scene, kind, args.batches, 1);

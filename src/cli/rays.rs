@@ -89,7 +89,7 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
         KindArg::All => RayKind::ALL.to_vec(),
     };
     // Ray generation aims at triangles by their file-order index.
-    let triangles = scene.file_order_triangles();
+    let triangles = scene.geometry.file_order_triangles();
     let mut rays = Vec::with_capacity(args.n * kinds.len());
     let mut groups = Vec::new();
     for kind in kinds {

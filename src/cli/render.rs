@@ -42,10 +42,10 @@ pub struct RenderArgs {
     pub sampler: Option<SamplerKind>,
     /// solid_angle (default: spherical rectangles, sphere cones) | area.
     #[arg(long)]
-    pub light_sampling: Option<strata::shade::light::LightSampling>,
+    pub light_sampling: Option<strata::light::LightSampling>,
     /// lobe (default: importance-sample the cosⁿ lobe) | uniform (hemisphere; a baseline).
     #[arg(long)]
-    pub glossy_sampling: Option<strata::shade::integrator::GlossySampling>,
+    pub glossy_sampling: Option<strata::scene::settings::GlossySampling>,
     /// Seed of every random number: same seed, same image.
     #[arg(long)]
     pub seed: Option<u32>,
@@ -262,21 +262,21 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
                 bvh_build_s: timings.bvh_build.as_secs_f64(),
                 render_s: outcome.seconds,
             },
-            triangles: scene.triangle_count as usize,
-            analytic_shapes: scene.shapes.len(),
-            planes: scene.planes.len(),
-            bvh_nodes: scene.bvh.nodes.len(),
-            bvh_bytes: scene.bvh.memory_bytes(),
-            bvh_prefetch: scene.bvh.prefetch,
+            triangles: scene.geometry.triangle_count as usize,
+            analytic_shapes: scene.geometry.shapes.len(),
+            planes: scene.geometry.planes.len(),
+            bvh_nodes: scene.geometry.bvh.nodes.len(),
+            bvh_bytes: scene.geometry.bvh.memory_bytes(),
+            bvh_prefetch: scene.geometry.bvh.prefetch,
             peak_rss_bytes: peak_rss_bytes(),
             memory: BuildMemory {
-                final_bytes_per_triangle: scene.accel_bytes() as f64
-                    / (scene.triangle_count.max(1)) as f64,
+                final_bytes_per_triangle: scene.geometry.accel_bytes() as f64
+                    / (scene.geometry.triangle_count.max(1)) as f64,
                 load_peak_bytes: timings.load_peak_bytes,
                 build_peak_bytes: timings.build_peak_bytes,
                 peak_bytes_per_triangle: timings
                     .peak_bytes()
-                    .map(|b| b as f64 / scene.triangle_count.max(1) as f64),
+                    .map(|b| b as f64 / scene.geometry.triangle_count.max(1) as f64),
             },
             invalid_samples: outcome.film.invalid,
             first_invalid_sample: outcome.film.first_invalid,
@@ -304,10 +304,10 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             timings.load.as_secs_f64(),
             timings.bvh_build.as_secs_f64(),
             match timings.peak_bytes() {
-                Some(b) if scene.triangle_count > 0 => format!(
+                Some(b) if scene.geometry.triangle_count > 0 => format!(
                     ", peak +{:.0} MB = {:.0} B/triangle",
                     b as f64 / 1e6,
-                    b as f64 / scene.triangle_count as f64
+                    b as f64 / scene.geometry.triangle_count as f64
                 ),
                 _ => String::new(),
             },

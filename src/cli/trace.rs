@@ -70,13 +70,13 @@ pub fn trace(
             .with_min_len(256)
             .map(|ray| {
                 if occlusion {
-                    if scene.occluded(ray) {
+                    if scene.geometry.occluded(ray) {
                         HitRecord::OCCLUDED
                     } else {
                         HitRecord::MISS
                     }
                 } else {
-                    HitRecord::from_hit(scene.intersect(ray))
+                    HitRecord::from_hit(scene.geometry.intersect(ray))
                 }
             })
             .collect();
@@ -87,7 +87,7 @@ pub fn trace(
 
 pub fn run(args: TraceArgs) -> Result<(), CliError> {
     let (mut scene, timings) = load_mesh_scene(&args.mesh, args.bvh_quality)?;
-    scene.bvh.prefetch = args.prefetch.enabled(scene.traversal_bytes());
+    scene.geometry.bvh.prefetch = args.prefetch.enabled(scene.geometry.traversal_bytes());
     let rays = read_rays(&args.rays)?;
     if args.hits == args.rays {
         return Err(InputError::new(
@@ -111,7 +111,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
             "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s) -> {}",
             rays.len(),
             if args.occlusion { "occlusion" } else { "closest hit" },
-            scene.triangle_count,
+            scene.geometry.triangle_count,
             found,
             if args.occlusion { "occluded" } else { "hits" },
             seconds,

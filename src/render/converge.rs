@@ -3,10 +3,10 @@
 //! with `--mse-reference-image`).
 
 use super::schedule::{render, RenderOptions};
+use crate::light::LightSampling;
 use crate::sampling::SamplerKind;
+use crate::scene::settings::GlossySampling;
 use crate::scene::Scene;
-use crate::shade::integrator::GlossySampling;
-use crate::shade::light::LightSampling;
 use glam::Vec3;
 
 /// One sampling configuration compared by `strata converge`.

@@ -17,16 +17,16 @@
 //! hashed as raw bits. If the `Debug` text of a type ever changes, parts from
 //! old and new builds refuse to merge: the failure is safe.
 //!
-//! [`scene_fingerprint`] destructures [`Scene`] and [`RenderSettings`]
+//! [`scene_fingerprint`] destructures [`Scene`], [`Geometry`] and [`RenderSettings`]
 //! without `..`, so a new field there is a compile error here until someone
 //! decides whether it changes the image.
 //!
 //! The hash is not cryptographic: it catches mistakes (a wrong file, a
 //! different scene, a flipped bit), not malice.
 
-use crate::scene::world::MeshRange;
+use crate::geometry::csg::Csg;
+use crate::geometry::{Geometry, MeshRange};
 use crate::scene::{RenderSettings, Scene};
-use crate::shape::csg::Csg;
 use std::fmt;
 
 const K1: u64 = 0x9e37_79b9_7f4a_7c15;
@@ -138,6 +138,13 @@ impl fmt::Write for Hasher64 {
 /// the settings stored in a partial header. See the module docs.
 pub fn scene_fingerprint(scene: &Scene) -> u64 {
     let Scene {
+        geometry,
+        materials,
+        lights,
+        camera,
+        settings,
+    } = scene;
+    let Geometry {
         // Hashed in file order below, so the fingerprint does not depend on
         // the BVH's leaf order (which varies with --bvh-quality).
         leaf_blocks: _,
@@ -147,12 +154,8 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         transforms,
         csg,
         planes,
-        materials,
-        lights,
-        camera,
-        settings,
         bvh: _, // an acceleration structure: it changes speed, not hits
-    } = scene;
+    } = geometry;
     let RenderSettings {
         // In the partial header, compared field by field.
         width: _,
@@ -169,7 +172,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     } = settings;
     let mut h = Hasher64::new();
     h.write(b"strata scene v1\0");
-    let triangles = scene.file_order_triangles();
+    let triangles = geometry.file_order_triangles();
     debug_assert_eq!(triangles.len(), *triangle_count as usize);
     h.write_u64(triangles.len() as u64);
     for tri in &triangles {

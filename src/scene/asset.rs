@@ -1,7 +1,8 @@
 //! What a mesh loader hands to the scene compiler: plain arrays in file
 //! order, with optional data present only where the file has it.
 
-use crate::shade::material::Material;
+use crate::geometry::MeshNormals;
+use crate::material::Material;
 use glam::Vec3;
 
 /// One triangle mesh read from a file. Triangles keep the file's order, so a
@@ -16,15 +17,6 @@ pub struct LoadedMesh {
     pub normals: Option<MeshNormals>,
     /// Index into [`LoadedAsset::materials`], if the file assigns one.
     pub material: Option<usize>,
-}
-
-/// Shading normals with their own per-triangle indexing (an OBJ may index
-/// normals apart from positions; glTF repeats the position indices).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct MeshNormals {
-    pub values: Vec<Vec3>,
-    /// One entry per triangle, parallel to [`LoadedMesh::indices`].
-    pub indices: Vec<[u32; 3]>,
 }
 
 /// A camera found in a glTF file, already placed in world space.

@@ -8,17 +8,18 @@
 use super::asset::{LoadedAsset, LoadedCamera};
 use super::description::*;
 use super::loaders::load_mesh_file;
-use super::world::{AnalyticPrim, MeshRange, RenderSettings, Scene, Shape, NO_TRANSFORM};
+use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
 use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
 use crate::error::{InputError, InputResult};
+use crate::geometry::csg::Csg;
+use crate::geometry::{AnalyticPrim, Geometry, MeshNormals, MeshRange, Shape, NO_TRANSFORM};
+use crate::light::Light;
+use crate::material::Material;
 use crate::math::{Aabb, Frame, Transform};
 use crate::output::stats::PeakMeter;
 use crate::sampling::SamplerKind;
-use crate::shade::light::Light;
-use crate::shade::material::Material;
-use crate::shape::csg::Csg;
 use crate::shape::cylinder::Cylinder;
 use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
@@ -44,8 +45,8 @@ pub struct RenderOverrides {
     pub max_depth: Option<u32>,
     pub sampler: Option<SamplerKind>,
     pub seed: Option<u32>,
-    pub light_sampling: Option<crate::shade::light::LightSampling>,
-    pub glossy_sampling: Option<crate::shade::integrator::GlossySampling>,
+    pub light_sampling: Option<crate::light::LightSampling>,
+    pub glossy_sampling: Option<crate::scene::settings::GlossySampling>,
     pub bvh_quality: BuildQuality,
 }
 
@@ -158,7 +159,7 @@ pub fn compile(
         load_peak_bytes,
         build_peak_bytes: memory.phase_peak(),
     };
-    let mut scene = Scene {
+    let mut geometry = Geometry {
         leaf_blocks,
         triangle_count: n_tris,
         meshes: c.meshes,
@@ -166,13 +167,16 @@ pub fn compile(
         transforms: c.transforms,
         csg: c.csg,
         planes: c.planes,
+        bvh,
+    };
+    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    let scene = Scene {
+        geometry,
         materials: c.materials,
         lights: c.lights,
         camera,
         settings,
-        bvh,
     };
-    scene.bvh.prefetch = Prefetch::Auto.enabled(scene.traversal_bytes());
     Ok((scene, timings))
 }
 
@@ -225,7 +229,7 @@ impl TriangleSource {
 }
 
 /// The BVH's leaf slots as 8-wide triangle blocks (see
-/// [`Scene::leaf_blocks`]), read from the indexed sources.
+/// [`Geometry::leaf_blocks`]), read from the indexed sources.
 fn leaf_blocks(
     meshes: &[MeshRange],
     sources: &[TriangleSource],
@@ -697,7 +701,7 @@ impl Compiler {
         name: String,
         tris: TriangleSource,
         material: u32,
-        normals: Option<super::asset::MeshNormals>,
+        normals: Option<MeshNormals>,
     ) {
         if tris.len() == 0 {
             return;
@@ -757,7 +761,7 @@ impl Compiler {
                 positions: mesh.positions.iter().map(|&p| t.point(p)).collect(),
                 indices: mesh.indices.clone(),
             };
-            let normals = mesh.normals.as_ref().map(|n| super::asset::MeshNormals {
+            let normals = mesh.normals.as_ref().map(|n| MeshNormals {
                 values: n.values.iter().map(|&v| t.normal_to_world * v).collect(),
                 indices: n.indices.clone(),
             });

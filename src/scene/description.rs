@@ -53,8 +53,8 @@ pub struct RenderDesc {
     pub sampler: crate::sampling::SamplerKind,
     pub seed: u32,
     pub background: V3,
-    pub light_sampling: crate::shade::light::LightSampling,
-    pub glossy_sampling: crate::shade::integrator::GlossySampling,
+    pub light_sampling: crate::light::LightSampling,
+    pub glossy_sampling: crate::scene::settings::GlossySampling,
 }
 
 impl Default for RenderDesc {
@@ -133,7 +133,7 @@ pub struct MaterialDesc {
 
 impl Default for MaterialDesc {
     fn default() -> Self {
-        let m = crate::shade::material::Material::default();
+        let m = crate::material::Material::default();
         Self {
             diffuse: m.diffuse.into(),
             specular: m.specular.into(),

@@ -1,12 +1,32 @@
-//! Scene files: description (serde types), loaders (mesh files), and the
-//! compiler that flattens both into the [`Scene`] the renderer reads.
+//! The scene: what a render reads, and how it is made from a scene file.
+//!
+//! [`Scene`] is plain data: the [`Geometry`] rays are traced against, the
+//! materials and lights that shading reads, the camera and the render
+//! settings. [`description`] is the scene file as serde types, [`parse`]
+//! reads it, [`loaders`] read mesh files, and [`compile`] turns all of
+//! that into a [`Scene`], validating every number on the way.
 
 pub mod asset;
 pub mod compile;
 pub mod description;
 pub mod loaders;
 pub mod parse;
-pub mod world;
+pub mod settings;
+
+use crate::camera::Camera;
+use crate::geometry::Geometry;
+use crate::light::Light;
+use crate::material::Material;
 
 pub use compile::{load_mesh_scene, load_scene, scene_from_str, LoadTimings, RenderOverrides};
-pub use world::{RenderSettings, Scene};
+pub use settings::RenderSettings;
+
+/// A compiled scene. Primitives refer to materials by index.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub geometry: Geometry,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    pub settings: RenderSettings,
+}

@@ -24,14 +24,16 @@
 //! single rays and every batch is shaded in sample order, so the image is
 //! bit-identical with packets on or off.
 
+use crate::accel::PrimHit;
 use crate::accel::PACKET_SIZE;
+use crate::geometry::Surface;
+use crate::material::Material;
 use crate::math::offset::spawn_origin;
 use crate::math::{Frame, Ray};
 use crate::sampling::warp::{phong_lobe, phong_lobe_pdf, uniform_hemisphere};
 use crate::sampling::{Dim, PixelSampler};
+use crate::scene::settings::GlossySampling;
 use crate::scene::Scene;
-use crate::shade::material::Material;
-use crate::shape::{PrimHit, Surface};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -60,30 +62,6 @@ impl RayCounts {
         self.reflection += o.reflection;
         self.refraction += o.refraction;
         self.glossy_rejected += o.glossy_rejected;
-    }
-}
-
-/// How fuzzy reflections pick directions. `lobe` importance-samples the
-/// cosⁿ lobe; `uniform` samples the hemisphere uniformly (a baseline for
-/// `strata converge` and the variance tests).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum GlossySampling {
-    #[default]
-    Lobe,
-    Uniform,
-}
-
-impl std::str::FromStr for GlossySampling {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "lobe" => Ok(Self::Lobe),
-            "uniform" => Ok(Self::Uniform),
-            _ => Err(format!(
-                "unknown glossy sampling '{s}' (expected lobe or uniform)"
-            )),
-        }
     }
 }
 
@@ -281,7 +259,7 @@ impl<'a> Integrator<'a> {
         }
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];
-        self.scene.intersect_packet(rays, &mut hits[..n]);
+        self.scene.geometry.intersect_packet(rays, &mut hits[..n]);
         self.counts.camera += n as u64;
         for i in 0..n {
             let slot = self.begin_record(0, "camera", &rays[i]);
@@ -299,7 +277,7 @@ impl<'a> Integrator<'a> {
         kind: &'static str,
     ) -> Vec3 {
         let slot = self.begin_record(depth, kind, ray);
-        let hit = self.scene.intersect(ray);
+        let hit = self.scene.geometry.intersect(ray);
         self.shade(ctx, ray, hit, depth, weight, slot)
     }
 
@@ -319,7 +297,7 @@ impl<'a> Integrator<'a> {
             self.finish_record(slot, None, scene.settings.background);
             return scene.settings.background;
         };
-        let surface = scene.surface(ray, &hit);
+        let surface = scene.geometry.surface(ray, &hit);
         let material = &scene.materials[surface.material as usize];
         let wo = -ray.direction.normalize();
         // Face the normals towards the viewer.
@@ -443,7 +421,7 @@ impl<'a> Integrator<'a> {
                         }
                     }
                     None => {
-                        if !scene.occluded_except(&shadow, except) {
+                        if !scene.geometry.occluded_except(&shadow, except) {
                             sum += f * ls.weight * cos_i;
                         }
                     }
@@ -468,10 +446,12 @@ impl<'a> Integrator<'a> {
         let rays = &batch.rays[..n];
         let mut blocked = [false; PACKET_SIZE];
         if self.packets.use_packet(n, SHADOW_PACKET_MIN) {
-            self.scene.occluded_packet(rays, except, &mut blocked[..n]);
+            self.scene
+                .geometry
+                .occluded_packet(rays, except, &mut blocked[..n]);
         } else {
             for (b, r) in blocked.iter_mut().zip(rays) {
-                *b = self.scene.occluded_except(r, except);
+                *b = self.scene.geometry.occluded_except(r, except);
             }
         }
         for (c, b) in batch.contribution[..n].iter().zip(&blocked) {

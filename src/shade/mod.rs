@@ -1,5 +1,3 @@
-//! Shading: materials, lights and the integrator.
+//! Shading: the integrator, which turns a camera sample into radiance.
 
 pub mod integrator;
-pub mod light;
-pub mod material;

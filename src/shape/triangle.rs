@@ -7,7 +7,6 @@
 //! hits at least one of them: no cracks. Edge functions that come out
 //! exactly zero are recomputed in f64, as the paper recommends.
 
-use super::PrimHit;
 use crate::math::Ray;
 use glam::Vec3;
 
@@ -146,18 +145,6 @@ fn origin_error_bound(
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
     3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
-}
-
-/// Intersect and package as a [`PrimHit`].
-#[inline]
-pub fn intersect_prim(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3], prim: u32) -> Option<PrimHit> {
-    intersect(ray, s, v).map(|(t, u, v)| PrimHit {
-        t,
-        prim,
-        u,
-        v,
-        part: 0,
-    })
 }
 
 /// Unnormalised geometric normal along the winding (v0, v1, v2).

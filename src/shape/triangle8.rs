@@ -22,9 +22,6 @@ use wide::f32x8;
 /// Triangles per block: one per `f32x8` lane.
 pub const LANES: usize = 8;
 
-/// The id of a lane that holds no primitive.
-pub const NO_PRIM: u32 = u32::MAX;
-
 /// Eight triangles in structure-of-arrays form with their primitive ids.
 /// Lanes that hold no triangle (padding, or an analytic primitive sharing
 /// the leaf) have NaN vertices, which no test accepts.
@@ -33,14 +30,15 @@ pub const NO_PRIM: u32 = u32::MAX;
 pub struct TriangleBlock {
     /// `v[3 * vertex + axis][lane]`.
     pub v: [[f32; LANES]; 9],
-    /// Primitive id per lane, [`NO_PRIM`] for padding.
+    /// Primitive id per lane; the scene stores the BVH's leaf slots here,
+    /// `u32::MAX` (the BVH's `NO_PRIM`) for padding.
     pub id: [u32; LANES],
 }
 
 impl TriangleBlock {
     pub const EMPTY: TriangleBlock = TriangleBlock {
         v: [[f32::NAN; LANES]; 9],
-        id: [NO_PRIM; LANES],
+        id: [u32::MAX; LANES],
     };
 
     /// The vertices in `lane`.

@@ -1,4 +1,4 @@
-//! `csg` objects: each becomes one tree in [`crate::shape::csg::Csg`] and
+//! `csg` objects: each becomes one tree in [`crate::geometry::csg::Csg`] and
 //! one BVH primitive. Operands are validated by the same helpers as plain
 //! objects of their kind; what cannot bound a solid is an error naming the
 //! operand's key path (`objects[3].csg.b`).
@@ -16,11 +16,11 @@
 
 use super::{mesh_triangles, Compiler, Placement};
 use crate::error::InputResult;
+use crate::geometry::csg::mesh::check_closed;
+use crate::geometry::csg::CsgOp;
+use crate::geometry::{AnalyticPrim, Shape, NO_TRANSFORM};
 use crate::math::Transform;
 use crate::scene::description::{self, CsgDesc, ObjectDesc};
-use crate::scene::world::{AnalyticPrim, Shape, NO_TRANSFORM};
-use crate::shape::csg::mesh::check_closed;
-use crate::shape::csg::CsgOp;
 use glam::Affine3A;
 
 impl Compiler {

@@ -73,8 +73,9 @@
 
 use super::io_message;
 use crate::error::{InputError, InputResult};
-use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh, LoadedPointLight, MeshNormals};
-use crate::shade::material::Material;
+use crate::geometry::MeshNormals;
+use crate::material::Material;
+use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh, LoadedPointLight};
 use ::gltf::json;
 use glam::{Mat3, Mat4, Quat, Vec3};
 use json::accessor::{ComponentType, Type as AccessorType};

@@ -46,8 +46,9 @@
 
 use super::io_message;
 use crate::error::{InputError, InputResult};
-use crate::scene::asset::{LoadedAsset, LoadedMesh, MeshNormals};
-use crate::shade::material::Material;
+use crate::geometry::MeshNormals;
+use crate::material::Material;
+use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::Vec3;
 use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};

@@ -37,12 +37,12 @@
 pub mod interval;
 pub mod mesh;
 
+use crate::accel::PrimHit;
 use crate::accel::{BuildQuality, Bvh8};
 use crate::math::offset::{barycentric_error, gamma, transformed_error};
 use crate::math::{Aabb, Ray, Transform};
 use crate::shape::cylinder::Cylinder;
 use crate::shape::sphere::Sphere;
-use crate::shape::PrimHit;
 use glam::Vec3;
 pub use interval::CsgOp;
 use interval::{combine, push_span, Boundary, Span, FLIP};

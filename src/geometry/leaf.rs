@@ -1,0 +1,211 @@
+//! Leaf kernels: what traversal runs when it reaches a BVH leaf. A leaf
+//! is a run of slots inside one [`TriangleBlock`]: its triangles are tested
+//! in one 8-wide watertight test ([`crate::shape::triangle8`]), then any
+//! analytic shapes the leaf holds one by one.
+
+use super::Geometry;
+use crate::accel::hit::closer;
+use crate::accel::{PrimHit, PACKET_SIZE};
+use crate::math::Ray;
+use crate::shape::triangle::ShearedRay;
+use crate::shape::triangle8::{self, ShearedRays, LANES};
+
+impl Geometry {
+    /// The lanes of leaf `start..start + count` in its block.
+    #[inline(always)]
+    pub(crate) fn leaf_lanes(start: u32, count: u32) -> (usize, u32) {
+        let lo = start % LANES as u32;
+        ((start / LANES as u32) as usize, ((1u32 << count) - 1) << lo)
+    }
+
+    /// The closest hit in leaf `start..start + count`: its triangles in one
+    /// 8-wide test, then any analytic shapes it holds. A triangle hit
+    /// records its slot in `part`, so [`Geometry::surface`] finds its vertices.
+    #[inline(always)]
+    pub(super) fn hit_leaf(
+        &self,
+        start: u32,
+        count: u32,
+        ray: &Ray,
+        sheared: &ShearedRay,
+    ) -> Option<PrimHit> {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut best = triangle8::closest(ray, sheared, block, lanes).map(|h| PrimHit {
+            t: h.t,
+            prim: block.id[h.lane],
+            u: h.u,
+            v: h.v,
+            part: (b * LANES + h.lane) as u32,
+        });
+        if !self.shapes.is_empty() {
+            let mut ray = Ray {
+                tmax: best.map_or(ray.tmax, |h| h.t.next_up()),
+                ..*ray
+            };
+            let mut m = lanes;
+            while m != 0 {
+                let id = block.id[m.trailing_zeros() as usize];
+                m &= m - 1;
+                if id >= self.triangle_count {
+                    if let Some(h) = self.hit_analytic(id, &ray) {
+                        if closer(&h, best.as_ref()) {
+                            ray.tmax = h.t.next_up();
+                            best = Some(h);
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// True if something in leaf `start..start + count` other than
+    /// primitive `except` blocks the ray.
+    #[inline(always)]
+    pub(super) fn blocks_leaf(
+        &self,
+        start: u32,
+        count: u32,
+        ray: &Ray,
+        sheared: &ShearedRay,
+        except: u32,
+    ) -> bool {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut hit = triangle8::intersect(ray, sheared, block, lanes).0;
+        while hit != 0 {
+            let lane = hit.trailing_zeros() as usize;
+            hit &= hit - 1;
+            if block.id[lane] != except {
+                return true;
+            }
+        }
+        if !self.shapes.is_empty() {
+            let mut m = lanes;
+            while m != 0 {
+                let id = block.id[m.trailing_zeros() as usize];
+                m &= m - 1;
+                if id >= self.triangle_count && id != except && self.hit_analytic(id, ray).is_some()
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// [`Geometry::hit_leaf`] for the packet rays in the bits of `rays_mask`:
+    /// each triangle of the leaf against all those rays in one 8-wide test
+    /// (rays in lanes), updating `out[ray]` with any hit [`closer`] than
+    /// it. Returns whether any changed. The result per ray is the minimum
+    /// of the same total order over the same candidates as
+    /// [`Geometry::hit_leaf`], so it is bit for bit the single-ray answer.
+    #[inline(always)]
+    pub(super) fn hit_leaf_packet(
+        &self,
+        rays: &[Ray],
+        sheared: &ShearedRays,
+        start: u32,
+        count: u32,
+        rays_mask: u32,
+        out: &mut [Option<PrimHit>],
+    ) -> bool {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut changed = false;
+        // Each ray's interval: up to and including its best t, for ties.
+        let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
+        for (i, r) in rays.iter().enumerate() {
+            tmax[i] = out[i].map_or(r.tmax, |h| h.t.next_up());
+        }
+        let mut m = lanes;
+        while m != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let id = block.id[lane];
+            if id < self.triangle_count {
+                let tri = block.triangle(lane);
+                let (mut hit, t, u, v) = sheared.intersect(&tri, tmax.into(), rays_mask);
+                while hit != 0 {
+                    let i = hit.trailing_zeros() as usize;
+                    hit &= hit - 1;
+                    let h = PrimHit {
+                        t: t[i],
+                        prim: id,
+                        u: u[i],
+                        v: v[i],
+                        part: (b * LANES + lane) as u32,
+                    };
+                    if closer(&h, out[i].as_ref()) {
+                        out[i] = Some(h);
+                        tmax[i] = h.t.next_up();
+                        changed = true;
+                    }
+                }
+            } else {
+                let mut r = rays_mask;
+                while r != 0 {
+                    let i = r.trailing_zeros() as usize;
+                    r &= r - 1;
+                    let ray = Ray {
+                        tmax: tmax[i],
+                        ..rays[i]
+                    };
+                    if let Some(h) = self.hit_analytic(id, &ray) {
+                        if closer(&h, out[i].as_ref()) {
+                            out[i] = Some(h);
+                            tmax[i] = h.t.next_up();
+                            changed = true;
+                        }
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    /// [`Geometry::blocks_leaf`] for the packet rays in the bits of
+    /// `rays_mask`; returns the rays blocked.
+    #[inline(always)]
+    pub(super) fn blocks_leaf_packet(
+        &self,
+        rays: &[Ray],
+        sheared: &ShearedRays,
+        start: u32,
+        count: u32,
+        rays_mask: u32,
+        except: u32,
+    ) -> u32 {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
+        for (i, r) in rays.iter().enumerate() {
+            tmax[i] = r.tmax;
+        }
+        let tmax = tmax.into();
+        let mut open = rays_mask;
+        let mut m = lanes;
+        while m != 0 && open != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let id = block.id[lane];
+            if id == except {
+                continue;
+            }
+            if id < self.triangle_count {
+                open &= !sheared.intersect(&block.triangle(lane), tmax, open).0;
+            } else {
+                let mut r = open;
+                while r != 0 {
+                    let i = r.trailing_zeros() as usize;
+                    r &= r - 1;
+                    if self.hit_analytic(id, &rays[i]).is_some() {
+                        open &= !(1 << i);
+                    }
+                }
+            }
+        }
+        rays_mask & !open
+    }
+}

@@ -1,0 +1,108 @@
+//! What the BVH's leaves hold besides triangles: analytic shapes in their
+//! own object space (a closed enum, matched in the hot loop), and the runs
+//! of triangles that came from one mesh with their material and normals.
+
+use super::csg::Csg;
+use crate::accel::PrimHit;
+use crate::math::{Aabb, Ray};
+use crate::shape::cylinder::Cylinder;
+use crate::shape::disk::Disk;
+use crate::shape::rect::Rect;
+use crate::shape::sphere::Sphere;
+use glam::Vec3;
+
+/// An analytic shape in its own object space. Closed set: the hot loop matches on it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    Sphere(Sphere),
+    Cylinder(Cylinder),
+    /// The visible surface of a `rect` area light.
+    Rect(Rect),
+    /// The visible surface of a `disk` area light.
+    Disk(Disk),
+    /// The root node of a tree in [`super::Geometry::csg`].
+    Csg(u32),
+}
+
+impl Shape {
+    /// The first hit in `(tmin, tmax)`; the caller fills in `prim`.
+    #[inline]
+    pub(super) fn intersect(&self, ray: &Ray, csg: &Csg) -> Option<PrimHit> {
+        let (t, part) = match self {
+            Shape::Sphere(s) => (s.intersect(ray)?, 0),
+            Shape::Cylinder(c) => c.intersect(ray)?,
+            Shape::Rect(r) => (r.intersect(ray)?, 0),
+            Shape::Disk(d) => (d.intersect(ray)?, 0),
+            Shape::Csg(root) => return csg.intersect(*root, ray),
+        };
+        Some(PrimHit {
+            t,
+            prim: 0,
+            u: 0.0,
+            v: 0.0,
+            part,
+        })
+    }
+
+    /// Object-space point, error bound and outward normal, and the material
+    /// if the shape chooses it per part.
+    pub(super) fn surface_at(
+        &self,
+        ray: &Ray,
+        hit: &PrimHit,
+        csg: &Csg,
+    ) -> (Vec3, Vec3, Vec3, Option<u32>) {
+        let (p, err, n) = match self {
+            Shape::Sphere(s) => s.surface_at(ray.at(hit.t)),
+            Shape::Cylinder(c) => c.surface_at(ray.at(hit.t), hit.part),
+            Shape::Rect(r) => r.surface_at(ray.at(hit.t)),
+            Shape::Disk(d) => d.surface_at(ray.at(hit.t)),
+            Shape::Csg(_) => {
+                let (p, err, n, material) = csg.surface_at(ray, hit);
+                return (p, err, n, Some(material));
+            }
+        };
+        (p, err, n, None)
+    }
+
+    pub fn bounds(&self, csg: &Csg) -> Aabb {
+        match self {
+            Shape::Sphere(s) => s.bounds(),
+            Shape::Cylinder(c) => c.bounds(),
+            Shape::Rect(r) => r.bounds(),
+            Shape::Disk(d) => d.bounds(),
+            Shape::Csg(root) => csg.bounds(*root),
+        }
+    }
+}
+
+pub const NO_TRANSFORM: u32 = u32::MAX;
+
+/// A bounded analytic primitive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnalyticPrim {
+    pub shape: Shape,
+    /// Index into [`super::Geometry::transforms`], or [`NO_TRANSFORM`].
+    pub transform: u32,
+    pub material: u32,
+}
+
+/// A run of triangles from one mesh, sharing one material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshRange {
+    pub name: String,
+    pub first: u32,
+    pub count: u32,
+    pub material: u32,
+    /// Shading normals, only when the file had them.
+    pub normals: Option<MeshNormals>,
+}
+
+/// Shading normals with their own per-triangle indexing (an OBJ may index
+/// normals apart from positions; glTF repeats the position indices).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshNormals {
+    pub values: Vec<Vec3>,
+    /// One entry per triangle, parallel to the mesh's vertex indices.
+    pub indices: Vec<[u32; 3]>,
+}
