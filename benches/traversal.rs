@@ -5,7 +5,7 @@
 //!
 //! The mesh is assets/bunny.obj when `tools/fetch-assets` has fetched it,
 //! else a generated icosphere of 81,920 triangles. Rays are the seeded sets
-//! of `strata bench` (`strata::bench::rays`): coherent = the 8 lens samples
+//! of `strata bench` (`strata::experiment::bench::rays`): coherent = the 8 lens samples
 //! of one pixel of a camera looking at the mesh, incoherent = chords of the
 //! bounding sphere. Traced through the `Scene` API, as the renderer does.
 
@@ -15,7 +15,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use std::hint::black_box;
 use std::time::Duration;
 use strata::accel::{BuildQuality, PACKET_SIZE};
-use strata::bench::{rays, RayKind};
+use strata::experiment::bench::{rays, RayKind};
 
 fn traversal(c: &mut Criterion) {
     let (scene, name) = common::mesh_scene(BuildQuality::Auto);

@@ -10,14 +10,15 @@
 #![deny(unsafe_code)]
 
 pub mod accel;
-pub mod bench;
 pub mod camera;
 pub mod error;
+pub mod experiment;
 pub mod geometry;
 pub mod light;
 pub mod material;
 pub mod math;
 pub mod output;
+pub mod partial;
 pub mod rayfile;
 pub mod raygen;
 pub mod render;
@@ -25,3 +26,4 @@ pub mod sampling;
 pub mod scene;
 pub mod shade;
 pub mod shape;
+pub mod system;

@@ -322,7 +322,7 @@ fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
 
 /// Seconds of this thread's CPU time (wall time where that is not known).
 fn now() -> f64 {
-    match strata::render::cputime::thread_cpu_ns() {
+    match strata::system::cputime::thread_cpu_ns() {
         Some(ns) => ns as f64 * 1e-9,
         None => std::time::UNIX_EPOCH.elapsed().unwrap().as_secs_f64(),
     }

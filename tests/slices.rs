@@ -9,11 +9,11 @@ use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
-use strata::render::film::{Film, PixelSum};
-use strata::render::merge::merge_partials;
-use strata::render::partial::{
+use strata::partial::format::{
     read_partial, read_partial_from, write_partial_to, Partial, PartialHeader,
 };
+use strata::partial::merge::merge_partials;
+use strata::render::film::{Film, PixelSum};
 use strata::render::{render, RenderOptions, SliceSpec};
 use strata::sampling::hash::hash_words;
 use strata::sampling::{Dim, PixelSampler};
@@ -344,7 +344,7 @@ fn merge_writes_the_one_process_image_and_refuses_bad_parts() {
     let mut ck = read_partial(&p1).unwrap();
     ck.header.samples.end -= 1;
     let unfinished = t.dir.join("unfinished_1.strata");
-    strata::render::partial::write_partial(&unfinished, &ck.header, &ck.film).unwrap();
+    strata::partial::format::write_partial(&unfinished, &ck.header, &ck.film).unwrap();
     refused(
         &t.dir,
         &[&p0, &unfinished, &p2],

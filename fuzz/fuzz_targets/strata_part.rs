@@ -5,5 +5,5 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = strata::render::partial::read_partial_from(data, data.len() as u64);
+    let _ = strata::partial::format::read_partial_from(data, data.len() as u64);
 });

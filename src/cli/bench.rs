@@ -6,10 +6,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 use strata::accel::BuildQuality;
-use strata::bench::{rays, trace, Query, RayKind};
 use strata::error::InputError;
-use strata::output::stats::peak_rss_bytes;
+use strata::experiment::bench::{rays, trace, Query, RayKind};
 use strata::scene::{compile, parse, RenderOverrides};
+use strata::system::memory::peak_rss_bytes;
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {

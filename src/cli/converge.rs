@@ -4,8 +4,8 @@ use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
 use strata::error::InputError;
+use strata::experiment::converge::{self, Point, METHODS};
 use strata::output::chart::{log_log_slope, write_svg, Panel, Series};
-use strata::render::converge::{self, Point, METHODS};
 use strata::scene::{load_scene, RenderOverrides};
 
 #[derive(Debug, Args, Clone)]

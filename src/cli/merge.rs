@@ -6,8 +6,8 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::error::InputError;
 use strata::output::image::{write_image, ImageFormat};
-use strata::render::merge::merge_partials;
-use strata::render::partial::{read_partial, write_partial};
+use strata::partial::format::{read_partial, write_partial};
+use strata::partial::merge::merge_partials;
 
 #[derive(Debug, Args, Clone)]
 pub struct MergeArgs {

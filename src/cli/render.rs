@@ -5,8 +5,8 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::error::InputError;
 use strata::output::image::write_image;
-use strata::output::stats::{peak_rss_bytes, BuildMemory, PhaseTimes, RenderStats};
-use strata::render::partial::{read_partial, write_partial, PartialHeader};
+use strata::partial::format::{read_partial, write_partial, PartialHeader};
+use strata::render::stats::RenderStats;
 use strata::render::{render, RenderOptions, Schedule, SliceSpec};
 use strata::sampling::SamplerKind;
 use strata::scene::{load_scene, RenderOverrides};
@@ -86,7 +86,7 @@ pub struct RenderArgs {
     pub stats: Option<PathBuf>,
     /// Replay one sample (pixel x, y and sample index) and print its path instead of rendering.
     #[arg(long, value_name = "X,Y,SAMPLE")]
-    pub debug_sample: Option<strata::render::debug::SampleId>,
+    pub debug_sample: Option<strata::render::replay::SampleId>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -154,9 +154,9 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     };
     let (scene, timings) = load_scene(&scene_path, &overrides)?;
     if let Some(id) = args.debug_sample {
-        let (value, events) = strata::render::debug::replay(&scene, id)
+        let (value, events) = strata::render::replay::replay(&scene, id)
             .map_err(|e| InputError::new("<command line>", "--debug-sample", e))?;
-        print!("{}", strata::render::debug::describe(id, value, &events));
+        print!("{}", strata::render::replay::describe(id, value, &events));
         return Ok(());
     }
     let s = &scene.settings;
@@ -227,8 +227,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             .map_err(|e| InputError::file(&args.output, e))?;
     }
 
-    let total = outcome.counts.total();
-    let mrays = total as f64 / outcome.seconds.max(1e-9) / 1e6;
     if outcome.counts.glossy_rejected > 0 && !args.quiet {
         eprintln!(
             "note: {} glossy directions fell below their surface and were rejected (counted, not traced)",
@@ -241,78 +239,13 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             outcome.film.invalid, bad.x, bad.y, bad.sample, bad.x, bad.y, bad.sample
         );
     }
+    let stats = RenderStats::new(&scene_path, &scene, &timings, &opts, &outcome);
     if let Some(path) = &args.stats {
-        let stats = RenderStats {
-            scene: scene_path.display().to_string(),
-            width: s.width,
-            height: s.height,
-            spp: s.spp,
-            samples_rendered: [resume_from.unwrap_or(full.start), full.end],
-            sampler: format!("{:?}", s.sampler).to_lowercase(),
-            seed: s.seed,
-            threads: outcome.threads,
-            schedule: format!("{:?}", opts.schedule).to_lowercase(),
-            slice: format!("{}/{}", opts.slice.index, opts.slice.count),
-            packets: opts.packets,
-            rays: outcome.counts,
-            rays_total: total,
-            mrays_per_s: mrays,
-            time: PhaseTimes {
-                load_s: timings.load.as_secs_f64(),
-                bvh_build_s: timings.bvh_build.as_secs_f64(),
-                render_s: outcome.seconds,
-            },
-            triangles: scene.geometry.triangle_count as usize,
-            analytic_shapes: scene.geometry.shapes.len(),
-            planes: scene.geometry.planes.len(),
-            bvh_nodes: scene.geometry.bvh.nodes.len(),
-            bvh_bytes: scene.geometry.bvh.memory_bytes(),
-            bvh_prefetch: scene.geometry.bvh.prefetch,
-            peak_rss_bytes: peak_rss_bytes(),
-            memory: BuildMemory {
-                final_bytes_per_triangle: scene.geometry.accel_bytes() as f64
-                    / (scene.geometry.triangle_count.max(1)) as f64,
-                load_peak_bytes: timings.load_peak_bytes,
-                build_peak_bytes: timings.build_peak_bytes,
-                peak_bytes_per_triangle: timings
-                    .peak_bytes()
-                    .map(|b| b as f64 / scene.geometry.triangle_count.max(1) as f64),
-            },
-            invalid_samples: outcome.film.invalid,
-            first_invalid_sample: outcome.film.first_invalid,
-            clamped_samples: outcome.film.clamped,
-        };
-        let json =
-            serde_json::to_string_pretty(&stats).map_err(|e| CliError::Internal(e.to_string()))?;
-        strata::output::atomic::write_bytes_atomic(path, json.as_bytes())
+        strata::output::atomic::write_bytes_atomic(path, stats.to_json().as_bytes())
             .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
     }
     if !args.quiet {
-        println!(
-            "{}x{} {} spp: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s{}) -> {}",
-            s.width,
-            s.height,
-            s.spp,
-            total as f64 / 1e6,
-            outcome.counts.camera as f64 / 1e6,
-            outcome.counts.shadow as f64 / 1e6,
-            outcome.counts.reflection as f64 / 1e6,
-            outcome.counts.refraction as f64 / 1e6,
-            outcome.seconds,
-            mrays,
-            outcome.threads,
-            timings.load.as_secs_f64(),
-            timings.bvh_build.as_secs_f64(),
-            match timings.peak_bytes() {
-                Some(b) if scene.geometry.triangle_count > 0 => format!(
-                    ", peak +{:.0} MB = {:.0} B/triangle",
-                    b as f64 / 1e6,
-                    b as f64 / scene.geometry.triangle_count as f64
-                ),
-                _ => String::new(),
-            },
-            args.output.display()
-        );
+        println!("{}", stats.summary(&args.output));
     }
     Ok(())
 }

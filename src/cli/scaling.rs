@@ -3,12 +3,13 @@
 use super::CliError;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
+use std::process::{Command, Stdio};
 use strata::error::InputError;
-use strata::output::chart::write_svg;
-use strata::render::scaling::{
-    chart_panels, csv, rows, table, thread_counts, time_processes, time_threads, Mode,
-    ProcessSetup, ScratchDir, Timing,
+use strata::experiment::scaling::{
+    chart_panels, csv, rows, table, thread_counts, time_processes, time_threads, Mode, ScratchDir,
+    SliceJob, Timing,
 };
+use strata::output::chart::write_svg;
 use strata::render::Schedule;
 use strata::scene::{load_scene, RenderOverrides};
 
@@ -94,24 +95,35 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
     } else {
         None
     };
-    let setup = scratch.as_ref().map(|dir| {
-        let mut extra = Vec::new();
-        for (flag, v) in [
-            ("--spp", args.spp),
-            ("--width", args.width),
-            ("--height", args.height),
-        ] {
-            if let Some(v) = v {
-                extra.extend([flag.to_string(), v.to_string()]);
-            }
+    // Each child renders its slice with this executable's own `render`, on
+    // one thread, with the same setting overrides as this run.
+    let mut overrides = Vec::new();
+    for (flag, v) in [
+        ("--spp", args.spp),
+        ("--width", args.width),
+        ("--height", args.height),
+    ] {
+        if let Some(v) = v {
+            overrides.extend([flag.to_string(), v.to_string()]);
         }
-        ProcessSetup {
-            exe: std::env::current_exe().unwrap_or_else(|_| PathBuf::from("strata")),
-            scene: scene_path.clone(),
-            args: extra,
-            work_dir: dir.path().to_path_buf(),
-        }
-    });
+    }
+    let exe = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("strata"));
+    let spawn_slice = |job: &SliceJob| {
+        Command::new(&exe)
+            .arg("render")
+            .arg(&scene_path)
+            .args(["--threads", "1", "--quiet", "--slice"])
+            .arg(format!("{}/{}", job.slice.index, job.slice.count))
+            .arg("-o")
+            .arg(&job.part)
+            .arg("--stats")
+            .arg(&job.stats)
+            .args(&overrides)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| format!("cannot start {}: {e}", exe.display()))
+    };
 
     let s = &scene.settings;
     if !args.quiet {
@@ -135,8 +147,11 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
             for (i, &n) in counts.iter().enumerate() {
                 let t = match mode {
                     Mode::Threads(schedule) => time_threads(&scene, *schedule, n),
-                    Mode::Processes => time_processes(setup.as_ref().expect("scratch dir"), n)
-                        .map_err(CliError::Internal)?,
+                    Mode::Processes => {
+                        let dir = scratch.as_ref().expect("scratch dir").path();
+                        time_processes(n, dir, &spawn_slice)
+                    }
+                    .map_err(CliError::Internal)?,
                 };
                 if !args.quiet {
                     eprintln!(

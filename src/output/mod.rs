@@ -1,8 +1,8 @@
-//! Writing results: images (PNG, EXR), statistics JSON, SVG charts. Every file is written
-//! to a temporary name beside its target and renamed into place, so an
-//! interrupted run never leaves a truncated file.
+//! Writing results: images (PNG, EXR), SVG charts, and any file through a
+//! temporary name beside its target that is renamed into place, so an
+//! interrupted run never leaves a truncated file. This layer only writes:
+//! it knows nothing of scenes, shading or rendering.
 
 pub mod atomic;
 pub mod chart;
 pub mod image;
-pub mod stats;

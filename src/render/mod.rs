@@ -1,15 +1,12 @@
-//! Scheduling samples onto threads, accumulating them, and reporting progress.
+//! The render core: scheduling samples onto threads ([`schedule`]),
+//! accumulating them exactly ([`film`]), reporting progress ([`progress`]),
+//! replaying one sample ([`replay`]) and the statistics of a run ([`stats`]).
 
-pub mod converge;
-pub mod cputime;
-pub mod debug;
 pub mod film;
-pub mod fingerprint;
-pub mod merge;
-pub mod partial;
 pub mod progress;
-pub mod scaling;
+pub mod replay;
 pub mod schedule;
+pub mod stats;
 
 pub use film::Film;
 pub use schedule::{render, RenderOptions, RenderOutcome, Schedule, SliceSpec};

@@ -123,7 +123,7 @@ pub struct RenderOutcome {
     pub threads: usize,
     pub samples: Range<u32>,
     /// CPU time spent, where the system reports it (Linux).
-    pub cpu: Option<super::cputime::CpuTimes>,
+    pub cpu: Option<crate::system::cputime::CpuTimes>,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -176,7 +176,7 @@ pub fn render(
         AtomicU64::new(0),
     ];
     let mut scratch = vec![PixelSum::default(); n];
-    let mut cpu = super::cputime::CpuMeter::start(&pool);
+    let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
     let chunk = match opts.schedule {
         Schedule::Slices => BATCH,

@@ -18,7 +18,6 @@ use crate::geometry::{AnalyticPrim, Geometry, MeshNormals, MeshRange, Shape, NO_
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Aabb, Frame, Transform};
-use crate::output::stats::PeakMeter;
 use crate::sampling::SamplerKind;
 use crate::shape::cylinder::Cylinder;
 use crate::shape::disk::Disk;
@@ -26,6 +25,7 @@ use crate::shape::plane::Plane;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
 use crate::shape::triangle8::{TriangleBlock, LANES};
+use crate::system::memory::PeakMeter;
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -13,7 +13,7 @@
 //! | 8 | magic `STRATAPT` |
 //! | 4 | format version (1) |
 //! | 2 + n | strata version that wrote it (u16 length, UTF-8) |
-//! | 8 | scene fingerprint (`render::fingerprint`) |
+//! | 8 | scene fingerprint (`partial::fingerprint`) |
 //! | 4 × 8 | width, height, spp, seed, sampler (0 random, 1 stratified), shadow samples, reflection samples, max depth |
 //! | 4 × 3 | slices `first..end` of `count`: a part holds one (`k..k+1`), a merged part a run of them |
 //! | 4 × 2 | sample indices `start..end` summed: the slices' samples, or less in an unfinished checkpoint |
@@ -27,9 +27,9 @@
 //! allocating anything (a corrupt header claiming 10¹² pixels allocates
 //! nothing), then the checksum.
 
-use super::film::{BadSample, Film};
 use super::fingerprint::{scene_fingerprint, Hasher64};
-use super::schedule::SliceSpec;
+use crate::render::film::{BadSample, Film};
+use crate::render::SliceSpec;
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
 use std::io::{Read, Write};

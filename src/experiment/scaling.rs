@@ -7,7 +7,7 @@
 //!
 //! Wall time on a machine shared with other work measures the neighbours as
 //! much as the scheduler. So in-process runs also record CPU time
-//! (`render::cputime`) along the critical path: per pass, the busiest
+//! (`system::cputime`) along the critical path: per pass, the busiest
 //! worker's CPU time, plus the serial work between passes. That is the wall
 //! time the render would take with a core per thread, and the 1-thread CPU
 //! time over it (`cpu_speedup`) is the speedup that load balance and
@@ -16,20 +16,21 @@
 //! caches, memory bandwidth or a hyperthread's sibling still counts.
 //!
 //! In-process timings cover rendering only (the scene is loaded and the BVH
-//! built once). Process timings are wall time from spawning P children of
-//! the `strata` executable (`render --slice k/P --threads 1`) until their
-//! parts are read back and merged, so they include each child's start,
-//! scene load, BVH build and part write: the real cost of splitting a render
-//! across processes.
+//! built once). Process timings are wall time from spawning P children (one
+//! single-threaded slice k/P each, started by a closure the caller hands
+//! in: `strata scaling` runs its own executable's `render --slice`) until
+//! their parts are read back and merged, so they include each child's
+//! start, scene load, BVH build and part write: the real cost of splitting a
+//! render across processes.
 
-use super::cputime::{thread_cpu_ns, waited_children_cpu_seconds};
-use super::merge::merge_partials;
-use super::partial::read_partial;
-use super::schedule::{render, RenderOptions, Schedule};
 use crate::output::chart::{Panel, Series};
+use crate::partial::merge::merge_partials;
+use crate::partial::read_partial;
+use crate::render::{render, RenderOptions, Schedule, SliceSpec};
 use crate::scene::Scene;
+use crate::system::cputime::{thread_cpu_ns, waited_children_cpu_seconds};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Child;
 use std::time::Instant;
 
 /// 1, 2, 4, … up to `max`, and `max` itself.
@@ -98,44 +99,37 @@ pub fn time_threads(scene: &Scene, schedule: Schedule, threads: usize) -> Timing
     }
 }
 
-/// How to start child renders for [`time_processes`].
+/// One child render of [`time_processes`]: the slice it renders, on one
+/// thread, and where it writes its part and its statistics JSON.
 #[derive(Debug, Clone)]
-pub struct ProcessSetup {
-    /// The `strata` executable (normally `std::env::current_exe()`).
-    pub exe: PathBuf,
-    pub scene: PathBuf,
-    /// Extra `render` flags (setting overrides such as `--spp 8`).
-    pub args: Vec<String>,
-    /// Where parts and stats go (created; files are overwritten).
-    pub work_dir: PathBuf,
+pub struct SliceJob {
+    pub slice: SliceSpec,
+    pub part: PathBuf,
+    pub stats: PathBuf,
 }
 
 /// Render with `processes` single-threaded children, one slice each, and
-/// merge their parts. Errors carry the failing child's message.
-pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, String> {
-    let dir = &setup.work_dir;
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let part = |k: usize| dir.join(format!("part_{k}.strata"));
-    let stats = |k: usize| dir.join(format!("stats_{k}.json"));
-    let start = Instant::now();
-    let children: Vec<_> = (0..processes)
-        .map(|k| {
-            Command::new(&setup.exe)
-                .arg("render")
-                .arg(&setup.scene)
-                .args(["--threads", "1", "--quiet", "--slice"])
-                .arg(format!("{k}/{processes}"))
-                .arg("-o")
-                .arg(part(k))
-                .arg("--stats")
-                .arg(stats(k))
-                .args(&setup.args)
-                .stdout(Stdio::null())
-                .stderr(Stdio::piped())
-                .spawn()
-                .map_err(|e| format!("cannot start {}: {e}", setup.exe.display()))
+/// merge their parts. `spawn` starts the child for a job (the caller knows
+/// how its renderer is invoked; piping the child's stderr makes a failure's
+/// message part of the error). Parts and statistics go to `work_dir`.
+pub fn time_processes(
+    processes: usize,
+    work_dir: &Path,
+    spawn: &dyn Fn(&SliceJob) -> Result<Child, String>,
+) -> Result<Timing, String> {
+    std::fs::create_dir_all(work_dir).map_err(|e| format!("{}: {e}", work_dir.display()))?;
+    let jobs: Vec<SliceJob> = (0..processes)
+        .map(|k| SliceJob {
+            slice: SliceSpec {
+                index: k as u32,
+                count: processes as u32,
+            },
+            part: work_dir.join(format!("part_{k}.strata")),
+            stats: work_dir.join(format!("stats_{k}.json")),
         })
-        .collect::<Result<_, _>>()?;
+        .collect();
+    let start = Instant::now();
+    let children: Vec<Child> = jobs.iter().map(spawn).collect::<Result<_, _>>()?;
     // Each child's CPU time: the growth of this process's waited-for
     // children's time as each one is reaped.
     let mut failures = Vec::new();
@@ -154,11 +148,12 @@ pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, 
         return Err(format!("a child render failed: {f}"));
     }
     let merge_cpu_start = thread_cpu_ns();
-    let parts = (0..processes)
-        .map(|k| {
-            read_partial(&part(k))
-                .map(|p| (part(k), p))
-                .map_err(|e| format!("{}: {e}", part(k).display()))
+    let parts = jobs
+        .iter()
+        .map(|job| {
+            read_partial(&job.part)
+                .map(|p| (job.part.clone(), p))
+                .map_err(|e| format!("{}: {e}", job.part.display()))
         })
         .collect::<Result<Vec<_>, _>>()?;
     merge_partials(parts, true).map_err(|e| e.to_string())?;
@@ -179,8 +174,8 @@ pub fn time_processes(setup: &ProcessSetup, processes: usize) -> Result<Timing, 
             )
         });
     let mut rays = 0;
-    for k in 0..processes {
-        let text = std::fs::read_to_string(stats(k)).map_err(|e| e.to_string())?;
+    for job in &jobs {
+        let text = std::fs::read_to_string(&job.stats).map_err(|e| e.to_string())?;
         let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
         rays += json["rays_total"].as_u64().unwrap_or(0);
     }

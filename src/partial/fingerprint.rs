@@ -1,7 +1,7 @@
 //! A 64-bit fingerprint of everything a render reads, and the checksum of
 //! partial files.
 //!
-//! A partial file (`render::partial`) must not be merged with a part of a
+//! A partial file (`partial::format`) must not be merged with a part of a
 //! different scene. We fingerprint the *compiled* scene rather than the
 //! scene file's bytes: comments, key order, file names and paths do not
 //! change the image and so do not change the fingerprint, while any change

@@ -6,7 +6,7 @@
 //! The sums are fixed point, so the merged film does not depend on the order
 //! of the parts and equals the film of one process rendering every slice.
 
-use super::partial::Partial;
+use super::format::Partial;
 use crate::error::{InputError, InputResult};
 use std::path::PathBuf;
 

@@ -2,8 +2,8 @@
 //! and measure RMSE against a reference (pbrt-v4 logs the same per pass
 //! with `--mse-reference-image`).
 
-use super::schedule::{render, RenderOptions};
 use crate::light::LightSampling;
+use crate::render::{render, RenderOptions};
 use crate::sampling::SamplerKind;
 use crate::scene::settings::GlossySampling;
 use crate::scene::Scene;

@@ -1,63 +1,7 @@
-//! The statistics JSON of a render.
+//! Resident memory of this process (Linux `/proc/self/status`; `None`
+//! elsewhere): the whole run's peak, and the peak of each loading phase.
 
-use crate::shade::integrator::RayCounts;
-use serde::Serialize;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-#[derive(Debug, Clone, Serialize)]
-pub struct PhaseTimes {
-    pub load_s: f64,
-    pub bvh_build_s: f64,
-    pub render_s: f64,
-}
-
-#[derive(Debug, Clone, Serialize)]
-pub struct RenderStats {
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    pub samples_rendered: [u32; 2],
-    pub sampler: String,
-    pub seed: u32,
-    pub threads: usize,
-    pub schedule: String,
-    pub slice: String,
-    /// `--packets`: auto, on or off (the image does not depend on it).
-    pub packets: crate::shade::integrator::PacketMode,
-    pub rays: RayCounts,
-    pub rays_total: u64,
-    pub mrays_per_s: f64,
-    pub time: PhaseTimes,
-    pub triangles: usize,
-    pub analytic_shapes: usize,
-    pub planes: usize,
-    pub bvh_nodes: usize,
-    pub bvh_bytes: usize,
-    /// Whether traversal prefetched (`accel::prefetch`: on for trees of
-    /// 8 MiB and more of nodes and leaf blocks; the image does not depend on it).
-    pub bvh_prefetch: bool,
-    pub peak_rss_bytes: Option<u64>,
-    pub memory: BuildMemory,
-    pub invalid_samples: u64,
-    pub first_invalid_sample: Option<crate::render::film::BadSample>,
-    pub clamped_samples: u64,
-}
-
-/// Memory of loading and building, as `strata render --stats` reports it.
-#[derive(Debug, Clone, Serialize)]
-pub struct BuildMemory {
-    /// Bytes per triangle of the structures traversal reads
-    /// ([`crate::scene::Scene::accel_bytes`]).
-    pub final_bytes_per_triangle: f64,
-    /// Peak resident memory above the level before loading, while loading
-    /// the meshes and while building the BVH (None where Linux's
-    /// `/proc/self/clear_refs` cannot reset the peak and it did not rise).
-    pub load_peak_bytes: Option<u64>,
-    pub build_peak_bytes: Option<u64>,
-    /// The larger of the two, per triangle.
-    pub peak_bytes_per_triangle: Option<f64>,
-}
 
 /// The highest `VmHWM` seen before [`PeakMeter`] last reset it, so that
 /// [`peak_rss_bytes`] stays the whole process's peak.

@@ -1,0 +1,160 @@
+//! The statistics of a render: what `strata render --stats` writes as
+//! JSON, and the summary line it prints.
+
+use super::film::BadSample;
+use super::{RenderOptions, RenderOutcome};
+use crate::scene::{LoadTimings, Scene};
+use crate::shade::integrator::{PacketMode, RayCounts};
+use crate::system::memory::peak_rss_bytes;
+use serde::Serialize;
+use std::path::Path;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseTimes {
+    pub load_s: f64,
+    pub bvh_build_s: f64,
+    pub render_s: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderStats {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub samples_rendered: [u32; 2],
+    pub sampler: String,
+    pub seed: u32,
+    pub threads: usize,
+    pub schedule: String,
+    pub slice: String,
+    /// `--packets`: auto, on or off (the image does not depend on it).
+    pub packets: PacketMode,
+    pub rays: RayCounts,
+    pub rays_total: u64,
+    pub mrays_per_s: f64,
+    pub time: PhaseTimes,
+    pub triangles: usize,
+    pub analytic_shapes: usize,
+    pub planes: usize,
+    pub bvh_nodes: usize,
+    pub bvh_bytes: usize,
+    /// Whether traversal prefetched (`accel::prefetch`: on for trees of
+    /// 8 MiB and more of nodes and leaf blocks; the image does not depend on it).
+    pub bvh_prefetch: bool,
+    pub peak_rss_bytes: Option<u64>,
+    pub memory: BuildMemory,
+    pub invalid_samples: u64,
+    pub first_invalid_sample: Option<BadSample>,
+    pub clamped_samples: u64,
+}
+
+/// Memory of loading and building, as `strata render --stats` reports it.
+#[derive(Debug, Clone, Serialize)]
+pub struct BuildMemory {
+    /// Bytes per triangle of the structures traversal reads
+    /// ([`crate::geometry::Geometry::accel_bytes`]).
+    pub final_bytes_per_triangle: f64,
+    /// Peak resident memory above the level before loading, while loading
+    /// the meshes and while building the BVH (None where Linux's
+    /// `/proc/self/clear_refs` cannot reset the peak and it did not rise).
+    pub load_peak_bytes: Option<u64>,
+    pub build_peak_bytes: Option<u64>,
+    /// The larger of the two, per triangle.
+    pub peak_bytes_per_triangle: Option<f64>,
+}
+
+impl RenderStats {
+    /// The record of one finished render of `scene` (read from `scene_path`).
+    pub fn new(
+        scene_path: &Path,
+        scene: &Scene,
+        timings: &LoadTimings,
+        opts: &RenderOptions,
+        outcome: &RenderOutcome,
+    ) -> Self {
+        let s = &scene.settings;
+        let g = &scene.geometry;
+        let per_triangle = |bytes: u64| bytes as f64 / g.triangle_count.max(1) as f64;
+        let rays_total = outcome.counts.total();
+        Self {
+            scene: scene_path.display().to_string(),
+            width: s.width,
+            height: s.height,
+            spp: s.spp,
+            samples_rendered: [
+                opts.resume_from.unwrap_or(outcome.samples.start),
+                outcome.samples.end,
+            ],
+            sampler: format!("{:?}", s.sampler).to_lowercase(),
+            seed: s.seed,
+            threads: outcome.threads,
+            schedule: format!("{:?}", opts.schedule).to_lowercase(),
+            slice: format!("{}/{}", opts.slice.index, opts.slice.count),
+            packets: opts.packets,
+            rays: outcome.counts,
+            rays_total,
+            mrays_per_s: rays_total as f64 / outcome.seconds.max(1e-9) / 1e6,
+            time: PhaseTimes {
+                load_s: timings.load.as_secs_f64(),
+                bvh_build_s: timings.bvh_build.as_secs_f64(),
+                render_s: outcome.seconds,
+            },
+            triangles: g.triangle_count as usize,
+            analytic_shapes: g.shapes.len(),
+            planes: g.planes.len(),
+            bvh_nodes: g.bvh.nodes.len(),
+            bvh_bytes: g.bvh.memory_bytes(),
+            bvh_prefetch: g.bvh.prefetch,
+            peak_rss_bytes: peak_rss_bytes(),
+            memory: BuildMemory {
+                final_bytes_per_triangle: per_triangle(g.accel_bytes() as u64),
+                load_peak_bytes: timings.load_peak_bytes,
+                build_peak_bytes: timings.build_peak_bytes,
+                peak_bytes_per_triangle: timings.peak_bytes().map(per_triangle),
+            },
+            invalid_samples: outcome.film.invalid,
+            first_invalid_sample: outcome.film.first_invalid,
+            clamped_samples: outcome.film.clamped,
+        }
+    }
+
+    /// Pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("plain numbers and strings serialise")
+    }
+
+    /// The one-line summary `strata render` prints, ending `-> output`.
+    pub fn summary(&self, output: &Path) -> String {
+        let r = &self.rays;
+        let peak = match self
+            .memory
+            .load_peak_bytes
+            .max(self.memory.build_peak_bytes)
+        {
+            Some(b) if self.triangles > 0 => format!(
+                ", peak +{:.0} MB = {:.0} B/triangle",
+                b as f64 / 1e6,
+                b as f64 / self.triangles as f64
+            ),
+            _ => String::new(),
+        };
+        format!(
+            "{}x{} {} spp: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s{peak}) -> {}",
+            self.width,
+            self.height,
+            self.spp,
+            self.rays_total as f64 / 1e6,
+            r.camera as f64 / 1e6,
+            r.shadow as f64 / 1e6,
+            r.reflection as f64 / 1e6,
+            r.refraction as f64 / 1e6,
+            self.time.render_s,
+            self.mrays_per_s,
+            self.threads,
+            self.time.load_s,
+            self.time.bvh_build_s,
+            output.display()
+        )
+    }
+}
