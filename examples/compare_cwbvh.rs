@@ -26,8 +26,14 @@ fn main() {
     let text = format!("[[objects]]\nmesh = {:?}\n", abs.display().to_string());
     let p = PathBuf::from("x.toml");
     let desc = parse::parse_description(&p, &text).unwrap();
-    let (scene, _) =
-        compile::compile(&desc, &p, &RenderOverrides::default(), Instant::now()).unwrap();
+    let (scene, _) = compile::compile(
+        &desc,
+        &p,
+        &RenderOverrides::default(),
+        Default::default(),
+        Instant::now(),
+    )
+    .unwrap();
     let rays = strata::rayfile::read_rays(std::path::Path::new(rays_path)).unwrap();
     let tris: Vec<Triangle> = scene
         .geometry

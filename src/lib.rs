@@ -17,6 +17,7 @@ pub mod geometry;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod mode;
 pub mod output;
 pub mod partial;
 pub mod rayfile;

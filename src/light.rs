@@ -49,26 +49,15 @@ use crate::shape::rect::Rect;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LightSampling {
-    /// Uniform over the light's surface: pdf 1/A, converted by cosθ_l / r².
-    Area,
-    /// Uniform over the solid angle the light subtends, where we can.
-    #[default]
-    SolidAngle,
-}
-
-impl std::str::FromStr for LightSampling {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "area" => Ok(Self::Area),
-            "solid_angle" | "solid-angle" => Ok(Self::SolidAngle),
-            _ => Err(format!(
-                "unknown light sampling '{s}' (expected area or solid_angle)"
-            )),
-        }
+crate::mode::mode_enum! {
+    /// How area lights are sampled.
+    #[derive(Default)]
+    pub enum LightSampling("light sampling") {
+        /// Uniform over the light's surface: pdf 1/A, converted by cosθ_l / r².
+        Area = "area",
+        /// Uniform over the solid angle the light subtends, where we can.
+        #[default]
+        SolidAngle = "solid_angle" | "solid-angle",
     }
 }
 

@@ -8,9 +8,10 @@ mod common;
 
 use common::{bumpy_sphere_obj, scene_at, temp_dir, Rng};
 use glam::Vec3;
+use std::time::Instant;
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::math::Ray;
-use strata::scene::{scene_from_str, RenderOverrides, Scene};
+use strata::scene::{compile, parse, RenderOverrides, Scene};
 
 /// A bumpy UV sphere (shared edges everywhere) and a flat grid (rays aimed
 /// at its vertices hit several triangles at exactly the same t).
@@ -48,6 +49,7 @@ sphere = { center = [1.2, 0.8, 0.5], radius = 0.3 }
 plane = { point = [0.0, -3.0, 0.0], normal = [0.0, 1.0, 0.0] }
 "#;
     let path = dir.join("scene.toml");
+    let desc = parse::parse_description(&path, text).unwrap();
     let mut out = vec![(BuildQuality::Auto, scene_at(text, &path))];
     for q in [
         BuildQuality::Fastest,
@@ -55,11 +57,9 @@ plane = { point = [0.0, -3.0, 0.0], normal = [0.0, 1.0, 0.0] }
         BuildQuality::Medium,
         BuildQuality::High,
     ] {
-        let o = RenderOverrides {
-            bvh_quality: q,
-            ..RenderOverrides::default()
-        };
-        out.push((q, scene_from_str(text, &path, &o).unwrap()));
+        let (scene, _) =
+            compile::compile(&desc, &path, &RenderOverrides::default(), q, Instant::now()).unwrap();
+        out.push((q, scene));
     }
     out
 }

@@ -11,32 +11,17 @@ use obvhs::bvh2::Bvh2;
 use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 
-/// Build effort. `auto` picks by primitive count: the better presets pay
-/// off on big meshes only if rays outnumber triangles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum BuildQuality {
-    Fastest,
-    Fast,
-    #[default]
-    Auto,
-    Medium,
-    High,
-}
-
-impl std::str::FromStr for BuildQuality {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "fastest" => Ok(Self::Fastest),
-            "fast" => Ok(Self::Fast),
-            "auto" => Ok(Self::Auto),
-            "medium" => Ok(Self::Medium),
-            "high" => Ok(Self::High),
-            _ => Err(format!(
-                "unknown BVH quality '{s}' (expected fastest, fast, auto, medium or high)"
-            )),
-        }
+crate::mode::mode_enum! {
+    /// Build effort. `auto` picks by primitive count: the better presets pay
+    /// off on big meshes only if rays outnumber triangles.
+    #[derive(Default)]
+    pub enum BuildQuality("BVH quality") {
+        Fastest = "fastest",
+        Fast = "fast",
+        #[default]
+        Auto = "auto",
+        Medium = "medium",
+        High = "high",
     }
 }
 

@@ -23,13 +23,15 @@
 
 #![allow(unsafe_code)]
 
-/// Whether traversal prefetches: `auto` decides by the scene's size.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Prefetch {
-    #[default]
-    Auto,
-    On,
-    Off,
+crate::mode::mode_enum! {
+    /// Whether traversal prefetches: `auto` decides by the scene's size.
+    #[derive(Default)]
+    pub enum Prefetch("prefetch mode") {
+        #[default]
+        Auto = "auto",
+        On = "on",
+        Off = "off",
+    }
 }
 
 /// The size of a tree's nodes and leaf blocks from which [`Prefetch::Auto`]
@@ -49,20 +51,6 @@ impl Prefetch {
             Self::Auto => bytes >= AUTO_MIN_BYTES,
             Self::On => true,
             Self::Off => false,
-        }
-    }
-}
-
-impl std::str::FromStr for Prefetch {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            "on" => Ok(Self::On),
-            "off" => Ok(Self::Off),
-            _ => Err(format!(
-                "unknown prefetch mode '{s}' (expected auto, on or off)"
-            )),
         }
     }
 }

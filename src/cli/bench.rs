@@ -24,7 +24,7 @@ pub struct BenchArgs {
     /// The "all threads" column (default: every core).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// BVH build effort: fastest, fast, auto, medium or high.
+    /// BVH build effort; auto picks by primitive count.
     #[arg(long, default_value = "auto")]
     pub bvh_quality: BuildQuality,
     /// Where to save the CSV.
@@ -80,11 +80,13 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         let text = format!("[[objects]]\nmesh = {:?}\n", abs.display().to_string());
         let scene_path = PathBuf::from("bench.toml");
         let desc = parse::parse_description(&scene_path, &text)?;
-        let overrides = RenderOverrides {
-            bvh_quality: args.bvh_quality,
-            ..RenderOverrides::default()
-        };
-        let (scene, timings) = compile::compile(&desc, &scene_path, &overrides, Instant::now())?;
+        let (scene, timings) = compile::compile(
+            &desc,
+            &scene_path,
+            &RenderOverrides::default(),
+            args.bvh_quality,
+            Instant::now(),
+        )?;
         let rss = peak_rss_bytes().unwrap_or(0) as f64 / (1 << 20) as f64;
         let tris = scene.geometry.triangle_count as usize;
         let bpt = scene.geometry.accel_bytes() as f64 / tris.max(1) as f64;

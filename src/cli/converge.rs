@@ -3,6 +3,7 @@
 use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
+use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::experiment::converge::{self, Point, METHODS};
 use strata::output::chart::{log_log_slope, write_svg, Panel, Series};
@@ -51,7 +52,7 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
         height: args.height,
         ..RenderOverrides::default()
     };
-    let (scene, _) = load_scene(&args.scene, &overrides)?;
+    let (scene, _) = load_scene(&args.scene, &overrides, BuildQuality::Auto)?;
     let (w, h) = (scene.settings.width, scene.settings.height);
     if args.max_spp == 0 || args.reference_spp == 0 {
         return Err(InputError::new("<command line>", "--max-spp", "must be at least 1").into());

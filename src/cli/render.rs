@@ -8,7 +8,6 @@ use strata::output::image::write_image;
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::stats::RenderStats;
 use strata::render::{render, RenderOptions, Schedule, SliceSpec};
-use strata::sampling::SamplerKind;
 use strata::scene::{load_scene, RenderOverrides};
 
 #[derive(Debug, Args, Clone)]
@@ -19,36 +18,9 @@ pub struct RenderArgs {
     /// film's exact sums, for `strata merge`; required with --slice k/P, P > 1).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
-    /// Image width in pixels (overrides [render] width).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height in pixels (overrides [render] height).
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Camera samples per pixel: antialiasing and, for a thin lens, aperture samples.
-    #[arg(long)]
-    pub spp: Option<u32>,
-    /// Shadow rays per area light per hit.
-    #[arg(long)]
-    pub shadow_samples: Option<u32>,
-    /// Rays per glossy reflection (at the first glossy hit; deeper hits trace one).
-    #[arg(long)]
-    pub reflection_samples: Option<u32>,
-    /// Maximum reflection/refraction depth.
-    #[arg(long)]
-    pub max_depth: Option<u32>,
-    /// random | stratified (correlated multi-jittered, any sample count).
-    #[arg(long)]
-    pub sampler: Option<SamplerKind>,
-    /// solid_angle (default: spherical rectangles, sphere cones) | area.
-    #[arg(long)]
-    pub light_sampling: Option<strata::light::LightSampling>,
-    /// lobe (default: importance-sample the cosⁿ lobe) | uniform (hemisphere; a baseline).
-    #[arg(long)]
-    pub glossy_sampling: Option<strata::scene::settings::GlossySampling>,
-    /// Seed of every random number: same seed, same image.
-    #[arg(long)]
-    pub seed: Option<u32>,
+    /// Render settings; each overrides the scene file's `[render]` value.
+    #[command(flatten)]
+    pub settings: RenderOverrides,
     /// Worker threads (default: all cores). The image is identical for any count.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -69,16 +41,17 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = strata::render::schedule::DEFAULT_PASSES,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub passes: u32,
-    /// slices (default, work stealing over sample slices) | regions (static bands, a baseline).
+    /// slices: work stealing over sample slices of pixel batches; regions: one
+    /// static band of rows per thread, a baseline for `strata scaling`.
     #[arg(long, default_value = "slices")]
     pub schedule: Schedule,
-    /// auto (default: packets where measured to pay: 8 camera samples of
-    /// one pixel in a scene of 1000+ BVH nodes) | on | off. Coherent batches (a pixel's camera
-    /// rays, the shadow rays from one hit to one light) traced as 8-ray
-    /// packets; the image is bit-identical for every mode.
+    /// Trace coherent batches (one pixel's camera samples, the shadow rays
+    /// from one hit to one light) as 8-ray packets: auto where measured to pay
+    /// (camera batches of 7 or more rays), on, or off. The image is
+    /// bit-identical in every mode.
     #[arg(long, default_value = "auto")]
     pub packets: strata::shade::integrator::PacketMode,
-    /// BVH build effort: fastest | fast | auto | medium | high.
+    /// BVH build effort; auto picks by primitive count.
     #[arg(long, default_value = "auto")]
     pub bvh_quality: strata::accel::BuildQuality,
     /// Write statistics (rays by kind, Mrays/s, phase times, peak RSS) as JSON.
@@ -139,20 +112,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             );
         }
     }
-    let overrides = RenderOverrides {
-        width: args.width,
-        height: args.height,
-        spp: args.spp,
-        shadow_samples: args.shadow_samples,
-        reflection_samples: args.reflection_samples,
-        max_depth: args.max_depth,
-        sampler: args.sampler,
-        seed: args.seed,
-        light_sampling: args.light_sampling,
-        glossy_sampling: args.glossy_sampling,
-        bvh_quality: args.bvh_quality,
-    };
-    let (scene, timings) = load_scene(&scene_path, &overrides)?;
+    let (scene, timings) = load_scene(&scene_path, &args.settings, args.bvh_quality)?;
     if let Some(id) = args.debug_sample {
         let (value, events) = strata::render::replay::replay(&scene, id)
             .map_err(|e| InputError::new("<command line>", "--debug-sample", e))?;

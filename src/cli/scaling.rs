@@ -4,6 +4,7 @@ use super::CliError;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
+use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::experiment::scaling::{
     chart_panels, csv, rows, table, thread_counts, time_processes, time_threads, Mode, ScratchDir,
@@ -70,7 +71,7 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         height: args.height,
         ..RenderOverrides::default()
     };
-    let (scene, _) = load_scene(&scene_path, &overrides)?;
+    let (scene, _) = load_scene(&scene_path, &overrides, BuildQuality::Auto)?;
     let max = match args.max_threads {
         Some(0) => {
             return Err(

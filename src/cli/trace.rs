@@ -31,7 +31,7 @@ pub struct TraceArgs {
     /// Worker threads (default: all cores). The hits are identical for any count.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// BVH build effort: fastest | fast | auto | medium | high.
+    /// BVH build effort; auto picks by primitive count.
     #[arg(long, default_value = "auto")]
     pub bvh_quality: BuildQuality,
     /// Trace the rays this many times and report the median time, with

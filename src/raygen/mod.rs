@@ -30,59 +30,22 @@ use crate::sampling::hash::{hash_words, unit_float};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-/// The kinds of ray set. Closed set: [`generate`] matches on it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum RayKind {
-    Random,
-    Camera,
-    Grazing,
-    Edges,
-    Inside,
+crate::mode::mode_enum! {
+    /// The kinds of ray set. Closed set: [`generate`] matches on it.
+    pub enum RayKind("ray kind") {
+        Random = "random",
+        Camera = "camera",
+        Grazing = "grazing",
+        Edges = "edges",
+        Inside = "inside",
+    }
 }
 
 impl RayKind {
-    pub const ALL: [RayKind; 5] = [
-        RayKind::Random,
-        RayKind::Camera,
-        RayKind::Grazing,
-        RayKind::Edges,
-        RayKind::Inside,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            RayKind::Random => "random",
-            RayKind::Camera => "camera",
-            RayKind::Grazing => "grazing",
-            RayKind::Edges => "edges",
-            RayKind::Inside => "inside",
-        }
-    }
-
     /// The parameter `t` at which every ray of this kind reaches the point
     /// it was aimed at, for kinds that aim at one.
     pub fn target_t(self) -> Option<f32> {
         matches!(self, RayKind::Grazing | RayKind::Edges).then_some(1.0)
-    }
-}
-
-impl std::fmt::Display for RayKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for RayKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        RayKind::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown ray kind '{s}' (expected random, camera, grazing, edges or inside)"
-                )
-            })
     }
 }
 

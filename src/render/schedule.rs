@@ -25,24 +25,15 @@ pub const BATCH: usize = 64;
 /// Passes per render when the sample count allows (each is a progress tick and a checkpoint).
 pub const DEFAULT_PASSES: u32 = 16;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Schedule {
-    #[default]
-    Slices,
-    Regions,
-}
-
-impl std::str::FromStr for Schedule {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "slices" => Ok(Self::Slices),
-            "regions" => Ok(Self::Regions),
-            _ => Err(format!(
-                "unknown schedule '{s}' (expected slices or regions)"
-            )),
-        }
+crate::mode::mode_enum! {
+    /// How work is split over threads: `slices` (work stealing over pixel
+    /// batches × sample slices) or `regions` (one static band of rows per
+    /// thread, the classic baseline).
+    #[derive(Default)]
+    pub enum Schedule("schedule") {
+        #[default]
+        Slices = "slices",
+        Regions = "regions",
     }
 }
 

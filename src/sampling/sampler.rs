@@ -9,26 +9,14 @@ use super::cmj::{cmj_2d, stratified_1d};
 use super::hash::{hash_words, unit_float};
 use glam::Vec2;
 
-/// `random`: independent uniform numbers. `stratified`: correlated
-/// multi-jittered sets, one per pixel, effect and depth.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SamplerKind {
-    Random,
-    #[default]
-    Stratified,
-}
-
-impl std::str::FromStr for SamplerKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "random" => Ok(Self::Random),
-            "stratified" => Ok(Self::Stratified),
-            _ => Err(format!(
-                "unknown sampler '{s}' (expected random or stratified)"
-            )),
-        }
+crate::mode::mode_enum! {
+    /// `random`: independent uniform numbers. `stratified`: correlated
+    /// multi-jittered sets, one per pixel, effect and depth.
+    #[derive(Default)]
+    pub enum SamplerKind("sampler") {
+        Random = "random",
+        #[default]
+        Stratified = "stratified",
     }
 }
 

@@ -8,6 +8,7 @@
 use super::asset::{LoadedAsset, LoadedCamera};
 use super::description::*;
 use super::loaders::load_mesh_file;
+use super::settings::RenderOverrides;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
@@ -18,7 +19,6 @@ use crate::geometry::{AnalyticPrim, Geometry, MeshNormals, MeshRange, Shape, NO_
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Aabb, Frame, Transform};
-use crate::sampling::SamplerKind;
 use crate::shape::cylinder::Cylinder;
 use crate::shape::disk::Disk;
 use crate::shape::plane::Plane;
@@ -33,22 +33,6 @@ use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 mod csg;
-
-/// Command-line values that override the scene file's `[render]` table.
-#[derive(Debug, Clone, Default)]
-pub struct RenderOverrides {
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-    pub spp: Option<u32>,
-    pub shadow_samples: Option<u32>,
-    pub reflection_samples: Option<u32>,
-    pub max_depth: Option<u32>,
-    pub sampler: Option<SamplerKind>,
-    pub seed: Option<u32>,
-    pub light_sampling: Option<crate::light::LightSampling>,
-    pub glossy_sampling: Option<crate::scene::settings::GlossySampling>,
-    pub bvh_quality: BuildQuality,
-}
 
 /// Wall time of each loading phase, and how far resident memory rose above
 /// its level before loading during each (see [`PeakMeter`]).
@@ -67,17 +51,23 @@ impl LoadTimings {
     }
 }
 
-/// Read, validate and compile a scene file.
-pub fn load_scene(path: &Path, overrides: &RenderOverrides) -> InputResult<(Scene, LoadTimings)> {
+/// Read, validate and compile a scene file, with the command line's
+/// setting overrides and BVH build effort.
+pub fn load_scene(
+    path: &Path,
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
     let desc = super::parse::read_description(path)?;
-    compile(&desc, path, overrides, start)
+    compile(&desc, path, overrides, quality, start)
 }
 
-/// Compile scene text as if read from `path` (meshes resolve relative to it).
+/// Compile scene text as if read from `path` (meshes resolve relative to
+/// it), with the default BVH build effort.
 pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> InputResult<Scene> {
     let desc = super::parse::parse_description(path, text)?;
-    compile(&desc, path, overrides, Instant::now()).map(|(scene, _)| scene)
+    compile(&desc, path, overrides, BuildQuality::Auto, Instant::now()).map(|(scene, _)| scene)
 }
 
 /// A scene of one mesh file used as it is (no transform, default camera and
@@ -96,20 +86,24 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
         }],
         ..SceneDescription::default()
     };
-    let overrides = RenderOverrides {
-        bvh_quality: quality,
-        ..RenderOverrides::default()
-    };
     // The "scene file" is the mesh itself, so the mesh resolves to `path`
     // and every error names it.
-    compile(&desc, path, &overrides, Instant::now())
+    compile(
+        &desc,
+        path,
+        &RenderOverrides::default(),
+        quality,
+        Instant::now(),
+    )
 }
 
-/// Compile a parsed description; `path` is the scene file (meshes are relative to it).
+/// Compile a parsed description; `path` is the scene file (meshes are
+/// relative to it), `overrides` the command line's render settings.
 pub fn compile(
     desc: &SceneDescription,
     path: &Path,
     overrides: &RenderOverrides,
+    quality: BuildQuality,
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
@@ -144,7 +138,7 @@ pub fn compile(
 
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
-    let mut bvh = Bvh8::build_from(boxes, overrides.bvh_quality);
+    let mut bvh = Bvh8::build_from(boxes, quality);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.nodes.shrink_to_fit();
     // Store the vertices once, in the order the leaves read them, straight
@@ -792,38 +786,23 @@ impl Compiler {
         Ok(())
     }
 
-    fn settings(&self, r: &RenderDesc, o: &RenderOverrides) -> InputResult<RenderSettings> {
-        let s = RenderSettings {
-            width: o.width.unwrap_or(r.width),
-            height: o.height.unwrap_or(r.height),
-            spp: o.spp.unwrap_or(r.spp),
-            shadow_samples: o.shadow_samples.unwrap_or(r.shadow_samples),
-            reflection_samples: o.reflection_samples.unwrap_or(r.reflection_samples),
-            max_depth: o.max_depth.unwrap_or(r.max_depth),
-            sampler: o.sampler.unwrap_or(r.sampler),
-            seed: o.seed.unwrap_or(r.seed),
-            background: self.colour(r.background, "render.background")?,
-            light_sampling: o.light_sampling.unwrap_or(r.light_sampling),
-            glossy_sampling: o.glossy_sampling.unwrap_or(r.glossy_sampling),
-        };
-        for (value, name) in [
-            (s.width, "width"),
-            (s.height, "height"),
-            (s.spp, "spp"),
-            (s.shadow_samples, "shadow_samples"),
-            (s.reflection_samples, "reflection_samples"),
-        ] {
-            if value == 0 {
-                return Err(self.err(&format!("render.{name}"), "must be at least 1"));
-            }
-        }
-        if s.width > 1 << 15 || s.height > 1 << 15 {
-            return Err(self.err("render.width", "image larger than 32768 pixels on a side"));
-        }
-        if s.spp > 1 << 22 {
-            return Err(self.err("render.spp", "more than 4194304 samples per pixel"));
-        }
-        Ok(s)
+    /// The file's `[render]` table under the command line's overrides;
+    /// a bad value names the layer it came from.
+    fn settings(
+        &self,
+        file: &RenderOverrides,
+        cli: &RenderOverrides,
+    ) -> InputResult<RenderSettings> {
+        file.check()
+            .map_err(|(field, message)| self.err(&format!("render.{field}"), message))?;
+        cli.check().map_err(|(field, message)| {
+            InputError::new(
+                "<command line>",
+                format!("--{}", field.replace('_', "-")),
+                message,
+            )
+        })?;
+        Ok(RenderSettings::merge(&[file, cli]))
     }
 
     fn camera(&self, desc: Option<&CameraDesc>, s: &RenderSettings) -> InputResult<Camera> {

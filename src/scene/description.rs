@@ -1,18 +1,9 @@
 //! The scene file, as serde types. Every field that can have a sensible
 //! default has one, and unknown keys are errors.
 //!
-//! ```toml
-//! [render]
-//! width = 640            # default 640
-//! height = 480           # default 480
-//! spp = 1                # camera (aperture) samples per pixel, default 1
-//! shadow_samples = 1     # samples per area light per hit, default 1
-//! reflection_samples = 1 # rays per glossy hit, default 1
-//! max_depth = 5          # reflection/refraction depth, default 5
-//! sampler = "stratified" # or "random"
-//! seed = 0
-//! background = [0.0, 0.0, 0.0]
+//! The `[render]` table is [`RenderOverrides`] (see [`super::settings`]).
 //!
+//! ```toml
 //! [camera]
 //! type = "perspective"   # "orthographic" | "thin_lens"
 //! position = [0.0, 1.0, 6.0]
@@ -22,6 +13,7 @@
 //! ```
 //! See the README for materials, lights and objects.
 
+use super::settings::RenderOverrides;
 use serde::Deserialize;
 
 pub type V3 = [f32; 3];
@@ -30,7 +22,7 @@ pub type V3 = [f32; 3];
 #[serde(deny_unknown_fields)]
 pub struct SceneDescription {
     #[serde(default)]
-    pub render: RenderDesc,
+    pub render: RenderOverrides,
     #[serde(default)]
     pub camera: Option<CameraDesc>,
     #[serde(default)]
@@ -39,40 +31,6 @@ pub struct SceneDescription {
     pub lights: Vec<LightDesc>,
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
-}
-
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct RenderDesc {
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    pub shadow_samples: u32,
-    pub reflection_samples: u32,
-    pub max_depth: u32,
-    pub sampler: crate::sampling::SamplerKind,
-    pub seed: u32,
-    pub background: V3,
-    pub light_sampling: crate::light::LightSampling,
-    pub glossy_sampling: crate::scene::settings::GlossySampling,
-}
-
-impl Default for RenderDesc {
-    fn default() -> Self {
-        Self {
-            width: 640,
-            height: 480,
-            spp: 1,
-            shadow_samples: 1,
-            reflection_samples: 1,
-            max_depth: 5,
-            sampler: crate::sampling::SamplerKind::Stratified,
-            seed: 0,
-            background: [0.0; 3],
-            light_sampling: Default::default(),
-            glossy_sampling: Default::default(),
-        }
-    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]

@@ -18,8 +18,8 @@ use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
 
-pub use compile::{load_mesh_scene, load_scene, scene_from_str, LoadTimings, RenderOverrides};
-pub use settings::RenderSettings;
+pub use compile::{load_mesh_scene, load_scene, scene_from_str, LoadTimings};
+pub use settings::{RenderOverrides, RenderSettings};
 
 /// A compiled scene. Primitives refer to materials by index.
 #[derive(Debug, Clone)]

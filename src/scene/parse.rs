@@ -45,10 +45,8 @@ mod tests {
     #[test]
     fn an_empty_file_is_a_valid_scene_with_defaults() {
         let d = parse_description(Path::new("empty.toml"), "").unwrap();
-        assert_eq!(
-            (d.render.width, d.render.height, d.render.spp),
-            (640, 480, 1)
-        );
+        let s = crate::scene::RenderSettings::merge(&[&d.render]);
+        assert_eq!((s.width, s.height, s.spp), (640, 480, 1));
         assert!(d.objects.is_empty());
     }
 }

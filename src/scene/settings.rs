@@ -1,31 +1,98 @@
-//! Render settings after the scene file and the command line are merged.
+//! Render settings, declared once. [`RenderOverrides`] is one layer of
+//! them, every value optional: the scene file's `[render]` table is one
+//! layer, the command line another (its flags are these fields, and their
+//! `--help` is these doc comments). [`RenderSettings::merge`] lays them
+//! over the defaults, file first, so the command line wins.
+//!
+//! ```toml
+//! [render]
+//! width = 640            # pixels, default 640
+//! height = 480           # default 480
+//! spp = 1                # camera (pixel and lens) samples per pixel
+//! shadow_samples = 1     # samples per area light per hit
+//! reflection_samples = 1 # rays per glossy hit (the first on a path)
+//! max_depth = 5          # reflection and refraction depth
+//! sampler = "stratified" # or "random"
+//! seed = 0
+//! background = [0.0, 0.0, 0.0]   # radiance of rays that hit nothing
+//! light_sampling = "solid_angle" # or "area"
+//! glossy_sampling = "lobe"       # or "uniform"
+//! ```
 
 use crate::light::LightSampling;
 use crate::sampling::SamplerKind;
 use glam::Vec3;
+use serde::Deserialize;
 
-/// How fuzzy reflections pick directions. `lobe` importance-samples the
-/// cosⁿ lobe; `uniform` samples the hemisphere uniformly (a baseline for
-/// `strata converge` and the variance tests).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum GlossySampling {
-    #[default]
-    Lobe,
-    Uniform,
+crate::mode::mode_enum! {
+    /// How fuzzy reflections pick directions. `lobe` importance-samples the
+    /// cosⁿ lobe; `uniform` samples the hemisphere uniformly (a baseline for
+    /// `strata converge` and the variance tests).
+    #[derive(Default)]
+    pub enum GlossySampling("glossy sampling") {
+        #[default]
+        Lobe = "lobe",
+        Uniform = "uniform",
+    }
 }
 
-impl std::str::FromStr for GlossySampling {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "lobe" => Ok(Self::Lobe),
-            "uniform" => Ok(Self::Uniform),
-            _ => Err(format!(
-                "unknown glossy sampling '{s}' (expected lobe or uniform)"
-            )),
-        }
-    }
+/// One layer of render settings: the scene file's `[render]` table, or the
+/// command line. Absent values fall through to the layer below.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, clap::Args)]
+#[serde(deny_unknown_fields)]
+pub struct RenderOverrides {
+    /// Image width in pixels [scene file: render.width; default 640]
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels [scene file: render.height; default 480]
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera samples per pixel: antialiasing and, for a thin lens, aperture
+    /// samples [render.spp; default 1]
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Shadow rays per area light per hit [render.shadow_samples; default 1]
+    #[arg(long)]
+    pub shadow_samples: Option<u32>,
+    /// Rays per glossy reflection, at the first glossy hit of a path (deeper
+    /// hits trace one) [render.reflection_samples; default 1]
+    #[arg(long)]
+    pub reflection_samples: Option<u32>,
+    /// Maximum reflection and refraction depth [render.max_depth; default 5]
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// stratified: correlated multi-jittered sets of any sample count;
+    /// random: independent numbers, a baseline [render.sampler; default stratified]
+    #[arg(long)]
+    pub sampler: Option<SamplerKind>,
+    /// Seed of every random number: same seed, same image [render.seed; default 0]
+    #[arg(long)]
+    pub seed: Option<u32>,
+    /// Radiance of rays that hit nothing, as R,G,B [render.background; default 0,0,0]
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub background: Option<[f32; 3]>,
+    /// solid_angle: spherical rectangles and sphere cones where possible;
+    /// area: uniform over the light's surface [render.light_sampling; default
+    /// solid_angle]
+    #[arg(long)]
+    pub light_sampling: Option<LightSampling>,
+    /// lobe: importance-sample the cosⁿ lobe; uniform: the hemisphere, a
+    /// baseline [render.glossy_sampling; default lobe]
+    #[arg(long)]
+    pub glossy_sampling: Option<GlossySampling>,
+}
+
+/// `r,g,b` as three numbers.
+fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [r, g, b] = parts[..] else {
+        return Err(format!("'{text}' is not three numbers R,G,B"));
+    };
+    let number = |s: &str| {
+        s.parse::<f32>()
+            .map_err(|_| format!("'{s}' is not a number"))
+    };
+    Ok([number(r)?, number(g)?, number(b)?])
 }
 
 /// Render settings after the scene file and the command line are merged.
@@ -42,4 +109,152 @@ pub struct RenderSettings {
     pub background: Vec3,
     pub light_sampling: LightSampling,
     pub glossy_sampling: GlossySampling,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            spp: 1,
+            shadow_samples: 1,
+            reflection_samples: 1,
+            max_depth: 5,
+            sampler: SamplerKind::default(),
+            seed: 0,
+            background: Vec3::ZERO,
+            light_sampling: LightSampling::default(),
+            glossy_sampling: GlossySampling::default(),
+        }
+    }
+}
+
+/// The largest image side and sample count a render accepts.
+pub const MAX_SIDE: u32 = 1 << 15;
+pub const MAX_SPP: u32 = 1 << 22;
+
+impl RenderOverrides {
+    /// The first value this layer gives that no render can use, as (field,
+    /// message); the field is the `[render]` key (`spp`).
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        for (value, field) in [
+            (self.width, "width"),
+            (self.height, "height"),
+            (self.spp, "spp"),
+            (self.shadow_samples, "shadow_samples"),
+            (self.reflection_samples, "reflection_samples"),
+        ] {
+            if value == Some(0) {
+                return Err((field, "must be at least 1".to_string()));
+            }
+        }
+        for (value, field) in [(self.width, "width"), (self.height, "height")] {
+            if value.is_some_and(|v| v > MAX_SIDE) {
+                return Err((
+                    field,
+                    format!("image larger than {MAX_SIDE} pixels on a side"),
+                ));
+            }
+        }
+        if self.spp.is_some_and(|v| v > MAX_SPP) {
+            return Err(("spp", format!("more than {MAX_SPP} samples per pixel")));
+        }
+        if let Some(c) = self.background {
+            if !c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                return Err((
+                    "background",
+                    format!("must be finite and not negative, got {c:?}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl RenderSettings {
+    /// The defaults with each layer laid over them in turn (the scene file,
+    /// then the command line): a value a later layer gives wins. Check each
+    /// layer with [`RenderOverrides::check`] first.
+    pub fn merge(layers: &[&RenderOverrides]) -> Self {
+        let mut s = Self::default();
+        for layer in layers {
+            let RenderOverrides {
+                width,
+                height,
+                spp,
+                shadow_samples,
+                reflection_samples,
+                max_depth,
+                sampler,
+                seed,
+                background,
+                light_sampling,
+                glossy_sampling,
+            } = **layer;
+            s.width = width.unwrap_or(s.width);
+            s.height = height.unwrap_or(s.height);
+            s.spp = spp.unwrap_or(s.spp);
+            s.shadow_samples = shadow_samples.unwrap_or(s.shadow_samples);
+            s.reflection_samples = reflection_samples.unwrap_or(s.reflection_samples);
+            s.max_depth = max_depth.unwrap_or(s.max_depth);
+            s.sampler = sampler.unwrap_or(s.sampler);
+            s.seed = seed.unwrap_or(s.seed);
+            s.background = background.map_or(s.background, Vec3::from);
+            s.light_sampling = light_sampling.unwrap_or(s.light_sampling);
+            s.glossy_sampling = glossy_sampling.unwrap_or(s.glossy_sampling);
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn later_layers_win_and_absent_values_fall_through() {
+        let file = RenderOverrides {
+            width: Some(320),
+            spp: Some(16),
+            sampler: Some(SamplerKind::Random),
+            ..Default::default()
+        };
+        let cli = RenderOverrides {
+            spp: Some(4),
+            background: Some([0.5, 0.25, 0.0]),
+            ..Default::default()
+        };
+        let s = RenderSettings::merge(&[&file, &cli]);
+        assert_eq!((s.width, s.height, s.spp), (320, 480, 4));
+        assert_eq!(s.sampler, SamplerKind::Random);
+        assert_eq!(s.background, Vec3::new(0.5, 0.25, 0.0));
+        assert_eq!(RenderSettings::merge(&[]), RenderSettings::default());
+    }
+
+    #[test]
+    fn check_names_the_first_unusable_value() {
+        let zero = RenderOverrides {
+            shadow_samples: Some(0),
+            ..Default::default()
+        };
+        assert_eq!(zero.check().unwrap_err().0, "shadow_samples");
+        let huge = RenderOverrides {
+            height: Some(MAX_SIDE + 1),
+            ..Default::default()
+        };
+        assert_eq!(huge.check().unwrap_err().0, "height");
+        let nan = RenderOverrides {
+            background: Some([0.0, f32::NAN, 0.0]),
+            ..Default::default()
+        };
+        assert_eq!(nan.check().unwrap_err().0, "background");
+        assert!(RenderOverrides::default().check().is_ok());
+    }
+
+    #[test]
+    fn colours_parse_from_the_command_line() {
+        assert_eq!(parse_rgb("1, 0.5,0"), Ok([1.0, 0.5, 0.0]));
+        assert!(parse_rgb("1,2").is_err());
+        assert!(parse_rgb("a,b,c").is_err());
+    }
 }

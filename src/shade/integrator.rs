@@ -65,19 +65,20 @@ impl RayCounts {
     }
 }
 
-/// Whether coherent batches of rays are traced as packets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PacketMode {
-    /// Packets where they were measured to pay: camera batches of at least
-    /// [`CAMERA_PACKET_MIN`] rays, and shadow batches of at least
-    /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
-    #[default]
-    Auto,
-    /// Every batch as a packet, however few rays it holds.
-    On,
-    /// Single rays only.
-    Off,
+crate::mode::mode_enum! {
+    /// Whether coherent batches of rays are traced as packets.
+    #[derive(Default)]
+    pub enum PacketMode("packet mode") {
+        /// Packets where they were measured to pay: camera batches of at least
+        /// [`CAMERA_PACKET_MIN`] rays, and shadow batches of at least
+        /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
+        #[default]
+        Auto = "auto",
+        /// Every batch as a packet, however few rays it holds.
+        On = "on",
+        /// Single rays only.
+        Off = "off",
+    }
 }
 
 // The `auto` thresholds, from the packet/single throughput of the renderer's
@@ -116,20 +117,6 @@ impl PacketMode {
             Self::Auto => live >= auto_min,
             Self::On => live > 0,
             Self::Off => false,
-        }
-    }
-}
-
-impl std::str::FromStr for PacketMode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            "on" => Ok(Self::On),
-            "off" => Ok(Self::Off),
-            _ => Err(format!(
-                "unknown packet mode '{s}' (expected auto, on or off)"
-            )),
         }
     }
 }
