@@ -1,0 +1,279 @@
+//! Material libraries (`.mtl`) for the OBJ loader: reading and checking them
+//! line by line (errors name the library and the line) before `tobj` parses
+//! them, and turning tobj's materials into ours.
+
+use super::super::io_message;
+use super::scan::parse_finite;
+use super::utf8_text;
+use crate::error::{InputError, InputResult};
+use crate::material::Material;
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// The materials of one `mtllib` line, in library order.
+pub(super) type MtlLibrary = Vec<tobj::Material>;
+
+pub(super) enum LibraryError {
+    /// A problem inside a library, already naming the library file.
+    Input(InputError),
+    /// The library could not be read; to be reported at the `mtllib` line.
+    Read(String),
+}
+
+/// Load the material libraries named after `mtllib`. tobj reads the whole
+/// rest of the line as one file name (names may contain spaces); if no such
+/// file exists and the text has several words, each word is a library.
+pub(super) fn load_library(obj_path: &Path, name: &str) -> Result<MtlLibrary, LibraryError> {
+    let dir = obj_path.parent().unwrap_or(Path::new(""));
+    let whole = dir.join(name);
+    let files: Vec<PathBuf> = if whole.is_file() || !name.contains(char::is_whitespace) {
+        vec![whole]
+    } else {
+        name.split_whitespace().map(|n| dir.join(n)).collect()
+    };
+    let mut materials = Vec::new();
+    for file in files {
+        let bytes = std::fs::read(&file).map_err(|e| {
+            LibraryError::Read(format!(
+                "cannot read material library {}: {}",
+                file.display(),
+                io_message(&e)
+            ))
+        })?;
+        materials.append(&mut parse_mtl(&file, &bytes).map_err(LibraryError::Input)?);
+    }
+    Ok(materials)
+}
+
+/// Validate an MTL file line by line (errors name it and the line), bring
+/// colours into the `r g b` form tobj needs, then let tobj parse it.
+fn parse_mtl(path: &Path, bytes: &[u8]) -> InputResult<MtlLibrary> {
+    let text = utf8_text(path, bytes)?;
+    let mut normalized = String::with_capacity(text.len());
+    for (number, raw) in text.split('\n').enumerate() {
+        let at = |message: String| InputError::new(path, format!("line {}", number + 1), message);
+        let line = raw.trim();
+        let mut words = line.split_whitespace();
+        let keyword = words.next().unwrap_or("");
+        let tokens: Vec<&str> = words.collect();
+        let after_keyword = line.get(keyword.len()..).unwrap_or("").trim();
+        match keyword {
+            "newmtl" => {
+                if after_keyword.is_empty() {
+                    return Err(at("newmtl needs a material name".to_string()));
+                }
+                normalized.push_str(line);
+            }
+            "Ka" | "Kd" | "Ks" | "Ke" => {
+                let rgb = parse_colour(keyword, &tokens).map_err(&at)?;
+                normalized.push_str(&format!("{keyword} {} {} {}", rgb[0], rgb[1], rgb[2]));
+            }
+            "Ns" | "Ni" | "d" | "Tr" => {
+                let value = tokens
+                    .iter()
+                    .find(|t| **t != "-halo")
+                    .ok_or_else(|| at(format!("{keyword} needs a number")))?;
+                let value = parse_finite(value, keyword).map_err(&at)?;
+                normalized.push_str(&format!("{keyword} {value}"));
+            }
+            "illum" => {
+                let ok = tokens.len() == 1 && tokens[0].parse::<u8>().is_ok();
+                if !ok {
+                    return Err(at(format!(
+                        "illum needs one illumination model number 0-10, found '{after_keyword}'"
+                    )));
+                }
+                normalized.push_str(line);
+            }
+            "map_Ka" | "map_Kd" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" | "map_d"
+            | "map_Bump" | "map_bump" | "bump" => {
+                if after_keyword.is_empty() {
+                    return Err(at(format!("{keyword} needs a file name")));
+                }
+                normalized.push_str(line);
+            }
+            _ => normalized.push_str(line),
+        }
+        normalized.push('\n');
+    }
+    tobj::load_mtl_buf(&mut normalized.as_bytes())
+        .map(|(materials, _)| materials)
+        .map_err(|e| InputError::file(path, format!("cannot parse MTL: {e}")))
+}
+
+/// `r g b`, or one number for a grey; other MTL colour forms are refused.
+fn parse_colour(keyword: &str, tokens: &[&str]) -> Result<[f32; 3], String> {
+    match tokens {
+        [] => Err(format!("{keyword} needs a colour r g b")),
+        [form, ..] if *form == "spectral" || *form == "xyz" => Err(format!(
+            "{keyword} {form} colours are not supported; give r g b"
+        )),
+        [grey] => {
+            let v = parse_finite(grey, keyword)?;
+            Ok([v; 3])
+        }
+        [_, _] => Err(format!(
+            "{keyword} needs r g b (or one number for a grey), found 2 numbers"
+        )),
+        [r, g, b, ..] => Ok([
+            parse_finite(r, keyword)?,
+            parse_finite(g, keyword)?,
+            parse_finite(b, keyword)?,
+        ]),
+    }
+}
+
+/// Map one MTL material to ours; see the table in the [`obj` module
+/// documentation](super).
+pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
+    let defaults = Material::default();
+    let specular = m.specular.map(Vec3::from).unwrap_or(Vec3::ZERO);
+    let mut transparency = match m.dissolve {
+        Some(d) => 1.0 - d,
+        None => m
+            .unknown_param
+            .get("Tr")
+            .and_then(|t| t.split_whitespace().next())
+            .and_then(|t| t.parse::<f32>().ok())
+            .unwrap_or(0.0),
+    };
+    if !transparency.is_finite() {
+        transparency = 0.0;
+    }
+    let illum = m.illumination_model.unwrap_or(0);
+    let mirror = matches!(illum, 3 | 5 | 7);
+    Material {
+        diffuse: m.diffuse.map(Vec3::from).unwrap_or(defaults.diffuse),
+        specular,
+        shininess: m.shininess.unwrap_or(0.0),
+        reflectivity: if mirror { specular.max_element() } else { 0.0 },
+        glossiness: 0.0,
+        transparency: transparency.clamp(0.0, 1.0),
+        ior: m
+            .optical_density
+            .filter(|n| n.is_finite() && *n > 0.0)
+            .unwrap_or(defaults.ior),
+        fresnel: matches!(illum, 5 | 7),
+        emission: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
+        ..defaults
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::load_obj;
+    use super::super::test_helpers::{load_text, SQUARE};
+    use crate::material::Material;
+    use crate::scene::loaders::test_files::{temp_dir, write};
+    use glam::Vec3;
+
+    #[test]
+    fn mtl_values_map_to_materials() {
+        let dir = temp_dir("mtl");
+        write(
+            &dir,
+            "looks.mtl",
+            b"# test library\nnewmtl matte\nKd 0.5 0.25 0.125\n\
+              newmtl mirror\nKd 0 0 0\nKs 0.9 0.8 0.7\nNs 200\nillum 3\n\
+              newmtl glass\nKd 0.1\nd 0.25\nNi 1.33\nillum 7\n\
+              newmtl lamp\nKe 4 3 2\nTr 0.5\n",
+        );
+        let obj =
+            format!("mtllib looks.mtl\n{SQUARE}o a\nusemtl mirror\nf 1 2 3\no b\nusemtl lamp\nf 1 3 4\no c\nf 2 3 4\n");
+        let asset = load_obj(&write(&dir, "scene.obj", obj.as_bytes())).unwrap();
+        let names: Vec<&str> = asset.materials.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["matte", "mirror", "glass", "lamp"]);
+        let m = |name: &str| asset.materials.iter().find(|(n, _)| n == name).unwrap().1;
+
+        let matte = m("matte");
+        assert_eq!(matte.diffuse, Vec3::new(0.5, 0.25, 0.125));
+        assert_eq!(matte.specular, Vec3::ZERO);
+        assert_eq!(matte.reflectivity, 0.0);
+        assert_eq!(matte.transparency, 0.0);
+
+        let mirror = m("mirror");
+        assert_eq!(mirror.specular, Vec3::new(0.9, 0.8, 0.7));
+        assert_eq!(mirror.shininess, 200.0);
+        assert_eq!(mirror.reflectivity, 0.9);
+        assert_eq!(mirror.glossiness, 0.0);
+        assert!(!mirror.fresnel);
+
+        let glass = m("glass");
+        assert_eq!(glass.diffuse, Vec3::splat(0.1));
+        assert_eq!(glass.transparency, 0.75);
+        assert_eq!(glass.ior, 1.33);
+        assert!(glass.fresnel);
+
+        let lamp = m("lamp");
+        assert_eq!(lamp.emission, Vec3::new(4.0, 3.0, 2.0));
+        assert_eq!(lamp.transparency, 0.5);
+        assert_eq!(lamp.diffuse, Material::default().diffuse);
+
+        let materials: Vec<Option<usize>> = asset.meshes.iter().map(|m| m.material).collect();
+        // Object c has no usemtl of its own but inherits the current one, as OBJ does.
+        assert_eq!(materials, [Some(1), Some(3), Some(3)]);
+    }
+
+    #[test]
+    fn missing_mtl_is_an_error_naming_it() {
+        let err = load_text(&format!("{SQUARE}mtllib nowhere.mtl\nf 1 2 3\n")).unwrap_err();
+        let shown = err.to_string();
+        assert!(shown.contains("nowhere.mtl"), "{shown}");
+        assert!(shown.contains("No such file or directory"), "{shown}");
+        assert_eq!(err.location, "line 5");
+    }
+
+    #[test]
+    fn mtl_errors_name_the_library_and_line() {
+        let dir = temp_dir("badmtl");
+        write(&dir, "bad.mtl", b"newmtl a\nKd 1 1 1\nNs lots\n");
+        let obj = write(&dir, "m.obj", b"mtllib bad.mtl\nv 0 0 0\n");
+        let err = load_obj(&obj).unwrap_err();
+        assert!(err.file.ends_with("bad.mtl"), "{err}");
+        assert_eq!(err.location, "line 3");
+        write(&dir, "two.mtl", b"newmtl a\nKd 1 1\n");
+        let obj = write(&dir, "n.obj", b"mtllib two.mtl\n");
+        let err = load_obj(&obj).unwrap_err();
+        assert!(
+            err.file.ends_with("two.mtl") && err.location == "line 2",
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn garbage_material_libraries_never_panic() {
+        let dir = temp_dir("mtlfuzz");
+        write(
+            &dir,
+            "f.obj",
+            b"mtllib f.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+        );
+        let words = [
+            "newmtl", "a", "Kd", "Ks", "Ke", "Ka", "Ns", "Ni", "d", "Tr", "illum", "map_Kd",
+            "bump", "map_Bump", "1", "0.5", "-3", "300", "x", "spectral", "xyz", "-halo", "nan",
+            "\n", "\n", "\n", "\t", "#",
+        ];
+        let mut state = 0x0dd_b1a5_e5ca_fe01u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut loaded = 0;
+        for _ in 0..300 {
+            let mut s = String::from("newmtl a\n");
+            for _ in 0..next() % 40 {
+                s.push_str(words[(next() % words.len() as u64) as usize]);
+                s.push(' ');
+            }
+            write(&dir, "f.mtl", s.as_bytes());
+            if let Ok(asset) = load_obj(&dir.join("f.obj")) {
+                loaded += 1;
+                let index = asset.meshes[0].material.expect("usemtl a");
+                assert_eq!(asset.materials[index].0, "a");
+            }
+        }
+        assert!(loaded > 0);
+    }
+}

@@ -1,0 +1,454 @@
+//! The validation pass over OBJ text, before `tobj` sees it.
+//!
+//! [`scan_obj`] checks, line by line, everything `tobj` would reject or
+//! silently mangle, so that the user gets the line number of the mistake
+//! rather than tobj's message about the whole file. It also loads the
+//! material libraries that `mtllib` lines name (see `mtl.rs`), because a
+//! `usemtl` is checked against the materials defined before it.
+//! [`rewrite_for_tobj`] then adjusts the few valid lines tobj would misread.
+
+use super::mtl::{load_library, LibraryError, MtlLibrary};
+use crate::error::{InputError, InputResult};
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+
+/// What the validation pass learned about one `f` line.
+#[derive(Clone, Copy)]
+pub(super) struct FaceInfo {
+    pub(super) triangles: u32,
+    pub(super) has_normals: bool,
+}
+
+/// The result of the validation pass over an OBJ file.
+pub(super) struct ObjScan {
+    pub(super) faces: Vec<FaceInfo>,
+    /// Material libraries keyed by the text after `mtllib`, as tobj asks for them.
+    pub(super) libraries: HashMap<PathBuf, MtlLibrary>,
+    /// The text needs adjusting before tobj can read it (see [`rewrite_for_tobj`]).
+    pub(super) needs_rewrite: bool,
+    /// Some `v` lines have colours and others not: drop the colours.
+    pub(super) strip_colours: bool,
+}
+
+/// How many `v`, `vt` and `vn` lines a file has, for absolute indices.
+#[derive(Default, Clone, Copy)]
+struct Counts {
+    v: usize,
+    vt: usize,
+    vn: usize,
+    /// Whether any `mtllib` line exists.
+    mtllib: bool,
+}
+
+fn count_elements(text: &str) -> Counts {
+    let mut counts = Counts::default();
+    for line in text.split('\n') {
+        match line.split_whitespace().next() {
+            Some("v") => counts.v += 1,
+            Some("vt") => counts.vt += 1,
+            Some("vn") => counts.vn += 1,
+            Some("mtllib") => counts.mtllib = true,
+            _ => {}
+        }
+    }
+    counts
+}
+
+fn parse_number(token: &str, what: &str) -> Result<f32, String> {
+    token
+        .parse::<f32>()
+        .map_err(|_| format!("{what}: '{token}' is not a number"))
+}
+
+/// A finite number, or a message naming `what`; `mtl.rs` checks MTL values
+/// with it too, so both files refuse the same numbers.
+pub(super) fn parse_finite(token: &str, what: &str) -> Result<f32, String> {
+    let value = parse_number(token, what)?;
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{what}: '{token}' is not a finite number (NaN, infinite or too large)"
+        ))
+    }
+}
+
+/// Check one index of a face corner: `kind` names it for messages,
+/// `so_far` is how many elements precede the face, `total` how many the file has.
+fn check_index(
+    text: &str,
+    (singular, plural): (&str, &str),
+    so_far: usize,
+    total: usize,
+) -> Result<(), String> {
+    let index: isize = text
+        .parse()
+        .map_err(|_| format!("'{text}' is not an integer {singular} index"))?;
+    if index == 0 {
+        return Err(format!(
+            "{singular} index 0 is invalid (OBJ indices start at 1)"
+        ));
+    }
+    if index < 0 {
+        if index.unsigned_abs() > so_far {
+            return Err(format!(
+                "relative {singular} index {index} reaches before the first {singular} \
+                 (only {so_far} {plural} are defined before this line)"
+            ));
+        }
+    } else if index as usize > total {
+        return Err(format!(
+            "{singular} index {index} is out of range (the file defines {total} {plural})"
+        ));
+    }
+    Ok(())
+}
+
+/// Validate a face's vertex tokens; returns whether every corner has a normal.
+fn check_face(tokens: &[&str], defined: Counts, total: Counts) -> Result<bool, String> {
+    if tokens.len() < 3 {
+        return Err(format!(
+            "a face needs at least 3 vertices, this one has {}",
+            tokens.len()
+        ));
+    }
+    let mut has_normals = true;
+    for token in tokens {
+        let parts: Vec<&str> = token.split('/').collect();
+        if parts.len() > 3 {
+            return Err(format!(
+                "'{token}' is not a face vertex (expected v, v/vt, v//vn or v/vt/vn)"
+            ));
+        }
+        if parts[0].is_empty() {
+            return Err(format!("'{token}' has no vertex index"));
+        }
+        check_index(parts[0], ("vertex", "vertices"), defined.v, total.v)?;
+        if let Some(vt) = parts.get(1).filter(|p| !p.is_empty()) {
+            check_index(
+                vt,
+                ("texture coordinate", "texture coordinates"),
+                defined.vt,
+                total.vt,
+            )?;
+        }
+        match parts.get(2).filter(|p| !p.is_empty()) {
+            Some(vn) => check_index(vn, ("normal", "normals"), defined.vn, total.vn)?,
+            None => has_normals = false,
+        }
+    }
+    Ok(has_normals)
+}
+
+/// The text after the first space, trimmed, as tobj reads `usemtl`/`mtllib`.
+fn after_first_space(line: &str) -> &str {
+    line.split_once(' ')
+        .map(|(_, rest)| rest.trim())
+        .unwrap_or("")
+}
+
+/// The validation pass: checks everything tobj would reject (or silently
+/// mangle), with line numbers, and loads the material libraries.
+pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
+    let total = count_elements(text);
+    let mut defined = Counts::default();
+    let mut scan = ObjScan {
+        faces: Vec::new(),
+        libraries: HashMap::new(),
+        needs_rewrite: false,
+        strip_colours: false,
+    };
+    let mut coloured_vertices = 0usize;
+    let mut material_names: HashSet<String> = HashSet::new();
+
+    for (number, line) in text.split('\n').enumerate() {
+        let at = |message: String| InputError::new(path, format!("line {}", number + 1), message);
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let rest: Vec<&str> = match keyword {
+            "v" | "vt" | "vn" | "f" | "l" => words.collect(),
+            _ => Vec::new(),
+        };
+        match keyword {
+            "v" => {
+                if !matches!(rest.len(), 3 | 4 | 6) {
+                    return Err(at(format!(
+                        "a vertex needs 3 coordinates x y z (optionally followed by w, \
+                         or by r g b), this one has {} numbers",
+                        rest.len()
+                    )));
+                }
+                let mut xyz = [0.0f32; 3];
+                for (i, token) in rest[..3].iter().enumerate() {
+                    xyz[i] = parse_finite(token, "vertex coordinate").map_err(&at)?;
+                }
+                if rest.len() == 4 {
+                    let w = parse_finite(rest[3], "vertex weight w").map_err(&at)?;
+                    if w == 0.0 || xyz.iter().any(|c| !(c / w).is_finite()) {
+                        return Err(at(format!(
+                            "vertex weight w = {w} would make the coordinates infinite"
+                        )));
+                    }
+                }
+                if rest.len() == 6 {
+                    for token in &rest[3..] {
+                        parse_number(token, "vertex colour").map_err(&at)?;
+                    }
+                    coloured_vertices += 1;
+                }
+                defined.v += 1;
+            }
+            "vt" => {
+                if rest.is_empty() {
+                    return Err(at("a texture coordinate needs at least u".to_string()));
+                }
+                for token in rest.iter().take(2) {
+                    parse_finite(token, "texture coordinate").map_err(&at)?;
+                }
+                if rest.len() == 1 {
+                    scan.needs_rewrite = true;
+                }
+                defined.vt += 1;
+            }
+            "vn" => {
+                if rest.len() < 3 {
+                    return Err(at(format!(
+                        "a normal needs 3 numbers x y z, this one has {}",
+                        rest.len()
+                    )));
+                }
+                for token in &rest[..3] {
+                    parse_finite(token, "normal component").map_err(&at)?;
+                }
+                defined.vn += 1;
+            }
+            "f" => {
+                let has_normals = check_face(&rest, defined, total).map_err(&at)?;
+                scan.faces.push(FaceInfo {
+                    triangles: (rest.len() - 2) as u32,
+                    has_normals,
+                });
+            }
+            "l" => {
+                // Polylines are ignored, but tobj triangulates an `l` with three
+                // or more vertices and rejects malformed ones: drop them first.
+                let well_formed = matches!(rest.len(), 1 | 2)
+                    && rest.iter().all(|t| {
+                        let parts: Vec<&str> = t.split('/').collect();
+                        parts.len() <= 3
+                            && parts
+                                .iter()
+                                .all(|p| p.is_empty() || p.parse::<isize>().is_ok())
+                    });
+                if !well_formed {
+                    scan.needs_rewrite = true;
+                }
+            }
+            "usemtl" => {
+                let name = after_first_space(line);
+                if name.is_empty() {
+                    return Err(at(
+                        "usemtl needs a material name, separated by a space".to_string()
+                    ));
+                }
+                if !material_names.contains(name) && total.mtllib {
+                    return Err(at(format!(
+                        "material '{name}' is not defined by any mtllib before this line"
+                    )));
+                }
+            }
+            "mtllib" => {
+                let name = after_first_space(line);
+                if name.is_empty() {
+                    return Err(at(
+                        "mtllib needs a file name, separated by a space".to_string()
+                    ));
+                }
+                let library = load_library(path, name).map_err(|e| match e {
+                    LibraryError::Input(e) => e,
+                    LibraryError::Read(message) => at(message),
+                })?;
+                material_names.extend(library.iter().map(|m| m.name.clone()));
+                scan.libraries.insert(PathBuf::from(name), library);
+            }
+            _ => {}
+        }
+    }
+    if coloured_vertices > 0 && coloured_vertices < defined.v {
+        scan.needs_rewrite = true;
+        scan.strip_colours = true;
+    }
+    Ok(scan)
+}
+
+/// Prepare text that tobj can read as we mean it: drop `l` lines (tobj
+/// would triangulate or reject some), give one-number `vt` lines a v of 0,
+/// and drop vertex colours when only some vertices have them (tobj would
+/// fail on the others). Line count is kept.
+pub(super) fn rewrite_for_tobj(text: &str, strip_colours: bool) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.split('\n') {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("l") => {}
+            Some("v") if strip_colours => {
+                let tokens: Vec<&str> = words.collect();
+                if tokens.len() == 6 {
+                    out.push_str("v ");
+                    out.push_str(&tokens[..3].join(" "));
+                } else {
+                    out.push_str(line);
+                }
+            }
+            Some("vt") => {
+                let tokens: Vec<&str> = words.collect();
+                if tokens.len() == 1 {
+                    out.push_str("vt ");
+                    out.push_str(tokens[0]);
+                    out.push_str(" 0");
+                } else {
+                    out.push_str(line);
+                }
+            }
+            _ => out.push_str(line),
+        }
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::load_obj;
+    use super::super::test_helpers::{corners, load_text, SQUARE};
+    use crate::scene::loaders::test_files::{temp_dir, write};
+    use glam::Vec3;
+
+    fn expect_line_error(text: &str, line: usize, needle: &str) {
+        let err = load_text(text).expect_err("expected an error");
+        let shown = err.to_string();
+        assert!(shown.contains("mesh.obj"), "{shown}");
+        assert_eq!(err.location, format!("line {line}"), "{shown}");
+        assert!(
+            shown.contains(&format!("line {line}:")),
+            "{shown} should name line {line}"
+        );
+        assert!(shown.contains(needle), "{shown} should contain '{needle}'");
+    }
+
+    #[test]
+    fn unknown_usemtl_is_an_error_only_with_a_library() {
+        let dir = temp_dir("usemtl");
+        write(&dir, "lib.mtl", b"newmtl known\n");
+        let obj = format!("mtllib lib.mtl\n{SQUARE}usemtl unknown\nf 1 2 3\n");
+        let err = load_obj(&write(&dir, "a.obj", obj.as_bytes())).unwrap_err();
+        assert_eq!(err.location, "line 6", "{err}");
+        assert!(err.to_string().contains("unknown"), "{err}");
+        let asset = load_text(&format!("{SQUARE}usemtl whatever\nf 1 2 3\n")).unwrap();
+        assert_eq!(asset.meshes[0].material, None);
+        assert!(asset.materials.is_empty());
+    }
+
+    #[test]
+    fn bad_vertices_report_their_line() {
+        expect_line_error("v 0 0 0\nv 1 0\n", 2, "3 coordinates");
+        expect_line_error("v 0 0 0\n\nv 1 zero 0\n", 3, "'zero' is not a number");
+        expect_line_error("# c\nv nan 0 0\n", 2, "not a finite number");
+        expect_line_error("v 0 0 inf\n", 1, "not a finite number");
+        expect_line_error("v 1e39 0 0\n", 1, "not a finite number");
+        expect_line_error("v 0 0 0 0\n", 1, "weight");
+        expect_line_error("v 0 0 0\nvn 0 NaN 1\n", 2, "not a finite number");
+        expect_line_error("vn 0 1\n", 1, "3 numbers");
+    }
+
+    #[test]
+    fn bad_faces_report_their_line() {
+        expect_line_error(&format!("{SQUARE}f 1 2\n"), 5, "at least 3 vertices");
+        expect_line_error(&format!("{SQUARE}f 1 2 3\nf 0 1 2\n"), 6, "index 0");
+        expect_line_error(&format!("{SQUARE}f 1 2 x\n"), 5, "'x' is not an integer");
+        expect_line_error(&format!("{SQUARE}f 1 2 3.5\n"), 5, "not an integer");
+        expect_line_error(&format!("{SQUARE}f 1 2 5\n"), 5, "out of range");
+        expect_line_error(&format!("{SQUARE}f -1 -2 -5\n"), 5, "before the first");
+        expect_line_error(
+            &format!("v 0 0 0\nf -1 -2 -3\n{SQUARE}"),
+            2,
+            "only 1 vertices",
+        );
+        expect_line_error(&format!("{SQUARE}f 1//1 2//1 3//1\n"), 5, "normal index 1");
+        expect_line_error(&format!("{SQUARE}vt 0 0\nf 1/2 2/1 3/1\n"), 6, "texture");
+        expect_line_error(&format!("{SQUARE}f 1/1/1/1 2 3\n"), 5, "not a face vertex");
+        expect_line_error(
+            &format!("{SQUARE}f 99999999999999999999 2 3\n"),
+            5,
+            "integer",
+        );
+    }
+
+    #[test]
+    fn absolute_indices_may_refer_forward_within_an_object() {
+        // Absolute indices are checked against the whole file.
+        let asset = load_text("v 0 0 0\nf 1 2 3\nv 1 0 0\nv 0 1 0\n").unwrap();
+        assert_eq!(corners(&asset), vec![[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+    }
+
+    #[test]
+    fn lines_points_colours_and_short_texcoords_are_tolerated() {
+        let text =
+            "v 0 0 0 1 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0.5\nl 1 2 3 4\nl 1\nl\nf 1/1 2/1 3/1\n";
+        let asset = load_text(text).unwrap();
+        assert_eq!(
+            corners(&asset),
+            vec![[Vec3::ZERO, Vec3::X, Vec3::new(1., 1., 0.)]]
+        );
+    }
+
+    #[test]
+    fn mutated_numbers_in_a_valid_obj_never_panic() {
+        let dir = temp_dir("objmutate");
+        let good = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\no a\n\
+                    f 1/1/1 2/1/1 3/1/1 4/1/1\ng b\nf -4//-1 -3//-1 -2//-1\nf 1 2 3\n";
+        let replacements = [
+            "0",
+            "1",
+            "2",
+            "4",
+            "5",
+            "-1",
+            "-4",
+            "-5",
+            "-9",
+            "99",
+            "1e39",
+            "nan",
+            "inf",
+            "x",
+            "",
+            "1/",
+            "//",
+            "1/1/1/1",
+            "-9223372036854775808",
+            "9223372036854775807",
+        ];
+        let tokens: Vec<&str> = good.split(' ').collect();
+        let mut state = 0x5eed_5eed_5eed_5eedu64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..400 {
+            let mut t: Vec<String> = tokens.iter().map(|s| s.to_string()).collect();
+            for _ in 0..1 + next() % 3 {
+                let at = (next() % t.len() as u64) as usize;
+                let with = replacements[(next() % replacements.len() as u64) as usize];
+                // Keep the line structure: replace only what precedes a newline.
+                let tail = t[at].find('\n').map(|i| t[at][i..].to_string());
+                t[at] = format!("{with}{}", tail.unwrap_or_default());
+            }
+            let _ = load_obj(&write(&dir, "m.obj", t.join(" ").as_bytes()));
+        }
+    }
+}
