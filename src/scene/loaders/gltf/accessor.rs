@@ -1,0 +1,228 @@
+//! Accessors and buffer views: where an attribute's or index list's elements
+//! lie in a buffer, with every offset, stride and count checked against the
+//! bytes there before a single element is read.
+
+use super::container::u32_le;
+use super::Loader;
+use crate::error::InputResult;
+use ::gltf::json;
+use glam::Vec3;
+use json::accessor::{ComponentType, Type as AccessorType};
+use json::validation::Checked;
+
+/// An accessor's elements, bounds-checked against its buffer.
+struct AccessorData<'b> {
+    /// From the accessor's first element to the end of its view.
+    bytes: &'b [u8],
+    stride: usize,
+    count: usize,
+}
+
+impl AccessorData<'_> {
+    fn element(&self, i: usize) -> &[u8] {
+        &self.bytes[i * self.stride..]
+    }
+}
+
+impl Loader<'_> {
+    /// Locate an accessor's bytes, checking view and buffer bounds.
+    fn accessor(
+        &self,
+        index: usize,
+        what: &str,
+        accepts: impl Fn(ComponentType, AccessorType) -> bool,
+    ) -> InputResult<(AccessorData<'_>, ComponentType)> {
+        let location = format!("accessors[{index}]");
+        let accessor = self
+            .root
+            .accessors
+            .get(index)
+            .ok_or_else(|| self.error(&location, "accessor does not exist"))?;
+        let (Checked::Valid(component), Checked::Valid(dimensions)) =
+            (&accessor.component_type, &accessor.type_)
+        else {
+            return Err(self.error(&location, "invalid componentType or type"));
+        };
+        let component = component.0;
+        if !accepts(component, *dimensions) {
+            return Err(self.error(
+                &location,
+                format!("{what} cannot be {component:?} {dimensions:?}"),
+            ));
+        }
+        if accessor.sparse.is_some() {
+            return Err(self.error(&location, "sparse accessors are not supported"));
+        }
+        let view_index = accessor
+            .buffer_view
+            .ok_or_else(|| self.error(&location, "accessor has no bufferView"))?
+            .value();
+        let view_location = format!("bufferViews[{view_index}]");
+        let view = self
+            .root
+            .buffer_views
+            .get(view_index)
+            .ok_or_else(|| self.error(&location, format!("{view_location} does not exist")))?;
+        let buffer_index = view.buffer.value();
+        let buffer = self.buffers.get(buffer_index).ok_or_else(|| {
+            self.error(
+                &view_location,
+                format!("buffers[{buffer_index}] does not exist"),
+            )
+        })?;
+        let view_offset = view.byte_offset.map_or(0, |o| o.0);
+        let view_length = view.byte_length.0;
+        let view_end = view_offset
+            .checked_add(view_length)
+            .filter(|&end| end <= buffer.len() as u64)
+            .ok_or_else(|| {
+                self.error(
+                    &view_location,
+                    format!(
+                        "byteOffset {view_offset} + byteLength {view_length} reach past the \
+                         end of buffers[{buffer_index}] ({} bytes)",
+                        buffer.len()
+                    ),
+                )
+            })?;
+        let view_bytes = &buffer[view_offset as usize..view_end as usize];
+
+        let element_size = (component.size() * dimensions.multiplicity()) as u64;
+        let stride = view.byte_stride.map_or(element_size, |s| s.0 as u64);
+        if stride < element_size {
+            return Err(self.error(
+                &view_location,
+                format!("byteStride {stride} is smaller than the {element_size}-byte elements of {location}"),
+            ));
+        }
+        let offset = accessor.byte_offset.map_or(0, |o| o.0);
+        let count = accessor.count.0;
+        let needed = if count == 0 {
+            Some(offset)
+        } else {
+            (count - 1)
+                .checked_mul(stride)
+                .and_then(|n| n.checked_add(element_size))
+                .and_then(|n| n.checked_add(offset))
+        };
+        match needed {
+            Some(needed) if needed <= view_length => {}
+            _ => {
+                return Err(self.error(
+                    &location,
+                    format!(
+                    "{count} elements of {element_size} bytes (stride {stride}) from byteOffset \
+                         {offset} do not fit in {view_location} ({view_length} bytes)"
+                ),
+                ))
+            }
+        }
+        Ok((
+            AccessorData {
+                bytes: &view_bytes[offset as usize..],
+                stride: stride as usize,
+                count: count as usize,
+            },
+            component,
+        ))
+    }
+
+    pub(super) fn read_vec3(&self, index: usize, what: &str) -> InputResult<Vec<Vec3>> {
+        let (data, _) = self.accessor(index, what, |c, t| {
+            c == ComponentType::F32 && t == AccessorType::Vec3
+        })?;
+        let mut values = Vec::with_capacity(data.count);
+        for i in 0..data.count {
+            let e = data.element(i);
+            let v = Vec3::new(
+                f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
+                f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
+                f32::from_le_bytes([e[8], e[9], e[10], e[11]]),
+            );
+            if !v.is_finite() {
+                return Err(self.error(
+                    format!("accessors[{index}]"),
+                    format!("{what} element {i} is not finite: {v}"),
+                ));
+            }
+            values.push(v);
+        }
+        Ok(values)
+    }
+
+    pub(super) fn read_indices(&self, index: usize) -> InputResult<Vec<u32>> {
+        let (data, component) = self.accessor(index, "indices", |c, t| {
+            matches!(
+                c,
+                ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+            ) && t == AccessorType::Scalar
+        })?;
+        Ok((0..data.count)
+            .map(|i| {
+                let e = data.element(i);
+                match component {
+                    ComponentType::U8 => u32::from(e[0]),
+                    ComponentType::U16 => u32::from(u16::from_le_bytes([e[0], e[1]])),
+                    _ => u32_le(e),
+                }
+            })
+            .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::*;
+
+    #[test]
+    fn accessors_and_views_out_of_range() {
+        let mut b = triangle_builder();
+        // Accessor 2 claims 4 elements from the 3-element view 0.
+        b.accessor(r#"{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"}"#.to_string());
+        let rest =
+            r#""meshes":[{"primitives":[{"attributes":{"POSITION":2}}]}],"nodes":[{"mesh":0}]"#;
+        expect_error(
+            load_json(&b, rest),
+            "scene.gltf",
+            "accessors[2]",
+            "do not fit in bufferViews[0]",
+        );
+
+        let mut b = triangle_builder();
+        b.views
+            .push(r#"{"buffer":0,"byteOffset":8,"byteLength":1000000}"#.to_string());
+        b.accessor(r#"{"bufferView":2,"componentType":5126,"count":3,"type":"VEC3"}"#.to_string());
+        let rest =
+            r#""meshes":[{"primitives":[{"attributes":{"POSITION":2}}]}],"nodes":[{"mesh":0}]"#;
+        expect_error(
+            load_json(&b, rest),
+            "scene.gltf",
+            "bufferViews[2]",
+            "past the end of buffers[0]",
+        );
+
+        let mut b = triangle_builder();
+        b.accessor(
+            r#"{"bufferView":0,"componentType":5126,"count":18446744073709551615,"type":"VEC3"}"#
+                .to_string(),
+        );
+        let rest =
+            r#""meshes":[{"primitives":[{"attributes":{"POSITION":2}}]}],"nodes":[{"mesh":0}]"#;
+        expect_error(
+            load_json(&b, rest),
+            "scene.gltf",
+            "accessors[2]",
+            "do not fit",
+        );
+
+        let b = triangle_builder();
+        let rest =
+            r#""meshes":[{"primitives":[{"attributes":{"POSITION":1}}]}],"nodes":[{"mesh":0}]"#;
+        expect_error(
+            load_json(&b, rest),
+            "scene.gltf",
+            "accessors[1]",
+            "POSITION cannot be U16 Scalar",
+        );
+    }
+}

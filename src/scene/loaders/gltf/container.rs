@@ -1,0 +1,252 @@
+//! The container layer: a GLB file split into its JSON and BIN chunks, and
+//! the JSON parsed and validated. Every length a GLB declares is checked
+//! against the bytes really there before it is sliced.
+
+use crate::error::{InputError, InputResult};
+use ::gltf::json;
+use json::mesh::Semantic;
+use json::validation::{Checked, Validate};
+use std::path::Path;
+
+pub(super) fn u32_le(bytes: &[u8]) -> u32 {
+    u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
+}
+
+/// Split a GLB container into its JSON chunk and optional BIN chunk, checking
+/// every declared length against the bytes actually present.
+pub(super) fn split_glb<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+) -> InputResult<(&'a [u8], Option<&'a [u8]>)> {
+    let header = |message: String| InputError::new(path, "GLB header", message);
+    if bytes.len() < 12 {
+        return Err(header(format!(
+            "the file is only {} bytes, too short for the 12-byte GLB header",
+            bytes.len()
+        )));
+    }
+    let version = u32_le(&bytes[4..]);
+    if version != 2 {
+        return Err(header(format!(
+            "GLB version {version} is not supported (only version 2)"
+        )));
+    }
+    let length = u32_le(&bytes[8..]) as usize;
+    if length > bytes.len() {
+        return Err(header(format!(
+            "declares {length} bytes but the file has only {} (truncated?)",
+            bytes.len()
+        )));
+    }
+    if length < 12 {
+        return Err(header(format!(
+            "declares a total length of {length} bytes, less than the header itself"
+        )));
+    }
+    let mut rest = &bytes[12..length];
+    let (mut json, mut bin) = (None, None);
+    let mut chunk = 0usize;
+    while !rest.is_empty() {
+        let at = |message: String| InputError::new(path, format!("GLB chunk {chunk}"), message);
+        if rest.len() < 8 {
+            return Err(at(format!(
+                "only {} bytes left, too few for a chunk header (truncated?)",
+                rest.len()
+            )));
+        }
+        let chunk_length = u32_le(rest) as usize;
+        let kind = &rest[4..8];
+        let available = rest.len() - 8;
+        if chunk_length > available {
+            return Err(at(format!(
+                "declares {chunk_length} bytes but only {available} remain (truncated?)"
+            )));
+        }
+        let data = &rest[8..8 + chunk_length];
+        match (chunk, kind) {
+            (0, b"JSON") => json = Some(data),
+            (0, _) => return Err(at("the first chunk must be the JSON chunk".to_string())),
+            (1, b"BIN\0") => bin = Some(data),
+            _ => {} // unknown chunks are to be ignored
+        }
+        rest = &rest[8 + chunk_length..];
+        chunk += 1;
+    }
+    let json = json.ok_or_else(|| header("the file has no JSON chunk".to_string()))?;
+    Ok((json, bin))
+}
+
+/// Parse and validate the JSON document.
+///
+/// The `gltf` crate's validator indexes the POSITION accessor without a
+/// bounds check, so that reference is checked first.
+pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Root> {
+    let root: json::Root = json::deserialize::from_slice(json_bytes)
+        .map_err(|e| InputError::file(path, format!("invalid glTF JSON: {e}")))?;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions))
+            {
+                if index.value() >= root.accessors.len() {
+                    return Err(InputError::new(
+                        path,
+                        format!("meshes[{m}].primitives[{p}]"),
+                        format!(
+                            "POSITION refers to accessors[{}] but the file has {} accessors",
+                            index.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let mut problems: Vec<(String, json::validation::Error)> = Vec::new();
+    root.validate(&root, json::Path::new, &mut |where_, error| {
+        problems.push((where_().to_string(), error))
+    });
+    // We read neither POSITION's min/max nor custom attributes, so files
+    // that get those wrong still load.
+    problems.retain(|(where_, error)| {
+        let unused_bounds = where_.contains(".attributes[")
+            && (where_.ends_with(".min") || where_.ends_with(".max"));
+        let custom_attribute =
+            *error == json::validation::Error::Invalid && where_.contains(".attributes[");
+        !(unused_bounds || custom_attribute)
+    });
+    if let Some((location, error)) = problems.first() {
+        let mut message = format!("invalid glTF: {error}");
+        if problems.len() > 1 {
+            let others: Vec<String> = problems[1..]
+                .iter()
+                .take(4)
+                .map(|(w, e)| format!("{w}: {e}"))
+                .collect();
+            message.push_str(&format!(
+                " (and {} more: {}{})",
+                problems.len() - 1,
+                others.join("; "),
+                if problems.len() > 5 { "; ..." } else { "" }
+            ));
+        }
+        return Err(InputError::new(path, location.clone(), message));
+    }
+    Ok(root)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::*;
+
+    #[test]
+    fn malformed_json_and_validation_errors() {
+        let dir = temp_dir("json-errors");
+        let path = write(
+            &dir,
+            "broken.gltf",
+            b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [",
+        );
+        expect_error(load_gltf(&path), "broken.gltf", "", "invalid glTF JSON");
+        let b = triangle_builder();
+        expect_error(
+            load_json(&b, r#""nodes":[{"mesh":3}]"#),
+            "scene.gltf",
+            "nodes[0].mesh",
+            "Index out of bounds",
+        );
+        // The gltf crate's own validator would panic on this one.
+        expect_error(
+            load_json(
+                &b,
+                r#""meshes":[{"primitives":[{"attributes":{"POSITION":9}}]}]"#,
+            ),
+            "scene.gltf",
+            "meshes[0].primitives[0]",
+            "accessors[9]",
+        );
+        expect_error(
+            load_json(
+                &b,
+                r#""extensionsRequired":["KHR_draco_mesh_compression"],"extensionsUsed":["KHR_draco_mesh_compression"]"#,
+            ),
+            "scene.gltf",
+            "extensionsRequired[0] = \"KHR_draco_mesh_compression\"",
+            "Unsupported extension",
+        );
+    }
+
+    #[test]
+    fn custom_attributes_and_missing_bounds_are_tolerated() {
+        let mut b = Builder::default();
+        b.vec3(&TRIANGLE, false);
+        let asset = load_json(
+            &b,
+            r#""meshes":[{"primitives":[{"attributes":{"POSITION":0,"_BATCHID":0}}]}],"nodes":[{"mesh":0}]"#,
+        )
+        .unwrap();
+        assert_eq!(asset.triangle_count(), 1);
+    }
+
+    #[test]
+    fn bad_glb_headers() {
+        let b = triangle_builder();
+        let rest = format!(r#"{TRIANGLE_MESH},"nodes":[{{"mesh":0}}]"#);
+        let good = b.glb(&rest);
+        let dir = temp_dir("glb");
+        let mut v1 = good.clone();
+        v1[4] = 1;
+        expect_error(
+            load_gltf(&write(&dir, "v1.glb", &v1)),
+            "v1.glb",
+            "GLB header",
+            "version 1",
+        );
+        let mut long = good.clone();
+        long[8..12].copy_from_slice(&(good.len() as u32 + 1).to_le_bytes());
+        expect_error(
+            load_gltf(&write(&dir, "long.glb", &long)),
+            "long.glb",
+            "GLB header",
+            "truncated",
+        );
+        let mut tiny = good.clone();
+        tiny[8..12].copy_from_slice(&3u32.to_le_bytes());
+        expect_error(
+            load_gltf(&write(&dir, "tiny.glb", &tiny)),
+            "tiny.glb",
+            "GLB header",
+            "less than the header",
+        );
+        expect_error(
+            load_gltf(&write(&dir, "text.glb", b"hello")),
+            "text.glb",
+            "GLB header",
+            "magic",
+        );
+        let mut chunk = good.clone();
+        chunk[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        expect_error(
+            load_gltf(&write(&dir, "chunk.glb", &chunk)),
+            "chunk.glb",
+            "GLB chunk 0",
+            "truncated",
+        );
+
+        // Every truncation of a valid GLB is an error, never a panic.
+        let path = dir.join("cut.glb");
+        for len in 0..good.len() {
+            let mut cut = good[..len].to_vec();
+            if len >= 12 {
+                cut[8..12].copy_from_slice(&(len as u32).to_le_bytes());
+            }
+            std::fs::write(&path, &cut).unwrap();
+            assert!(load_gltf(&path).is_err(), "truncated to {len} bytes");
+            std::fs::write(&path, &good[..len]).unwrap();
+            assert!(load_gltf(&path).is_err(), "cut to {len} bytes");
+        }
+        std::fs::write(&path, &good).unwrap();
+        assert_eq!(load_gltf(&path).unwrap().triangle_count(), 1);
+    }
+}

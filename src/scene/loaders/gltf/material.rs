@@ -1,0 +1,130 @@
+//! glTF metallic-roughness materials mapped onto strata's [`Material`], as
+//! the table in the loader's documentation (`mod.rs`) says.
+
+use super::Loader;
+use crate::error::InputResult;
+use crate::material::Material;
+use glam::Vec3;
+
+/// Largest Phong exponent the roughness mapping produces.
+const MAX_PHONG_EXPONENT: f32 = 1.0e6;
+
+impl Loader<'_> {
+    pub(super) fn materials(&self) -> InputResult<Vec<(String, Material)>> {
+        let mut materials = Vec::with_capacity(self.root.materials.len());
+        for (i, m) in self.root.materials.iter().enumerate() {
+            let location = format!("materials[{i}]");
+            let pbr = &m.pbr_metallic_roughness;
+            let base = pbr.base_color_factor.0;
+            let metallic = pbr.metallic_factor.0;
+            let roughness = pbr.roughness_factor.0;
+            let strength = m
+                .extensions
+                .as_ref()
+                .and_then(|e| e.emissive_strength.as_ref())
+                .map_or(1.0, |s| s.emissive_strength.0);
+            let emission = Vec3::from(m.emissive_factor.0) * strength;
+            let factors_ok = base.iter().all(|c| c.is_finite() && *c >= 0.0)
+                && (0.0..=1.0).contains(&metallic)
+                && (0.0..=1.0).contains(&roughness)
+                && emission.is_finite()
+                && emission.min_element() >= 0.0;
+            if !factors_ok {
+                return Err(self.error(
+                    location,
+                    "baseColorFactor, emissive factor and strength must be finite and not \
+                     negative, metallicFactor and roughnessFactor between 0 and 1",
+                ));
+            }
+            let name = m.name.clone().unwrap_or_else(|| format!("material{i}"));
+            let base = Vec3::new(base[0], base[1], base[2]);
+            materials.push((name, pbr_material(base, metallic, roughness, emission)));
+        }
+        Ok(materials)
+    }
+}
+
+/// Phong exponent matching roughness `r`: `2/α² − 2` with `α = r²`,
+/// clamped to [1, 10⁶].
+fn phong_exponent(roughness: f32) -> f32 {
+    let alpha = roughness * roughness;
+    let alpha2 = alpha * alpha;
+    if alpha2 <= 0.0 {
+        return MAX_PHONG_EXPONENT;
+    }
+    (2.0 / alpha2 - 2.0).clamp(1.0, MAX_PHONG_EXPONENT)
+}
+
+/// The metallic-roughness mapping in the module documentation's table.
+fn pbr_material(base: Vec3, metallic: f32, roughness: f32, emission: Vec3) -> Material {
+    let exponent = phong_exponent(roughness);
+    Material {
+        diffuse: base * (1.0 - metallic),
+        specular: Vec3::splat(0.04 * (1.0 - metallic)),
+        shininess: exponent,
+        reflectivity: metallic,
+        glossiness: if roughness == 0.0 { 0.0 } else { exponent },
+        emission,
+        ..Material::default()
+    }
+}
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::*;
+
+    #[test]
+    fn materials_follow_the_mapping_table() {
+        let mut b = triangle_builder();
+        b.u8s(&[2, 1, 0]);
+        let rest = r#""materials":[
+                {"name":"plastic","pbrMetallicRoughness":{"baseColorFactor":[0.5,0.25,1,1],"metallicFactor":0,"roughnessFactor":1}},
+                {"pbrMetallicRoughness":{"baseColorFactor":[0.9,0.8,0.7,1],"metallicFactor":1,"roughnessFactor":0}},
+                {"name":"satin","pbrMetallicRoughness":{"metallicFactor":0.5,"roughnessFactor":0.5},
+                 "emissiveFactor":[1,0.5,0],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":10}}}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":2},
+                                     {"attributes":{"POSITION":0},"indices":2}]}],
+            "nodes":[{"mesh":0}]"#;
+        let asset = load_json(&b, rest).unwrap();
+        let names: Vec<&str> = asset.materials.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["plastic", "material1", "satin"]);
+
+        let plastic = asset.materials[0].1;
+        assert_close(plastic.diffuse, Vec3::new(0.5, 0.25, 1.0));
+        assert_eq!(plastic.reflectivity, 0.0);
+        assert_close(plastic.specular, Vec3::splat(0.04));
+        assert_eq!(
+            plastic.shininess, 1.0,
+            "r = 1 gives 2/1 − 2 = 0, clamped to 1"
+        );
+        assert_eq!(plastic.glossiness, 1.0);
+        assert_eq!(plastic.emission, Vec3::ZERO);
+
+        let metal = asset.materials[1].1;
+        assert_eq!(metal.diffuse, Vec3::ZERO);
+        assert_eq!(metal.reflectivity, 1.0);
+        assert_eq!(metal.specular, Vec3::ZERO);
+        assert_eq!(metal.glossiness, 0.0, "r = 0 is a perfect mirror");
+        assert_eq!(metal.shininess, 1.0e6);
+
+        let satin = asset.materials[2].1;
+        assert_close(satin.diffuse, Vec3::splat(0.5));
+        assert_eq!(satin.reflectivity, 0.5);
+        assert_close(satin.specular, Vec3::splat(0.02));
+        // α = 0.25, 2/α² − 2 = 30.
+        assert!(
+            (satin.glossiness - 30.0).abs() < 1e-3,
+            "{}",
+            satin.glossiness
+        );
+        assert!((satin.shininess - 30.0).abs() < 1e-3);
+        assert_close(satin.emission, Vec3::new(10.0, 5.0, 0.0));
+        assert_eq!(satin.transparency, 0.0);
+        assert_eq!(satin.ior, 1.5);
+
+        assert_eq!(asset.meshes.len(), 2);
+        assert_eq!(asset.meshes[0].name, "mesh0[0]");
+        assert_eq!(asset.meshes[0].material, Some(2));
+        assert_eq!(asset.meshes[1].material, None);
+        assert_eq!(asset.meshes[1].indices, vec![[2, 1, 0]]);
+    }
+}

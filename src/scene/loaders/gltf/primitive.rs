@@ -1,0 +1,189 @@
+//! One mesh primitive in its mesh's local space: its `POSITION`, `NORMAL`
+//! and indices read, and its mode's vertex order turned into triangles.
+
+use super::Loader;
+use crate::error::InputResult;
+use crate::geometry::MeshNormals;
+use crate::scene::asset::{LoadedAsset, LoadedMesh};
+use ::gltf::json;
+use json::mesh::{Mode, Semantic};
+use json::validation::Checked;
+
+impl Loader<'_> {
+    /// Read one primitive in its mesh's local space; `None` for point and
+    /// line primitives.
+    pub(super) fn primitive(
+        &self,
+        location: &str,
+        primitive: &json::mesh::Primitive,
+        name: String,
+        asset: &LoadedAsset,
+    ) -> InputResult<Option<LoadedMesh>> {
+        let mode = match primitive.mode {
+            Checked::Valid(mode) => mode,
+            Checked::Invalid => return Err(self.error(location, "invalid primitive mode")),
+        };
+        if matches!(
+            mode,
+            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+        ) {
+            return Ok(None);
+        }
+        let position_accessor = primitive
+            .attributes
+            .get(&Checked::Valid(Semantic::Positions))
+            .ok_or_else(|| self.error(location, "primitive has no POSITION attribute"))?
+            .value();
+        let positions = self.read_vec3(position_accessor, "POSITION")?;
+        let vertex_count = positions.len();
+        if vertex_count > u32::MAX as usize {
+            return Err(self.error(location, "more than 2³² vertices"));
+        }
+        let normals = match primitive.attributes.get(&Checked::Valid(Semantic::Normals)) {
+            Some(accessor) => {
+                let normals = self.read_vec3(accessor.value(), "NORMAL")?;
+                if normals.len() != vertex_count {
+                    return Err(self.error(
+                        location,
+                        format!(
+                            "NORMAL has {} elements but POSITION has {vertex_count}",
+                            normals.len()
+                        ),
+                    ));
+                }
+                Some(normals)
+            }
+            None => None,
+        };
+        let order: Vec<u32> = match primitive.indices {
+            Some(accessor) => {
+                let accessor = accessor.value();
+                let indices = self.read_indices(accessor)?;
+                if let Some((k, bad)) = indices
+                    .iter()
+                    .enumerate()
+                    .find(|(_, &i)| i as usize >= vertex_count)
+                {
+                    return Err(self.error(
+                        location,
+                        format!(
+                            "index {bad} (element {k} of accessors[{accessor}]) is out of \
+                             range: the primitive has {vertex_count} vertices"
+                        ),
+                    ));
+                }
+                indices
+            }
+            None => (0..vertex_count as u32).collect(),
+        };
+        let indices =
+            assemble_triangles(mode, &order).map_err(|message| self.error(location, message))?;
+        let material = match primitive.material.map(|m| m.value()) {
+            Some(m) if m >= asset.materials.len() => {
+                return Err(self.error(
+                    format!("{location}.material"),
+                    format!("materials[{m}] does not exist"),
+                ))
+            }
+            other => other,
+        };
+        Ok(Some(LoadedMesh {
+            name,
+            positions,
+            normals: normals.map(|values| MeshNormals {
+                values,
+                indices: indices.clone(),
+            }),
+            indices,
+            material,
+        }))
+    }
+}
+
+/// Turn a primitive's vertex order into triangles as its mode says.
+fn assemble_triangles(mode: Mode, order: &[u32]) -> Result<Vec<[u32; 3]>, String> {
+    let n = order.len();
+    match mode {
+        Mode::TriangleStrip => Ok((0..n.saturating_sub(2))
+            .map(|i| {
+                if i % 2 == 0 {
+                    [order[i], order[i + 1], order[i + 2]]
+                } else {
+                    [order[i], order[i + 2], order[i + 1]]
+                }
+            })
+            .collect()),
+        Mode::TriangleFan => Ok((0..n.saturating_sub(2))
+            .map(|i| [order[i + 1], order[i + 2], order[0]])
+            .collect()),
+        _ => {
+            if !n.is_multiple_of(3) {
+                return Err(format!(
+                    "a triangle list needs a multiple of 3 vertices, this one has {n}"
+                ));
+            }
+            Ok(order.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::*;
+
+    #[test]
+    fn non_indexed_strip_and_fan_primitives() {
+        let mut b = Builder::default();
+        let quad = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.]];
+        b.positions(&[
+            [0., 0., 0.],
+            [1., 0., 0.],
+            [0., 1., 0.],
+            [5., 0., 0.],
+            [6., 0., 0.],
+            [5., 1., 0.],
+        ]);
+        b.positions(&quad);
+        b.u32s(&[0, 1, 2, 3]);
+        let rest = r#""meshes":[{"primitives":[
+                {"attributes":{"POSITION":0}},
+                {"attributes":{"POSITION":1},"mode":5},
+                {"attributes":{"POSITION":1},"indices":2,"mode":6},
+                {"attributes":{"POSITION":1},"mode":0},
+                {"attributes":{"POSITION":1},"mode":1}]}],
+            "nodes":[{"mesh":0}]"#;
+        let asset = load_json(&b, rest).unwrap();
+        assert_eq!(asset.meshes.len(), 3, "points and lines are skipped");
+        assert_eq!(asset.meshes[0].indices, vec![[0, 1, 2], [3, 4, 5]]);
+        assert_eq!(asset.meshes[1].indices, vec![[0, 1, 2], [1, 3, 2]]);
+        assert_eq!(asset.meshes[2].indices, vec![[1, 2, 0], [2, 3, 0]]);
+    }
+
+    #[test]
+    fn missing_position_is_an_error() {
+        let mut b = Builder::default();
+        b.vec3(&TRIANGLE, false);
+        let err = load_json(
+            &b,
+            r#""meshes":[{"primitives":[{"attributes":{"NORMAL":0}}]}],"nodes":[{"mesh":0}]"#,
+        )
+        .unwrap_err();
+        assert!(err.location.starts_with("meshes[0].primitives[0]"), "{err}");
+        assert!(err.to_string().contains("POSITION"), "{err}");
+        assert!(err.file.ends_with("scene.gltf"));
+    }
+
+    #[test]
+    fn index_out_of_range_names_the_primitive() {
+        let mut b = Builder::default();
+        b.positions(&TRIANGLE);
+        b.u16s(&[0, 1, 3]);
+        let rest = r#""meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],"nodes":[{"mesh":0}]"#;
+        expect_error(
+            load_json(&b, rest),
+            "scene.gltf",
+            "meshes[0].primitives[0]",
+            "index 3",
+        );
+    }
+}
