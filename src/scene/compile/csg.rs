@@ -14,7 +14,9 @@
 //! group). Point lights and cameras in a mesh file used as an operand are
 //! ignored.
 
-use super::{mesh_triangles, Compiler, Placement};
+use super::mesh::mesh_triangles;
+use super::object::Placement;
+use super::Compiler;
 use crate::error::InputResult;
 use crate::geometry::csg::mesh::check_closed;
 use crate::geometry::csg::CsgOp;

@@ -58,7 +58,7 @@ pub(crate) use crate::error::io_message;
 
 /// Temporary files for the loaders' unit tests.
 #[cfg(test)]
-mod test_files {
+pub(crate) mod test_files {
     use std::path::{Path, PathBuf};
     use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -101,48 +101,30 @@ mod test_files {
 mod tests {
     use super::*;
 
-    /// Writes `name` into a fresh directory, removed again when dropped.
-    struct TempFile(std::path::PathBuf);
-
-    impl Drop for TempFile {
-        fn drop(&mut self) {
-            if let Some(dir) = self.0.parent() {
-                let _ = std::fs::remove_dir_all(dir);
-            }
-        }
-    }
-
-    fn temp_file(name: &str, contents: &[u8]) -> TempFile {
-        let dir = std::env::temp_dir().join(format!(
-            "strata-loaders-mod-{}-{}",
-            std::process::id(),
-            name.replace('.', "_")
-        ));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join(name);
-        std::fs::write(&path, contents).unwrap();
-        TempFile(path)
-    }
+    use test_files::{temp_dir, write};
 
     #[test]
     fn dispatches_by_extension_case_insensitively() {
-        let path = temp_file("tri.OBJ", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-        let asset = load_mesh_file(&path.0).unwrap();
+        let dir = temp_dir("dispatch");
+        let path = write(&dir, "tri.OBJ", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let asset = load_mesh_file(&path).unwrap();
         assert_eq!(asset.triangle_count(), 1);
     }
 
     #[test]
     fn gltf_extension_goes_to_the_gltf_loader() {
-        let path = temp_file("broken.gltf", b"{ not json");
-        let err = load_mesh_file(&path.0).unwrap_err();
+        let dir = temp_dir("dispatch-gltf");
+        let path = write(&dir, "broken.gltf", b"{ not json");
+        let err = load_mesh_file(&path).unwrap_err();
         assert!(err.file.ends_with("broken.gltf"), "{err}");
         assert!(err.to_string().contains("JSON"), "{err}");
     }
 
     #[test]
     fn unknown_extension_lists_supported_ones() {
-        let path = temp_file("bunny.stl", b"solid\n");
-        let err = load_mesh_file(&path.0).unwrap_err();
+        let dir = temp_dir("dispatch-stl");
+        let path = write(&dir, "bunny.stl", b"solid\n");
+        let err = load_mesh_file(&path).unwrap_err();
         let text = err.to_string();
         assert!(text.contains("bunny.stl"), "{text}");
         assert!(text.contains(".obj, .gltf, .glb, .ply"), "{text}");

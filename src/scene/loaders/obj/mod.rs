@@ -172,6 +172,26 @@ fn tobj_message(e: tobj::LoadError) -> String {
     }
 }
 
+/// A number (any f32, infinities included), or a message naming `what`.
+pub(super) fn parse_number(token: &str, what: &str) -> Result<f32, String> {
+    token
+        .parse::<f32>()
+        .map_err(|_| format!("{what}: '{token}' is not a number"))
+}
+
+/// A finite number, or a message naming `what`. The OBJ scan and the MTL
+/// reader both check numbers with it, so both refuse the same ones.
+pub(super) fn parse_finite(token: &str, what: &str) -> Result<f32, String> {
+    let value = parse_number(token, what)?;
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{what}: '{token}' is not a finite number (NaN, infinite or too large)"
+        ))
+    }
+}
+
 /// The file as text (a leading byte-order mark dropped), or an error at the
 /// first line that is not UTF-8. `mtl.rs` reads material libraries through
 /// it too, so both kinds of file report bad bytes the same way.

@@ -3,8 +3,7 @@
 //! them, and turning tobj's materials into ours.
 
 use super::super::io_message;
-use super::scan::parse_finite;
-use super::utf8_text;
+use super::{parse_finite, utf8_text};
 use crate::error::{InputError, InputResult};
 use crate::material::Material;
 use glam::Vec3;

@@ -8,6 +8,7 @@
 //! [`rewrite_for_tobj`] then adjusts the few valid lines tobj would misread.
 
 use super::mtl::{load_library, LibraryError, MtlLibrary};
+use super::{parse_finite, parse_number};
 use crate::error::{InputError, InputResult};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -54,26 +55,8 @@ fn count_elements(text: &str) -> Counts {
     counts
 }
 
-fn parse_number(token: &str, what: &str) -> Result<f32, String> {
-    token
-        .parse::<f32>()
-        .map_err(|_| format!("{what}: '{token}' is not a number"))
-}
-
-/// A finite number, or a message naming `what`; `mtl.rs` checks MTL values
-/// with it too, so both files refuse the same numbers.
-pub(super) fn parse_finite(token: &str, what: &str) -> Result<f32, String> {
-    let value = parse_number(token, what)?;
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(format!(
-            "{what}: '{token}' is not a finite number (NaN, infinite or too large)"
-        ))
-    }
-}
-
-/// Check one index of a face corner: `kind` names it for messages,
+/// Check one index of a face corner: `singular` and `plural` name the
+/// element ("vertex", "vertices") for messages,
 /// `so_far` is how many elements precede the face, `total` how many the file has.
 fn check_index(
     text: &str,

@@ -1,0 +1,118 @@
+//! `[camera]`, or the first camera of a glTF file when the scene file has
+//! none, or the default view.
+
+use super::Compiler;
+use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
+use crate::error::InputResult;
+use crate::scene::description::{CameraDesc, CameraType};
+use crate::scene::RenderSettings;
+
+impl Compiler {
+    pub(super) fn camera(
+        &self,
+        desc: Option<&CameraDesc>,
+        s: &RenderSettings,
+    ) -> InputResult<Camera> {
+        let (w, h) = (s.width, s.height);
+        let Some(d) = desc else {
+            if let Some(cam) = self.loaded_cameras.first() {
+                let view =
+                    View::looking(cam.position, cam.forward, cam.up, w, h).ok_or_else(|| {
+                        self.err(
+                            "camera",
+                            "the mesh file's camera has a degenerate orientation",
+                        )
+                    })?;
+                return Ok(match (cam.yfov_degrees, cam.ortho_height) {
+                    (_, Some(height)) => Camera::Orthographic(Orthographic::new(view, height)),
+                    (fov, None) => Camera::Perspective(Perspective::new(view, fov.unwrap_or(40.0))),
+                });
+            }
+            return self.camera(Some(&CameraDesc::default()), s);
+        };
+        let position = self.v3(d.position, "camera.position")?;
+        let look_at = self.v3(d.look_at, "camera.look_at")?;
+        let up = self.v3(d.up, "camera.up")?;
+        if position == look_at {
+            return Err(self.err(
+                "camera.look_at",
+                "equals camera.position, so there is no view direction",
+            ));
+        }
+        let view = View::look_at(position, look_at, up, w, h)
+            .ok_or_else(|| self.err("camera.up", "is zero or parallel to the view direction"))?;
+        let fov = |c: &Self| -> InputResult<f32> {
+            let f = c.finite(d.fov, "camera.fov")?;
+            if f > 0.0 && f < 180.0 {
+                Ok(f)
+            } else {
+                Err(c.err(
+                    "camera.fov",
+                    format!("must be between 0 and 180 degrees, got {f}"),
+                ))
+            }
+        };
+        Ok(match d.kind {
+            CameraType::Perspective => Camera::Perspective(Perspective::new(view, fov(self)?)),
+            CameraType::Orthographic => Camera::Orthographic(Orthographic::new(
+                view,
+                self.positive(d.height, "camera.height")?,
+            )),
+            CameraType::ThinLens => {
+                let focus_distance = match d.focus_distance {
+                    Some(f) => self.positive(f, "camera.focus_distance")?,
+                    None => (look_at - position).length(),
+                };
+                Camera::ThinLens(ThinLens {
+                    pinhole: Perspective::new(view, fov(self)?),
+                    aperture: self.non_negative(d.aperture, "camera.aperture")?,
+                    focus_distance,
+                })
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::{compiled, rejected};
+    use crate::camera::Camera;
+
+    #[test]
+    fn a_thin_lens_focuses_on_look_at_unless_told_otherwise() {
+        let s = compiled(
+            "[camera]\ntype = \"thin_lens\"\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 1.0]\naperture = 0.1\n",
+        );
+        let Camera::ThinLens(c) = s.camera else {
+            panic!("{:?}", s.camera)
+        };
+        assert_eq!((c.focus_distance, c.aperture), (4.0, 0.1));
+        let s = compiled("[camera]\ntype = \"thin_lens\"\nfocus_distance = 2.5\n");
+        let Camera::ThinLens(c) = s.camera else {
+            panic!("{:?}", s.camera)
+        };
+        assert_eq!(c.focus_distance, 2.5);
+    }
+
+    #[test]
+    fn degenerate_views_and_fields_of_view_are_rejected() {
+        for (text, key) in [
+            (
+                "[camera]\nposition = [1.0, 2.0, 3.0]\nlook_at = [1.0, 2.0, 3.0]",
+                "camera.look_at",
+            ),
+            (
+                "[camera]\nposition = [0.0, 5.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]",
+                "camera.up",
+            ),
+            ("[camera]\nfov = 180.0", "camera.fov"),
+            ("[camera]\nfov = 0.0", "camera.fov"),
+            (
+                "[camera]\ntype = \"orthographic\"\nheight = -1.0",
+                "camera.height",
+            ),
+        ] {
+            assert_eq!(rejected(text).location, key, "{text}");
+        }
+    }
+}

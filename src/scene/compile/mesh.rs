@@ -1,0 +1,268 @@
+//! Triangles: mesh files (read once each, their materials registered once)
+//! and single triangles, kept indexed until the BVH is built and then
+//! written once, in leaf order, into the scene's leaf blocks.
+
+use super::Compiler;
+use crate::error::{InputError, InputResult};
+use crate::geometry::{MeshNormals, MeshRange};
+use crate::light::Light;
+use crate::math::Transform;
+use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh};
+use crate::scene::loaders::load_mesh_file;
+use crate::shape::triangle8::{TriangleBlock, LANES};
+use glam::{Affine3A, Vec3};
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// The triangles of one [`MeshRange`] until the BVH is built. A mesh file's
+/// meshes stay indexed (world-space positions and the file's indices, about
+/// 18 bytes per triangle instead of 36), so the build runs beside half the
+/// memory and the triangles are expanded once, in leaf order, afterwards.
+pub(super) enum TriangleSource {
+    Soup(Vec<[Vec3; 3]>),
+    Indexed {
+        positions: Vec<Vec3>,
+        /// Checked against `positions` when made.
+        indices: Vec<[u32; 3]>,
+    },
+}
+
+impl TriangleSource {
+    pub(super) fn len(&self) -> usize {
+        match self {
+            Self::Soup(t) => t.len(),
+            Self::Indexed { indices, .. } => indices.len(),
+        }
+    }
+
+    #[inline]
+    pub(super) fn get(&self, i: usize) -> [Vec3; 3] {
+        match self {
+            Self::Soup(t) => t[i],
+            Self::Indexed { positions, indices } => indices[i].map(|k| positions[k as usize]),
+        }
+    }
+}
+
+/// The BVH's leaf slots as 8-wide triangle blocks (see
+/// [`Geometry::leaf_blocks`]), read from the indexed sources.
+pub(super) fn leaf_blocks(
+    meshes: &[MeshRange],
+    sources: &[TriangleSource],
+    prim_ids: &[u32],
+) -> Vec<TriangleBlock> {
+    use rayon::prelude::*;
+    prim_ids
+        .par_chunks(LANES)
+        .map(|ids| {
+            let mut block = TriangleBlock::EMPTY;
+            for (lane, &id) in ids.iter().enumerate() {
+                let k = meshes.partition_point(|m| m.first + m.count <= id);
+                match (meshes.get(k), sources.get(k)) {
+                    (Some(m), Some(src)) if id >= m.first => {
+                        block.set(lane, &src.get((id - m.first) as usize), id)
+                    }
+                    _ => block.id[lane] = id,
+                }
+            }
+            block
+        })
+        .collect()
+}
+
+impl Compiler {
+    pub(super) fn push_mesh(
+        &mut self,
+        name: String,
+        tris: TriangleSource,
+        material: u32,
+        normals: Option<MeshNormals>,
+    ) {
+        if tris.len() == 0 {
+            return;
+        }
+        let first = self.meshes.last().map_or(0, |m| m.first + m.count);
+        let count = tris.len() as u32;
+        self.sources.push(tris);
+        self.meshes.push(MeshRange {
+            name,
+            first,
+            count,
+            material,
+            normals,
+        });
+    }
+
+    /// A mesh file's contents and the scene index of its first material,
+    /// read (and its materials registered) once per file.
+    pub(super) fn asset(
+        &mut self,
+        file: &str,
+        key: &str,
+    ) -> InputResult<(Rc<LoadedAsset>, u32, PathBuf)> {
+        let path = self.base_dir.join(file);
+        if !self.assets.contains_key(&path) {
+            let asset = load_mesh_file(&path).map_err(|e| {
+                // Say which object pulled the file in, keeping the mesh file's own location.
+                if e.file == path.display().to_string() {
+                    e
+                } else {
+                    e.within(&format!("{key}.mesh"))
+                }
+            })?;
+            let first_material = self.materials.len() as u32;
+            for (name, mat) in &asset.materials {
+                self.materials.push(*mat);
+                self.material_ids
+                    .entry(format!("{file}:{name}"))
+                    .or_insert(self.materials.len() as u32 - 1);
+            }
+            self.assets
+                .insert(path.clone(), (Rc::new(asset), first_material));
+        }
+        let (asset, first_material) = self.assets.get(&path).expect("inserted above").clone();
+        Ok((asset, first_material, path))
+    }
+
+    pub(super) fn mesh_file(
+        &mut self,
+        file: &str,
+        key: &str,
+        m: Affine3A,
+        explicit_material: Option<u32>,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let (asset, first_material, path) = self.asset(file, key)?;
+        let t = Transform::new(m).expect("checked by the caller");
+        for mesh in &asset.meshes {
+            check_indices(mesh, &path)?;
+            let tris = TriangleSource::Indexed {
+                positions: mesh.positions.iter().map(|&p| t.point(p)).collect(),
+                indices: mesh.indices.clone(),
+            };
+            let normals = mesh.normals.as_ref().map(|n| MeshNormals {
+                values: n.values.iter().map(|&v| t.normal_to_world * v).collect(),
+                indices: n.indices.clone(),
+            });
+            let material = explicit_material
+                .or(mesh.material.map(|i| first_material + i as u32))
+                .unwrap_or(inherited);
+            let name = if mesh.name.is_empty() {
+                key.to_string()
+            } else {
+                mesh.name.clone()
+            };
+            self.push_mesh(name, tris, material, normals);
+        }
+        for light in &asset.point_lights {
+            self.lights.push(Light::Point {
+                position: t.point(light.position),
+                intensity: light.intensity,
+            });
+        }
+        for cam in &asset.cameras {
+            self.loaded_cameras.push(LoadedCamera {
+                position: t.point(cam.position),
+                forward: t.vector(cam.forward),
+                up: t.vector(cam.up),
+                ..cam.clone()
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Every vertex index of a loaded mesh is in range.
+fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
+    let n_vertices = mesh.positions.len();
+    match mesh
+        .indices
+        .iter()
+        .position(|idx| idx.iter().any(|&i| i as usize >= n_vertices))
+    {
+        Some(f) => Err(InputError::new(
+            path,
+            format!("face {f}"),
+            "vertex index out of range",
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A loaded mesh's triangles in file space, with every index checked.
+pub(super) fn mesh_triangles(mesh: &LoadedMesh, path: &Path) -> InputResult<Vec<[Vec3; 3]>> {
+    check_indices(mesh, path)?;
+    Ok(mesh
+        .indices
+        .iter()
+        .map(|idx| idx.map(|i| mesh.positions[i as usize]))
+        .collect())
+}
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::compiled;
+    use super::*;
+    use crate::scene::loaders::test_files::{temp_dir, write};
+    use crate::scene::{scene_from_str, RenderOverrides};
+
+    const TWO_QUADS: &str = "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nusemtl a\nf 1 2 3 4\nusemtl b\nf 5 6 7\n";
+
+    #[test]
+    fn mesh_files_are_baked_read_once_and_stored_in_leaf_order() {
+        let dir = temp_dir("compile-mesh");
+        write(&dir, "two.obj", TWO_QUADS.as_bytes());
+        write(&dir, "two.mtl", b"newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 0 1\n");
+        let text = r#"
+[[objects]]
+mesh = "two.obj"
+transform = { translate = [0.0, 0.0, 5.0] }
+[[objects]]
+mesh = "two.obj"
+"#;
+        let s = scene_from_str(text, &dir.join("s.toml"), &RenderOverrides::default()).unwrap();
+        let g = &s.geometry;
+        assert_eq!(g.triangle_count, 6, "a quad and a triangle, twice");
+        // One file, read once: its two materials are registered once.
+        assert_eq!(s.materials.len(), 3);
+        let tris = g.file_order_triangles();
+        assert_eq!(
+            tris[0][0],
+            Vec3::new(0.0, 0.0, 5.0),
+            "the first use is moved"
+        );
+        assert_eq!(tris[3][0], Vec3::ZERO, "the second is not");
+        // Every leaf slot of a triangle holds that triangle's vertices.
+        for block in &g.leaf_blocks {
+            for (lane, &id) in block.id.iter().enumerate() {
+                if id < g.triangle_count {
+                    assert_eq!(block.triangle(lane), tris[id as usize]);
+                }
+            }
+        }
+        let colour = |tri: u32| s.materials[g.mesh_of(tri).material as usize].diffuse;
+        assert_eq!(colour(0), Vec3::X);
+        assert_eq!(colour(2), Vec3::Z);
+    }
+
+    #[test]
+    fn a_missing_mesh_names_the_file_and_out_of_range_indices_the_face() {
+        let s = compiled(
+            "[[objects]]\ntriangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }",
+        );
+        assert_eq!(s.geometry.meshes[0].name, "objects[0]");
+        let e = scene_from_str(
+            "[[objects]]\nmesh = \"nowhere.obj\"",
+            Path::new("t.toml"),
+            &RenderOverrides::default(),
+        )
+        .unwrap_err();
+        assert!(e.file.ends_with("nowhere.obj"), "{e}");
+        let mesh = LoadedMesh {
+            positions: vec![Vec3::ZERO; 3],
+            indices: vec![[0, 1, 2], [0, 1, 3]],
+            ..LoadedMesh::default()
+        };
+        let e = check_indices(&mesh, Path::new("m.obj")).unwrap_err();
+        assert_eq!(e.location, "face 1");
+    }
+}

@@ -1,0 +1,367 @@
+//! Description → [`Scene`]: flatten the object tree into plain arrays,
+//! validate every number on the way, and build the BVH.
+//!
+//! Meshes are baked into world space. Analytic shapes keep their object
+//! space unless the transform is a similarity (then a sphere is baked into
+//! a new centre and radius, exactly). Infinite planes stay out of the BVH.
+//!
+//! One [`Compiler`] walks the description; each part of a scene file has
+//! its own file of `impl Compiler`: [`material`], [`light`], [`object`]
+//! (placement, shapes, groups), [`mesh`] (mesh files and the leaf blocks),
+//! [`csg`], [`camera`]; [`validate`] holds the number checks they share.
+//! This file holds the entry points and the order of the steps.
+
+use super::asset::{LoadedAsset, LoadedCamera};
+use super::description::{ObjectDesc, SceneDescription};
+use super::settings::RenderOverrides;
+use super::{RenderSettings, Scene};
+use crate::accel::prefetch::Prefetch;
+use crate::accel::{BuildQuality, Bvh8};
+use crate::error::{InputError, InputResult};
+use crate::geometry::csg::Csg;
+use crate::geometry::{AnalyticPrim, Geometry, MeshRange, NO_TRANSFORM};
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::{Aabb, Transform};
+use crate::shape::plane::Plane;
+use crate::system::memory::PeakMeter;
+use glam::Affine3A;
+use mesh::{leaf_blocks, TriangleSource};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+mod camera;
+mod csg;
+mod light;
+mod material;
+mod mesh;
+mod object;
+mod validate;
+
+/// Wall time of each loading phase, and how far resident memory rose above
+/// its level before loading during each (see [`PeakMeter`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LoadTimings {
+    pub load: Duration,
+    pub bvh_build: Duration,
+    pub load_peak_bytes: Option<u64>,
+    pub build_peak_bytes: Option<u64>,
+}
+
+impl LoadTimings {
+    /// Peak memory of loading and building together, above the level before.
+    pub fn peak_bytes(&self) -> Option<u64> {
+        self.load_peak_bytes.max(self.build_peak_bytes)
+    }
+}
+
+/// Read, validate and compile a scene file, with the command line's
+/// setting overrides and BVH build effort.
+pub fn load_scene(
+    path: &Path,
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+) -> InputResult<(Scene, LoadTimings)> {
+    let start = Instant::now();
+    let desc = super::parse::read_description(path)?;
+    compile(&desc, path, overrides, quality, start)
+}
+
+/// Compile scene text as if read from `path` (meshes resolve relative to
+/// it), with the default BVH build effort.
+pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> InputResult<Scene> {
+    let desc = super::parse::parse_description(path, text)?;
+    compile(&desc, path, overrides, BuildQuality::Auto, Instant::now()).map(|(scene, _)| scene)
+}
+
+/// A scene of one mesh file used as it is (no transform, default camera and
+/// materials), compiled exactly as a scene file holding only
+/// `[[objects]] mesh = "PATH"` would be. Triangle `i` of the file is
+/// primitive `i`. This is what `strata trace` and `strata rays` intersect,
+/// so they exercise the renderer's own code path.
+pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene, LoadTimings)> {
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| InputError::file(path, "is not a file name"))?;
+    let desc = SceneDescription {
+        objects: vec![ObjectDesc {
+            mesh: Some(file_name.to_string_lossy().into_owned()),
+            ..ObjectDesc::default()
+        }],
+        ..SceneDescription::default()
+    };
+    // The "scene file" is the mesh itself, so the mesh resolves to `path`
+    // and every error names it.
+    compile(
+        &desc,
+        path,
+        &RenderOverrides::default(),
+        quality,
+        Instant::now(),
+    )
+}
+
+/// Compile a parsed description; `path` is the scene file (meshes are
+/// relative to it), `overrides` the command line's render settings.
+pub fn compile(
+    desc: &SceneDescription,
+    path: &Path,
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+    start: Instant,
+) -> InputResult<(Scene, LoadTimings)> {
+    let mut memory = PeakMeter::start();
+    let mut c = Compiler::new(path);
+    for (name, m) in &desc.materials {
+        let key = format!("materials.{name}");
+        let material = c.material(m, &key)?;
+        c.add_material(name.clone(), material);
+    }
+    for (i, light) in desc.lights.iter().enumerate() {
+        c.light(light, &format!("lights[{i}]"))?;
+    }
+    for (i, obj) in desc.objects.iter().enumerate() {
+        c.object(obj, &format!("objects[{i}]"), Affine3A::IDENTITY, 0)?;
+    }
+    let settings = c.settings(&desc.render, overrides)?;
+    let camera = c.camera(desc.camera.as_ref(), &settings)?;
+    // Every object holds what it needs from its mesh files by now.
+    drop(std::mem::take(&mut c.assets));
+    let load = start.elapsed();
+    let load_peak_bytes = memory.next_phase();
+
+    // Area lights were recorded by shape index; make them global primitive ids.
+    let n_tris = c.meshes.last().map_or(0, |m| m.first + m.count);
+    for light in &mut c.lights {
+        if let Light::Rect { prim, .. } | Light::Disk { prim, .. } | Light::Sphere { prim, .. } =
+            light
+        {
+            *prim += n_tris;
+        }
+    }
+
+    let build_start = Instant::now();
+    let boxes = c.primitive_boxes()?;
+    let mut bvh = Bvh8::build_from(boxes, quality);
+    // The builder reserves room for more nodes than the collapse makes.
+    bvh.nodes.shrink_to_fit();
+    // Store the vertices once, in the order the leaves read them, straight
+    // from the (indexed) sources, with the leaf ids beside them: never two
+    // copies of the triangles, and the BVH's own ids become redundant.
+    let leaf_blocks = leaf_blocks(&c.meshes, &c.sources, &bvh.prim_ids);
+    bvh.prim_ids = Vec::new();
+    drop(std::mem::take(&mut c.sources));
+    let timings = LoadTimings {
+        load,
+        bvh_build: build_start.elapsed(),
+        load_peak_bytes,
+        build_peak_bytes: memory.phase_peak(),
+    };
+    let mut geometry = Geometry {
+        leaf_blocks,
+        triangle_count: n_tris,
+        meshes: c.meshes,
+        shapes: c.shapes,
+        transforms: c.transforms,
+        csg: c.csg,
+        planes: c.planes,
+        bvh,
+    };
+    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    let scene = Scene {
+        geometry,
+        materials: c.materials,
+        lights: c.lights,
+        camera,
+        settings,
+    };
+    Ok((scene, timings))
+}
+
+struct Compiler {
+    file: PathBuf,
+    base_dir: PathBuf,
+    /// The triangles of each entry of `meshes`.
+    sources: Vec<TriangleSource>,
+    meshes: Vec<MeshRange>,
+    shapes: Vec<AnalyticPrim>,
+    transforms: Vec<Transform>,
+    csg: Csg,
+    planes: Vec<Plane>,
+    materials: Vec<Material>,
+    material_ids: HashMap<String, u32>,
+    lights: Vec<Light>,
+    loaded_cameras: Vec<LoadedCamera>,
+    /// Mesh files already read, with the scene index of their first material.
+    assets: HashMap<PathBuf, (Rc<LoadedAsset>, u32)>,
+}
+
+impl Compiler {
+    fn new(path: &Path) -> Self {
+        let mut c = Self {
+            file: path.to_path_buf(),
+            base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            sources: Vec::new(),
+            meshes: Vec::new(),
+            shapes: Vec::new(),
+            transforms: Vec::new(),
+            csg: Csg::default(),
+            planes: Vec::new(),
+            materials: Vec::new(),
+            material_ids: HashMap::new(),
+            lights: Vec::new(),
+            loaded_cameras: Vec::new(),
+            assets: HashMap::new(),
+        };
+        // Material 0: what objects get when nothing names one.
+        c.materials.push(Material::default());
+        c
+    }
+
+    /// The file's `[render]` table under the command line's overrides;
+    /// a bad value names the layer it came from.
+    fn settings(
+        &self,
+        file: &RenderOverrides,
+        cli: &RenderOverrides,
+    ) -> InputResult<RenderSettings> {
+        file.check()
+            .map_err(|(field, message)| self.err(&format!("render.{field}"), message))?;
+        cli.check().map_err(|(field, message)| {
+            InputError::new(
+                "<command line>",
+                format!("--{}", field.replace('_', "-")),
+                message,
+            )
+        })?;
+        Ok(RenderSettings::merge(&[file, cli]))
+    }
+
+    fn primitive_boxes(&self) -> InputResult<Vec<Aabb>> {
+        let n_tris = self
+            .meshes
+            .last()
+            .map_or(0, |m| (m.first + m.count) as usize);
+        let mut boxes = Vec::with_capacity(n_tris + self.shapes.len());
+        for (mesh, source) in self.meshes.iter().zip(&self.sources) {
+            for i in 0..source.len() {
+                let b = Aabb::from_points(&source.get(i));
+                if !b.is_finite() {
+                    return Err(self.err(&mesh.name, format!("triangle {i} is not finite")));
+                }
+                boxes.push(b);
+            }
+        }
+        for (i, s) in self.shapes.iter().enumerate() {
+            let local = s.shape.bounds(&self.csg);
+            let b = if s.transform == NO_TRANSFORM {
+                local
+            } else {
+                let t = &self.transforms[s.transform as usize];
+                Aabb::from_points(&local.corners().map(|c| t.point(c)))
+            };
+            if !b.is_finite() {
+                return Err(self.err("objects", format!("shape {i} has infinite bounds")));
+            }
+            boxes.push(b);
+        }
+        Ok(boxes)
+    }
+}
+
+/// Helpers for the compiler's unit tests.
+#[cfg(test)]
+pub(super) mod test_support {
+    use crate::error::InputError;
+    use crate::scene::{scene_from_str, RenderOverrides, Scene};
+    use std::path::Path;
+
+    pub fn compiled(text: &str) -> Scene {
+        scene_from_str(text, Path::new("t.toml"), &RenderOverrides::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The error compiling `text` gives; panics if it compiles.
+    pub fn rejected(text: &str) -> InputError {
+        match scene_from_str(text, Path::new("t.toml"), &RenderOverrides::default()) {
+            Ok(_) => panic!("compiled:\n{text}"),
+            Err(e) => e,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_support::{compiled, rejected};
+    use super::*;
+
+    #[test]
+    fn file_settings_then_command_line_and_each_error_names_its_layer() {
+        let text = "[render]\nwidth = 32\nheight = 16\nspp = 8\n";
+        let cli = RenderOverrides {
+            spp: Some(2),
+            ..Default::default()
+        };
+        let s = scene_from_str(text, Path::new("t.toml"), &cli).unwrap();
+        assert_eq!(
+            (s.settings.width, s.settings.height, s.settings.spp),
+            (32, 16, 2)
+        );
+        let e = rejected("[render]\nspp = 0\n");
+        assert_eq!(
+            (e.file.as_str(), e.location.as_str()),
+            ("t.toml", "render.spp")
+        );
+        let zero = RenderOverrides {
+            reflection_samples: Some(0),
+            ..Default::default()
+        };
+        let e = scene_from_str("", Path::new("t.toml"), &zero).unwrap_err();
+        assert_eq!(
+            (e.file.as_str(), e.location.as_str()),
+            ("<command line>", "--reflection-samples")
+        );
+    }
+
+    #[test]
+    fn primitives_are_numbered_triangles_first_and_planes_stay_outside_the_bvh() {
+        let s = compiled(
+            r#"
+[[objects]]
+sphere = { radius = 1.0 }
+[[objects]]
+plane = { normal = [0.0, 1.0, 0.0] }
+[[objects]]
+triangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }
+"#,
+        );
+        let g = &s.geometry;
+        assert_eq!(
+            (g.triangle_count, g.shapes.len(), g.planes.len()),
+            (1, 1, 1)
+        );
+        assert_eq!(g.primitive_count(), 2, "the plane is not a BVH primitive");
+        let mut ids: Vec<u32> = g
+            .leaf_blocks
+            .iter()
+            .flat_map(|b| b.id)
+            .filter(|&id| id != crate::accel::NO_PRIM)
+            .collect();
+        ids.sort();
+        assert_eq!(ids, [0, 1], "triangle 0, then the sphere");
+    }
+
+    #[test]
+    fn an_empty_scene_compiles_to_an_empty_tree_with_the_default_camera() {
+        let s = compiled("");
+        assert_eq!(s.geometry.primitive_count(), 0);
+        assert!(s
+            .geometry
+            .intersect(&crate::math::Ray::new(glam::Vec3::ZERO, glam::Vec3::X))
+            .is_none());
+        assert_eq!(s.materials.len(), 1, "material 0, the default grey");
+        assert!(matches!(s.camera, crate::camera::Camera::Perspective(_)));
+    }
+}

@@ -1,0 +1,130 @@
+//! Number checks shared by every part of the compiler: each value of a
+//! scene file is checked where it is read, and a bad one is an error that
+//! names its key path (`objects[2].sphere.radius`).
+
+use super::Compiler;
+use crate::error::{InputError, InputResult};
+use crate::scene::description::V3;
+use glam::Vec3;
+use std::path::Path;
+
+pub(super) fn finite3(v: V3, key: &str, file: &Path) -> InputResult<Vec3> {
+    let v = Vec3::from(v);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(InputError::new(
+            file,
+            key,
+            format!("must be finite, got {v:?}"),
+        ))
+    }
+}
+
+impl Compiler {
+    pub(super) fn err(&self, key: &str, message: impl Into<String>) -> InputError {
+        InputError::new(&self.file, key, message)
+    }
+
+    pub(super) fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {
+        finite3(v, key, &self.file)
+    }
+
+    pub(super) fn finite(&self, x: f32, key: &str) -> InputResult<f32> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be finite, got {x}")))
+        }
+    }
+
+    pub(super) fn positive(&self, x: f32, key: &str) -> InputResult<f32> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a positive finite number, got {x}")))
+        }
+    }
+
+    pub(super) fn non_negative(&self, x: f32, key: &str) -> InputResult<f32> {
+        if x.is_finite() && x >= 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a finite number ≥ 0, got {x}")))
+        }
+    }
+
+    pub(super) fn colour(&self, v: V3, key: &str) -> InputResult<Vec3> {
+        let c = self.v3(v, key)?;
+        if c.min_element() < 0.0 {
+            return Err(self.err(key, format!("must not be negative, got {c:?}")));
+        }
+        Ok(c)
+    }
+
+    pub(super) fn direction(&self, v: V3, key: &str) -> InputResult<Vec3> {
+        let d = self.v3(v, key)?;
+        d.try_normalize()
+            .ok_or_else(|| self.err(key, "must be a non-zero vector"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::rejected;
+
+    #[test]
+    fn each_kind_of_number_is_checked_and_named_by_its_key() {
+        for (text, key, needle) in [
+            (
+                "[[objects]]\nsphere = { radius = 0.0 }",
+                "objects[0].sphere.radius",
+                "positive",
+            ),
+            (
+                "[[objects]]\nsphere = { radius = -1.0 }",
+                "objects[0].sphere.radius",
+                "positive",
+            ),
+            (
+                "[[objects]]\nsphere = { radius = nan }",
+                "objects[0].sphere.radius",
+                "positive",
+            ),
+            (
+                "[[objects]]\nsphere = { radius = inf }",
+                "objects[0].sphere.radius",
+                "positive",
+            ),
+            (
+                "[materials.m]\nshininess = -1.0",
+                "materials.m.shininess",
+                "≥ 0",
+            ),
+            (
+                "[materials.m]\ndiffuse = [0.5, -0.1, 0.5]",
+                "materials.m.diffuse",
+                "negative",
+            ),
+            (
+                "[materials.m]\nemission = [0.5, inf, 0.5]",
+                "materials.m.emission",
+                "finite",
+            ),
+            (
+                "[[objects]]\nplane = { normal = [0.0, 0.0, 0.0] }",
+                "objects[0].plane.normal",
+                "non-zero",
+            ),
+            (
+                "[[objects]]\nsphere = { center = [0.0, nan, 0.0], radius = 1.0 }",
+                "objects[0].sphere.center",
+                "finite",
+            ),
+        ] {
+            let e = rejected(text);
+            assert_eq!(e.location, key, "{text}");
+            assert!(e.message.contains(needle), "{text}: {e}");
+        }
+    }
+}
