@@ -7,7 +7,7 @@
 mod common;
 mod csg_reference;
 
-use common::{render_rgb, scene, scene_at, Rng};
+use common::{render_rgb, scene, scene_at, seeded, Draw, StreamRng};
 use csg_reference::{op, sphere, Node, Op, Reference, Trs};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -253,10 +253,11 @@ fn next_boundary(s: &Scene, o: Vec3, d: Vec3) -> impl Fn(f64) -> Option<f64> + '
 fn random_rays(node: &Node, rays: usize, seed: u32) -> Tally {
     let s = csg_scene(node, "");
     let reference = Reference::new(node);
-    let mut rng = Rng(seed);
+    let mut rng = seeded(seed.into());
     let mut tally = Tally::default();
-    let point =
-        |rng: &mut Rng, r: f32| Vec3::new(rng.range(-r, r), rng.range(-r, r), rng.range(-r, r));
+    let point = |rng: &mut StreamRng, r: f32| {
+        Vec3::new(rng.range(-r, r), rng.range(-r, r), rng.range(-r, r))
+    };
     for i in 0..rays {
         let o = point(&mut rng, 3.0);
         let d = if i % 2 == 0 {
@@ -470,7 +471,7 @@ fn the_difference_of_identical_spheres_is_empty_with_no_nan() {
     let text =
         node.object("") + "[render]\nwidth = 48\nheight = 36\nbackground = [0.25, 0.5, 0.75]\n";
     let s = scene(&text);
-    let mut rng = Rng(5);
+    let mut rng = seeded(5);
     for _ in 0..20_000 {
         let o = Vec3::new(
             rng.range(-2.0, 2.0),
@@ -528,7 +529,7 @@ fn a_union_of_touching_spheres_renders_exactly_like_the_two_spheres() {
 fn spawned_rays(node: &Node, seed: u32, paths: usize) -> Tally {
     let s = csg_scene(node, "");
     let reference = Reference::new(node);
-    let mut rng = Rng(seed);
+    let mut rng = seeded(seed.into());
     let mut tally = Tally::default();
     for _ in 0..paths {
         let target = Vec3::new(

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{bumpy_sphere_obj, scene_at, temp_dir, Rng};
+use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
 use strata::accel::{BuildQuality, PACKET_SIZE};
@@ -66,7 +66,7 @@ plane = { point = [0.0, -3.0, 0.0], normal = [0.0, 1.0, 0.0] }
 
 /// Batches of up to eight rays.
 fn ray_sets(scene: &Scene) -> Vec<(&'static str, Vec<Vec<Ray>>)> {
-    let mut rng = Rng(7);
+    let mut rng = seeded(7);
     // Lens samples of one pixel: origins on a 0.1 lens, aimed at one focus point.
     let camera: Vec<Vec<Ray>> = (0..400)
         .map(|p| {
@@ -288,7 +288,7 @@ fn packets_match_single_rays_on_every_strata_rays_kind() {
     // single rays): narrow fans of rays whose x and y components straddle
     // zero, some exactly ±0, like the lens samples of a pixel at the centre
     // of the image.
-    let mut rng = Rng(17);
+    let mut rng = seeded(17);
     let fans: Vec<Ray> = (0..300)
         .flat_map(|_| {
             let eye = Vec3::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -4.0);

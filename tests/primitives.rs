@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{scene, Rng};
+use common::{scene, seeded, Draw};
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 use strata::math::Ray;
 
@@ -54,7 +54,7 @@ fn sphere_under_non_uniform_scale_and_rotation_matches_the_f64_ellipsoid() {
         DVec3::from_array(translate.map(|x: f32| x as f64)),
     );
     let inv = m.inverse();
-    let mut rng = Rng(7);
+    let mut rng = seeded(7);
     let mut hits = 0;
     for _ in 0..2000 {
         let o = rng.unit_vector() * 6.0;
@@ -104,7 +104,7 @@ fn sphere_rays_from_inside_hit_the_far_side_facing_away() {
         "sphere = { center = [1.0, 2.0, 3.0], radius = 2.0 }",
         "",
     ));
-    let mut rng = Rng(3);
+    let mut rng = seeded(3);
     for _ in 0..200 {
         let d = rng.unit_vector();
         let ray = Ray::new(Vec3::new(1.0, 2.0, 3.0) + 0.5 * rng.unit_vector(), d);
@@ -246,7 +246,7 @@ fn matrix_transforms_equal_their_trs_form() {
         "sphere = { radius = 1.0 }",
         "transform = { matrix = [[2.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 2.0], [0.0, 0.0, 1.0, 3.0], [0.0, 0.0, 0.0, 1.0]] }",
     ));
-    let mut rng = Rng(11);
+    let mut rng = seeded(11);
     for _ in 0..200 {
         let ray = Ray::new(
             rng.unit_vector() * 8.0 + Vec3::new(1.0, 2.0, 3.0),

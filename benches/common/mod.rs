@@ -108,4 +108,4 @@ pub fn mesh_scene(quality: BuildQuality) -> (Scene, String) {
 }
 
 /// Tiny deterministic generator for bench inputs.
-pub use strata::sampling::hash::HashRng as Rng;
+pub use strata::sampling::stream::{seeded, Draw, StreamRng};

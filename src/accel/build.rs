@@ -553,10 +553,11 @@ const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEA
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::stream::{seeded, Draw};
     use glam::Vec3;
 
     fn random_boxes(n: usize, seed: u32) -> Vec<Aabb> {
-        let mut rng = crate::sampling::hash::HashRng(seed);
+        let mut rng = seeded(seed.into());
         (0..n)
             .map(|_| {
                 let c = rng.cube(50.0);

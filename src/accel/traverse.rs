@@ -508,6 +508,7 @@ mod tests {
     use super::*;
     use crate::accel::NO_PRIM;
     use crate::math::Aabb;
+    use crate::sampling::stream::{seeded, Draw};
     use crate::shape::sphere::Sphere;
     use glam::Vec3;
 
@@ -518,7 +519,7 @@ mod tests {
     #[test]
     fn closest_and_any_hit_agree_with_brute_force_for_every_quality() {
         let mut spheres = Vec::new();
-        let mut rng = crate::sampling::hash::HashRng(1);
+        let mut rng = seeded(1);
         let mut rnd = || rng.unit();
         for _ in 0..500 {
             let c = Vec3::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
@@ -615,7 +616,7 @@ mod tests {
     /// child, and never raises a distance.
     #[test]
     fn nearest_last_sorts_every_mask_farthest_first() {
-        let mut rng = crate::sampling::hash::HashRng(7);
+        let mut rng = seeded(7);
         let child: [u32; 8] = std::array::from_fn(|i| 100 + i as u32);
         for round in 0..2000 {
             let tn: [f32; 8] = std::array::from_fn(|i| match round % 4 {

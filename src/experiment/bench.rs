@@ -4,10 +4,11 @@
 //! incoherent rays (random chords of the bounding sphere), traced one by
 //! one and as packets, at 1 thread and at all threads.
 //!
-//! Ray sets are seeded, so every run traces the same rays.
+//! Ray sets are seeded `rand` streams, so every run traces the same rays.
 
 use crate::accel::PACKET_SIZE;
 use crate::math::Ray;
+use crate::sampling::stream::{item_stream, Draw, StreamRng};
 use crate::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -32,18 +33,15 @@ impl RayKind {
     }
 }
 
-fn hash(x: u32) -> f32 {
-    crate::sampling::hash::unit_float(crate::sampling::hash::hash_u32(x))
-}
-
-fn sphere_point(i: u32) -> Vec3 {
-    let z = 2.0 * hash(2 * i) - 1.0;
-    let phi = std::f32::consts::TAU * hash(2 * i + 1);
+fn sphere_point(rng: &mut StreamRng) -> Vec3 {
+    let z = 2.0 * rng.unit() - 1.0;
+    let phi = std::f32::consts::TAU * rng.unit();
     let r = (1.0 - z * z).max(0.0).sqrt();
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
-/// `batches` batches of 8 rays of `kind` around the scene's BVH bounds.
+/// `batches` batches of 8 rays of `kind` around the scene's BVH bounds;
+/// batch `k` draws from its own seeded stream.
 pub fn rays(scene: &Scene, kind: RayKind, batches: usize, seed: u32) -> Vec<[Ray; PACKET_SIZE]> {
     let b = scene.geometry.bvh.bounds;
     let center = (b.min + b.max) * 0.5;
@@ -51,29 +49,22 @@ pub fn rays(scene: &Scene, kind: RayKind, batches: usize, seed: u32) -> Vec<[Ray
     let side = (batches as f64).sqrt().ceil() as usize;
     (0..batches)
         .map(|k| {
-            let base = seed.wrapping_mul(0x9e37_79b9) ^ (k as u32).wrapping_mul(64);
-            std::array::from_fn(|lane| {
-                let s = base.wrapping_add(lane as u32 * 8);
-                match kind {
-                    RayKind::Camera => {
-                        let (px, py) = (k % side, k / side);
-                        let fx = ((px as f32 + 0.5) / side as f32 * 2.0 - 1.0) * radius;
-                        let fy = (1.0 - (py as f32 + 0.5) / side as f32 * 2.0) * radius;
-                        let focus = center + Vec3::new(fx, fy, 0.0);
-                        let lens = 0.02 * radius;
-                        let o = center
-                            + Vec3::new(
-                                (hash(s) * 2.0 - 1.0) * lens,
-                                (hash(s + 1) * 2.0 - 1.0) * lens,
-                                2.5 * radius,
-                            );
-                        Ray::new(o, focus - o)
-                    }
-                    RayKind::Random => {
-                        let a = center + sphere_point(s) * radius;
-                        let c = center + sphere_point(s + 3) * radius;
-                        Ray::segment(a, c - a, 1.0)
-                    }
+            let mut rng = item_stream(seed, kind as u32, k as u32);
+            std::array::from_fn(|_| match kind {
+                RayKind::Camera => {
+                    let (px, py) = (k % side, k / side);
+                    let fx = ((px as f32 + 0.5) / side as f32 * 2.0 - 1.0) * radius;
+                    let fy = (1.0 - (py as f32 + 0.5) / side as f32 * 2.0) * radius;
+                    let focus = center + Vec3::new(fx, fy, 0.0);
+                    let lens = 0.02 * radius;
+                    let o = center
+                        + Vec3::new(rng.range(-lens, lens), rng.range(-lens, lens), 2.5 * radius);
+                    Ray::new(o, focus - o)
+                }
+                RayKind::Random => {
+                    let a = center + sphere_point(&mut rng) * radius;
+                    let c = center + sphere_point(&mut rng) * radius;
+                    Ray::segment(a, c - a, 1.0)
                 }
             })
         })

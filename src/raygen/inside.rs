@@ -7,7 +7,9 @@
 //! through the front, −1 through the back), is the same non-zero number
 //! along all six. Signed counting keeps duplicated faces and degenerate
 //! triangles from flipping the answer; needing six agreeing probes keeps
-//! rays through edges from doing so, and rejects points on the surface.
+//! rays through edges from doing so. Points on the surface (within a few
+//! f32 spacings of it along a probe or along the ray itself) are rejected:
+//! whether a crossing at t = 0 counts differs between intersectors.
 
 use super::{Generator, MeshInfo, Stream};
 use crate::accel::{BuildQuality, Bvh8};
@@ -61,6 +63,36 @@ impl<'a> Inside<'a> {
         });
         winding
     }
+
+    /// Whether the surface passes within about two f32 spacings of `origin`
+    /// along the line through it in unit direction `d`. Such a point is on
+    /// the surface as far as rounding can tell (common when the mesh is far
+    /// from the origin and every coordinate is coarsely rounded): a ray
+    /// from it may see its first crossing at t = 0, which counts as a hit
+    /// for some intersectors and not for others.
+    fn touches_surface(&self, origin: Vec3, d: Vec3) -> bool {
+        let reach = 2.0 * f32::EPSILON * origin.abs().max_element().max(f32::MIN_POSITIVE);
+        // From a little behind the point to a little beyond it: the triangle
+        // test ignores crossings within rounding of t = 0, which is exactly
+        // where this one would be if it started at the point.
+        let segment = Ray::segment(origin - reach * d, d, 2.0 * reach);
+        self.winding_crossings(&segment) > 0
+    }
+
+    /// How many triangles the ray crosses in its interval.
+    fn winding_crossings(&self, ray: &Ray) -> u32 {
+        let sheared = ShearedRay::new(ray);
+        let mut crossings = 0;
+        self.bvh.any_hit(ray, &[] as &[()], |start, count, r| {
+            for (_, id) in self.bvh.leaf_prims(start, count) {
+                if intersect(r, &sheared, &self.triangles[id as usize]).is_some() {
+                    crossings += 1;
+                }
+            }
+            false
+        });
+        crossings
+    }
 }
 
 impl Generator for Inside<'_> {
@@ -71,13 +103,14 @@ impl Generator for Inside<'_> {
             let d = rng.unit_vector().as_vec3();
             let w = self.winding(&Ray::new(origin, d));
             // Opposite probes agree unless a crossing sits at t = 0, that
-            // is, unless the point lies on the surface (common when the mesh
-            // is far from the origin and every coordinate is coarsely rounded).
-            if w == 0 || self.winding(&Ray::new(origin, -d)) != w {
+            // is, unless the point lies on the surface.
+            if w == 0 || self.winding(&Ray::new(origin, -d)) != w || self.touches_surface(origin, d)
+            {
                 return None;
             }
         }
-        Some(Ray::new(origin, rng.unit_vector().as_vec3()))
+        let d = rng.unit_vector().as_vec3();
+        (!self.touches_surface(origin, d)).then(|| Ray::new(origin, d))
     }
 }
 
@@ -93,6 +126,30 @@ mod tests {
         for ray in generate(RayKind::Inside, &tris, 500, 1).unwrap() {
             let p = (ray.origin - Vec3::new(1.0, -3.0, 0.5)) / 2.0;
             assert!(p.abs().element_sum() <= 1.0 + 1e-5, "{p} is outside");
+        }
+    }
+
+    /// Far from the origin, f32 coordinates are coarse next to a small
+    /// mesh, and many candidate origins land on its faces, edges and
+    /// vertices; none of those may become an inside ray.
+    #[test]
+    fn origins_on_the_surface_are_rejected() {
+        let offset = Vec3::splat(1e5);
+        let tris = octahedron(0.2, offset);
+        let info = crate::raygen::MeshInfo::new(&tris).unwrap();
+        let inside = super::Inside::new(&info).unwrap();
+        let vertex = offset + Vec3::new(0.2, 0.0, 0.0);
+        assert!(inside.touches_surface(vertex, Vec3::new(0.6, 0.8, 0.0)));
+        assert!(!inside.touches_surface(offset, Vec3::X));
+        // The vertices as f32 holds them: 0.2 rounds to a multiple of 2⁻⁷.
+        let r = tris[0][0].x - offset.x;
+        for ray in generate(RayKind::Inside, &tris, 2000, 3).unwrap() {
+            let p = ray.origin - offset;
+            // On this grid, points of the faces have |x| + |y| + |z| = r exactly.
+            assert!(
+                p.abs().element_sum() < r,
+                "{p} is on or outside the surface"
+            );
         }
     }
 

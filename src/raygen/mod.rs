@@ -13,10 +13,10 @@
 //! is `target − origin`, computed from the exact target in f64 (see
 //! [`aimed_ray`]). All rays have `tmin = 0` and `tmax = +inf`.
 //!
-//! Every number is a pure function of (seed, kind, ray index, draw), so a
-//! set is reproducible on any machine and thread count, and (except for
-//! `camera`, whose image size follows the ray count) ray `i` does not depend
-//! on how many rays are asked for.
+//! Each ray draws from its own seeded `rand` stream, a function of (seed,
+//! kind, ray index), so a set is reproducible on any machine and thread
+//! count, and (except for `camera`, whose image size follows the ray count)
+//! ray `i` does not depend on how many rays are asked for.
 
 pub mod camera;
 pub mod edges;
@@ -26,8 +26,9 @@ pub mod random;
 pub mod topology;
 
 use crate::math::{Aabb, Ray};
-use crate::sampling::hash::{hash_words, unit_float};
+use crate::sampling::stream::{item_stream, StreamRng};
 use glam::{DVec3, Vec3};
+use rand::RngExt;
 use rayon::prelude::*;
 
 crate::mode::mode_enum! {
@@ -49,36 +50,29 @@ impl RayKind {
     }
 }
 
-/// Random numbers for one ray: draw `k` is `hash(seed, kind, ray, k)`.
-pub struct Stream {
-    key: u32,
-    draw: u32,
-}
+/// Random numbers for one ray: its own seeded `rand` stream
+/// ([`crate::sampling::stream::item_stream`] of (seed, kind, ray)), so ray
+/// `i` does not depend on how many rays are made or on which thread.
+pub struct Stream(StreamRng);
 
 impl Stream {
     pub fn new(seed: u32, kind: RayKind, index: u32) -> Self {
-        Self {
-            key: hash_words(&[seed, kind as u32, index]),
-            draw: 0,
-        }
+        Self(item_stream(seed, kind as u32, index))
     }
 
     /// Uniform in [0, 1).
     pub fn uniform(&mut self) -> f32 {
-        self.draw += 1;
-        unit_float(hash_words(&[self.key, self.draw]))
+        self.0.random()
     }
 
-    /// Uniform in [0, 1) with 48 random bits, for f64 geometry.
+    /// Uniform in [0, 1) with 53 random bits, for f64 geometry.
     pub fn next_f64(&mut self) -> f64 {
-        let hi = self.uniform() as f64;
-        let lo = self.uniform() as f64;
-        (hi + lo / 16_777_216.0).min(1.0 - f64::EPSILON)
+        self.0.random()
     }
 
     /// Uniform below `n` (`n > 0`).
     pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_f64() * n as f64) as usize).min(n - 1)
+        self.0.random_range(0..n)
     }
 
     /// A uniform direction (Marsaglia's rejection: a point in the unit ball).

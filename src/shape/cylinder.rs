@@ -171,6 +171,7 @@ impl Cylinder {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{RngExt, SeedableRng};
 
     const C: Cylinder = Cylinder {
         radius: 1.0,
@@ -193,8 +194,8 @@ mod tests {
 
     #[test]
     fn solid_span_matches_the_first_and_last_hit() {
-        let mut rng = crate::sampling::hash::HashRng(9);
-        let mut rnd = || rng.range(-1.0, 1.0);
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(9);
+        let mut rnd = || rng.random_range(-1.0f32..1.0);
         let mut spans = 0;
         for _ in 0..5000 {
             let o = Vec3::new(rnd() * 3.0, rnd() * 3.0, 1.0 + rnd() * 3.0);

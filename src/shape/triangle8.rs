@@ -323,7 +323,14 @@ impl ShearedRays {
 mod tests {
     use super::super::triangle;
     use super::*;
-    use crate::sampling::hash::HashRng as Rng;
+    use rand::{RngExt, SeedableRng};
+
+    type Rng = rand::rngs::Xoshiro256PlusPlus;
+
+    /// A point of the cube of side `scale` centred on the origin.
+    fn cube(rng: &mut Rng, scale: f32) -> Vec3 {
+        (Vec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * scale
+    }
 
     /// Every lane agrees with the scalar test bit for bit.
     fn check(ray: &Ray, block: &TriangleBlock) {
@@ -343,24 +350,24 @@ mod tests {
 
     #[test]
     fn lanes_match_the_scalar_test_bit_for_bit() {
-        let mut rng = Rng(7);
+        let mut rng = Rng::seed_from_u64(7);
         let mut hits = 0;
         for round in 0..4000 {
             let scale = [1e-4, 1.0, 1e5][round % 3];
             let mut block = TriangleBlock::EMPTY;
             for lane in 0..LANES {
-                let c = rng.cube(scale);
+                let c = cube(&mut rng, scale);
                 let tri = [
-                    c + rng.cube(scale),
-                    c + rng.cube(scale),
-                    c + rng.cube(scale),
+                    c + cube(&mut rng, scale),
+                    c + cube(&mut rng, scale),
+                    c + cube(&mut rng, scale),
                 ];
                 block.set(lane, &tri, lane as u32);
             }
             // Aim at a random point of a random lane's triangle, or at one
             // of its vertices or edge midpoints (exact-zero edge functions).
             let target_tri = block.triangle(round % LANES);
-            let (b1, b2) = (rng.unit(), rng.unit());
+            let (b1, b2) = (rng.random::<f32>(), rng.random::<f32>());
             let target = match round % 4 {
                 0 => target_tri[0],
                 1 => (target_tri[1] + target_tri[2]) * 0.5,
@@ -375,10 +382,10 @@ mod tests {
                         + (target_tri[2] - target_tri[0]) * b2
                 }
             };
-            let origin = target + rng.cube(scale * 4.0);
+            let origin = target + cube(&mut rng, scale * 4.0);
             let mut ray = Ray::new(origin, target - origin);
             if round % 5 == 0 {
-                ray.tmax = rng.unit() * 1.5;
+                ray.tmax = rng.random::<f32>() * 1.5;
             }
             check(&ray, &block);
             hits += intersect(&ray, &ShearedRay::new(&ray), &block, 0xff)
@@ -392,19 +399,19 @@ mod tests {
     /// permutation, agree with the scalar test bit for bit.
     #[test]
     fn ray_lanes_match_the_scalar_test_bit_for_bit() {
-        let mut rng = Rng(11);
+        let mut rng = Rng::seed_from_u64(11);
         let mut hits = 0;
         for round in 0..3000 {
             let scale = [1e-4, 1.0, 1e5][round % 3];
-            let c = rng.cube(scale);
+            let c = cube(&mut rng, scale);
             let tri = [
-                c + rng.cube(scale),
-                c + rng.cube(scale),
-                c + rng.cube(scale),
+                c + cube(&mut rng, scale),
+                c + cube(&mut rng, scale),
+                c + cube(&mut rng, scale),
             ];
             let rays: Vec<Ray> = (0..LANES)
                 .map(|lane| {
-                    let (b1, b2) = (rng.unit(), rng.unit());
+                    let (b1, b2) = (rng.random::<f32>(), rng.random::<f32>());
                     let (b1, b2) = if b1 + b2 > 1.0 {
                         (1.0 - b1, 1.0 - b2)
                     } else {
@@ -415,7 +422,7 @@ mod tests {
                         1 => (tri[0] + tri[2]) * 0.5,
                         _ => tri[0] + (tri[1] - tri[0]) * b1 + (tri[2] - tri[0]) * b2,
                     };
-                    let origin = target + rng.cube(scale * 4.0);
+                    let origin = target + cube(&mut rng, scale * 4.0);
                     let mut ray = Ray::new(origin, target - origin);
                     ray.tmin = if lane % 3 == 0 { 0.5 } else { 0.0 };
                     ray

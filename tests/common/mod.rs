@@ -53,13 +53,21 @@ pub fn bumpy_sphere_obj(nu: u32, nv: u32, radius: f32, bump: f32) -> String {
     obj
 }
 
-/// A fresh, empty temporary directory for one test.
+/// A fresh, empty temporary directory, unique to this call: tests of one
+/// binary run in parallel in one process, so the name and the process id
+/// alone would let two of them share (and delete) one directory.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-test-{}-{}", name, std::process::id()));
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!(
+        "strata-test-{}-{}-{call}",
+        name,
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
 /// Tiny deterministic generator for test inputs.
-pub use strata::sampling::hash::HashRng as Rng;
+pub use strata::sampling::stream::{seeded, Draw, StreamRng};

@@ -175,6 +175,7 @@ pub fn check_closed(tris: &[[Vec3; 3]]) -> Result<(), OpenEdge> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::sampling::stream::{seeded, Draw};
 
     /// The cube [-1, 1]³ as 12 outward-wound triangles, each face split
     /// along a diagonal.
@@ -232,7 +233,7 @@ pub(crate) mod tests {
     #[test]
     fn toward_means_the_winding_normal_faces_the_ray() {
         let tris = cube();
-        let mut rng = crate::sampling::hash::HashRng(5);
+        let mut rng = seeded(5);
         let mut rnd = || rng.range(-1.0, 1.0);
         let mut seen = 0;
         for _ in 0..2000 {
