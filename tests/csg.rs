@@ -15,7 +15,7 @@ use std::process::Command;
 use strata::math::offset::spawn_origin;
 use strata::math::Ray;
 use strata::scene::Scene;
-use strata::shade::integrator::refract;
+use strata::shade::bsdf::refract;
 
 /// Disagreements with the reference closer than this (in t, along unit
 /// directions, for solids of size ~1) are rounding, not errors.

@@ -18,7 +18,7 @@ use strata::render::schedule::render_pixel;
 use strata::sampling::SamplerKind;
 use strata::scene::settings::GlossySampling;
 use strata::scene::Scene;
-use strata::shade::integrator::Integrator;
+use strata::shade::Integrator;
 
 #[derive(Debug, Clone, Copy)]
 struct Method {

@@ -14,7 +14,7 @@ use strata::render::film::Film;
 use strata::render::{render, RenderOptions, SliceSpec};
 use strata::sampling::{Dim, PixelSampler};
 use strata::scene::Scene;
-use strata::shade::integrator::{PacketMode, CAMERA_PACKET_MIN};
+use strata::shade::{PacketMode, CAMERA_PACKET_MIN};
 
 const MODES: [PacketMode; 3] = [PacketMode::Off, PacketMode::On, PacketMode::Auto];
 

@@ -18,7 +18,7 @@ use strata::render::{render, RenderOptions, SliceSpec};
 use strata::sampling::hash::hash_words;
 use strata::sampling::{Dim, PixelSampler};
 use strata::scene::Scene;
-use strata::shade::integrator::{Integrator, SampleContext};
+use strata::shade::{Integrator, SampleContext};
 
 /// Mirrors, Fresnel glass and a point light: every kind of ray.
 const BUSY: &str = "[render]\nwidth = 40\nheight = 30\nspp = 10\nmax_depth = 6\n\

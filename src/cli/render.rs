@@ -50,7 +50,7 @@ pub struct RenderArgs {
     /// (camera batches of 7 or more rays), on, or off. The image is
     /// bit-identical in every mode.
     #[arg(long, default_value = "auto")]
-    pub packets: strata::shade::integrator::PacketMode,
+    pub packets: strata::shade::PacketMode,
     /// BVH build effort; auto picks by primitive count.
     #[arg(long, default_value = "auto")]
     pub bvh_quality: strata::accel::BuildQuality,

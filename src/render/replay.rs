@@ -5,7 +5,7 @@
 use super::schedule::render_pixel;
 use crate::render::film::PixelSum;
 use crate::scene::Scene;
-use crate::shade::integrator::{Integrator, PathEvent};
+use crate::shade::{Integrator, PathEvent};
 use glam::Vec3;
 use std::fmt::Write;
 

@@ -13,7 +13,7 @@ use super::progress;
 use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
-use crate::shade::integrator::{CameraSample, Integrator, PacketMode, RayCounts, SampleContext};
+use crate::shade::{CameraSample, Integrator, PacketMode, RayCounts, SampleContext};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;

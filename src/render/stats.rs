@@ -4,7 +4,7 @@
 use super::film::BadSample;
 use super::{RenderOptions, RenderOutcome};
 use crate::scene::{LoadTimings, Scene};
-use crate::shade::integrator::{PacketMode, RayCounts};
+use crate::shade::{PacketMode, RayCounts};
 use crate::system::memory::peak_rss_bytes;
 use serde::Serialize;
 use std::path::Path;

@@ -1,3 +1,45 @@
-//! Shading: the integrator, which turns a camera sample into radiance.
+//! Shading: the distribution ray tracer, Whitted's recursion (1980) with Cook's
+//! distributed effects (Cook, Porter and Carpenter 1984).
+//!
+//! At each hit: emitted radiance, direct light from every light through
+//! shadow rays (radiometric Phong: ρ/π diffuse plus the normalised lobe
+//! (n+2)/(2π) k_s cosⁿα), then a mirror ray weighted by `reflectivity` and a
+//! refracted ray weighted by `transparency` (Snell's law, total internal
+//! reflection sends the refracted weight into the reflection).
+//! Recursion stops at `max_depth` or when the path weight falls below 1e-3.
+//!
+//! Distributed effects, each stratified over the pixel's one sample set:
+//! area lights take `shadow_samples` M samples per hit; a glossy surface
+//! (`glossiness` n > 0) replaces the mirror ray by rays importance-sampled
+//! from the normalised cosⁿ lobe around the mirror direction (Lafortune and
+//! Willems 1994), and the reflected radiance is the lobe-weighted average of
+//! incoming radiance. The first glossy hit of a path branches into
+//! `reflection_samples` K rays; deeper glossy hits trace one ray each, so
+//! the cost grows by K once, not Kᵈᵉᵖᵗʰ. Lobe directions that fall below the
+//! surface are rejected (they contribute nothing) and counted.
+//!
+//! Coherent batches are traced as packets ([`PacketMode`]): the camera rays
+//! of neighbouring samples ([`Integrator::camera_batch`]) and the shadow rays
+//! from one hit point towards one light. Packets return exactly the hits of
+//! single rays and every batch is shaded in sample order, so the image is
+//! bit-identical with packets on or off.
+//!
+//! | file | what |
+//! |---|---|
+//! | [`integrator`] | the [`Integrator`]: camera samples, batches, the recursion |
+//! | [`direct`] | direct light: shadow rays towards every light |
+//! | [`specular`] | mirror, glossy and refracted rays |
+//! | [`bsdf`] | the Phong BRDF, Snell's law and Schlick's Fresnel |
+//! | [`sample`] | what identifies a sample, ray counts, replay events |
+//! | [`packets`] | when coherent batches travel as packets |
 
+pub mod bsdf;
+pub mod direct;
 pub mod integrator;
+pub mod packets;
+pub mod sample;
+pub mod specular;
+
+pub use integrator::Integrator;
+pub use packets::{PacketMode, CAMERA_PACKET_MIN, SHADOW_PACKET_MIN};
+pub use sample::{CameraSample, PathEvent, RayCounts, SampleContext};

@@ -1,0 +1,82 @@
+//! What identifies one sample and what a render counts.
+
+use crate::math::Ray;
+use crate::sampling::PixelSampler;
+use glam::{Vec2, Vec3};
+
+/// Rays traced, by kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct RayCounts {
+    pub camera: u64,
+    pub shadow: u64,
+    pub reflection: u64,
+    pub refraction: u64,
+    /// Glossy directions that fell below the surface (not traced, not leaked).
+    pub glossy_rejected: u64,
+}
+
+impl RayCounts {
+    pub fn total(&self) -> u64 {
+        self.camera + self.shadow + self.reflection + self.refraction
+    }
+
+    pub fn add(&mut self, o: &RayCounts) {
+        self.camera += o.camera;
+        self.shadow += o.shadow;
+        self.reflection += o.reflection;
+        self.refraction += o.refraction;
+        self.glossy_rejected += o.glossy_rejected;
+    }
+}
+
+/// One camera sample of a batch: its context and film position.
+#[derive(Debug, Clone, Copy)]
+pub struct CameraSample {
+    pub ctx: SampleContext,
+    pub film: Vec2,
+}
+
+/// Identifies one camera sample and, after a glossy branch, one of its K
+/// branches: everything random in the path derives from this.
+#[derive(Debug, Clone, Copy)]
+pub struct SampleContext {
+    pub sampler: PixelSampler,
+    pub sample: u32,
+    pub spp: u32,
+    /// Which branch of the first glossy split this path follows, of `branches`.
+    pub branch: u32,
+    pub branches: u32,
+}
+
+impl SampleContext {
+    pub fn new(sampler: PixelSampler, sample: u32, spp: u32) -> Self {
+        Self {
+            sampler,
+            sample,
+            spp,
+            branch: 0,
+            branches: 1,
+        }
+    }
+
+    /// This path's index in the pixel's set of `count()` paths.
+    #[inline]
+    pub fn index(&self) -> u32 {
+        self.sample * self.branches + self.branch
+    }
+
+    #[inline]
+    pub fn count(&self) -> u32 {
+        self.spp * self.branches
+    }
+}
+
+/// One path vertex, for `--debug-sample` replays.
+#[derive(Debug, Clone)]
+pub struct PathEvent {
+    pub depth: u32,
+    pub kind: &'static str,
+    pub ray: Ray,
+    pub hit: Option<(f32, u32, Vec3)>,
+    pub radiance: Vec3,
+}

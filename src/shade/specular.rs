@@ -1,0 +1,123 @@
+//! Specular transport: the mirror ray (or, on a glossy surface, rays
+//! importance-sampled from the cosⁿ lobe) and the refracted ray.
+
+use super::bsdf::{refract, schlick};
+use super::integrator::{Shading, MIN_PATH_WEIGHT};
+use super::{Integrator, SampleContext};
+use crate::geometry::Surface;
+use crate::math::offset::spawn_origin;
+use crate::math::{Frame, Ray};
+use crate::sampling::warp::{phong_lobe, phong_lobe_pdf, uniform_hemisphere};
+use crate::sampling::Dim;
+use crate::scene::settings::GlossySampling;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+impl Integrator<'_> {
+    /// Mirror (or glossy) reflection and refraction.
+    pub(super) fn specular_transport(
+        &mut self,
+        ctx: &SampleContext,
+        sh: &Shading,
+        depth: u32,
+        weight: f32,
+    ) -> Vec3 {
+        let (m, s, wo, ng, ns) = (sh.material, sh.surface, sh.wo, sh.ng, sh.ns);
+        let mut kr = m.reflectivity;
+        let mut kt = m.transparency;
+        let mut refracted = None;
+        if kt > 0.0 {
+            let eta = if sh.entering { 1.0 / m.ior } else { m.ior };
+            match refract(wo, ns, eta) {
+                Some(t) => {
+                    if m.fresnel {
+                        let f = schlick(wo.dot(ns), if sh.entering { m.ior } else { 1.0 / m.ior });
+                        kr += kt * f;
+                        kt *= 1.0 - f;
+                    }
+                    refracted = Some(t);
+                }
+                None => {
+                    // Total internal reflection: all transmitted energy reflects.
+                    kr += kt;
+                    kt = 0.0;
+                }
+            }
+        }
+        let mut l = Vec3::ZERO;
+        if kr > 0.0 && weight * kr >= MIN_PATH_WEIGHT {
+            let mirror = 2.0 * ns.dot(wo) * ns - wo;
+            if m.glossiness > 0.0 {
+                l += kr * self.glossy(ctx, s, m.glossiness, mirror, ng, depth, weight * kr);
+            } else if mirror.dot(ng) > 0.0 {
+                self.counts.reflection += 1;
+                let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, mirror), mirror);
+                l += kr * self.radiance(ctx, &ray, depth + 1, weight * kr, "reflection");
+            }
+        }
+        if let Some(dir) = refracted {
+            if kt > 0.0 && weight * kt >= MIN_PATH_WEIGHT {
+                self.counts.refraction += 1;
+                let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
+                l += kt * self.radiance(ctx, &ray, depth + 1, weight * kt, "refraction");
+            }
+        }
+        l
+    }
+
+    /// Lobe-weighted average of incoming radiance around `mirror`, with K
+    /// branches at the first glossy hit of the path and one ray after that.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn glossy(
+        &mut self,
+        ctx: &SampleContext,
+        s: &Surface,
+        exponent: f32,
+        mirror: Vec3,
+        ng: Vec3,
+        depth: u32,
+        weight: f32,
+    ) -> Vec3 {
+        let k = if ctx.branches == 1 {
+            self.scene.settings.reflection_samples
+        } else {
+            1
+        };
+        let lobe = Frame::from_z(mirror);
+        let hemisphere = Frame::from_z(ng);
+        let mut sum = Vec3::ZERO;
+        for b in 0..k {
+            let child = if k > 1 {
+                SampleContext {
+                    branch: b,
+                    branches: k,
+                    ..*ctx
+                }
+            } else {
+                *ctx
+            };
+            let u = ctx
+                .sampler
+                .get_2d(Dim::glossy(depth), child.index(), child.count());
+            let (dir, w) = match self.scene.settings.glossy_sampling {
+                GlossySampling::Lobe => (lobe.to_world(phong_lobe(u, exponent)), 1.0),
+                GlossySampling::Uniform => {
+                    let d = hemisphere.to_world(uniform_hemisphere(u));
+                    // Lobe density over the uniform density 1/(2π).
+                    (d, phong_lobe_pdf(d.dot(mirror), exponent) * 2.0 * PI)
+                }
+            };
+            if dir.dot(ng) <= 0.0 {
+                self.counts.glossy_rejected += 1;
+                continue;
+            }
+            if !(w > 0.0) {
+                continue;
+            }
+            self.counts.reflection += 1;
+            let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
+            sum += w * self.radiance(&child, &ray, depth + 1, weight, "glossy");
+        }
+        sum / k as f32
+    }
+}
