@@ -1,6 +1,6 @@
 //! Building: obvhs PLOC into a binary tree, then a collapse into 8-wide
 //! nodes chosen by the surface area heuristic over the whole subtree
-//! (Ylitie, Karras and Laine 2017), see [`CollapseCosts`].
+//! (Ylitie, Karras and Laine 2017), see `CollapseCosts`.
 
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS, MAX_PRIMS};
 use crate::math::Aabb;

@@ -18,12 +18,12 @@
 //! the smallest reciprocal that no lane has, let three times as many
 //! children through to the lane tests as entered them (bench camera
 //! batches), and the lane tests were a third of a packet's instructions.
-//! Rounding is covered by widening both intervals (see [`SLACK`]).
+//! Rounding is covered by widening both intervals (see `SLACK`).
 //!
 //! Exactness: the interval test accepts every box a lane's own test
 //! accepts, every lane tests a superset of the primitives its single ray
 //! would test, with the same leaf test, and the closest hit is the minimum
-//! of a total order (t, then primitive id; see [`super::traverse::closer`]),
+//! of a total order (t, then primitive id; see [`super::hit::closer`]),
 //! so each lane's answer is bit-identical to [`Bvh8::closest`] /
 //! [`Bvh8::any_hit`] on that ray.
 //!
@@ -289,7 +289,7 @@ impl Bvh8 {
     /// Closest hits of a packet: `out[i]` is exactly what
     /// [`Bvh8::closest`] returns for `packet`'s ray `i`.
     /// `hit_leaf(start, count, lanes, out)` tests the leaf for the rays in
-    /// the bits of `lanes`, replacing `out[lane]` by any hit [`closer`](super::traverse::closer)
+    /// the bits of `lanes`, replacing `out[lane]` by any hit [`closer`](super::hit::closer)
     /// than it within the ray's interval, and returns whether any changed.
     /// `leaf_data` as for [`Bvh8::closest`]: the children pushed for later
     /// are prefetched.

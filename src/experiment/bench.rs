@@ -79,7 +79,8 @@ pub enum Query {
 }
 
 /// Trace every batch once; returns (seconds, hits). `packet` traces each
-/// batch with [`Scene::intersect_packet`] / [`Scene::occluded_packet`],
+/// batch with [`Geometry::intersect_packet`](crate::geometry::Geometry::intersect_packet) /
+/// [`Geometry::occluded_packet`](crate::geometry::Geometry::occluded_packet),
 /// else ray by ray.
 pub fn trace(
     scene: &Scene,

@@ -78,7 +78,7 @@ pub struct Timing {
     pub seconds: f64,
     pub rays: u64,
     /// CPU seconds of all threads together, and along the critical path
-    /// (see [`CpuTimes`](super::schedule::CpuTimes); for processes, the
+    /// (see [`CpuTimes`](crate::system::cputime::CpuTimes); for processes, the
     /// slowest child plus the merge, in 10 ms ticks). Linux only.
     pub cpu: Option<(f64, f64)>,
 }

@@ -1,5 +1,5 @@
 //! Leaf kernels: what traversal runs when it reaches a BVH leaf. A leaf
-//! is a run of slots inside one [`TriangleBlock`]: its triangles are tested
+//! is a run of slots inside one [`TriangleBlock`](crate::shape::triangle8::TriangleBlock): its triangles are tested
 //! in one 8-wide watertight test ([`crate::shape::triangle8`]), then any
 //! analytic shapes the leaf holds one by one.
 

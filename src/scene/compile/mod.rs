@@ -5,10 +5,10 @@
 //! space unless the transform is a similarity (then a sphere is baked into
 //! a new centre and radius, exactly). Infinite planes stay out of the BVH.
 //!
-//! One [`Compiler`] walks the description; each part of a scene file has
-//! its own file of `impl Compiler`: [`material`], [`light`], [`object`]
-//! (placement, shapes, groups), [`mesh`] (mesh files and the leaf blocks),
-//! [`csg`], [`camera`]; [`validate`] holds the number checks they share.
+//! One `Compiler` walks the description; each part of a scene file has
+//! its own file of `impl Compiler`: `material`, `light`, `object`
+//! (placement, shapes, groups), `mesh` (mesh files and the leaf blocks),
+//! `csg`, `camera`; `validate` holds the number checks they share.
 //! This file holds the entry points and the order of the steps.
 
 use super::asset::{LoadedAsset, LoadedCamera};
