@@ -14,6 +14,8 @@ pub struct InputError {
     pub file: String,
     /// The TOML key path (`objects[2].sphere.radius`), `line N`, or empty.
     pub location: String,
+    /// The line of a scene file that `location` names, where known.
+    pub line: Option<usize>,
     pub message: String,
 }
 
@@ -26,6 +28,7 @@ impl InputError {
         Self {
             file: file.as_ref().display().to_string(),
             location: location.into(),
+            line: None,
             message: message.into(),
         }
     }
@@ -35,16 +38,9 @@ impl InputError {
         Self::new(file, "", message)
     }
 
-    /// Prefix the location with an outer key, so errors raised deep inside
-    /// a nested object report the full path.
-    pub fn within(mut self, outer: &str) -> Self {
-        self.location = if self.location.is_empty() {
-            outer.to_string()
-        } else if self.location.starts_with('[') {
-            format!("{outer}{}", self.location)
-        } else {
-            format!("{outer}.{}", self.location)
-        };
+    /// The same error, placed on `line` of its file.
+    pub fn on_line(mut self, line: Option<usize>) -> Self {
+        self.line = line;
         self
     }
 }
@@ -57,11 +53,14 @@ impl fmt::Display for InputError {
             .split_whitespace()
             .collect::<Vec<_>>()
             .join(" ");
-        if self.location.is_empty() {
-            write!(f, "{}: {}", self.file, message)
-        } else {
-            write!(f, "{}: {}: {}", self.file, self.location, message)
+        write!(f, "{}: ", self.file)?;
+        if let Some(line) = self.line {
+            write!(f, "line {line}: ")?;
         }
+        if !self.location.is_empty() {
+            write!(f, "{}: ", self.location)?;
+        }
+        f.write_str(&message)
     }
 }
 

@@ -10,6 +10,11 @@
 // `unsafe` lives in one module, `accel::prefetch`, which allows it for itself.
 #![deny(unsafe_code)]
 
+/// This build: the package version, plus `+git.<commit>` when built from a
+/// git checkout. Partial files record it, and merging or resuming parts of
+/// different builds is refused unless forced.
+pub const VERSION: &str = env!("STRATA_VERSION");
+
 pub mod accel;
 pub mod camera;
 pub mod error;

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 
 /// Layers from the bottom: a module may import modules of lower layers only.
 const LAYERS: &[&[&str]] = &[
-    &["error", "math", "mode", "output", "system"],
-    &["sampling"],
+    &["error", "math", "mode"],
+    &["output", "sampling", "system"],
     &["shape"],
     &["accel"],
     &["geometry"],
@@ -90,8 +90,20 @@ fn layer_of(module: &str) -> Option<usize> {
     LAYERS.iter().position(|layer| layer.contains(&module))
 }
 
+/// The top-level modules `src/lib.rs` declares (crate-root items such as
+/// `crate::VERSION` belong to no layer and may be used anywhere).
+fn modules() -> Vec<String> {
+    let lib = std::fs::read_to_string(src().join("lib.rs")).unwrap();
+    code(&lib)
+        .lines()
+        .filter_map(|line| line.trim().strip_prefix("pub mod "))
+        .map(|name| name.trim_end_matches(';').to_string())
+        .collect()
+}
+
 /// For each library module, the modules it imports and the files that do.
 fn imports() -> BTreeMap<String, BTreeMap<String, Vec<PathBuf>>> {
+    let modules = modules();
     let mut files = Vec::new();
     rust_files(&src(), &mut files);
     let mut out: BTreeMap<String, BTreeMap<String, Vec<PathBuf>>> = BTreeMap::new();
@@ -102,7 +114,7 @@ fn imports() -> BTreeMap<String, BTreeMap<String, Vec<PathBuf>>> {
         }
         let text = std::fs::read_to_string(&file).unwrap();
         for target in crate_paths(&code(&text)) {
-            if target != module {
+            if target != module && modules.contains(&target) {
                 out.entry(module.clone())
                     .or_default()
                     .entry(target)

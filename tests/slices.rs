@@ -12,7 +12,14 @@ use std::time::{Duration, Instant};
 use strata::partial::format::{
     read_partial, read_partial_from, write_partial_to, Partial, PartialHeader,
 };
-use strata::partial::merge::merge_partials;
+use strata::partial::merge::{merge_partials, MergeRules};
+
+/// Rules for merging every slice into an image.
+const ALL: MergeRules = MergeRules {
+    require_all: true,
+    preview: false,
+    force: false,
+};
 use strata::render::film::{Film, PixelSum};
 use strata::render::{render, RenderOptions, SliceSpec};
 use strata::sampling::hash::hash_words;
@@ -67,7 +74,7 @@ fn slices_merged_equal_one_render_for_any_split_and_thread_count() {
             .map(|k| part(&s, SliceSpec { index: k, count: p }, 1 + k as usize % 3))
             .collect();
         parts.reverse();
-        let merged = merge_partials(parts, true).unwrap();
+        let merged = merge_partials(parts, ALL).unwrap();
         assert_eq!(merged.header.samples, 0..10);
         assert_eq!(merged.film, whole, "P = {p}");
         assert_eq!(merged.film.to_rgb(), whole.to_rgb());
@@ -451,7 +458,7 @@ fn slicing_keeps_the_stratification_of_the_whole_set() {
         let parts = (0..p)
             .map(|k| part(&sc, SliceSpec { index: k, count: p }, 1))
             .collect();
-        sliced.push(merge_partials(parts, true).unwrap().film.to_rgb());
+        sliced.push(merge_partials(parts, ALL).unwrap().film.to_rgb());
         fresh.push(render_with_fresh_sets_per_slice(&sc, p));
     }
     let (vw, vs, vf) = (

@@ -52,6 +52,7 @@ fn meshes(args: &BenchArgs) -> Result<Vec<PathBuf>, CliError> {
 }
 
 pub fn run(args: BenchArgs) -> Result<(), CliError> {
+    super::writable(&args.csv, "--csv", &["csv"])?;
     let all = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));

@@ -47,6 +47,11 @@ pub struct ConvergeArgs {
 }
 
 pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
+    super::writable(&args.csv, "--csv", &["csv"])?;
+    super::writable(&args.chart, "--chart", &["svg"])?;
+    if args.reference.is_none() {
+        super::writable(&reference_path(&args), "--csv", &[])?;
+    }
     let overrides = RenderOverrides {
         width: args.width,
         height: args.height,
@@ -69,7 +74,7 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
             pixels
         }
         None => {
-            let path = args.csv.with_extension("reference.exr");
+            let path = reference_path(&args);
             eprintln!(
                 "no --reference given: rendering a {}-spp reference with {} sampling, saved to {}",
                 args.reference_spp,
@@ -105,6 +110,11 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
         },
     );
     write_outputs(&args, &points)
+}
+
+/// Where a rendered reference is saved: beside the CSV.
+fn reference_path(args: &ConvergeArgs) -> PathBuf {
+    args.csv.with_extension("reference.exr")
 }
 
 fn write_outputs(args: &ConvergeArgs, points: &[Point]) -> Result<(), CliError> {

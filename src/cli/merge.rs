@@ -5,9 +5,10 @@ use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
 use strata::error::InputError;
-use strata::output::image::{write_image, ImageFormat};
+use strata::output::atomic::check_target;
+use strata::output::image::write_image;
 use strata::partial::format::{read_partial, write_partial};
-use strata::partial::merge::merge_partials;
+use strata::partial::merge::{merge_partials, MergeRules};
 
 #[derive(Debug, Args, Clone)]
 pub struct MergeArgs {
@@ -18,6 +19,15 @@ pub struct MergeArgs {
     /// part: any contiguous run of slices, for merging in stages).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Preview what the parts hold so far: unfinished checkpoints and
+    /// missing slices are accepted, and each pixel is the mean of the samples
+    /// there are. Needs an image output.
+    #[arg(long)]
+    pub partial: bool,
+    /// Merge parts written by different builds of strata (their samples need
+    /// not agree bit for bit).
+    #[arg(long)]
+    pub force: bool,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -25,21 +35,25 @@ pub struct MergeArgs {
 
 pub fn run(args: MergeArgs) -> Result<(), CliError> {
     let partial_output = is_partial_path(&args.output);
-    if !partial_output && ImageFormat::from_path(&args.output).is_none() {
-        return Err(InputError::new(
-            "<command line>",
-            "--output",
-            "must end in .png, .exr or .strata",
-        )
-        .into());
-    }
+    let extensions: &[&str] = if args.partial {
+        &["png", "exr"]
+    } else {
+        &["png", "exr", "strata"]
+    };
+    check_target(&args.output, extensions)
+        .map_err(|e| InputError::new("<command line>", "--output", e))?;
     let mut parts = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
         let part = read_partial(path).map_err(|e| InputError::file(path, e))?;
         parts.push((path.clone(), part));
     }
     let n = parts.len();
-    let merged = merge_partials(parts, !partial_output)?;
+    let rules = MergeRules {
+        require_all: !partial_output,
+        preview: args.partial,
+        force: args.force,
+    };
+    let merged = merge_partials(parts, rules)?;
     let h = &merged.header;
     if partial_output {
         write_partial(&args.output, h, &merged.film)
@@ -55,14 +69,26 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
         );
     }
     if !args.quiet {
+        let parts = super::count(n, "part", "parts");
+        let what = if args.partial {
+            format!(
+                "preview of {parts}: {:.1} of {} spp per pixel on average",
+                merged.film.mean_samples(),
+                h.spp
+            )
+        } else {
+            format!(
+                "merged {parts}: slices {}, samples {}..{} of {} spp",
+                h.slices_text(),
+                h.samples.start,
+                h.samples.end,
+                h.spp
+            )
+        };
         println!(
-            "merged {n} parts: slices {}, {}x{} {} spp (samples {}..{}) -> {}",
-            h.slices_text(),
+            "{what}, {}x{} -> {}",
             h.width,
             h.height,
-            h.spp,
-            h.samples.start,
-            h.samples.end,
             args.output.display()
         );
     }

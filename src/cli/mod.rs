@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod converge;
+pub mod cpu;
 pub mod merge;
 pub mod rays;
 pub mod render;
@@ -13,14 +14,13 @@ use strata::error::InputError;
 
 /// strata: a Monte Carlo distribution ray tracer.
 ///
-/// With no command, renders scenes/seed.toml to render.png.
+/// With no command, renders the built-in seed scene to render.png. Every
+/// command has its own --help: `strata render --help`.
 #[derive(Debug, Parser)]
-#[command(name = "strata", version, about, long_about = None, args_conflicts_with_subcommands = true)]
+#[command(name = "strata", version = strata::VERSION, about, long_about = None)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
-    #[command(flatten)]
-    pub render: render::RenderArgs,
 }
 
 #[derive(Debug, Subcommand)]
@@ -54,6 +54,18 @@ impl From<InputError> for CliError {
     }
 }
 
+/// Check, before any work, that `path` (given with `flag`) can be written
+/// and has one of `extensions`.
+pub fn writable(path: &std::path::Path, flag: &str, extensions: &[&str]) -> Result<(), CliError> {
+    strata::output::atomic::check_target(path, extensions)
+        .map_err(|e| InputError::new("<command line>", flag, e).into())
+}
+
+/// "1 part", "2 parts".
+pub fn count(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
@@ -63,6 +75,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Rays(args)) => rays::run(args),
         Some(Command::Trace(args)) => trace::run(args),
         Some(Command::Bench(args)) => bench::run(args),
-        None => render::run(cli.render),
+        None => render::run(render::RenderArgs::default()),
     }
 }

@@ -82,6 +82,7 @@ struct Description {
 }
 
 pub fn run(args: RaysArgs) -> Result<(), CliError> {
+    super::writable(&args.output, "--output", &[])?;
     let start = Instant::now();
     let (scene, _) = load_mesh_scene(&args.mesh, BuildQuality::Fastest)?;
     let kinds: Vec<RayKind> = match args.kind {

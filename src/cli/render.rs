@@ -3,16 +3,18 @@
 use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
+use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::output::image::write_image;
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::stats::RenderStats;
-use strata::render::{render, RenderOptions, Schedule, SliceSpec};
-use strata::scene::{load_scene, RenderOverrides};
+use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec};
+use strata::scene::{compile, load_scene, parse, LoadTimings, RenderOverrides, Scene};
 
 #[derive(Debug, Args, Clone)]
 pub struct RenderArgs {
-    /// Scene file (TOML). Default: scenes/seed.toml.
+    /// Scene file (TOML). Without one, the built-in seed scene (the same as
+    /// the repository's scenes/seed.toml).
     pub scene: Option<PathBuf>,
     /// Output: .png (sRGB, 8-bit), .exr (linear float), or .strata (the
     /// film's exact sums, for `strata merge`; required with --slice k/P, P > 1).
@@ -32,10 +34,14 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
     /// Continue from the --checkpoint file if it exists (it must be of the
-    /// same scene, settings and slice); the result is bit-identical to an
-    /// uninterrupted render.
+    /// same scene, settings, slice and strata build); the result is
+    /// bit-identical to an uninterrupted render. Without --resume an existing
+    /// checkpoint file is an error, never silently replaced.
     #[arg(long, requires = "checkpoint")]
     pub resume: bool,
+    /// Resume from a checkpoint written by a different build of strata.
+    #[arg(long, requires = "resume")]
+    pub force: bool,
     /// Progressive passes (each a progress tick and a checkpoint); capped by
     /// the sample count.
     #[arg(long, default_value_t = strata::render::schedule::DEFAULT_PASSES,
@@ -73,86 +79,33 @@ impl Default for RenderArgs {
     }
 }
 
+/// The scene `strata` renders when given none: built in, so a bare
+/// `strata` works from any directory.
+const SEED_SCENE: &str = include_str!("../../scenes/seed.toml");
+const SEED_SCENE_NAME: &str = "scenes/seed.toml (built in)";
+
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
-    let scene_path = args
-        .scene
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("scenes/seed.toml"));
-    let partial_output = is_partial_path(&args.output);
-    if !partial_output && strata::output::image::ImageFormat::from_path(&args.output).is_none() {
-        return Err(InputError::new(
-            "<command line>",
-            "--output",
-            "must end in .png, .exr or .strata",
-        )
-        .into());
-    }
-    // Parsed here, not by clap, so that a bad value is one line like every other input error.
-    let slice = match &args.slice {
-        None => SliceSpec::WHOLE,
-        Some(text) => text
-            .parse::<SliceSpec>()
-            .map_err(|e| InputError::new("<command line>", "--slice", e))?,
-    };
-    if slice.count > 1 && !partial_output {
-        return Err(InputError::new(
-            "<command line>",
-            "--slice",
-            format!(
-                "slice {}/{} is a partial render: write it to a .strata file (-o part_{}.strata) and combine the parts with `strata merge`",
-                slice.index, slice.count, slice.index
-            ),
-        )
-        .into());
-    }
-    if let Some(ck) = &args.checkpoint {
-        if !is_partial_path(ck) {
-            return Err(
-                InputError::new("<command line>", "--checkpoint", "must end in .strata").into(),
-            );
-        }
-    }
-    let (scene, timings) = load_scene(&scene_path, &args.settings, args.bvh_quality)?;
+    let (slice, partial_output) = check_outputs(&args)?;
+    let (scene, timings) = load(&args)?;
+    let scene_name = scene_name(args.scene.as_deref());
     if let Some(id) = args.debug_sample {
         let (value, events) = strata::render::replay::replay(&scene, id)
             .map_err(|e| InputError::new("<command line>", "--debug-sample", e))?;
-        print!("{}", strata::render::replay::describe(id, value, &events));
+        print!(
+            "{}",
+            strata::render::replay::describe(&scene, id, value, &events)
+        );
         return Ok(());
+    }
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+        eprintln!(
+            "warning: {scene_name}: no lights and no emissive materials, so everything but the background renders black"
+        );
     }
     let s = &scene.settings;
     let full = slice.samples(s.spp);
     let header = PartialHeader::for_scene(&scene, slice, full.clone());
-
-    let (initial, resume_from) = match (&args.checkpoint, args.resume) {
-        (Some(ck), true) if ck.exists() => {
-            let part = read_partial(ck).map_err(|e| InputError::file(ck, e))?;
-            let done = part
-                .header
-                .resume_point(&header)
-                .map_err(|e| InputError::file(ck, e))?;
-            if !args.quiet {
-                eprintln!(
-                    "resuming from {}: samples {}..{} of {}..{} done",
-                    ck.display(),
-                    full.start,
-                    done,
-                    full.start,
-                    full.end
-                );
-            }
-            (Some(part.film), Some(done))
-        }
-        (Some(ck), true) => {
-            if !args.quiet {
-                eprintln!(
-                    "no checkpoint at {} yet; starting from the first sample",
-                    ck.display()
-                );
-            }
-            (None, None)
-        }
-        _ => (None, None),
-    };
+    let (initial, resume_from) = resume(&args, &header)?;
 
     let opts = RenderOptions {
         threads: args.threads,
@@ -186,20 +139,13 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         write_image(&args.output, &outcome.film.to_rgb(), s.width, s.height)
             .map_err(|e| InputError::file(&args.output, e))?;
     }
-
-    if outcome.counts.glossy_rejected > 0 && !args.quiet {
-        eprintln!(
-            "note: {} glossy directions fell below their surface and were rejected (counted, not traced)",
-            outcome.counts.glossy_rejected
-        );
-    }
     if let Some(bad) = outcome.film.first_invalid {
         eprintln!(
             "warning: {} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {} (replay it with --debug-sample {},{},{})",
             outcome.film.invalid, bad.x, bad.y, bad.sample, bad.x, bad.y, bad.sample
         );
     }
-    let stats = RenderStats::new(&scene_path, &scene, &timings, &opts, &outcome);
+    let stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
     if let Some(path) = &args.stats {
         strata::output::atomic::write_bytes_atomic(path, stats.to_json().as_bytes())
             .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
@@ -208,6 +154,113 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         println!("{}", stats.summary(&args.output));
     }
     Ok(())
+}
+
+/// Everything about the command line that can be wrong, checked before any
+/// work: the slice, and every file the render will write (extension,
+/// directory, permission). Returns the slice and whether the output is a
+/// `.strata` part.
+fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
+    let flag = |name: &'static str| move |e: String| InputError::new("<command line>", name, e);
+    super::writable(&args.output, "--output", &["png", "exr", "strata"])?;
+    let partial_output = is_partial_path(&args.output);
+    // Parsed here, not by clap, so that a bad value is one line like every other input error.
+    let slice = match &args.slice {
+        None => SliceSpec::WHOLE,
+        Some(text) => text.parse::<SliceSpec>().map_err(flag("--slice"))?,
+    };
+    if slice.count > 1 && !partial_output {
+        return Err(flag("--slice")(format!(
+            "slice {}/{} is a partial render: write it to a .strata file (-o part_{}.strata) and combine the parts with `strata merge`",
+            slice.index, slice.count, slice.index
+        ))
+        .into());
+    }
+    if let Some(path) = &args.stats {
+        super::writable(path, "--stats", &["json"])?;
+    }
+    if let Some(ck) = &args.checkpoint {
+        super::writable(ck, "--checkpoint", &["strata"])?;
+        if ck.exists() && !args.resume {
+            let held = match read_partial(ck) {
+                Ok(p) => format!(
+                    "holds samples {}..{} of a render",
+                    p.header.samples.start, p.header.samples.end
+                ),
+                Err(e) => format!("is not a checkpoint strata can read ({e})"),
+            };
+            return Err(InputError::file(
+                ck,
+                format!("already exists and {held}; add --resume to continue from it, or delete it to start over"),
+            )
+            .into());
+        }
+    }
+    Ok((slice, partial_output))
+}
+
+/// The scene of the command line.
+fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
+    load_or_seed(args.scene.as_deref(), &args.settings, args.bvh_quality)
+}
+
+/// The scene at `path`, or the built-in seed scene.
+pub fn load_or_seed(
+    path: Option<&std::path::Path>,
+    settings: &RenderOverrides,
+    quality: BuildQuality,
+) -> Result<(Scene, LoadTimings), CliError> {
+    Ok(match path {
+        Some(path) => load_scene(path, settings, quality)?,
+        None => {
+            let start = std::time::Instant::now();
+            let path = std::path::Path::new(SEED_SCENE_NAME);
+            let desc = parse::parse_description(path, SEED_SCENE)?;
+            compile::compile(&desc, path, settings, quality, start)?
+        }
+    })
+}
+
+/// How a scene is named in messages: its path, or the built-in seed.
+pub fn scene_name(path: Option<&std::path::Path>) -> String {
+    path.map_or(SEED_SCENE_NAME.to_string(), |p| p.display().to_string())
+}
+
+/// The film and sample to start from: an existing checkpoint's with
+/// --resume, else none.
+fn resume(
+    args: &RenderArgs,
+    header: &PartialHeader,
+) -> Result<(Option<Film>, Option<u32>), CliError> {
+    let (Some(ck), true) = (&args.checkpoint, args.resume) else {
+        return Ok((None, None));
+    };
+    if !ck.exists() {
+        if !args.quiet {
+            eprintln!(
+                "no checkpoint at {} yet; starting from the first sample",
+                ck.display()
+            );
+        }
+        return Ok((None, None));
+    }
+    let part = read_partial(ck).map_err(|e| InputError::file(ck, e))?;
+    let done = part
+        .header
+        .resume_point(header, args.force)
+        .map_err(|e| InputError::file(ck, e))?;
+    if !args.quiet {
+        let full = &header.samples;
+        eprintln!(
+            "resuming from {}: samples {}..{} of {}..{} done",
+            ck.display(),
+            full.start,
+            done,
+            full.start,
+            full.end
+        );
+    }
+    Ok((Some(part.film), Some(done)))
 }
 
 /// Whether `path` names a partial render (`.strata`).

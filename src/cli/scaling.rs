@@ -12,7 +12,7 @@ use strata::experiment::scaling::{
 };
 use strata::output::chart::write_svg;
 use strata::render::Schedule;
-use strata::scene::{load_scene, RenderOverrides};
+use strata::scene::RenderOverrides;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ScheduleChoice {
@@ -23,7 +23,8 @@ pub enum ScheduleChoice {
 
 #[derive(Debug, Args, Clone)]
 pub struct ScalingArgs {
-    /// Scene file (TOML), rendered with its own settings. Default: scenes/seed.toml.
+    /// Scene file (TOML), rendered with its own settings. Default: the
+    /// built-in seed scene.
     pub scene: Option<PathBuf>,
     /// Largest thread count; the run measures 1, 2, 4, … and this. Default: all cores.
     #[arg(long)]
@@ -61,17 +62,17 @@ pub struct ScalingArgs {
 }
 
 pub fn run(args: ScalingArgs) -> Result<(), CliError> {
-    let scene_path = args
-        .scene
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("scenes/seed.toml"));
+    super::writable(&args.csv, "--csv", &["csv"])?;
+    super::writable(&args.chart, "--chart", &["svg"])?;
+    let scene_name = super::render::scene_name(args.scene.as_deref());
     let overrides = RenderOverrides {
         spp: args.spp,
         width: args.width,
         height: args.height,
         ..RenderOverrides::default()
     };
-    let (scene, _) = load_scene(&scene_path, &overrides, BuildQuality::Auto)?;
+    let (scene, _) =
+        super::render::load_or_seed(args.scene.as_deref(), &overrides, BuildQuality::Auto)?;
     let max = match args.max_threads {
         Some(0) => {
             return Err(
@@ -112,7 +113,7 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
     let spawn_slice = |job: &SliceJob| {
         Command::new(&exe)
             .arg("render")
-            .arg(&scene_path)
+            .args(&args.scene)
             .args(["--threads", "1", "--quiet", "--slice"])
             .arg(format!("{}/{}", job.slice.index, job.slice.count))
             .arg("-o")
@@ -129,13 +130,8 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
     let s = &scene.settings;
     if !args.quiet {
         eprintln!(
-            "{}: {}x{} {} spp; threads {:?}; {} repeats",
-            scene_path.display(),
-            s.width,
-            s.height,
-            s.spp,
-            counts,
-            args.repeats
+            "{scene_name}: {}x{} {} spp; threads {:?}; {} repeats",
+            s.width, s.height, s.spp, counts, args.repeats
         );
     }
     // Warm up caches and the allocator once, untimed.
@@ -176,12 +172,10 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
     print!("{}", table(&all));
     strata::output::atomic::write_bytes_atomic(&args.csv, csv(&all).as_bytes())
         .map_err(|e| InputError::file(&args.csv, format!("cannot write: {e}")))?;
+    let short_name = args.scene.as_deref().and_then(|p| p.file_name());
     let title = format!(
         "{} ({}x{}, {} spp)",
-        scene_path.file_name().map_or_else(
-            || scene_path.display().to_string(),
-            |n| n.to_string_lossy().into_owned()
-        ),
+        short_name.map_or("seed.toml".into(), |n| n.to_string_lossy()),
         s.width,
         s.height,
         s.spp

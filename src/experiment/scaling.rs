@@ -24,7 +24,7 @@
 //! render across processes.
 
 use crate::output::chart::{Panel, Series};
-use crate::partial::merge::merge_partials;
+use crate::partial::merge::{merge_partials, MergeRules};
 use crate::partial::read_partial;
 use crate::render::{render, RenderOptions, Schedule, SliceSpec};
 use crate::scene::Scene;
@@ -156,7 +156,11 @@ pub fn time_processes(
                 .map_err(|e| format!("{}: {e}", job.part.display()))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    merge_partials(parts, true).map_err(|e| e.to_string())?;
+    let rules = MergeRules {
+        require_all: true,
+        ..MergeRules::default()
+    };
+    merge_partials(parts, rules).map_err(|e| e.to_string())?;
     let seconds = start.elapsed().as_secs_f64();
     let merge_cpu = merge_cpu_start
         .zip(thread_cpu_ns())

@@ -137,6 +137,26 @@ impl Geometry {
         (i < self.planes.len()).then_some(i)
     }
 
+    /// A primitive id as a user reads it: `plane 0`, `triangle 12 of mesh
+    /// "bunny"`, `sphere (shape 3)`.
+    pub fn describe_prim(&self, prim: u32) -> String {
+        if let Some(i) = self.plane_index(prim) {
+            return format!("plane {i}");
+        }
+        if prim < self.triangle_count {
+            let mesh = self.mesh_of(prim);
+            return format!(
+                "triangle {} of mesh \"{}\" (primitive {prim})",
+                prim - mesh.first,
+                mesh.name
+            );
+        }
+        match self.shapes.get((prim - self.triangle_count) as usize) {
+            Some(s) => format!("{} (primitive {prim})", s.shape.kind()),
+            None => format!("primitive {prim}"),
+        }
+    }
+
     /// The mesh a triangle belongs to.
     pub fn mesh_of(&self, tri: u32) -> &MeshRange {
         let i = self.meshes.partition_point(|m| m.first + m.count <= tri);

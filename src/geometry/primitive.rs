@@ -65,6 +65,17 @@ impl Shape {
         (p, err, n, None)
     }
 
+    /// What the shape is, in a word or two.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Shape::Sphere(_) => "sphere",
+            Shape::Cylinder(_) => "cylinder",
+            Shape::Rect(_) => "rect light",
+            Shape::Disk(_) => "disk light",
+            Shape::Csg(_) => "CSG solid",
+        }
+    }
+
     pub fn bounds(&self, csg: &Csg) -> Aabb {
         match self {
             Shape::Sphere(s) => s.bounds(),

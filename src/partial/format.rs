@@ -45,7 +45,7 @@ const MAX_VERSION_BYTES: usize = 256;
 /// What a partial file says about the render it belongs to.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PartialHeader {
-    /// The strata version that wrote the file (`CARGO_PKG_VERSION`).
+    /// The strata build that wrote the file ([`crate::VERSION`]).
     pub strata_version: String,
     pub scene_hash: u64,
     pub width: u32,
@@ -75,7 +75,7 @@ impl PartialHeader {
     pub fn for_scene(scene: &Scene, slice: SliceSpec, samples: Range<u32>) -> Self {
         let s = &scene.settings;
         Self {
-            strata_version: env!("CARGO_PKG_VERSION").to_string(),
+            strata_version: crate::VERSION.to_string(),
             scene_hash: scene_fingerprint(scene),
             width: s.width,
             height: s.height,
@@ -92,9 +92,12 @@ impl PartialHeader {
     }
 
     /// Check that a checkpoint with this header continues the render that
-    /// `expected` describes (same render, same slice), and return the end
-    /// of the samples it has done.
-    pub fn resume_point(&self, expected: &PartialHeader) -> Result<u32, String> {
+    /// `expected` describes (same render, same slice, and, unless `force`,
+    /// the same build), and return the end of the samples it has done.
+    pub fn resume_point(&self, expected: &PartialHeader, force: bool) -> Result<u32, String> {
+        if let (false, Some(m)) = (force, self.build_mismatch(expected)) {
+            return Err(m);
+        }
         if let Some(m) = self.render_mismatch(expected) {
             return Err(format!(
                 "the checkpoint is of a different render: {m} (checkpoint vs now)"
@@ -144,16 +147,23 @@ impl PartialHeader {
         }
     }
 
+    /// Why `self` and `other` may not mix though they describe the same
+    /// render: they were written by different builds of strata, whose
+    /// samples need not agree bit for bit.
+    pub fn build_mismatch(&self, other: &PartialHeader) -> Option<String> {
+        (self.strata_version != other.strata_version).then(|| {
+            format!(
+                "written by strata {}, not {}: samples of different builds need not agree; rerun it with this build, or pass --force to use it anyway",
+                self.strata_version, other.strata_version
+            )
+        })
+    }
+
     /// The first way in which `self` belongs to a different render than
-    /// `other` (ignoring which slices and samples each holds), as
-    /// "what: mine vs theirs".
+    /// `other` (ignoring which slices and samples each holds, and which
+    /// build wrote it), as "what: mine vs theirs".
     pub fn render_mismatch(&self, other: &PartialHeader) -> Option<String> {
-        let pairs: [(&str, String, String); 10] = [
-            (
-                "strata version",
-                self.strata_version.clone(),
-                other.strata_version.clone(),
-            ),
+        let pairs: [(&str, String, String); 9] = [
             (
                 "scene (fingerprint of geometry, materials, lights, camera)",
                 format!("{:016x}", self.scene_hash),

@@ -19,15 +19,30 @@ fn slices_text(range: std::ops::Range<u32>, count: u32) -> String {
     }
 }
 
+/// What a merge accepts.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MergeRules {
+    /// Every slice 0..P must be there (for an image; a merged `.strata`
+    /// may hold any contiguous run of them).
+    pub require_all: bool,
+    /// A preview: unfinished checkpoints and missing slices are welcome,
+    /// and each pixel is the mean of whatever samples the parts hold.
+    pub preview: bool,
+    /// Parts written by different builds of strata may mix.
+    pub force: bool,
+}
+
 /// Sum `parts` (path, contents) into one partial covering a contiguous run
-/// of slices; with `require_all`, every slice 0..P. Errors name the
-/// offending file.
+/// of slices, under `rules`. Errors name the offending file.
 pub fn merge_partials(
     mut parts: Vec<(PathBuf, Partial)>,
-    require_all: bool,
+    rules: MergeRules,
 ) -> InputResult<Partial> {
     if parts.is_empty() {
         return Err(InputError::file("<command line>", "no parts to merge"));
+    }
+    if rules.preview {
+        return merge_preview(parts, rules.force);
     }
     for (path, p) in &parts {
         let h = &p.header;
@@ -36,24 +51,13 @@ pub fn merge_partials(
             return Err(InputError::file(
                 path,
                 format!(
-                    "an unfinished checkpoint: holds samples {}..{} of slice {}'s {}..{}; finish it with --resume",
+                    "an unfinished checkpoint: holds samples {}..{} of slice {}'s {}..{}; finish it with --resume, or preview it with merge --partial",
                     h.samples.start, h.samples.end, h.slices_text(), full.start, full.end
                 ),
             ));
         }
     }
-    let (first_path, first) = (parts[0].0.clone(), parts[0].1.header.clone());
-    for (path, p) in &parts[1..] {
-        if let Some(m) = p.header.render_mismatch(&first) {
-            return Err(InputError::file(
-                path,
-                format!(
-                    "not part of the same render as {}: {m} (this file vs that one)",
-                    first_path.display()
-                ),
-            ));
-        }
-    }
+    check_same_render(&parts, rules.force)?;
     parts.sort_by_key(|(_, p)| p.header.slices.start);
     let count = parts[0].1.header.slice_count;
     for pair in parts.windows(2) {
@@ -81,7 +85,7 @@ pub fn merge_partials(
             ));
         }
     }
-    if require_all {
+    if rules.require_all {
         let (lo_path, lo) = (&parts[0].0, &parts[0].1.header);
         let (hi_path, hi) = (&parts[parts.len() - 1].0, &parts[parts.len() - 1].1.header);
         if lo.slices.start > 0 {
@@ -110,5 +114,49 @@ pub fn merge_partials(
         merged.header.slices.end = p.header.slices.end;
     }
     merged.header.samples = merged.header.slice_samples();
+    Ok(merged)
+}
+
+/// Every part describes the same render as the first (and, unless
+/// `force`, was written by the same build).
+fn check_same_render(parts: &[(PathBuf, Partial)], force: bool) -> InputResult<()> {
+    let (first_path, first) = (&parts[0].0, &parts[0].1.header);
+    for (path, p) in &parts[1..] {
+        let mismatch = p
+            .header
+            .render_mismatch(first)
+            .map(|m| format!("{m} (this file vs that one)"))
+            .or_else(|| p.header.build_mismatch(first).filter(|_| !force));
+        if let Some(m) = mismatch {
+            return Err(InputError::file(
+                path,
+                format!(
+                    "not part of the same render as {}: {m}",
+                    first_path.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A preview of whatever the parts hold: no slice may be in two parts, but
+/// slices may be missing and checkpoints unfinished.
+fn merge_preview(mut parts: Vec<(PathBuf, Partial)>, force: bool) -> InputResult<Partial> {
+    check_same_render(&parts, force)?;
+    parts.sort_by_key(|(_, p)| p.header.slices.start);
+    for pair in parts.windows(2) {
+        if pair[1].1.header.slices.start < pair[0].1.header.slices.end {
+            return Err(InputError::file(
+                &pair[1].0,
+                format!("holds a slice that {} holds too", pair[0].0.display()),
+            ));
+        }
+    }
+    let mut iter = parts.into_iter();
+    let (_, mut merged) = iter.next().expect("at least one part");
+    for (_, p) in iter {
+        merged.film.merge(&p.film);
+    }
     Ok(merged)
 }

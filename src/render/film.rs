@@ -147,6 +147,12 @@ impl Film {
     pub fn to_rgb(&self) -> Vec<Vec3> {
         (0..self.pixel_count()).map(|i| self.mean(i)).collect()
     }
+
+    /// Valid samples per pixel, on average over the image.
+    pub fn mean_samples(&self) -> f64 {
+        let total: u64 = self.counts.iter().map(|&c| c as u64).sum();
+        total as f64 / self.pixel_count().max(1) as f64
+    }
 }
 
 #[cfg(test)]

@@ -63,7 +63,7 @@ pub fn replay(scene: &Scene, id: SampleId) -> Result<(Vec3, Vec<PathEvent>), Str
 }
 
 /// A readable listing of a replayed path.
-pub fn describe(id: SampleId, value: Vec3, events: &[PathEvent]) -> String {
+pub fn describe(scene: &Scene, id: SampleId, value: Vec3, events: &[PathEvent]) -> String {
     let mut out = format!(
         "sample ({}, {}) #{}: radiance {:?}\n",
         id.x,
@@ -84,7 +84,8 @@ pub fn describe(id: SampleId, value: Vec3, events: &[PathEvent]) -> String {
             Some((t, prim, p)) => {
                 let _ = writeln!(
                     out,
-                    " hits prim {prim} at t {t} p {:?} -> L {:?}",
+                    " hits {} at t {t} p {:?} -> L {:?}",
+                    scene.geometry.describe_prim(prim),
                     p.to_array(),
                     e.radiance.to_array()
                 );

@@ -49,12 +49,16 @@ pub struct RenderStats {
     pub clamped_samples: u64,
 }
 
+/// Fewest triangles for which the summary gives memory per triangle: below
+/// it, fixed costs dominate and the figure says nothing about meshes.
+pub const PER_TRIANGLE_MIN: usize = 1000;
+
 /// Memory of loading and building, as `strata render --stats` reports it.
 #[derive(Debug, Clone, Serialize)]
 pub struct BuildMemory {
     /// Bytes per triangle of the structures traversal reads
     /// ([`crate::geometry::Geometry::accel_bytes`]).
-    pub final_bytes_per_triangle: f64,
+    pub final_bytes_per_triangle: Option<f64>,
     /// Peak resident memory above the level before loading, while loading
     /// the meshes and while building the BVH (None where Linux's
     /// `/proc/self/clear_refs` cannot reset the peak and it did not rise).
@@ -65,9 +69,9 @@ pub struct BuildMemory {
 }
 
 impl RenderStats {
-    /// The record of one finished render of `scene` (read from `scene_path`).
+    /// The record of one finished render of `scene` (named `scene_name`).
     pub fn new(
-        scene_path: &Path,
+        scene_name: &str,
         scene: &Scene,
         timings: &LoadTimings,
         opts: &RenderOptions,
@@ -75,10 +79,13 @@ impl RenderStats {
     ) -> Self {
         let s = &scene.settings;
         let g = &scene.geometry;
-        let per_triangle = |bytes: u64| bytes as f64 / g.triangle_count.max(1) as f64;
+        // Per triangle only where there are triangles: a figure per triangle
+        // of a scene without meshes would be all overhead.
+        let per_triangle =
+            |bytes: u64| (g.triangle_count > 0).then(|| bytes as f64 / g.triangle_count as f64);
         let rays_total = outcome.counts.total();
         Self {
-            scene: scene_path.display().to_string(),
+            scene: scene_name.to_string(),
             width: s.width,
             height: s.height,
             spp: s.spp,
@@ -111,7 +118,7 @@ impl RenderStats {
                 final_bytes_per_triangle: per_triangle(g.accel_bytes() as u64),
                 load_peak_bytes: timings.load_peak_bytes,
                 build_peak_bytes: timings.build_peak_bytes,
-                peak_bytes_per_triangle: timings.peak_bytes().map(per_triangle),
+                peak_bytes_per_triangle: timings.peak_bytes().and_then(per_triangle),
             },
             invalid_samples: outcome.film.invalid,
             first_invalid_sample: outcome.film.first_invalid,
@@ -127,23 +134,34 @@ impl RenderStats {
     /// The one-line summary `strata render` prints, ending `-> output`.
     pub fn summary(&self, output: &Path) -> String {
         let r = &self.rays;
-        let peak = match self
+        let peak = self
             .memory
             .load_peak_bytes
-            .max(self.memory.build_peak_bytes)
-        {
-            Some(b) if self.triangles > 0 => format!(
+            .max(self.memory.build_peak_bytes);
+        let peak = match (peak, self.triangles) {
+            (Some(b), n) if n >= PER_TRIANGLE_MIN => format!(
                 ", peak +{:.0} MB = {:.0} B/triangle",
                 b as f64 / 1e6,
-                b as f64 / self.triangles as f64
+                b as f64 / n as f64
             ),
-            _ => String::new(),
+            (Some(b), _) => format!(", peak +{:.0} MB", b as f64 / 1e6),
+            (None, _) => String::new(),
+        };
+        let [start, end] = self.samples_rendered;
+        let samples = if end - start == self.spp {
+            format!("{} spp", self.spp)
+        } else {
+            format!("samples {start}..{end} of {} spp", self.spp)
+        };
+        let threads = if self.threads == 1 {
+            "thread"
+        } else {
+            "threads"
         };
         format!(
-            "{}x{} {} spp: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s{peak}) -> {}",
+            "{}x{} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {:.2} s{peak}) -> {}",
             self.width,
             self.height,
-            self.spp,
             self.rays_total as f64 / 1e6,
             r.camera as f64 / 1e6,
             r.shadow as f64 / 1e6,

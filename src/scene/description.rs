@@ -31,17 +31,26 @@ pub struct SceneDescription {
     pub lights: Vec<LightDesc>,
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
+    /// Where each key is written, for error messages (empty when the
+    /// description was not parsed from text).
+    #[serde(skip)]
+    pub source: super::source_map::SourceMap,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum CameraType {
-    #[default]
-    Perspective,
-    Orthographic,
-    ThinLens,
+crate::mode::mode_enum! {
+    /// `[camera] type`.
+    #[derive(Default)]
+    pub enum CameraType("camera type") {
+        #[default]
+        Perspective = "perspective",
+        Orthographic = "orthographic",
+        ThinLens = "thin_lens",
+    }
 }
 
+/// `[camera]`. Keys that the chosen type does not use are errors (an
+/// `aperture` on a pinhole camera would silently do nothing); the compiler
+/// checks them, so these are options here.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraDesc {
@@ -50,14 +59,14 @@ pub struct CameraDesc {
     pub position: V3,
     pub look_at: V3,
     pub up: V3,
-    /// Vertical field of view in degrees (perspective, thin lens).
-    pub fov: f32,
-    /// Lens radius (thin lens).
-    pub aperture: f32,
+    /// Vertical field of view in degrees (perspective, thin lens); default 40.
+    pub fov: Option<f32>,
+    /// Lens radius (thin lens); default 0, a pinhole.
+    pub aperture: Option<f32>,
     /// Distance to the plane in focus (thin lens); default: distance to `look_at`.
     pub focus_distance: Option<f32>,
-    /// World-space height of the view (orthographic).
-    pub height: f32,
+    /// World-space height of the view (orthographic); default 4.
+    pub height: Option<f32>,
 }
 
 impl Default for CameraDesc {
@@ -67,10 +76,10 @@ impl Default for CameraDesc {
             position: [0.0, 1.0, 6.0],
             look_at: [0.0, 0.5, 0.0],
             up: [0.0, 1.0, 0.0],
-            fov: 40.0,
-            aperture: 0.0,
+            fov: None,
+            aperture: None,
             focus_distance: None,
-            height: 4.0,
+            height: None,
         }
     }
 }
@@ -106,38 +115,42 @@ impl Default for MaterialDesc {
     }
 }
 
+crate::mode::mode_enum! {
+    /// `[[lights]] type`.
+    pub enum LightType("light type") {
+        /// Intensity I in W/sr: irradiance I cosθ / r².
+        Point = "point",
+        /// Light travelling along `direction`, with `irradiance` (W/m²) on a
+        /// surface facing it.
+        Directional = "directional",
+        /// One-sided parallelogram emitting `radiance` towards `edge_u × edge_v`.
+        Rect = "rect",
+        /// One-sided disk emitting `radiance` towards `normal`.
+        Disk = "disk",
+        /// Sphere emitting `radiance` outwards.
+        Sphere = "sphere",
+    }
+}
+
+/// A `[[lights]]` entry: its type and that type's keys. One flat table (not
+/// one serde variant per type) so that a bad value is reported at its own
+/// key and line; the compiler checks which keys the type takes.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields, tag = "type", rename_all = "snake_case")]
-pub enum LightDesc {
-    /// Intensity I in W/sr: irradiance I cosθ / r².
-    Point { position: V3, intensity: V3 },
-    /// Light travelling along `direction`, with irradiance `irradiance`
-    /// (W/m²) on a surface facing it.
-    Directional {
-        direction: V3,
-        #[serde(alias = "intensity")]
-        irradiance: V3,
-    },
-    /// One-sided parallelogram emitting radiance towards `edge_u × edge_v`.
-    Rect {
-        corner: V3,
-        edge_u: V3,
-        edge_v: V3,
-        radiance: V3,
-    },
-    /// One-sided disk emitting radiance towards `normal`.
-    Disk {
-        center: V3,
-        normal: V3,
-        radius: f32,
-        radiance: V3,
-    },
-    /// Sphere emitting radiance outwards.
-    Sphere {
-        center: V3,
-        radius: f32,
-        radiance: V3,
-    },
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    #[serde(rename = "type")]
+    pub kind: LightType,
+    pub position: Option<V3>,
+    pub intensity: Option<V3>,
+    pub direction: Option<V3>,
+    pub irradiance: Option<V3>,
+    pub corner: Option<V3>,
+    pub edge_u: Option<V3>,
+    pub edge_v: Option<V3>,
+    pub center: Option<V3>,
+    pub normal: Option<V3>,
+    pub radius: Option<f32>,
+    pub radiance: Option<V3>,
 }
 
 /// An object: exactly one shape key, plus optional material and transform.

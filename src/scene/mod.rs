@@ -12,6 +12,7 @@ pub mod description;
 pub mod loaders;
 pub mod parse;
 pub mod settings;
+pub mod source_map;
 
 use crate::camera::Camera;
 use crate::geometry::Geometry;

@@ -2,6 +2,7 @@
 //! the file and the line.
 
 use super::description::SceneDescription;
+use super::source_map::SourceMap;
 use crate::error::{InputError, InputResult};
 use std::path::Path;
 
@@ -11,19 +12,26 @@ pub fn read_description(path: &Path) -> InputResult<SceneDescription> {
     parse_description(path, &text)
 }
 
+/// Parse scene text read from `path`. A malformed value is reported at its
+/// line with its key path (`lights[1].radiance`), from the span serde gives.
 pub fn parse_description(path: &Path, text: &str) -> InputResult<SceneDescription> {
-    toml::from_str::<SceneDescription>(text).map_err(|e| {
-        let location = e
-            .span()
-            .map(|span| {
-                format!(
-                    "line {}",
-                    text[..span.start.min(text.len())].matches('\n').count() + 1
-                )
-            })
-            .unwrap_or_default();
-        InputError::new(path, location, e.message().to_string())
-    })
+    let source = SourceMap::new(text);
+    match toml::from_str::<SceneDescription>(text) {
+        Ok(mut desc) => {
+            desc.source = source;
+            Ok(desc)
+        }
+        Err(e) => {
+            let (line, key) = match e.span() {
+                Some(span) => {
+                    let at = span.start.min(text.len());
+                    (Some(source.line_at(at)), source.path_at(at).unwrap_or(""))
+                }
+                None => (None, ""),
+            };
+            Err(InputError::new(path, key, e.message().to_string()).on_line(line))
+        }
+    }
 }
 
 #[cfg(test)]
@@ -34,10 +42,13 @@ mod tests {
     fn unknown_keys_and_type_errors_name_the_line() {
         let p = Path::new("bad.toml");
         let e = parse_description(p, "[render]\nwidth = 10\nwidht = 20\n").unwrap_err();
-        assert_eq!(e.location, "line 3");
+        assert_eq!((e.line, e.location.as_str()), (Some(3), "render.widht"));
         assert!(e.message.contains("widht"), "{e}");
         let e = parse_description(p, "[[objects]]\nsphere = { radius = \"big\" }\n").unwrap_err();
-        assert_eq!(e.location, "line 2");
+        assert_eq!(
+            (e.line, e.location.as_str()),
+            (Some(2), "objects[0].sphere.radius")
+        );
         let e = parse_description(p, "[render\n").unwrap_err();
         assert!(e.to_string().starts_with("bad.toml: line 1:"), "{e}");
     }

@@ -7,7 +7,12 @@ use crate::error::InputResult;
 use crate::scene::description::{CameraDesc, CameraType};
 use crate::scene::RenderSettings;
 
-impl Compiler {
+/// Vertical field of view of a camera that gives none, in degrees.
+pub const DEFAULT_FOV: f32 = 40.0;
+/// World-space view height of an orthographic camera that gives none.
+pub const DEFAULT_HEIGHT: f32 = 4.0;
+
+impl Compiler<'_> {
     pub(super) fn camera(
         &self,
         desc: Option<&CameraDesc>,
@@ -25,11 +30,30 @@ impl Compiler {
                     })?;
                 return Ok(match (cam.yfov_degrees, cam.ortho_height) {
                     (_, Some(height)) => Camera::Orthographic(Orthographic::new(view, height)),
-                    (fov, None) => Camera::Perspective(Perspective::new(view, fov.unwrap_or(40.0))),
+                    (fov, None) => {
+                        Camera::Perspective(Perspective::new(view, fov.unwrap_or(DEFAULT_FOV)))
+                    }
                 });
             }
             return self.camera(Some(&CameraDesc::default()), s);
         };
+        let what = match d.kind {
+            CameraType::Perspective => "a perspective camera",
+            CameraType::Orthographic => "an orthographic camera",
+            CameraType::ThinLens => "a thin_lens camera",
+        };
+        let given = [
+            ("fov", d.fov.is_some()),
+            ("aperture", d.aperture.is_some()),
+            ("focus_distance", d.focus_distance.is_some()),
+            ("height", d.height.is_some()),
+        ];
+        let takes: &[&str] = match d.kind {
+            CameraType::Perspective => &["fov"],
+            CameraType::Orthographic => &["height"],
+            CameraType::ThinLens => &["fov", "aperture", "focus_distance"],
+        };
+        self.only("camera", what, &given, takes)?;
         let position = self.v3(d.position, "camera.position")?;
         let look_at = self.v3(d.look_at, "camera.look_at")?;
         let up = self.v3(d.up, "camera.up")?;
@@ -42,7 +66,7 @@ impl Compiler {
         let view = View::look_at(position, look_at, up, w, h)
             .ok_or_else(|| self.err("camera.up", "is zero or parallel to the view direction"))?;
         let fov = |c: &Self| -> InputResult<f32> {
-            let f = c.finite(d.fov, "camera.fov")?;
+            let f = c.finite(d.fov.unwrap_or(DEFAULT_FOV), "camera.fov")?;
             if f > 0.0 && f < 180.0 {
                 Ok(f)
             } else {
@@ -56,7 +80,7 @@ impl Compiler {
             CameraType::Perspective => Camera::Perspective(Perspective::new(view, fov(self)?)),
             CameraType::Orthographic => Camera::Orthographic(Orthographic::new(
                 view,
-                self.positive(d.height, "camera.height")?,
+                self.positive(d.height.unwrap_or(DEFAULT_HEIGHT), "camera.height")?,
             )),
             CameraType::ThinLens => {
                 let focus_distance = match d.focus_distance {
@@ -65,7 +89,7 @@ impl Compiler {
                 };
                 Camera::ThinLens(ThinLens {
                     pinhole: Perspective::new(view, fov(self)?),
-                    aperture: self.non_negative(d.aperture, "camera.aperture")?,
+                    aperture: self.non_negative(d.aperture.unwrap_or(0.0), "camera.aperture")?,
                     focus_distance,
                 })
             }
@@ -113,6 +137,34 @@ mod tests {
             ),
         ] {
             assert_eq!(rejected(text).location, key, "{text}");
+        }
+    }
+
+    #[test]
+    fn keys_a_camera_type_does_not_use_are_errors() {
+        for (text, key, line, needle) in [
+            (
+                "[camera]\naperture = 0.1",
+                "camera.aperture",
+                2,
+                "perspective camera, which takes fov",
+            ),
+            (
+                "[camera]\ntype = \"orthographic\"\nfov = 30.0",
+                "camera.fov",
+                3,
+                "which takes height",
+            ),
+            (
+                "[camera]\ntype = \"thin_lens\"\nheight = 2.0",
+                "camera.height",
+                3,
+                "fov, aperture and focus_distance",
+            ),
+        ] {
+            let e = rejected(text);
+            assert_eq!((e.location.as_str(), e.line), (key, Some(line)), "{text}");
+            assert!(e.message.contains(needle), "{text}: {e}");
         }
     }
 }

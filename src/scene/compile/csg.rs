@@ -25,7 +25,7 @@ use crate::math::Transform;
 use crate::scene::description::{self, CsgDesc, ObjectDesc};
 use glam::Affine3A;
 
-impl Compiler {
+impl Compiler<'_> {
     /// A `csg` object at `key`: its tree and one primitive for the BVH,
     /// unless the bounds already prove it empty.
     pub(super) fn csg_object(

@@ -6,45 +6,68 @@ use crate::error::InputResult;
 use crate::geometry::{AnalyticPrim, Shape, NO_TRANSFORM};
 use crate::light::Light;
 use crate::material::Material;
-use crate::scene::description::LightDesc;
+use crate::scene::description::{LightDesc, LightType, V3};
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
 use glam::Vec3;
 
-impl Compiler {
+impl Compiler<'_> {
     /// Validate a light and add it; area lights also become visible,
     /// one-sided emitting primitives.
     pub(super) fn light(&mut self, l: &LightDesc, key: &str) -> InputResult<()> {
         let k = |field: &str| format!("{key}.{field}");
-        let light = match l {
-            LightDesc::Point {
-                position,
-                intensity,
-            } => Light::Point {
-                position: self.v3(*position, &k("position"))?,
-                intensity: self.colour(*intensity, &k("intensity"))?,
+        let what = format!("a {} light", l.kind);
+        let given = [
+            ("position", l.position.is_some()),
+            ("intensity", l.intensity.is_some()),
+            ("direction", l.direction.is_some()),
+            ("irradiance", l.irradiance.is_some()),
+            ("corner", l.corner.is_some()),
+            ("edge_u", l.edge_u.is_some()),
+            ("edge_v", l.edge_v.is_some()),
+            ("center", l.center.is_some()),
+            ("normal", l.normal.is_some()),
+            ("radius", l.radius.is_some()),
+            ("radiance", l.radiance.is_some()),
+        ];
+        let takes: &[&str] = match l.kind {
+            LightType::Point => &["position", "intensity"],
+            // `intensity` is accepted as another name for a directional
+            // light's irradiance.
+            LightType::Directional => &["direction", "irradiance", "intensity"],
+            LightType::Rect => &["corner", "edge_u", "edge_v", "radiance"],
+            LightType::Disk => &["center", "normal", "radius", "radiance"],
+            LightType::Sphere => &["center", "radius", "radiance"],
+        };
+        self.only(key, &what, &given, takes)?;
+        let need = |value: Option<V3>, name: &str| self.need(value, key, name, &what);
+        let light = match l.kind {
+            LightType::Point => Light::Point {
+                position: self.v3(need(l.position, "position")?, &k("position"))?,
+                intensity: self.colour(need(l.intensity, "intensity")?, &k("intensity"))?,
             },
-            LightDesc::Directional {
-                direction,
-                irradiance,
-            } => Light::Directional {
-                direction: self.direction(*direction, &k("direction"))?,
-                irradiance: self.colour(*irradiance, &k("irradiance"))?,
-            },
-            LightDesc::Rect {
-                corner,
-                edge_u,
-                edge_v,
-                radiance,
-            } => {
-                let corner = self.v3(*corner, &k("corner"))?;
-                let eu = self.v3(*edge_u, &k("edge_u"))?;
-                let ev = self.v3(*edge_v, &k("edge_v"))?;
+            LightType::Directional => {
+                let (value, name) = match (l.irradiance, l.intensity) {
+                    (Some(_), Some(_)) => {
+                        return Err(self.err(key, "give irradiance or intensity, not both"))
+                    }
+                    (None, Some(v)) => (v, "intensity"),
+                    (irradiance, None) => (need(irradiance, "irradiance")?, "irradiance"),
+                };
+                Light::Directional {
+                    direction: self.direction(need(l.direction, "direction")?, &k("direction"))?,
+                    irradiance: self.colour(value, &k(name))?,
+                }
+            }
+            LightType::Rect => {
+                let corner = self.v3(need(l.corner, "corner")?, &k("corner"))?;
+                let eu = self.v3(need(l.edge_u, "edge_u")?, &k("edge_u"))?;
+                let ev = self.v3(need(l.edge_v, "edge_v")?, &k("edge_v"))?;
                 let rect = Rect::new(corner, eu, ev).ok_or_else(|| {
                     self.err(key, "edge_u and edge_v must be non-zero and not parallel")
                 })?;
-                let radiance = self.colour(*radiance, &k("radiance"))?;
+                let radiance = self.colour(need(l.radiance, "radiance")?, &k("radiance"))?;
                 let prim = self.emitter(Shape::Rect(rect), radiance, true);
                 Light::Rect {
                     rect,
@@ -52,18 +75,13 @@ impl Compiler {
                     prim,
                 }
             }
-            LightDesc::Disk {
-                center,
-                normal,
-                radius,
-                radiance,
-            } => {
+            LightType::Disk => {
                 let disk = Disk::new(
-                    self.v3(*center, &k("center"))?,
-                    self.direction(*normal, &k("normal"))?,
-                    self.positive(*radius, &k("radius"))?,
+                    self.v3(need(l.center, "center")?, &k("center"))?,
+                    self.direction(need(l.normal, "normal")?, &k("normal"))?,
+                    self.positive(self.need(l.radius, key, "radius", &what)?, &k("radius"))?,
                 );
-                let radiance = self.colour(*radiance, &k("radiance"))?;
+                let radiance = self.colour(need(l.radiance, "radiance")?, &k("radiance"))?;
                 let prim = self.emitter(Shape::Disk(disk), radiance, true);
                 Light::Disk {
                     disk,
@@ -71,14 +89,11 @@ impl Compiler {
                     prim,
                 }
             }
-            LightDesc::Sphere {
-                center,
-                radius,
-                radiance,
-            } => {
-                let center = self.v3(*center, &k("center"))?;
-                let radius = self.positive(*radius, &k("radius"))?;
-                let radiance = self.colour(*radiance, &k("radiance"))?;
+            LightType::Sphere => {
+                let center = self.v3(need(l.center, "center")?, &k("center"))?;
+                let radius =
+                    self.positive(self.need(l.radius, key, "radius", &what)?, &k("radius"))?;
+                let radiance = self.colour(need(l.radiance, "radiance")?, &k("radiance"))?;
                 let prim = self.emitter(Shape::Sphere(Sphere { center, radius }), radiance, false);
                 Light::Sphere {
                     center,
@@ -161,5 +176,33 @@ triangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }
         );
         assert_eq!(e.location, "lights[0]");
         assert!(e.message.contains("parallel"), "{e}");
+    }
+
+    #[test]
+    fn keys_a_light_type_does_not_take_are_errors_on_their_line() {
+        let e = rejected(
+            "[[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [1.0, 1.0, 1.0]\nradius = 0.5\n",
+        );
+        assert_eq!((e.location.as_str(), e.line), ("lights[0].radius", Some(5)));
+        assert!(
+            e.message
+                .contains("does not apply to a point light, which takes position and intensity"),
+            "{e}"
+        );
+        let e = rejected(
+            "[[lights]]\ntype = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradiance = [1.0, 1.0, 1.0]\n",
+        );
+        assert_eq!((e.location.as_str(), e.line), ("lights[0]", Some(1)));
+        assert!(e.message.contains("a sphere light needs `radius`"), "{e}");
+        // A directional light's irradiance may be called intensity, not both.
+        let d = "[[lights]]\ntype = \"directional\"\ndirection = [0.0, -1.0, 0.0]\n";
+        assert!(matches!(
+            compiled(&format!("{d}intensity = [2.0, 2.0, 2.0]")).lights[0],
+            Light::Directional { irradiance, .. } if irradiance == glam::Vec3::splat(2.0)
+        ));
+        let e = rejected(&format!(
+            "{d}intensity = [2.0, 2.0, 2.0]\nirradiance = [1.0, 1.0, 1.0]"
+        ));
+        assert!(e.message.contains("not both"), "{e}");
     }
 }

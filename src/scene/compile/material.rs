@@ -5,7 +5,7 @@ use crate::error::InputResult;
 use crate::material::Material;
 use crate::scene::description::MaterialDesc;
 
-impl Compiler {
+impl Compiler<'_> {
     pub(super) fn add_material(&mut self, name: String, m: Material) -> u32 {
         let id = self.materials.len() as u32;
         self.materials.push(m);

@@ -3,12 +3,13 @@
 //! written once, in leaf order, into the scene's leaf blocks.
 
 use super::Compiler;
+use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::{MeshNormals, MeshRange};
 use crate::light::Light;
 use crate::math::Transform;
 use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh};
-use crate::scene::loaders::load_mesh_file;
+use crate::scene::loaders::{self, load_mesh_file};
 use crate::shape::triangle8::{TriangleBlock, LANES};
 use glam::{Affine3A, Vec3};
 use std::path::{Path, PathBuf};
@@ -70,7 +71,7 @@ pub(super) fn leaf_blocks(
         .collect()
 }
 
-impl Compiler {
+impl Compiler<'_> {
     pub(super) fn push_mesh(
         &mut self,
         name: String,
@@ -102,14 +103,18 @@ impl Compiler {
     ) -> InputResult<(Rc<LoadedAsset>, u32, PathBuf)> {
         let path = self.base_dir.join(file);
         if !self.assets.contains_key(&path) {
-            let asset = load_mesh_file(&path).map_err(|e| {
-                // Say which object pulled the file in, keeping the mesh file's own location.
-                if e.file == path.display().to_string() {
-                    e
-                } else {
-                    e.within(&format!("{key}.mesh"))
-                }
-            })?;
+            // A file that cannot be opened, or of a kind we do not read, is a
+            // mistake in the scene file: say where. A problem inside the mesh
+            // file is reported at its own line there.
+            let at = format!("{key}.mesh");
+            if let Err(e) = std::fs::File::open(&path) {
+                let message = format!("cannot read '{}': {}", path.display(), io_message(&e));
+                return Err(self.err(&at, message));
+            }
+            if let Err(message) = loaders::check_extension(&path) {
+                return Err(self.err(&at, message));
+            }
+            let asset = load_mesh_file(&path)?;
             let first_material = self.materials.len() as u32;
             for (name, mat) in &asset.materials {
                 self.materials.push(*mat);
@@ -256,7 +261,12 @@ mesh = "two.obj"
             &RenderOverrides::default(),
         )
         .unwrap_err();
-        assert!(e.file.ends_with("nowhere.obj"), "{e}");
+        assert_eq!(
+            (e.file.as_str(), e.location.as_str()),
+            ("t.toml", "objects[0].mesh")
+        );
+        assert_eq!(e.line, Some(2), "the line of the mesh key");
+        assert!(e.message.contains("cannot read 'nowhere.obj'"), "{e}");
         let mesh = LoadedMesh {
             positions: vec![Vec3::ZERO; 3],
             indices: vec![[0, 1, 2], [0, 1, 3]],

@@ -14,6 +14,7 @@
 use super::asset::{LoadedAsset, LoadedCamera};
 use super::description::{ObjectDesc, SceneDescription};
 use super::settings::RenderOverrides;
+use super::source_map::SourceMap;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
@@ -113,7 +114,7 @@ pub fn compile(
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
-    let mut c = Compiler::new(path);
+    let mut c = Compiler::new(path, &desc.source);
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
         let material = c.material(m, &key)?;
@@ -180,9 +181,11 @@ pub fn compile(
     Ok((scene, timings))
 }
 
-struct Compiler {
+struct Compiler<'d> {
     file: PathBuf,
     base_dir: PathBuf,
+    /// Where the scene file writes each key, for errors.
+    source: &'d SourceMap,
     /// The triangles of each entry of `meshes`.
     sources: Vec<TriangleSource>,
     meshes: Vec<MeshRange>,
@@ -198,11 +201,12 @@ struct Compiler {
     assets: HashMap<PathBuf, (Rc<LoadedAsset>, u32)>,
 }
 
-impl Compiler {
-    fn new(path: &Path) -> Self {
+impl<'d> Compiler<'d> {
+    fn new(path: &Path, source: &'d SourceMap) -> Self {
         let mut c = Self {
             file: path.to_path_buf(),
             base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            source,
             sources: Vec::new(),
             meshes: Vec::new(),
             shapes: Vec::new(),

@@ -24,7 +24,7 @@ pub(super) struct Placement {
     pub(super) explicit_material: Option<u32>,
 }
 
-impl Compiler {
+impl Compiler<'_> {
     pub(super) fn transform(&self, t: &TransformDesc, key: &str) -> InputResult<Affine3A> {
         if let Some(m) = t.matrix {
             if t.translate.is_some() || t.rotate.is_some() || t.scale.is_some() {

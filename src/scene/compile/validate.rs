@@ -21,9 +21,48 @@ pub(super) fn finite3(v: V3, key: &str, file: &Path) -> InputResult<Vec3> {
     }
 }
 
-impl Compiler {
+impl Compiler<'_> {
+    /// Refuse the keys of the table at `key` that its type does not take:
+    /// `given` lists each optional key and whether the file gives it,
+    /// `takes` the ones that `what` ("a point light") uses. A key that would
+    /// silently do nothing is as much a mistake as an unknown one.
+    pub(super) fn only(
+        &self,
+        key: &str,
+        what: &str,
+        given: &[(&str, bool)],
+        takes: &[&str],
+    ) -> InputResult<()> {
+        match given
+            .iter()
+            .find(|(name, set)| *set && !takes.contains(name))
+        {
+            Some((name, _)) => Err(self.err(
+                &format!("{key}.{name}"),
+                format!(
+                    "does not apply to {what}, which takes {}",
+                    crate::mode::expected(takes).replace(" or ", " and ")
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// The value of a key that `what` must have.
+    pub(super) fn need<T: Copy>(
+        &self,
+        value: Option<T>,
+        key: &str,
+        name: &str,
+        what: &str,
+    ) -> InputResult<T> {
+        value.ok_or_else(|| self.err(key, format!("{what} needs `{name}`")))
+    }
+
+    /// An error at `key` of the scene file, on the line where the key (or
+    /// the nearest table around it) is written.
     pub(super) fn err(&self, key: &str, message: impl Into<String>) -> InputError {
-        InputError::new(&self.file, key, message)
+        InputError::new(&self.file, key, message).on_line(self.source.line_of(key))
     }
 
     pub(super) fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {

@@ -22,35 +22,41 @@ use std::path::Path;
 /// The extensions [`load_mesh_file`] understands, for error messages.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "ply"];
 
-/// Load any supported mesh file, chosen by its extension (case-insensitive):
-/// `.obj`, `.gltf` or `.glb`. Any other extension is an [`InputError`]
-/// naming the file and listing the supported ones.
-pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
+/// The lower-case extension of `path`, if it is one [`load_mesh_file`]
+/// reads; else a message listing the ones it does.
+pub fn check_extension(path: &Path) -> Result<String, String> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
+    if SUPPORTED_EXTENSIONS.contains(&extension.as_str()) {
+        return Ok(extension);
+    }
+    let supported = SUPPORTED_EXTENSIONS
+        .iter()
+        .map(|e| format!(".{e}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let found = if extension.is_empty() {
+        "a file without an extension".to_string()
+    } else {
+        format!("'.{extension}' files")
+    };
+    Err(format!(
+        "cannot load {found} as a mesh; supported mesh formats are {supported}"
+    ))
+}
+
+/// Load any supported mesh file, chosen by its extension (case-insensitive):
+/// `.obj`, `.gltf`, `.glb` or `.ply`. Any other extension is an
+/// [`InputError`] naming the file and listing the supported ones.
+pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
+    let extension = check_extension(path).map_err(|e| InputError::file(path, e))?;
     match extension.as_str() {
         "obj" => obj::load_obj(path),
         "gltf" | "glb" => gltf::load_gltf(path),
-        "ply" => ply::load_ply(path),
-        _ => {
-            let supported = SUPPORTED_EXTENSIONS
-                .iter()
-                .map(|e| format!(".{e}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let found = if extension.is_empty() {
-                "a file without an extension".to_string()
-            } else {
-                format!("'.{extension}' files")
-            };
-            Err(InputError::file(
-                path,
-                format!("cannot load {found} as a mesh; supported mesh formats are {supported}"),
-            ))
-        }
+        _ => ply::load_ply(path),
     }
 }
 
