@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::experiment::converge::{self, Point, METHODS};
-use strata::output::chart::{log_log_slope, write_svg, Panel, Series};
+use strata::output::chart::write_svg;
 use strata::scene::{load_scene, RenderOverrides};
 
 #[derive(Debug, Args, Clone)]
@@ -127,45 +127,12 @@ fn write_outputs(args: &ConvergeArgs, points: &[Point]) -> Result<(), CliError> 
     }
     strata::output::atomic::write_bytes_atomic(&args.csv, csv.as_bytes())
         .map_err(|e| InputError::file(&args.csv, format!("cannot write: {e}")))?;
-    let mut by_time = Vec::new();
-    let mut by_spp = Vec::new();
-    for m in METHODS {
-        let pts: Vec<&Point> = points.iter().filter(|p| p.method == m.name).collect();
-        let spp_pts: Vec<(f64, f64)> = pts.iter().map(|p| (p.spp as f64, p.rmse)).collect();
-        let slope = log_log_slope(&spp_pts).map_or("n/a".to_string(), |s| format!("{s:.2}"));
-        let label = format!("{} (slope {slope})", m.name);
-        by_spp.push(Series {
-            label: label.clone(),
-            points: spp_pts,
-        });
-        by_time.push(Series {
-            label,
-            points: pts.iter().map(|p| (p.seconds, p.rmse)).collect(),
-        });
-    }
     let title = args
         .scene
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
-    let panels = [
-        Panel {
-            title: format!("{title}: RMSE against time"),
-            x_label: "seconds".into(),
-            y_label: "RMSE".into(),
-            log_x: true,
-            log_y: true,
-            series: by_time,
-        },
-        Panel {
-            title: format!("{title}: RMSE against samples per pixel"),
-            x_label: "spp".into(),
-            y_label: "RMSE".into(),
-            log_x: true,
-            log_y: true,
-            series: by_spp,
-        },
-    ];
+    let panels = converge::chart_panels(&title, points);
     write_svg(&args.chart, &panels, 560, 420).map_err(|e| InputError::file(&args.chart, e))?;
     if !args.quiet {
         println!("wrote {} and {}", args.csv.display(), args.chart.display());

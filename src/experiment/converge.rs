@@ -3,6 +3,7 @@
 //! with `--mse-reference-image`).
 
 use crate::light::LightSampling;
+use crate::output::chart::{log_log_slope, Panel, Series};
 use crate::render::{render, RenderOptions};
 use crate::sampling::SamplerKind;
 use crate::scene::settings::GlossySampling;
@@ -141,6 +142,46 @@ pub fn measure(
         }
     }
     points
+}
+
+/// The chart `strata converge` draws: RMSE against time and against spp,
+/// log-log, a line per method (in `METHODS` order) labelled with its slope
+/// against spp.
+pub fn chart_panels(title: &str, points: &[Point]) -> Vec<Panel> {
+    let mut by_time = Vec::new();
+    let mut by_spp = Vec::new();
+    for m in METHODS {
+        let pts: Vec<&Point> = points.iter().filter(|p| p.method == m.name).collect();
+        let spp_pts: Vec<(f64, f64)> = pts.iter().map(|p| (p.spp as f64, p.rmse)).collect();
+        let slope = log_log_slope(&spp_pts).map_or("n/a".to_string(), |s| format!("{s:.2}"));
+        let label = format!("{} (slope {slope})", m.name);
+        by_spp.push(Series {
+            label: label.clone(),
+            points: spp_pts,
+        });
+        by_time.push(Series {
+            label,
+            points: pts.iter().map(|p| (p.seconds, p.rmse)).collect(),
+        });
+    }
+    vec![
+        Panel {
+            title: format!("{title}: RMSE against time"),
+            x_label: "seconds".into(),
+            y_label: "RMSE".into(),
+            log_x: true,
+            log_y: true,
+            series: by_time,
+        },
+        Panel {
+            title: format!("{title}: RMSE against samples per pixel"),
+            x_label: "spp".into(),
+            y_label: "RMSE".into(),
+            log_x: true,
+            log_y: true,
+            series: by_spp,
+        },
+    ]
 }
 
 #[cfg(test)]
