@@ -155,14 +155,11 @@ pub fn chart_panels(title: &str, points: &[Point]) -> Vec<Panel> {
         let spp_pts: Vec<(f64, f64)> = pts.iter().map(|p| (p.spp as f64, p.rmse)).collect();
         let slope = log_log_slope(&spp_pts).map_or("n/a".to_string(), |s| format!("{s:.2}"));
         let label = format!("{} (slope {slope})", m.name);
-        by_spp.push(Series {
-            label: label.clone(),
-            points: spp_pts,
-        });
-        by_time.push(Series {
-            label,
-            points: pts.iter().map(|p| (p.seconds, p.rmse)).collect(),
-        });
+        by_time.push(Series::new(
+            label.clone(),
+            pts.iter().map(|p| (p.seconds, p.rmse)).collect(),
+        ));
+        by_spp.push(Series::new(label, spp_pts));
     }
     vec![
         Panel {
@@ -171,6 +168,7 @@ pub fn chart_panels(title: &str, points: &[Point]) -> Vec<Panel> {
             y_label: "RMSE".into(),
             log_x: true,
             log_y: true,
+            integer_x: false,
             series: by_time,
         },
         Panel {
@@ -179,6 +177,7 @@ pub fn chart_panels(title: &str, points: &[Point]) -> Vec<Panel> {
             y_label: "RMSE".into(),
             log_x: true,
             log_y: true,
+            integer_x: true,
             series: by_spp,
         },
     ]
@@ -187,6 +186,7 @@ pub fn chart_panels(title: &str, points: &[Point]) -> Vec<Panel> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::chart::{legend_text, same_as};
 
     #[test]
     fn error_is_zero_for_identical_images_and_scales_with_the_difference() {
@@ -195,5 +195,37 @@ mod tests {
         let x: Vec<Vec3> = r.iter().map(|v| *v + Vec3::splat(0.1)).collect();
         let (rmse, _) = image_error(&x, &r);
         assert!((rmse - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn chart_panels_plot_each_method_and_name_those_that_coincide() {
+        // The last method's errors equal the second's (as on a scene with
+        // nothing for its importance sampling to change), at other times.
+        let mut points = Vec::new();
+        for (k, m) in METHODS.iter().enumerate() {
+            let rmse_of = if k == 3 { 1 } else { k };
+            for spp in [1u32, 2, 4, 8] {
+                points.push(Point {
+                    method: m.name,
+                    spp,
+                    seconds: 0.01 * spp as f64 * (1.0 + k as f64),
+                    rmse: 0.1 / (1.0 + rmse_of as f64) / (spp as f64).sqrt(),
+                    rel_mse: 0.0,
+                });
+            }
+        }
+        let panels = chart_panels("scene.toml", &points);
+        let (time, spp) = (&panels[0], &panels[1]);
+        assert!(time.log_x && time.log_y && !time.integer_x);
+        assert!(spp.log_x && spp.log_y && spp.integer_x);
+        assert_eq!(spp.series.len(), METHODS.len());
+        assert_eq!(spp.series[0].label, "random (slope -0.50)");
+        assert_eq!(same_as(time), [None; 4], "times differ");
+        let same = same_as(spp);
+        assert_eq!(same, [None, None, None, Some(1)]);
+        assert_eq!(
+            legend_text(spp, 3, &same),
+            "stratified+is/area-lights (slope -0.50) (same as stratified (slope -0.50))"
+        );
     }
 }

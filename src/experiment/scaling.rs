@@ -265,24 +265,21 @@ pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
                     .filter_map(|r| Some((r.threads as f64, value(r, pick(r)?))))
                     .collect()
             };
-            series.push(Series {
-                label: format!("{mode} (wall)"),
-                points: of(&|r| Some(r.speedup)),
-            });
+            series.push(Series::new(
+                format!("{mode} (wall)"),
+                of(&|r| Some(r.speedup)),
+            ));
             let cpu = of(&|r| r.cpu_speedup);
             if !cpu.is_empty() {
-                series.push(Series {
-                    label: format!("{mode} (CPU critical path)"),
-                    points: cpu,
-                });
+                series.push(Series::new(format!("{mode} (CPU critical path)"), cpu));
             }
         }
         series
     };
-    let mut speedup = vec![Series {
-        label: "ideal".into(),
-        points: vec![(1.0, 1.0), (max_threads as f64, max_threads as f64)],
-    }];
+    let mut speedup = vec![Series::reference(
+        "ideal",
+        vec![(1.0, 1.0), (max_threads as f64, max_threads as f64)],
+    )];
     speedup.extend(lines(&|_, s| s));
     vec![
         Panel {
@@ -291,6 +288,7 @@ pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
             y_label: "speedup over 1".into(),
             log_x: false,
             log_y: false,
+            integer_x: true,
             series: speedup,
         },
         Panel {
@@ -299,6 +297,7 @@ pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
             y_label: "efficiency (%)".into(),
             log_x: false,
             log_y: false,
+            integer_x: true,
             series: lines(&|r, s| 100.0 * s / r.threads as f64),
         },
     ]
@@ -416,6 +415,7 @@ mod tests {
         assert!(table(&r).contains("slices"));
         let panels = chart_panels("t", &r);
         assert_eq!(panels[0].series.len(), 3, "ideal, wall, CPU");
+        assert!(panels[0].series[0].reference && panels.iter().all(|p| p.integer_x));
         assert_eq!(panels[1].series[0].points, vec![(1.0, 100.0), (2.0, 100.0)]);
     }
 }
