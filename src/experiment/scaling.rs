@@ -245,17 +245,26 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
         .collect()
 }
 
-/// The chart `strata scaling` draws: speedup (with the ideal) and
-/// efficiency against threads, a line per schedule from wall time and, where
-/// measured, one from the CPU critical path.
+/// The chart `strata scaling` draws: speedup and efficiency against
+/// threads, each with the ideal as a reference line, a line per schedule
+/// from wall time and, where measured, one from the CPU critical path.
 pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
     let mut modes: Vec<&str> = Vec::new();
+    let mut counts: Vec<usize> = Vec::new();
     for r in rows {
         if !modes.contains(&r.mode.as_str()) {
             modes.push(&r.mode);
         }
+        if !counts.contains(&r.threads) {
+            counts.push(r.threads);
+        }
     }
-    let max_threads = rows.iter().map(|r| r.threads).max().unwrap_or(1);
+    counts.sort_unstable();
+    // The ideal at every measured count, so that a line on it is seen to be.
+    let ideal = |value: &dyn Fn(f64) -> f64| {
+        let points = counts.iter().map(|&t| (t as f64, value(t as f64)));
+        Series::reference("ideal", points.collect())
+    };
     let lines = |value: &dyn Fn(&ScalingRow, f64) -> f64| {
         let mut series = Vec::new();
         for mode in &modes {
@@ -276,30 +285,22 @@ pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
         }
         series
     };
-    let mut speedup = vec![Series::reference(
-        "ideal",
-        vec![(1.0, 1.0), (max_threads as f64, max_threads as f64)],
-    )];
+    let mut speedup = vec![ideal(&|t| t)];
     speedup.extend(lines(&|_, s| s));
+    let mut efficiency = vec![ideal(&|_| 100.0)];
+    efficiency.extend(lines(&|r, s| 100.0 * s / r.threads as f64));
+    let panel = |title: String, y_label: &str, series| Panel {
+        title,
+        x_label: "threads (or processes)".into(),
+        y_label: y_label.into(),
+        log_x: false,
+        log_y: false,
+        integer_x: true,
+        series,
+    };
     vec![
-        Panel {
-            title: format!("speedup: {title}"),
-            x_label: "threads (or processes)".into(),
-            y_label: "speedup over 1".into(),
-            log_x: false,
-            log_y: false,
-            integer_x: true,
-            series: speedup,
-        },
-        Panel {
-            title: "efficiency".into(),
-            x_label: "threads (or processes)".into(),
-            y_label: "efficiency (%)".into(),
-            log_x: false,
-            log_y: false,
-            integer_x: true,
-            series: lines(&|r, s| 100.0 * s / r.threads as f64),
-        },
+        panel(format!("speedup: {title}"), "speedup over 1", speedup),
+        panel("efficiency".into(), "efficiency (%)", efficiency),
     ]
 }
 
@@ -382,6 +383,7 @@ impl Drop for ScratchDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::chart::{legend_text, same_as};
 
     #[test]
     fn thread_counts_double_up_to_the_maximum() {
@@ -417,5 +419,30 @@ mod tests {
         assert_eq!(panels[0].series.len(), 3, "ideal, wall, CPU");
         assert!(panels[0].series[0].reference && panels.iter().all(|p| p.integer_x));
         assert_eq!(panels[1].series[0].points, vec![(1.0, 100.0), (2.0, 100.0)]);
+        assert_eq!(panels[1].series[1].points, vec![(1.0, 100.0), (2.0, 100.0)]);
+    }
+
+    #[test]
+    fn the_chart_names_schedules_that_scale_alike() {
+        let t = |s: f64| Timing {
+            seconds: s,
+            rays: 1000,
+            cpu: None,
+        };
+        let timings = [vec![t(4.0)], vec![t(2.5)], vec![t(1.6)]];
+        let mut r = rows(Mode::Threads(Schedule::Slices), &[1, 2, 4], &timings);
+        r.extend(rows(Mode::Threads(Schedule::Regions), &[1, 2, 4], &timings));
+        let panels = chart_panels("t", &r);
+        for p in &panels {
+            assert!(p.integer_x && p.series[0].reference);
+            let ideal: Vec<f64> = p.series[0].points.iter().map(|q| q.0).collect();
+            assert_eq!(ideal, [1.0, 2.0, 4.0], "the ideal at every count");
+            let same = same_as(p);
+            assert_eq!(same, [None, None, Some(1)], "{}", p.title);
+            assert_eq!(
+                legend_text(p, 2, &same),
+                "regions (wall) (same as slices (wall))"
+            );
+        }
     }
 }
