@@ -6,6 +6,7 @@
 
 pub mod orthographic;
 pub mod perspective;
+pub mod projection;
 pub mod thin_lens;
 
 use crate::math::Ray;

@@ -5,11 +5,13 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
-use strata::output::image::write_image;
+use strata::output::exr::{Attribute, ExrImage};
+use strata::output::image::{write_image, ImageFormat};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::stats::RenderStats;
-use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec};
-use strata::scene::{compile, load_scene, parse, LoadTimings, RenderOverrides, Scene};
+use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec, Window};
+use strata::scene::edit::Edit;
+use strata::scene::{compile, load_edited_scene, parse, LoadTimings, RenderOverrides, Scene};
 
 #[derive(Debug, Args, Clone)]
 pub struct RenderArgs {
@@ -23,6 +25,11 @@ pub struct RenderArgs {
     /// Render settings; each overrides the scene file's `[render]` value.
     #[command(flatten)]
     pub settings: RenderOverrides,
+    /// Change any value of the scene file by its key path, as editing the
+    /// file would, e.g. --set camera.fov=30 --set 'lights[0].radiance=[1,1,1]'.
+    /// The value is TOML (or a bare word, taken as a string). Repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<Edit>,
     /// Worker threads (default: all cores). The image is identical for any count.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -63,6 +70,17 @@ pub struct RenderArgs {
     /// Write statistics (rays by kind, Mrays/s, phase times, peak RSS) as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Render only the window X0,Y0,X1,Y1 (pixels, half-open) and write an
+    /// image of that size. Each pixel gets the samples it gets in the whole
+    /// image, so the crop equals that window of a full render bit for bit
+    /// (an EXR places it in the full image's display window).
+    #[arg(long, value_name = "X0,Y0,X1,Y1")]
+    pub crop: Option<String>,
+    /// Rewrite the output image after every pass (atomically), to watch it
+    /// converge; a render stopped part-way leaves the last pass's image.
+    /// --passes sets how often.
+    #[arg(long)]
+    pub progressive: bool,
     /// Replay one sample (pixel x, y and sample index) and print its path instead of rendering.
     #[arg(long, value_name = "X,Y,SAMPLE")]
     pub debug_sample: Option<strata::render::replay::SampleId>,
@@ -103,9 +121,24 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         );
     }
     let s = &scene.settings;
+    let window = match &args.crop {
+        Some(text) => Some(
+            Window::crop(text, s.width, s.height)
+                .map_err(|e| InputError::new("<command line>", "--crop", e))?,
+        ),
+        None => None,
+    };
     let full = slice.samples(s.spp);
     let header = PartialHeader::for_scene(&scene, slice, full.clone());
     let (initial, resume_from) = resume(&args, &header)?;
+    let image = Output {
+        args: &args,
+        scene: &scene,
+        window: window
+            .clone()
+            .unwrap_or_else(|| Window::whole(s.width, s.height)),
+        started: std::time::Instant::now(),
+    };
 
     let opts = RenderOptions {
         threads: args.threads,
@@ -115,20 +148,22 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         passes: args.passes,
         resume_from,
         packets: args.packets,
+        window,
     };
-    let mut checkpoint_failed = false;
+    let mut failed = (false, false);
     let outcome = render(&scene, &opts, initial, |film, done| {
-        let Some(ck) = &args.checkpoint else {
-            return;
-        };
-        let h = PartialHeader {
-            samples: full.start..done,
-            ..header.clone()
-        };
-        if let Err(e) = write_partial(ck, &h, film) {
-            if !checkpoint_failed {
-                eprintln!("warning: {}: cannot write checkpoint: {e}", ck.display());
-                checkpoint_failed = true;
+        if let Some(ck) = &args.checkpoint {
+            let h = PartialHeader {
+                samples: full.start..done,
+                ..header.clone()
+            };
+            if let Err(e) = write_partial(ck, &h, film) {
+                warn_once(&mut failed.0, ck, &format!("cannot write checkpoint: {e}"));
+            }
+        }
+        if args.progressive && done < full.end {
+            if let Err(e) = image.write(film, done - full.start) {
+                warn_once(&mut failed.1, &args.output, &e);
             }
         }
     });
@@ -136,7 +171,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         write_partial(&args.output, &header, &outcome.film)
             .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
     } else {
-        write_image(&args.output, &outcome.film.to_rgb(), s.width, s.height)
+        image
+            .write(&outcome.film, full.end - full.start)
             .map_err(|e| InputError::file(&args.output, e))?;
     }
     if let Some(bad) = outcome.film.first_invalid {
@@ -154,6 +190,64 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         println!("{}", stats.summary(&args.output));
     }
     Ok(())
+}
+
+/// Print a warning about `path` the first time only.
+fn warn_once(warned: &mut bool, path: &std::path::Path, message: &str) {
+    if !*warned {
+        eprintln!("warning: {}: {message}", path.display());
+        *warned = true;
+    }
+}
+
+/// Writes the render's image: PNG, or EXR with the camera and the render's
+/// settings in its header and a crop placed in the whole image.
+struct Output<'a> {
+    args: &'a RenderArgs,
+    scene: &'a Scene,
+    window: Window,
+    started: std::time::Instant,
+}
+
+impl Output<'_> {
+    /// The image of `film`, which holds `spp` samples per pixel.
+    fn write(&self, film: &Film, spp: u32) -> Result<(), String> {
+        let pixels = film.to_rgb();
+        let (w, h) = (self.window.width(), self.window.height());
+        if ImageFormat::from_path(&self.args.output) != Some(ImageFormat::Exr) {
+            return write_image(&self.args.output, &pixels, w, h);
+        }
+        let s = &self.scene.settings;
+        let camera = &self.scene.camera;
+        let mut exr = ExrImage::rgb(&pixels, w, h);
+        exr.origin = (self.window.x.start, self.window.y.start);
+        exr.display = (s.width, s.height);
+        exr.attributes = vec![
+            // OpenEXR's standard camera attributes (row-vector matrices, which
+            // are glam's column-major arrays).
+            (
+                "worldToCamera".into(),
+                Attribute::Matrix(camera.world_to_camera().to_cols_array()),
+            ),
+            (
+                "worldToNDC".into(),
+                Attribute::Matrix(camera.world_to_ndc().to_cols_array()),
+            ),
+            ("spp".into(), Attribute::Int(spp as i32)),
+            // A double holds every u32 seed exactly.
+            ("seed".into(), Attribute::Double(s.seed as f64)),
+            ("sampler".into(), Attribute::Text(s.sampler.name().into())),
+            (
+                "renderTimeSeconds".into(),
+                Attribute::Float(self.started.elapsed().as_secs_f32()),
+            ),
+            (
+                "strataVersion".into(),
+                Attribute::Text(strata::VERSION.into()),
+            ),
+        ];
+        exr.write(&self.args.output)
+    }
 }
 
 /// Everything about the command line that can be wrong, checked before any
@@ -179,6 +273,22 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
     if let Some(path) = &args.stats {
         super::writable(path, "--stats", &["json"])?;
     }
+    if partial_output || args.checkpoint.is_some() {
+        // A part or a checkpoint holds whole images' sums, to be merged.
+        if args.crop.is_some() {
+            return Err(flag("--crop")(
+                "a crop is an image: write it to .png or .exr, without --slice or --checkpoint"
+                    .into(),
+            )
+            .into());
+        }
+    }
+    if args.progressive && partial_output {
+        return Err(flag("--progressive")(
+            "rewrites an image after every pass: write a .png or .exr".into(),
+        )
+        .into());
+    }
     if let Some(ck) = &args.checkpoint {
         super::writable(ck, "--checkpoint", &["strata"])?;
         if ck.exists() && !args.resume {
@@ -201,21 +311,27 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 
 /// The scene of the command line.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
-    load_or_seed(args.scene.as_deref(), &args.settings, args.bvh_quality)
+    load_or_seed(
+        args.scene.as_deref(),
+        &args.set,
+        &args.settings,
+        args.bvh_quality,
+    )
 }
 
-/// The scene at `path`, or the built-in seed scene.
+/// The scene at `path`, or the built-in seed scene, with `edits` applied.
 pub fn load_or_seed(
     path: Option<&std::path::Path>,
+    edits: &[Edit],
     settings: &RenderOverrides,
     quality: BuildQuality,
 ) -> Result<(Scene, LoadTimings), CliError> {
     Ok(match path {
-        Some(path) => load_scene(path, settings, quality)?,
+        Some(path) => load_edited_scene(path, edits, settings, quality)?,
         None => {
             let start = std::time::Instant::now();
             let path = std::path::Path::new(SEED_SCENE_NAME);
-            let desc = parse::parse_description(path, SEED_SCENE)?;
+            let desc = parse::parse_edited(path, SEED_SCENE, edits)?;
             compile::compile(&desc, path, settings, quality, start)?
         }
     })

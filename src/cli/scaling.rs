@@ -72,7 +72,7 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         ..RenderOverrides::default()
     };
     let (scene, _) =
-        super::render::load_or_seed(args.scene.as_deref(), &overrides, BuildQuality::Auto)?;
+        super::render::load_or_seed(args.scene.as_deref(), &[], &overrides, BuildQuality::Auto)?;
     let max = match args.max_threads {
         Some(0) => {
             return Err(

@@ -61,11 +61,10 @@ pub fn encode(
                 .map_err(|e| e.to_string())?;
         }
         ImageFormat::Exr => {
-            let data: Vec<f32> = pixels.iter().flat_map(|p| p.to_array()).collect();
-            let img =
-                image::Rgb32FImage::from_raw(width, height, data).ok_or("image size mismatch")?;
-            img.write_to(&mut bytes, image::ImageFormat::OpenExr)
-                .map_err(|e| e.to_string())?;
+            if pixels.len() != width as usize * height as usize {
+                return Err("image size mismatch".to_string());
+            }
+            return super::exr::ExrImage::rgb(pixels, width, height).encode();
         }
     }
     Ok(bytes.into_inner())

@@ -5,4 +5,5 @@
 
 pub mod atomic;
 pub mod chart;
+pub mod exr;
 pub mod image;

@@ -7,6 +7,8 @@ pub mod progress;
 pub mod replay;
 pub mod schedule;
 pub mod stats;
+pub mod window;
 
 pub use film::Film;
 pub use schedule::{render, RenderOptions, RenderOutcome, Schedule, SliceSpec};
+pub use window::Window;

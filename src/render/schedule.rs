@@ -10,6 +10,7 @@
 
 use super::film::{Film, PixelSum};
 use super::progress;
+use super::window::Window;
 use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
@@ -90,6 +91,8 @@ pub struct RenderOptions {
     /// Trace coherent batches (camera rays, shadow rays to one light) as
     /// packets; the image is bit-identical for every mode.
     pub packets: PacketMode,
+    /// The pixels to render (`--crop`); `None` for the whole image.
+    pub window: Option<Window>,
 }
 
 impl Default for RenderOptions {
@@ -102,6 +105,7 @@ impl Default for RenderOptions {
             passes: DEFAULT_PASSES,
             resume_from: None,
             packets: PacketMode::Auto,
+            window: None,
         }
     }
 }
@@ -149,7 +153,11 @@ pub fn render(
         .num_threads(threads)
         .build()
         .expect("thread pool");
-    let mut film = initial.unwrap_or_else(|| Film::new(s.width, s.height));
+    let window = opts
+        .window
+        .clone()
+        .unwrap_or_else(|| Window::whole(s.width, s.height));
+    let mut film = initial.unwrap_or_else(|| Film::new(window.width(), window.height()));
     let full = opts.slice.samples(s.spp);
     let start_sample = opts
         .resume_from
@@ -194,7 +202,7 @@ pub fn render(
                     for (k, accs) in pixels.chunks_mut(BATCH).enumerate() {
                         accs.fill(PixelSum::default());
                         let first = b * chunk + k * BATCH;
-                        render_pixels(&mut integrator, scene, first, accs, pass.clone());
+                        render_pixels(&mut integrator, scene, &window, first, accs, pass.clone());
                         if opts.schedule == Schedule::Regions && accs.len() == BATCH {
                             bar.inc(1);
                         }
@@ -255,11 +263,19 @@ pub fn render_pixel(
     samples: Range<u32>,
     acc: &mut PixelSum,
 ) {
-    render_pixels(integrator, scene, index, std::slice::from_mut(acc), samples);
+    let whole = Window::whole(scene.settings.width, scene.settings.height);
+    render_pixels(
+        integrator,
+        scene,
+        &whole,
+        index,
+        std::slice::from_mut(acc),
+        samples,
+    );
 }
 
-/// All samples of `samples` for the pixels `first..first + accs.len()`
-/// (row-major indices), into `accs`.
+/// All samples of `samples` for the pixels `first..first + accs.len()` of
+/// `window` (row-major), into `accs`.
 ///
 /// Each pixel's samples go to the integrator [`PACKET_SIZE`] at a time,
 /// in index order: a batch is the pixel and lens samples of one pixel,
@@ -272,18 +288,18 @@ pub fn render_pixel(
 pub fn render_pixels(
     integrator: &mut Integrator,
     scene: &Scene,
+    window: &Window,
     first: usize,
     accs: &mut [PixelSum],
     samples: Range<u32>,
 ) {
     let s = &scene.settings;
-    let width = s.width as usize;
     let mut batch: Vec<CameraSample> = Vec::with_capacity(PACKET_SIZE);
     let mut out = [Vec3::ZERO; PACKET_SIZE];
     for (j, acc) in accs.iter_mut().enumerate() {
-        let index = first + j;
-        let (x, y) = ((index % width) as f32, (index / width) as f32);
-        let sampler = PixelSampler::new(s.sampler, s.seed, index as u32);
+        let (x, y, index) = window.pixel(first + j);
+        let (x, y) = (x as f32, y as f32);
+        let sampler = PixelSampler::new(s.sampler, s.seed, index);
         let mut start = samples.start;
         while start < samples.end {
             let end = samples.end.min(start + PACKET_SIZE as u32);

@@ -28,6 +28,8 @@ pub struct RenderStats {
     pub threads: usize,
     pub schedule: String,
     pub slice: String,
+    /// `--crop`: the window rendered, as [x0, y0, x1, y1] (half-open).
+    pub crop: Option<[u32; 4]>,
     /// `--packets`: auto, on or off (the image does not depend on it).
     pub packets: PacketMode,
     pub rays: RayCounts,
@@ -98,6 +100,10 @@ impl RenderStats {
             threads: outcome.threads,
             schedule: format!("{:?}", opts.schedule).to_lowercase(),
             slice: format!("{}/{}", opts.slice.index, opts.slice.count),
+            crop: opts
+                .window
+                .as_ref()
+                .map(|w| [w.x.start, w.y.start, w.x.end, w.y.end]),
             packets: opts.packets,
             rays: outcome.counts,
             rays_total,
@@ -158,10 +164,14 @@ impl RenderStats {
         } else {
             "threads"
         };
+        let size = match self.crop {
+            Some([x0, y0, x1, y1]) => {
+                format!("crop {x0},{y0},{x1},{y1} of {}x{}", self.width, self.height)
+            }
+            None => format!("{}x{}", self.width, self.height),
+        };
         format!(
-            "{}x{} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {:.2} s{peak}) -> {}",
-            self.width,
-            self.height,
+            "{size} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {:.2} s{peak}) -> {}",
             self.rays_total as f64 / 1e6,
             r.camera as f64 / 1e6,
             r.shadow as f64 / 1e6,

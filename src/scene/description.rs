@@ -35,6 +35,9 @@ pub struct SceneDescription {
     /// description was not parsed from text).
     #[serde(skip)]
     pub source: super::source_map::SourceMap,
+    /// Key paths that `--set` changed: an error there is the command line's.
+    #[serde(skip)]
+    pub edited: Vec<String>,
 }
 
 crate::mode::mode_enum! {

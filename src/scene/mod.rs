@@ -9,6 +9,7 @@
 pub mod asset;
 pub mod compile;
 pub mod description;
+pub mod edit;
 pub mod loaders;
 pub mod parse;
 pub mod settings;
@@ -19,7 +20,7 @@ use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
 
-pub use compile::{load_mesh_scene, load_scene, scene_from_str, LoadTimings};
+pub use compile::{load_edited_scene, load_mesh_scene, load_scene, scene_from_str, LoadTimings};
 pub use settings::{RenderOverrides, RenderSettings};
 
 /// A compiled scene. Primitives refer to materials by index.

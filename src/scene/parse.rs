@@ -2,6 +2,7 @@
 //! the file and the line.
 
 use super::description::SceneDescription;
+use super::edit::{self, Edit};
 use super::source_map::SourceMap;
 use crate::error::{InputError, InputResult};
 use std::path::Path;
@@ -10,6 +11,35 @@ pub fn read_description(path: &Path) -> InputResult<SceneDescription> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;
     parse_description(path, &text)
+}
+
+/// Parse scene text with `--set` edits applied. The text as written is
+/// checked first, so its own mistakes are reported at its lines; what is
+/// wrong after that comes from an edit, and is reported as that `--set`.
+pub fn parse_edited(path: &Path, text: &str, edits: &[Edit]) -> InputResult<SceneDescription> {
+    let as_written = parse_description(path, text)?;
+    if edits.is_empty() {
+        return Ok(as_written);
+    }
+    let edited = edit::apply(text, edits)?;
+    let mut desc = parse_description(path, &edited).map_err(|e| {
+        let edit = edits
+            .iter()
+            .rev()
+            .find(|edit| within(&e.location, &edit.path) || within(&edit.path, &e.location))
+            .unwrap_or(&edits[edits.len() - 1]);
+        InputError::new("<command line>", edit.flag(), e.message)
+    })?;
+    desc.source = as_written.source;
+    desc.edited = edits.iter().map(|e| e.path.clone()).collect();
+    Ok(desc)
+}
+
+/// Whether key path `inner` is `outer` or lies inside it.
+pub fn within(inner: &str, outer: &str) -> bool {
+    inner
+        .strip_prefix(outer)
+        .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
 }
 
 /// Parse scene text read from `path`. A malformed value is reported at its

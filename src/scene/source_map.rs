@@ -62,6 +62,11 @@ impl SourceMap {
         }
     }
 
+    /// Whether the file writes `path` itself.
+    pub fn contains(&self, path: &str) -> bool {
+        self.entries.iter().any(|e| e.path == path)
+    }
+
     /// The innermost key whose value contains byte `offset`.
     pub fn path_at(&self, offset: usize) -> Option<&str> {
         self.entries

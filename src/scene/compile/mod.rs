@@ -13,11 +13,13 @@
 
 use super::asset::{LoadedAsset, LoadedCamera};
 use super::description::{ObjectDesc, SceneDescription};
+use super::edit::Edit;
 use super::settings::RenderOverrides;
 use super::source_map::SourceMap;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
+use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::csg::Csg;
 use crate::geometry::{AnalyticPrim, Geometry, MeshRange, NO_TRANSFORM};
@@ -65,8 +67,20 @@ pub fn load_scene(
     overrides: &RenderOverrides,
     quality: BuildQuality,
 ) -> InputResult<(Scene, LoadTimings)> {
+    load_edited_scene(path, &[], overrides, quality)
+}
+
+/// [`load_scene`] with `--set` edits applied to the file's values first.
+pub fn load_edited_scene(
+    path: &Path,
+    edits: &[Edit],
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
-    let desc = super::parse::read_description(path)?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let desc = super::parse::parse_edited(path, &text, edits)?;
     compile(&desc, path, overrides, quality, start)
 }
 
@@ -114,7 +128,7 @@ pub fn compile(
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
-    let mut c = Compiler::new(path, &desc.source);
+    let mut c = Compiler::new(path, &desc.source, &desc.edited);
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
         let material = c.material(m, &key)?;
@@ -186,6 +200,8 @@ struct Compiler<'d> {
     base_dir: PathBuf,
     /// Where the scene file writes each key, for errors.
     source: &'d SourceMap,
+    /// Key paths the command line's `--set` changed.
+    edited: &'d [String],
     /// The triangles of each entry of `meshes`.
     sources: Vec<TriangleSource>,
     meshes: Vec<MeshRange>,
@@ -202,11 +218,12 @@ struct Compiler<'d> {
 }
 
 impl<'d> Compiler<'d> {
-    fn new(path: &Path, source: &'d SourceMap) -> Self {
+    fn new(path: &Path, source: &'d SourceMap, edited: &'d [String]) -> Self {
         let mut c = Self {
             file: path.to_path_buf(),
             base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
             source,
+            edited,
             sources: Vec::new(),
             meshes: Vec::new(),
             shapes: Vec::new(),

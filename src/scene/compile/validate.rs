@@ -5,6 +5,7 @@
 use super::Compiler;
 use crate::error::{InputError, InputResult};
 use crate::scene::description::V3;
+use crate::scene::parse::within;
 use glam::Vec3;
 use std::path::Path;
 
@@ -62,7 +63,19 @@ impl Compiler<'_> {
     /// An error at `key` of the scene file, on the line where the key (or
     /// the nearest table around it) is written.
     pub(super) fn err(&self, key: &str, message: impl Into<String>) -> InputError {
-        InputError::new(&self.file, key, message).on_line(self.source.line_of(key))
+        // The command line's fault: inside an edited value, or at a table
+        // the edit gave a key the file did not have.
+        let by_edit = |path: &&String| {
+            within(key, path) || (within(path, key) && !self.source.contains(path))
+        };
+        match self.edited.iter().find(by_edit) {
+            Some(path) => InputError::new(
+                "<command line>",
+                format!("--set {path}"),
+                format!("{key}: {}", message.into()),
+            ),
+            None => InputError::new(&self.file, key, message).on_line(self.source.line_of(key)),
+        }
     }
 
     pub(super) fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {

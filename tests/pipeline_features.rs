@@ -1,0 +1,252 @@
+//! What pipelines reach for, through the real binary: `--set` equals
+//! editing the file, `--crop` equals the window of a full render, EXR
+//! headers carry the camera and the render's settings, and a killed
+//! `--progressive` render leaves a readable image.
+
+mod common;
+
+use exr::prelude::{read, AttributeValue, ReadChannels, ReadLayers, Text};
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn strata(dir: &Path, args: &[&str]) -> Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn scene(name: &str) -> String {
+    format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// An EXR's data window origin and size, its display size, its channels by
+/// name (row-major values) and its header attributes.
+struct Exr {
+    origin: (i32, i32),
+    size: (usize, usize),
+    display: (usize, usize),
+    channels: Vec<(String, Vec<f32>)>,
+    layer: exr::meta::header::LayerAttributes,
+}
+
+fn read_exr(path: &Path) -> Exr {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    let layer = image.layer_data;
+    let channels = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
+    Exr {
+        origin: (
+            layer.attributes.layer_position.0,
+            layer.attributes.layer_position.1,
+        ),
+        size: (layer.size.0, layer.size.1),
+        display: (
+            image.attributes.display_window.size.0,
+            image.attributes.display_window.size.1,
+        ),
+        channels,
+        layer: layer.attributes,
+    }
+}
+
+#[test]
+fn set_equals_editing_the_file_bit_for_bit() {
+    let dir = common::temp_dir("set");
+    let text = std::fs::read_to_string(scene("soft-shadow.toml")).unwrap();
+    let edited = text
+        .replace("fov = 40.0", "fov = 30.0")
+        .replace("radiance = [6.0, 6.0, 6.0]", "radiance = [3.0, 4.0, 5.0]")
+        .replace("spp = 4", "spp = 2");
+    assert_ne!(edited, text);
+    std::fs::write(dir.join("edited.toml"), edited).unwrap();
+    std::fs::write(dir.join("original.toml"), &text).unwrap();
+    strata(
+        &dir,
+        &["render", "edited.toml", "-q", "-o", "edited.strata"],
+    );
+    strata(
+        &dir,
+        &[
+            "render",
+            "original.toml",
+            "-q",
+            "-o",
+            "set.strata",
+            "--set",
+            "camera.fov=30",
+            "--set",
+            "lights[0].radiance=[3, 4, 5]",
+            "--set",
+            "render.spp=2",
+        ],
+    );
+    // Parts hold the scene's fingerprint and the film's exact sums.
+    let a = std::fs::read(dir.join("edited.strata")).unwrap();
+    let b = std::fs::read(dir.join("set.strata")).unwrap();
+    assert!(a == b, "--set and the edited file differ");
+    // An unknown key, or an element the scene lacks, is named.
+    for (set, needle) in [
+        ("render.spq=3", "--set render.spq: unknown field `spq`"),
+        ("lights[4].radiance=[1,1,1]", "lights has 1 entry"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_strata"))
+            .current_dir(&dir)
+            .args(["render", "original.toml", "-q", "-o", "x.png", "--set", set])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(needle), "{set}: {e}");
+        assert!(!dir.join("x.png").exists());
+    }
+}
+
+#[test]
+fn a_crop_equals_its_window_of_the_full_render() {
+    let dir = common::temp_dir("crop");
+    let s = scene("seed-mc.toml");
+    strata(&dir, &["render", &s, "-q", "-o", "full.exr"]);
+    strata(
+        &dir,
+        &[
+            "render",
+            &s,
+            "-q",
+            "--crop",
+            "37,21,101,70",
+            "-o",
+            "crop.exr",
+        ],
+    );
+    let (full, crop) = (
+        read_exr(&dir.join("full.exr")),
+        read_exr(&dir.join("crop.exr")),
+    );
+    assert_eq!(crop.origin, (37, 21));
+    assert_eq!(crop.size, (64, 49));
+    assert_eq!(crop.display, full.size);
+    for ((name, whole), (crop_name, part)) in full.channels.iter().zip(&crop.channels) {
+        assert_eq!(name, crop_name);
+        for y in 0..49 {
+            for x in 0..64 {
+                let a = whole[(21 + y) * full.size.0 + 37 + x];
+                let b = part[y * 64 + x];
+                assert_eq!(a.to_bits(), b.to_bits(), "{name} at ({x}, {y}) of the crop");
+            }
+        }
+    }
+    // The PNG of a crop is the window's size.
+    strata(
+        &dir,
+        &["render", &s, "-q", "--crop", "0,0,10,5", "-o", "crop.png"],
+    );
+    let (_, w, h) = strata::output::image::read_image(&dir.join("crop.png")).unwrap();
+    assert_eq!((w, h), (10, 5));
+}
+
+#[test]
+fn exr_headers_carry_the_camera_and_the_settings() {
+    let dir = common::temp_dir("meta");
+    let s = scene("soft-shadow.toml");
+    strata(
+        &dir,
+        &[
+            "render", &s, "-q", "--seed", "7", "--spp", "3", "-o", "m.exr",
+        ],
+    );
+    let exr = read_exr(&dir.join("m.exr"));
+    let other = |name: &str| exr.layer.other.get(&Text::from(name)).cloned();
+    assert_eq!(other("spp"), Some(AttributeValue::I32(3)));
+    assert_eq!(other("seed"), Some(AttributeValue::F64(7.0)));
+    assert_eq!(
+        other("sampler"),
+        Some(AttributeValue::Text(Text::from("stratified")))
+    );
+    assert_eq!(
+        other("strataVersion"),
+        Some(AttributeValue::Text(Text::from(strata::VERSION)))
+    );
+    assert!(matches!(other("renderTimeSeconds"), Some(AttributeValue::F32(t)) if t > 0.0));
+    // The scene's camera sits at [0, 3, 5] looking at [0, 0.3, 0]: the
+    // matrices (row vectors) map it to the camera origin and the point it
+    // looks at to the middle of the image, in front of the camera.
+    let row_vector = |m: [f32; 16], p: [f32; 3]| -> [f32; 4] {
+        std::array::from_fn(|c| p[0] * m[c] + p[1] * m[4 + c] + p[2] * m[8 + c] + m[12 + c])
+    };
+    let to_camera = exr.layer.world_to_camera.expect("worldToCamera");
+    let origin = row_vector(to_camera, [0.0, 3.0, 5.0]);
+    assert!(origin[..3].iter().all(|c| c.abs() < 1e-5), "{origin:?}");
+    assert!(
+        row_vector(to_camera, [0.0, 0.3, 0.0])[2] > 0.0,
+        "+z looks forward"
+    );
+    let to_ndc = exr.layer.world_to_normalized_device.expect("worldToNDC");
+    let h = row_vector(to_ndc, [0.0, 0.3, 0.0]);
+    assert!(
+        (h[0] / h[3] - 0.5).abs() < 1e-5 && (h[1] / h[3] - 0.5).abs() < 1e-5,
+        "{h:?}"
+    );
+}
+
+#[test]
+fn a_killed_progressive_render_leaves_a_readable_image() {
+    let dir = common::temp_dir("progressive");
+    let out = dir.join("p.png");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(&dir)
+        .args([
+            "render",
+            &scene("seed-mc.toml"),
+            "-q",
+            "--progressive",
+            "--passes",
+            "64",
+            "--spp",
+            "4096",
+            "--threads",
+            "1",
+            "-o",
+        ])
+        .arg(&out)
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !out.exists() {
+        assert!(
+            start.elapsed().as_secs() < 120,
+            "no image after two minutes"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the render ended early"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // Let it rewrite the image a few times, then kill it mid-render.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(child.try_wait().unwrap().is_none(), "still rendering");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let (pixels, w, h) = strata::output::image::read_image(&out).unwrap();
+    assert_eq!((w, h), (200, 150));
+    assert!(pixels.iter().any(|p| p.max_element() > 0.0), "a lit image");
+}
