@@ -209,6 +209,9 @@ done
 [ -f out.exr ] || die "the merge job wrote no out.exr"
 
 # shellcheck disable=SC2086 # STRATA_ARGS is split into words on purpose
-strata render "$STRATA_SCENE" $STRATA_ARGS --quiet -o single.exr
+# The single render goes through merge too, so that both EXRs are written
+# alike: a render's own EXR header also records how long it took.
+strata render "$STRATA_SCENE" $STRATA_ARGS --quiet -o single.strata
+strata merge single.strata -o single.exr --quiet
 cmp out.exr single.exr || die "merged image differs from the single-process render"
 echo "slurm check: PASS: 4 Slurm array tasks merged equal one render, bit for bit ($((SECONDS - started)) s)"
