@@ -250,3 +250,93 @@ fn a_killed_progressive_render_leaves_a_readable_image() {
     assert_eq!((w, h), (200, 150));
     assert!(pixels.iter().any(|p| p.max_element() > 0.0), "a lit image");
 }
+
+/// An orthographic camera 5 units in front of a square (two triangles
+/// wound towards the camera) that fills the middle of the view.
+const QUAD: &str = r#"
+[render]
+width = 32
+height = 32
+spp = 4
+[camera]
+type = "orthographic"
+position = [0.0, 0.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+height = 4.0
+[materials.paint]
+diffuse = [0.2, 0.4, 0.6]
+[[lights]]
+type = "directional"
+direction = [0.0, 0.0, -1.0]
+irradiance = [1.0, 1.0, 1.0]
+[[objects]]
+material = "paint"
+group = [
+  { triangle = { v = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0]] } },
+  { triangle = { v = [[-1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]] } },
+]
+"#;
+
+#[test]
+fn aovs_hold_the_first_hits_albedo_normal_and_depth() {
+    let dir = common::temp_dir("aov");
+    std::fs::write(dir.join("quad.toml"), QUAD).unwrap();
+    let render = |threads: &str, out: &str| {
+        strata(
+            &dir,
+            &[
+                "render",
+                "quad.toml",
+                "-q",
+                "--aov",
+                "albedo,normal,depth",
+                "--threads",
+                threads,
+                "-o",
+                out,
+            ],
+        );
+        read_exr(&dir.join(out))
+    };
+    let exr = render("2", "a.exr");
+    let channel = |name: &str| &exr.channels.iter().find(|(n, _)| n == name).unwrap().1;
+    // The quad spans pixels 8..24 both ways (4 world units over 32 pixels).
+    let inside = 16 * 32 + 16;
+    let outside = 2 * 32 + 2;
+    for (name, value) in [
+        ("albedo.R", 0.2),
+        ("albedo.G", 0.4),
+        ("albedo.B", 0.6),
+        ("normal.X", 0.0),
+        ("normal.Y", 0.0),
+        ("normal.Z", 1.0),
+        ("depth.Z", 5.0),
+    ] {
+        let got = channel(name)[inside];
+        assert!((got - value).abs() < 1e-6, "{name}: {got} vs {value}");
+    }
+    assert_eq!(channel("depth.Z")[outside], f32::INFINITY);
+    assert_eq!(channel("albedo.G")[outside], 0.0);
+    // The same bits on one thread.
+    let one = render("1", "b.exr");
+    for ((name, a), (_, b)) in exr.channels.iter().zip(&one.channels) {
+        let bits = |v: &Vec<f32>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(a), bits(b), "{name}");
+    }
+    // Without --aov, only the beauty pass.
+    strata(&dir, &["render", "quad.toml", "-q", "-o", "plain.exr"]);
+    let names: Vec<String> = read_exr(&dir.join("plain.exr"))
+        .channels
+        .into_iter()
+        .map(|c| c.0)
+        .collect();
+    assert_eq!(names, ["B", "G", "R"]);
+    // AOVs are EXR channels.
+    let o = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(&dir)
+        .args(["render", "quad.toml", "-q", "--aov", "depth", "-o", "x.png"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!dir.join("x.png").exists());
+}

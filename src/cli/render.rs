@@ -8,6 +8,7 @@ use strata::error::InputError;
 use strata::output::exr::{Attribute, ExrImage};
 use strata::output::image::{write_image, ImageFormat};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
+use strata::render::aov::{self, Aov, AovSum};
 use strata::render::stats::RenderStats;
 use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec, Window};
 use strata::scene::edit::Edit;
@@ -76,6 +77,12 @@ pub struct RenderArgs {
     /// (an EXR places it in the full image's display window).
     #[arg(long, value_name = "X0,Y0,X1,Y1")]
     pub crop: Option<String>,
+    /// Add AOV channels to the EXR output, averaged over each pixel's camera
+    /// samples: albedo (albedo.R/G/B, the first hit's diffuse colour),
+    /// normal (normal.X/Y/Z, its world-space shading normal), depth
+    /// (depth.Z, the distance along the camera ray; inf where a ray misses).
+    #[arg(long, value_delimiter = ',', value_name = "AOV,...")]
+    pub aov: Vec<Aov>,
     /// Rewrite the output image after every pass (atomically), to watch it
     /// converge; a render stopped part-way leaves the last pass's image.
     /// --passes sets how often.
@@ -149,6 +156,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         resume_from,
         packets: args.packets,
         window,
+        aovs: !args.aov.is_empty(),
     };
     let mut failed = (false, false);
     let outcome = render(&scene, &opts, initial, |film, done| {
@@ -162,7 +170,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
         }
         if args.progressive && done < full.end {
-            if let Err(e) = image.write(film, done - full.start) {
+            if let Err(e) = image.write(film, None, done - full.start) {
                 warn_once(&mut failed.1, &args.output, &e);
             }
         }
@@ -172,7 +180,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
     } else {
         image
-            .write(&outcome.film, full.end - full.start)
+            .write(&outcome.film, outcome.aov.as_deref(), full.end - full.start)
             .map_err(|e| InputError::file(&args.output, e))?;
     }
     if let Some(bad) = outcome.film.first_invalid {
@@ -210,8 +218,9 @@ struct Output<'a> {
 }
 
 impl Output<'_> {
-    /// The image of `film`, which holds `spp` samples per pixel.
-    fn write(&self, film: &Film, spp: u32) -> Result<(), String> {
+    /// The image of `film`, which holds `spp` samples per pixel, with the
+    /// AOVs of `aov`.
+    fn write(&self, film: &Film, aov: Option<&[AovSum]>, spp: u32) -> Result<(), String> {
         let pixels = film.to_rgb();
         let (w, h) = (self.window.width(), self.window.height());
         if ImageFormat::from_path(&self.args.output) != Some(ImageFormat::Exr) {
@@ -220,6 +229,9 @@ impl Output<'_> {
         let s = &self.scene.settings;
         let camera = &self.scene.camera;
         let mut exr = ExrImage::rgb(&pixels, w, h);
+        if let Some(sums) = aov {
+            exr.channels.extend(aov::channels(sums, &self.args.aov));
+        }
         exr.origin = (self.window.x.start, self.window.y.start);
         exr.display = (s.width, s.height);
         exr.attributes = vec![
@@ -279,6 +291,19 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
             return Err(flag("--crop")(
                 "a crop is an image: write it to .png or .exr, without --slice or --checkpoint"
                     .into(),
+            )
+            .into());
+        }
+    }
+    if !args.aov.is_empty() {
+        if ImageFormat::from_path(&args.output) != Some(ImageFormat::Exr) {
+            return Err(
+                flag("--aov")("AOVs are EXR channels: write the output to .exr".into()).into(),
+            );
+        }
+        if args.checkpoint.is_some() {
+            return Err(flag("--aov")(
+                "a checkpoint keeps no AOVs: render them without --checkpoint".into(),
             )
             .into());
         }

@@ -2,6 +2,7 @@
 //! accumulating them exactly ([`film`]), reporting progress ([`progress`]),
 //! replaying one sample ([`replay`]) and the statistics of a run ([`stats`]).
 
+pub mod aov;
 pub mod film;
 pub mod progress;
 pub mod replay;

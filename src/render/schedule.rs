@@ -8,13 +8,14 @@
 //! `Schedule::Regions` is the classic baseline for `strata scaling`: the
 //! image cut into one band of rows per thread, no stealing.
 
+use super::aov::AovSum;
 use super::film::{Film, PixelSum};
 use super::progress;
 use super::window::Window;
 use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
-use crate::shade::{CameraSample, Integrator, PacketMode, RayCounts, SampleContext};
+use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -93,6 +94,8 @@ pub struct RenderOptions {
     pub packets: PacketMode,
     /// The pixels to render (`--crop`); `None` for the whole image.
     pub window: Option<Window>,
+    /// Also accumulate what each camera ray hit first (`--aov`).
+    pub aovs: bool,
 }
 
 impl Default for RenderOptions {
@@ -106,6 +109,7 @@ impl Default for RenderOptions {
             resume_from: None,
             packets: PacketMode::Auto,
             window: None,
+            aovs: false,
         }
     }
 }
@@ -119,6 +123,9 @@ pub struct RenderOutcome {
     pub samples: Range<u32>,
     /// CPU time spent, where the system reports it (Linux).
     pub cpu: Option<crate::system::cputime::CpuTimes>,
+    /// Per pixel of the window, the sums of the first hits, with
+    /// [`RenderOptions::aovs`].
+    pub aov: Option<Vec<AovSum>>,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -175,6 +182,7 @@ pub fn render(
         AtomicU64::new(0),
     ];
     let mut scratch = vec![PixelSum::default(); n];
+    let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
     let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
     let chunk = match opts.schedule {
@@ -193,16 +201,29 @@ pub fn render(
             pass.end,
             s.spp
         ));
+        // Each worker owns its chunk's AOV sums for the pass; they carry
+        // over between passes, added to in sample order.
+        let aov_chunks: Vec<Option<&mut [AovSum]>> = match &mut aov {
+            Some(a) => a.chunks_mut(chunk).map(Some).collect(),
+            None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
+        };
         pool.install(|| {
             scratch
                 .par_chunks_mut(chunk)
+                .zip(aov_chunks.into_par_iter())
                 .enumerate()
-                .for_each(|(b, pixels)| {
+                .for_each(|(b, (pixels, mut aov_pixels))| {
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
                     for (k, accs) in pixels.chunks_mut(BATCH).enumerate() {
                         accs.fill(PixelSum::default());
                         let first = b * chunk + k * BATCH;
-                        render_pixels(&mut integrator, scene, &window, first, accs, pass.clone());
+                        let range = k * BATCH..k * BATCH + accs.len();
+                        let aov = aov_pixels.as_deref_mut().map(|a| &mut a[range]);
+                        let pixels = PixelRun {
+                            window: &window,
+                            first,
+                        };
+                        render_pixels(&mut integrator, scene, pixels, accs, aov, pass.clone());
                         if opts.schedule == Schedule::Regions && accs.len() == BATCH {
                             bar.inc(1);
                         }
@@ -251,6 +272,7 @@ pub fn render(
         threads,
         samples: full,
         cpu: cpu.finish(),
+        aov,
     }
 }
 
@@ -264,18 +286,30 @@ pub fn render_pixel(
     acc: &mut PixelSum,
 ) {
     let whole = Window::whole(scene.settings.width, scene.settings.height);
+    let pixels = PixelRun {
+        window: &whole,
+        first: index,
+    };
     render_pixels(
         integrator,
         scene,
-        &whole,
-        index,
+        pixels,
         std::slice::from_mut(acc),
+        None,
         samples,
     );
 }
 
-/// All samples of `samples` for the pixels `first..first + accs.len()` of
-/// `window` (row-major), into `accs`.
+/// Pixels `first..` of `window` (row-major).
+#[derive(Debug, Clone, Copy)]
+pub struct PixelRun<'w> {
+    pub window: &'w Window,
+    pub first: usize,
+}
+
+/// All samples of `samples` for the pixels `run.first..run.first +
+/// accs.len()` of its window, into `accs`, and with `aov`, what their camera
+/// rays hit first into it.
 ///
 /// Each pixel's samples go to the integrator [`PACKET_SIZE`] at a time,
 /// in index order: a batch is the pixel and lens samples of one pixel,
@@ -288,16 +322,17 @@ pub fn render_pixel(
 pub fn render_pixels(
     integrator: &mut Integrator,
     scene: &Scene,
-    window: &Window,
-    first: usize,
+    run: PixelRun,
     accs: &mut [PixelSum],
+    mut aov: Option<&mut [AovSum]>,
     samples: Range<u32>,
 ) {
     let s = &scene.settings;
     let mut batch: Vec<CameraSample> = Vec::with_capacity(PACKET_SIZE);
     let mut out = [Vec3::ZERO; PACKET_SIZE];
+    let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
     for (j, acc) in accs.iter_mut().enumerate() {
-        let (x, y, index) = window.pixel(first + j);
+        let (x, y, index) = run.window.pixel(run.first + j);
         let (x, y) = (x as f32, y as f32);
         let sampler = PixelSampler::new(s.sampler, s.seed, index);
         let mut start = samples.start;
@@ -308,9 +343,15 @@ pub fn render_pixels(
                 ctx: SampleContext::new(sampler, sample, s.spp),
                 film: Vec2::new(x, y) + sampler.get_2d(Dim::PIXEL, sample, s.spp),
             }));
-            integrator.camera_batch(&batch, &mut out);
+            let first = aov.is_some().then_some(&mut first_hits[..]);
+            integrator.camera_batch(&batch, &mut out, first);
             for (v, sample) in out.iter().zip(start..end) {
                 acc.add(*v, sample);
+            }
+            if let Some(aov) = aov.as_deref_mut() {
+                for hit in &first_hits[..batch.len()] {
+                    aov[j].add(hit);
+                }
             }
             start = end;
         }

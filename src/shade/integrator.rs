@@ -2,7 +2,7 @@
 //! recursion from a hit to its emitted, direct and specular light.
 
 use super::packets::CAMERA_PACKET_MIN;
-use super::{CameraSample, PacketMode, PathEvent, RayCounts, SampleContext};
+use super::{CameraSample, FirstHit, PacketMode, PathEvent, RayCounts, SampleContext};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::geometry::Surface;
 use crate::material::Material;
@@ -31,6 +31,9 @@ pub struct Integrator<'a> {
     pub packets: PacketMode,
     /// When set, every path vertex is recorded (slow; for debugging one sample).
     pub trace: Option<Vec<PathEvent>>,
+    /// The first hit of the camera ray being shaded, recorded only while a
+    /// caller of [`Integrator::camera_batch`] asks for them (AOVs).
+    first_hit: Option<FirstHit>,
 }
 
 impl<'a> Integrator<'a> {
@@ -40,6 +43,7 @@ impl<'a> Integrator<'a> {
             counts: RayCounts::default(),
             packets: PacketMode::Auto,
             trace: None,
+            first_hit: None,
         }
     }
 
@@ -73,13 +77,27 @@ impl Integrator<'_> {
     /// Radiance of up to [`PACKET_SIZE`] camera samples, `out[i]` for
     /// `batch[i]`: exactly what [`Integrator::camera_sample`] returns for
     /// each, with the primary rays traced together as a packet when
-    /// `self.packets` says so. Samples are shaded in batch order.
-    pub fn camera_batch(&mut self, batch: &[CameraSample], out: &mut [Vec3]) {
+    /// `self.packets` says so. Samples are shaded in batch order. With
+    /// `first`, `first[i]` receives what sample `i`'s camera ray hit.
+    pub fn camera_batch(
+        &mut self,
+        batch: &[CameraSample],
+        out: &mut [Vec3],
+        mut first: Option<&mut [FirstHit]>,
+    ) {
         let n = batch.len();
         assert!(n <= PACKET_SIZE && out.len() >= n);
+        let recording = first.is_some();
+        let mut record = |i: usize, hit: Option<FirstHit>| {
+            if let (Some(first), Some(hit)) = (first.as_deref_mut(), hit) {
+                first[i] = hit;
+            }
+        };
         if !self.packets.use_packet(n, CAMERA_PACKET_MIN) {
-            for (o, s) in out.iter_mut().zip(batch) {
+            for (i, (o, s)) in out.iter_mut().zip(batch).enumerate() {
+                self.first_hit = recording.then_some(FirstHit::MISS);
                 *o = self.camera_sample(&s.ctx, s.film);
+                record(i, self.first_hit.take());
             }
             return;
         }
@@ -93,7 +111,9 @@ impl Integrator<'_> {
         self.counts.camera += n as u64;
         for i in 0..n {
             let slot = self.begin_record(0, "camera", &rays[i]);
+            self.first_hit = recording.then_some(FirstHit::MISS);
             out[i] = self.shade(&batch[i].ctx, &rays[i], hits[i], 0, 1.0, slot);
+            record(i, self.first_hit.take());
         }
     }
 
@@ -145,6 +165,15 @@ impl Integrator<'_> {
             ns,
             entering,
         };
+        if depth == 0 {
+            if let Some(first) = &mut self.first_hit {
+                *first = FirstHit {
+                    albedo: material.diffuse,
+                    normal: surface.shading_normal,
+                    depth: hit.t * ray.direction.length(),
+                };
+            }
+        }
 
         let mut l = if entering || !material.one_sided {
             material.emission

@@ -42,4 +42,4 @@ pub mod specular;
 
 pub use integrator::Integrator;
 pub use packets::{PacketMode, CAMERA_PACKET_MIN, SHADOW_PACKET_MIN};
-pub use sample::{CameraSample, PathEvent, RayCounts, SampleContext};
+pub use sample::{CameraSample, FirstHit, PathEvent, RayCounts, SampleContext};

@@ -80,3 +80,22 @@ pub struct PathEvent {
     pub hit: Option<(f32, u32, Vec3)>,
     pub radiance: Vec3,
 }
+
+/// What a camera ray's first hit shows, for the AOV channels of denoisers
+/// and compositing: the diffuse albedo, the world-space shading normal (as
+/// the surface has it, pointing out of solids), and the distance along the
+/// ray. A ray that hits nothing has albedo and normal 0 and depth ∞.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FirstHit {
+    pub albedo: Vec3,
+    pub normal: Vec3,
+    pub depth: f32,
+}
+
+impl FirstHit {
+    pub const MISS: FirstHit = FirstHit {
+        albedo: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        depth: f32::INFINITY,
+    };
+}
