@@ -17,7 +17,13 @@ use strata::error::InputError;
 /// With no command, renders the built-in seed scene to render.png. Every
 /// command has its own --help: `strata render --help`.
 #[derive(Debug, Parser)]
-#[command(name = "strata", version = strata::VERSION, about, long_about = None)]
+#[command(
+    name = "strata",
+    version = strata::VERSION,
+    about,
+    long_about = None,
+    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
