@@ -151,9 +151,47 @@ fn missing_files_are_named() {
     assert_rejected("no-scene", None, &[], &["scene.toml", "cannot read"]);
     assert_rejected(
         "no-mesh",
-        Some("[[objects]]\nmesh = \"gone.obj\"\n"),
+        Some("[[objects]]\nsphere = { radius = 1.0 }\n\n[[objects]]\nmesh = \"gone.obj\"\n"),
         &[],
-        &["gone.obj"],
+        &[
+            "scene.toml: line 5: objects[1].mesh: cannot read",
+            "gone.obj",
+        ],
+    );
+}
+
+#[test]
+fn errors_in_lights_name_their_own_line_and_key() {
+    let scene = r#"[render]
+width = 8
+height = 6
+
+[[lights]]
+type = "point"
+position = [0.0, 4.0, 0.0]
+intensity = [1.0, 1.0, 1.0]
+
+[[lights]]
+type = "rect"
+corner = [0.0, 3.0, 0.0]
+edge_u = [1.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.0]
+radiance = [1.0, 1.0]
+"#;
+    assert_rejected(
+        "light-line",
+        Some(scene),
+        &[],
+        &["scene.toml: line 15: lights[1].radiance: invalid length 2"],
+    );
+    assert_rejected(
+        "light-key",
+        Some(&scene.replace(
+            "radiance = [1.0, 1.0]",
+            "radiance = [1.0, 1.0, 1.0]\nintensity = [1.0, 1.0, 1.0]",
+        )),
+        &[],
+        &["line 16: lights[1].intensity: does not apply to a rect light"],
     );
 }
 
