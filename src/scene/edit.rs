@@ -98,7 +98,7 @@ pub fn apply(text: &str, edits: &[Edit]) -> Result<String, InputError> {
         let steps = steps(&edit.path).map_err(err)?;
         put(&mut doc, "", &steps, edit.value.clone()).map_err(err)?;
     }
-    Ok(toml::to_string(&doc).expect("a table always serialises"))
+    toml::to_string(&doc).map_err(|e| InputError::new(COMMAND_LINE, "--set", e.to_string()))
 }
 
 /// Put `value` at `steps` below `table` (which is at key path `at`),
