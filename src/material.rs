@@ -34,6 +34,12 @@ pub struct Material {
     pub emission: Vec3,
     /// Emit only from the front face (the surfaces of rect and disk lights).
     pub one_sided: bool,
+    /// A texture (index into the scene's [`Textures`]) that multiplies
+    /// `diffuse` where the surface has texture coordinates. Only mesh files
+    /// give one (MTL `map_Kd`, glTF `baseColorTexture`).
+    ///
+    /// [`Textures`]: crate::texture::Textures
+    pub diffuse_texture: Option<u32>,
 }
 
 impl Default for Material {
@@ -50,6 +56,7 @@ impl Default for Material {
             fresnel: false,
             emission: Vec3::ZERO,
             one_sided: false,
+            diffuse_texture: None,
         }
     }
 }

@@ -5,8 +5,9 @@
 use super::Compiler;
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
-use crate::geometry::{MeshNormals, MeshRange};
+use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshUvs};
 use crate::light::Light;
+use crate::material::Material;
 use crate::math::Transform;
 use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
@@ -78,6 +79,7 @@ impl Compiler<'_> {
         tris: TriangleSource,
         material: u32,
         normals: Option<MeshNormals>,
+        uvs: Option<MeshUvs>,
     ) {
         if tris.len() == 0 {
             return;
@@ -91,6 +93,7 @@ impl Compiler<'_> {
             count,
             material,
             normals,
+            uvs,
         });
     }
 
@@ -114,10 +117,16 @@ impl Compiler<'_> {
             if let Err(message) = loaders::check_extension(&path) {
                 return Err(self.err(&at, message));
             }
-            let asset = load_mesh_file(&path)?;
+            let mut asset = load_mesh_file(&path)?;
+            // The file's images move into the scene's (no copy); its
+            // materials' texture indices move with them.
+            let first_texture = self.textures.append(std::mem::take(&mut asset.textures));
             let first_material = self.materials.len() as u32;
             for (name, mat) in &asset.materials {
-                self.materials.push(*mat);
+                self.materials.push(Material {
+                    diffuse_texture: mat.diffuse_texture.map(|t| t + first_texture),
+                    ..*mat
+                });
                 self.material_ids
                     .entry(format!("{file}:{name}"))
                     .or_insert(self.materials.len() as u32 - 1);
@@ -141,6 +150,12 @@ impl Compiler<'_> {
         let t = Transform::new(m).expect("checked by the caller");
         for mesh in &asset.meshes {
             check_indices(mesh, &path)?;
+            if let Some(normals) = &mesh.normals {
+                check_attribute(normals, mesh, &path, "normals")?;
+            }
+            if let Some(uvs) = &mesh.uvs {
+                check_attribute(uvs, mesh, &path, "texture coordinates")?;
+            }
             let tris = TriangleSource::Indexed {
                 positions: mesh.positions.iter().map(|&p| t.point(p)).collect(),
                 indices: mesh.indices.clone(),
@@ -152,12 +167,16 @@ impl Compiler<'_> {
             let material = explicit_material
                 .or(mesh.material.map(|i| first_material + i as u32))
                 .unwrap_or(inherited);
+            // UVs only where a texture will be looked up with them: a
+            // scene-file material put on a textured mesh has none.
+            let textured = self.materials[material as usize].diffuse_texture.is_some();
+            let uvs = mesh.uvs.clone().filter(|_| textured);
             let name = if mesh.name.is_empty() {
                 key.to_string()
             } else {
                 mesh.name.clone()
             };
-            self.push_mesh(name, tris, material, normals);
+            self.push_mesh(name, tris, material, normals, uvs);
         }
         for light in &asset.point_lights {
             self.lights.push(Light::Point {
@@ -192,6 +211,31 @@ fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
         )),
         None => Ok(()),
     }
+}
+
+/// A per-corner attribute a loader handed over has one index triple per
+/// triangle, each in range (the loaders make them so; this keeps a
+/// mistake there from becoming a panic at a hit).
+fn check_attribute<T>(
+    attribute: &MeshAttribute<T>,
+    mesh: &LoadedMesh,
+    path: &Path,
+    what: &str,
+) -> InputResult<()> {
+    let bad = attribute.indices.len() != mesh.indices.len()
+        || attribute
+            .indices
+            .iter()
+            .flatten()
+            .any(|&i| i as usize >= attribute.values.len());
+    if bad {
+        return Err(InputError::new(
+            path,
+            mesh.name.clone(),
+            format!("the {what} do not match the mesh's triangles"),
+        ));
+    }
+    Ok(())
 }
 
 /// A loaded mesh's triangles in file space, with every index checked.

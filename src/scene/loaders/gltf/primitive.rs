@@ -96,6 +96,7 @@ impl Loader<'_> {
             }),
             indices,
             material,
+            uvs: None,
         }))
     }
 }

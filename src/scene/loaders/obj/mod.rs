@@ -150,6 +150,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             indices,
             normals,
             material: mesh.material_id.filter(|&i| i < asset.materials.len()),
+            uvs: None,
         });
     }
     Ok(asset)
