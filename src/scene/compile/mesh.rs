@@ -294,6 +294,73 @@ mesh = "two.obj"
     }
 
     #[test]
+    fn only_textured_meshes_keep_uvs_and_texture_indices_follow_their_files() {
+        use crate::scene::loaders::test_files::png;
+        let dir = temp_dir("compile-uvs");
+        write(&dir, "red.png", &png(1, 1, &[[255, 0, 0]]));
+        write(&dir, "blue.png", &png(1, 1, &[[0, 0, 255]]));
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+        for (name, texture) in [("first", "red.png"), ("second", "blue.png")] {
+            let mtl = format!("newmtl wood\nmap_Kd {texture}\nnewmtl paint\nKd 0.5 0.5 0.5\n");
+            write(&dir, &format!("{name}.mtl"), mtl.as_bytes());
+            let obj = format!(
+                "mtllib {name}.mtl\n{quad}o wood\nusemtl wood\nf 1/1 2/2 3/3 4/4\n\
+                 o paint\nusemtl paint\nf 1/1 2/2 3/3\n"
+            );
+            write(&dir, &format!("{name}.obj"), obj.as_bytes());
+        }
+        let text = r#"
+[materials.grey]
+diffuse = [0.5, 0.5, 0.5]
+[[objects]]
+mesh = "first.obj"
+[[objects]]
+mesh = "second.obj"
+[[objects]]
+mesh = "second.obj"
+material = "grey"
+"#;
+        let s = scene_from_str(text, &dir.join("s.toml"), &RenderOverrides::default()).unwrap();
+        let has_uvs: Vec<(&str, bool)> = s
+            .geometry
+            .meshes
+            .iter()
+            .map(|m| (m.name.as_str(), m.uvs.is_some()))
+            .collect();
+        assert_eq!(
+            has_uvs,
+            [
+                ("wood", true),
+                ("paint", false),
+                ("wood", true),
+                ("paint", false),
+                ("wood", false), // a scene material without texture replaces it
+                ("paint", false),
+            ]
+        );
+        assert_eq!(s.textures.images.len(), 2, "one image per file, read once");
+        let texture_of = |mesh: usize| {
+            let m = &s.materials[s.geometry.meshes[mesh].material as usize];
+            m.diffuse_texture.map(|t| {
+                s.textures.images[s.textures.textures[t as usize].image as usize].texels()[0]
+            })
+        };
+        assert_eq!(texture_of(0), Some([255, 0, 0]));
+        assert_eq!(texture_of(2), Some([0, 0, 255]));
+        assert_eq!(texture_of(1), None);
+        assert_eq!(texture_of(4), None);
+
+        // A scene without textured meshes stores no UVs at all.
+        let s = scene_from_str(
+            "[[objects]]\nmesh = \"first.obj\"\nmaterial = \"grey\"\n[materials.grey]\n",
+            &dir.join("t.toml"),
+            &RenderOverrides::default(),
+        )
+        .unwrap();
+        assert!(s.geometry.meshes.iter().all(|m| m.uvs.is_none()));
+    }
+
+    #[test]
     fn a_missing_mesh_names_the_file_and_out_of_range_indices_the_face() {
         let s = compiled(
             "[[objects]]\ntriangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }",
