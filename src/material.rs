@@ -17,6 +17,9 @@
 //! `L_e + Σ_lights (ρ/π + k_s (n+2)/(2π) cosⁿα) E + k_r L_reflected + k_t L_refracted`,
 //! the classic Whitted split with each term in radiometric units. Energy
 //! conservation is the scene author's job: keep `ρ + k_s + k_r + k_t ≤ 1`.
+//!
+//! Mesh files may texture ρ (MTL `map_Kd`, glTF `baseColorTexture`): then
+//! ρ at a hit is `diffuse` times the texture there; see [`crate::texture`].
 
 use glam::Vec3;
 

@@ -3,8 +3,11 @@
 //! per axis.
 //!
 //! A texture multiplies a material's diffuse colour: the albedo at a hit
-//! is `diffuse × texture(u, v)`. Mesh files name them; the scene file has
-//! no texture keys of its own.
+//! is `diffuse × texture(u, v)`, looked up once per hit. Mesh files name
+//! them; the scene file has no texture keys of its own. Where a surface
+//! has no texture coordinates (analytic shapes, CSG solids, a mesh file
+//! without `vt` or `TEXCOORD_n`, or a material given to a shape other than
+//! its mesh) the diffuse colour applies alone.
 //!
 //! ```text
 //! # scene.mtl (OBJ)                          # glTF
