@@ -34,3 +34,4 @@ pub mod scene;
 pub mod shade;
 pub mod shape;
 pub mod system;
+pub mod texture;

@@ -17,6 +17,9 @@
 //! `L_e + Σ_lights (ρ/π + k_s (n+2)/(2π) cosⁿα) E + k_r L_reflected + k_t L_refracted`,
 //! the classic Whitted split with each term in radiometric units. Energy
 //! conservation is the scene author's job: keep `ρ + k_s + k_r + k_t ≤ 1`.
+//!
+//! Mesh files may texture ρ (MTL `map_Kd`, glTF `baseColorTexture`): then
+//! ρ at a hit is `diffuse` times the texture there; see [`crate::texture`].
 
 use glam::Vec3;
 
@@ -34,6 +37,12 @@ pub struct Material {
     pub emission: Vec3,
     /// Emit only from the front face (the surfaces of rect and disk lights).
     pub one_sided: bool,
+    /// A texture (index into the scene's [`Textures`]) that multiplies
+    /// `diffuse` where the surface has texture coordinates. Only mesh files
+    /// give one (MTL `map_Kd`, glTF `baseColorTexture`).
+    ///
+    /// [`Textures`]: crate::texture::Textures
+    pub diffuse_texture: Option<u32>,
 }
 
 impl Default for Material {
@@ -50,6 +59,7 @@ impl Default for Material {
             fresnel: false,
             emission: Vec3::ZERO,
             one_sided: false,
+            diffuse_texture: None,
         }
     }
 }

@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["shape"],
     &["accel"],
     &["geometry"],
-    &["camera", "light", "material"],
+    &["camera", "light", "material", "texture"],
     &["scene"],
     &["shade"],
     &["render"],

@@ -230,6 +230,48 @@ fn malformed_obj_and_gltf_name_the_file_and_line_or_location() {
 }
 
 #[test]
+fn a_missing_or_broken_texture_names_the_file_and_the_mtl_line_or_gltf_image() {
+    let scene = "[[objects]]\nmesh = \"quad.obj\"\n";
+    let obj: &[u8] =
+        b"mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nusemtl wood\nf 1/1 2/1 3/1\n";
+    assert_rejected(
+        "map_Kd-missing",
+        Some(scene),
+        &[
+            ("quad.obj", obj),
+            (
+                "quad.mtl",
+                b"newmtl wood\nKd 1 1 1\nmap_Kd wood grain.png\n",
+            ),
+        ],
+        &[
+            "quad.mtl",
+            "line 3",
+            "wood grain.png",
+            "No such file or directory",
+        ],
+    );
+    assert_rejected(
+        "map_Kd-not-an-image",
+        Some(scene),
+        &[
+            ("quad.obj", obj),
+            ("quad.mtl", b"newmtl wood\n\nmap_Kd -clamp on notes.jpg\n"),
+            ("notes.jpg", b"shopping list"),
+        ],
+        &["quad.mtl", "line 3", "notes.jpg", "not a PNG or JPEG"],
+    );
+    let gltf = br#"{"asset":{"version":"2.0"},"materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
+        "textures":[{"source":1}],"images":[{"uri":"a.png"},{"uri":"gone.png"}]}"#;
+    assert_rejected(
+        "gltf-image-missing",
+        Some("[[objects]]\nmesh = \"t.gltf\"\n"),
+        &[("t.gltf", gltf)],
+        &["t.gltf", "images[1]", "gone.png", "textures[0]"],
+    );
+}
+
+#[test]
 fn unknown_materials_and_shapeless_objects_are_rejected() {
     assert_rejected(
         "mat",

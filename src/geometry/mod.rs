@@ -24,7 +24,9 @@ use crate::shape::plane::Plane;
 use crate::shape::triangle8::{TriangleBlock, LANES};
 use csg::Csg;
 use glam::Vec3;
-pub use primitive::{AnalyticPrim, MeshNormals, MeshRange, Shape, NO_TRANSFORM};
+pub use primitive::{
+    AnalyticPrim, MeshAttribute, MeshNormals, MeshRange, MeshUvs, Shape, NO_TRANSFORM,
+};
 pub use surface::Surface;
 
 // A BVH leaf is a run of slots inside one block of `LEAF_BLOCK`, and the

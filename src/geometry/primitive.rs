@@ -9,7 +9,8 @@ use crate::shape::cylinder::Cylinder;
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use std::ops::{Add, Mul};
 
 /// An analytic shape in its own object space. Closed set: the hot loop matches on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -107,13 +108,39 @@ pub struct MeshRange {
     pub material: u32,
     /// Shading normals, only when the file had them.
     pub normals: Option<MeshNormals>,
+    /// Texture coordinates, only when the file had them and the mesh's
+    /// material has a texture to look up with them.
+    pub uvs: Option<MeshUvs>,
 }
 
-/// Shading normals with their own per-triangle indexing (an OBJ may index
-/// normals apart from positions; glTF repeats the position indices).
+/// A per-corner attribute with its own per-triangle indexing (an OBJ may
+/// index normals and texture coordinates apart from positions; glTF
+/// repeats the position indices).
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct MeshNormals {
-    pub values: Vec<Vec3>,
+pub struct MeshAttribute<T> {
+    pub values: Vec<T>,
     /// One entry per triangle, parallel to the mesh's vertex indices.
     pub indices: Vec<[u32; 3]>,
+}
+
+/// Shading normals of a mesh's corners.
+pub type MeshNormals = MeshAttribute<Vec3>;
+
+/// Texture coordinates of a mesh's corners, in the texture space of
+/// [`crate::texture`] (`(0, 0)` the top-left of the image).
+pub type MeshUvs = MeshAttribute<Vec2>;
+
+impl<T: Copy + Add<Output = T>> MeshAttribute<T>
+where
+    f32: Mul<T, Output = T>,
+{
+    /// The attribute at barycentric weights `b` in triangle `tri` (counted
+    /// from the mesh's first).
+    #[inline]
+    pub fn interpolate(&self, tri: usize, b: [f32; 3]) -> T {
+        let idx = self.indices[tri];
+        b[0] * self.values[idx[0] as usize]
+            + b[1] * self.values[idx[1] as usize]
+            + b[2] * self.values[idx[2] as usize]
+    }
 }

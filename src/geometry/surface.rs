@@ -5,7 +5,7 @@ use crate::accel::PrimHit;
 use crate::math::offset::{barycentric_error, transformed_error};
 use crate::math::Ray;
 use crate::shape::triangle;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// The local geometry at a hit, in world space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,6 +19,9 @@ pub struct Surface {
     /// Unit shading normal, on the same side as `geometric_normal`.
     pub shading_normal: Vec3,
     pub material: u32,
+    /// Texture coordinates, on meshes that keep them (those whose material
+    /// has a texture); `None` everywhere else.
+    pub uv: Option<Vec2>,
 }
 
 impl Geometry {
@@ -34,6 +37,7 @@ impl Geometry {
                 geometric_normal: plane.normal,
                 shading_normal: plane.normal,
                 material: plane.material,
+                uv: None,
             };
         }
         if hit.prim < n_tris {
@@ -42,13 +46,10 @@ impl Geometry {
             let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
             let ng = triangle::geometric_normal(&v).normalize_or(Vec3::Z);
             let mesh = self.mesh_of(hit.prim);
+            let tri = (hit.prim - mesh.first) as usize;
             let mut ns = ng;
             if let Some(normals) = &mesh.normals {
-                let idx = normals.indices[(hit.prim - mesh.first) as usize];
-                let n = b[0] * normals.values[idx[0] as usize]
-                    + b[1] * normals.values[idx[1] as usize]
-                    + b[2] * normals.values[idx[2] as usize];
-                if let Some(n) = n.try_normalize() {
+                if let Some(n) = normals.interpolate(tri, b).try_normalize() {
                     // Keep the shading normal on the geometric side.
                     ns = if n.dot(ng) < 0.0 { -n } else { n };
                 }
@@ -59,6 +60,7 @@ impl Geometry {
                 geometric_normal: ng,
                 shading_normal: ns,
                 material: mesh.material,
+                uv: mesh.uvs.as_ref().map(|uvs| uvs.interpolate(tri, b)),
             };
         }
         let prim = &self.shapes[(hit.prim - n_tris) as usize];
@@ -80,6 +82,7 @@ impl Geometry {
             geometric_normal: n,
             shading_normal: n,
             material: material.unwrap_or(prim.material),
+            uv: None,
         }
     }
 }

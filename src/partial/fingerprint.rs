@@ -13,20 +13,22 @@
 //! Small, rarely large parts (materials, lights, camera, analytic shapes)
 //! are hashed through their `Debug` text: Rust prints every `f32` so that it
 //! parses back to the same bits, and a field added to one of those types is
-//! covered without touching this file. Large arrays (triangles, normals) are
-//! hashed as raw bits. If the `Debug` text of a type ever changes, parts from
-//! old and new builds refuse to merge: the failure is safe.
+//! covered without touching this file. Large arrays (triangles, normals,
+//! texture coordinates, texels) are hashed as raw bits. If the `Debug` text
+//! of a type ever changes, parts from old and new builds refuse to merge:
+//! the failure is safe.
 //!
-//! [`scene_fingerprint`] destructures [`Scene`], [`Geometry`] and [`RenderSettings`]
-//! without `..`, so a new field there is a compile error here until someone
+//! [`scene_fingerprint`] destructures [`Scene`], [`Geometry`], [`MeshRange`],
+//! [`Textures`] and [`RenderSettings`] without `..`, so a new field there is a compile error here until someone
 //! decides whether it changes the image.
 //!
 //! The hash is not cryptographic: it catches mistakes (a wrong file, a
 //! different scene, a flipped bit), not malice.
 
 use crate::geometry::csg::Csg;
-use crate::geometry::{Geometry, MeshRange};
+use crate::geometry::{Geometry, MeshAttribute, MeshRange};
 use crate::scene::{RenderSettings, Scene};
+use crate::texture::Textures;
 use std::fmt;
 
 const K1: u64 = 0x9e37_79b9_7f4a_7c15;
@@ -140,6 +142,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     let Scene {
         geometry,
         materials,
+        textures,
         lights,
         camera,
         settings,
@@ -190,29 +193,25 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
             count,
             material,
             normals,
+            uvs,
         } = mesh;
         h.write_u32(*first);
         h.write_u32(*count);
         h.write_u32(*material);
-        match normals {
-            None => h.write_u32(0),
-            Some(n) => {
-                h.write_u32(1);
-                h.write_u64(n.values.len() as u64);
-                for v in &n.values {
-                    for c in v.to_array() {
-                        h.write_f32(c);
-                    }
-                }
-                h.write_u64(n.indices.len() as u64);
-                for t in &n.indices {
-                    for i in t {
-                        h.write_u32(*i);
-                    }
-                }
-            }
-        }
+        write_attribute(&mut h, normals.as_ref(), |v| v.to_array());
+        write_attribute(&mut h, uvs.as_ref(), |v| v.to_array());
     }
+    let Textures {
+        images,
+        textures: texture_list,
+    } = textures;
+    h.write_u64(images.len() as u64);
+    for image in images {
+        h.write_u32(image.width());
+        h.write_u32(image.height());
+        h.write(image.texels().as_flattened());
+    }
+    h.write_debug("textures", texture_list);
     let Csg {
         nodes: csg_nodes,
         leaves: csg_leaves,
@@ -245,6 +244,32 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     h.write_debug("light_sampling", light_sampling);
     h.write_debug("glossy_sampling", glossy_sampling);
     h.finish()
+}
+
+/// A mesh's optional per-corner attribute, as raw bits: absent, or its
+/// values (each as the floats `floats` gives) and index triples.
+fn write_attribute<T, const N: usize>(
+    h: &mut Hasher64,
+    attribute: Option<&MeshAttribute<T>>,
+    floats: impl Fn(&T) -> [f32; N],
+) {
+    let Some(a) = attribute else {
+        h.write_u32(0);
+        return;
+    };
+    h.write_u32(1);
+    h.write_u64(a.values.len() as u64);
+    for v in &a.values {
+        for c in floats(v) {
+            h.write_f32(c);
+        }
+    }
+    h.write_u64(a.indices.len() as u64);
+    for t in &a.indices {
+        for i in t {
+            h.write_u32(*i);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -289,5 +314,59 @@ mod tests {
         let mut b = Hasher64::new();
         b.write(&[1]);
         assert_ne!(a.finish(), b.finish());
+    }
+
+    #[test]
+    fn texture_coordinates_texels_and_wrap_modes_change_the_fingerprint() {
+        use crate::geometry::MeshUvs;
+        use crate::scene::{scene_from_str, RenderOverrides};
+        use crate::texture::{Image, Texture, Wrap};
+        use glam::Vec2;
+        let mut scene = scene_from_str(
+            "[[objects]]\ntriangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }",
+            std::path::Path::new("t.toml"),
+            &RenderOverrides::default(),
+        )
+        .unwrap();
+        let untextured = scene_fingerprint(&scene);
+        // Texture the triangle as a mesh file's material would.
+        let image = Image::new(2, 1, vec![[255, 0, 0], [0, 0, 255]]).unwrap();
+        scene.textures.add_image(image);
+        scene.textures.add_texture(Texture {
+            image: 0,
+            wrap: [Wrap::Repeat; 2],
+        });
+        let material = scene.geometry.meshes[0].material as usize;
+        scene.materials[material].diffuse_texture = Some(0);
+        scene.geometry.meshes[0].uvs = Some(MeshUvs {
+            values: vec![Vec2::ZERO, Vec2::X, Vec2::Y],
+            indices: vec![[0, 1, 2]],
+        });
+        let textured = scene_fingerprint(&scene);
+        assert_ne!(textured, untextured);
+
+        let mut moved = scene.clone();
+        moved.geometry.meshes[0].uvs.as_mut().unwrap().values[2].y = 0.5;
+        let mut reindexed = scene.clone();
+        reindexed.geometry.meshes[0].uvs.as_mut().unwrap().indices[0] = [0, 2, 1];
+        let mut repainted = scene.clone();
+        repainted.textures.images[0] = Image::new(2, 1, vec![[255, 0, 0], [0, 1, 255]]).unwrap();
+        let mut resized = scene.clone();
+        resized.textures.images[0] = Image::new(1, 2, vec![[255, 0, 0], [0, 0, 255]]).unwrap();
+        let mut clamped = scene.clone();
+        clamped.textures.textures[0].wrap[1] = Wrap::ClampToEdge;
+        let mut no_uvs = scene.clone();
+        no_uvs.geometry.meshes[0].uvs = None;
+        for (what, changed) in [
+            ("a texture coordinate", moved),
+            ("a UV index", reindexed),
+            ("one texel", repainted),
+            ("the image's shape", resized),
+            ("a wrap mode", clamped),
+            ("dropping the UVs", no_uvs),
+        ] {
+            assert_ne!(scene_fingerprint(&changed), textured, "{what}");
+        }
+        assert_eq!(scene_fingerprint(&scene.clone()), textured);
     }
 }

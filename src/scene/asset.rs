@@ -1,8 +1,9 @@
 //! What a mesh loader hands to the scene compiler: plain arrays in file
 //! order, with optional data present only where the file has it.
 
-use crate::geometry::MeshNormals;
+use crate::geometry::{MeshNormals, MeshUvs};
 use crate::material::Material;
+use crate::texture::Textures;
 use glam::Vec3;
 
 /// One triangle mesh read from a file. Triangles keep the file's order, so a
@@ -15,6 +16,9 @@ pub struct LoadedMesh {
     pub indices: Vec<[u32; 3]>,
     /// Shading normals, only if the file has them.
     pub normals: Option<MeshNormals>,
+    /// Texture coordinates (in [`crate::texture`]'s space), only if the file
+    /// has them for every triangle and the mesh's material has a texture.
+    pub uvs: Option<MeshUvs>,
     /// Index into [`LoadedAsset::materials`], if the file assigns one.
     pub material: Option<usize>,
 }
@@ -44,6 +48,8 @@ pub struct LoadedPointLight {
 pub struct LoadedAsset {
     pub meshes: Vec<LoadedMesh>,
     pub materials: Vec<(String, Material)>,
+    /// The images and textures the materials' `diffuse_texture` indices name.
+    pub textures: Textures,
     pub cameras: Vec<LoadedCamera>,
     pub point_lights: Vec<LoadedPointLight>,
 }

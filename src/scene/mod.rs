@@ -1,8 +1,8 @@
 //! The scene: what a render reads, and how it is made from a scene file.
 //!
 //! [`Scene`] is plain data: the [`Geometry`] rays are traced against, the
-//! materials and lights that shading reads, the camera and the render
-//! settings. [`description`] is the scene file as serde types, [`parse`]
+//! materials, textures and lights that shading reads, the camera and the
+//! render settings. [`description`] is the scene file as serde types, [`parse`]
 //! reads it, [`loaders`] read mesh files, and [`compile`] turns all of
 //! that into a [`Scene`], validating every number on the way.
 
@@ -19,6 +19,7 @@ use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
+use crate::texture::Textures;
 
 pub use compile::{load_edited_scene, load_mesh_scene, load_scene, scene_from_str, LoadTimings};
 pub use settings::{RenderOverrides, RenderSettings};
@@ -28,6 +29,8 @@ pub use settings::{RenderOverrides, RenderSettings};
 pub struct Scene {
     pub geometry: Geometry,
     pub materials: Vec<Material>,
+    /// What the materials' `diffuse_texture` indices name.
+    pub textures: Textures,
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub settings: RenderSettings,

@@ -5,17 +5,19 @@ use crate::material::Material;
 use glam::Vec3;
 use std::f32::consts::PI;
 
-/// ρ/π + k_s (n+2)/(2π) cosⁿα, α between the mirror of `wi` and `wo`.
+/// ρ/π + k_s (n+2)/(2π) cosⁿα, α between the mirror of `wi` and `wo`;
+/// `albedo` is ρ at the hit (the material's diffuse, perhaps textured).
 #[inline]
 pub fn phong_brdf(
     m: &Material,
+    albedo: Vec3,
     wo: Vec3,
     wi: Vec3,
     n: Vec3,
     diffuse: bool,
     specular: bool,
 ) -> Vec3 {
-    let mut f = if diffuse { m.diffuse / PI } else { Vec3::ZERO };
+    let mut f = if diffuse { albedo / PI } else { Vec3::ZERO };
     if specular {
         let r = 2.0 * n.dot(wi) * n - wi;
         let cos_a = r.dot(wo);

@@ -16,7 +16,7 @@ impl Integrator<'_> {
     /// samples per area light.
     pub(super) fn direct_light(&mut self, ctx: &SampleContext, depth: u32, sh: &Shading) -> Vec3 {
         let m = sh.material;
-        let diffuse = m.diffuse.max_element() > 0.0;
+        let diffuse = sh.diffuse.max_element() > 0.0;
         let specular = m.has_specular_lobe();
         if !diffuse && !specular {
             return Vec3::ZERO;
@@ -57,7 +57,7 @@ impl Integrator<'_> {
                 if cos_i <= 0.0 || sh.ng.dot(ls.wi) <= 0.0 {
                     continue;
                 }
-                let f = phong_brdf(m, sh.wo, ls.wi, sh.ns, diffuse, specular);
+                let f = phong_brdf(m, sh.diffuse, sh.wo, ls.wi, sh.ns, diffuse, specular);
                 if f.max_element() <= 0.0 {
                     continue;
                 }

@@ -18,6 +18,9 @@ pub const MIN_PATH_WEIGHT: f32 = 1e-3;
 pub(super) struct Shading<'s> {
     pub(super) surface: &'s Surface,
     pub(super) material: &'s Material,
+    /// The diffuse albedo ρ here: the material's, times its texture where
+    /// the surface has texture coordinates. Read it, not `material.diffuse`.
+    pub(super) diffuse: Vec3,
     pub(super) wo: Vec3,
     pub(super) ng: Vec3,
     pub(super) ns: Vec3,
@@ -157,9 +160,15 @@ impl Integrator<'_> {
         } else {
             (-surface.geometric_normal, -surface.shading_normal)
         };
+        // One texture lookup per hit, and none on untextured surfaces.
+        let diffuse = match (material.diffuse_texture, surface.uv) {
+            (Some(texture), Some(uv)) => material.diffuse * scene.textures.sample(texture, uv),
+            _ => material.diffuse,
+        };
         let sh = Shading {
             surface: &surface,
             material,
+            diffuse,
             wo,
             ng,
             ns,
@@ -168,7 +177,7 @@ impl Integrator<'_> {
         if depth == 0 {
             if let Some(first) = &mut self.first_hit {
                 *first = FirstHit {
-                    albedo: material.diffuse,
+                    albedo: diffuse,
                     normal: surface.shading_normal,
                     depth: hit.t * ray.direction.length(),
                 };

@@ -26,6 +26,7 @@ impl Compiler<'_> {
             fresnel: m.fresnel,
             emission: self.colour(m.emission, &k("emission"))?,
             one_sided: false,
+            diffuse_texture: None,
         })
     }
 }

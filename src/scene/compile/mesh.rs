@@ -5,8 +5,9 @@
 use super::Compiler;
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
-use crate::geometry::{MeshNormals, MeshRange};
+use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshUvs};
 use crate::light::Light;
+use crate::material::Material;
 use crate::math::Transform;
 use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
@@ -78,6 +79,7 @@ impl Compiler<'_> {
         tris: TriangleSource,
         material: u32,
         normals: Option<MeshNormals>,
+        uvs: Option<MeshUvs>,
     ) {
         if tris.len() == 0 {
             return;
@@ -91,6 +93,7 @@ impl Compiler<'_> {
             count,
             material,
             normals,
+            uvs,
         });
     }
 
@@ -114,10 +117,16 @@ impl Compiler<'_> {
             if let Err(message) = loaders::check_extension(&path) {
                 return Err(self.err(&at, message));
             }
-            let asset = load_mesh_file(&path)?;
+            let mut asset = load_mesh_file(&path)?;
+            // The file's images move into the scene's (no copy); its
+            // materials' texture indices move with them.
+            let first_texture = self.textures.append(std::mem::take(&mut asset.textures));
             let first_material = self.materials.len() as u32;
             for (name, mat) in &asset.materials {
-                self.materials.push(*mat);
+                self.materials.push(Material {
+                    diffuse_texture: mat.diffuse_texture.map(|t| t + first_texture),
+                    ..*mat
+                });
                 self.material_ids
                     .entry(format!("{file}:{name}"))
                     .or_insert(self.materials.len() as u32 - 1);
@@ -141,6 +150,12 @@ impl Compiler<'_> {
         let t = Transform::new(m).expect("checked by the caller");
         for mesh in &asset.meshes {
             check_indices(mesh, &path)?;
+            if let Some(normals) = &mesh.normals {
+                check_attribute(normals, mesh, &path, "normals")?;
+            }
+            if let Some(uvs) = &mesh.uvs {
+                check_attribute(uvs, mesh, &path, "texture coordinates")?;
+            }
             let tris = TriangleSource::Indexed {
                 positions: mesh.positions.iter().map(|&p| t.point(p)).collect(),
                 indices: mesh.indices.clone(),
@@ -152,12 +167,16 @@ impl Compiler<'_> {
             let material = explicit_material
                 .or(mesh.material.map(|i| first_material + i as u32))
                 .unwrap_or(inherited);
+            // UVs only where a texture will be looked up with them: a
+            // scene-file material put on a textured mesh has none.
+            let textured = self.materials[material as usize].diffuse_texture.is_some();
+            let uvs = mesh.uvs.clone().filter(|_| textured);
             let name = if mesh.name.is_empty() {
                 key.to_string()
             } else {
                 mesh.name.clone()
             };
-            self.push_mesh(name, tris, material, normals);
+            self.push_mesh(name, tris, material, normals, uvs);
         }
         for light in &asset.point_lights {
             self.lights.push(Light::Point {
@@ -192,6 +211,31 @@ fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
         )),
         None => Ok(()),
     }
+}
+
+/// A per-corner attribute a loader handed over has one index triple per
+/// triangle, each in range (the loaders make them so; this keeps a
+/// mistake there from becoming a panic at a hit).
+fn check_attribute<T>(
+    attribute: &MeshAttribute<T>,
+    mesh: &LoadedMesh,
+    path: &Path,
+    what: &str,
+) -> InputResult<()> {
+    let bad = attribute.indices.len() != mesh.indices.len()
+        || attribute
+            .indices
+            .iter()
+            .flatten()
+            .any(|&i| i as usize >= attribute.values.len());
+    if bad {
+        return Err(InputError::new(
+            path,
+            mesh.name.clone(),
+            format!("the {what} do not match the mesh's triangles"),
+        ));
+    }
+    Ok(())
 }
 
 /// A loaded mesh's triangles in file space, with every index checked.
@@ -247,6 +291,73 @@ mesh = "two.obj"
         let colour = |tri: u32| s.materials[g.mesh_of(tri).material as usize].diffuse;
         assert_eq!(colour(0), Vec3::X);
         assert_eq!(colour(2), Vec3::Z);
+    }
+
+    #[test]
+    fn only_textured_meshes_keep_uvs_and_texture_indices_follow_their_files() {
+        use crate::scene::loaders::test_files::png;
+        let dir = temp_dir("compile-uvs");
+        write(&dir, "red.png", &png(1, 1, &[[255, 0, 0]]));
+        write(&dir, "blue.png", &png(1, 1, &[[0, 0, 255]]));
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+        for (name, texture) in [("first", "red.png"), ("second", "blue.png")] {
+            let mtl = format!("newmtl wood\nmap_Kd {texture}\nnewmtl paint\nKd 0.5 0.5 0.5\n");
+            write(&dir, &format!("{name}.mtl"), mtl.as_bytes());
+            let obj = format!(
+                "mtllib {name}.mtl\n{quad}o wood\nusemtl wood\nf 1/1 2/2 3/3 4/4\n\
+                 o paint\nusemtl paint\nf 1/1 2/2 3/3\n"
+            );
+            write(&dir, &format!("{name}.obj"), obj.as_bytes());
+        }
+        let text = r#"
+[materials.grey]
+diffuse = [0.5, 0.5, 0.5]
+[[objects]]
+mesh = "first.obj"
+[[objects]]
+mesh = "second.obj"
+[[objects]]
+mesh = "second.obj"
+material = "grey"
+"#;
+        let s = scene_from_str(text, &dir.join("s.toml"), &RenderOverrides::default()).unwrap();
+        let has_uvs: Vec<(&str, bool)> = s
+            .geometry
+            .meshes
+            .iter()
+            .map(|m| (m.name.as_str(), m.uvs.is_some()))
+            .collect();
+        assert_eq!(
+            has_uvs,
+            [
+                ("wood", true),
+                ("paint", false),
+                ("wood", true),
+                ("paint", false),
+                ("wood", false), // a scene material without texture replaces it
+                ("paint", false),
+            ]
+        );
+        assert_eq!(s.textures.images.len(), 2, "one image per file, read once");
+        let texture_of = |mesh: usize| {
+            let m = &s.materials[s.geometry.meshes[mesh].material as usize];
+            m.diffuse_texture.map(|t| {
+                s.textures.images[s.textures.textures[t as usize].image as usize].texels()[0]
+            })
+        };
+        assert_eq!(texture_of(0), Some([255, 0, 0]));
+        assert_eq!(texture_of(2), Some([0, 0, 255]));
+        assert_eq!(texture_of(1), None);
+        assert_eq!(texture_of(4), None);
+
+        // A scene without textured meshes stores no UVs at all.
+        let s = scene_from_str(
+            "[[objects]]\nmesh = \"first.obj\"\nmaterial = \"grey\"\n[materials.grey]\n",
+            &dir.join("t.toml"),
+            &RenderOverrides::default(),
+        )
+        .unwrap();
+        assert!(s.geometry.meshes.iter().all(|m| m.uvs.is_none()));
     }
 
     #[test]

@@ -28,6 +28,7 @@ use crate::material::Material;
 use crate::math::{Aabb, Transform};
 use crate::shape::plane::Plane;
 use crate::system::memory::PeakMeter;
+use crate::texture::Textures;
 use glam::Affine3A;
 use mesh::{leaf_blocks, TriangleSource};
 use std::collections::HashMap;
@@ -188,6 +189,7 @@ pub fn compile(
     let scene = Scene {
         geometry,
         materials: c.materials,
+        textures: c.textures,
         lights: c.lights,
         camera,
         settings,
@@ -211,6 +213,8 @@ struct Compiler<'d> {
     planes: Vec<Plane>,
     materials: Vec<Material>,
     material_ids: HashMap<String, u32>,
+    /// The mesh files' images and textures, in the order the files were read.
+    textures: Textures,
     lights: Vec<Light>,
     loaded_cameras: Vec<LoadedCamera>,
     /// Mesh files already read, with the scene index of their first material.
@@ -232,6 +236,7 @@ impl<'d> Compiler<'d> {
             planes: Vec::new(),
             materials: Vec::new(),
             material_ids: HashMap::new(),
+            textures: Textures::default(),
             lights: Vec::new(),
             loaded_cameras: Vec::new(),
             assets: HashMap::new(),

@@ -180,6 +180,7 @@ impl Compiler<'_> {
                 TriangleSource::Soup(vec![v]),
                 material,
                 None,
+                None,
             );
         } else if let Some(file) = &obj.mesh {
             self.mesh_file(file, key, m, explicit_material, inherited)?;

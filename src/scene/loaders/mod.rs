@@ -101,6 +101,15 @@ pub(crate) mod test_files {
         std::fs::write(&path, contents).unwrap();
         path
     }
+
+    /// A PNG file's bytes: `width × height` 8-bit sRGB texels, row by row
+    /// from the top.
+    pub fn png(width: u32, height: u32, texels: &[[u8; 3]]) -> Vec<u8> {
+        let image = image::RgbImage::from_raw(width, height, texels.concat()).unwrap();
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        image.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+        bytes.into_inner()
+    }
 }
 
 #[cfg(test)]

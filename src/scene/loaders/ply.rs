@@ -215,6 +215,7 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
             indices,
             normals: None,
             material: None,
+            uvs: None,
         }],
         ..LoadedAsset::default()
     })

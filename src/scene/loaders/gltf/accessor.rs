@@ -6,7 +6,7 @@ use super::container::u32_le;
 use super::Loader;
 use crate::error::InputResult;
 use ::gltf::json;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use json::accessor::{ComponentType, Type as AccessorType};
 use json::validation::Checked;
 
@@ -25,6 +25,45 @@ impl AccessorData<'_> {
 }
 
 impl Loader<'_> {
+    /// A buffer view and its bytes, checked against its buffer; `referrer`
+    /// is the location of what names the view, for the error if it does not
+    /// exist.
+    pub(super) fn view(
+        &self,
+        view_index: usize,
+        referrer: &str,
+    ) -> InputResult<(&json::buffer::View, &[u8])> {
+        let view_location = format!("bufferViews[{view_index}]");
+        let view = self
+            .root
+            .buffer_views
+            .get(view_index)
+            .ok_or_else(|| self.error(referrer, format!("{view_location} does not exist")))?;
+        let buffer_index = view.buffer.value();
+        let buffer = self.buffers.get(buffer_index).ok_or_else(|| {
+            self.error(
+                &view_location,
+                format!("buffers[{buffer_index}] does not exist"),
+            )
+        })?;
+        let view_offset = view.byte_offset.map_or(0, |o| o.0);
+        let view_length = view.byte_length.0;
+        let view_end = view_offset
+            .checked_add(view_length)
+            .filter(|&end| end <= buffer.len() as u64)
+            .ok_or_else(|| {
+                self.error(
+                    &view_location,
+                    format!(
+                        "byteOffset {view_offset} + byteLength {view_length} reach past the \
+                         end of buffers[{buffer_index}] ({} bytes)",
+                        buffer.len()
+                    ),
+                )
+            })?;
+        Ok((view, &buffer[view_offset as usize..view_end as usize]))
+    }
+
     /// Locate an accessor's bytes, checking view and buffer bounds.
     fn accessor(
         &self,
@@ -58,34 +97,8 @@ impl Loader<'_> {
             .ok_or_else(|| self.error(&location, "accessor has no bufferView"))?
             .value();
         let view_location = format!("bufferViews[{view_index}]");
-        let view = self
-            .root
-            .buffer_views
-            .get(view_index)
-            .ok_or_else(|| self.error(&location, format!("{view_location} does not exist")))?;
-        let buffer_index = view.buffer.value();
-        let buffer = self.buffers.get(buffer_index).ok_or_else(|| {
-            self.error(
-                &view_location,
-                format!("buffers[{buffer_index}] does not exist"),
-            )
-        })?;
-        let view_offset = view.byte_offset.map_or(0, |o| o.0);
-        let view_length = view.byte_length.0;
-        let view_end = view_offset
-            .checked_add(view_length)
-            .filter(|&end| end <= buffer.len() as u64)
-            .ok_or_else(|| {
-                self.error(
-                    &view_location,
-                    format!(
-                        "byteOffset {view_offset} + byteLength {view_length} reach past the \
-                         end of buffers[{buffer_index}] ({} bytes)",
-                        buffer.len()
-                    ),
-                )
-            })?;
-        let view_bytes = &buffer[view_offset as usize..view_end as usize];
+        let (view, view_bytes) = self.view(view_index, &location)?;
+        let view_length = view_bytes.len() as u64;
 
         let element_size = (component.size() * dimensions.multiplicity()) as u64;
         let stride = view.byte_stride.map_or(element_size, |s| s.0 as u64);
@@ -146,6 +159,50 @@ impl Loader<'_> {
                 ));
             }
             values.push(v);
+        }
+        Ok(values)
+    }
+
+    /// Texture coordinates: `FLOAT`, or normalized `UNSIGNED_BYTE` or
+    /// `UNSIGNED_SHORT` (read as n/255, n/65535), `VEC2`, as the glTF
+    /// specification allows for `TEXCOORD_n`.
+    pub(super) fn read_uvs(&self, index: usize, what: &str) -> InputResult<Vec<Vec2>> {
+        let (data, component) = self.accessor(index, what, |c, t| {
+            matches!(
+                c,
+                ComponentType::F32 | ComponentType::U8 | ComponentType::U16
+            ) && t == AccessorType::Vec2
+        })?;
+        let normalized = self.root.accessors.get(index).is_some_and(|a| a.normalized);
+        if component != ComponentType::F32 && !normalized {
+            return Err(self.error(
+                format!("accessors[{index}]"),
+                format!("{what} of {component:?} must be normalized"),
+            ));
+        }
+        let mut values = Vec::with_capacity(data.count);
+        for i in 0..data.count {
+            let e = data.element(i);
+            let uv = match component {
+                ComponentType::U8 => Vec2::new(f32::from(e[0]), f32::from(e[1])) / 255.0,
+                ComponentType::U16 => {
+                    Vec2::new(
+                        f32::from(u16::from_le_bytes([e[0], e[1]])),
+                        f32::from(u16::from_le_bytes([e[2], e[3]])),
+                    ) / 65535.0
+                }
+                _ => Vec2::new(
+                    f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
+                    f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
+                ),
+            };
+            if !uv.is_finite() {
+                return Err(self.error(
+                    format!("accessors[{index}]"),
+                    format!("{what} element {i} is not finite: {uv}"),
+                ));
+            }
+            values.push(uv);
         }
         Ok(values)
     }

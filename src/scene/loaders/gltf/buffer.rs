@@ -9,7 +9,7 @@ use crate::error::{InputError, InputResult};
 use ::gltf::json;
 use std::borrow::Cow;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Resolve every buffer to its bytes, exactly `byteLength` long.
 pub(super) fn load_buffers<'a>(
@@ -81,7 +81,7 @@ fn decode_data_uri(uri: &str, declared: u64) -> Result<Vec<u8>, String> {
 }
 
 /// Standard (or URL-safe) base64, padding optional, whitespace ignored.
-fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
+pub(super) fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
     let mut out = Vec::with_capacity(text.len() / 4 * 3 + 3);
     let (mut bits, mut bit_count) = (0u32, 0u32);
     let mut padding = false;
@@ -118,8 +118,9 @@ fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
-/// Read `declared` bytes of a buffer file named by a relative URI.
-fn read_buffer_file(gltf_path: &Path, uri: &str, declared: u64) -> Result<Vec<u8>, String> {
+/// The file a relative URI names, beside the glTF file (percent-decoded);
+/// other schemes than `data:` (handled by the callers) are refused.
+pub(super) fn uri_file(gltf_path: &Path, uri: &str) -> Result<PathBuf, String> {
     let scheme_end = uri.find(':');
     let slash = uri.find('/').unwrap_or(uri.len());
     if let Some(colon) = scheme_end.filter(|&c| c < slash && c > 1) {
@@ -129,7 +130,12 @@ fn read_buffer_file(gltf_path: &Path, uri: &str, declared: u64) -> Result<Vec<u8
         ));
     }
     let name = percent_decode(uri)?;
-    let file = gltf_path.parent().unwrap_or(Path::new("")).join(name);
+    Ok(gltf_path.parent().unwrap_or(Path::new("")).join(name))
+}
+
+/// Read `declared` bytes of a buffer file named by a relative URI.
+fn read_buffer_file(gltf_path: &Path, uri: &str, declared: u64) -> Result<Vec<u8>, String> {
+    let file = uri_file(gltf_path, uri)?;
     let cannot = |e: std::io::Error| format!("cannot read {}: {}", file.display(), io_message(&e));
     let size = std::fs::metadata(&file).map_err(cannot)?.len();
     if size < declared {

@@ -1,17 +1,23 @@
 //! glTF metallic-roughness materials mapped onto strata's [`Material`], as
 //! the table in the loader's documentation (`mod.rs`) says.
 
+use super::texture::TextureCache;
 use super::Loader;
 use crate::error::InputResult;
 use crate::material::Material;
+use crate::texture::Textures;
 use glam::Vec3;
 
 /// Largest Phong exponent the roughness mapping produces.
 const MAX_PHONG_EXPONENT: f32 = 1.0e6;
 
 impl Loader<'_> {
-    pub(super) fn materials(&self) -> InputResult<Vec<(String, Material)>> {
+    /// Every material, in file order, and the base colour textures they
+    /// name (decoded here, so a missing image is an error even if no
+    /// primitive uses the material).
+    pub(super) fn materials(&self) -> InputResult<(Vec<(String, Material)>, Textures)> {
         let mut materials = Vec::with_capacity(self.root.materials.len());
+        let mut textures = TextureCache::default();
         for (i, m) in self.root.materials.iter().enumerate() {
             let location = format!("materials[{i}]");
             let pbr = &m.pbr_metallic_roughness;
@@ -36,11 +42,23 @@ impl Loader<'_> {
                      negative, metallicFactor and roughnessFactor between 0 and 1",
                 ));
             }
+            let diffuse_texture = match &pbr.base_color_texture {
+                Some(info) => Some(self.texture(
+                    &mut textures,
+                    info.index.value(),
+                    &format!("{location}.pbrMetallicRoughness.baseColorTexture"),
+                )?),
+                None => None,
+            };
             let name = m.name.clone().unwrap_or_else(|| format!("material{i}"));
             let base = Vec3::new(base[0], base[1], base[2]);
-            materials.push((name, pbr_material(base, metallic, roughness, emission)));
+            let material = Material {
+                diffuse_texture,
+                ..pbr_material(base, metallic, roughness, emission)
+            };
+            materials.push((name, material));
         }
-        Ok(materials)
+        Ok((materials, textures.textures))
     }
 }
 

@@ -19,16 +19,20 @@
 //! | `POINTS`, `LINES`, `LINE_LOOP`, `LINE_STRIP` | skipped                            |
 //!
 //! A primitive without `indices` uses its vertices in order (0, 1, 2, …).
-//! Only `POSITION` (and `NORMAL`, when present) are read; both must be
-//! `FLOAT` `VEC3`. Sparse accessors are not supported.
+//! Only `POSITION` (and `NORMAL`, when present) are read, both `FLOAT`
+//! `VEC3`, and, for a primitive whose material has a base colour texture,
+//! the `TEXCOORD_n` set that texture names (`FLOAT`, or normalized
+//! `UNSIGNED_BYTE` or `UNSIGNED_SHORT`, `VEC2`); other primitives keep no
+//! texture coordinates. Sparse accessors are not supported.
 //!
 //! # Materials
 //!
 //! Every glTF material becomes one entry of [`LoadedAsset::materials`], in
 //! file order (so a primitive's `material` index carries over unchanged), named
 //! by its `name` or `material<i>`. A primitive without a material gets `None`,
-//! i.e. the scene's default material. Textures and alpha are ignored. With
-//! base colour `c`, metallic `m` and roughness `r`:
+//! i.e. the scene's default material. Alpha, and every texture but the base
+//! colour's, are ignored. With base colour `c`, metallic `m` and roughness
+//! `r`:
 //!
 //! | glTF (metallic-roughness)                          | [`Material`] field                                   |
 //! |----------------------------------------------------|------------------------------------------------------|
@@ -38,10 +42,34 @@
 //! | `metallicFactor` `m`                               | `specular = 0.04 · (1 − m)` (grey), the dielectric highlight |
 //! | `roughnessFactor` `r`                              | `shininess = n(r)` (`r = 0` gives the maximum, 10⁶)  |
 //! | `emissiveFactor` `e` × `KHR_materials_emissive_strength` `s` | `emission = e · s`                         |
+//! | `baseColorTexture`                                 | `diffuse_texture`: the image multiplies `diffuse` |
 //! | everything else                                    | [`Material::default`] (`transparency = 0`, `ior = 1.5`, no Fresnel) |
 //!
 //! where `n(r) = 2/α² − 2` with `α = r²` (the usual Phong-exponent equivalent
 //! of a microfacet lobe of width α, Walter et al. 2007), clamped to [1, 10⁶].
+//!
+//! # Base colour textures
+//!
+//! ```text
+//! "materials": [{ "pbrMetallicRoughness": {
+//!     "baseColorFactor": [1, 1, 1, 1],
+//!     "baseColorTexture": { "index": 0, "texCoord": 0 } } }],
+//! "textures": [{ "source": 0, "sampler": 0 }],
+//! "samplers": [{ "wrapS": 10497, "wrapT": 33071 }],
+//! "images":   [{ "uri": "crate.png" }]
+//! ```
+//!
+//! The texture's image is a PNG or JPEG file beside the glTF, a base64
+//! `data:` URI, or a `bufferView` (GLB); the format is told by its bytes,
+//! not `mimeType`. Its sampler's `wrapS`/`wrapT` become the wrap modes
+//! (repeat without a sampler); its filters are ignored, lookups are always
+//! bilinear (see [`crate::texture`]). Each image is decoded once however
+//! many textures use it, and only images a base colour texture uses are
+//! read. `KHR_texture_transform` is not supported: in `extensionsRequired`
+//! the file is refused, otherwise it is ignored and the UVs are used as
+//! stored. A missing or undecodable image is an error at `images[j]` that
+//! names the file and the texture using it: `cannot read texture
+//! dir/crate.png: No such file or directory (used by textures[0])`.
 //!
 //! # Cameras and lights
 //!
@@ -82,6 +110,7 @@
 //! | `primitive.rs` | one mesh primitive: attributes, indices, mode → triangles       |
 //! | `node.rs`      | node transforms, world-space normals, cameras and point lights  |
 //! | `material.rs`  | metallic-roughness → [`Material`]                               |
+//! | `texture.rs`   | base colour textures: samplers and images (file, URI or view)   |
 //!
 //! [`LoadedMesh`]: crate::scene::asset::LoadedMesh
 //! [`LoadedCamera`]: crate::scene::asset::LoadedCamera
@@ -97,6 +126,7 @@ mod node;
 mod primitive;
 #[cfg(test)]
 mod test_support;
+mod texture;
 
 use super::io_message;
 use crate::error::{InputError, InputResult};
@@ -155,8 +185,10 @@ impl Loader<'_> {
     }
 
     fn load(&self) -> InputResult<LoadedAsset> {
+        let (materials, textures) = self.materials()?;
         let mut asset = LoadedAsset {
-            materials: self.materials()?,
+            materials,
+            textures,
             ..Default::default()
         };
         let root_nodes = self.root_nodes()?;

@@ -1,9 +1,10 @@
-//! One mesh primitive in its mesh's local space: its `POSITION`, `NORMAL`
-//! and indices read, and its mode's vertex order turned into triangles.
+//! One mesh primitive in its mesh's local space: its `POSITION`, `NORMAL`,
+//! `TEXCOORD_n` (if its material has a base colour texture) and indices
+//! read, and its mode's vertex order turned into triangles.
 
 use super::Loader;
 use crate::error::InputResult;
-use crate::geometry::MeshNormals;
+use crate::geometry::{MeshNormals, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use ::gltf::json;
 use json::mesh::{Mode, Semantic};
@@ -87,6 +88,38 @@ impl Loader<'_> {
             }
             other => other,
         };
+        // UVs only for a textured material, from the set its texture names;
+        // a primitive without that set gets none.
+        let uv_set = material
+            .filter(|&m| asset.materials[m].1.diffuse_texture.is_some())
+            .and_then(|m| self.root.materials.get(m))
+            .and_then(|m| m.pbr_metallic_roughness.base_color_texture.as_ref())
+            .map(|info| info.tex_coord);
+        let uv_accessor = uv_set.and_then(|set| {
+            primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::TexCoords(set)))
+                .map(|a| (set, a.value()))
+        });
+        let uvs = match uv_accessor {
+            Some((set, accessor)) => {
+                let values = self.read_uvs(accessor, &format!("TEXCOORD_{set}"))?;
+                if values.len() != vertex_count {
+                    return Err(self.error(
+                        location,
+                        format!(
+                            "TEXCOORD_{set} has {} elements but POSITION has {vertex_count}",
+                            values.len()
+                        ),
+                    ));
+                }
+                Some(MeshUvs {
+                    values,
+                    indices: indices.clone(),
+                })
+            }
+            None => None,
+        };
         Ok(Some(LoadedMesh {
             name,
             positions,
@@ -96,6 +129,7 @@ impl Loader<'_> {
             }),
             indices,
             material,
+            uvs,
         }))
     }
 }

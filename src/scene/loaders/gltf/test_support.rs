@@ -19,7 +19,7 @@ pub(super) struct Builder {
 }
 
 impl Builder {
-    fn view(&mut self, bytes: &[u8]) -> usize {
+    pub(super) fn view(&mut self, bytes: &[u8]) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -61,6 +61,43 @@ impl Builder {
         self.accessor(format!(
             r#"{{"bufferView":{view},"componentType":5126,"count":{},"type":"VEC3"{bounds}}}"#,
             values.len()
+        ))
+    }
+
+    /// `FLOAT` `VEC2` values, such as texture coordinates.
+    pub(super) fn vec2(&mut self, values: &[[f32; 2]]) -> usize {
+        let bytes: Vec<u8> = values
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        self.raw_accessor(&bytes, 5126, "VEC2", false)
+    }
+
+    /// An accessor over `bytes` in a view of their own: `component` is the
+    /// glTF componentType, `kind` the type (`"VEC2"`), each element tightly
+    /// packed.
+    pub(super) fn raw_accessor(
+        &mut self,
+        bytes: &[u8],
+        component: u32,
+        kind: &str,
+        normalized: bool,
+    ) -> usize {
+        let size = match component {
+            5120 | 5121 => 1,
+            5122 | 5123 => 2,
+            _ => 4,
+        } * match kind {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            _ => 4,
+        };
+        let view = self.view(bytes);
+        self.accessor(format!(
+            r#"{{"bufferView":{view},"componentType":{component},"count":{},"type":"{kind}","normalized":{normalized}}}"#,
+            bytes.len() / size
         ))
     }
 

@@ -10,7 +10,11 @@
 //! Shading normals come through only where the file has them: a mesh whose
 //! faces all give a `vn` index for every vertex keeps them (indexed apart
 //! from positions, as in the file); if any face of a mesh lacks them the mesh
-//! gets none (`normals: None`) rather than invented ones.
+//! gets none (`normals: None`) rather than invented ones. Texture
+//! coordinates follow the same rule with `vt`, and are kept only for a mesh
+//! whose material has a `map_Kd` texture to look up with them; `v` is
+//! flipped (`1 − v`) into [`crate::texture`]'s space, whose `v` runs down
+//! from the image's top row.
 //!
 //! Before `tobj` sees the text, a validation pass reports the common mistakes
 //! with their line number (`mesh.obj: line 12: ...`): malformed or
@@ -39,10 +43,27 @@
 //! | `Tr t` (only without `d`) | `transparency = t` (clamped to [0, 1])                     |
 //! | `illum 3`, `5` or `7`     | `reflectivity = max(Ks r, g, b)`, `glossiness = 0` (mirror) |
 //! | `illum 5` or `7`          | also `fresnel = true`                                      |
-//! | `Ka`, `Tf`, `map_*`, `bump`, others | ignored                                          |
+//! | `map_Kd [-clamp on] file` | `diffuse_texture`: the image multiplies `Kd`                |
+//! | `Ka`, `Tf`, other `map_*`, `bump`, others | ignored                                    |
 //!
 //! A colour given as one number (`Kd 0.5`) is a grey. Every other field keeps
 //! its [`Material::default`] value.
+//!
+//! # Textures
+//!
+//! ```text
+//! newmtl crate
+//! Kd 1 1 1                     # the texture multiplies Kd: keep it white to see the image as is
+//! map_Kd textures/crate.png    # PNG or JPEG, relative to the .mtl file; the name may contain spaces
+//! ```
+//!
+//! The image repeats outside [0, 1]; `-clamp on` clamps it to its edge
+//! texels instead (see [`crate::texture`] for filtering and colour). Other
+//! `map_Kd` options (`-o`, `-s`, `-mm`, ...) are refused, not ignored. Each
+//! image file is decoded once however many materials name it. A texture
+//! that is missing, unreadable or not a PNG or JPEG image is an error at
+//! its `map_Kd` line: `meshes/looks.mtl: line 3: cannot read texture
+//! meshes/textures/crate.png: No such file or directory`.
 //!
 //! # Files
 //!
@@ -51,8 +72,9 @@
 //!   mesh had them).
 //! - `scan.rs`: the validation pass described above, and the small rewrite of
 //!   lines that `tobj` would misread.
-//! - `mtl.rs`: material libraries: reading and checking `.mtl` files, and
-//!   mapping their materials to ours as in the table above.
+//! - `mtl.rs`: material libraries: reading and checking `.mtl` files,
+//!   decoding their textures, and mapping their materials to ours as in the
+//!   table above.
 //!
 //! [`Material`]: crate::material::Material
 //! [`Material::default`]: crate::material::Material::default
@@ -62,9 +84,9 @@ mod scan;
 
 use super::io_message;
 use crate::error::{InputError, InputResult};
-use crate::geometry::MeshNormals;
+use crate::geometry::{MeshNormals, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use mtl::mtl_to_material;
 use scan::{rewrite_for_tobj, scan_obj};
 use std::borrow::Cow;
@@ -78,7 +100,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let text = utf8_text(path, &bytes)?;
-    let scan = scan_obj(path, text)?;
+    let mut scan = scan_obj(path, text)?;
 
     let source: Cow<str> = if scan.needs_rewrite {
         Cow::Owned(rewrite_for_tobj(text, scan.strip_colours))
@@ -116,21 +138,25 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             .iter()
             .map(|m| (m.name.clone(), mtl_to_material(m)))
             .collect(),
+        textures: std::mem::take(&mut scan.textures.textures),
         ..Default::default()
     };
 
     // tobj's models hold the faces in file order, so walk the scan's faces
-    // alongside to learn whether every face of a model had normals.
+    // alongside to learn whether every face of a model had normals and
+    // texture coordinates (tobj fills gaps in either with a neighbour's).
     let mut faces = scan.faces.iter();
     for model in models {
         let mesh = model.mesh;
         let triangle_count = mesh.indices.len() / 3;
         let mut covered = 0usize;
         let mut all_have_normals = true;
+        let mut all_have_texcoords = true;
         while covered < triangle_count {
             let Some(face) = faces.next() else { break };
             covered += face.triangles as usize;
             all_have_normals &= face.has_normals;
+            all_have_texcoords &= face.has_texcoords;
         }
         if triangle_count == 0 {
             continue;
@@ -144,12 +170,31 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             values: vec3s(&mesh.normals),
             indices: triangles(&mesh.normal_indices),
         });
+        let material = mesh.material_id.filter(|&i| i < asset.materials.len());
+        // UVs only for a mesh whose material has a texture to look up.
+        let textured = material.is_some_and(|i| asset.materials[i].1.diffuse_texture.is_some());
+        let uvs = (textured
+            && all_have_texcoords
+            && covered == triangle_count
+            && !mesh.texcoords.is_empty()
+            && mesh.texcoord_indices.len() == mesh.indices.len())
+        .then(|| MeshUvs {
+            // OBJ's v runs up from the image's bottom row; ours runs down
+            // from its top row.
+            values: mesh
+                .texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect(),
+            indices: triangles(&mesh.texcoord_indices),
+        });
         asset.meshes.push(LoadedMesh {
             name: model.name,
             positions: vec3s(&mesh.positions),
             indices,
             normals,
-            material: mesh.material_id.filter(|&i| i < asset.materials.len()),
+            material,
+            uvs,
         });
     }
     Ok(asset)

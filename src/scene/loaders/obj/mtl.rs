@@ -1,12 +1,15 @@
 //! Material libraries (`.mtl`) for the OBJ loader: reading and checking them
 //! line by line (errors name the library and the line) before `tobj` parses
-//! them, and turning tobj's materials into ours.
+//! them, decoding the textures `map_Kd` names, and turning tobj's materials
+//! into ours.
 
 use super::super::io_message;
 use super::{parse_finite, utf8_text};
 use crate::error::{InputError, InputResult};
 use crate::material::Material;
+use crate::texture::{Image, Texture, Textures, Wrap};
 use glam::Vec3;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// The materials of one `mtllib` line, in library order.
@@ -19,10 +22,46 @@ pub(super) enum LibraryError {
     Read(String),
 }
 
+/// The textures of an OBJ file's material libraries, each image file
+/// decoded once however many `map_Kd` lines name it.
+#[derive(Default)]
+pub(super) struct TextureFiles {
+    pub(super) textures: Textures,
+    images: HashMap<PathBuf, u32>,
+}
+
+impl TextureFiles {
+    /// The index of the texture of `file` with `wrap`, the file read and
+    /// decoded the first time it is named.
+    fn load(&mut self, file: &Path, wrap: Wrap) -> Result<u32, String> {
+        let image = match self.images.get(file) {
+            Some(&image) => image,
+            None => {
+                let bytes = std::fs::read(file).map_err(|e| {
+                    format!("cannot read texture {}: {}", file.display(), io_message(&e))
+                })?;
+                let image = Image::decode(&bytes)
+                    .map_err(|e| format!("texture {}: {e}", file.display()))?;
+                let image = self.textures.add_image(image);
+                self.images.insert(file.to_path_buf(), image);
+                image
+            }
+        };
+        Ok(self.textures.add_texture(Texture {
+            image,
+            wrap: [wrap; 2],
+        }))
+    }
+}
+
 /// Load the material libraries named after `mtllib`. tobj reads the whole
 /// rest of the line as one file name (names may contain spaces); if no such
 /// file exists and the text has several words, each word is a library.
-pub(super) fn load_library(obj_path: &Path, name: &str) -> Result<MtlLibrary, LibraryError> {
+pub(super) fn load_library(
+    obj_path: &Path,
+    name: &str,
+    textures: &mut TextureFiles,
+) -> Result<MtlLibrary, LibraryError> {
     let dir = obj_path.parent().unwrap_or(Path::new(""));
     let whole = dir.join(name);
     let files: Vec<PathBuf> = if whole.is_file() || !name.contains(char::is_whitespace) {
@@ -39,14 +78,15 @@ pub(super) fn load_library(obj_path: &Path, name: &str) -> Result<MtlLibrary, Li
                 io_message(&e)
             ))
         })?;
-        materials.append(&mut parse_mtl(&file, &bytes).map_err(LibraryError::Input)?);
+        materials.append(&mut parse_mtl(&file, &bytes, textures).map_err(LibraryError::Input)?);
     }
     Ok(materials)
 }
 
 /// Validate an MTL file line by line (errors name it and the line), bring
-/// colours into the `r g b` form tobj needs, then let tobj parse it.
-fn parse_mtl(path: &Path, bytes: &[u8]) -> InputResult<MtlLibrary> {
+/// colours into the `r g b` form tobj needs, decode the textures, then let
+/// tobj parse it.
+fn parse_mtl(path: &Path, bytes: &[u8], textures: &mut TextureFiles) -> InputResult<MtlLibrary> {
     let text = utf8_text(path, bytes)?;
     let mut normalized = String::with_capacity(text.len());
     for (number, raw) in text.split('\n').enumerate() {
@@ -84,8 +124,17 @@ fn parse_mtl(path: &Path, bytes: &[u8]) -> InputResult<MtlLibrary> {
                 }
                 normalized.push_str(line);
             }
-            "map_Ka" | "map_Kd" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" | "map_d"
-            | "map_Bump" | "map_bump" | "bump" => {
+            "map_Kd" => {
+                let (wrap, file) = parse_map_kd(after_keyword).map_err(&at)?;
+                let dir = path.parent().unwrap_or(Path::new(""));
+                let texture = textures.load(&dir.join(file), wrap).map_err(&at)?;
+                // tobj keeps the rest of the line as the texture's name: hand
+                // it the index of the decoded texture, which
+                // `mtl_to_material` reads back.
+                normalized.push_str(&format!("map_Kd {texture}"));
+            }
+            "map_Ka" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" | "map_d" | "map_Bump"
+            | "map_bump" | "bump" => {
                 if after_keyword.is_empty() {
                     return Err(at(format!("{keyword} needs a file name")));
                 }
@@ -98,6 +147,43 @@ fn parse_mtl(path: &Path, bytes: &[u8]) -> InputResult<MtlLibrary> {
     tobj::load_mtl_buf(&mut normalized.as_bytes())
         .map(|(materials, _)| materials)
         .map_err(|e| InputError::file(path, format!("cannot parse MTL: {e}")))
+}
+
+/// The wrap mode and file name of a `map_Kd` statement (the text after the
+/// keyword): `[-clamp on|off] file name`, the name being the rest of the
+/// line (it may contain spaces). Other options would change the lookup
+/// (`-o`, `-s`, `-mm`, ...) and are refused rather than ignored.
+fn parse_map_kd(text: &str) -> Result<(Wrap, &str), String> {
+    let mut wrap = Wrap::Repeat;
+    let mut rest = text.trim();
+    while rest.starts_with('-') {
+        let (option, after) = first_word(rest);
+        if option != "-clamp" {
+            return Err(format!(
+                "map_Kd option '{option}' is not supported (only -clamp on|off is)"
+            ));
+        }
+        let (value, after) = first_word(after);
+        wrap = match value {
+            "on" => Wrap::ClampToEdge,
+            "off" => Wrap::Repeat,
+            _ => return Err(format!("map_Kd -clamp needs on or off, found '{value}'")),
+        };
+        rest = after;
+    }
+    if rest.is_empty() {
+        return Err("map_Kd needs a file name".to_string());
+    }
+    Ok((wrap, rest))
+}
+
+/// The first word of `text` and the rest after it, both trimmed.
+fn first_word(text: &str) -> (&str, &str) {
+    let text = text.trim_start();
+    match text.find(char::is_whitespace) {
+        Some(i) => (&text[..i], text[i..].trim_start()),
+        None => (text, ""),
+    }
 }
 
 /// `r g b`, or one number for a grey; other MTL colour forms are refused.
@@ -154,6 +240,8 @@ pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
             .unwrap_or(defaults.ior),
         fresnel: matches!(illum, 5 | 7),
         emission: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
+        // `parse_mtl` put the texture's index in place of the file name.
+        diffuse_texture: m.diffuse_texture.as_deref().and_then(|t| t.parse().ok()),
         ..defaults
     }
 }
@@ -211,6 +299,107 @@ mod tests {
         let materials: Vec<Option<usize>> = asset.meshes.iter().map(|m| m.material).collect();
         // Object c has no usemtl of its own but inherits the current one, as OBJ does.
         assert_eq!(materials, [Some(1), Some(3), Some(3)]);
+    }
+
+    /// A quad with texture coordinates, in objects `a` (material a), `b`
+    /// (b), `c` (c) and `plain` (a, but without `vt` indices).
+    const TEXTURED_QUADS: &str = "mtllib looks.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+        vt 0 0\nvt 1 0\nvt 1 1\nvt 0.25 1\n\
+        o a\nusemtl a\nf 1/1 2/2 3/3 4/4\no b\nusemtl b\nf 1/1 2/2 3/3\n\
+        o c\nusemtl c\nf 1/1 2/2 3/3\no plain\nusemtl a\nf 1/1 2/2 3/3\nf 1 3 4\n";
+
+    #[test]
+    fn map_kd_textures_are_decoded_once_and_textured_meshes_get_uvs() {
+        use crate::scene::loaders::test_files::png;
+        use crate::texture::Wrap;
+        use glam::Vec2;
+        let dir = temp_dir("map_kd");
+        let texels = [[255, 128, 0], [0, 64, 255]];
+        write(&dir, "two texels.png", &png(2, 1, &texels));
+        write(
+            &dir,
+            "looks.mtl",
+            b"newmtl a\nKd 0.5 0.5 0.5\nmap_Kd two texels.png\n\
+              newmtl b\nmap_Kd -clamp on two texels.png\nnewmtl c\nKd 1 0 0\n",
+        );
+        let asset = load_obj(&write(&dir, "q.obj", TEXTURED_QUADS.as_bytes())).unwrap();
+        // One file named twice: one image, two textures (two wrap modes).
+        assert_eq!(asset.textures.images.len(), 1);
+        assert_eq!(asset.textures.images[0].texels(), texels);
+        let wraps: Vec<_> = asset.textures.textures.iter().map(|t| t.wrap).collect();
+        assert_eq!(wraps, [[Wrap::Repeat; 2], [Wrap::ClampToEdge; 2]]);
+        let textures: Vec<_> = asset
+            .materials
+            .iter()
+            .map(|(_, m)| m.diffuse_texture)
+            .collect();
+        assert_eq!(textures, [Some(0), Some(1), None]);
+        assert_eq!(asset.materials[0].1.diffuse, Vec3::splat(0.5), "Kd stays");
+
+        let uvs = |name: &str| {
+            asset
+                .meshes
+                .iter()
+                .find(|m| m.name == name)
+                .unwrap()
+                .uvs
+                .clone()
+        };
+        let a = uvs("a").expect("textured, with vt");
+        // v flipped: OBJ's v = 0 is the image's bottom row, ours its top.
+        let corners: Vec<[Vec2; 3]> = a
+            .indices
+            .iter()
+            .map(|t| t.map(|i| a.values[i as usize]))
+            .collect();
+        let uv = Vec2::new;
+        assert_eq!(
+            corners,
+            [
+                [uv(0., 1.), uv(1., 1.), uv(1., 0.)],
+                [uv(0., 1.), uv(1., 0.), uv(0.25, 0.)]
+            ]
+        );
+        assert!(uvs("b").is_some());
+        assert!(uvs("c").is_none(), "no texture, no UVs");
+        assert!(
+            uvs("plain").is_none(),
+            "a face without vt: no UVs, none invented"
+        );
+    }
+
+    #[test]
+    fn missing_or_bad_textures_name_the_file_and_the_mtl_line() {
+        let dir = temp_dir("bad_map_kd");
+        write(&dir, "q.obj", TEXTURED_QUADS.as_bytes());
+        write(&dir, "text.png", b"just text");
+        let png = crate::scene::loaders::test_files::png(2, 2, &[[1, 2, 3]; 4]);
+        write(&dir, "cut.png", &png[..png.len() / 2]);
+        write(&dir, "ok.png", &png);
+        let cases: [(&[u8], &str); 6] = [
+            (b"map_Kd gone.png", "cannot read texture"),
+            (b"map_Kd text.png", "not a PNG or JPEG"),
+            (b"map_Kd cut.png", "cannot decode"),
+            (b"map_Kd -s 2 2 1 ok.png", "option '-s' is not supported"),
+            (b"map_Kd -clamp maybe ok.png", "-clamp needs on or off"),
+            (b"map_Kd -clamp on", "needs a file name"),
+        ];
+        for (statement, needle) in cases {
+            let mut mtl = b"newmtl a\nKd 1 1 1\n".to_vec();
+            mtl.extend_from_slice(statement);
+            mtl.extend_from_slice(b"\nnewmtl b\nnewmtl c\n");
+            write(&dir, "looks.mtl", &mtl);
+            let err = load_obj(&dir.join("q.obj")).unwrap_err();
+            let shown = err.to_string();
+            assert!(err.file.ends_with("looks.mtl"), "{shown}");
+            assert_eq!(err.location, "line 3", "{shown}");
+            assert!(shown.contains(needle), "{shown} should say '{needle}'");
+            if !needle.contains("option") && !needle.contains("-clamp") && !needle.contains("name")
+            {
+                let file = std::str::from_utf8(&statement[7..]).unwrap();
+                assert!(shown.contains(file), "{shown} should name {file}");
+            }
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! `usemtl` is checked against the materials defined before it.
 //! [`rewrite_for_tobj`] then adjusts the few valid lines tobj would misread.
 
-use super::mtl::{load_library, LibraryError, MtlLibrary};
+use super::mtl::{load_library, LibraryError, MtlLibrary, TextureFiles};
 use super::{parse_finite, parse_number};
 use crate::error::{InputError, InputResult};
 use std::collections::{HashMap, HashSet};
@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 pub(super) struct FaceInfo {
     pub(super) triangles: u32,
     pub(super) has_normals: bool,
+    pub(super) has_texcoords: bool,
 }
 
 /// The result of the validation pass over an OBJ file.
@@ -25,6 +26,8 @@ pub(super) struct ObjScan {
     pub(super) faces: Vec<FaceInfo>,
     /// Material libraries keyed by the text after `mtllib`, as tobj asks for them.
     pub(super) libraries: HashMap<PathBuf, MtlLibrary>,
+    /// The textures their `map_Kd` lines name, each file decoded once.
+    pub(super) textures: TextureFiles,
     /// The text needs adjusting before tobj can read it (see [`rewrite_for_tobj`]).
     pub(super) needs_rewrite: bool,
     /// Some `v` lines have colours and others not: drop the colours.
@@ -87,15 +90,16 @@ fn check_index(
     Ok(())
 }
 
-/// Validate a face's vertex tokens; returns whether every corner has a normal.
-fn check_face(tokens: &[&str], defined: Counts, total: Counts) -> Result<bool, String> {
+/// Validate a face's vertex tokens; returns whether every corner has a
+/// normal, and whether every corner has texture coordinates.
+fn check_face(tokens: &[&str], defined: Counts, total: Counts) -> Result<(bool, bool), String> {
     if tokens.len() < 3 {
         return Err(format!(
             "a face needs at least 3 vertices, this one has {}",
             tokens.len()
         ));
     }
-    let mut has_normals = true;
+    let (mut has_normals, mut has_texcoords) = (true, true);
     for token in tokens {
         let parts: Vec<&str> = token.split('/').collect();
         if parts.len() > 3 {
@@ -107,20 +111,21 @@ fn check_face(tokens: &[&str], defined: Counts, total: Counts) -> Result<bool, S
             return Err(format!("'{token}' has no vertex index"));
         }
         check_index(parts[0], ("vertex", "vertices"), defined.v, total.v)?;
-        if let Some(vt) = parts.get(1).filter(|p| !p.is_empty()) {
-            check_index(
+        match parts.get(1).filter(|p| !p.is_empty()) {
+            Some(vt) => check_index(
                 vt,
                 ("texture coordinate", "texture coordinates"),
                 defined.vt,
                 total.vt,
-            )?;
+            )?,
+            None => has_texcoords = false,
         }
         match parts.get(2).filter(|p| !p.is_empty()) {
             Some(vn) => check_index(vn, ("normal", "normals"), defined.vn, total.vn)?,
             None => has_normals = false,
         }
     }
-    Ok(has_normals)
+    Ok((has_normals, has_texcoords))
 }
 
 /// The text after the first space, trimmed, as tobj reads `usemtl`/`mtllib`.
@@ -138,6 +143,7 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
     let mut scan = ObjScan {
         faces: Vec::new(),
         libraries: HashMap::new(),
+        textures: TextureFiles::default(),
         needs_rewrite: false,
         strip_colours: false,
     };
@@ -208,10 +214,12 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
                 defined.vn += 1;
             }
             "f" => {
-                let has_normals = check_face(&rest, defined, total).map_err(&at)?;
+                let (has_normals, has_texcoords) =
+                    check_face(&rest, defined, total).map_err(&at)?;
                 scan.faces.push(FaceInfo {
                     triangles: (rest.len() - 2) as u32,
                     has_normals,
+                    has_texcoords,
                 });
             }
             "l" => {
@@ -249,10 +257,11 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
                         "mtllib needs a file name, separated by a space".to_string()
                     ));
                 }
-                let library = load_library(path, name).map_err(|e| match e {
-                    LibraryError::Input(e) => e,
-                    LibraryError::Read(message) => at(message),
-                })?;
+                let library =
+                    load_library(path, name, &mut scan.textures).map_err(|e| match e {
+                        LibraryError::Input(e) => e,
+                        LibraryError::Read(message) => at(message),
+                    })?;
                 material_names.extend(library.iter().map(|m| m.name.clone()));
                 scan.libraries.insert(PathBuf::from(name), library);
             }
