@@ -5,7 +5,8 @@
 
 mod common;
 
-use exr::prelude::{read, AttributeValue, ReadChannels, ReadLayers, Text};
+use common::exr::read_exr;
+use exr::prelude::{AttributeValue, Text};
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -25,47 +26,6 @@ fn strata(dir: &Path, args: &[&str]) -> Output {
 
 fn scene(name: &str) -> String {
     format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-/// An EXR's data window origin and size, its display size, its channels by
-/// name (row-major values) and its header attributes.
-struct Exr {
-    origin: (i32, i32),
-    size: (usize, usize),
-    display: (usize, usize),
-    channels: Vec<(String, Vec<f32>)>,
-    layer: exr::meta::header::LayerAttributes,
-}
-
-fn read_exr(path: &Path) -> Exr {
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
-    let layer = image.layer_data;
-    let channels = layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-        .collect();
-    Exr {
-        origin: (
-            layer.attributes.layer_position.0,
-            layer.attributes.layer_position.1,
-        ),
-        size: (layer.size.0, layer.size.1),
-        display: (
-            image.attributes.display_window.size.0,
-            image.attributes.display_window.size.1,
-        ),
-        channels,
-        layer: layer.attributes,
-    }
 }
 
 #[test]

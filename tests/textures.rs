@@ -157,24 +157,11 @@ fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() 
 /// Standard base64 with padding, for a glTF buffer's `data:` URI.
 /// The `albedo.R/G/B` channels of an EXR written with `--aov albedo`.
 fn read_albedo(path: &Path) -> Vec<Vec3> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
-    let channel = |name: &str| -> Vec<f32> {
-        let list = &image.layer_data.channel_data.list;
-        let c = list.iter().find(|c| c.name == *name).unwrap();
-        c.sample_data.values_as_f32().collect()
-    };
+    let exr = common::exr::read_exr(path);
     let (r, g, b) = (
-        channel("albedo.R"),
-        channel("albedo.G"),
-        channel("albedo.B"),
+        exr.channel("albedo.R"),
+        exr.channel("albedo.G"),
+        exr.channel("albedo.B"),
     );
     (0..r.len()).map(|i| Vec3::new(r[i], g[i], b[i])).collect()
 }

@@ -2,6 +2,8 @@
 //! every one, hence the allows).
 #![allow(dead_code, unused_imports)]
 
+pub mod exr;
+
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use strata::render::{render, RenderOptions};

@@ -144,23 +144,13 @@ impl Loader<'_> {
         let (data, _) = self.accessor(index, what, |c, t| {
             c == ComponentType::F32 && t == AccessorType::Vec3
         })?;
-        let mut values = Vec::with_capacity(data.count);
-        for i in 0..data.count {
-            let e = data.element(i);
-            let v = Vec3::new(
+        self.finite_elements(index, what, &data, |e| {
+            Vec3::new(
                 f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
                 f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
                 f32::from_le_bytes([e[8], e[9], e[10], e[11]]),
-            );
-            if !v.is_finite() {
-                return Err(self.error(
-                    format!("accessors[{index}]"),
-                    format!("{what} element {i} is not finite: {v}"),
-                ));
-            }
-            values.push(v);
-        }
-        Ok(values)
+            )
+        })
     }
 
     /// Texture coordinates: `FLOAT`, or normalized `UNSIGNED_BYTE` or
@@ -180,29 +170,40 @@ impl Loader<'_> {
                 format!("{what} of {component:?} must be normalized"),
             ));
         }
+        self.finite_elements(index, what, &data, |e| match component {
+            ComponentType::U8 => Vec2::new(f32::from(e[0]), f32::from(e[1])) / 255.0,
+            ComponentType::U16 => {
+                Vec2::new(
+                    f32::from(u16::from_le_bytes([e[0], e[1]])),
+                    f32::from(u16::from_le_bytes([e[2], e[3]])),
+                ) / 65535.0
+            }
+            _ => Vec2::new(
+                f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
+                f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
+            ),
+        })
+    }
+
+    /// Decode every element of `data`, refusing the first that is not finite
+    /// (a NaN position or UV would poison the BVH or the texture lookup).
+    fn finite_elements<T: FiniteValue>(
+        &self,
+        index: usize,
+        what: &str,
+        data: &AccessorData,
+        decode: impl Fn(&[u8]) -> T,
+    ) -> InputResult<Vec<T>> {
         let mut values = Vec::with_capacity(data.count);
         for i in 0..data.count {
-            let e = data.element(i);
-            let uv = match component {
-                ComponentType::U8 => Vec2::new(f32::from(e[0]), f32::from(e[1])) / 255.0,
-                ComponentType::U16 => {
-                    Vec2::new(
-                        f32::from(u16::from_le_bytes([e[0], e[1]])),
-                        f32::from(u16::from_le_bytes([e[2], e[3]])),
-                    ) / 65535.0
-                }
-                _ => Vec2::new(
-                    f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
-                    f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
-                ),
-            };
-            if !uv.is_finite() {
+            let v = decode(data.element(i));
+            if !v.finite() {
                 return Err(self.error(
                     format!("accessors[{index}]"),
-                    format!("{what} element {i} is not finite: {uv}"),
+                    format!("{what} element {i} is not finite: {v}"),
                 ));
             }
-            values.push(uv);
+            values.push(v);
         }
         Ok(values)
     }
@@ -224,6 +225,23 @@ impl Loader<'_> {
                 }
             })
             .collect())
+    }
+}
+
+/// The vector types an accessor decodes to, which must be finite.
+trait FiniteValue: std::fmt::Display {
+    fn finite(&self) -> bool;
+}
+
+impl FiniteValue for Vec3 {
+    fn finite(&self) -> bool {
+        self.is_finite()
+    }
+}
+
+impl FiniteValue for Vec2 {
+    fn finite(&self) -> bool {
+        self.is_finite()
     }
 }
 
