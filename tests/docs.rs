@@ -1,0 +1,378 @@
+//! The user documentation cannot fall behind the code unnoticed:
+//!
+//! - every long flag that `strata --help` or `strata COMMAND --help` lists
+//!   appears in docs/cli.md, and every subcommand has a section there;
+//! - every relative link in README.md and docs/*.md points at a file that
+//!   exists, and a `#fragment` into a Markdown file names one of its headings;
+//! - every TOML example in the scene format reference (and the README and
+//!   the CLI reference) is a scene strata accepts, and every example marked
+//!   as an error is refused with the message the documentation shows.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// `strata ARGS --help`, which must succeed.
+fn help(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .args(args)
+        .arg("--help")
+        .output()
+        .expect("run strata");
+    assert!(
+        out.status.success(),
+        "strata {} --help failed: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn is_flag_char(c: char) -> bool {
+    c.is_ascii_alphanumeric() || c == '-' || c == '_'
+}
+
+/// Every `--long-flag` written anywhere in `text`.
+fn long_flags(text: &str) -> BTreeSet<String> {
+    let mut flags = BTreeSet::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("--") {
+        let before = rest[..i].chars().next_back();
+        let after = &rest[i + 2..];
+        let len = after
+            .find(|c: char| !is_flag_char(c))
+            .unwrap_or(after.len());
+        let name = &after[..len];
+        if !before.is_some_and(is_flag_char) && name.starts_with(|c: char| c.is_ascii_lowercase()) {
+            flags.insert(format!("--{}", name.trim_end_matches('-')));
+        }
+        rest = &after[len..];
+    }
+    flags
+}
+
+/// The subcommands `strata --help` lists (its "Commands:" section).
+fn subcommands(top: &str) -> Vec<String> {
+    let section = top
+        .split("Commands:")
+        .nth(1)
+        .expect("strata --help has a Commands section");
+    section
+        .lines()
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|name| *name != "help")
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn every_flag_of_every_subcommand_is_in_the_cli_reference() {
+    let doc = read(&repo().join("docs/cli.md"));
+    let documented = long_flags(&doc);
+    let top = help(&[]);
+    let commands = subcommands(&top);
+    for expected in [
+        "render", "merge", "converge", "scaling", "bench", "rays", "trace",
+    ] {
+        assert!(
+            commands.iter().any(|c| c == expected),
+            "strata --help does not list {expected}: {commands:?}"
+        );
+    }
+    let mut missing = Vec::new();
+    for flag in long_flags(&top) {
+        if !documented.contains(&flag) {
+            missing.push(format!("strata {flag}"));
+        }
+    }
+    for command in &commands {
+        if !doc.contains(&format!("## `strata {command}")) {
+            missing.push(format!("a `## `strata {command}`` section"));
+        }
+        for flag in long_flags(&help(&[command])) {
+            if !documented.contains(&flag) {
+                missing.push(format!("strata {command} {flag}"));
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "docs/cli.md does not document: {}",
+        missing.join(", ")
+    );
+}
+
+/// The text of `markdown` outside fenced code blocks and inline code spans.
+fn prose(markdown: &str) -> String {
+    let mut out = String::new();
+    let mut fenced = false;
+    for line in markdown.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            out.push('\n');
+            continue;
+        }
+        if !fenced {
+            // Drop inline code: every other backtick-delimited span.
+            let mut code = false;
+            for (i, part) in line.split('`').enumerate() {
+                if i > 0 {
+                    code = !code;
+                }
+                if !code {
+                    out.push_str(part);
+                }
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The targets of the inline links and images `[text](target)` and the
+/// reference definitions `[label]: target` in `markdown`.
+fn link_targets(markdown: &str) -> Vec<String> {
+    let text = prose(markdown);
+    let mut targets = Vec::new();
+    let mut rest = text.as_str();
+    while let Some(i) = rest.find("](") {
+        let after = &rest[i + 2..];
+        let end = after.find(')').unwrap_or(after.len());
+        let target = after[..end].split_whitespace().next().unwrap_or("");
+        targets.push(target.trim_matches(['<', '>']).to_string());
+        rest = &after[end..];
+    }
+    for line in text.lines() {
+        let line = line.trim_start();
+        if let Some(close) = line.strip_prefix('[').and_then(|l| l.find("]:")) {
+            let target = line[close + 3..].split_whitespace().next().unwrap_or("");
+            targets.push(target.to_string());
+        }
+    }
+    targets
+}
+
+/// GitHub's anchor for a heading: lower case, punctuation other than `-`
+/// and `_` dropped, spaces to hyphens.
+fn slug(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|&c| c.is_alphanumeric() || c == ' ' || c == '-' || c == '_')
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The anchors of a Markdown file's headings (repeats get -1, -2, …).
+fn anchors(markdown: &str) -> BTreeSet<String> {
+    let mut seen = std::collections::HashMap::<String, usize>::new();
+    let mut out = BTreeSet::new();
+    let mut fenced = false;
+    for line in markdown.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+        }
+        if fenced || !line.starts_with('#') {
+            continue;
+        }
+        let heading = line.trim_start_matches('#');
+        if !heading.starts_with(' ') {
+            continue;
+        }
+        let base = slug(&heading.replace('`', ""));
+        let n = seen.entry(base.clone()).or_insert(0);
+        out.insert(if *n == 0 {
+            base.clone()
+        } else {
+            format!("{base}-{n}")
+        });
+        *n += 1;
+    }
+    out
+}
+
+fn markdown_files() -> Vec<PathBuf> {
+    let mut files = vec![repo().join("README.md")];
+    let mut docs: Vec<PathBuf> = std::fs::read_dir(repo().join("docs"))
+        .expect("docs/")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    docs.sort();
+    files.extend(docs);
+    files
+}
+
+/// Documents that other work is still writing. A link to one of them is
+/// skipped only while the file does not exist; once it does, its links and
+/// headings are checked like any other's. Remove an entry when its file lands.
+const PENDING_DOCS: &[&str] = &["docs/embree.md", "docs/mitsuba.md"];
+
+#[test]
+fn every_relative_link_in_the_docs_points_at_a_file_that_exists() {
+    let mut broken = Vec::new();
+    let mut checked = 0;
+    for file in markdown_files() {
+        let text = read(&file);
+        let name = file.strip_prefix(repo()).unwrap().display().to_string();
+        for target in link_targets(&text) {
+            if target.is_empty() || target.contains("://") || target.starts_with("mailto:") {
+                continue;
+            }
+            checked += 1;
+            let (path, fragment) = match target.split_once('#') {
+                Some((p, f)) => (p, Some(f)),
+                None => (target.as_str(), None),
+            };
+            let resolved = if path.is_empty() {
+                file.clone()
+            } else {
+                file.parent().unwrap().join(path)
+            };
+            if !resolved.exists() && PENDING_DOCS.iter().any(|p| repo().join(p) == resolved) {
+                continue;
+            }
+            if !resolved.exists() {
+                broken.push(format!("{name}: {target} (no such file)"));
+                continue;
+            }
+            if let Some(fragment) = fragment {
+                if resolved.extension().is_some_and(|e| e == "md")
+                    && !anchors(&read(&resolved)).contains(fragment)
+                {
+                    broken.push(format!("{name}: {target} (no such heading)"));
+                }
+            }
+        }
+    }
+    assert!(checked > 0, "no relative links found at all");
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+}
+
+/// The documents whose TOML examples are scene files (or parts of one that
+/// stand alone as a scene: everything in a scene file has a default).
+const SCENE_EXAMPLES: &[&str] = &["README.md", "docs/scene-format.md", "docs/cli.md"];
+
+/// How an example that strata must refuse is marked: its first line is
+/// `# error: TEXT`, and the error strata prints must contain TEXT.
+const ERROR_MARK: &str = "# error: ";
+
+/// The fenced ```toml blocks of `markdown`, as (line of the fence, text).
+fn toml_blocks(markdown: &str) -> Vec<(usize, String)> {
+    let mut blocks = Vec::new();
+    let mut current: Option<(usize, String)> = None;
+    for (i, line) in markdown.lines().enumerate() {
+        let fence = line.trim_start().strip_prefix("```");
+        match (&mut current, fence) {
+            (None, Some(info)) if info.trim() == "toml" => current = Some((i + 1, String::new())),
+            (Some(_), Some(_)) => blocks.extend(current.take()),
+            (Some((_, text)), None) => {
+                text.push_str(line);
+                text.push('\n');
+            }
+            (None, _) => {}
+        }
+    }
+    blocks
+}
+
+/// Compile a documented scene as strata does before rendering (parse,
+/// validate every key and number, load the meshes, build the BVH), as if
+/// saved in the repository's root: mesh paths are relative to it.
+fn compile_example(text: &str) -> Result<(), String> {
+    let path = repo().join("example.toml");
+    strata::scene::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+#[test]
+fn every_scene_example_in_the_docs_is_a_scene_strata_accepts() {
+    let mut failures = Vec::new();
+    let mut scenes = 0;
+    let mut errors = 0;
+    for name in SCENE_EXAMPLES {
+        let text = read(&repo().join(name));
+        for (line, block) in toml_blocks(&text) {
+            let at = format!("{name}:{line}");
+            match block
+                .lines()
+                .next()
+                .and_then(|l| l.strip_prefix(ERROR_MARK))
+            {
+                Some(expected) => {
+                    errors += 1;
+                    match compile_example(&block) {
+                        Ok(()) => failures.push(format!("{at}: accepted, but marked as an error")),
+                        Err(e) if !e.contains(expected.trim()) => failures.push(format!(
+                            "{at}: the error is\n    {e}\n  not one containing\n    {expected}"
+                        )),
+                        Err(_) => {}
+                    }
+                }
+                None => {
+                    scenes += 1;
+                    if let Err(e) = compile_example(&block) {
+                        failures.push(format!("{at}: {e}"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(scenes >= 10, "only {scenes} scene examples found");
+    assert!(errors >= 1, "no error examples found");
+    assert!(
+        failures.is_empty(),
+        "TOML examples that do not do what the docs say:\n{}",
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn the_checkers_find_what_they_look_for() {
+    assert_eq!(
+        long_flags(
+            "  -o, --output <OUTPUT>\n      --max-spp <N>  (see --reference-spp)\n a--b ---"
+        ),
+        ["--max-spp", "--output", "--reference-spp"]
+            .map(String::from)
+            .into()
+    );
+    let md = "See [the format](scene-format.md#render) and ![chart](c.svg).\n\
+              `[not](code.md)`\n```\n[not](fenced.md)\n```\n[ref]: other.md\n";
+    assert_eq!(
+        link_targets(md),
+        ["scene-format.md#render", "c.svg", "other.md"]
+    );
+    let heads = anchors("# Scene files\n## `[render]`\n## Units and limits\n## Units and limits\n");
+    for a in [
+        "scene-files",
+        "render",
+        "units-and-limits",
+        "units-and-limits-1",
+    ] {
+        assert!(heads.contains(a), "{a} in {heads:?}");
+    }
+    let blocks = toml_blocks("a\n```toml\n[render]\nspp = 4\n```\n```sh\nx\n```\n```toml\n```\n");
+    assert_eq!(
+        blocks,
+        [(2, "[render]\nspp = 4\n".to_string()), (9, String::new())]
+    );
+    assert!(compile_example("[render]\nspp = 4\n").is_ok());
+    let typo = compile_example("[render]\nssp = 4\n").unwrap_err();
+    assert!(
+        typo.contains("line 2: render.ssp: unknown field `ssp`"),
+        "{typo}"
+    );
+}
