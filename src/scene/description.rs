@@ -11,7 +11,7 @@
 //! up = [0.0, 1.0, 0.0]
 //! fov = 40.0             # vertical, degrees
 //! ```
-//! See the README for materials, lights and objects.
+//! docs/scene-format.md describes every key for users.
 
 use super::settings::RenderOverrides;
 use serde::Deserialize;

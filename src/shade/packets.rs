@@ -20,7 +20,7 @@ crate::mode::mode_enum! {
 }
 
 // The `auto` thresholds, from the packet/single throughput of the renderer's
-// own batches (README, "Packets in the renderer"; reproduce with `cargo test
+// own batches (docs/performance.md, "Packets"; reproduce with `cargo test
 // --release --test render_packets -- --ignored --nocapture`), medians of 15
 // alternating runs on a shared 2-core machine. Re-measured after packets
 // began testing each leaf triangle against all their rays at once:

@@ -164,7 +164,7 @@ impl Compiler<'_> {
         explicit: Option<u32>,
         inherited: u32,
     ) -> InputResult<u32> {
-        let (asset, first_material, path) = self.asset(file, key)?;
+        let (asset, first_material, path) = self.asset(file, &format!("{key}.mesh"))?;
         let mut tris = Vec::new();
         let mut materials = Vec::new();
         for mesh in &asset.meshes {

@@ -98,24 +98,24 @@ impl Compiler<'_> {
     }
 
     /// A mesh file's contents and the scene index of its first material,
-    /// read (and its materials registered) once per file.
+    /// read (and its materials registered) once per file. `at` is the key
+    /// path that names the file, for errors.
     pub(super) fn asset(
         &mut self,
         file: &str,
-        key: &str,
+        at: &str,
     ) -> InputResult<(Rc<LoadedAsset>, u32, PathBuf)> {
         let path = self.base_dir.join(file);
         if !self.assets.contains_key(&path) {
             // A file that cannot be opened, or of a kind we do not read, is a
             // mistake in the scene file: say where. A problem inside the mesh
             // file is reported at its own line there.
-            let at = format!("{key}.mesh");
             if let Err(e) = std::fs::File::open(&path) {
                 let message = format!("cannot read '{}': {}", path.display(), io_message(&e));
-                return Err(self.err(&at, message));
+                return Err(self.err(at, message));
             }
             if let Err(message) = loaders::check_extension(&path) {
-                return Err(self.err(&at, message));
+                return Err(self.err(at, message));
             }
             let mut asset = load_mesh_file(&path)?;
             // The file's images move into the scene's (no copy); its
@@ -146,7 +146,7 @@ impl Compiler<'_> {
         explicit_material: Option<u32>,
         inherited: u32,
     ) -> InputResult<()> {
-        let (asset, first_material, path) = self.asset(file, key)?;
+        let (asset, first_material, path) = self.asset(file, &format!("{key}.mesh"))?;
         let t = Transform::new(m).expect("checked by the caller");
         for mesh in &asset.meshes {
             check_indices(mesh, &path)?;

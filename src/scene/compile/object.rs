@@ -9,10 +9,12 @@ use crate::error::InputResult;
 use crate::geometry::{AnalyticPrim, Shape, NO_TRANSFORM};
 use crate::math::{Frame, Transform};
 use crate::scene::description::{CylinderDesc, ObjectDesc, ScaleDesc, SphereDesc, TransformDesc};
+use crate::scene::loaders;
 use crate::shape::cylinder::Cylinder;
 use crate::shape::plane::Plane;
 use crate::shape::sphere::Sphere;
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
+use std::path::Path;
 
 /// An object's transform and material, after [`Compiler::placement`].
 pub(super) struct Placement {
@@ -83,10 +85,29 @@ impl Compiler<'_> {
         Ok(self.transforms.len() as u32 - 1)
     }
 
+    /// The scene index of material `name`: a `[materials]` table, or
+    /// `FILE:NAME` for material `NAME` of mesh file `FILE`, which is read
+    /// here if no earlier object has read it, so that the order of objects
+    /// does not matter.
+    fn material_id(&mut self, name: &str, key: &str) -> InputResult<u32> {
+        if let Some(&id) = self.material_ids.get(name) {
+            return Ok(id);
+        }
+        let unknown = || format!("unknown material '{name}'");
+        match name.rsplit_once(':') {
+            Some((file, _)) if loaders::check_extension(Path::new(file)).is_ok() => {
+                self.asset(file, key)?;
+                let id = self.material_ids.get(name).copied();
+                id.ok_or_else(|| self.err(key, unknown()))
+            }
+            _ => Err(self.err(key, unknown())),
+        }
+    }
+
     /// What every object has besides its shape: exactly one shape key, a
     /// known material (or the inherited one) and an invertible transform.
     pub(super) fn placement(
-        &self,
+        &mut self,
         obj: &ObjectDesc,
         key: &str,
         parent: Affine3A,
@@ -112,12 +133,7 @@ impl Compiler<'_> {
             _ => return Err(self.err(key, "has more than one shape key; use a group for several")),
         }
         let explicit_material = match &obj.material {
-            Some(name) => Some(*self.material_ids.get(name).ok_or_else(|| {
-                self.err(
-                    &format!("{key}.material"),
-                    format!("unknown material '{name}'"),
-                )
-            })?),
+            Some(name) => Some(self.material_id(name, &format!("{key}.material"))?),
             None => None,
         };
         let m = match &obj.transform {
@@ -285,6 +301,39 @@ mod tests {
     use super::similarity_scale;
     use crate::geometry::{Shape, NO_TRANSFORM};
     use glam::{Affine3A, Quat, Vec3};
+
+    #[test]
+    fn a_mesh_files_material_can_be_named_before_the_mesh_is_placed() {
+        use crate::scene::{scene_from_str, RenderOverrides};
+        let at = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/t.toml");
+        let compile = |text: &str| scene_from_str(text, &at, &RenderOverrides::default());
+        let sphere = "sphere = { center = [0.0, 0.0, 0.0], radius = 1.0 }";
+        let mesh = "[[objects]]\nmesh = \"meshes/icosphere.obj\"\n";
+        let first = format!("[[objects]]\n{sphere}\nmaterial = \"meshes/icosphere.obj:gold\"\n");
+        // Either order compiles, to the same materials.
+        let before = compile(&format!("{first}{mesh}")).unwrap_or_else(|e| panic!("{e}"));
+        let after = compile(&format!("{mesh}{first}")).unwrap_or_else(|e| panic!("{e}"));
+        let gold = Vec3::new(0.6, 0.45, 0.1);
+        for scene in [&before, &after] {
+            assert_eq!(
+                scene.materials.iter().filter(|m| m.diffuse == gold).count(),
+                1
+            );
+        }
+        // A name the file does not have, or a file that is not there.
+        let e = compile(&format!(
+            "[[objects]]\n{sphere}\nmaterial = \"meshes/icosphere.obj:silver\"\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.location, "objects[0].material", "{e}");
+        assert!(e.message.contains("unknown material"), "{e}");
+        let e = compile(&format!(
+            "[[objects]]\n{sphere}\nmaterial = \"meshes/nothere.obj:gold\"\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.location, "objects[0].material", "{e}");
+        assert!(e.message.contains("cannot read"), "{e}");
+    }
 
     fn first_vertex(text: &str) -> Vec3 {
         compiled(text).geometry.file_order_triangles()[0][0]
