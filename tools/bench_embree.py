@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Ray throughput of strata against Embree (embreex) on the same rays.
+"""Ray throughput of strata against Embree's own C API on the same rays.
 
     bench_embree.py MESH [RAYS.bin] [MESH [RAYS.bin] ...] [-n 100000] [--seed 1]
                     [--strata target/release/strata] [--repeats 3] [--csv embree_bench.csv]
@@ -8,14 +8,31 @@ Each MESH (OBJ or PLY) is traced with the rays of the RAYS.bin that follows
 it, or, if none follows, with `strata rays all MESH -n N --seed S` (N rays
 of each kind: random, camera, grazing, edges, inside); RAYS.bin.json names
 the kind of each run of rays. For every mesh, kind and query (closest hit,
-occlusion) both engines trace the same rays on one thread: strata through
-`strata trace --threads 1 --repeats 3` (its own timing of the trace phase,
-after load and BVH build, the median of three passes in one process, as
-Embree's passes share one process), Embree through embreex's single-threaded loop after a
-warm-up query has built its BVH. Each measurement is the median of
---repeats runs, strata's and Embree's alternating. One row per mesh x kind x query: Mrays/s per engine and the
-ratio strata / Embree (above 1: strata is faster), then the geometric mean
-of the ratios per mesh; the rows are also saved as CSV.
+occlusion) the engines trace the same rays on one thread:
+
+* strata through `strata trace --threads 1 --repeats 3` (its own timing of
+  the trace phase, after load and BVH build: the median of three passes in
+  one process), with RAYON_NUM_THREADS=1 so that its BVH build runs on one
+  thread too;
+* Embree through tools/embree/embree_trace (compiled here on demand with
+  `make -C tools/embree`, into target/embree/), a C program on Embree 3's
+  API: rtcIntersect1 / rtcOccluded1 in a plain loop, the scene built at
+  RTC_BUILD_QUALITY_HIGH on one thread, once in default mode and once with
+  RTC_SCENE_FLAG_ROBUST. Each harness builds once and then answers pass
+  requests (--serve); a measurement is the median of three passes, as
+  strata's is.
+
+Each row's figure is the median of --repeats such measurements, strata's and
+Embree's alternating, so that a change in the machine's load falls on all.
+One row per mesh x kind x query: Mrays/s per engine and the ratios
+strata / Embree (above 1: strata is faster), then the geometric mean of the
+ratios per mesh, and per mesh the BVH build times (strata's, Embree's
+high-quality build in each mode) and Embree's bytes per triangle (its own
+allocations, through its memory monitor). The rows are saved as CSV.
+
+If the harness cannot be built (no C compiler or no libembree-dev), one line
+says so and only strata's column is measured. embreex is not used here: it
+serves tools/validate_embree.py, which checks answers, not speed.
 
 These machines are shared and noisy: compare the ratios of one run, not
 absolute figures across runs.
@@ -27,58 +44,81 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import numpy as np  # noqa: E402
 from validate_embree import InputError, load_mesh, read_groups, read_ray_file  # noqa: E402
 
-
-def embree_scene(vertices, triangles):
-    from embreex import rtcore_scene as rtcs
-    from embreex.mesh_construction import TriangleMesh
-
-    scene = rtcs.EmbreeScene()
-    TriangleMesh(scene, vertices, triangles.astype(np.int32))
-    return scene
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PASSES = 3
 
 
-def embree_rate(scene, rays, query):
-    """Mrays/s of one embreex pass over `rays`."""
-    origins = np.ascontiguousarray(rays[:, 0:3])
-    directions = np.ascontiguousarray(rays[:, 3:6])
-    dists = rays[:, 7].copy()
-    start = time.perf_counter()
-    if query == "closest":
-        scene.run(origins, directions, dists=dists, output=1)
-    else:
-        scene.run(origins, directions, dists=dists, query="OCCLUDED")
-    return len(rays) / (time.perf_counter() - start) / 1e6
+def build_harness():
+    """Path of the compiled harness, or None after one line saying why not."""
+    out = os.path.join(ROOT, "target", "embree")
+    try:
+        r = subprocess.run(["make", "-s", "-C", os.path.join(ROOT, "tools", "embree"), f"OUT={out}"], capture_output=True, text=True)
+    except OSError as e:
+        r = None
+        why = f"cannot run make: {e.strerror}"
+    if r is not None and r.returncode == 0:
+        return os.path.join(out, "embree_trace")
+    if r is not None:
+        text = (r.stderr + r.stdout).splitlines()
+        lines = [line for line in text if "error" in line.lower() and not line.startswith("make")] or text or ["make failed"]
+        why = lines[0].strip()
+    print(f"Embree column skipped: tools/embree/embree_trace does not build (apt-get install libembree-dev): {why}", flush=True)
+    return None
+
+
+def write_tris(vertices, triangles, path):
+    """MESH.tris for the harness: u32 vertex and triangle counts, f32 xyz, u32 indices."""
+    with open(path, "wb") as f:
+        np.array([len(vertices), len(triangles)], "<u4").tofile(f)
+        np.ascontiguousarray(vertices, "<f4").tofile(f)
+        np.ascontiguousarray(triangles, "<u4").tofile(f)
+
+
+class Harness:
+    """One embree_trace --serve process: the scene built once, passes on request."""
+
+    def __init__(self, exe, tris, rays, robust):
+        args = [exe, tris, rays, "--serve", "--threads", "1"] + (["--robust"] if robust else [])
+        self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        ready = self.proc.stdout.readline().split()
+        if not ready or ready[0] != "ready":
+            raise InputError(tris, f"embree_trace did not start ({' '.join(args)})")
+        self.triangles = int(ready[1])
+        self.build_s = float(ready[2])
+        self.bytes = int(ready[3])
+
+    def rate(self, first, count, query):
+        """Mrays/s: the median of PASSES single-thread passes over rays first..first + count."""
+        times = []
+        for _ in range(PASSES):
+            self.proc.stdin.write(f"{first} {count} {query} single 1\n")
+            self.proc.stdin.flush()
+            reply = self.proc.stdout.readline().split()
+            if len(reply) != 2:
+                raise InputError("embree_trace", f"unexpected reply {reply}")
+            times.append(float(reply[0]))
+        return count / statistics.median(times) / 1e6
+
+    def close(self):
+        self.proc.stdin.close()
+        self.proc.wait()
 
 
 def strata_rate(args, mesh):
-    """Mrays/s that one `strata trace` run reports for its trace phase."""
-    out = subprocess.run(args, capture_output=True, text=True)
+    """(Mrays/s, BVH seconds) that one `strata trace` run reports."""
+    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    out = subprocess.run(args, capture_output=True, text=True, env=env)
     if out.returncode != 0:
         raise InputError(mesh, f"strata trace failed: {out.stderr.strip()}")
-    # "... in 0.123 s = 4.56 Mrays/s on 1 threads ..."
-    return float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
-
-
-def time_both(strata, mesh, scene, rays, query, repeats):
-    """Median Mrays/s of strata and of Embree, their runs alternating so
-    that a change in the machine's load falls on both."""
-    with tempfile.TemporaryDirectory() as tmp:
-        rays_path = os.path.join(tmp, "rays.bin")
-        rays.astype("<f4").tofile(rays_path)
-        args = [strata, "trace", mesh, "--rays", rays_path, "--hits", os.path.join(tmp, "hits.bin"), "--threads", "1", "--repeats", "3"]
-        if query == "occlusion":
-            args.append("--occlusion")
-        s, e = [], []
-        for _ in range(repeats):
-            s.append(strata_rate(args, mesh))
-            e.append(embree_rate(scene, rays, query))
-        return statistics.median(s), statistics.median(e)
+    # "... in 0.123 s = 4.56 Mrays/s on 1 threads (load 0.12 s, BVH 0.34 s) -> ..."
+    rate = float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
+    build = float(out.stdout.split("BVH ")[1].split(" s")[0])
+    return rate, build
 
 
 def make_rays(strata, mesh, n, seed, workdir):
@@ -104,45 +144,90 @@ def pairs(items):
     return out
 
 
+def geomean(xs):
+    return float(np.exp(np.mean(np.log(xs)))) if xs else float("nan")
+
+
+def fmt(x, width, digits=2):
+    return f"{x:>{width}.{digits}f}" if x is not None else f"{'-':>{width}}"
+
+
+def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
+    vertices, triangles = load_mesh(mesh)
+    rays_path = rays_path or make_rays(a.strata, mesh, a.n, a.seed, workdir)
+    rays = read_ray_file(rays_path)
+    groups, _ = read_groups(rays_path, len(rays), None)
+    name = os.path.basename(mesh)
+    harnesses = []
+    if exe:
+        tris = os.path.join(workdir, "mesh.tris")
+        write_tris(vertices, triangles, tris)
+        harnesses = [Harness(exe, tris, rays_path, robust) for robust in (False, True)]
+    ratios = ([], [])
+    builds = []
+    try:
+        for kind, first, count, _ in groups:
+            sub = os.path.join(workdir, "kind.rays")
+            rays[first:first + count].astype("<f4").tofile(sub)
+            for query in ("closest", "occlusion"):
+                args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", "1", "--repeats", str(PASSES)]
+                if query == "occlusion":
+                    args.append("--occlusion")
+                s, e = [], ([], [])
+                for _ in range(a.repeats):
+                    rate, build = strata_rate(args, mesh)
+                    s.append(rate)
+                    builds.append(build)
+                    for h, out in zip(harnesses, e):
+                        out.append(h.rate(first, count, query))
+                s = statistics.median(s)
+                ed, er = (statistics.median(x) if x else None for x in e)
+                if ed:
+                    ratios[0].append(s / ed)
+                    ratios[1].append(s / er)
+                rows.append((name, len(triangles), kind, query, count, s, ed, er))
+                print(f"{name:<16} {len(triangles):>8} {kind:<8} {query:<10} {count:>8} {s:>7.2f} {fmt(ed, 7)} {fmt(er, 7)} "
+                      f"{fmt(ed and s / ed, 8)}x {fmt(er and s / er, 8)}x", flush=True)
+        if harnesses:
+            print(f"{name:<16} {len(triangles):>8} {'all':<8} {'geomean':<10} {'':>8} {'':>7} {'':>7} {'':>7} {geomean(ratios[0]):>7.2f}x {geomean(ratios[1]):>7.2f}x", flush=True)
+        line = f"# {name}: BVH build on 1 thread: strata {statistics.median(builds):.2f} s"
+        if harnesses:
+            d, r = harnesses
+            line += (f", Embree high quality {d.build_s:.2f} s (default mode), {r.build_s:.2f} s (robust); "
+                     f"Embree {d.bytes / d.triangles:.1f} B/tri (default), {r.bytes / r.triangles:.1f} B/tri (robust); "
+                     f"strata's B/tri: `strata bench`")
+        print(line, flush=True)
+    finally:
+        for h in harnesses:
+            h.close()
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="MESH [RAYS.bin]", help="meshes (OBJ or PLY), each optionally followed by its ray file")
     p.add_argument("-n", type=int, default=100000, help="rays of each kind to make for a mesh without a ray file (default 100000)")
     p.add_argument("--seed", type=int, default=1, help="seed of the rays made here (default 1)")
     p.add_argument("--strata", default="target/release/strata", help="the strata executable")
-    p.add_argument("--repeats", type=int, default=3, help="runs per measurement; the median is kept")
+    p.add_argument("--repeats", type=int, default=3, help="measurements per row; the median is kept")
     p.add_argument("--csv", default="embree_bench.csv", help="where to save the rows (default embree_bench.csv)")
     a = p.parse_args(argv)
     rows = []
     try:
         jobs = pairs(a.inputs)
-        print(f"{'mesh':<18} {'tris':>9} {'kind':<8} {'query':<10} {'rays':>7} {'strata':>8} {'embree':>8} {'strata/embree':>14}")
+        exe = build_harness()
+        print(f"{'mesh':<16} {'tris':>8} {'kind':<8} {'query':<10} {'rays':>8} {'strata':>7} {'embree':>7} {'robust':>7} {'s/embree':>8} {'s/robust':>8}")
         with tempfile.TemporaryDirectory() as workdir:
             for mesh, rays_path in jobs:
-                vertices, triangles = load_mesh(mesh)
-                rays_path = rays_path or make_rays(a.strata, mesh, a.n, a.seed, workdir)
-                rays = read_ray_file(rays_path)
-                groups, _ = read_groups(rays_path, len(rays), None)
-                scene = embree_scene(vertices, triangles)
-                scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), output=1)  # build the BVH
-                name = os.path.basename(mesh)
-                ratios = []
-                for kind, first, count, _ in groups:
-                    sub = rays[first:first + count]
-                    for query in ("closest", "occlusion"):
-                        s, e = time_both(a.strata, mesh, scene, sub, query, a.repeats)
-                        ratios.append(s / e)
-                        rows.append((name, len(triangles), kind, query, count, s, e))
-                        print(f"{name:<18} {len(triangles):>9} {kind:<8} {query:<10} {count:>7} {s:>8.2f} {e:>8.2f} {s / e:>13.2f}x", flush=True)
-                geomean = float(np.exp(np.mean(np.log(ratios))))
-                print(f"{name:<18} {len(triangles):>9} {'all':<8} {'geomean':<10} {'':>7} {'':>8} {'':>8} {geomean:>13.2f}x", flush=True)
+                bench_mesh(a, exe, mesh, rays_path, workdir, rows)
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     with open(a.csv, "w") as f:
-        f.write("mesh,triangles,kind,query,rays,threads,strata_mrays_per_s,embree_mrays_per_s,strata_over_embree\n")
-        for name, tris, kind, query, count, s, e in rows:
-            f.write(f"{name},{tris},{kind},{query},{count},1,{s:.4f},{e:.4f},{s / e:.4f}\n")
+        f.write("mesh,triangles,kind,query,rays,threads,strata_mrays_per_s,embree_mrays_per_s,embree_robust_mrays_per_s,"
+                "strata_over_embree,strata_over_embree_robust\n")
+        for name, tris, kind, query, count, s, ed, er in rows:
+            cols = [f"{x:.4f}" if x else "" for x in (ed, er, ed and s / ed, er and s / er)]
+            f.write(f"{name},{tris},{kind},{query},{count},1,{s:.4f},{','.join(cols)}\n")
     print(f"-> {a.csv}")
     return 0
 
