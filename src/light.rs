@@ -121,6 +121,42 @@ impl Light {
 
     /// Sample the light as seen from `p`, with `u` uniform in [0,1)².
     pub fn sample(&self, p: Vec3, u: Vec2, method: LightSampling) -> Option<LightSample> {
+        self.seen_from(p, method).sample(u)
+    }
+
+    /// The light as seen from `p`: what every sample taken from `p` shares,
+    /// computed once (for a rect light sampled by solid angle, its
+    /// spherical rectangle), so that [`LightFrom::sample`] for each of a
+    /// hit's shadow samples does only the per-sample work. The samples are
+    /// exactly those of [`Light::sample`].
+    pub fn seen_from(&self, p: Vec3, method: LightSampling) -> LightFrom<'_> {
+        if let Light::Rect { rect, radiance, .. } = self {
+            if method == LightSampling::SolidAngle && rect.is_rectangle() {
+                if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
+                    return LightFrom::SphericalRect {
+                        p,
+                        rect: s,
+                        normal: rect.normal,
+                        weight: *radiance * s.solid_angle,
+                    };
+                }
+                // The point is (nearly) in the light's plane: sample by area.
+                return LightFrom::Light {
+                    light: self,
+                    p,
+                    method: LightSampling::Area,
+                };
+            }
+        }
+        LightFrom::Light {
+            light: self,
+            p,
+            method,
+        }
+    }
+
+    /// One sample of the light from `p` by `method`, all of it per sample.
+    fn sample_from(&self, p: Vec3, u: Vec2, method: LightSampling) -> Option<LightSample> {
         match *self {
             Light::Point {
                 position,
@@ -147,12 +183,7 @@ impl Light {
                 weight: irradiance,
             }),
             Light::Rect { rect, radiance, .. } => {
-                if method == LightSampling::SolidAngle && rect.is_rectangle() {
-                    if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
-                        let q = s.sample(u);
-                        return towards(p, q, rect.normal, radiance * s.solid_angle, None);
-                    }
-                }
+                // Solid-angle sampling of rectangles is LightFrom::SphericalRect.
                 let q = rect.point(u.x, u.y);
                 towards(p, q, rect.normal, radiance, Some(rect.area()))
             }
@@ -209,6 +240,41 @@ impl Light {
             Light::Sphere {
                 radius, radiance, ..
             } => 4.0 * PI * PI * radius * radius * radiance,
+        }
+    }
+}
+
+/// A light seen from one shading point `p` (see [`Light::seen_from`]).
+#[derive(Debug, Clone, Copy)]
+pub enum LightFrom<'l> {
+    /// A rect light sampled uniformly in the solid angle it subtends at `p`.
+    SphericalRect {
+        p: Vec3,
+        rect: SphericalRect,
+        normal: Vec3,
+        /// Radiance times the solid angle: radiance over the pdf.
+        weight: Vec3,
+    },
+    /// Any other light or method: each sample does all its work.
+    Light {
+        light: &'l Light,
+        p: Vec3,
+        method: LightSampling,
+    },
+}
+
+impl LightFrom<'_> {
+    /// A sample with `u` uniform in [0,1)².
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> Option<LightSample> {
+        match *self {
+            LightFrom::SphericalRect {
+                p,
+                rect,
+                normal,
+                weight,
+            } => towards(p, rect.sample(u), normal, weight, None),
+            LightFrom::Light { light, p, method } => light.sample_from(p, u, method),
         }
     }
 }

@@ -42,6 +42,9 @@ impl Integrator<'_> {
                 .use_packet(full, SHADOW_PACKET_MIN)
                 .then(ShadowBatch::default);
             let mut sum = Vec3::ZERO;
+            // What every sample of this light from this point shares (the
+            // spherical rectangle of a rect light), built once.
+            let seen = light.seen_from(s.p, method);
             for j in 0..m_samples {
                 let u = if light.is_area() {
                     ctx.sampler
@@ -49,7 +52,7 @@ impl Integrator<'_> {
                 } else {
                     Vec2::ZERO
                 };
-                let Some(ls) = light.sample(s.p, u, method) else {
+                let Some(ls) = seen.sample(u) else {
                     continue;
                 };
                 let cos_i = sh.ns.dot(ls.wi);
