@@ -334,7 +334,10 @@ pub fn render_pixels(
     for (j, acc) in accs.iter_mut().enumerate() {
         let (x, y, index) = run.window.pixel(run.first + j);
         let (x, y) = (x as f32, y as f32);
-        let sampler = PixelSampler::new(s.sampler, s.seed, index);
+        // The pixel's common set sizes: its camera samples, and its
+        // first-hit light samples.
+        let sampler = PixelSampler::new(s.sampler, s.seed, index)
+            .with_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
         let mut start = samples.start;
         while start < samples.end {
             let end = samples.end.min(start + PACKET_SIZE as u32);
