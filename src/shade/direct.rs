@@ -31,6 +31,11 @@ impl Integrator<'_> {
             } else {
                 1
             };
+            // A light all of whose samples would be rejected below is
+            // skipped whole (same image: the draws are counter-based).
+            if light.hidden_from(s.p, sh.ng) {
+                continue;
+            }
             let dim = Dim::light(depth, light_index as u32);
             let except = light.prim().unwrap_or(u32::MAX);
             // Where a batch may be traced as a packet, shadow rays wait in
