@@ -130,7 +130,7 @@ impl Light {
     /// every sample would be rejected, so the caller skips the light
     /// without building or drawing anything (the draws are counter-based,
     /// so no other number changes). The margin, a thousandth of the
-    /// distance to the light, lies far outside the rounding of a sample's
+    /// distance to the light (or more), lies far outside the rounding of a sample's
     /// position and direction, so the answer never differs from what the
     /// samples would have found. Other lights answer false.
     pub fn hidden_from(&self, p: Vec3, n: Vec3) -> bool {
@@ -143,9 +143,10 @@ impl Light {
             rect.corner + rect.edge_v,
             rect.corner + rect.edge_u + rect.edge_v,
         ];
+        // The L1 norm bounds the distance from above (no square roots).
         let reach = corners
             .iter()
-            .map(|c| (*c - p).length())
+            .map(|c| (*c - p).abs().element_sum())
             .fold(0.0, f32::max);
         let margin = 1e-3 * reach;
         // A sample's direction is a positive combination of the corners'
