@@ -127,12 +127,11 @@ def translate(path, mi):
 
     bsdfs = {}
     for name, m in doc.get("materials", {}).items():
-        for key, value in m.items():
-            if key == "diffuse":
-                continue
-            if key in ("ior", "fresnel") or (isinstance(value, list) and not any(value)) or value == 0:
-                continue  # inactive without a specular layer
-            problems.append(f"material {name!r} has {key} (strata's Phong, mirror and glass layers)")
+        # ior and fresnel are inactive without a glass layer; zeros are defaults.
+        extra = [key for key, value in m.items() if key not in ("diffuse", "ior", "fresnel")
+                 and not ((isinstance(value, list) and not any(value)) or value == 0)]
+        if extra:
+            problems.append(f"material {name!r}: {', '.join(extra)} (beyond a diffuse BSDF)")
         bsdfs[name] = {"type": "twosided", "material": {
             "type": "diffuse", "reflectance": {"type": "rgb", "value": v3(m.get("diffuse", [0.8] * 3))}}}
 
