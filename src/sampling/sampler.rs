@@ -73,12 +73,20 @@ impl PixelSampler {
         }
     }
 
-    /// The same sampler with the CMJ grids of set sizes `counts` prepared
-    /// (for example the pixel's spp, and spp × shadow samples): each
-    /// [`PixelSampler::get_2d`] of such a size then divides by multiplying.
-    pub fn with_sets(mut self, counts: [u32; 2]) -> Self {
+    /// The prepared CMJ grids of set sizes `counts` (for example a
+    /// render's spp, and spp × shadow samples), for
+    /// [`PixelSampler::with_sets`]. They depend on the sizes alone, so a
+    /// caller prepares them once for many pixels.
+    pub fn prepare_sets(counts: [u32; 2]) -> [CmjSet; 2] {
+        counts.map(|n| if n > 0 { CmjSet::new(n) } else { EMPTY_SET })
+    }
+
+    /// The same sampler with `sets` (from [`PixelSampler::prepare_sets`]):
+    /// each [`PixelSampler::get_2d`] of one of their sizes then divides by
+    /// multiplying.
+    pub fn with_sets(mut self, sets: [CmjSet; 2]) -> Self {
         if self.kind == SamplerKind::Stratified {
-            self.sets = counts.map(|n| if n > 0 { CmjSet::new(n) } else { EMPTY_SET });
+            self.sets = sets;
         }
         self
     }
@@ -146,7 +154,7 @@ mod tests {
         for kind in [SamplerKind::Stratified, SamplerKind::Random] {
             for (seed, pixel) in [(0u32, 0u32), (7, 12_345), (0xffff_ffff, 76_799)] {
                 let plain = PixelSampler::new(kind, seed, pixel);
-                let prepared = plain.with_sets([16, 64]);
+                let prepared = plain.with_sets(PixelSampler::prepare_sets([16, 64]));
                 for dim in [Dim::PIXEL, Dim::LENS, Dim::light(0, 0), Dim::glossy(2)] {
                     for n in [1u32, 5, 16, 64, 100] {
                         for i in 0..n {
