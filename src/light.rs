@@ -121,6 +121,76 @@ impl Light {
 
     /// Sample the light as seen from `p`, with `u` uniform in [0,1)².
     pub fn sample(&self, p: Vec3, u: Vec2, method: LightSampling) -> Option<LightSample> {
+        self.seen_from(p, method).sample(u)
+    }
+
+    /// True only if no sample of this light can light `p` from the side its
+    /// geometric normal `n` faces: every point of a rect light lies below
+    /// the tangent plane of `p`, or `p` is behind the one-sided light. Then
+    /// every sample would be rejected, so the caller skips the light
+    /// without building or drawing anything (the draws are counter-based,
+    /// so no other number changes). The margin, a thousandth of the
+    /// distance to the light (or more), lies far outside the rounding of a sample's
+    /// position and direction, so the answer never differs from what the
+    /// samples would have found. Other lights answer false.
+    pub fn hidden_from(&self, p: Vec3, n: Vec3) -> bool {
+        let Light::Rect { rect, .. } = self else {
+            return false;
+        };
+        let corners = [
+            rect.corner,
+            rect.corner + rect.edge_u,
+            rect.corner + rect.edge_v,
+            rect.corner + rect.edge_u + rect.edge_v,
+        ];
+        // The L1 norm bounds the distance from above (no square roots).
+        let reach = corners
+            .iter()
+            .map(|c| (*c - p).abs().element_sum())
+            .fold(0.0, f32::max);
+        let margin = 1e-3 * reach;
+        // A sample's direction is a positive combination of the corners'
+        // directions (the rectangle is convex), so if n·(c − p) < 0 for
+        // every corner c, then n·wi < 0 for every sample.
+        let below = corners.iter().all(|c| n.dot(*c - p) < -margin);
+        // The light emits towards `rect.normal`: from behind, cosθ_l ≤ 0.
+        let behind = rect.normal.dot(p - rect.corner) < -margin;
+        (below || behind) && margin.is_finite()
+    }
+
+    /// The light as seen from `p`: what every sample taken from `p` shares,
+    /// computed once (for a rect light sampled by solid angle, its
+    /// spherical rectangle), so that [`LightFrom::sample`] for each of a
+    /// hit's shadow samples does only the per-sample work. The samples are
+    /// exactly those of [`Light::sample`].
+    pub fn seen_from(&self, p: Vec3, method: LightSampling) -> LightFrom<'_> {
+        if let Light::Rect { rect, radiance, .. } = self {
+            if method == LightSampling::SolidAngle && rect.is_rectangle() {
+                if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
+                    return LightFrom::SphericalRect {
+                        p,
+                        rect: s,
+                        normal: rect.normal,
+                        weight: *radiance * s.solid_angle,
+                    };
+                }
+                // The point is (nearly) in the light's plane: sample by area.
+                return LightFrom::Light {
+                    light: self,
+                    p,
+                    method: LightSampling::Area,
+                };
+            }
+        }
+        LightFrom::Light {
+            light: self,
+            p,
+            method,
+        }
+    }
+
+    /// One sample of the light from `p` by `method`, all of it per sample.
+    fn sample_from(&self, p: Vec3, u: Vec2, method: LightSampling) -> Option<LightSample> {
         match *self {
             Light::Point {
                 position,
@@ -147,12 +217,7 @@ impl Light {
                 weight: irradiance,
             }),
             Light::Rect { rect, radiance, .. } => {
-                if method == LightSampling::SolidAngle && rect.is_rectangle() {
-                    if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
-                        let q = s.sample(u);
-                        return towards(p, q, rect.normal, radiance * s.solid_angle, None);
-                    }
-                }
+                // Solid-angle sampling of rectangles is LightFrom::SphericalRect.
                 let q = rect.point(u.x, u.y);
                 towards(p, q, rect.normal, radiance, Some(rect.area()))
             }
@@ -209,6 +274,41 @@ impl Light {
             Light::Sphere {
                 radius, radiance, ..
             } => 4.0 * PI * PI * radius * radius * radiance,
+        }
+    }
+}
+
+/// A light seen from one shading point `p` (see [`Light::seen_from`]).
+#[derive(Debug, Clone, Copy)]
+pub enum LightFrom<'l> {
+    /// A rect light sampled uniformly in the solid angle it subtends at `p`.
+    SphericalRect {
+        p: Vec3,
+        rect: SphericalRect,
+        normal: Vec3,
+        /// Radiance times the solid angle: radiance over the pdf.
+        weight: Vec3,
+    },
+    /// Any other light or method: each sample does all its work.
+    Light {
+        light: &'l Light,
+        p: Vec3,
+        method: LightSampling,
+    },
+}
+
+impl LightFrom<'_> {
+    /// A sample with `u` uniform in [0,1)².
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> Option<LightSample> {
+        match *self {
+            LightFrom::SphericalRect {
+                p,
+                rect,
+                normal,
+                weight,
+            } => towards(p, rect.sample(u), normal, weight, None),
+            LightFrom::Light { light, p, method } => light.sample_from(p, u, method),
         }
     }
 }
@@ -295,6 +395,45 @@ mod tests {
         let a = irradiance(&rect, LightSampling::Area, Vec3::Y);
         let s = irradiance(&rect, LightSampling::SolidAngle, Vec3::Y);
         assert!((a - s).abs() / s < 5e-3, "area {a} vs solid angle {s}");
+    }
+
+    #[test]
+    fn a_hidden_light_has_no_sample_that_lights_the_point() {
+        let rect = Light::Rect {
+            rect: Rect::new(Vec3::new(-1.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Z * 2.0).unwrap(),
+            radiance: Vec3::ONE,
+            prim: 0,
+        };
+        let lit = |p: Vec3, n: Vec3| {
+            (0..16).any(|i| {
+                (0..16).any(|j| {
+                    let u = Vec2::new((i as f32 + 0.5) / 16.0, (j as f32 + 0.5) / 16.0);
+                    [LightSampling::Area, LightSampling::SolidAngle]
+                        .into_iter()
+                        .any(|m| rect.sample(p, u, m).is_some_and(|s| n.dot(s.wi) > 0.0))
+                })
+            })
+        };
+        let cases = [
+            (Vec3::ZERO, Vec3::Y, false),
+            (Vec3::ZERO, -Vec3::Y, true),
+            (Vec3::ZERO, Vec3::X, false),
+            (Vec3::new(3.0, 0.0, 0.0), Vec3::X, true),
+            (Vec3::new(3.0, 0.0, 0.0), -Vec3::X, false),
+            (Vec3::Y * 2.0, Vec3::Y, true),
+            (Vec3::Y * 2.0, -Vec3::Y, true),
+        ];
+        for (p, n, hidden) in cases {
+            assert_eq!(rect.hidden_from(p, n), hidden, "{p} {n}");
+            if hidden {
+                assert!(!lit(p, n), "{p} {n}");
+            }
+        }
+        let point = Light::Point {
+            position: Vec3::Y,
+            intensity: Vec3::ONE,
+        };
+        assert!(!point.hidden_from(Vec3::ZERO, -Vec3::Y));
     }
 
     #[test]

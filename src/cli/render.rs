@@ -136,8 +136,14 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         None => None,
     };
     let full = slice.samples(s.spp);
-    let header = PartialHeader::for_scene(&scene, slice, full.clone());
-    let (initial, resume_from) = resume(&args, &header)?;
+    // The header holds the scene's fingerprint, a hash of every triangle:
+    // computed only when a .strata file (output or checkpoint) is written.
+    let header = (partial_output || args.checkpoint.is_some())
+        .then(|| PartialHeader::for_scene(&scene, slice, full.clone()));
+    let (initial, resume_from) = match &header {
+        Some(header) => resume(&args, header)?,
+        None => (None, None),
+    };
     let image = Output {
         args: &args,
         scene: &scene,
@@ -160,7 +166,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     };
     let mut failed = (false, false);
     let outcome = render(&scene, &opts, initial, |film, done| {
-        if let Some(ck) = &args.checkpoint {
+        if let (Some(ck), Some(header)) = (&args.checkpoint, &header) {
             let h = PartialHeader {
                 samples: full.start..done,
                 ..header.clone()
@@ -175,8 +181,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
         }
     });
-    if partial_output {
-        write_partial(&args.output, &header, &outcome.film)
+    if let (true, Some(header)) = (partial_output, &header) {
+        write_partial(&args.output, header, &outcome.film)
             .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
     } else {
         image

@@ -331,10 +331,13 @@ pub fn render_pixels(
     let mut batch: Vec<CameraSample> = Vec::with_capacity(PACKET_SIZE);
     let mut out = [Vec3::ZERO; PACKET_SIZE];
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
+    // The common set sizes, prepared once for all these pixels: camera
+    // samples, and first-hit light samples.
+    let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
     for (j, acc) in accs.iter_mut().enumerate() {
         let (x, y, index) = run.window.pixel(run.first + j);
         let (x, y) = (x as f32, y as f32);
-        let sampler = PixelSampler::new(s.sampler, s.seed, index);
+        let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
         let mut start = samples.start;
         while start < samples.end {
             let end = samples.end.min(start + PACKET_SIZE as u32);

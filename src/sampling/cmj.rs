@@ -9,21 +9,110 @@
 
 use glam::Vec2;
 
-/// A pseudo-random permutation of `0..len`, indexed by `i`, chosen by
-/// `pattern`. Hash steps that are bijective on the low bits, cycle-walked
-/// into range (Kensler 2013, listing 3).
-pub fn permute(mut i: u32, len: u32, pattern: u32) -> u32 {
-    debug_assert!(len > 0 && i < len);
-    if len == 1 {
-        return 0;
-    }
-    let p = pattern;
-    let mut w = len - 1;
+/// A divisor of the sampling arithmetic: a plain `u32`, or a [`FastDiv`]
+/// prepared once for a sample set. Both give the same quotients.
+trait Divisor: Copy {
+    fn get(self) -> u32;
+    fn div(self, n: u32) -> u32;
+    fn rem(self, n: u32) -> u32;
+    /// All ones up to the highest set bit of `get() - 1` (the cycle-walking mask).
+    fn mask(self) -> u32;
+}
+
+fn mask_of(len: u32) -> u32 {
+    let mut w = len.wrapping_sub(1);
     w |= w >> 1;
     w |= w >> 2;
     w |= w >> 4;
     w |= w >> 8;
     w |= w >> 16;
+    w
+}
+
+impl Divisor for u32 {
+    #[inline(always)]
+    fn get(self) -> u32 {
+        self
+    }
+    #[inline(always)]
+    fn div(self, n: u32) -> u32 {
+        n / self
+    }
+    #[inline(always)]
+    fn rem(self, n: u32) -> u32 {
+        n % self
+    }
+    #[inline(always)]
+    fn mask(self) -> u32 {
+        mask_of(self)
+    }
+}
+
+/// Division and remainder by a fixed `d ≥ 1` with multiplications only,
+/// exact for every 32-bit numerator: with M = ⌈2⁶⁴ / d⌉, n / d is the high
+/// 64 bits of M·n, and n mod d the high 64 bits of (M·n mod 2⁶⁴)·d
+/// (Lemire, Kaser and Kurz 2019, "Faster Remainder by Direct Computation:
+/// Applications to Compilers and Software Libraries", SPE 49(6)).
+#[derive(Debug, Clone, Copy)]
+pub struct FastDiv {
+    /// ⌈2⁶⁴ / d⌉, or 0 for d = 1 (which `div` handles alone).
+    m: u64,
+    d: u32,
+    w: u32,
+}
+
+impl FastDiv {
+    pub fn new(d: u32) -> Self {
+        assert!(d > 0);
+        let m = if d > 1 { u64::MAX / d as u64 + 1 } else { 0 };
+        Self {
+            m,
+            d,
+            w: mask_of(d),
+        }
+    }
+}
+
+impl Divisor for FastDiv {
+    #[inline(always)]
+    fn get(self) -> u32 {
+        self.d
+    }
+    #[inline(always)]
+    fn div(self, n: u32) -> u32 {
+        if self.d == 1 {
+            n
+        } else {
+            ((self.m as u128 * n as u128) >> 64) as u32
+        }
+    }
+    #[inline(always)]
+    fn rem(self, n: u32) -> u32 {
+        let low = self.m.wrapping_mul(n as u64);
+        ((low as u128 * self.d as u128) >> 64) as u32
+    }
+    #[inline(always)]
+    fn mask(self) -> u32 {
+        self.w
+    }
+}
+
+/// A pseudo-random permutation of `0..len`, indexed by `i`, chosen by
+/// `pattern`. Hash steps that are bijective on the low bits, cycle-walked
+/// into range (Kensler 2013, listing 3).
+pub fn permute(i: u32, len: u32, pattern: u32) -> u32 {
+    permute_by(i, len, pattern)
+}
+
+#[inline(always)]
+fn permute_by<D: Divisor>(mut i: u32, len: D, pattern: u32) -> u32 {
+    let len_ = len.get();
+    debug_assert!(len_ > 0 && i < len_);
+    if len_ == 1 {
+        return 0;
+    }
+    let p = pattern;
+    let w = len.mask();
     loop {
         i ^= p;
         i = i.wrapping_mul(0xe170_893d);
@@ -43,11 +132,11 @@ pub fn permute(mut i: u32, len: u32, pattern: u32) -> u32 {
         i = i.wrapping_mul(0xc860_a3df);
         i &= w;
         i ^= i >> 5;
-        if i < len {
+        if i < len_ {
             break;
         }
     }
-    (i.wrapping_add(p)) % len
+    len.rem(i.wrapping_add(p))
 }
 
 /// A hashed float in [0, 1) for index `i` under `pattern` (Kensler 2013, listing 4).
@@ -76,16 +165,69 @@ pub fn rand_float(mut i: u32, p: u32) -> f32 {
 /// a cell or a fine 1D stratum (stratified).
 pub fn cmj_2d(s: u32, n: u32, pattern: u32) -> Vec2 {
     debug_assert!(s < n);
-    let m = ((n as f32).sqrt() as u32).max(1);
-    let rows = n.div_ceil(m);
-    let s = permute(s, m * rows, pattern.wrapping_mul(0x5163_3e2d));
-    let sx = permute(s % m, m, pattern.wrapping_mul(0x68bc_21eb));
-    let sy = permute(s / m, rows, pattern.wrapping_mul(0x02e5_be93));
+    let m = grid_columns(n);
+    cmj_point(s, pattern, m, n.div_ceil(m), m * n.div_ceil(m))
+}
+
+/// Columns of the CMJ grid for `n` samples.
+#[inline]
+fn grid_columns(n: u32) -> u32 {
+    ((n as f32).sqrt() as u32).max(1)
+}
+
+/// Sample `s` of the set on a grid of `m` columns, `rows` rows and `cells` = m × rows.
+#[inline(always)]
+fn cmj_point<D: Divisor>(s: u32, pattern: u32, m: D, rows: D, cells: D) -> Vec2 {
+    let s = permute_by(s, cells, pattern.wrapping_mul(0x5163_3e2d));
+    let (col, row) = (m.rem(s), m.div(s));
+    let sx = permute_by(col, m, pattern.wrapping_mul(0x68bc_21eb));
+    let sy = permute_by(row, rows, pattern.wrapping_mul(0x02e5_be93));
     let jx = rand_float(s, pattern.wrapping_mul(0x967a_889b));
     let jy = rand_float(s, pattern.wrapping_mul(0x368c_c8b7));
-    let x = (sx as f32 + (sy as f32 + jx) / rows as f32) / m as f32;
-    let y = ((s / m) as f32 + jy) / rows as f32;
+    let (m, rows) = (m.get() as f32, rows.get() as f32);
+    let x = (sx as f32 + (sy as f32 + jx) / rows) / m;
+    let y = (row as f32 + jy) / rows;
     Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
+}
+
+/// An `n`-sample CMJ set's grid with its divisions prepared (three 64-bit
+/// divisions, once), so that each [`CmjSet::sample`] divides by
+/// multiplying. Same samples as [`cmj_2d`]; worth it when a set is reused
+/// for several samples (a pixel's samples in one pass).
+#[derive(Debug, Clone, Copy)]
+pub struct CmjSet {
+    pub n: u32,
+    m: FastDiv,
+    rows: FastDiv,
+    cells: FastDiv,
+}
+
+impl CmjSet {
+    /// A set of no samples: matches no count.
+    pub const EMPTY: CmjSet = CmjSet {
+        n: 0,
+        m: FastDiv { m: 0, d: 1, w: 0 },
+        rows: FastDiv { m: 0, d: 1, w: 0 },
+        cells: FastDiv { m: 0, d: 1, w: 0 },
+    };
+
+    pub fn new(n: u32) -> Self {
+        let m = grid_columns(n.max(1));
+        let rows = n.max(1).div_ceil(m);
+        Self {
+            n,
+            m: FastDiv::new(m),
+            rows: FastDiv::new(rows),
+            cells: FastDiv::new(m * rows),
+        }
+    }
+
+    /// Exactly `cmj_2d(s, self.n, pattern)`.
+    #[inline]
+    pub fn sample(&self, s: u32, pattern: u32) -> Vec2 {
+        debug_assert!(s < self.n);
+        cmj_point(s, pattern, self.m, self.rows, self.cells)
+    }
 }
 
 /// Sample `s` of an `n`-sample stratified (jittered) set in [0,1).
@@ -161,6 +303,66 @@ mod tests {
                 (frac - 0.1).abs() < 0.004,
                 "n {n}: {frac} of samples in the top 10%"
             );
+        }
+    }
+
+    #[test]
+    fn prepared_sets_give_the_same_samples_bit_for_bit() {
+        for n in [1u32, 2, 3, 5, 7, 16, 17, 32, 64, 100, 1000, 4096, 65_537] {
+            let set = CmjSet::new(n);
+            for pattern in [0u32, 1, 0xdead_beef, 0xffff_ffff, 12345] {
+                for s in (0..n).step_by((n as usize / 97).max(1)).chain([n - 1]) {
+                    let (a, b) = (cmj_2d(s, n, pattern), set.sample(s, pattern));
+                    assert_eq!(
+                        a.to_array().map(f32::to_bits),
+                        b.to_array().map(f32::to_bits)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fast_division_is_exact() {
+        let mut d = 1u32;
+        while d < u32::MAX / 3 {
+            let f = FastDiv::new(d);
+            for n in [
+                0u32,
+                1,
+                d - 1,
+                d,
+                d + 1,
+                2 * d + 1,
+                u32::MAX,
+                u32::MAX - 1,
+                0x8000_0000,
+                12_345_678,
+            ] {
+                assert_eq!(f.div(n), n / d, "{n} / {d}");
+                assert_eq!(f.rem(n), n % d, "{n} % {d}");
+            }
+            d = d * 3 + 1;
+        }
+        for d in [
+            2u32,
+            3,
+            7,
+            8,
+            9,
+            15,
+            16,
+            17,
+            255,
+            256,
+            257,
+            65_535,
+            u32::MAX,
+        ] {
+            let f = FastDiv::new(d);
+            for n in (0..100_000u32).chain((0..100_000).map(|k| u32::MAX - k)) {
+                assert_eq!((f.div(n), f.rem(n)), (n / d, n % d), "{n} by {d}");
+            }
         }
     }
 

@@ -14,14 +14,21 @@ pub fn hash_u32(mut x: u32) -> u32 {
     x
 }
 
+/// The state [`hash_words`] starts from.
+pub const HASH_WORDS_INIT: u32 = 0x9e37_79b9;
+
+/// One step of [`hash_words`]: the state after word `w`, from state `h`.
+/// A caller hashing many sequences with a common prefix can keep the state
+/// after the prefix and continue from it, with the same result.
+#[inline]
+pub fn hash_step(h: u32, w: u32) -> u32 {
+    hash_u32(h ^ hash_u32(w.wrapping_add(0x632b_e5ab)))
+}
+
 /// Hash a sequence of words into one (a chained, order-sensitive combine).
 #[inline]
 pub fn hash_words(words: &[u32]) -> u32 {
-    let mut h = 0x9e37_79b9u32;
-    for &w in words {
-        h = hash_u32(h ^ hash_u32(w.wrapping_add(0x632b_e5ab)));
-    }
-    h
+    words.iter().fold(HASH_WORDS_INIT, |h, &w| hash_step(h, w))
 }
 
 /// Map 32 random bits to a float in [0, 1).

@@ -5,8 +5,8 @@
 //! from (seed, pixel, dimension). Within a dimension a pixel's `N` samples
 //! form one stratified set, and sample `i` depends on nothing but `i`.
 
-use super::cmj::{cmj_2d, stratified_1d};
-use super::hash::{hash_words, unit_float};
+use super::cmj::{cmj_2d, stratified_1d, CmjSet};
+use super::hash::{hash_step, unit_float, HASH_WORDS_INIT};
 use glam::Vec2;
 
 crate::mode::mode_enum! {
@@ -46,34 +46,74 @@ impl Dim {
 }
 
 /// The sampler for one pixel.
+///
+/// What every number of the pixel shares is computed once, in
+/// [`PixelSampler::new`] and [`PixelSampler::with_sets`]: the hash state
+/// after (seed, pixel), and the prepared CMJ grids of the pixel's usual set
+/// sizes. The numbers are those of the plain formulas, bit for bit.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelSampler {
     pub kind: SamplerKind,
     pub seed: u32,
     pub pixel: u32,
+    /// `hash_words` state after [seed, pixel].
+    prefix: u32,
+    /// Prepared grids for set sizes asked often; size 0 is an empty slot.
+    sets: [CmjSet; 2],
 }
 
 impl PixelSampler {
     pub fn new(kind: SamplerKind, seed: u32, pixel: u32) -> Self {
-        Self { kind, seed, pixel }
+        Self {
+            kind,
+            seed,
+            pixel,
+            prefix: hash_step(hash_step(HASH_WORDS_INIT, seed), pixel),
+            sets: [EMPTY_SET; 2],
+        }
     }
 
+    /// The prepared CMJ grids of set sizes `counts` (for example a
+    /// render's spp, and spp × shadow samples), for
+    /// [`PixelSampler::with_sets`]. They depend on the sizes alone, so a
+    /// caller prepares them once for many pixels.
+    pub fn prepare_sets(counts: [u32; 2]) -> [CmjSet; 2] {
+        counts.map(|n| if n > 0 { CmjSet::new(n) } else { EMPTY_SET })
+    }
+
+    /// The same sampler with `sets` (from [`PixelSampler::prepare_sets`]):
+    /// each [`PixelSampler::get_2d`] of one of their sizes then divides by
+    /// multiplying.
+    pub fn with_sets(mut self, sets: [CmjSet; 2]) -> Self {
+        if self.kind == SamplerKind::Stratified {
+            self.sets = sets;
+        }
+        self
+    }
+
+    /// `hash_words(&[seed, pixel, dim])`, from the kept prefix.
+    #[inline]
     fn pattern(&self, dim: Dim) -> u32 {
-        hash_words(&[self.seed, self.pixel, dim.0])
+        hash_step(self.prefix, dim.0)
     }
 
     /// Point `index` of a `count`-point set in [0,1)² for dimension `dim`.
     /// For effects with several samples per camera sample, pass
     /// `index = sample * m + j` and `count = spp * m`, so that the pixel's
     /// spp·m points form one stratified set.
+    #[inline]
     pub fn get_2d(&self, dim: Dim, index: u32, count: u32) -> Vec2 {
         let p = self.pattern(dim);
         match self.kind {
-            SamplerKind::Stratified => cmj_2d(index, count, p),
-            SamplerKind::Random => Vec2::new(
-                unit_float(hash_words(&[p, index, 0])),
-                unit_float(hash_words(&[p, index, 1])),
-            ),
+            SamplerKind::Stratified => match self.sets.iter().find(|set| set.n == count) {
+                Some(set) => set.sample(index, p),
+                None => cmj_2d(index, count, p),
+            },
+            SamplerKind::Random => {
+                // hash_words(&[p, index, k]) for k = 0, 1, sharing [p, index].
+                let h = hash_step(hash_step(HASH_WORDS_INIT, p), index);
+                Vec2::new(unit_float(hash_step(h, 0)), unit_float(hash_step(h, 1)))
+            }
         }
     }
 
@@ -81,7 +121,60 @@ impl PixelSampler {
         let p = self.pattern(dim);
         match self.kind {
             SamplerKind::Stratified => stratified_1d(index, count, p),
-            SamplerKind::Random => unit_float(hash_words(&[p, index, 2])),
+            SamplerKind::Random => unit_float(hash_step(
+                hash_step(hash_step(HASH_WORDS_INIT, p), index),
+                2,
+            )),
+        }
+    }
+}
+
+const EMPTY_SET: CmjSet = CmjSet::EMPTY;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::hash::hash_words;
+
+    /// The numbers of the plain formulas: a pattern hashed from (seed,
+    /// pixel, dim), then CMJ or hashed floats.
+    fn plain_2d(kind: SamplerKind, seed: u32, pixel: u32, dim: Dim, i: u32, n: u32) -> Vec2 {
+        let p = hash_words(&[seed, pixel, dim.0]);
+        match kind {
+            SamplerKind::Stratified => cmj_2d(i, n, p),
+            SamplerKind::Random => Vec2::new(
+                unit_float(hash_words(&[p, i, 0])),
+                unit_float(hash_words(&[p, i, 1])),
+            ),
+        }
+    }
+
+    #[test]
+    fn kept_prefixes_and_prepared_sets_change_no_number() {
+        for kind in [SamplerKind::Stratified, SamplerKind::Random] {
+            for (seed, pixel) in [(0u32, 0u32), (7, 12_345), (0xffff_ffff, 76_799)] {
+                let plain = PixelSampler::new(kind, seed, pixel);
+                let prepared = plain.with_sets(PixelSampler::prepare_sets([16, 64]));
+                for dim in [Dim::PIXEL, Dim::LENS, Dim::light(0, 0), Dim::glossy(2)] {
+                    for n in [1u32, 5, 16, 64, 100] {
+                        for i in 0..n {
+                            let want = plain_2d(kind, seed, pixel, dim, i, n).to_array();
+                            for got in [plain.get_2d(dim, i, n), prepared.get_2d(dim, i, n)] {
+                                assert_eq!(
+                                    got.to_array().map(f32::to_bits),
+                                    want.map(f32::to_bits)
+                                );
+                            }
+                        }
+                    }
+                    let p = hash_words(&[seed, pixel, dim.0]);
+                    let want = match kind {
+                        SamplerKind::Stratified => stratified_1d(3, 10, p),
+                        SamplerKind::Random => unit_float(hash_words(&[p, 3, 2])),
+                    };
+                    assert_eq!(plain.get_1d(dim, 3, 10).to_bits(), want.to_bits());
+                }
+            }
         }
     }
 }

@@ -31,6 +31,11 @@ impl Integrator<'_> {
             } else {
                 1
             };
+            // A light all of whose samples would be rejected below is
+            // skipped whole (same image: the draws are counter-based).
+            if light.hidden_from(s.p, sh.ng) {
+                continue;
+            }
             let dim = Dim::light(depth, light_index as u32);
             let except = light.prim().unwrap_or(u32::MAX);
             // Where a batch may be traced as a packet, shadow rays wait in
@@ -42,6 +47,9 @@ impl Integrator<'_> {
                 .use_packet(full, SHADOW_PACKET_MIN)
                 .then(ShadowBatch::default);
             let mut sum = Vec3::ZERO;
+            // What every sample of this light from this point shares (the
+            // spherical rectangle of a rect light), built once.
+            let seen = light.seen_from(s.p, method);
             for j in 0..m_samples {
                 let u = if light.is_area() {
                     ctx.sampler
@@ -49,7 +57,7 @@ impl Integrator<'_> {
                 } else {
                     Vec2::ZERO
                 };
-                let Some(ls) = light.sample(s.p, u, method) else {
+                let Some(ls) = seen.sample(u) else {
                     continue;
                 };
                 let cos_i = sh.ns.dot(ls.wi);

@@ -1,0 +1,366 @@
+#!/usr/bin/env python3
+"""strata against Mitsuba 3 on strata's own scenes (issue 17).
+
+    tools/.venv/bin/python tools/bench_mitsuba.py [SCENE.toml ...]
+        [--strata target/release/strata] [--threads 1] [--runs 5]
+        [--spp N] [--ref-spp 1024] [--variant llvm_ad_rgb]
+
+Without scenes: scenes/large/dragon-rect.toml, scenes/seed-mc.toml and
+scenes/soft-shadow.toml. Each strata scene is translated into a Mitsuba
+scene dict: perspective camera (strata's fov is vertical: fov_axis "y"),
+box pixel filter, two-sided diffuse BSDFs, a rect light as a `rectangle`
+with a one-sided `area` emitter facing edge_u x edge_v, point and
+directional lights, a plane as a large rectangle, spheres, PLY/OBJ meshes
+(flat-shaded, as strata shades meshes without normals), and the `direct`
+integrator (emitter_samples = strata's shadow_samples, bsdf_samples = 1) with the `independent`
+sampler. strata's direct light has the same expectation (one light sample
+per hit; no diffuse interreflection). A scene the translation cannot
+express (specular or glossy materials, emission, textures, a background,
+thin lenses, disk or sphere lights, CSG, cylinders, transforms, ...) is
+skipped with the reason.
+
+Per scene:
+  1. A Mitsuba reference at --ref-spp (cached under tools/.cache/).
+  2. The same-image check: strata (stratified) at --ref-spp against the
+     reference: the mean of each of 3x3 image regions must agree within
+     1% (regions darker than 1% of the brightest are compared against that
+     floor). Otherwise the region means are printed and the scene is not
+     compared.
+  3. Equal spp (the scene's spp, or --spp): Mitsuba (independent sampler)
+     and strata (--sampler random) alternate --runs times on --threads
+     threads. Mitsuba renders once first (its JIT compiles the kernel;
+     later renders hit the kernel cache), so its timed renders exclude
+     compilation, as strata's render phase excludes its load and BVH
+     build. Medians; RMSE of each against the reference (mean over runs).
+  4. Equal RMSE: strata (stratified) at 1, 2, 4, ... spp until its RMSE
+     is at most Mitsuba's; the whole strata process (wall, including
+     load and BVH build) against Mitsuba's load_dict + warm render.
+
+Run on a quiet machine: these are wall-clock figures.
+"""
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+DEFAULT_SCENES = ["scenes/large/dragon-rect.toml", "scenes/seed-mc.toml", "scenes/soft-shadow.toml"]
+LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+
+
+class Unsupported(Exception):
+    pass
+
+
+def v3(x):
+    return [float(c) for c in x]
+
+
+def sub(a, b):
+    return [a[i] - b[i] for i in range(3)]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def norm(a):
+    n = math.sqrt(sum(c * c for c in a))
+    return [c / n for c in a]
+
+
+def frame_matrix(x, y, z, o):
+    """4x4 row-major matrix with columns x, y, z, o."""
+    return [[x[i], y[i], z[i], o[i]] for i in range(3)] + [[0.0, 0.0, 0.0, 1.0]]
+
+
+def translate(path, mi):
+    """strata scene file -> (Mitsuba dict, render settings). Raises Unsupported."""
+    with open(path, "rb") as f:
+        doc = tomllib.load(f)
+    base = os.path.dirname(os.path.abspath(path))
+    problems = []  # everything the translation cannot express, reported together
+    r = doc.get("render", {})
+    for key in r:
+        if key not in ("width", "height", "spp", "shadow_samples", "seed", "sampler",
+                       "light_sampling", "max_depth", "reflection_samples", "background",
+                       "glossy_sampling"):
+            problems.append(f"render.{key}")
+    if any(c != 0 for c in r.get("background", [0, 0, 0])):
+        problems.append("a background radiance (Mitsuba's constant emitter would also light the scene)")
+    settings = {"width": r.get("width", 640), "height": r.get("height", 480), "spp": r.get("spp", 1)}
+
+    cam = doc.get("camera", {})
+    kind = cam.get("type", "perspective")
+    if kind != "perspective":
+        problems.append(f"a {kind} camera")
+    for key in cam:
+        if key not in ("type", "position", "look_at", "up", "fov"):
+            problems.append(f"camera.{key}")
+    T = mi.ScalarTransform4f
+    scene = {
+        "type": "scene",
+        # strata's shadow_samples light samples per hit, and one BSDF sample.
+        "integrator": {"type": "direct", "emitter_samples": int(r.get("shadow_samples", 1)),
+                       "bsdf_samples": 1},
+        "sensor": {
+            "type": "perspective",
+            "fov_axis": "y",
+            "fov": float(cam.get("fov", 40.0)),
+            "to_world": T().look_at(origin=v3(cam.get("position", [0, 1, 6])),
+                                    target=v3(cam.get("look_at", [0, 0.5, 0])),
+                                    up=v3(cam.get("up", [0, 1, 0]))),
+            "film": {"type": "hdrfilm", "width": settings["width"], "height": settings["height"],
+                     "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+            "sampler": {"type": "independent", "sample_count": settings["spp"]},
+        },
+    }
+
+    bsdfs = {}
+    for name, m in doc.get("materials", {}).items():
+        # ior and fresnel are inactive without a glass layer; zeros are defaults.
+        extra = [key for key, value in m.items() if key not in ("diffuse", "ior", "fresnel")
+                 and not ((isinstance(value, list) and not any(value)) or value == 0)]
+        if extra:
+            problems.append(f"material {name!r}: {', '.join(extra)} (beyond a diffuse BSDF)")
+        bsdfs[name] = {"type": "twosided", "material": {
+            "type": "diffuse", "reflectance": {"type": "rgb", "value": v3(m.get("diffuse", [0.8] * 3))}}}
+
+    for i, light in enumerate(doc.get("lights", [])):
+        kind = light.get("type")
+        if kind == "point":
+            scene[f"light{i}"] = {"type": "point", "position": v3(light["position"]),
+                                  "intensity": {"type": "rgb", "value": v3(light["intensity"])}}
+        elif kind == "directional":
+            scene[f"light{i}"] = {"type": "directional", "direction": v3(light["direction"]),
+                                  "irradiance": {"type": "rgb", "value": v3(light["irradiance"])}}
+        elif kind == "rect":
+            c, eu, ev = v3(light["corner"]), v3(light["edge_u"]), v3(light["edge_v"])
+            n = norm(cross(eu, ev))  # strata's rect emits towards edge_u x edge_v
+            center = [c[k] + 0.5 * (eu[k] + ev[k]) for k in range(3)]
+            # Mitsuba's rectangle is [-1, 1]^2 at z = 0, emitting towards +z.
+            half_u = [0.5 * x for x in eu]
+            half_v = [0.5 * x for x in ev]
+            scene[f"light{i}"] = {
+                "type": "rectangle",
+                "to_world": T(frame_matrix(half_u, half_v, n, center)),
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": v3(light["radiance"])}},
+                # Its back: black, as strata's rect light shows nothing from behind.
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}},
+            }
+        else:
+            problems.append(f"a {kind} light")
+
+    for i, obj in enumerate(doc.get("objects", [])):
+        for key in obj:
+            if key not in ("sphere", "plane", "mesh", "material", "name"):
+                problems.append(f"objects[{i}].{key}")
+        mat = obj.get("material")
+        if mat not in bsdfs:
+            problems.append(f"objects[{i}] without a named material")
+            continue
+        bsdf = bsdfs[mat]
+        if "sphere" in obj:
+            s = obj["sphere"]
+            scene[f"obj{i}"] = {"type": "sphere", "center": v3(s.get("center", [0, 0, 0])),
+                                "radius": float(s["radius"]), "bsdf": bsdf}
+        elif "plane" in obj:
+            p = obj["plane"]
+            n = norm(v3(p["normal"]))
+            a = [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]
+            u = norm(cross(a, n))
+            v = cross(n, u)
+            size = 1000.0  # half-width: a plane, as far as any of these views reach
+            scene[f"obj{i}"] = {
+                "type": "rectangle",
+                "to_world": T(frame_matrix([size * x for x in u], [size * x for x in v], n,
+                                           v3(p.get("point", [0, 0, 0])))),
+                "bsdf": bsdf,
+            }
+        elif "mesh" in obj:
+            mesh = os.path.normpath(os.path.join(base, obj["mesh"]))
+            ext = os.path.splitext(mesh)[1].lower()
+            if ext not in (".ply", ".obj"):
+                problems.append(f"mesh {mesh}")
+            scene[f"obj{i}"] = {"type": ext[1:], "filename": mesh, "face_normals": True, "bsdf": bsdf}
+        else:
+            problems.append(f"objects[{i}] has no sphere, plane or mesh")
+    if problems:
+        raise Unsupported("; ".join(problems))
+    return scene, settings
+
+
+THREADS = 1
+
+
+def read_exr(mi, np, path):
+    import drjit as dr
+
+    # Mitsuba 3.9.1's EXR reader deadlocks on a one-thread pool: read on two.
+    dr.set_thread_count(max(2, THREADS))
+    img = np.array(mi.Bitmap(path), copy=True)[:, :, :3].astype(np.float64)
+    dr.set_thread_count(THREADS)
+    return img
+
+
+def rmse(np, a, b):
+    return float(np.sqrt(np.mean((a - b) ** 2)))
+
+
+def region_means(np, img, k=3):
+    h, w = img.shape[:2]
+    return [float(img[h * i // k:h * (i + 1) // k, w * j // k:w * (j + 1) // k].mean())
+            for i in range(k) for j in range(k)]
+
+
+def run_strata(args, scene, spp, sampler, out, seed=0):
+    stats = out + ".json"
+    cmd = [args.strata, "render", scene, "-q", "--threads", str(args.threads), "--spp", str(spp),
+           "--sampler", sampler, "--seed", str(seed), "-o", out, "--stats", stats]
+    t = time.perf_counter()
+    subprocess.run(cmd, check=True, cwd=ROOT)
+    wall = time.perf_counter() - t
+    with open(stats) as f:
+        st = json.load(f)["time"]
+    return wall, st["render_s"], st["load_s"] + st["bvh_build_s"]
+
+
+def bench_scene(args, mi, dr, np, path, tmp):
+    name = os.path.splitext(os.path.basename(path))[0]
+    try:
+        desc, settings = translate(path, mi)
+    except Unsupported as e:
+        print(f"{name}: skipped: the Mitsuba translation cannot express {e}")
+        return None
+    spp = args.spp or settings["spp"]
+    t = time.perf_counter()
+    scene = mi.load_dict(desc)
+    load_s = time.perf_counter() - t
+
+    cpu = []  # Mitsuba's CPU seconds per wall second while rendering: its thread use
+
+    def mitsuba(n, seed):
+        t, c = time.perf_counter(), time.process_time()
+        img = np.array(mi.render(scene, spp=n, seed=seed), copy=True).astype(np.float64)
+        t = time.perf_counter() - t
+        cpu.append((time.process_time() - c) / t)
+        return img, t
+
+    # 1. The reference, cached by the scene file, its meshes' sizes and the spp.
+    key = hashlib.sha256(open(path, "rb").read() + json.dumps(
+        [args.ref_spp, mi.__version__, sorted(str(v.get("filename", "")) + str(
+            os.path.getsize(v["filename"]) if "filename" in v else "") for v in desc.values()
+            if isinstance(v, dict))]).encode()).hexdigest()[:16]
+    cache = os.path.join(HERE, ".cache", f"mitsuba-{name}-{args.ref_spp}spp-{key}.npy")
+    if os.path.exists(cache):
+        ref = np.load(cache)
+    else:
+        # In passes of at most 256 spp (memory), with distinct seeds.
+        passes = max(1, args.ref_spp // 256)
+        ref = sum(mitsuba(args.ref_spp // passes, 1000 + k)[0] for k in range(passes)) / passes
+        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        np.save(cache, ref)
+
+    # 2. Same image?
+    check = os.path.join(tmp, f"{name}-check.exr")
+    run_strata(args, path, args.ref_spp, "stratified", check)
+    mine = read_exr(mi, np, check)
+    ms, ss = region_means(np, ref), region_means(np, mine)
+    floor = 0.01 * max(ms)
+    bad = [i for i, (m, s) in enumerate(zip(ms, ss)) if abs(s - m) > 0.01 * max(m, floor)]
+    if mine.shape != ref.shape or bad:
+        print(f"{name}: NOT COMPARED: the renderers disagree at {args.ref_spp} spp "
+              f"(3x3 region means, row-major; regions {bad} differ by more than 1%):")
+        print("  mitsuba " + " ".join(f"{m:.5f}" for m in ms))
+        print("  strata  " + " ".join(f"{s:.5f}" for s in ss))
+        return None
+    worst = max(abs(s - m) / max(m, floor) for m, s in zip(ms, ss))
+    print(f"{name}: same image: 3x3 region means agree within {100 * worst:.2f}% at {args.ref_spp} spp")
+
+    # 3. Equal spp, alternating; Mitsuba warmed up (JIT) first.
+    first_t = mitsuba(spp, 1)[1]
+    m_times, m_err, s_render, s_wall, s_err = [], [], [], [], []
+    for k in range(args.runs):
+        img, t = mitsuba(spp, 2 + k)
+        m_times.append(t)
+        m_err.append(rmse(np, img, ref))
+        out = os.path.join(tmp, f"{name}-rnd.exr")
+        wall, render_s, _ = run_strata(args, path, spp, "random", out, seed=k)
+        s_render.append(render_s)
+        s_wall.append(wall)
+        s_err.append(rmse(np, read_exr(mi, np, out), ref))
+    med = statistics.median
+    m_rmse, s_rmse = statistics.mean(m_err), statistics.mean(s_err)
+    print(f"  equal spp ({spp}, random / independent sampler, {args.threads} thread(s), "
+          f"median of {args.runs}):")
+    print(f"    mitsuba render {med(m_times):.3f} s (first render, with JIT compile: {first_t:.3f} s; "
+          f"load_dict {load_s:.3f} s)  RMSE {m_rmse:.5f}")
+    print(f"    strata  render {med(s_render):.3f} s (whole process {med(s_wall):.3f} s)  "
+          f"RMSE {s_rmse:.5f}")
+    print(f"    strata / mitsuba render time {med(s_render) / med(m_times):.2f} "
+          f"(mitsuba used {med(cpu[-args.runs:]):.2f} CPU s per wall s)")
+
+    # 4. Equal RMSE: strata stratified, doubling spp until at or below Mitsuba's RMSE.
+    n, found = 1, None
+    while n <= 4 * args.ref_spp:
+        out = os.path.join(tmp, f"{name}-strat.exr")
+        run_strata(args, path, n, "stratified", out)
+        e = rmse(np, read_exr(mi, np, out), ref)
+        if e <= m_rmse:
+            found = (n, e)
+            break
+        n *= 2
+    if found is None:
+        print(f"  equal RMSE: strata did not reach Mitsuba's RMSE {m_rmse:.5f} by {n // 2} spp")
+        return None
+    n, e = found
+    walls, renders = [], []
+    for k in range(args.runs):
+        wall, render_s, _ = run_strata(args, path, n, "stratified", os.path.join(tmp, f"{name}-strat.exr"))
+        walls.append(wall)
+        renders.append(render_s)
+    mitsuba_total = load_s + med(m_times)
+    print(f"  equal RMSE: strata stratified at {n} spp: RMSE {e:.5f} <= mitsuba's {m_rmse:.5f} at {spp} spp")
+    print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
+          f"load_dict + warm render {mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
+    return True
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("scenes", nargs="*", default=DEFAULT_SCENES)
+    ap.add_argument("--strata", default=os.path.join(ROOT, "target", "release", "strata"))
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--spp", type=int, default=0, help="equal-spp sample count (default: the scene's)")
+    ap.add_argument("--ref-spp", type=int, default=1024)
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    args = ap.parse_args()
+    if os.path.exists(LLVM):
+        os.environ.setdefault("DRJIT_LIBLLVM_PATH", LLVM)
+    import numpy as np
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    global THREADS
+    THREADS = args.threads
+    dr.set_thread_count(args.threads)
+    print(f"mitsuba {mi.__version__} ({args.variant}), strata {args.strata}, {args.threads} thread(s), "
+          f"{args.runs} runs, reference {args.ref_spp} spp")
+    with tempfile.TemporaryDirectory() as tmp:
+        for path in args.scenes:
+            bench_scene(args, mi, dr, np, path, tmp)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
