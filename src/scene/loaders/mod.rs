@@ -14,6 +14,7 @@
 pub mod gltf;
 pub mod obj;
 pub mod ply;
+mod ply_ascii;
 
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::LoadedAsset;

@@ -1,4 +1,5 @@
-//! Stanford PLY, ASCII and binary (either endianness), through `ply-rs-bw`.
+//! Stanford PLY, ASCII and binary (either endianness): the header and
+//! binary bodies through `ply-rs-bw`, ASCII bodies by `ply_ascii`.
 //!
 //! `vertex` elements give `x y z` (float or double); `face` elements give a
 //! `vertex_indices` (or `vertex_index`) list, fan-triangulated like OBJ
@@ -11,6 +12,7 @@
 //! file, not an allocation. An index out of range is an error naming the face.
 
 use super::io_message;
+use super::ply_ascii::{self, AsciiFace};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::Vec3;
@@ -163,6 +165,23 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     check_counts(path, &header, file_len)?;
     let mut positions = Vec::new();
     let mut faces = Vec::new();
+    if header.encoding == Encoding::Ascii {
+        // The reader's count has already moved past `end_header` (our
+        // line tests pin this).
+        let line = reader.line().saturating_sub(1);
+        let body = ply_ascii::read_body(path, &header, reader.into_inner(), line)?;
+        positions = body.positions;
+        faces = body
+            .faces
+            .into_iter()
+            .map(|f| match f {
+                AsciiFace::Triangle(t) => Face::Triangle(t),
+                AsciiFace::Polygon(p) => Face::Polygon(p),
+                AsciiFace::Invalid(k) => Face::Invalid(k),
+            })
+            .collect();
+        return mesh_asset(path, positions, &faces);
+    }
     for (name, def) in &header.elements {
         match name.as_str() {
             "vertex" => {
@@ -185,6 +204,12 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
             }
         }
     }
+    mesh_asset(path, positions, &faces)
+}
+
+/// One mesh of `positions` and `faces` (fan-triangulated), every index
+/// checked against the vertex count.
+fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<LoadedAsset> {
     let n = positions.len();
     let mut indices = Vec::with_capacity(faces.len());
     for (i, f) in faces.iter().enumerate() {
@@ -204,7 +229,6 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
             Face::Empty | Face::Invalid(_) => {}
         }
     }
-    drop(faces);
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().to_string());
@@ -274,5 +298,130 @@ mod tests {
             e.to_string().contains("face 0") && e.to_string().contains("oob.ply"),
             "{e}"
         );
+    }
+
+    /// The same random vertices as ASCII and as binary: bit-identical
+    /// positions, whatever the float (the ASCII text is Rust's shortest
+    /// round-trip form, which parses back to the same bits).
+    #[test]
+    fn ascii_floats_parse_to_the_bits_the_binary_file_holds() {
+        use crate::sampling::stream::{seeded, Draw};
+        let mut rng = seeded(7);
+        let n = 500;
+        let values: Vec<f32> = (0..3 * n)
+            .map(|_| {
+                let scale = 10f32.powi(rng.range(-30.0, 30.0) as i32);
+                rng.range(-0.5, 0.5) * scale
+            })
+            .collect();
+        let head = format!(
+            "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        );
+        let mut ascii = head.clone();
+        for v in values.chunks(3) {
+            ascii += &format!("{} {} {}\n", v[0], v[1], v[2]);
+        }
+        ascii += "3 0 1 2\n";
+        let mut bin = head.replace("ascii", "binary_little_endian").into_bytes();
+        for v in &values {
+            bin.extend(v.to_le_bytes());
+        }
+        bin.push(3);
+        for i in [0i32, 1, 2] {
+            bin.extend(i.to_le_bytes());
+        }
+        let a = load_ply(&write("fa.ply", ascii.as_bytes())).unwrap();
+        let b = load_ply(&write("fb.ply", &bin)).unwrap();
+        let bits = |m: &LoadedAsset| -> Vec<u32> {
+            m.meshes[0]
+                .positions
+                .iter()
+                .flat_map(|p| p.to_array())
+                .map(f32::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(
+            bits(&a),
+            values.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn ascii_bodies_skip_what_a_mesh_does_not_use() {
+        // Doubles, extra vertex properties, an extra element with a list,
+        // blank lines, a pentagon, the singular `vertex_index`.
+        let text = "ply\nformat ascii 1.0\ncomment x\nelement vertex 3\nproperty double x\n\
+                    property float nx\nproperty double y\nproperty double z\nproperty uchar red\n\
+                    element edge 1\nproperty list uchar int pair\nproperty int weight\n\
+                    element face 2\nproperty uchar flags\nproperty list uchar uint vertex_index\n\
+                    end_header\n0.5 9 0 0 255\n\n1 9 0 0 1\n1 9 1 0 2\n2 0 1 -7\n\
+                    0 3 0 1 2\n1 5 0 1 2 0 1\n";
+        let a = load_ply(&write("skip.ply", text.as_bytes())).unwrap();
+        let m = &a.meshes[0];
+        assert_eq!(
+            m.positions,
+            vec![
+                Vec3::new(0.5, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0)
+            ]
+        );
+        assert_eq!(m.indices, vec![[0, 1, 2], [0, 1, 2], [0, 2, 0], [0, 0, 1]]);
+    }
+
+    #[test]
+    fn ascii_errors_name_the_file_and_line() {
+        let cases = [
+            // (body, line, words in the message)
+            (
+                "0 0 0\n1 0 x\n1 1 0\n0 1 0\n3 0 1 2\n",
+                11,
+                "'x' is not a float",
+            ),
+            (
+                "0 0 0\n1 0 0\n1 1\n0 1 0\n3 0 1 2\n",
+                12,
+                "coordinate is missing",
+            ),
+            (
+                "0 0 0\n1 0 0 4\n1 1 0\n0 1 0\n3 0 1 2\n",
+                11,
+                "unexpected '4'",
+            ),
+            (
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1\n",
+                14,
+                "vertex index is missing",
+            ),
+            (
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n300 0 1 2\n",
+                14,
+                "'300' is not a uchar",
+            ),
+            (
+                "0 0 0\n1 0 0\n1 1 0\n",
+                13,
+                "ends before its 4 'vertex' elements",
+            ),
+            (
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2.5\n",
+                14,
+                "'2.5' is not a int",
+            ),
+        ];
+        for (body, line, words) in cases {
+            let e = load_ply(&write("bad.ply", format!("{HEAD}{body}").as_bytes())).unwrap_err();
+            let text = e.to_string();
+            assert!(
+                text.starts_with(&format!("{}: line {line}: ", e.file)),
+                "{text}"
+            );
+            assert!(text.contains("bad.ply") && text.contains(words), "{text}");
+        }
+        // A negative index is named with its face, as in binary files.
+        let neg = format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 -1 2\n");
+        let e = load_ply(&write("neg.ply", neg.as_bytes())).unwrap_err();
+        assert!(e.to_string().contains("face 0: vertex index -1"), "{e}");
     }
 }

@@ -1,0 +1,206 @@
+//! The body of an ASCII PLY file, read line by line without the generic
+//! per-element machinery of `ply-rs-bw` (which builds a property map and a
+//! `Vec` per face), since ASCII scans are the large meshes people download.
+//!
+//! One element per line, its properties in header order: a scalar is one
+//! token, a list a count and then that many tokens. Only what the mesh
+//! needs is kept (`x y z` of `vertex`, the index list of `face`); every
+//! other token is still checked to be a number of its type, so a damaged
+//! file fails here as it would in any PLY reader. Errors name the file's
+//! line. Floats parse with Rust's correctly rounded `str::parse`, so the
+//! positions are the same bits as any exact reader gives; `double`
+//! properties round once, from the f64 value, to f32.
+
+use crate::error::{InputError, InputResult};
+use glam::Vec3;
+use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
+use std::io::BufRead;
+use std::path::Path;
+
+/// A face's vertex indices as the file gives them (a negative one kept to
+/// be reported, not wrapped).
+pub(super) enum AsciiFace {
+    Triangle([u32; 3]),
+    Polygon(Box<[u32]>),
+    Invalid(i64),
+}
+
+/// What a mesh takes from an ASCII PLY body.
+#[derive(Default)]
+pub(super) struct AsciiBody {
+    pub positions: Vec<Vec3>,
+    pub faces: Vec<AsciiFace>,
+}
+
+/// What to do with one property of an element.
+#[derive(Clone, Copy)]
+enum Use {
+    /// Coordinate `axis` of a vertex.
+    Coordinate(usize),
+    /// The face's vertex index list.
+    Indices,
+    /// Checked and dropped.
+    Skip,
+}
+
+/// Read the body that follows the header; `line` is the number of the
+/// header's last line (`end_header`).
+pub(super) fn read_body(
+    path: &Path,
+    header: &Header,
+    mut reader: impl BufRead,
+    mut line: usize,
+) -> InputResult<AsciiBody> {
+    let mut body = AsciiBody::default();
+    let mut text = String::new();
+    for (name, element) in &header.elements {
+        let uses: Vec<(Use, &PropertyType)> = element
+            .properties
+            .iter()
+            .map(|(property, def)| {
+                let role = match (name.as_str(), property.as_str(), &def.data_type) {
+                    ("vertex", "x", PropertyType::Scalar(_)) => Use::Coordinate(0),
+                    ("vertex", "y", PropertyType::Scalar(_)) => Use::Coordinate(1),
+                    ("vertex", "z", PropertyType::Scalar(_)) => Use::Coordinate(2),
+                    ("face", "vertex_indices" | "vertex_index", PropertyType::List(..)) => {
+                        Use::Indices
+                    }
+                    _ => Use::Skip,
+                };
+                (role, &def.data_type)
+            })
+            .collect();
+        match name.as_str() {
+            "vertex" => body.positions.reserve_exact(element.count),
+            "face" => body.faces.reserve_exact(element.count),
+            _ => {}
+        }
+        let mut indices: Vec<u32> = Vec::new();
+        for _ in 0..element.count {
+            // Blank lines carry no element.
+            loop {
+                text.clear();
+                line += 1;
+                let read = reader.read_line(&mut text).map_err(|e| {
+                    InputError::file(path, format!("cannot read: {e}")).on_line(Some(line))
+                })?;
+                if read == 0 {
+                    return Err(InputError::file(
+                        path,
+                        format!(
+                            "the file ends before its {} '{name}' elements do",
+                            element.count
+                        ),
+                    )
+                    .on_line(Some(line)));
+                }
+                if !text.trim_ascii().is_empty() {
+                    break;
+                }
+            }
+            let at = |message: String| InputError::file(path, message).on_line(Some(line));
+            let mut tokens = text.split_ascii_whitespace();
+            let mut next = |what: &str| {
+                tokens
+                    .next()
+                    .ok_or_else(|| at(format!("'{name}' element: {what} is missing")))
+            };
+            let mut position = [0.0f32; 3];
+            let mut face = None;
+            for &(role, data_type) in &uses {
+                match (role, data_type) {
+                    (Use::Coordinate(axis), PropertyType::Scalar(t)) => {
+                        let token = next("a coordinate")?;
+                        position[axis] = number(token, t).map_err(&at)? as f32;
+                    }
+                    (Use::Indices, PropertyType::List(count_type, item_type)) => {
+                        let n = count(next("the index count")?, count_type).map_err(&at)?;
+                        indices.clear();
+                        let mut invalid = None;
+                        for _ in 0..n {
+                            let k = integer(next("a vertex index")?, item_type).map_err(&at)?;
+                            match u32::try_from(k) {
+                                Ok(k) => indices.push(k),
+                                Err(_) => invalid = invalid.or(Some(k)),
+                            }
+                        }
+                        face = Some(match (invalid, <[u32; 3]>::try_from(indices.as_slice())) {
+                            (Some(k), _) => AsciiFace::Invalid(k),
+                            (None, Ok(tri)) => AsciiFace::Triangle(tri),
+                            (None, Err(_)) => AsciiFace::Polygon(indices.as_slice().into()),
+                        });
+                    }
+                    (_, PropertyType::Scalar(t)) => {
+                        number(next("a value")?, t).map_err(&at)?;
+                    }
+                    (_, PropertyType::List(count_type, item_type)) => {
+                        let n = count(next("a list count")?, count_type).map_err(&at)?;
+                        for _ in 0..n {
+                            number(next("a list value")?, item_type).map_err(&at)?;
+                        }
+                    }
+                }
+            }
+            if let Some(extra) = tokens.next() {
+                return Err(at(format!(
+                    "'{name}' element: unexpected '{extra}' after its {} properties",
+                    uses.len()
+                )));
+            }
+            match name.as_str() {
+                "vertex" => body.positions.push(Vec3::from(position)),
+                "face" => body.faces.extend(face),
+                _ => {}
+            }
+        }
+    }
+    Ok(body)
+}
+
+/// A token of scalar type `t` as f64 (exact for every PLY integer type).
+fn number(token: &str, t: &ScalarType) -> Result<f64, String> {
+    match t {
+        ScalarType::Float => token.parse::<f32>().map(f64::from).map_err(|_| ()),
+        ScalarType::Double => token.parse::<f64>().map_err(|_| ()),
+        _ => integer(token, t).map(|k| k as f64).map_err(|_| ()),
+    }
+    .map_err(|()| format!("'{token}' is not a {}", type_name(t)))
+}
+
+/// A token of integer type `t`, range-checked.
+fn integer(token: &str, t: &ScalarType) -> Result<i64, String> {
+    let (lo, hi) = match t {
+        ScalarType::Char => (i8::MIN as i64, i8::MAX as i64),
+        ScalarType::UChar => (0, u8::MAX as i64),
+        ScalarType::Short => (i16::MIN as i64, i16::MAX as i64),
+        ScalarType::UShort => (0, u16::MAX as i64),
+        ScalarType::Int => (i32::MIN as i64, i32::MAX as i64),
+        ScalarType::UInt => (0, u32::MAX as i64),
+        ScalarType::Float | ScalarType::Double => {
+            return Err(format!("'{token}': a list of {} indices", type_name(t)))
+        }
+    };
+    match token.parse::<i64>() {
+        Ok(k) if (lo..=hi).contains(&k) => Ok(k),
+        _ => Err(format!("'{token}' is not a {}", type_name(t))),
+    }
+}
+
+/// A list's length, which must not be negative.
+fn count(token: &str, t: &ScalarType) -> Result<usize, String> {
+    let n = integer(token, t)?;
+    usize::try_from(n).map_err(|_| format!("list length {n} is negative"))
+}
+
+fn type_name(t: &ScalarType) -> &'static str {
+    match t {
+        ScalarType::Char => "char",
+        ScalarType::UChar => "uchar",
+        ScalarType::Short => "short",
+        ScalarType::UShort => "ushort",
+        ScalarType::Int => "int",
+        ScalarType::UInt => "uint",
+        ScalarType::Float => "float",
+        ScalarType::Double => "double",
+    }
+}
