@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""strata against Mitsuba 3 on strata's own scenes (issue 17).
+"""strata against Mitsuba 3 on strata's own scenes.
 
     tools/.venv/bin/python tools/bench_mitsuba.py [SCENE.toml ...]
         [--strata target/release/strata] [--threads 1] [--runs 5]
