@@ -115,7 +115,7 @@ def strata_rate(args, mesh):
     out = subprocess.run(args, capture_output=True, text=True, env=env)
     if out.returncode != 0:
         raise InputError(mesh, f"strata trace failed: {out.stderr.strip()}")
-    # "... in 0.123 s = 4.56 Mrays/s on 1 threads (load 0.12 s, BVH 0.34 s) -> ..."
+    # "... in 0.123 s = 4.56 Mrays/s on 1 thread (load 0.12 s, BVH 0.34 s) -> ..."
     rate = float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
     build = float(out.stdout.split("BVH ")[1].split(" s")[0])
     return rate, build

@@ -323,9 +323,9 @@ fn bench_meshes(
                     .collect();
                 let e = Embree::start(exe, work, &scene.geometry, &flat, pools.last().unwrap().0)?;
                 println!(
-                    "# {name}: Embree (native, high quality, default mode) BVH build {:.3} s on {} threads, {:.1} B/tri",
+                    "# {name}: Embree (native, high quality, default mode) BVH build {:.3} s on {}, {:.1} B/tri",
                     e.build_s,
-                    pools.last().unwrap().0,
+                    super::count(pools.last().unwrap().0, "thread", "threads"),
                     e.bytes / tris.max(1) as f64
                 );
                 Some(e)

@@ -152,9 +152,9 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
                 };
                 if !args.quiet {
                     eprintln!(
-                        "  {:<9} {:>3} threads, run {}/{}: {:.3} s",
+                        "  {:<9} {:>11}, run {}/{}: {:.3} s",
                         mode.name(),
-                        n,
+                        super::count(n, "thread", "threads"),
                         rep + 1,
                         args.repeats,
                         t.seconds

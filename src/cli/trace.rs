@@ -109,7 +109,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
     if !args.quiet {
         let found = hits.iter().filter(|h| h.is_hit()).count();
         println!(
-            "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} threads (load {:.2} s, BVH {:.2} s) -> {}",
+            "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} (load {:.2} s, BVH {:.2} s) -> {}",
             rays.len(),
             if args.occlusion { "occlusion" } else { "closest hit" },
             scene.geometry.triangle_count,
@@ -117,7 +117,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
             if args.occlusion { "occluded" } else { "hits" },
             seconds,
             rays.len() as f64 / seconds.max(1e-9) / 1e6,
-            threads,
+            super::count(threads, "thread", "threads"),
             timings.load.as_secs_f64(),
             timings.bvh_build.as_secs_f64(),
             args.hits.display()
