@@ -112,7 +112,7 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
         path(&dir, "2.hits"),
         path(&dir, "occ.hits"),
     );
-    ok(&[
+    let one = strata(&[
         "trace",
         ICOSPHERE,
         "--rays",
@@ -121,8 +121,12 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
         &s(&h1),
         "--threads",
         "1",
-        "--quiet",
     ]);
+    let summary = String::from_utf8_lossy(&one.stdout);
+    assert!(
+        one.status.success() && summary.contains("on 1 thread ("),
+        "{summary}"
+    );
     ok(&[
         "trace",
         ICOSPHERE,
