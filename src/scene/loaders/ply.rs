@@ -210,6 +210,12 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
 /// One mesh of `positions` and `faces` (fan-triangulated), every index
 /// checked against the vertex count.
 fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<LoadedAsset> {
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(InputError::file(
+            path,
+            format!("vertex {i} is not finite: {}", positions[i]),
+        ));
+    }
     let n = positions.len();
     let mut indices = Vec::with_capacity(faces.len());
     for (i, f) in faces.iter().enumerate() {
@@ -419,6 +425,36 @@ mod tests {
             );
             assert!(text.contains("bad.ply") && text.contains(words), "{text}");
         }
+        // NaN or infinite coordinates, in ASCII (with the line) and binary.
+        let nan = format!("{HEAD}0 0 0\n1 nan 0\n1 1 0\n0 1 0\n3 0 1 2\n");
+        let e = load_ply(&write("nan.ply", nan.as_bytes())).unwrap_err();
+        assert!(
+            e.to_string().contains("line 11: vertex 1 is not finite"),
+            "{e}"
+        );
+        let mut bin = HEAD.replace("ascii", "binary_little_endian").into_bytes();
+        for c in [
+            0.0f32,
+            0.0,
+            0.0,
+            1.0,
+            0.0,
+            0.0,
+            1.0,
+            f32::INFINITY,
+            0.0,
+            0.0,
+            1.0,
+            0.0,
+        ] {
+            bin.extend(c.to_le_bytes());
+        }
+        bin.push(3);
+        for i in [0i32, 1, 2] {
+            bin.extend(i.to_le_bytes());
+        }
+        let e = load_ply(&write("inf.ply", &bin)).unwrap_err();
+        assert!(e.to_string().contains("vertex 2 is not finite"), "{e}");
         // A negative index is named with its face, as in binary files.
         let neg = format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 -1 2\n");
         let e = load_ply(&write("neg.ply", neg.as_bytes())).unwrap_err();

@@ -148,7 +148,16 @@ pub(super) fn read_body(
                 )));
             }
             match name.as_str() {
-                "vertex" => body.positions.push(Vec3::from(position)),
+                "vertex" => {
+                    let p = Vec3::from(position);
+                    if !p.is_finite() {
+                        return Err(at(format!(
+                            "vertex {} is not finite: {p}",
+                            body.positions.len()
+                        )));
+                    }
+                    body.positions.push(p);
+                }
                 "face" => body.faces.extend(face),
                 _ => {}
             }
