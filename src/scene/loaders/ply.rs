@@ -12,7 +12,7 @@
 //! file, not an allocation. An index out of range is an error naming the face.
 
 use super::io_message;
-use super::ply_ascii::{self, AsciiFace};
+use super::ply_ascii;
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::Vec3;
@@ -53,7 +53,7 @@ impl Vertex {
 /// An index that is no `u32` (a negative `int`) is kept, as i64, to be
 /// reported, not wrapped.
 #[derive(Default)]
-enum Face {
+pub(super) enum Face {
     #[default]
     Empty,
     Triangle([u32; 3]),
@@ -75,12 +75,17 @@ impl Face {
                     }
                 }
             }
-            *self = match <[u32; 3]>::try_from(idx.as_slice()) {
-                Ok(tri) => Face::Triangle(tri),
-                Err(_) => Face::Polygon(idx.into_boxed_slice()),
-            };
+            *self = Face::of(&idx);
         }
         ply_rs_bw::ply::PropertyAccessResult::Ignored
+    }
+
+    /// The face of valid indices `idx`: inline if a triangle.
+    pub(super) fn of(idx: &[u32]) -> Face {
+        match <[u32; 3]>::try_from(idx) {
+            Ok(tri) => Face::Triangle(tri),
+            Err(_) => Face::Polygon(idx.into()),
+        }
     }
 
     /// The first index outside `0..n`, if any.
@@ -163,25 +168,15 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     let fparser = Parser::<Face>::new();
     let header = vparser.read_header(&mut reader).map_err(|e| bad(&e))?;
     check_counts(path, &header, file_len)?;
-    let mut positions = Vec::new();
-    let mut faces = Vec::new();
     if header.encoding == Encoding::Ascii {
         // The reader's count has already moved past `end_header` (our
         // line tests pin this).
         let line = reader.line().saturating_sub(1);
         let body = ply_ascii::read_body(path, &header, reader.into_inner(), line)?;
-        positions = body.positions;
-        faces = body
-            .faces
-            .into_iter()
-            .map(|f| match f {
-                AsciiFace::Triangle(t) => Face::Triangle(t),
-                AsciiFace::Polygon(p) => Face::Polygon(p),
-                AsciiFace::Invalid(k) => Face::Invalid(k),
-            })
-            .collect();
-        return mesh_asset(path, positions, &faces);
+        return mesh_asset(path, body.positions, &body.faces);
     }
+    let mut positions: Vec<Vec3> = Vec::new();
+    let mut faces = Vec::new();
     for (name, def) in &header.elements {
         match name.as_str() {
             "vertex" => {
@@ -204,18 +199,19 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
             }
         }
     }
-    mesh_asset(path, positions, &faces)
-}
-
-/// One mesh of `positions` and `faces` (fan-triangulated), every index
-/// checked against the vertex count.
-fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<LoadedAsset> {
+    // The ASCII reader checks this as it reads, to name the line.
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
         return Err(InputError::file(
             path,
             format!("vertex {i} is not finite: {}", positions[i]),
         ));
     }
+    mesh_asset(path, positions, &faces)
+}
+
+/// One mesh of finite `positions` and `faces` (fan-triangulated), every
+/// index checked against the vertex count.
+fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<LoadedAsset> {
     let n = positions.len();
     let mut indices = Vec::with_capacity(faces.len());
     for (i, f) in faces.iter().enumerate() {

@@ -11,25 +11,18 @@
 //! positions are the same bits as any exact reader gives; `double`
 //! properties round once, from the f64 value, to f32.
 
+use super::ply::Face;
 use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
 use std::io::BufRead;
 use std::path::Path;
 
-/// A face's vertex indices as the file gives them (a negative one kept to
-/// be reported, not wrapped).
-pub(super) enum AsciiFace {
-    Triangle([u32; 3]),
-    Polygon(Box<[u32]>),
-    Invalid(i64),
-}
-
 /// What a mesh takes from an ASCII PLY body.
 #[derive(Default)]
 pub(super) struct AsciiBody {
     pub positions: Vec<Vec3>,
-    pub faces: Vec<AsciiFace>,
+    pub faces: Vec<Face>,
 }
 
 /// What to do with one property of an element.
@@ -124,10 +117,10 @@ pub(super) fn read_body(
                                 Err(_) => invalid = invalid.or(Some(k)),
                             }
                         }
-                        face = Some(match (invalid, <[u32; 3]>::try_from(indices.as_slice())) {
-                            (Some(k), _) => AsciiFace::Invalid(k),
-                            (None, Ok(tri)) => AsciiFace::Triangle(tri),
-                            (None, Err(_)) => AsciiFace::Polygon(indices.as_slice().into()),
+                        // A negative index is kept to be reported, not wrapped.
+                        face = Some(match invalid {
+                            Some(k) => Face::Invalid(k),
+                            None => Face::of(&indices),
                         });
                     }
                     (_, PropertyType::Scalar(t)) => {
