@@ -6,7 +6,11 @@
 //!   exists, and a `#fragment` into a Markdown file names one of its headings;
 //! - every TOML example in the scene format reference (and the README and
 //!   the CLI reference) is a scene strata accepts, and every example marked
-//!   as an error is refused with the message the documentation shows.
+//!   as an error is refused with the message the documentation shows;
+//! - the README stays short, and the scene it asks a new user to type in
+//!   renders something lit.
+
+mod common;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -295,6 +299,39 @@ fn compile_example(text: &str) -> Result<(), String> {
     strata::scene::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
         .map(|_| ())
         .map_err(|e| e.to_string())
+}
+
+#[test]
+fn the_readme_fits_in_a_sitting() {
+    let lines = read(&repo().join("README.md")).lines().count();
+    assert!(lines <= 300, "README.md has {lines} lines");
+}
+
+#[test]
+fn the_first_scene_in_the_readme_renders_a_lit_image() {
+    let readme = read(&repo().join("README.md"));
+    let section = readme
+        .split("## Your first scene")
+        .nth(1)
+        .expect("a 'Your first scene' section");
+    let (_, block) = toml_blocks(section)
+        .into_iter()
+        .next()
+        .expect("a toml block in 'Your first scene'");
+    // The README says to save it in the repository's root, so its mesh path
+    // resolves from there.
+    let small = block
+        .replace("width = 640", "width = 32")
+        .replace("height = 480", "height = 24")
+        .replace("spp = 16 ", "spp = 1 ");
+    let scene = common::scene_at(&small, &repo().join("first.toml"));
+    let rgb = common::render_rgb(&scene, 2);
+    let lit = rgb.iter().filter(|p| p.max_element() > 0.01).count();
+    assert!(
+        lit > rgb.len() / 4,
+        "only {lit} of {} pixels lit",
+        rgb.len()
+    );
 }
 
 #[test]
