@@ -69,7 +69,7 @@ impl PixelSampler {
             seed,
             pixel,
             prefix: hash_step(hash_step(HASH_WORDS_INIT, seed), pixel),
-            sets: [EMPTY_SET; 2],
+            sets: [CmjSet::EMPTY; 2],
         }
     }
 
@@ -78,7 +78,7 @@ impl PixelSampler {
     /// [`PixelSampler::with_sets`]. They depend on the sizes alone, so a
     /// caller prepares them once for many pixels.
     pub fn prepare_sets(counts: [u32; 2]) -> [CmjSet; 2] {
-        counts.map(|n| if n > 0 { CmjSet::new(n) } else { EMPTY_SET })
+        counts.map(|n| if n > 0 { CmjSet::new(n) } else { CmjSet::EMPTY })
     }
 
     /// The same sampler with `sets` (from [`PixelSampler::prepare_sets`]):
@@ -110,8 +110,7 @@ impl PixelSampler {
                 None => cmj_2d(index, count, p),
             },
             SamplerKind::Random => {
-                // hash_words(&[p, index, k]) for k = 0, 1, sharing [p, index].
-                let h = hash_step(hash_step(HASH_WORDS_INIT, p), index);
+                let h = random_prefix(p, index);
                 Vec2::new(unit_float(hash_step(h, 0)), unit_float(hash_step(h, 1)))
             }
         }
@@ -121,15 +120,17 @@ impl PixelSampler {
         let p = self.pattern(dim);
         match self.kind {
             SamplerKind::Stratified => stratified_1d(index, count, p),
-            SamplerKind::Random => unit_float(hash_step(
-                hash_step(hash_step(HASH_WORDS_INIT, p), index),
-                2,
-            )),
+            SamplerKind::Random => unit_float(hash_step(random_prefix(p, index), 2)),
         }
     }
 }
 
-const EMPTY_SET: CmjSet = CmjSet::EMPTY;
+/// The random sampler's `hash_words(&[p, index, k])` state before `k`, which
+/// a sample's coordinates (k = 0, 1 in 2D, 2 in 1D) share.
+#[inline]
+fn random_prefix(p: u32, index: u32) -> u32 {
+    hash_step(hash_step(HASH_WORDS_INIT, p), index)
+}
 
 #[cfg(test)]
 mod tests {
