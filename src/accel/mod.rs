@@ -10,12 +10,14 @@
 //! spills to the heap instead of dropping work.
 
 pub mod build;
+mod collapse;
 pub mod hit;
 pub mod node;
 pub mod packet;
 pub mod prefetch;
 pub mod traverse;
 
-pub use build::{BuildQuality, Bvh8, TreeStats, LEAF_BLOCK, NO_PRIM};
+pub use build::{BuildQuality, Bvh8, TreeStats};
+pub use collapse::{LEAF_BLOCK, NO_PRIM};
 pub use hit::PrimHit;
 pub use packet::{Packet, PACKET_SIZE};

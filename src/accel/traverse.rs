@@ -7,7 +7,7 @@
 //! by ±f32::MAX reciprocals so no slab computes 0·∞ = NaN.
 
 use super::build::Bvh8;
-use super::build::LEAF_BLOCK;
+use super::collapse::LEAF_BLOCK;
 use super::hit::{closer, tie_ray, PrimHit};
 use super::node::{decode, is_leaf, leaf_range, ChildRef};
 use super::prefetch::prefetch;

@@ -1,0 +1,511 @@
+//! The collapse of obvhs's binary tree into 8-wide nodes, chosen by the
+//! surface area heuristic over the whole subtree (Ylitie, Karras and Laine
+//! 2017), and the packing of its leaves into blocks of [`LEAF_BLOCK`] slots.
+//!
+//! Both passes run in parallel: the cost tables over the subtrees of the
+//! top [`PARALLEL_DEPTH`] levels, and the emission of 8-wide nodes over
+//! subtrees of at least [`PARALLEL_PRIMS`] primitives. Every
+//! choice is a function of the binary tree alone, so the 8-wide tree is
+//! the same for any thread count.
+
+use super::build::Bvh8;
+use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS};
+use crate::math::Aabb;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::bvh2::Bvh2;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+/// The relative costs the collapse weighs, per unit of surface area (the
+/// chance a ray enters a box): an 8-wide node test, and a leaf test, which
+/// is one 8-wide triangle test whatever the leaf's size (up to
+/// [`LEAF_PRIMS`]). On this code a node test with its share of child
+/// ordering and stack work is about 70 instructions and four cache lines,
+/// a leaf test about 110 and five. Instructions per dragon ray hardly move
+/// for LEAF_COST from 1 to 2.5; a cost per triangle in the leaf (0.05 or
+/// 0.15 of a node test) only added some (callgrind, random, grazing and
+/// camera rays).
+pub(super) const NODE_COST: f32 = 1.0;
+pub(super) const LEAF_COST: f32 = 1.5;
+
+/// Slots per leaf block. A leaf is a run of slots inside one block, so the
+/// scene can store each block as one 8-lane triangle block
+/// ([`crate::shape::triangle8`]) and test a whole leaf at once.
+pub const LEAF_BLOCK: usize = 8;
+
+/// The id of a slot that holds no primitive (padding at the end of a block).
+pub const NO_PRIM: u32 = u32::MAX;
+
+/// Subtrees with at most this many primitives become one leaf.
+const LEAF_PRIMS: u32 = 8;
+const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEAF_BLOCK);
+
+/// Subtrees of at least this many primitives are emitted in parallel, one
+/// task per 8-wide child; smaller ones by one sequential walk. Large
+/// enough that a task's work (milliseconds) dwarfs its hand-off, and that
+/// only the top two or three levels of a large mesh's tree are split.
+const PARALLEL_PRIMS: u32 = 1 << 16;
+
+/// The cost tables of the top this many levels of the binary tree are
+/// filled by parallel recursion (at most 2^10 tasks, each a post-order
+/// walk of its subtree): enough tasks to balance lopsided trees, too few
+/// for their hand-offs to count.
+const PARALLEL_DEPTH: u32 = 10;
+
+/// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
+pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
+    let costs = CollapseCosts::new(bvh2);
+    let part = costs.emit(0);
+    Bvh8 {
+        nodes: part.nodes,
+        prim_ids: part.prim_ids,
+        bounds,
+        depth: part.depth,
+        prefetch: true,
+    }
+}
+
+/// [`collapse`] by one sequential walk from the root, for tests of the
+/// parallel emission.
+#[cfg(test)]
+pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
+    let part = CollapseCosts::new(bvh2).emit_sequential(0);
+    Bvh8 {
+        nodes: part.nodes,
+        prim_ids: part.prim_ids,
+        bounds,
+        depth: part.depth,
+        prefetch: true,
+    }
+}
+
+/// The SAH cost tables of the collapse (Ylitie, Karras and Laine 2017,
+/// "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
+/// BVHs", §3.1), computed bottom-up over the binary tree. `cost[n][i - 1]`
+/// is the least cost of representing BVH2 node `n`'s subtree as at most
+/// `i` children of one 8-wide node:
+///
+/// - one child (`i = 1`): `n` as a leaf (if it holds at most
+///   [`LEAF_PRIMS`] primitives) or as an 8-wide node of its own, whose
+///   cost is its test plus the best distribution of its two children over
+///   eight slots;
+/// - more (`i > 1`): the better of using one slot fewer, and splitting the
+///   `i` slots between `n`'s two children.
+///
+/// Costs are areas times the constants above, all relative to one tree, so
+/// no division by the root's area is needed. The greedy collapse this
+/// replaces (open the largest child until there are eight) filled every
+/// node and made leaves of 2.3 (dragon) to 2.5 (bunny) triangles, paying an 8-wide
+/// leaf test for each; the tables instead weigh a bigger leaf's larger box
+/// against the node tests it saves.
+pub(super) struct CollapseCosts<'a> {
+    bvh2: &'a Bvh2,
+    /// Areas are measured in units of the largest coordinate, so they
+    /// neither overflow (coordinates near 1e20 have areas past f32::MAX)
+    /// nor flush to zero (near 1e-20), and the choices do not depend on
+    /// the scene's scale.
+    unit: f32,
+    /// Per inner node, at [`CollapseCosts::slot`]: only inner nodes have
+    /// tables (a leaf's is its leaf cost in every entry), which halves
+    /// their memory (36 bytes a primitive at the build's peak, not 72).
+    /// f32 bits in atomics (relaxed: plain loads and stores) so that
+    /// parallel tasks can fill disjoint subtrees' entries; `rayon::join`
+    /// orders a parent's read after its children's writes.
+    cost: Vec<[AtomicU32; 8]>,
+    counts: Vec<AtomicU32>,
+}
+
+impl<'a> CollapseCosts<'a> {
+    pub(super) fn new(bvh2: &'a Bvh2) -> Self {
+        let inner = bvh2.nodes.len() / 2;
+        let root = &bvh2.nodes[0].aabb;
+        let largest = root.min.abs().max(root.max.abs()).max_element();
+        let costs = Self {
+            bvh2,
+            unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
+            cost: (0..inner).map(|_| Default::default()).collect(),
+            counts: (0..inner).map(|_| AtomicU32::new(0)).collect(),
+        };
+        costs.fill_tables(0, 0);
+        costs
+    }
+
+    /// Fills the tables of BVH2 node `i`'s subtree, children before
+    /// parents: the top [`PARALLEL_DEPTH`] levels by parallel recursion,
+    /// each subtree below in one post-order walk (which keeps a node's
+    /// children's tables in cache when it reads them; filling level by
+    /// level, in parallel, took three times as long on the dragon).
+    fn fill_tables(&self, i: usize, depth: u32) {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            return;
+        }
+        if depth < PARALLEL_DEPTH {
+            let (l, r) = children(node);
+            rayon::join(
+                || self.fill_tables(l, depth + 1),
+                || self.fill_tables(r, depth + 1),
+            );
+            self.store_table(i);
+            return;
+        }
+        for n in post_order(self.bvh2, i) {
+            if self.bvh2.nodes[n as usize].prim_count == 0 {
+                self.store_table(n as usize);
+            }
+        }
+    }
+
+    /// Computes and stores inner node `i`'s table from its children's.
+    fn store_table(&self, i: usize) {
+        let (table, count) = self.node_table(i);
+        let slot = Self::slot(&self.bvh2.nodes[i]);
+        for (entry, c) in self.cost[slot].iter().zip(table) {
+            entry.store(c.to_bits(), Relaxed);
+        }
+        self.counts[slot].store(count, Relaxed);
+    }
+
+    /// The table and primitive count of inner node `i`, from its children's.
+    fn node_table(&self, i: usize) -> ([f32; 8], u32) {
+        let (l, r) = children(&self.bvh2.nodes[i]);
+        let count = self.count(l) + self.count(r);
+        let area = self.area(i);
+        let (left, right) = (self.table(l), self.table(r));
+        let split = |j: usize| split_cost(&left, &right, j).0;
+        let as_node = NODE_COST * area + split(8);
+        let mut c = [0.0f32; 8];
+        c[0] = if count <= LEAF_PRIMS {
+            as_node.min(leaf_cost(area))
+        } else {
+            as_node
+        };
+        for j in 2..=8 {
+            c[j - 1] = c[j - 2].min(split(j));
+        }
+        (c, count)
+    }
+
+    /// Where an inner node's table is kept: obvhs stores the two children
+    /// of a node side by side with the left one at an odd index, so half
+    /// of it numbers the inner nodes from 0.
+    #[inline]
+    fn slot(node: &Bvh2Node) -> usize {
+        node.first_index as usize / 2
+    }
+
+    /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
+    pub(super) fn area(&self, i: usize) -> f32 {
+        let b = &self.bvh2.nodes[i].aabb;
+        let d = b.max * self.unit - b.min * self.unit;
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    fn count(&self, i: usize) -> u32 {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            node.prim_count
+        } else {
+            self.counts[Self::slot(node)].load(Relaxed)
+        }
+    }
+
+    fn table(&self, i: usize) -> [f32; 8] {
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            [leaf_cost(self.area(i)); 8]
+        } else {
+            self.cost[Self::slot(node)]
+                .each_ref()
+                .map(|c| f32::from_bits(c.load(Relaxed)))
+        }
+    }
+
+    /// The least cost of sharing `slots` children between inner node
+    /// `i`'s two children, and the left one's share.
+    pub(super) fn split(&self, i: usize, slots: usize) -> (f32, usize) {
+        let (l, r) = children(&self.bvh2.nodes[i]);
+        split_cost(&self.table(l), &self.table(r), slots)
+    }
+
+    /// True if BVH2 node `i`, as one child slot, is best a leaf: its
+    /// one-slot cost is the leaf's (`min` returns one of its operands, so
+    /// the equality is exact, and a tie goes to the leaf as in the table).
+    fn is_leaf(&self, i: usize) -> bool {
+        let node = &self.bvh2.nodes[i];
+        node.prim_count > 0
+            || self.count(i) <= LEAF_PRIMS && self.table(i)[0] == leaf_cost(self.area(i))
+    }
+
+    /// The children of BVH2 node `i` made an 8-wide node: its two children
+    /// share eight slots as the tables chose. Only the root can instead be
+    /// its own only child, a leaf, when that is cheaper (a tree of a few
+    /// primitives); any other node made a node is one the tables found
+    /// cheaper opened. `work` is scratch space.
+    fn node_children(&self, i: usize, out: &mut Vec<usize>, work: &mut Vec<(usize, usize)>) {
+        out.clear();
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            out.push(i);
+            return;
+        }
+        let (split, k) = self.split(i, 8);
+        if self.count(i) <= LEAF_PRIMS && leaf_cost(self.area(i)) <= split {
+            out.push(i);
+            return;
+        }
+        let (l, r) = children(node);
+        self.distribute(l, k, out, work);
+        self.distribute(r, 8 - k, out, work);
+    }
+
+    /// The BVH2 nodes that fill at most `slots` children of one 8-wide
+    /// node for `i`'s subtree, following the choices the tables made.
+    fn distribute(
+        &self,
+        i: usize,
+        slots: usize,
+        out: &mut Vec<usize>,
+        work: &mut Vec<(usize, usize)>,
+    ) {
+        work.clear();
+        work.push((i, slots));
+        while let Some((i, slots)) = work.pop() {
+            let node = &self.bvh2.nodes[i];
+            if slots == 1 || node.prim_count > 0 {
+                out.push(i);
+                continue;
+            }
+            let (split, k) = self.split(i, slots);
+            if self.table(i)[slots - 2] <= split {
+                work.push((i, slots - 1));
+            } else {
+                let (l, r) = children(node);
+                work.push((r, slots - k));
+                work.push((l, k));
+            }
+        }
+    }
+
+    /// The primitives under BVH2 node `i`, left to right, into `prims`.
+    fn gather_prims(&self, i: usize, prims: &mut Vec<u32>, stack: &mut Vec<usize>) {
+        prims.clear();
+        stack.clear();
+        stack.push(i);
+        while let Some(i) = stack.pop() {
+            let node = &self.bvh2.nodes[i];
+            if node.prim_count > 0 {
+                let s = node.first_index as usize;
+                prims.extend_from_slice(
+                    &self.bvh2.primitive_indices[s..s + node.prim_count as usize],
+                );
+            } else {
+                stack.push(node.first_index as usize + 1);
+                stack.push(node.first_index as usize);
+            }
+        }
+    }
+
+    /// The 8-wide tree for BVH2 node `src`'s subtree. A large subtree
+    /// makes its own node here and its inner children's subtrees in
+    /// parallel, appended after it in slot order; a small one is one
+    /// sequential walk ([`CollapseCosts::emit_sequential`]).
+    fn emit(&self, src: usize) -> Part {
+        if self.count(src) < PARALLEL_PRIMS {
+            return self.emit_sequential(src);
+        }
+        let mut part = Part::default();
+        let mut scratch = Scratch::default();
+        part.nodes.push(Node8::EMPTY);
+        part.depth = 1;
+        self.node_children(src, &mut scratch.children, &mut scratch.work);
+        let mut inner = Vec::with_capacity(8);
+        for slot in 0..scratch.children.len() {
+            let c = scratch.children[slot];
+            set_bounds(&mut part.nodes[0], slot, &self.bvh2.nodes[c].aabb);
+            if self.is_leaf(c) {
+                part.nodes[0].child[slot] = self.place_leaf(c, &mut part, &mut scratch);
+            } else {
+                inner.push((slot, c));
+            }
+        }
+        let subtrees: Vec<Part> = inner.par_iter().map(|&(_, c)| self.emit(c)).collect();
+        for (&(slot, _), sub) in inner.iter().zip(subtrees) {
+            part.nodes[0].child[slot] = part.nodes.len() as u32;
+            part.append(sub);
+        }
+        part
+    }
+
+    /// [`CollapseCosts::emit`] in one walk: nodes are numbered in the order
+    /// they are made, a node's inner children side by side.
+    fn emit_sequential(&self, src: usize) -> Part {
+        let mut part = Part::default();
+        let mut scratch = Scratch::default();
+        part.nodes.push(Node8::EMPTY);
+        // Work list of (BVH2 node, Node8 to fill, depth): iterative, so
+        // degenerate deep trees cannot overflow the call stack.
+        let mut work = vec![(src, 0usize, 1u32)];
+        while let Some((src, dst, depth)) = work.pop() {
+            part.depth = part.depth.max(depth);
+            self.node_children(src, &mut scratch.children, &mut scratch.work);
+            for slot in 0..scratch.children.len() {
+                let c = scratch.children[slot];
+                set_bounds(&mut part.nodes[dst], slot, &self.bvh2.nodes[c].aabb);
+                part.nodes[dst].child[slot] = if self.is_leaf(c) {
+                    self.place_leaf(c, &mut part, &mut scratch)
+                } else {
+                    let new = part.nodes.len();
+                    part.nodes.push(Node8::EMPTY);
+                    work.push((c, new, depth + 1));
+                    new as u32
+                };
+            }
+            debug_assert!(part.nodes[dst].child.iter().any(|&c| c != EMPTY));
+        }
+        part
+    }
+
+    /// Packs the primitives under BVH2 node `c` as one leaf of `part`, and
+    /// returns its child reference.
+    fn place_leaf(&self, c: usize, part: &mut Part, scratch: &mut Scratch) -> u32 {
+        self.gather_prims(c, &mut scratch.prims, &mut scratch.stack);
+        let start = part.packer.place(&scratch.prims, &mut part.prim_ids);
+        encode_leaf(start, scratch.prims.len() as u32)
+    }
+}
+
+/// Buffers the emission reuses from node to node, so that making a node
+/// or a leaf allocates nothing.
+#[derive(Default)]
+struct Scratch {
+    children: Vec<usize>,
+    work: Vec<(usize, usize)>,
+    prims: Vec<u32>,
+    stack: Vec<usize>,
+}
+
+/// A subtree of the 8-wide tree: its nodes, the first its root, with
+/// child references local to it, and its leaves' slots.
+#[derive(Default)]
+struct Part {
+    nodes: Vec<Node8>,
+    prim_ids: Vec<u32>,
+    depth: u32,
+    packer: LanePacker,
+}
+
+impl Part {
+    /// Appends `sub` (whose root becomes node `self.nodes.len()`), moving
+    /// its references by where its nodes and slots now start. Slots move
+    /// by whole blocks: every part's `prim_ids` is a whole number of them.
+    fn append(&mut self, sub: Part) {
+        let node_offset = self.nodes.len() as u32;
+        let slot_offset = self.prim_ids.len() as u32;
+        self.nodes.extend(sub.nodes.into_iter().map(|mut node| {
+            for c in &mut node.child {
+                if *c == EMPTY {
+                    continue;
+                }
+                *c = if is_leaf(*c) {
+                    let (start, count) = leaf_range(*c);
+                    encode_leaf(start + slot_offset, count)
+                } else {
+                    *c + node_offset
+                };
+            }
+            node
+        }));
+        self.prim_ids.extend_from_slice(&sub.prim_ids);
+        self.depth = self.depth.max(sub.depth + 1);
+    }
+}
+
+fn set_bounds(node: &mut Node8, slot: usize, b: &obvhs::aabb::Aabb) {
+    for axis in 0..3 {
+        node.bounds[2 * axis][slot] = b.min[axis];
+        node.bounds[2 * axis + 1][slot] = b.max[axis];
+    }
+}
+
+/// Post-order of BVH2 node `root`'s subtree (children before parents),
+/// by an explicit stack: trees can be deep.
+fn post_order(bvh2: &Bvh2, root: usize) -> Vec<u32> {
+    let mut order = Vec::new();
+    let mut stack = vec![root as u32];
+    while let Some(i) = stack.pop() {
+        order.push(i);
+        let node = &bvh2.nodes[i as usize];
+        if node.prim_count == 0 {
+            stack.push(node.first_index);
+            stack.push(node.first_index + 1);
+        }
+    }
+    order.reverse();
+    order
+}
+
+/// An inner BVH2 node's two children.
+#[inline]
+fn children(node: &Bvh2Node) -> (usize, usize) {
+    (node.first_index as usize, node.first_index as usize + 1)
+}
+
+#[inline]
+fn leaf_cost(area: f32) -> f32 {
+    area * LEAF_COST
+}
+
+/// The least cost of sharing `slots` children between two subtrees, and
+/// the left one's share.
+#[inline]
+fn split_cost(left: &[f32; 8], right: &[f32; 8], slots: usize) -> (f32, usize) {
+    (1..slots)
+        .map(|k| (left[k - 1] + right[slots - k - 1], k))
+        .fold(
+            (f32::INFINITY, 1),
+            |best, c| if c.0 < best.0 { c } else { best },
+        )
+}
+
+/// Places leaves into blocks of [`LEAF_BLOCK`] slots so that no leaf
+/// straddles two blocks: a leaf is then one 8-wide triangle test over one
+/// contiguous block (see `shape::triangle8`). First fit among the last few
+/// blocks that still have room keeps the padding small (a fraction of a
+/// percent on scanned meshes) and keeps leaves that are near in the tree
+/// near in memory.
+#[derive(Default)]
+struct LanePacker {
+    /// Blocks with free slots: (first free slot, end of block).
+    open: Vec<(u32, u32)>,
+}
+
+impl LanePacker {
+    /// Blocks kept open for first fit.
+    const OPEN_BLOCKS: usize = 8;
+
+    /// Writes `prims` into free slots of `prim_ids` (growing it by whole
+    /// blocks padded with [`NO_PRIM`]) and returns the first slot.
+    fn place(&mut self, prims: &[u32], prim_ids: &mut Vec<u32>) -> u32 {
+        let n = prims.len() as u32;
+        let i = match self.open.iter().position(|&(free, end)| end - free >= n) {
+            Some(i) => i,
+            None => {
+                let start = prim_ids.len() as u32;
+                prim_ids.resize(prim_ids.len() + LEAF_BLOCK, NO_PRIM);
+                if self.open.len() == Self::OPEN_BLOCKS {
+                    self.open.remove(0);
+                }
+                self.open.push((start, start + LEAF_BLOCK as u32));
+                self.open.len() - 1
+            }
+        };
+        let start = self.open[i].0;
+        prim_ids[start as usize..(start + n) as usize].copy_from_slice(prims);
+        self.open[i].0 += n;
+        if self.open[i].0 == self.open[i].1 {
+            self.open.remove(i);
+        }
+        start
+    }
+}
