@@ -286,6 +286,82 @@ mod tests {
         assert_eq!(a.meshes[0].indices, vec![[0, 1, 2], [0, 2, 3]]);
     }
 
+    /// A grid of n × n quads as an ASCII PLY body (with a blank line every
+    /// 1000 lines) and as the same mesh in binary: the header line count
+    /// and the two files.
+    fn grid(n: u32) -> (String, Vec<u8>) {
+        let verts = (n + 1) * (n + 1);
+        let head = format!("ply\nformat ascii 1.0\nelement vertex {verts}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n", n * n);
+        let mut ascii = head.clone();
+        let mut bin = head.replace("ascii", "binary_little_endian").into_bytes();
+        let mut lines = 0;
+        let mut line = |ascii: &mut String, text: String| {
+            ascii.push_str(&text);
+            lines += 1;
+            if lines % 1000 == 0 {
+                ascii.push_str("  \n");
+            }
+        };
+        for k in 0..verts {
+            let p = [(k % (n + 1)) as f32 * 0.1, (k / (n + 1)) as f32 / 3.0, 0.5];
+            line(&mut ascii, format!("{} {} {}\n", p[0], p[1], p[2]));
+            p.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+        }
+        for q in 0..n * n {
+            let (i, j) = (q % n, q / n);
+            let a = j * (n + 1) + i;
+            let quad = [a, a + 1, a + n + 2, a + n + 1];
+            line(
+                &mut ascii,
+                format!("4 {} {} {} {}\n", quad[0], quad[1], quad[2], quad[3]),
+            );
+            bin.push(4);
+            quad.iter()
+                .for_each(|v| bin.extend((*v as i32).to_le_bytes()));
+        }
+        (ascii, bin)
+    }
+
+    /// An ASCII body of several parallel chunks reads as its binary twin,
+    /// and a bad line deep in it is reported with its own line number,
+    /// before a truncation that comes later.
+    #[test]
+    fn large_ascii_bodies_read_in_chunks_as_binary_ones() {
+        let (ascii, bin) = grid(250); // 63,001 vertices and 62,500 quads
+        let a = load_ply(&write("grid.ply", ascii.as_bytes())).unwrap();
+        let b = load_ply(&write("gridb.ply", &bin)).unwrap();
+        assert_eq!(a.meshes[0].positions, b.meshes[0].positions);
+        assert_eq!(a.meshes[0].indices, b.meshes[0].indices);
+        assert_eq!(a.meshes[0].indices.len(), 125_000);
+
+        // Break vertex 50,000's line (file line: 9 header lines, the
+        // vertex lines before it, and a blank line after every 1000).
+        let lines: Vec<&str> = ascii.split_inclusive('\n').collect();
+        let at = 9 + 50_000 + 50;
+        let (x, y) = ((50_000 % 251) as f32 * 0.1, (50_000 / 251) as f32 / 3.0);
+        assert_eq!(lines[at], format!("{x} {y} 0.5\n"));
+        let mut broken = lines.clone();
+        broken[at] = "0.1 oops 0.5\n";
+        let broken: String = broken.concat();
+        let e = load_ply(&write("broken.ply", broken.as_bytes())).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains(&format!("line {}: 'oops' is not a float", at + 1)),
+            "{e}"
+        );
+        // The same file cut short in its faces still names the bad vertex.
+        let cut = &broken[..broken.len() - 40_000];
+        let e = load_ply(&write("cut.ply", cut.as_bytes())).unwrap_err();
+        assert!(e.to_string().contains("'oops'"), "{e}");
+        let end = ascii[..ascii.len() - 40_000].rfind('\n').unwrap() + 1;
+        let e = load_ply(&write("cut2.ply", &ascii.as_bytes()[..end])).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("ends before its 62500 'face' elements"),
+            "{e}"
+        );
+    }
+
     #[test]
     fn huge_counts_and_bad_indices_are_errors_naming_the_file_and_face() {
         let huge = HEAD.replace("vertex 4", "vertex 1000000000000");

@@ -15,6 +15,7 @@ use super::ply::Face;
 use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
+use rayon::prelude::*;
 use std::io::BufRead;
 use std::path::Path;
 
@@ -36,16 +37,34 @@ enum Use {
     Skip,
 }
 
+/// Elements per parallel parsing task: large enough that a task's work
+/// (about a millisecond) dwarfs its hand-off.
+const CHUNK: usize = 1 << 14;
+
 /// Read the body that follows the header; `line` is the number of the
 /// header's last line (`end_header`).
+///
+/// The body is read whole, then each element's lines are cut into chunks
+/// of [`CHUNK`] elements by one scan for line ends (which also counts
+/// lines, for messages), and the chunks are parsed in parallel. Errors
+/// are those of a line-by-line reader: the first bad line in file order.
 pub(super) fn read_body(
     path: &Path,
     header: &Header,
     mut reader: impl BufRead,
     mut line: usize,
 ) -> InputResult<AsciiBody> {
+    let mut bytes = Vec::new();
+    reader
+        .read_to_end(&mut bytes)
+        .map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let before = &bytes[..e.valid_up_to()];
+        let at = line + 1 + before.iter().filter(|&&b| b == b'\n').count();
+        InputError::file(path, "cannot read: not ASCII text".to_string()).on_line(Some(at))
+    })?;
+    let mut rest = text;
     let mut body = AsciiBody::default();
-    let mut text = String::new();
     for (name, element) in &header.elements {
         let uses: Vec<(Use, &PropertyType)> = element
             .properties
@@ -63,35 +82,118 @@ pub(super) fn read_body(
                 (role, &def.data_type)
             })
             .collect();
+        let mut chunks = Vec::new();
+        let mut done = 0;
+        let mut truncated = false;
+        while done < element.count {
+            let n = (element.count - done).min(CHUNK);
+            // A file that ends early still has its lines checked first, so
+            // that an earlier bad line is the one reported.
+            let (chunk, lines) = take_elements(rest, n).unwrap_or_else(|| {
+                truncated = true;
+                (rest, rest.lines().count())
+            });
+            chunks.push(Chunk {
+                text: chunk,
+                first_line: line + 1,
+                first_element: done,
+            });
+            rest = &rest[chunk.len()..];
+            line += lines;
+            done += n;
+            if truncated {
+                break;
+            }
+        }
+        let element_reader = ElementReader { path, name, uses };
+        let parsed: Vec<InputResult<Parsed>> =
+            chunks.par_iter().map(|c| element_reader.parse(c)).collect();
         match name.as_str() {
-            "vertex" => body.positions.reserve_exact(element.count),
-            "face" => body.faces.reserve_exact(element.count),
+            "vertex" => body.positions.reserve_exact(element_count(&parsed)),
+            "face" => body.faces.reserve_exact(element_count(&parsed)),
             _ => {}
         }
+        for chunk in parsed {
+            let chunk = chunk?;
+            body.positions.extend(chunk.positions);
+            body.faces.extend(chunk.faces);
+        }
+        if truncated {
+            return Err(InputError::file(
+                path,
+                format!(
+                    "the file ends before its {} '{name}' elements do",
+                    element.count
+                ),
+            )
+            .on_line(Some(line + 1)));
+        }
+    }
+    Ok(body)
+}
+
+/// The start of `text` holding its next `n` elements (one a non-blank
+/// line; blank lines among them are kept), and how many lines that is;
+/// `None` if the text ends first.
+fn take_elements(text: &str, n: usize) -> Option<(&str, usize)> {
+    let (mut end, mut lines, mut found) = (0, 0, 0);
+    while found < n {
+        if end >= text.len() {
+            return None;
+        }
+        let line_end = text[end..].find('\n').map_or(text.len(), |k| end + k + 1);
+        if !text[end..line_end].trim_ascii().is_empty() {
+            found += 1;
+        }
+        lines += 1;
+        end = line_end;
+    }
+    Some((&text[..end], lines))
+}
+
+fn element_count(parsed: &[InputResult<Parsed>]) -> usize {
+    parsed
+        .iter()
+        .flatten()
+        .map(|p| p.positions.len() + p.faces.len())
+        .sum()
+}
+
+/// A run of whole lines of one element, where it starts in the file.
+struct Chunk<'t> {
+    text: &'t str,
+    first_line: usize,
+    /// The index of its first element within the element's list.
+    first_element: usize,
+}
+
+/// What one chunk of an element yields.
+#[derive(Default)]
+struct Parsed {
+    positions: Vec<Vec3>,
+    faces: Vec<Face>,
+}
+
+/// How to read the lines of one element: its properties' roles and types.
+struct ElementReader<'h> {
+    path: &'h Path,
+    name: &'h str,
+    uses: Vec<(Use, &'h PropertyType)>,
+}
+
+impl ElementReader<'_> {
+    /// The elements of `chunk`, or the error of its first bad line.
+    fn parse(&self, chunk: &Chunk) -> InputResult<Parsed> {
+        let name = self.name;
+        let mut out = Parsed::default();
         let mut indices: Vec<u32> = Vec::new();
-        for _ in 0..element.count {
+        for (k, text) in chunk.text.lines().enumerate() {
             // Blank lines carry no element.
-            loop {
-                text.clear();
-                line += 1;
-                let read = reader.read_line(&mut text).map_err(|e| {
-                    InputError::file(path, format!("cannot read: {e}")).on_line(Some(line))
-                })?;
-                if read == 0 {
-                    return Err(InputError::file(
-                        path,
-                        format!(
-                            "the file ends before its {} '{name}' elements do",
-                            element.count
-                        ),
-                    )
-                    .on_line(Some(line)));
-                }
-                if !text.trim_ascii().is_empty() {
-                    break;
-                }
+            if text.trim_ascii().is_empty() {
+                continue;
             }
-            let at = |message: String| InputError::file(path, message).on_line(Some(line));
+            let line = chunk.first_line + k;
+            let at = |message: String| InputError::file(self.path, message).on_line(Some(line));
             let mut tokens = text.split_ascii_whitespace();
             let mut next = |what: &str| {
                 tokens
@@ -100,7 +202,7 @@ pub(super) fn read_body(
             };
             let mut position = [0.0f32; 3];
             let mut face = None;
-            for &(role, data_type) in &uses {
+            for &(role, data_type) in &self.uses {
                 match (role, data_type) {
                     (Use::Coordinate(axis), PropertyType::Scalar(t)) => {
                         let token = next("a coordinate")?;
@@ -137,26 +239,26 @@ pub(super) fn read_body(
             if let Some(extra) = tokens.next() {
                 return Err(at(format!(
                     "'{name}' element: unexpected '{extra}' after its {} properties",
-                    uses.len()
+                    self.uses.len()
                 )));
             }
-            match name.as_str() {
+            match name {
                 "vertex" => {
                     let p = Vec3::from(position);
                     if !p.is_finite() {
                         return Err(at(format!(
                             "vertex {} is not finite: {p}",
-                            body.positions.len()
+                            chunk.first_element + out.positions.len()
                         )));
                     }
-                    body.positions.push(p);
+                    out.positions.push(p);
                 }
-                "face" => body.faces.extend(face),
+                "face" => out.faces.extend(face),
                 _ => {}
             }
         }
+        Ok(out)
     }
-    Ok(body)
 }
 
 /// A token of scalar type `t` as f64 (exact for every PLY integer type).
