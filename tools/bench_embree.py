@@ -2,25 +2,30 @@
 """Ray throughput of strata against Embree's own C API on the same rays.
 
     bench_embree.py MESH [RAYS.bin] [MESH [RAYS.bin] ...] [-n 100000] [--seed 1]
-                    [--strata target/release/strata] [--repeats 3] [--csv embree_bench.csv]
+                    [--strata target/release/strata] [--threads 1] [--repeats 3]
+                    [--csv embree_bench.csv]
 
 Each MESH (OBJ or PLY) is traced with the rays of the RAYS.bin that follows
 it, or, if none follows, with `strata rays all MESH -n N --seed S` (N rays
 of each kind: random, camera, grazing, edges, inside); RAYS.bin.json names
 the kind of each run of rays. For every mesh, kind and query (closest hit,
-occlusion) the engines trace the same rays on one thread:
+occlusion) the engines trace the same rays on --threads N threads (default
+1; 0: every core this process may run on, a count then passed to both):
 
-* strata through `strata trace --threads 1 --repeats 3` (its own timing of
+* strata through `strata trace --threads N --repeats 3` (its own timing of
   the trace phase, after load and BVH build: the median of three passes in
-  one process), with RAYON_NUM_THREADS=1 so that its BVH build runs on one
-  thread too;
+  one process), with RAYON_NUM_THREADS=N so that its BVH build runs on N
+  threads too;
 * Embree through tools/embree/embree_trace (compiled here on demand with
   `make -C tools/embree`, into target/embree/), a C program on Embree 3's
-  API: rtcIntersect1 / rtcOccluded1 in a plain loop, the scene built at
-  RTC_BUILD_QUALITY_HIGH on one thread, once in default mode and once with
-  RTC_SCENE_FLAG_ROBUST. Each harness builds once and then answers pass
-  requests (--serve); a measurement is the median of three passes, as
-  strata's is.
+  API: rtcIntersect1 / rtcOccluded1 in a plain loop on N threads taking
+  chunks of 256 rays, the scene built at RTC_BUILD_QUALITY_HIGH on N
+  threads, once in default mode and once with RTC_SCENE_FLAG_ROBUST. Each
+  harness builds once and then answers pass requests (--serve); a
+  measurement is the median of three passes, as strata's is.
+
+Single rays only: `strata trace` has no packet mode, so strata's 8-ray
+packets against rtcIntersect8 / rtcOccluded8 are compared by `strata bench`.
 
 Each row's figure is the median of --repeats such measurements, strata's and
 Embree's alternating, so that a change in the machine's load falls on all.
@@ -28,7 +33,8 @@ One row per mesh x kind x query: Mrays/s per engine and the ratios
 strata / Embree (above 1: strata is faster), then the geometric mean of the
 ratios per mesh, and per mesh the BVH build times (strata's, Embree's
 high-quality build in each mode) and Embree's bytes per triangle (its own
-allocations, through its memory monitor). The rows are saved as CSV.
+allocations, through its memory monitor). The rows are saved as CSV, with
+the thread count; with N other than 1 the table's first line says it too.
 
 If the harness cannot be built (no C compiler or no libembree-dev), one line
 says so and only strata's column is measured. embreex is not used here: it
@@ -79,11 +85,16 @@ def write_tris(vertices, triangles, path):
         np.ascontiguousarray(triangles, "<u4").tofile(f)
 
 
+def threads_word(n):
+    return f"{n} thread" + ("" if n == 1 else "s")
+
+
 class Harness:
     """One embree_trace --serve process: the scene built once, passes on request."""
 
-    def __init__(self, exe, tris, rays, robust):
-        args = [exe, tris, rays, "--serve", "--threads", "1"] + (["--robust"] if robust else [])
+    def __init__(self, exe, tris, rays, robust, threads):
+        self.threads = threads
+        args = [exe, tris, rays, "--serve", "--threads", str(threads)] + (["--robust"] if robust else [])
         self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         ready = self.proc.stdout.readline().split()
         if not ready or ready[0] != "ready":
@@ -93,10 +104,10 @@ class Harness:
         self.bytes = int(ready[3])
 
     def rate(self, first, count, query):
-        """Mrays/s: the median of PASSES single-thread passes over rays first..first + count."""
+        """Mrays/s: the median of PASSES passes (single rays) over rays first..first + count."""
         times = []
         for _ in range(PASSES):
-            self.proc.stdin.write(f"{first} {count} {query} single 1\n")
+            self.proc.stdin.write(f"{first} {count} {query} single {self.threads}\n")
             self.proc.stdin.flush()
             reply = self.proc.stdout.readline().split()
             if len(reply) != 2:
@@ -109,13 +120,15 @@ class Harness:
         self.proc.wait()
 
 
-def strata_rate(args, mesh):
-    """(Mrays/s, BVH seconds) that one `strata trace` run reports."""
-    env = dict(os.environ, RAYON_NUM_THREADS="1")
+def strata_rate(args, mesh, threads):
+    """(Mrays/s, BVH seconds) that one `strata trace` run on `threads` threads reports."""
+    env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
     out = subprocess.run(args, capture_output=True, text=True, env=env)
     if out.returncode != 0:
         raise InputError(mesh, f"strata trace failed: {out.stderr.strip()}")
     # "... in 0.123 s = 4.56 Mrays/s on 1 thread (load 0.12 s, BVH 0.34 s) -> ..."
+    if f" Mrays/s on {threads_word(threads)} (" not in out.stdout:
+        raise InputError(mesh, f"strata trace did not run on {threads_word(threads)}: {out.stdout.strip()}")
     rate = float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
     build = float(out.stdout.split("BVH ")[1].split(" s")[0])
     return rate, build
@@ -162,7 +175,7 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
     if exe:
         tris = os.path.join(workdir, "mesh.tris")
         write_tris(vertices, triangles, tris)
-        harnesses = [Harness(exe, tris, rays_path, robust) for robust in (False, True)]
+        harnesses = [Harness(exe, tris, rays_path, robust, a.threads) for robust in (False, True)]
     ratios = ([], [])
     builds = []
     try:
@@ -170,12 +183,12 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
             sub = os.path.join(workdir, "kind.rays")
             rays[first:first + count].astype("<f4").tofile(sub)
             for query in ("closest", "occlusion"):
-                args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", "1", "--repeats", str(PASSES)]
+                args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", str(a.threads), "--repeats", str(PASSES)]
                 if query == "occlusion":
                     args.append("--occlusion")
                 s, e = [], ([], [])
                 for _ in range(a.repeats):
-                    rate, build = strata_rate(args, mesh)
+                    rate, build = strata_rate(args, mesh, a.threads)
                     s.append(rate)
                     builds.append(build)
                     for h, out in zip(harnesses, e):
@@ -190,7 +203,7 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
                       f"{fmt(ed and s / ed, 8)}x {fmt(er and s / er, 8)}x", flush=True)
         if harnesses:
             print(f"{name:<16} {len(triangles):>8} {'all':<8} {'geomean':<10} {'':>8} {'':>7} {'':>7} {'':>7} {geomean(ratios[0]):>7.2f}x {geomean(ratios[1]):>7.2f}x", flush=True)
-        line = f"# {name}: BVH build on 1 thread: strata {statistics.median(builds):.2f} s"
+        line = f"# {name}: BVH build on {threads_word(a.threads)}: strata {statistics.median(builds):.2f} s"
         if harnesses:
             d, r = harnesses
             line += (f", Embree high quality {d.build_s:.2f} s (default mode), {r.build_s:.2f} s (robust); "
@@ -208,13 +221,20 @@ def main(argv=None):
     p.add_argument("-n", type=int, default=100000, help="rays of each kind to make for a mesh without a ray file (default 100000)")
     p.add_argument("--seed", type=int, default=1, help="seed of the rays made here (default 1)")
     p.add_argument("--strata", default="target/release/strata", help="the strata executable")
+    p.add_argument("--threads", type=int, default=1, help="threads each engine traces (and builds) on; 0: all cores (default 1)")
     p.add_argument("--repeats", type=int, default=3, help="measurements per row; the median is kept")
     p.add_argument("--csv", default="embree_bench.csv", help="where to save the rows (default embree_bench.csv)")
     a = p.parse_args(argv)
+    if a.threads < 0:
+        p.error("--threads must be 0 (all cores) or more")
+    # 0 becomes one count for both engines: the cores this process may run on.
+    a.threads = a.threads or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count())
     rows = []
     try:
         jobs = pairs(a.inputs)
         exe = build_harness()
+        if a.threads != 1:
+            print(f"# single rays on {threads_word(a.threads)} per engine: strata trace --threads {a.threads}, embree_trace --threads {a.threads}")
         print(f"{'mesh':<16} {'tris':>8} {'kind':<8} {'query':<10} {'rays':>8} {'strata':>7} {'embree':>7} {'robust':>7} {'s/embree':>8} {'s/robust':>8}")
         with tempfile.TemporaryDirectory() as workdir:
             for mesh, rays_path in jobs:
@@ -227,7 +247,7 @@ def main(argv=None):
                 "strata_over_embree,strata_over_embree_robust\n")
         for name, tris, kind, query, count, s, ed, er in rows:
             cols = [f"{x:.4f}" if x else "" for x in (ed, er, ed and s / ed, er and s / er)]
-            f.write(f"{name},{tris},{kind},{query},{count},1,{s:.4f},{','.join(cols)}\n")
+            f.write(f"{name},{tris},{kind},{query},{count},{a.threads},{s:.4f},{','.join(cols)}\n")
     print(f"-> {a.csv}")
     return 0
 
