@@ -16,14 +16,13 @@ use clap::Args;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
-use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::experiment::bench::{rays, trace, Query, RayKind};
 use strata::geometry::Geometry;
 use strata::math::Ray;
 use strata::rayfile::encode_rays;
-use strata::scene::{compile, parse, RenderOverrides};
+use strata::scene::load_mesh_scene;
 use strata::system::memory::peak_rss_bytes;
 
 #[derive(Debug, Args)]
@@ -273,16 +272,7 @@ fn bench_meshes(
     for mesh in meshes(args)? {
         let abs = std::fs::canonicalize(&mesh)
             .map_err(|e| InputError::file(&mesh, format!("cannot open: {e}")))?;
-        let text = format!("[[objects]]\nmesh = {:?}\n", abs.display().to_string());
-        let scene_path = PathBuf::from("bench.toml");
-        let desc = parse::parse_description(&scene_path, &text)?;
-        let (scene, timings) = compile::compile(
-            &desc,
-            &scene_path,
-            &RenderOverrides::default(),
-            args.bvh_quality,
-            Instant::now(),
-        )?;
+        let (scene, timings) = load_mesh_scene(&abs, args.bvh_quality)?;
         let rss = peak_rss_bytes().unwrap_or(0) as f64 / (1 << 20) as f64;
         let tris = scene.geometry.triangle_count as usize;
         let bpt = scene.geometry.accel_bytes() as f64 / tris.max(1) as f64;

@@ -129,6 +129,28 @@ impl Default for RenderSettings {
     }
 }
 
+impl RenderSettings {
+    /// The rays a render traces at its first hits: a camera ray per
+    /// sample, and per hit one shadow ray per point or directional light
+    /// and `shadow_samples` per area light. Reflected, refracted and
+    /// deeper rays come on top, so this is a lower bound, for choosing how
+    /// much effort a BVH build is worth.
+    pub fn first_hit_rays(&self, lights: &[crate::light::Light]) -> u64 {
+        let shadow: u64 = lights
+            .iter()
+            .map(|l| {
+                if l.is_area() {
+                    self.shadow_samples as u64
+                } else {
+                    1
+                }
+            })
+            .sum();
+        let samples = self.width as u64 * self.height as u64 * self.spp as u64;
+        samples.saturating_mul(1 + shadow)
+    }
+}
+
 /// The largest image side and sample count a render accepts.
 pub const MAX_SIDE: u32 = 1 << 15;
 pub const MAX_SPP: u32 = 1 << 22;

@@ -110,22 +110,45 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
     };
     // The "scene file" is the mesh itself, so the mesh resolves to `path`
     // and every error names it.
-    compile(
+    compile_for(
         &desc,
         path,
         &RenderOverrides::default(),
         quality,
+        Purpose::Tracing,
         Instant::now(),
     )
 }
 
-/// Compile a parsed description; `path` is the scene file (meshes are
-/// relative to it), `overrides` the command line's render settings.
+/// What a scene is compiled for, which decides what `auto` BVH effort means.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Purpose {
+    /// Rendering with its settings: `auto` weighs the build against the
+    /// rays the render traces ([`BuildQuality::for_render`]).
+    Render,
+    /// Tracing ray files and benchmarks: `auto` by primitive count alone,
+    /// the same tree however many rays are timed.
+    Tracing,
+}
+
+/// Compile a parsed description for rendering; `path` is the scene file
+/// (meshes are relative to it), `overrides` the command line's render settings.
 pub fn compile(
     desc: &SceneDescription,
     path: &Path,
     overrides: &RenderOverrides,
     quality: BuildQuality,
+    start: Instant,
+) -> InputResult<(Scene, LoadTimings)> {
+    compile_for(desc, path, overrides, quality, Purpose::Render, start)
+}
+
+fn compile_for(
+    desc: &SceneDescription,
+    path: &Path,
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+    purpose: Purpose,
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
@@ -160,6 +183,10 @@ pub fn compile(
 
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
+    let quality = match purpose {
+        Purpose::Render => quality.for_render(boxes.len(), settings.first_hit_rays(&c.lights)),
+        Purpose::Tracing => quality,
+    };
     let mut bvh = Bvh8::build_from(boxes, quality);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.nodes.shrink_to_fit();
@@ -322,6 +349,58 @@ pub(super) mod test_support {
 mod tests {
     use super::test_support::{compiled, rejected};
     use super::*;
+
+    /// A render's `auto` build is the fastest preset's tree when the render
+    /// traces few rays per triangle and the default one's when it traces
+    /// many; tracing a mesh file keeps the default whatever the settings.
+    #[test]
+    fn auto_bvh_effort_follows_the_renders_rays() {
+        let dir = std::env::temp_dir().join(format!("strata-auto-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mesh = dir.join("grid.ply");
+        let n = 230u32; // 105,800 triangles
+        let mut ply = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n", (n + 1) * (n + 1), n * n).into_bytes();
+        for k in 0..(n + 1) * (n + 1) {
+            let (i, j) = ((k % (n + 1)) as f32, (k / (n + 1)) as f32);
+            for c in [i, j, (i * 0.37).sin() + (j * 0.21).cos()] {
+                ply.extend(c.to_le_bytes());
+            }
+        }
+        for q in 0..n * n {
+            let a = (q / n) * (n + 1) + q % n;
+            ply.push(4);
+            for v in [a, a + 1, a + n + 2, a + n + 1] {
+                ply.extend((v as i32).to_le_bytes());
+            }
+        }
+        std::fs::write(&mesh, ply).unwrap();
+        let scene = dir.join("s.toml");
+        std::fs::write(&scene, "[[lights]]\ntype = \"point\"\nposition = [0, 0, 500]\nintensity = [1, 1, 1]\n[[objects]]\nmesh = \"grid.ply\"\n").unwrap();
+        let tree = |spp: u32, quality: BuildQuality| {
+            let overrides = RenderOverrides {
+                width: Some(64),
+                height: Some(64),
+                spp: Some(spp),
+                ..Default::default()
+            };
+            let (s, _) = load_scene(&scene, &overrides, quality).unwrap();
+            s.geometry.bvh.stats()
+        };
+        let (fastest, medium) = (
+            tree(1, BuildQuality::Fastest),
+            tree(1, BuildQuality::Medium),
+        );
+        assert_ne!(
+            fastest, medium,
+            "the presets must differ for the test to mean anything"
+        );
+        // 64·64·1·2 rays ≪ 8 per triangle; 64·64·256·2 ≫.
+        assert_eq!(tree(1, BuildQuality::Auto), fastest);
+        assert_eq!(tree(256, BuildQuality::Auto), medium);
+        let (traced, _) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
+        assert_eq!(traced.geometry.bvh.stats(), medium);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn file_settings_then_command_line_and_each_error_names_its_layer() {
