@@ -172,7 +172,7 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
         // The reader's count has already moved past `end_header` (our
         // line tests pin this).
         let line = reader.line().saturating_sub(1);
-        let body = ply_ascii::read_body(path, &header, reader.into_inner(), line)?;
+        let body = ply_ascii::read_body(path, &header, reader.into_inner(), line, file_len)?;
         return mesh_asset(path, body.positions, &body.faces);
     }
     let mut positions: Vec<Vec3> = Vec::new();

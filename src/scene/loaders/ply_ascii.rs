@@ -42,7 +42,7 @@ enum Use {
 const CHUNK: usize = 1 << 14;
 
 /// Read the body that follows the header; `line` is the number of the
-/// header's last line (`end_header`).
+/// header's last line (`end_header`), `file_len` the file's size.
 ///
 /// The body is read whole, then each element's lines are cut into chunks
 /// of [`CHUNK`] elements by one scan for line ends (which also counts
@@ -53,8 +53,10 @@ pub(super) fn read_body(
     header: &Header,
     mut reader: impl BufRead,
     mut line: usize,
+    file_len: u64,
 ) -> InputResult<AsciiBody> {
-    let mut bytes = Vec::new();
+    // The file's length bounds the body's: one allocation, no regrowth.
+    let mut bytes = Vec::with_capacity(usize::try_from(file_len).unwrap_or(0));
     reader
         .read_to_end(&mut bytes)
         .map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;
@@ -106,17 +108,33 @@ pub(super) fn read_body(
             }
         }
         let element_reader = ElementReader { path, name, uses };
-        let parsed: Vec<InputResult<Parsed>> =
-            chunks.par_iter().map(|c| element_reader.parse(c)).collect();
-        match name.as_str() {
-            "vertex" => body.positions.reserve_exact(element_count(&parsed)),
-            "face" => body.faces.reserve_exact(element_count(&parsed)),
-            _ => {}
+        // Each chunk writes its own part of the element's one array, so no
+        // chunk's elements are copied again after parsing.
+        let total = done;
+        let mut positions = vec![Vec3::ZERO; if name == "vertex" { total } else { 0 }];
+        let mut faces: Vec<Face> = std::iter::repeat_with(Face::default)
+            .take(if name == "face" { total } else { 0 })
+            .collect();
+        let mut position_parts: Vec<&mut [Vec3]> = positions.chunks_mut(CHUNK).collect();
+        position_parts.resize_with(chunks.len(), Default::default);
+        let mut face_parts: Vec<&mut [Face]> = faces.chunks_mut(CHUNK).collect();
+        face_parts.resize_with(chunks.len(), Default::default);
+        let parsed: Vec<InputResult<()>> = chunks
+            .par_iter()
+            .zip(position_parts)
+            .zip(face_parts)
+            .map(|((chunk, positions), faces)| element_reader.parse(chunk, positions, faces))
+            .collect();
+        parsed.into_iter().collect::<InputResult<()>>()?;
+        if body.positions.is_empty() {
+            body.positions = positions;
+        } else {
+            body.positions.extend(positions);
         }
-        for chunk in parsed {
-            let chunk = chunk?;
-            body.positions.extend(chunk.positions);
-            body.faces.extend(chunk.faces);
+        if body.faces.is_empty() {
+            body.faces = faces;
+        } else {
+            body.faces.extend(faces);
         }
         if truncated {
             return Err(InputError::file(
@@ -151,27 +169,12 @@ fn take_elements(text: &str, n: usize) -> Option<(&str, usize)> {
     Some((&text[..end], lines))
 }
 
-fn element_count(parsed: &[InputResult<Parsed>]) -> usize {
-    parsed
-        .iter()
-        .flatten()
-        .map(|p| p.positions.len() + p.faces.len())
-        .sum()
-}
-
 /// A run of whole lines of one element, where it starts in the file.
 struct Chunk<'t> {
     text: &'t str,
     first_line: usize,
     /// The index of its first element within the element's list.
     first_element: usize,
-}
-
-/// What one chunk of an element yields.
-#[derive(Default)]
-struct Parsed {
-    positions: Vec<Vec3>,
-    faces: Vec<Face>,
 }
 
 /// How to read the lines of one element: its properties' roles and types.
@@ -182,10 +185,12 @@ struct ElementReader<'h> {
 }
 
 impl ElementReader<'_> {
-    /// The elements of `chunk`, or the error of its first bad line.
-    fn parse(&self, chunk: &Chunk) -> InputResult<Parsed> {
+    /// Writes the elements of `chunk` (its vertices' positions or its
+    /// faces, one a slot, in order) or returns the error of its first bad
+    /// line.
+    fn parse(&self, chunk: &Chunk, positions: &mut [Vec3], faces: &mut [Face]) -> InputResult<()> {
         let name = self.name;
-        let mut out = Parsed::default();
+        let mut element = 0;
         let mut indices: Vec<u32> = Vec::new();
         for (k, text) in chunk.text.lines().enumerate() {
             // Blank lines carry no element.
@@ -248,16 +253,17 @@ impl ElementReader<'_> {
                     if !p.is_finite() {
                         return Err(at(format!(
                             "vertex {} is not finite: {p}",
-                            chunk.first_element + out.positions.len()
+                            chunk.first_element + element
                         )));
                     }
-                    out.positions.push(p);
+                    positions[element] = p;
                 }
-                "face" => out.faces.extend(face),
+                "face" => faces[element] = face.unwrap_or_default(),
                 _ => {}
             }
+            element += 1;
         }
-        Ok(out)
+        Ok(())
     }
 }
 
