@@ -299,12 +299,15 @@ impl<'d> Compiler<'d> {
             .map_or(0, |m| (m.first + m.count) as usize);
         let mut boxes = Vec::with_capacity(n_tris + self.shapes.len());
         for (mesh, source) in self.meshes.iter().zip(&self.sources) {
-            for i in 0..source.len() {
-                let b = Aabb::from_points(&source.get(i));
-                if !b.is_finite() {
-                    return Err(self.err(&mesh.name, format!("triangle {i} is not finite")));
-                }
-                boxes.push(b);
+            use rayon::prelude::*;
+            let start = boxes.len();
+            boxes.par_extend(
+                (0..source.len())
+                    .into_par_iter()
+                    .map(|i| Aabb::from_points(&source.get(i))),
+            );
+            if let Some(i) = boxes[start..].iter().position(|b| !b.is_finite()) {
+                return Err(self.err(&mesh.name, format!("triangle {i} is not finite")));
             }
         }
         for (i, s) in self.shapes.iter().enumerate() {
@@ -349,6 +352,28 @@ pub(super) mod test_support {
 mod tests {
     use super::test_support::{compiled, rejected};
     use super::*;
+
+    /// A mesh that its transform carries past f32's range is an error
+    /// naming the mesh and its first triangle out of range.
+    #[test]
+    fn a_triangle_past_f32_after_its_transform_is_an_error() {
+        let dir = std::env::temp_dir().join(format!("strata-inf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("m.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e30 0 0\nf 1 2 3\nf 1 2 3\nf 1 2 4\n",
+        )
+        .unwrap();
+        let scene = dir.join("s.toml");
+        std::fs::write(
+            &scene,
+            "[[objects]]\nmesh = \"m.obj\"\ntransform = { scale = 1e20 }\n",
+        )
+        .unwrap();
+        let e = load_scene(&scene, &RenderOverrides::default(), BuildQuality::Auto).unwrap_err();
+        assert!(e.to_string().contains("triangle 2 is not finite"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// A render's `auto` build is the fastest preset's tree when the render
     /// traces few rays per triangle and the default one's when it traces
