@@ -365,6 +365,48 @@ mod tests {
         assert_eq!(auto.for_render(usize::MAX, u64::MAX), BuildQuality::Auto);
     }
 
+    /// A binary tree that is a chain 300,000 leaves deep (each inner node
+    /// a leaf and the rest) collapses without overflowing the stack,
+    /// holds every primitive once, and matches the sequential walk.
+    #[test]
+    fn a_degenerate_chain_collapses_without_deep_recursion() {
+        use obvhs::bvh2::node::Bvh2Node;
+        let n = 300_000u32;
+        let boxed = |k: u32| obvhs::aabb::Aabb {
+            min: Vec3A::ZERO,
+            max: Vec3A::splat(1.0 + k as f32),
+        };
+        // Node 2j is the chain's inner node j, whose children are node
+        // 2j + 1 (a leaf holding primitive j) and node 2j + 2 (inner node
+        // j + 1, or the last leaf); the boxes nest.
+        let mut nodes = Vec::with_capacity(2 * n as usize - 1);
+        for j in 0..n - 1 {
+            nodes.push(Bvh2Node::new(boxed(n - 1 - j), 0, 2 * j + 1));
+            nodes.push(Bvh2Node::new(boxed(n - 1 - j), 1, j));
+        }
+        nodes.push(Bvh2Node::new(boxed(0), 1, n - 1));
+        let bvh2 = Bvh2 {
+            nodes,
+            primitive_indices: (0..n).collect(),
+            ..Default::default()
+        };
+        let bounds = Aabb::new(glam::Vec3::ZERO, glam::Vec3::splat(n as f32));
+        let tree = std::thread::Builder::new()
+            .stack_size(1 << 20)
+            .spawn(move || {
+                let parallel = Bvh8::collapse(&bvh2, bounds);
+                let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
+                (parallel, sequential)
+            })
+            .unwrap()
+            .join()
+            .unwrap();
+        let (parallel, sequential) = tree;
+        assert_eq!(leaf_sets(&parallel), leaf_sets(&sequential));
+        assert_eq!(leaf_sets(&parallel).concat().len(), n as usize);
+        assert_eq!(parallel.stats().nodes, sequential.stats().nodes);
+    }
+
     /// Taking the boxes (and freeing them before the collapse) builds the
     /// same tree as borrowing them.
     #[test]

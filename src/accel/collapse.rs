@@ -46,6 +46,13 @@ const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEA
 /// only the top two or three levels of a large mesh's tree are split.
 const PARALLEL_PRIMS: u32 = 1 << 16;
 
+/// At most this many levels of 8-wide nodes are emitted by parallel
+/// recursion; below, however large the subtree, one sequential walk (a
+/// loop, not recursion) goes on. Eight children a level, so a balanced
+/// tree has split into thousands of tasks long before; the bound only
+/// keeps a degenerate tree (a chain) from overflowing the call stack.
+const PARALLEL_LEVELS: u32 = 16;
+
 /// The cost tables of the top this many levels of the binary tree are
 /// filled by parallel recursion (at most 2^10 tasks, each a post-order
 /// walk of its subtree): enough tasks to balance lopsided trees, too few
@@ -55,7 +62,7 @@ const PARALLEL_DEPTH: u32 = 10;
 /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
 pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
     let costs = CollapseCosts::new(bvh2);
-    let part = costs.emit(0);
+    let part = costs.emit(0, 0);
     Bvh8 {
         nodes: part.nodes,
         prim_ids: part.prim_ids,
@@ -306,12 +313,13 @@ impl<'a> CollapseCosts<'a> {
         }
     }
 
-    /// The 8-wide tree for BVH2 node `src`'s subtree. A large subtree
-    /// makes its own node here and its inner children's subtrees in
-    /// parallel, appended after it in slot order; a small one is one
-    /// sequential walk ([`CollapseCosts::emit_sequential`]).
-    fn emit(&self, src: usize) -> Part {
-        if self.count(src) < PARALLEL_PRIMS {
+    /// The 8-wide tree for BVH2 node `src`'s subtree, whose root is at
+    /// 8-wide level `level`. A large subtree near the top makes its own
+    /// node here and its inner children's subtrees in parallel, appended
+    /// after it in slot order; the rest is one sequential walk
+    /// ([`CollapseCosts::emit_sequential`]).
+    fn emit(&self, src: usize, level: u32) -> Part {
+        if self.count(src) < PARALLEL_PRIMS || level >= PARALLEL_LEVELS {
             return self.emit_sequential(src);
         }
         let mut part = Part::default();
@@ -329,7 +337,10 @@ impl<'a> CollapseCosts<'a> {
                 inner.push((slot, c));
             }
         }
-        let subtrees: Vec<Part> = inner.par_iter().map(|&(_, c)| self.emit(c)).collect();
+        let subtrees: Vec<Part> = inner
+            .par_iter()
+            .map(|&(_, c)| self.emit(c, level + 1))
+            .collect();
         for (&(slot, _), sub) in inner.iter().zip(subtrees) {
             part.nodes[0].child[slot] = part.nodes.len() as u32;
             part.append(sub);
