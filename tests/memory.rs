@@ -82,6 +82,10 @@ fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
         "12",
         "--spp",
         "1",
+        // One preset for render and bench, so that both report the same
+        // tree (`auto` builds a render this short with the fastest one).
+        "--bvh-quality",
+        "medium",
         "--stats",
         &s(&stats),
     ]);
@@ -111,6 +115,8 @@ fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
         "1",
         "--threads",
         "1",
+        "--bvh-quality",
+        "medium",
         "--csv",
         &s(&csv),
     ]);
