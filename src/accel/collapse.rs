@@ -61,29 +61,14 @@ const PARALLEL_DEPTH: u32 = 10;
 
 /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
 pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
-    let costs = CollapseCosts::new(bvh2);
-    let part = costs.emit(0, 0);
-    Bvh8 {
-        nodes: part.nodes,
-        prim_ids: part.prim_ids,
-        bounds,
-        depth: part.depth,
-        prefetch: true,
-    }
+    CollapseCosts::new(bvh2).emit(0, 0).into_bvh(bounds)
 }
 
 /// [`collapse`] by one sequential walk from the root, for tests of the
 /// parallel emission.
 #[cfg(test)]
 pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
-    let part = CollapseCosts::new(bvh2).emit_sequential(0);
-    Bvh8 {
-        nodes: part.nodes,
-        prim_ids: part.prim_ids,
-        bounds,
-        depth: part.depth,
-        prefetch: true,
-    }
+    CollapseCosts::new(bvh2).emit_sequential(0).into_bvh(bounds)
 }
 
 /// The SAH cost tables of the collapse (Ylitie, Karras and Laine 2017,
@@ -407,6 +392,17 @@ struct Part {
 }
 
 impl Part {
+    /// The whole tree, whose root box is `bounds`.
+    fn into_bvh(self, bounds: Aabb) -> Bvh8 {
+        Bvh8 {
+            nodes: self.nodes,
+            prim_ids: self.prim_ids,
+            bounds,
+            depth: self.depth,
+            prefetch: true,
+        }
+    }
+
     /// Appends `sub` (whose root becomes node `self.nodes.len()`), moving
     /// its references by where its nodes and slots now start. Slots move
     /// by whole blocks: every part's `prim_ids` is a whole number of them.
