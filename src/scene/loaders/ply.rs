@@ -497,6 +497,15 @@ mod tests {
             );
             assert!(text.contains("bad.ply") && text.contains(words), "{text}");
         }
+        // Bytes that are not text, on the line they are on.
+        let mut junk = format!("{HEAD}0 0 0\n1 0 0\n").into_bytes();
+        junk.extend([0xff, 0xfe, b' ', b'0', b'\n']);
+        let e = load_ply(&write("junk.ply", &junk)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("line 12: cannot read: not ASCII text"),
+            "{e}"
+        );
         // NaN or infinite coordinates, in ASCII (with the line) and binary.
         let nan = format!("{HEAD}0 0 0\n1 nan 0\n1 1 0\n0 1 0\n3 0 1 2\n");
         let e = load_ply(&write("nan.ply", nan.as_bytes())).unwrap_err();
