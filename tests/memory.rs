@@ -92,6 +92,7 @@ fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["triangles"], 180_000);
+    assert_eq!(json["bvh_quality"], "medium");
     let memory = &json["memory"];
     let final_bpt = memory["final_bytes_per_triangle"].as_f64().unwrap();
     // At least the leaf triangles and ids; the nodes add a fraction.

@@ -52,14 +52,22 @@ impl BuildQuality {
         }
     }
 
-    fn params(self, prim_count: usize) -> BvhBuildParams {
+    /// The preset a build over `prim_count` primitives uses: `auto` is
+    /// `fast` above 2 million primitives and `medium` up to them.
+    pub fn preset(self, prim_count: usize) -> Self {
         match self {
+            Self::Auto if prim_count > 2_000_000 => Self::Fast,
+            Self::Auto => Self::Medium,
+            other => other,
+        }
+    }
+
+    fn params(self, prim_count: usize) -> BvhBuildParams {
+        match self.preset(prim_count) {
             Self::Fastest => BvhBuildParams::fastest_build(),
             Self::Fast => BvhBuildParams::fast_build(),
-            Self::Medium => BvhBuildParams::medium_build(),
             Self::High => BvhBuildParams::slow_build(),
-            Self::Auto if prim_count > 2_000_000 => BvhBuildParams::fast_build(),
-            Self::Auto => BvhBuildParams::medium_build(),
+            Self::Medium | Self::Auto => BvhBuildParams::medium_build(),
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use super::film::BadSample;
 use super::{RenderOptions, RenderOutcome};
+use crate::accel::BuildQuality;
 use crate::scene::{LoadTimings, Scene};
 use crate::shade::{PacketMode, RayCounts};
 use crate::system::memory::peak_rss_bytes;
@@ -39,6 +40,8 @@ pub struct RenderStats {
     pub triangles: usize,
     pub analytic_shapes: usize,
     pub planes: usize,
+    /// The BVH build preset used (`--bvh-quality`, with `auto` resolved).
+    pub bvh_quality: BuildQuality,
     pub bvh_nodes: usize,
     pub bvh_bytes: usize,
     /// Whether traversal prefetched (`accel::prefetch`: on for trees of
@@ -116,6 +119,7 @@ impl RenderStats {
             triangles: g.triangle_count as usize,
             analytic_shapes: g.shapes.len(),
             planes: g.planes.len(),
+            bvh_quality: timings.bvh_quality,
             bvh_nodes: g.bvh.nodes.len(),
             bvh_bytes: g.bvh.memory_bytes(),
             bvh_prefetch: g.bvh.prefetch,

@@ -50,6 +50,8 @@ mod validate;
 pub struct LoadTimings {
     pub load: Duration,
     pub bvh_build: Duration,
+    /// The preset the BVH was built with (what `auto` chose).
+    pub bvh_quality: BuildQuality,
     pub load_peak_bytes: Option<u64>,
     pub build_peak_bytes: Option<u64>,
 }
@@ -187,6 +189,7 @@ fn compile_for(
         Purpose::Render => quality.for_render(boxes.len(), settings.first_hit_rays(&c.lights)),
         Purpose::Tracing => quality,
     };
+    let bvh_quality = quality.preset(boxes.len());
     let mut bvh = Bvh8::build_from(boxes, quality);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.nodes.shrink_to_fit();
@@ -199,6 +202,7 @@ fn compile_for(
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
+        bvh_quality,
         load_peak_bytes,
         build_peak_bytes: memory.phase_peak(),
     };
@@ -408,22 +412,27 @@ mod tests {
                 spp: Some(spp),
                 ..Default::default()
             };
-            let (s, _) = load_scene(&scene, &overrides, quality).unwrap();
-            s.geometry.bvh.stats()
+            let (s, timings) = load_scene(&scene, &overrides, quality).unwrap();
+            (s.geometry.bvh.stats(), timings.bvh_quality)
         };
         let (fastest, medium) = (
             tree(1, BuildQuality::Fastest),
             tree(1, BuildQuality::Medium),
         );
         assert_ne!(
-            fastest, medium,
+            fastest.0, medium.0,
             "the presets must differ for the test to mean anything"
         );
-        // 64·64·1·2 rays ≪ 8 per triangle; 64·64·256·2 ≫.
+        assert_eq!(
+            (fastest.1, medium.1),
+            (BuildQuality::Fastest, BuildQuality::Medium)
+        );
+        // 64·64·1·2 rays ≪ 8 per triangle; 64·64·256·2 ≫. The timings
+        // name the preset used.
         assert_eq!(tree(1, BuildQuality::Auto), fastest);
         assert_eq!(tree(256, BuildQuality::Auto), medium);
-        let (traced, _) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
-        assert_eq!(traced.geometry.bvh.stats(), medium);
+        let (traced, timings) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
+        assert_eq!((traced.geometry.bvh.stats(), timings.bvh_quality), medium);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
