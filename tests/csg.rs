@@ -308,7 +308,7 @@ fn every_operator_and_operand_agrees_with_point_membership_on_20k_rays() {
     }
 }
 
-/// The stability count of issue 3: 1M random rays per configuration.
+/// The stability count: 1M random rays per configuration.
 /// Run with `cargo test --release --test csg -- --ignored --nocapture`.
 #[test]
 #[ignore]
