@@ -274,6 +274,7 @@ mod tests {
             let boxes = random_boxes(3000, seed);
             let bvh2 = binary_tree(&boxes, quality);
             let costs = CollapseCosts::new(&bvh2);
+            costs.assert_choices_match_tables();
             let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
             let stats = Bvh8::collapse(&bvh2, bounds).stats();
