@@ -31,7 +31,8 @@ pub struct RenderArgs {
     /// The value is TOML (or a bare word, taken as a string). Repeatable.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<Edit>,
-    /// Worker threads (default: all cores). The image is identical for any count.
+    /// Threads for loading, the BVH build and rendering (default: all
+    /// cores). The image is identical for any count.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// Render only slice k of P of every pixel's samples (0-based k), e.g. 3/8,
@@ -341,13 +342,32 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 }
 
 /// The scene of the command line.
+/// Loads the scene and builds its BVH on `--threads` threads, as the
+/// render runs: a one-thread job (a Slurm task given one CPU, a one-thread
+/// benchmark) stays on one core from start to end.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
-    load_or_seed(
-        args.scene.as_deref(),
-        &args.set,
-        &args.settings,
-        args.bvh_quality,
-    )
+    let load = || {
+        load_or_seed(
+            args.scene.as_deref(),
+            &args.set,
+            &args.settings,
+            args.bvh_quality,
+        )
+    };
+    on_threads(args.threads, load)?
+}
+
+/// `work` run on a pool of `threads` threads (0: the global pool, one
+/// thread per core).
+fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<T, CliError> {
+    if threads == 0 {
+        return Ok(work());
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))?;
+    Ok(pool.install(work))
 }
 
 /// The scene at `path`, or the built-in seed scene, with `edits` applied.
@@ -415,4 +435,21 @@ pub fn is_partial_path(path: &std::path::Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("strata"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::on_threads;
+
+    /// `--threads N` bounds the load and the build as it bounds the
+    /// render: the work runs on a pool of exactly N threads, and 0 keeps
+    /// the global pool.
+    #[test]
+    fn loading_runs_on_the_requested_threads() {
+        for n in [1, 3] {
+            assert!(matches!(on_threads(n, rayon::current_num_threads), Ok(m) if m == n));
+        }
+        let global = rayon::current_num_threads();
+        assert!(matches!(on_threads(0, rayon::current_num_threads), Ok(m) if m == global));
+    }
 }
