@@ -341,10 +341,9 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
     Ok((slice, partial_output))
 }
 
-/// The scene of the command line.
-/// Loads the scene and builds its BVH on `--threads` threads, as the
-/// render runs: a one-thread job (a Slurm task given one CPU, a one-thread
-/// benchmark) stays on one core from start to end.
+/// The scene of the command line, loaded and its BVH built on `--threads`
+/// threads as the render runs: a one-thread job (a Slurm task given one
+/// CPU, a one-thread benchmark) stays on one core from start to end.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
     let load = || {
         load_or_seed(
