@@ -128,6 +128,23 @@ pub fn encode_rays(rays: &[Ray]) -> Vec<u8> {
     out
 }
 
+/// Encode triangles as the native Embree harness's `MESH.tris`
+/// (`tools/embree/embree_trace.c`): u32 vertex and triangle counts, the
+/// vertices as f32 xyz, then u32 indices; unindexed, so triangle `i` is
+/// vertices `3i..3i + 3` and keeps its index as its primitive id.
+pub fn encode_triangles(tris: &[[Vec3; 3]]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(8 + tris.len() * 48);
+    out.extend_from_slice(&(3 * tris.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+    for x in tris.iter().flatten().flat_map(|v| v.to_array()) {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    for i in 0..3 * tris.len() as u32 {
+        out.extend_from_slice(&i.to_le_bytes());
+    }
+    out
+}
+
 /// Encode hit records as a hit file's bytes.
 pub fn encode_hits(hits: &[HitRecord]) -> Vec<u8> {
     let mut out = Vec::with_capacity(hits.len() * HIT_BYTES);

@@ -14,7 +14,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use strata::accel::BuildQuality;
-use strata::rayfile::{parse_hits, read_rays, HitRecord};
+use strata::rayfile::{encode_triangles, parse_hits, read_rays, HitRecord};
 use strata::scene::load_mesh_scene;
 
 /// Rays of each kind.
@@ -68,17 +68,8 @@ fn the_native_harness_answers_as_strata_does() {
     // MESH.tris in strata's file order, unindexed, as `strata bench` writes it.
     let (scene, _) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
     let tris = scene.geometry.file_order_triangles();
-    let mut bytes = Vec::new();
-    bytes.extend_from_slice(&(3 * tris.len() as u32).to_le_bytes());
-    bytes.extend_from_slice(&(tris.len() as u32).to_le_bytes());
-    for x in tris.iter().flatten().flat_map(|v| v.to_array()) {
-        bytes.extend_from_slice(&x.to_le_bytes());
-    }
-    for i in 0..3 * tris.len() as u32 {
-        bytes.extend_from_slice(&i.to_le_bytes());
-    }
     let tris_path = dir.join("sphere.tris");
-    std::fs::write(&tris_path, bytes).unwrap();
+    std::fs::write(&tris_path, encode_triangles(&tris)).unwrap();
 
     let rays = dir.join("rays.bin");
     let strata = |args: &[&Path]| {
@@ -94,28 +85,21 @@ fn the_native_harness_answers_as_strata_does() {
         &rays,
     ])
     .args(["-n", "600", "--seed", "3", "--quiet"]));
-    let ours = dir.join("strata.hits");
-    let ours_occ = dir.join("strata.occ");
-    let t = Path::new("trace");
-    run(strata(&[
-        t,
-        &mesh,
-        Path::new("--rays"),
-        &rays,
-        Path::new("--hits"),
-        &ours,
-    ])
-    .arg("-q"));
-    run(strata(&[
-        t,
-        &mesh,
-        Path::new("--rays"),
-        &rays,
-        Path::new("--hits"),
-        &ours_occ,
-    ])
-    .args(["-q", "--occlusion"]));
-    let (ours, ours_occ) = (hits(&ours), hits(&ours_occ));
+    // Closest hits, then occlusion, from `strata trace`.
+    let [ours, ours_occ] = [&[][..], &["--occlusion"]].map(|flags| {
+        let out = dir.join("strata.hits");
+        run(strata(&[
+            Path::new("trace"),
+            &mesh,
+            Path::new("--rays"),
+            &rays,
+            Path::new("--hits"),
+            &out,
+        ])
+        .arg("-q")
+        .args(flags));
+        hits(&out)
+    });
     let ray_list = read_rays(&rays).unwrap();
     let n = ours.len();
     assert_eq!(n, 5 * PER_KIND);
@@ -128,22 +112,17 @@ fn the_native_harness_answers_as_strata_does() {
         &["--packet"],
         &["--robust", "--packet"],
     ] {
-        let theirs_path = dir.join("embree.hits");
-        let theirs_occ_path = dir.join("embree.occ");
-        run(Command::new(&exe)
-            .arg(&tris_path)
-            .arg(&rays)
-            .arg("--hits")
-            .arg(&theirs_path)
-            .args(flags));
-        run(Command::new(&exe)
-            .arg(&tris_path)
-            .arg(&rays)
-            .arg("--hits")
-            .arg(&theirs_occ_path)
-            .arg("--occlusion")
-            .args(flags));
-        let (theirs, theirs_occ) = (hits(&theirs_path), hits(&theirs_occ_path));
+        let [theirs, theirs_occ] = [&[][..], &["--occlusion"]].map(|query| {
+            let out = dir.join("embree.hits");
+            run(Command::new(&exe)
+                .arg(&tris_path)
+                .arg(&rays)
+                .arg("--hits")
+                .arg(&out)
+                .args(query)
+                .args(flags));
+            hits(&out)
+        });
         assert_eq!(theirs.len(), n);
         // Two answers agree if they name the same triangle, or triangles
         // hit at the same t: rays aimed at a shared edge or vertex may

@@ -21,7 +21,7 @@ use strata::error::InputError;
 use strata::experiment::bench::{rays, trace, Query, RayKind};
 use strata::geometry::Geometry;
 use strata::math::Ray;
-use strata::rayfile::encode_rays;
+use strata::rayfile::{encode_rays, encode_triangles};
 use strata::scene::load_mesh_scene;
 use strata::system::memory::peak_rss_bytes;
 
@@ -104,18 +104,7 @@ impl Embree {
         rays: &[Ray],
         threads: usize,
     ) -> Result<Self, CliError> {
-        let tris = geometry.file_order_triangles();
-        let mut bytes = Vec::with_capacity(8 + tris.len() * 48);
-        bytes.extend_from_slice(&(3 * tris.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(&(tris.len() as u32).to_le_bytes());
-        for v in tris.iter().flatten() {
-            for x in v.to_array() {
-                bytes.extend_from_slice(&x.to_le_bytes());
-            }
-        }
-        for i in 0..3 * tris.len() as u32 {
-            bytes.extend_from_slice(&i.to_le_bytes());
-        }
+        let bytes = encode_triangles(&geometry.file_order_triangles());
         let (mesh_path, rays_path) = (dir.join("mesh.tris"), dir.join("rays.bin"));
         std::fs::write(&mesh_path, bytes).map_err(harness_error)?;
         std::fs::write(&rays_path, encode_rays(rays)).map_err(harness_error)?;
