@@ -207,13 +207,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         .into_iter()
         .enumerate()
         .filter(|&(i, n)| i == 0 || n != 1)
-        .map(|(_, n)| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .map_err(|e| CliError::Internal(e.to_string()))?;
-            Ok((n, pool))
-        })
+        .map(|(_, n)| Ok((n, super::thread_pool(n)?)))
         .collect::<Result<_, CliError>>()?;
     let mut csv = String::from(
         "mesh,triangles,load_s,build_s,bytes_per_triangle,peak_load_build_bytes_per_triangle,peak_rss_mb,query,rays,mode,threads,mrays_per_s,embree_build_s,embree_bytes_per_triangle,embree_mrays_per_s,strata_over_embree\n",

@@ -67,6 +67,14 @@ pub fn writable(path: &std::path::Path, flag: &str, extensions: &[&str]) -> Resu
         .map_err(|e| InputError::new("<command line>", flag, e).into())
 }
 
+/// A pool of `threads` threads (0: one per core).
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, CliError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))
+}
+
 /// "1 part", "2 parts".
 pub fn count(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })

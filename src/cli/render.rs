@@ -362,11 +362,7 @@ fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Resul
     if threads == 0 {
         return Ok(work());
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))?;
-    Ok(pool.install(work))
+    Ok(super::thread_pool(threads)?.install(work))
 }
 
 /// The scene at `path`, or the built-in seed scene, with `edits` applied.

@@ -59,10 +59,7 @@ pub fn trace(
     occlusion: bool,
     threads: usize,
 ) -> Result<(Vec<HitRecord>, usize, f64), CliError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))?;
+    let pool = super::thread_pool(threads)?;
     let (hits, seconds) = pool.install(|| {
         let start = Instant::now();
         let hits: Vec<HitRecord> = rays
