@@ -18,6 +18,7 @@ use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
 use rayon::prelude::*;
 use std::io::BufRead;
 use std::path::Path;
+use wide::u8x32;
 
 /// What a mesh takes from an ASCII PLY body.
 #[derive(Default)]
@@ -153,20 +154,60 @@ pub(super) fn read_body(
 /// The start of `text` holding its next `n` elements (one a non-blank
 /// line; blank lines among them are kept), and how many lines that is;
 /// `None` if the text ends first.
+///
+/// This scan is the serial part of a parallel parse, so it finds line
+/// ends 64 bytes at a time ([`line_feeds`]) instead of one search per
+/// line, which took 15 ms of the dragon's 107 ms two-thread load (34 MB,
+/// 1.3 M lines). Load, dragon, medians of five interleaved runs: one
+/// thread 0.144 → 0.133 s, two 0.106 → 0.093 s.
 fn take_elements(text: &str, n: usize) -> Option<(&str, usize)> {
-    let (mut end, mut lines, mut found) = (0, 0, 0);
-    while found < n {
-        if end >= text.len() {
-            return None;
-        }
-        let line_end = text[end..].find('\n').map_or(text.len(), |k| end + k + 1);
-        if !text[end..line_end].trim_ascii().is_empty() {
+    if n == 0 {
+        return Some(("", 0));
+    }
+    let bytes = text.as_bytes();
+    // A last line without a line feed ends where the text does.
+    let last = (!bytes.is_empty() && !bytes.ends_with(b"\n")).then_some(bytes.len());
+    let ends = bytes
+        .chunks(64)
+        .enumerate()
+        .flat_map(|(k, block)| {
+            let mut feeds = line_feeds(block);
+            std::iter::from_fn(move || {
+                let bit = feeds.trailing_zeros() as usize;
+                feeds &= feeds.wrapping_sub(1);
+                (bit < 64).then_some(64 * k + bit + 1)
+            })
+        })
+        .chain(last);
+    let (mut lines, mut found, mut start) = (0, 0, 0);
+    for end in ends {
+        if bytes[start..end].iter().any(|b| !b.is_ascii_whitespace()) {
             found += 1;
         }
         lines += 1;
-        end = line_end;
+        start = end;
+        if found == n {
+            return Some((&text[..end], lines));
+        }
     }
-    Some((&text[..end], lines))
+    None
+}
+
+/// Bit `i` set where `block[i]` (at most 64 bytes) is a line feed: one
+/// vector compare per 32 bytes of a whole block.
+#[inline]
+fn line_feeds(block: &[u8]) -> u64 {
+    let half = |bytes: &[u8]| -> u64 {
+        match <[u8; 32]>::try_from(bytes) {
+            Ok(b) => u64::from(u8x32::from(b).simd_eq(u8x32::splat(b'\n')).to_bitmask()),
+            Err(_) => bytes
+                .iter()
+                .enumerate()
+                .fold(0, |m, (i, &b)| m | u64::from(b == b'\n') << i),
+        }
+    };
+    let (low, high) = block.split_at(block.len().min(32));
+    half(low) | half(high) << 32
 }
 
 /// A run of whole lines of one element, where it starts in the file.
@@ -312,5 +353,54 @@ fn type_name(t: &ScalarType) -> &'static str {
         ScalarType::UInt => "uint",
         ScalarType::Float => "float",
         ScalarType::Double => "double",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::stream::{seeded, Draw};
+
+    /// The plain scan: one search for each line's end.
+    fn take_elements_by_line(text: &str, n: usize) -> Option<(&str, usize)> {
+        let (mut end, mut lines, mut found) = (0, 0, 0);
+        while found < n {
+            if end >= text.len() {
+                return None;
+            }
+            let line_end = text[end..].find('\n').map_or(text.len(), |k| end + k + 1);
+            if !text[end..line_end].trim_ascii().is_empty() {
+                found += 1;
+            }
+            lines += 1;
+            end = line_end;
+        }
+        Some((&text[..end], lines))
+    }
+
+    /// The 64-byte scan cuts every text where the line-by-line scan does:
+    /// lines of any length across block edges, blank and whitespace-only
+    /// lines, CRLF ends, and texts that end without a line feed or early.
+    #[test]
+    fn block_scan_cuts_where_the_line_scan_does() {
+        let mut rng = seeded(11);
+        let pieces = ["\n", "\r\n", " \n", "\t \r\n", "1", "-0.25", " ", "3 1 2 0"];
+        for round in 0..400 {
+            let mut text = String::new();
+            let len = rng.range(0.0, 300.0) as usize;
+            while text.len() < len {
+                text.push_str(pieces[rng.range(0.0, pieces.len() as f32) as usize % pieces.len()]);
+            }
+            if round % 3 == 0 {
+                text.push('\n');
+            }
+            for n in 0..12 {
+                assert_eq!(
+                    take_elements(&text, n),
+                    take_elements_by_line(&text, n),
+                    "{text:?}, {n} elements"
+                );
+            }
+        }
     }
 }
