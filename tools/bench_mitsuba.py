@@ -32,9 +32,11 @@ Per scene:
      later renders hit the kernel cache), so its timed renders exclude
      compilation, as strata's render phase excludes its load and BVH
      build. Medians; RMSE of each against the reference (mean over runs).
-  4. Equal RMSE: strata (stratified) at 1, 2, 4, ... spp until its RMSE
-     is at most Mitsuba's; the whole strata process (wall, including
-     load and BVH build) against Mitsuba's load_dict + warm render.
+  4. Equal RMSE: the fewest spp at which strata (stratified; its RMSE
+     the mean over three seeds) is at most Mitsuba's RMSE, found by
+     doubling from 1 spp and then bisecting; the whole strata process
+     (wall, including load and BVH build) against Mitsuba's load_dict
+     (median of --runs loads) + warm render.
 
 Run on a quiet machine: these are wall-clock figures.
 """
@@ -55,6 +57,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 DEFAULT_SCENES = ["scenes/large/dragon-rect.toml", "scenes/seed-mc.toml", "scenes/soft-shadow.toml"]
 LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+# Seeds whose mean RMSE decides whether strata has reached Mitsuba's error.
+RMSE_SEEDS = 3
 
 
 class Unsupported(Exception):
@@ -309,29 +313,57 @@ def bench_scene(args, mi, dr, np, path, tmp):
     print(f"    strata / mitsuba render time {med(s_render) / med(m_times):.2f} "
           f"(mitsuba used {med(cpu[-args.runs:]):.2f} CPU s per wall s)")
 
-    # 4. Equal RMSE: strata stratified, doubling spp until at or below Mitsuba's RMSE.
-    n, found = 1, None
+    # 4. Equal RMSE: the fewest spp at which strata (stratified) has at most
+    # Mitsuba's RMSE, both averaged over runs with different seeds: doubling
+    # from 1 spp, then bisecting between the last two counts (strata takes
+    # any sample count, and a power of two can overshoot by nearly 2x).
+    def strata_rmse(n):
+        errs = []
+        for seed in range(RMSE_SEEDS):
+            out = os.path.join(tmp, f"{name}-strat.exr")
+            run_strata(args, path, n, "stratified", out, seed=seed)
+            errs.append(rmse(np, read_exr(mi, np, out), ref))
+        return statistics.mean(errs)
+
+    lo, n, found = 0, 1, None
     while n <= 4 * args.ref_spp:
-        out = os.path.join(tmp, f"{name}-strat.exr")
-        run_strata(args, path, n, "stratified", out)
-        e = rmse(np, read_exr(mi, np, out), ref)
+        e = strata_rmse(n)
         if e <= m_rmse:
             found = (n, e)
             break
-        n *= 2
+        lo, n = n, n * 2
     if found is None:
         print(f"  equal RMSE: strata did not reach Mitsuba's RMSE {m_rmse:.5f} by {n // 2} spp")
         return None
+    hi = found[0]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        e = strata_rmse(mid)
+        if e <= m_rmse:
+            hi, found = mid, (mid, e)
+        else:
+            lo = mid
     n, e = found
+    # Mitsuba's load, timed like strata's whole process: the median of
+    # --runs loads (the first, above, included), so that one slow load on
+    # this shared machine does not stand for Mitsuba.
+    loads = [load_s]
+    for _ in range(args.runs - 1):
+        t = time.perf_counter()
+        mi.load_dict(desc)
+        loads.append(time.perf_counter() - t)
+    load_med = med(loads)
     walls, renders = [], []
     for k in range(args.runs):
         wall, render_s, _ = run_strata(args, path, n, "stratified", os.path.join(tmp, f"{name}-strat.exr"))
         walls.append(wall)
         renders.append(render_s)
-    mitsuba_total = load_s + med(m_times)
-    print(f"  equal RMSE: strata stratified at {n} spp: RMSE {e:.5f} <= mitsuba's {m_rmse:.5f} at {spp} spp")
+    mitsuba_total = load_med + med(m_times)
+    print(f"  equal RMSE: strata stratified at {n} spp: RMSE {e:.5f} <= mitsuba's {m_rmse:.5f} at {spp} spp "
+          f"(means over {RMSE_SEEDS} seeds and {args.runs} runs)")
     print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
-          f"load_dict + warm render {mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
+          f"load_dict {load_med:.3f} s (median of {len(loads)}: {min(loads):.3f} to {max(loads):.3f} s) "
+          f"+ warm render {med(m_times):.3f} s = {mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
     return True
 
 
