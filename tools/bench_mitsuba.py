@@ -246,9 +246,13 @@ def bench_scene(args, mi, dr, np, path, tmp):
         print(f"{name}: skipped: the Mitsuba translation cannot express {e}")
         return None
     spp = args.spp or settings["spp"]
-    t = time.perf_counter()
-    scene = mi.load_dict(desc)
-    load_s = time.perf_counter() - t
+
+    def load():
+        t = time.perf_counter()
+        loaded = mi.load_dict(desc)
+        return loaded, time.perf_counter() - t
+
+    scene, load_s = load()
 
     cpu = []  # Mitsuba's CPU seconds per wall second while rendering: its thread use
 
@@ -347,11 +351,7 @@ def bench_scene(args, mi, dr, np, path, tmp):
     # Mitsuba's load, timed like strata's whole process: the median of
     # --runs loads (the first, above, included), so that one slow load on
     # this shared machine does not stand for Mitsuba.
-    loads = [load_s]
-    for _ in range(args.runs - 1):
-        t = time.perf_counter()
-        mi.load_dict(desc)
-        loads.append(time.perf_counter() - t)
+    loads = [load_s] + [load()[1] for _ in range(args.runs - 1)]
     load_med = med(loads)
     walls, renders = [], []
     for k in range(args.runs):
