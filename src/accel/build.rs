@@ -287,6 +287,50 @@ mod tests {
         }
     }
 
+    /// Every leaf holds the primitives of its binary subtree: each
+    /// primitive's box lies inside the box of the slot that holds it, and
+    /// each is held once, for a preset whose tree is PLOC's (fastest) and
+    /// one whose nodes reinsertion has moved (high), on one thread and on
+    /// three (the leaf order the tables record is joined from pieces).
+    #[test]
+    fn every_leaf_holds_the_primitives_of_its_subtree() {
+        let boxes = random_boxes(150_000, 8);
+        for quality in [BuildQuality::Fastest, BuildQuality::High] {
+            for threads in [1, 3] {
+                let bvh = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| Bvh8::build(&boxes, quality));
+                let mut held = vec![0u32; boxes.len()];
+                for node in &bvh.nodes {
+                    for slot in 0..8 {
+                        let child = node.child[slot];
+                        if child == EMPTY || !is_leaf(child) {
+                            continue;
+                        }
+                        let b = |row: usize| node.bounds[row][slot];
+                        let leaf =
+                            Aabb::new(Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)));
+                        let (start, count) = leaf_range(child);
+                        for &id in &bvh.prim_ids[start as usize..(start + count) as usize] {
+                            let p = boxes[id as usize];
+                            assert!(
+                                leaf.min.cmple(p.min).all() && p.max.cmple(leaf.max).all(),
+                                "{quality:?}, {threads} threads: primitive {id} outside its leaf"
+                            );
+                            held[id as usize] += 1;
+                        }
+                    }
+                }
+                assert!(
+                    held.iter().all(|&h| h == 1),
+                    "{quality:?}, {threads} threads"
+                );
+            }
+        }
+    }
+
     /// The leaves of a tree as sorted lists of primitive ids, sorted: what
     /// the tree holds, whatever its node numbering and slot order.
     fn leaf_sets(bvh: &Bvh8) -> Vec<Vec<u32>> {

@@ -65,14 +65,16 @@ const PARALLEL_DEPTH: u32 = 10;
 
 /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
 pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
-    CollapseCosts::new(bvh2).emit(0, 0).into_bvh(bounds)
+    CollapseCosts::new(bvh2).emit(0, 0, 0).into_bvh(bounds)
 }
 
 /// [`collapse`] by one sequential walk from the root, for tests of the
 /// parallel emission.
 #[cfg(test)]
 pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
-    CollapseCosts::new(bvh2).emit_sequential(0).into_bvh(bounds)
+    CollapseCosts::new(bvh2)
+        .emit_sequential(0, 0)
+        .into_bvh(bounds)
 }
 
 /// The SAH cost tables of the collapse (Ylitie, Karras and Laine 2017,
@@ -112,6 +114,13 @@ pub(super) struct CollapseCosts<'a> {
     /// Per inner node, the choices its table made ([`Choices`]), so that
     /// the emission follows them without recomputing any split.
     choices: Vec<AtomicU32>,
+    /// Every primitive id in the order of the tree's leaves, left to
+    /// right, recorded by the walk that fills the tables: the primitives
+    /// of a subtree are the run of [`CollapseCosts::count`] ids from where
+    /// its leftmost leaf's are, so a leaf of the 8-wide tree copies one
+    /// run instead of walking its binary subtree again (a cache miss a
+    /// node: the nodes are 48 bytes, scattered by PLOC's levels).
+    ordered: Vec<u32>,
 }
 
 impl<'a> CollapseCosts<'a> {
@@ -119,14 +128,15 @@ impl<'a> CollapseCosts<'a> {
         let inner = bvh2.nodes.len() / 2;
         let root = &bvh2.nodes[0].aabb;
         let largest = root.min.abs().max(root.max.abs()).max_element();
-        let costs = Self {
+        let mut costs = Self {
             bvh2,
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
             cost: (0..inner).map(|_| Default::default()).collect(),
             counts: (0..inner).map(|_| AtomicU32::new(0)).collect(),
             choices: (0..inner).map(|_| AtomicU32::new(0)).collect(),
+            ordered: Vec::new(),
         };
-        costs.fill_tables(0, 0);
+        costs.ordered = costs.fill_tables(0, 0).concat();
         costs
     }
 
@@ -135,25 +145,42 @@ impl<'a> CollapseCosts<'a> {
     /// each subtree below in one post-order walk (which keeps a node's
     /// children's tables in cache when it reads them; filling level by
     /// level, in parallel, took three times as long on the dragon).
-    fn fill_tables(&self, i: usize, depth: u32) {
+    /// Returns the subtree's primitive ids in leaf order, in pieces (one
+    /// per walk) that the caller joins once.
+    fn fill_tables(&self, i: usize, depth: u32) -> Vec<Vec<u32>> {
         let node = &self.bvh2.nodes[i];
         if node.prim_count > 0 {
-            return;
+            return vec![self.leaf_prims(node).to_vec()];
         }
         if depth < PARALLEL_DEPTH {
             let (l, r) = children(node);
-            rayon::join(
+            let (mut left, right) = rayon::join(
                 || self.fill_tables(l, depth + 1),
                 || self.fill_tables(r, depth + 1),
             );
             self.store_table(i);
-            return;
+            left.extend(right);
+            return left;
         }
-        for n in post_order(self.bvh2, i) {
-            if self.bvh2.nodes[n as usize].prim_count == 0 {
+        let order = post_order(self.bvh2, i);
+        // A tree of n leaves has 2n - 1 nodes; leaves hold one primitive
+        // or more.
+        let mut prims = Vec::with_capacity(order.len().div_ceil(2));
+        for n in order {
+            let node = &self.bvh2.nodes[n as usize];
+            if node.prim_count == 0 {
                 self.store_table(n as usize);
+            } else {
+                prims.extend_from_slice(self.leaf_prims(node));
             }
         }
+        vec![prims]
+    }
+
+    /// The primitive ids of BVH2 leaf `node`.
+    fn leaf_prims(&self, node: &Bvh2Node) -> &[u32] {
+        let first = node.first_index as usize;
+        &self.bvh2.primitive_indices[first..first + node.prim_count as usize]
     }
 
     /// Computes and stores inner node `i`'s table from its children's.
@@ -283,12 +310,14 @@ impl<'a> CollapseCosts<'a> {
     /// share eight slots as the tables chose. Only the root can instead be
     /// its own only child, a leaf, when that is cheaper (a tree of a few
     /// primitives); any other node made a node is one the tables found
-    /// cheaper opened. `work` is scratch space.
-    fn node_children(&self, i: usize, out: &mut Vec<usize>, work: &mut Vec<(usize, usize)>) {
+    /// cheaper opened. Each child comes with where its primitives start
+    /// in [`CollapseCosts::ordered`], `i`'s being at `first`. `work` is
+    /// scratch space.
+    fn node_children(&self, i: usize, first: u32, out: &mut Vec<Child>, work: &mut Vec<Work>) {
         out.clear();
         let node = &self.bvh2.nodes[i];
         if node.prim_count > 0 {
-            out.push(i);
+            out.push((i, first));
             return;
         }
         // Only the root is tested here: any other node made a node was
@@ -297,59 +326,42 @@ impl<'a> CollapseCosts<'a> {
             let (l, r) = children(node);
             let split = split_costs(&self.table(l), &self.table(r))[8].0;
             if leaf_cost(self.area(i)) <= split {
-                out.push(i);
+                out.push((i, first));
                 return;
             }
         }
         let k = self.choices(node).open_split();
         let (l, r) = children(node);
-        self.distribute(l, k, out, work);
-        self.distribute(r, 8 - k, out, work);
+        self.distribute(l, k, first, out, work);
+        self.distribute(r, 8 - k, first + self.count(l), out, work);
     }
 
     /// The BVH2 nodes that fill at most `slots` children of one 8-wide
-    /// node for `i`'s subtree, following the choices the tables made.
+    /// node for `i`'s subtree (whose primitives start at `first`),
+    /// following the choices the tables made.
     fn distribute(
         &self,
         i: usize,
         slots: usize,
-        out: &mut Vec<usize>,
-        work: &mut Vec<(usize, usize)>,
+        first: u32,
+        out: &mut Vec<Child>,
+        work: &mut Vec<Work>,
     ) {
         work.clear();
-        work.push((i, slots));
-        while let Some((i, slots)) = work.pop() {
+        work.push((i, slots, first));
+        while let Some((i, slots, first)) = work.pop() {
             let node = &self.bvh2.nodes[i];
             if slots == 1 || node.prim_count > 0 {
-                out.push(i);
+                out.push((i, first));
                 continue;
             }
             match self.choices(node).split(slots) {
-                None => work.push((i, slots - 1)),
+                None => work.push((i, slots - 1, first)),
                 Some(k) => {
                     let (l, r) = children(node);
-                    work.push((r, slots - k));
-                    work.push((l, k));
+                    work.push((r, slots - k, first + self.count(l)));
+                    work.push((l, k, first));
                 }
-            }
-        }
-    }
-
-    /// The primitives under BVH2 node `i`, left to right, into `prims`.
-    fn gather_prims(&self, i: usize, prims: &mut Vec<u32>, stack: &mut Vec<usize>) {
-        prims.clear();
-        stack.clear();
-        stack.push(i);
-        while let Some(i) = stack.pop() {
-            let node = &self.bvh2.nodes[i];
-            if node.prim_count > 0 {
-                let s = node.first_index as usize;
-                prims.extend_from_slice(
-                    &self.bvh2.primitive_indices[s..s + node.prim_count as usize],
-                );
-            } else {
-                stack.push(node.first_index as usize + 1);
-                stack.push(node.first_index as usize);
             }
         }
     }
@@ -359,30 +371,29 @@ impl<'a> CollapseCosts<'a> {
     /// node here and its inner children's subtrees in parallel, appended
     /// after it in slot order; the rest is one sequential walk
     /// ([`CollapseCosts::emit_sequential`]).
-    fn emit(&self, src: usize, level: u32) -> Part {
+    fn emit(&self, src: usize, first: u32, level: u32) -> Part {
         if self.count(src) < PARALLEL_PRIMS || level >= PARALLEL_LEVELS {
-            return self.emit_sequential(src);
+            return self.emit_sequential(src, first);
         }
         let mut part = Part::default();
         let mut scratch = Scratch::default();
         part.nodes.push(Node8::EMPTY);
         part.depth = 1;
-        self.node_children(src, &mut scratch.children, &mut scratch.work);
+        self.node_children(src, first, &mut scratch.children, &mut scratch.work);
         let mut inner = Vec::with_capacity(8);
-        for slot in 0..scratch.children.len() {
-            let c = scratch.children[slot];
+        for (slot, &(c, first)) in scratch.children.iter().enumerate() {
             set_bounds(&mut part.nodes[0], slot, &self.bvh2.nodes[c].aabb);
             if self.is_leaf(c) {
-                part.nodes[0].child[slot] = self.place_leaf(c, &mut part, &mut scratch);
+                part.nodes[0].child[slot] = self.place_leaf(c, first, &mut part);
             } else {
-                inner.push((slot, c));
+                inner.push((slot, c, first));
             }
         }
         let subtrees: Vec<Part> = inner
             .par_iter()
-            .map(|&(_, c)| self.emit(c, level + 1))
+            .map(|&(_, c, first)| self.emit(c, first, level + 1))
             .collect();
-        for (&(slot, _), sub) in inner.iter().zip(subtrees) {
+        for (&(slot, _, _), sub) in inner.iter().zip(subtrees) {
             part.nodes[0].child[slot] = part.nodes.len() as u32;
             part.append(sub);
         }
@@ -391,25 +402,24 @@ impl<'a> CollapseCosts<'a> {
 
     /// [`CollapseCosts::emit`] in one walk: nodes are numbered in the order
     /// they are made, a node's inner children side by side.
-    fn emit_sequential(&self, src: usize) -> Part {
+    fn emit_sequential(&self, src: usize, first: u32) -> Part {
         let mut part = Part::default();
         let mut scratch = Scratch::default();
         part.nodes.push(Node8::EMPTY);
-        // Work list of (BVH2 node, Node8 to fill, depth): iterative, so
-        // degenerate deep trees cannot overflow the call stack.
-        let mut work = vec![(src, 0usize, 1u32)];
-        while let Some((src, dst, depth)) = work.pop() {
+        // Work list of (BVH2 node, Node8 to fill, depth, first primitive):
+        // iterative, so degenerate deep trees cannot overflow the call stack.
+        let mut work = vec![(src, 0usize, 1u32, first)];
+        while let Some((src, dst, depth, first)) = work.pop() {
             part.depth = part.depth.max(depth);
-            self.node_children(src, &mut scratch.children, &mut scratch.work);
-            for slot in 0..scratch.children.len() {
-                let c = scratch.children[slot];
+            self.node_children(src, first, &mut scratch.children, &mut scratch.work);
+            for (slot, &(c, first)) in scratch.children.iter().enumerate() {
                 set_bounds(&mut part.nodes[dst], slot, &self.bvh2.nodes[c].aabb);
                 part.nodes[dst].child[slot] = if self.is_leaf(c) {
-                    self.place_leaf(c, &mut part, &mut scratch)
+                    self.place_leaf(c, first, &mut part)
                 } else {
                     let new = part.nodes.len();
                     part.nodes.push(Node8::EMPTY);
-                    work.push((c, new, depth + 1));
+                    work.push((c, new, depth + 1, first));
                     new as u32
                 };
             }
@@ -418,23 +428,31 @@ impl<'a> CollapseCosts<'a> {
         part
     }
 
-    /// Packs the primitives under BVH2 node `c` as one leaf of `part`, and
-    /// returns its child reference.
-    fn place_leaf(&self, c: usize, part: &mut Part, scratch: &mut Scratch) -> u32 {
-        self.gather_prims(c, &mut scratch.prims, &mut scratch.stack);
-        let start = part.packer.place(&scratch.prims, &mut part.prim_ids);
-        encode_leaf(start, scratch.prims.len() as u32)
+    /// Packs the primitives under BVH2 node `c`, which start at `first`
+    /// in [`CollapseCosts::ordered`], as one leaf of `part`, and returns
+    /// its child reference.
+    fn place_leaf(&self, c: usize, first: u32, part: &mut Part) -> u32 {
+        let first = first as usize;
+        let prims = &self.ordered[first..first + self.count(c) as usize];
+        let start = part.packer.place(prims, &mut part.prim_ids);
+        encode_leaf(start, prims.len() as u32)
     }
 }
 
+/// A child of an 8-wide node in the making: a BVH2 node, and where its
+/// primitives start in [`CollapseCosts::ordered`].
+type Child = (usize, u32);
+
+/// A subtree waiting in [`CollapseCosts::distribute`]: a BVH2 node, the
+/// slots it may fill, and where its primitives start.
+type Work = (usize, usize, u32);
+
 /// Buffers the emission reuses from node to node, so that making a node
-/// or a leaf allocates nothing.
+/// allocates nothing.
 #[derive(Default)]
 struct Scratch {
-    children: Vec<usize>,
-    work: Vec<(usize, usize)>,
-    prims: Vec<u32>,
-    stack: Vec<usize>,
+    children: Vec<Child>,
+    work: Vec<Work>,
 }
 
 /// A subtree of the 8-wide tree: its nodes, the first its root, with
