@@ -287,6 +287,15 @@ mod tests {
         }
     }
 
+    /// `work` on a pool of exactly `threads` threads.
+    fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(work)
+    }
+
     /// Every leaf holds the primitives of its binary subtree: each
     /// primitive's box lies inside the box of the slot that holds it, and
     /// each is held once, for a preset whose tree is PLOC's (fastest) and
@@ -297,11 +306,7 @@ mod tests {
         let boxes = random_boxes(150_000, 8);
         for quality in [BuildQuality::Fastest, BuildQuality::High] {
             for threads in [1, 3] {
-                let bvh = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap()
-                    .install(|| Bvh8::build(&boxes, quality));
+                let bvh = on_threads(threads, || Bvh8::build(&boxes, quality));
                 let mut held = vec![0u32; boxes.len()];
                 for node in &bvh.nodes {
                     for slot in 0..8 {
@@ -360,13 +365,7 @@ mod tests {
         let boxes = random_boxes(200_000, 6);
         let bvh2 = binary_tree(&boxes, BuildQuality::Fastest);
         let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| Bvh8::collapse(&bvh2, bounds))
-        };
+        let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds));
         let (one, three) = (on(1), on(3));
         let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
         let (p, s) = (one.stats(), sequential.stats());
