@@ -350,14 +350,17 @@ def bench_scene(args, mi, dr, np, path, tmp):
     n, e = found
     # Mitsuba's load, timed like strata's whole process: the median of
     # --runs loads (the first, above, included), so that one slow load on
-    # this shared machine does not stand for Mitsuba.
-    loads = [load_s] + [load()[1] for _ in range(args.runs - 1)]
-    load_med = med(loads)
+    # this shared machine does not stand for Mitsuba. Each repeat load
+    # alternates with one strata run, so both see the same machine.
+    loads = [load_s]
     walls, renders = [], []
     for k in range(args.runs):
+        if k > 0:
+            loads.append(load()[1])
         wall, render_s, _ = run_strata(args, path, n, "stratified", os.path.join(tmp, f"{name}-strat.exr"))
         walls.append(wall)
         renders.append(render_s)
+    load_med = med(loads)
     mitsuba_total = load_med + med(m_times)
     print(f"  equal RMSE: strata stratified at {n} spp: RMSE {e:.5f} <= mitsuba's {m_rmse:.5f} at {spp} spp "
           f"(means over {RMSE_SEEDS} seeds and {args.runs} runs)")
