@@ -134,7 +134,7 @@ fn an_existing_checkpoint_is_never_discarded_and_can_be_previewed() {
     let full = SliceSpec::WHOLE.samples(scene.settings.spp);
     let header = PartialHeader::for_scene(&scene, SliceSpec::WHOLE, full.clone());
     let opts = RenderOptions {
-        passes: 2,
+        passes: Some(2),
         ..RenderOptions::default()
     };
     render(&scene, &opts, None, |film, done| {

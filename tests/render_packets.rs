@@ -115,7 +115,7 @@ material = "glass"
 fn film(scene: &Scene, packets: PacketMode, threads: usize, passes: u32, slice: SliceSpec) -> Film {
     let opts = RenderOptions {
         threads,
-        passes,
+        passes: Some(passes),
         slice,
         packets,
         ..RenderOptions::default()

@@ -52,10 +52,11 @@ pub struct RenderArgs {
     #[arg(long, requires = "resume")]
     pub force: bool,
     /// Progressive passes (each a progress tick and a checkpoint); capped by
-    /// the sample count.
-    #[arg(long, default_value_t = strata::render::schedule::DEFAULT_PASSES,
-          value_parser = clap::value_parser!(u32).range(1..))]
-    pub passes: u32,
+    /// the sample count. Default: up to 16, each with at least 8 samples
+    /// per pixel, since a pixel's samples are traced and lit in batches of
+    /// 8 within a pass (fewer per pass is slower, never a different image).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub passes: Option<u32>,
     /// slices: work stealing over sample slices of pixel batches; regions: one
     /// static band of rows per thread, a baseline for `strata scaling`.
     #[arg(long, default_value = "slices")]

@@ -117,7 +117,7 @@ pub fn measure(
             let s = configured(scene, method, spp);
             let opts = RenderOptions {
                 threads,
-                passes: 1,
+                passes: Some(1),
                 ..RenderOptions::default()
             };
             let mut times = Vec::new();

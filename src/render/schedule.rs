@@ -24,8 +24,19 @@ use std::time::Instant;
 
 /// Pixels per work item: small enough that 64 threads stay busy on small images.
 pub const BATCH: usize = 64;
-/// Passes per render when the sample count allows (each is a progress tick and a checkpoint).
+/// Most passes a render is split into by default (each pass is a progress
+/// tick and a checkpoint).
 pub const DEFAULT_PASSES: u32 = 16;
+
+/// Passes for `samples` samples per pixel when none are asked for: up to
+/// [`DEFAULT_PASSES`], each with at least [`PACKET_SIZE`] samples per
+/// pixel. A pixel's samples are shaded in batches within a pass, and a
+/// pass of one sample per pixel would trace every camera ray alone and
+/// light every hit alone (on the 871k-triangle dragon at 16 spp, 16
+/// passes rendered in 0.57 s, 2 passes in 0.35 s; docs/performance.md).
+pub fn default_passes(samples: u32) -> u32 {
+    (samples / PACKET_SIZE as u32).clamp(1, DEFAULT_PASSES)
+}
 
 crate::mode::mode_enum! {
     /// How work is split over threads: `slices` (work stealing over pixel
@@ -85,8 +96,9 @@ pub struct RenderOptions {
     pub slice: SliceSpec,
     pub schedule: Schedule,
     pub quiet: bool,
-    /// Passes to split this process's samples into (capped by the sample count).
-    pub passes: u32,
+    /// Passes to split this process's samples into (capped by the sample
+    /// count); `None` for [`default_passes`].
+    pub passes: Option<u32>,
     /// Sample indices already rendered (from a checkpoint), skipped.
     pub resume_from: Option<u32>,
     /// Trace coherent batches (camera rays, shadow rays to one light) as
@@ -105,7 +117,7 @@ impl Default for RenderOptions {
             slice: SliceSpec::WHOLE,
             schedule: Schedule::Slices,
             quiet: true,
-            passes: DEFAULT_PASSES,
+            passes: None,
             resume_from: None,
             packets: PacketMode::Auto,
             window: None,
@@ -170,7 +182,10 @@ pub fn render(
         .resume_from
         .unwrap_or(full.start)
         .clamp(full.start, full.end);
-    let passes = pass_ranges(start_sample..full.end, opts.passes);
+    let passes = opts
+        .passes
+        .unwrap_or_else(|| default_passes(full.end - full.start));
+    let passes = pass_ranges(start_sample..full.end, passes);
     let n = film.pixel_count();
     let batches = n.div_ceil(BATCH) as u64;
     let bar = progress::bar(batches * passes.len() as u64, opts.quiet, "render");
