@@ -43,6 +43,7 @@
 
 use crate::math::Frame;
 use crate::sampling::spherical_rect::SphericalRect;
+use crate::sampling::spherical_rect8::{mask_lanes, SphericalRects, LANES};
 use crate::sampling::warp::{concentric_disk, uniform_cone, uniform_sphere};
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;
@@ -275,6 +276,116 @@ impl Light {
                 radius, radiance, ..
             } => 4.0 * PI * PI * radius * radius * radiance,
         }
+    }
+}
+
+impl Light {
+    /// The light as seen from up to eight points at once, `points[i]` for
+    /// the lanes `i` of `active` (the hit points of one batch of camera
+    /// samples): [`Light::seen_from`] per lane, with a rect light's
+    /// spherical rectangles built in SIMD lanes. Lane `i`'s samples are
+    /// exactly those of `self.seen_from(points[i], method)`.
+    pub fn seen_from_lanes(
+        &self,
+        points: &[Vec3; LANES],
+        active: u32,
+        method: LightSampling,
+    ) -> LightLanes<'_> {
+        if active.count_ones() == 1 {
+            // One point (a reflected ray's hit, a one-sample pass): the
+            // scalar code, which each lane equals, without the lanes' cost.
+            let lane = active.trailing_zeros() as usize;
+            return LightLanes::One {
+                lane,
+                seen: self.seen_from(points[lane], method),
+            };
+        }
+        if let Light::Rect { rect, radiance, .. } = self {
+            if method == LightSampling::SolidAngle && rect.is_rectangle() {
+                let rects =
+                    SphericalRects::new(points, active, rect.corner, rect.edge_u, rect.edge_v);
+                return LightLanes::Rects {
+                    light: self,
+                    points: *points,
+                    weight: std::array::from_fn(|i| *radiance * rects.solid_angle(i)),
+                    normal: rect.normal,
+                    rects,
+                };
+            }
+        }
+        LightLanes::Each {
+            light: self,
+            points: *points,
+            method,
+        }
+    }
+}
+
+/// A light seen from up to eight shading points (see
+/// [`Light::seen_from_lanes`]).
+// One lives on the stack per light and batch; boxing the large variant
+// would allocate there instead.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy)]
+pub enum LightLanes<'l> {
+    /// A single point, seen as [`Light::seen_from`] sees it.
+    One { lane: usize, seen: LightFrom<'l> },
+    /// A rect light sampled by solid angle: its spherical rectangles, its
+    /// normal, and radiance times each lane's solid angle.
+    Rects {
+        light: &'l Light,
+        points: [Vec3; LANES],
+        rects: SphericalRects,
+        normal: Vec3,
+        weight: [Vec3; LANES],
+    },
+    /// Any other light or method: each sample does all its work.
+    Each {
+        light: &'l Light,
+        points: [Vec3; LANES],
+        method: LightSampling,
+    },
+}
+
+impl LightLanes<'_> {
+    /// One sample per lane of `active`, lane `i` with `u[i]` uniform in
+    /// [0,1)²: exactly [`LightFrom::sample`] of that lane's point.
+    pub fn sample(&self, active: u32, u: &[Vec2; LANES]) -> [Option<LightSample>; LANES] {
+        let mut out = [None; LANES];
+        match self {
+            LightLanes::One { lane, seen } => {
+                if active >> lane & 1 != 0 {
+                    out[*lane] = seen.sample(u[*lane]);
+                }
+            }
+            LightLanes::Rects {
+                light,
+                points,
+                rects,
+                normal,
+                weight,
+            } => {
+                let q = rects.sample(active, u);
+                for i in mask_lanes(active) {
+                    out[i] = if rects.valid() >> i & 1 != 0 {
+                        towards(points[i], q[i], *normal, weight[i], None)
+                    } else {
+                        // The point is (nearly) in the light's plane: sample by area.
+                        light.sample_from(points[i], u[i], LightSampling::Area)
+                    };
+                }
+            }
+            LightLanes::Each {
+                light,
+                points,
+                method,
+            } => {
+                for i in mask_lanes(active) {
+                    out[i] = light.sample_from(points[i], u[i], *method);
+                }
+            }
+        }
+        out
     }
 }
 

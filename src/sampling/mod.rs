@@ -13,6 +13,7 @@ pub mod cmj;
 pub mod hash;
 pub mod sampler;
 pub mod spherical_rect;
+pub mod spherical_rect8;
 pub mod stream;
 pub mod warp;
 

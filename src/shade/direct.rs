@@ -1,30 +1,59 @@
 //! Direct light: one shadow ray per delta light and `shadow_samples`
 //! stratified samples per area light, each weighted by the Phong BRDF.
+//!
+//! The hit points of one batch of camera samples are lit together, one
+//! SIMD lane each ([`Light::seen_from_lanes`]): building and sampling a
+//! rect light's spherical rectangle is a chain of dependent divisions and
+//! square roots, and eight lanes run eight chains at once. Every lane's
+//! numbers are exactly those of lighting its point alone.
+//!
+//! [`Light::seen_from_lanes`]: crate::light::Light::seen_from_lanes
 
 use super::bsdf::phong_brdf;
-use super::integrator::Shading;
+use super::integrator::{ShadeLane, Shading};
 use super::packets::SHADOW_PACKET_MIN;
-use super::{Integrator, SampleContext};
+use super::Integrator;
 use crate::accel::PACKET_SIZE;
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
+use crate::sampling::spherical_rect8::{mask_lanes, LANES};
 use crate::sampling::Dim;
 use glam::{Vec2, Vec3};
 
+// A batch of camera samples is one lane of light sampling per sample.
+const _: () = assert!(PACKET_SIZE == LANES);
+
 impl Integrator<'_> {
-    /// Phong direct lighting: one shadow ray per delta light, M stratified
-    /// samples per area light.
-    pub(super) fn direct_light(&mut self, ctx: &SampleContext, depth: u32, sh: &Shading) -> Vec3 {
-        let m = sh.material;
-        let diffuse = sh.diffuse.max_element() > 0.0;
-        let specular = m.has_specular_lobe();
-        if !diffuse && !specular {
-            return Vec3::ZERO;
+    /// Phong direct lighting at each lane's hit (`shadings[i]` for
+    /// `lanes[i]`; `None` where the ray hit nothing): one shadow ray per
+    /// delta light, M stratified samples per area light.
+    pub(super) fn direct_light(
+        &mut self,
+        depth: u32,
+        lanes: &[ShadeLane],
+        shadings: &[Option<Shading>],
+    ) -> [Vec3; LANES] {
+        let mut l = [Vec3::ZERO; LANES];
+        // The lanes whose material has a lobe that direct light reaches.
+        let mut lit = 0u32;
+        let mut lobes = [(false, false); LANES];
+        let mut points = [Vec3::ZERO; LANES];
+        for (i, sh) in shadings.iter().enumerate().take(lanes.len()) {
+            let Some(sh) = sh else { continue };
+            let diffuse = sh.diffuse.max_element() > 0.0;
+            let specular = sh.material.has_specular_lobe();
+            if diffuse || specular {
+                lit |= 1 << i;
+                lobes[i] = (diffuse, specular);
+                points[i] = sh.surface.p;
+            }
+        }
+        if lit == 0 {
+            return l;
         }
         let scene = self.scene;
-        let s = sh.surface;
         let method = scene.settings.light_sampling;
-        let mut l = Vec3::ZERO;
+        let shading = |i: usize| shadings[i].as_ref().expect("a lit lane has a hit");
         for (light_index, light) in scene.lights.iter().enumerate() {
             let m_samples = if light.is_area() {
                 scene.settings.shadow_samples
@@ -33,70 +62,99 @@ impl Integrator<'_> {
             };
             // A light all of whose samples would be rejected below is
             // skipped whole (same image: the draws are counter-based).
-            if light.hidden_from(s.p, sh.ng) {
+            let mut active = 0u32;
+            for i in mask_lanes(lit) {
+                if !light.hidden_from(points[i], shading(i).ng) {
+                    active |= 1 << i;
+                }
+            }
+            if active == 0 {
                 continue;
             }
             let dim = Dim::light(depth, light_index as u32);
             let except = light.prim().unwrap_or(u32::MAX);
-            // Where a batch may be traced as a packet, shadow rays wait in
-            // `batch` and are traced PACKET_SIZE at a time; else each is
-            // traced at once. Contributions are added in sample order either way.
+            // Where a batch may be traced as a packet, each lane's shadow
+            // rays wait in its `batches` slot and are traced PACKET_SIZE at
+            // a time; else each is traced at once. Contributions are added
+            // in sample order either way.
             let full = (m_samples as usize).min(PACKET_SIZE);
-            let mut batch = self
+            let mut batches = self
                 .packets
                 .use_packet(full, SHADOW_PACKET_MIN)
-                .then(ShadowBatch::default);
-            let mut sum = Vec3::ZERO;
-            // What every sample of this light from this point shares (the
-            // spherical rectangle of a rect light), built once.
-            let seen = light.seen_from(s.p, method);
+                .then(|| std::array::from_fn::<ShadowBatch, LANES, _>(|_| ShadowBatch::default()));
+            let mut sum = [Vec3::ZERO; LANES];
+            // What every sample of this light from a point shares (a rect
+            // light's spherical rectangle), built once per lane.
+            let seen = light.seen_from_lanes(&points, active, method);
+            let mut u = [Vec2::ZERO; LANES];
             for j in 0..m_samples {
-                let u = if light.is_area() {
-                    ctx.sampler
-                        .get_2d(dim, ctx.index() * m_samples + j, ctx.count() * m_samples)
-                } else {
-                    Vec2::ZERO
-                };
-                let Some(ls) = seen.sample(u) else {
-                    continue;
-                };
-                let cos_i = sh.ns.dot(ls.wi);
-                // Both normals must agree that the light is in front, or shading normals leak light.
-                if cos_i <= 0.0 || sh.ng.dot(ls.wi) <= 0.0 {
-                    continue;
-                }
-                let f = phong_brdf(m, sh.diffuse, sh.wo, ls.wi, sh.ns, diffuse, specular);
-                if f.max_element() <= 0.0 {
-                    continue;
-                }
-                self.counts.shadow += 1;
-                let origin = spawn_origin(s.p, s.p_error, sh.ng, ls.wi);
-                let tmax = if ls.distance.is_finite() {
-                    (ls.distance - (origin - s.p).length()).max(0.0)
-                } else {
-                    f32::INFINITY
-                };
-                let shadow = Ray::segment(origin, ls.wi, tmax);
-                match &mut batch {
-                    Some(b) => {
-                        b.rays[b.len] = shadow;
-                        b.contribution[b.len] = f * ls.weight * cos_i;
-                        b.len += 1;
-                        if b.len == PACKET_SIZE {
-                            self.flush_shadows(b, except, &mut sum);
-                        }
+                if light.is_area() {
+                    for i in mask_lanes(active) {
+                        let ctx = lanes[i].ctx;
+                        u[i] = ctx.sampler.get_2d(
+                            dim,
+                            ctx.index() * m_samples + j,
+                            ctx.count() * m_samples,
+                        );
                     }
-                    None => {
-                        if !scene.geometry.occluded_except(&shadow, except) {
-                            sum += f * ls.weight * cos_i;
+                }
+                let samples = seen.sample(active, &u);
+                for i in mask_lanes(active) {
+                    let Some(ls) = samples[i] else {
+                        continue;
+                    };
+                    let sh = shading(i);
+                    let s = sh.surface;
+                    let cos_i = sh.ns.dot(ls.wi);
+                    // Both normals must agree that the light is in front, or shading normals leak light.
+                    if cos_i <= 0.0 || sh.ng.dot(ls.wi) <= 0.0 {
+                        continue;
+                    }
+                    let (diffuse, specular) = lobes[i];
+                    let f = phong_brdf(
+                        sh.material,
+                        sh.diffuse,
+                        sh.wo,
+                        ls.wi,
+                        sh.ns,
+                        diffuse,
+                        specular,
+                    );
+                    if f.max_element() <= 0.0 {
+                        continue;
+                    }
+                    self.counts.shadow += 1;
+                    let origin = spawn_origin(s.p, s.p_error, sh.ng, ls.wi);
+                    let tmax = if ls.distance.is_finite() {
+                        (ls.distance - (origin - s.p).length()).max(0.0)
+                    } else {
+                        f32::INFINITY
+                    };
+                    let shadow = Ray::segment(origin, ls.wi, tmax);
+                    match &mut batches {
+                        Some(b) => {
+                            let b = &mut b[i];
+                            b.rays[b.len] = shadow;
+                            b.contribution[b.len] = f * ls.weight * cos_i;
+                            b.len += 1;
+                            if b.len == PACKET_SIZE {
+                                self.flush_shadows(b, except, &mut sum[i]);
+                            }
+                        }
+                        None => {
+                            if !scene.geometry.occluded_except(&shadow, except) {
+                                sum[i] += f * ls.weight * cos_i;
+                            }
                         }
                     }
                 }
             }
-            if let Some(b) = &mut batch {
-                self.flush_shadows(b, except, &mut sum);
+            for i in mask_lanes(active) {
+                if let Some(b) = &mut batches {
+                    self.flush_shadows(&mut b[i], except, &mut sum[i]);
+                }
+                l[i] += sum[i] / m_samples as f32;
             }
-            l += sum / m_samples as f32;
         }
         l
     }

@@ -27,6 +27,35 @@ pub(super) struct Shading<'s> {
     pub(super) entering: bool,
 }
 
+impl<'s> Shading<'s> {
+    /// The hit `surface` of `ray`, with its material and its normals faced
+    /// towards the viewer.
+    fn new(scene: &'s Scene, surface: &'s Surface, ray: &Ray) -> Self {
+        let material = &scene.materials[surface.material as usize];
+        let wo = -ray.direction.normalize();
+        let entering = surface.geometric_normal.dot(wo) >= 0.0;
+        let (ng, ns) = if entering {
+            (surface.geometric_normal, surface.shading_normal)
+        } else {
+            (-surface.geometric_normal, -surface.shading_normal)
+        };
+        // One texture lookup per hit, and none on untextured surfaces.
+        let diffuse = match (material.diffuse_texture, surface.uv) {
+            (Some(texture), Some(uv)) => material.diffuse * scene.textures.sample(texture, uv),
+            _ => material.diffuse,
+        };
+        Self {
+            surface,
+            material,
+            diffuse,
+            wo,
+            ng,
+            ns,
+            entering,
+        }
+    }
+}
+
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
     pub counts: RayCounts,
@@ -34,9 +63,18 @@ pub struct Integrator<'a> {
     pub packets: PacketMode,
     /// When set, every path vertex is recorded (slow; for debugging one sample).
     pub trace: Option<Vec<PathEvent>>,
-    /// The first hit of the camera ray being shaded, recorded only while a
-    /// caller of [`Integrator::camera_batch`] asks for them (AOVs).
-    first_hit: Option<FirstHit>,
+}
+
+/// One ray to shade, with its closest hit: a lane of [`Integrator::shade`].
+#[derive(Clone, Copy)]
+pub(super) struct ShadeLane<'c> {
+    pub(super) ctx: &'c SampleContext,
+    ray: Ray,
+    hit: Option<PrimHit>,
+    /// The path's weight so far.
+    weight: f32,
+    /// Where [`Integrator::begin_record`] put this ray's event.
+    slot: usize,
 }
 
 impl<'a> Integrator<'a> {
@@ -46,7 +84,6 @@ impl<'a> Integrator<'a> {
             counts: RayCounts::default(),
             packets: PacketMode::Auto,
             trace: None,
-            first_hit: None,
         }
     }
 
@@ -72,16 +109,17 @@ impl Integrator<'_> {
 
     /// Radiance of one camera sample at film position `film`.
     pub fn camera_sample(&mut self, ctx: &SampleContext, film: Vec2) -> Vec3 {
-        let ray = self.camera_ray(ctx, film);
-        self.counts.camera += 1;
-        self.radiance(ctx, &ray, 0, 1.0, "camera")
+        let mut out = [Vec3::ZERO];
+        self.camera_batch(&[CameraSample { ctx: *ctx, film }], &mut out, None);
+        out[0]
     }
 
     /// Radiance of up to [`PACKET_SIZE`] camera samples, `out[i]` for
     /// `batch[i]`: exactly what [`Integrator::camera_sample`] returns for
     /// each, with the primary rays traced together as a packet when
-    /// `self.packets` says so. Samples are shaded in batch order. With
-    /// `first`, `first[i]` receives what sample `i`'s camera ray hit.
+    /// `self.packets` says so, and the hits shaded together (their light
+    /// samples in SIMD lanes). With `first`, `first[i]` receives what
+    /// sample `i`'s camera ray hit.
     pub fn camera_batch(
         &mut self,
         batch: &[CameraSample],
@@ -90,18 +128,23 @@ impl Integrator<'_> {
     ) {
         let n = batch.len();
         assert!(n <= PACKET_SIZE && out.len() >= n);
-        let recording = first.is_some();
-        let mut record = |i: usize, hit: Option<FirstHit>| {
-            if let (Some(first), Some(hit)) = (first.as_deref_mut(), hit) {
-                first[i] = hit;
+        if n == 0 {
+            return;
+        }
+        if self.trace.is_some() && n > 1 {
+            // A replay records each path's vertices in pre-order, one
+            // sample after the other.
+            for i in 0..n {
+                let first_i = first.as_deref_mut().map(|f| &mut f[i..=i]);
+                self.camera_batch(&batch[i..=i], &mut out[i..=i], first_i);
             }
-        };
-        if !self.packets.use_packet(n, CAMERA_PACKET_MIN) {
-            for (i, (o, s)) in out.iter_mut().zip(batch).enumerate() {
-                self.first_hit = recording.then_some(FirstHit::MISS);
-                *o = self.camera_sample(&s.ctx, s.film);
-                record(i, self.first_hit.take());
-            }
+            return;
+        }
+        if n == 1 {
+            // One sample: shaded as one lane, without a batch's arrays.
+            let ray = self.camera_ray(&batch[0].ctx, batch[0].film);
+            self.counts.camera += 1;
+            out[0] = self.trace_and_shade(&batch[0].ctx, &ray, 0, 1.0, "camera", first);
             return;
         }
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE];
@@ -110,14 +153,29 @@ impl Integrator<'_> {
         }
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];
-        self.scene.geometry.intersect_packet(rays, &mut hits[..n]);
-        self.counts.camera += n as u64;
-        for i in 0..n {
-            let slot = self.begin_record(0, "camera", &rays[i]);
-            self.first_hit = recording.then_some(FirstHit::MISS);
-            out[i] = self.shade(&batch[i].ctx, &rays[i], hits[i], 0, 1.0, slot);
-            record(i, self.first_hit.take());
+        if self.packets.use_packet(n, CAMERA_PACKET_MIN) {
+            self.scene.geometry.intersect_packet(rays, &mut hits[..n]);
+        } else {
+            for (h, r) in hits.iter_mut().zip(rays) {
+                *h = self.scene.geometry.intersect(r);
+            }
         }
+        self.counts.camera += n as u64;
+        // (Lanes past `n` repeat the last one, unused.)
+        let mut lanes: [_; PACKET_SIZE] = std::array::from_fn(|i| {
+            let i = i.min(n - 1);
+            ShadeLane {
+                ctx: &batch[i].ctx,
+                ray: rays[i],
+                hit: hits[i],
+                weight: 1.0,
+                slot: usize::MAX,
+            }
+        });
+        for lane in &mut lanes[..n] {
+            lane.slot = self.begin_record(0, "camera", &lane.ray);
+        }
+        self.shade::<PACKET_SIZE>(0, &lanes[..n], out, first);
     }
 
     /// Radiance arriving along `ray` at path depth `depth`.
@@ -129,72 +187,88 @@ impl Integrator<'_> {
         weight: f32,
         kind: &'static str,
     ) -> Vec3 {
-        let slot = self.begin_record(depth, kind, ray);
-        let hit = self.scene.geometry.intersect(ray);
-        self.shade(ctx, ray, hit, depth, weight, slot)
+        self.trace_and_shade(ctx, ray, depth, weight, kind, None)
     }
 
-    /// Radiance arriving along `ray`, given its closest hit (traced by the
-    /// caller, alone or in a packet); `slot` is its [`Integrator::begin_record`].
-    fn shade(
+    /// [`Integrator::radiance`], and at depth 0, with `first`, what the
+    /// ray hit into `first[0]`.
+    fn trace_and_shade(
         &mut self,
         ctx: &SampleContext,
         ray: &Ray,
-        hit: Option<PrimHit>,
         depth: u32,
         weight: f32,
-        slot: usize,
+        kind: &'static str,
+        first: Option<&mut [FirstHit]>,
     ) -> Vec3 {
+        let slot = self.begin_record(depth, kind, ray);
+        let hit = self.scene.geometry.intersect(ray);
+        let lane = ShadeLane {
+            ctx,
+            ray: *ray,
+            hit,
+            weight,
+            slot,
+        };
+        let mut out = [Vec3::ZERO];
+        self.shade::<1>(depth, &[lane], &mut out, first);
+        out[0]
+    }
+
+    /// Radiance arriving along each lane's ray at path depth `depth`,
+    /// given its closest hit (traced by the caller, alone or in a packet),
+    /// into `out`; at depth 0, with `first`, what each ray hit first.
+    /// The lanes' direct light is computed together; each lane's result
+    /// is exactly what shading it alone gives. `N` bounds the lanes: the
+    /// per-lane arrays are that long, so one ray pays for one lane.
+    fn shade<const N: usize>(
+        &mut self,
+        depth: u32,
+        lanes: &[ShadeLane],
+        out: &mut [Vec3],
+        first: Option<&mut [FirstHit]>,
+    ) {
         let scene = self.scene;
-        let Some(hit) = hit else {
-            self.finish_record(slot, None, scene.settings.background);
-            return scene.settings.background;
-        };
-        let surface = scene.geometry.surface(ray, &hit);
-        let material = &scene.materials[surface.material as usize];
-        let wo = -ray.direction.normalize();
-        // Face the normals towards the viewer.
-        let entering = surface.geometric_normal.dot(wo) >= 0.0;
-        let (ng, ns) = if entering {
-            (surface.geometric_normal, surface.shading_normal)
-        } else {
-            (-surface.geometric_normal, -surface.shading_normal)
-        };
-        // One texture lookup per hit, and none on untextured surfaces.
-        let diffuse = match (material.diffuse_texture, surface.uv) {
-            (Some(texture), Some(uv)) => material.diffuse * scene.textures.sample(texture, uv),
-            _ => material.diffuse,
-        };
-        let sh = Shading {
-            surface: &surface,
-            material,
-            diffuse,
-            wo,
-            ng,
-            ns,
-            entering,
-        };
-        if depth == 0 {
-            if let Some(first) = &mut self.first_hit {
-                *first = FirstHit {
-                    albedo: diffuse,
-                    normal: surface.shading_normal,
-                    depth: hit.t * ray.direction.length(),
+        let surfaces: [Option<Surface>; N] = std::array::from_fn(|i| {
+            let lane = lanes.get(i)?;
+            Some(scene.geometry.surface(&lane.ray, &lane.hit?))
+        });
+        let shadings: [Option<Shading>; N] = std::array::from_fn(|i| {
+            let surface = surfaces[i].as_ref()?;
+            Some(Shading::new(scene, surface, &lanes[i].ray))
+        });
+        if let Some(first) = first.filter(|_| depth == 0) {
+            for (i, lane) in lanes.iter().enumerate() {
+                first[i] = match (&shadings[i], lane.hit) {
+                    (Some(sh), Some(hit)) => FirstHit {
+                        albedo: sh.diffuse,
+                        normal: sh.surface.shading_normal,
+                        depth: hit.t * lane.ray.direction.length(),
+                    },
+                    _ => FirstHit::MISS,
                 };
             }
         }
-
-        let mut l = if entering || !material.one_sided {
-            material.emission
-        } else {
-            Vec3::ZERO
-        };
-        l += self.direct_light(ctx, depth, &sh);
-        if depth < scene.settings.max_depth {
-            l += self.specular_transport(ctx, &sh, depth, weight);
+        let direct = self.direct_light(depth, lanes, &shadings);
+        for (i, lane) in lanes.iter().enumerate() {
+            let (Some(sh), Some(hit)) = (&shadings[i], lane.hit) else {
+                self.finish_record(lane.slot, None, scene.settings.background);
+                out[i] = scene.settings.background;
+                continue;
+            };
+            let material = sh.material;
+            let mut l = if sh.entering || !material.one_sided {
+                material.emission
+            } else {
+                Vec3::ZERO
+            };
+            l += direct[i];
+            if depth < scene.settings.max_depth {
+                l += self.specular_transport(lane.ctx, sh, depth, lane.weight);
+            }
+            self.finish_record(lane.slot, Some((hit.t, hit.prim, sh.surface.p)), l);
+            out[i] = l;
         }
-        self.finish_record(slot, Some((hit.t, hit.prim, surface.p)), l);
-        l
     }
 
     /// Path vertices are recorded in pre-order (a parent before its
