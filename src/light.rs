@@ -165,28 +165,41 @@ impl Light {
     /// hit's shadow samples does only the per-sample work. The samples are
     /// exactly those of [`Light::sample`].
     pub fn seen_from(&self, p: Vec3, method: LightSampling) -> LightFrom<'_> {
-        if let Light::Rect { rect, radiance, .. } = self {
-            if method == LightSampling::SolidAngle && rect.is_rectangle() {
-                if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
-                    return LightFrom::SphericalRect {
-                        p,
-                        rect: s,
-                        normal: rect.normal,
-                        weight: *radiance * s.solid_angle,
-                    };
-                }
-                // The point is (nearly) in the light's plane: sample by area.
-                return LightFrom::Light {
-                    light: self,
+        if let Some((rect, radiance)) = self.solid_angle_rect(method) {
+            if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
+                return LightFrom::SphericalRect {
                     p,
-                    method: LightSampling::Area,
+                    rect: s,
+                    normal: rect.normal,
+                    weight: radiance * s.solid_angle,
                 };
             }
+            // The point is (nearly) in the light's plane: sample by area.
+            return LightFrom::Light {
+                light: self,
+                p,
+                method: LightSampling::Area,
+            };
         }
         LightFrom::Light {
             light: self,
             p,
             method,
+        }
+    }
+
+    /// The rect light and its radiance, where `method` samples it by the
+    /// solid angle of its spherical rectangle (which needs perpendicular
+    /// edges; a parallelogram is sampled by area). One decision for
+    /// [`Light::seen_from`] and [`Light::seen_from_lanes`].
+    fn solid_angle_rect(&self, method: LightSampling) -> Option<(&Rect, Vec3)> {
+        match self {
+            Light::Rect { rect, radiance, .. }
+                if method == LightSampling::SolidAngle && rect.is_rectangle() =>
+            {
+                Some((rect, *radiance))
+            }
+            _ => None,
         }
     }
 
@@ -300,18 +313,15 @@ impl Light {
                 seen: self.seen_from(points[lane], method),
             };
         }
-        if let Light::Rect { rect, radiance, .. } = self {
-            if method == LightSampling::SolidAngle && rect.is_rectangle() {
-                let rects =
-                    SphericalRects::new(points, active, rect.corner, rect.edge_u, rect.edge_v);
-                return LightLanes::Rects {
-                    light: self,
-                    points: *points,
-                    weight: std::array::from_fn(|i| *radiance * rects.solid_angle(i)),
-                    normal: rect.normal,
-                    rects,
-                };
-            }
+        if let Some((rect, radiance)) = self.solid_angle_rect(method) {
+            let rects = SphericalRects::new(points, active, rect.corner, rect.edge_u, rect.edge_v);
+            return LightLanes::Rects {
+                light: self,
+                points: *points,
+                weight: std::array::from_fn(|i| radiance * rects.solid_angle(i)),
+                normal: rect.normal,
+                rects,
+            };
         }
         LightLanes::Each {
             light: self,
