@@ -126,10 +126,11 @@ fn film(scene: &Scene, packets: PacketMode, threads: usize, passes: u32, slice: 
 #[test]
 fn packets_on_off_and_auto_render_the_same_film() {
     let base = busy_scene("films");
-    // Shadow batches of 1, 3, 5 and 8 rays and two of 8 + 3; one sample per
-    // pixel per pass (batches span pixels), three, and all twelve at once.
-    // The passes also change how many hits are lit together in SIMD lanes
-    // (one, three, eight and four), which must not change the film either.
+    // One to eleven shadow samples per hit; one sample per pixel per pass,
+    // three, and all twelve at once. The passes change how many hits are
+    // lit together in SIMD lanes, and so how many shadow rays travel in
+    // one wave (one, three, eight and four), which must not change the
+    // film either.
     for shadow_samples in [1, 3, 5, 8, 11] {
         let mut scene = base.clone();
         scene.settings.shadow_samples = shadow_samples;
@@ -227,8 +228,9 @@ fn the_cli_renders_identical_images_with_packets_on_and_off() {
 //   cargo test --release --test render_packets -- --ignored --nocapture
 //
 // Batches are built as the renderer builds them: the camera rays of one
-// pixel (8 pixel and lens samples), and the shadow rays from one camera
-// hit to a rect light (8 stratified samples that pass the cosine test);
+// pixel (8 pixel and lens samples), and a wave of shadow rays to a rect
+// light, one from each of those 8 rays' hits (where all 8 hit and pass
+// the cosine test);
 // for comparison also "row" batches, one sample of each of 8 neighbouring
 // pixels. For n = 1..8 the first n rays of every batch are traced one by
 // one and as one packet, alternately, 15 times; the medians of this
@@ -281,7 +283,7 @@ mesh = "{mesh}"
 }
 
 /// Pixel batches, row batches and (if the first light is an area light)
-/// full shadow batches.
+/// full shadow waves.
 fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
     let s = &scene.settings;
     let light = &scene.lights[0];
@@ -299,19 +301,23 @@ fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
             if x % n == 0 && x + n <= s.width {
                 row.push((0..n).map(|k| camera_ray(x + k, y, 0)).collect());
             }
-            // Shadow rays from the first sample's hit, as direct_light makes them.
-            if let (true, Some(hit)) = (light.is_area(), scene.geometry.intersect(&rays[0])) {
-                let sf = scene.geometry.surface(&rays[0], &hit);
-                let wo = -rays[0].direction.normalize();
-                let ng = if sf.geometric_normal.dot(wo) >= 0.0 {
-                    sf.geometric_normal
-                } else {
-                    -sf.geometric_normal
-                };
+            // One shadow ray from each sample's hit, as direct_light makes
+            // a wave of them (one light sample per camera sample).
+            if light.is_area() {
                 let sampler = PixelSampler::new(s.sampler, s.seed, y * s.width + x);
-                let sh: Vec<Ray> = (0..n)
-                    .filter_map(|j| {
-                        let u = sampler.get_2d(Dim::light(0, 0), j, n);
+                let wave: Vec<Ray> = rays
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, ray)| {
+                        let hit = scene.geometry.intersect(ray)?;
+                        let sf = scene.geometry.surface(ray, &hit);
+                        let wo = -ray.direction.normalize();
+                        let ng = if sf.geometric_normal.dot(wo) >= 0.0 {
+                            sf.geometric_normal
+                        } else {
+                            -sf.geometric_normal
+                        };
+                        let u = sampler.get_2d(Dim::light(0, 0), i as u32, n);
                         let ls = light.sample(sf.p, u, s.light_sampling)?;
                         if ng.dot(ls.wi) <= 0.0 {
                             return None;
@@ -320,8 +326,8 @@ fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
                         Some(Ray::segment(o, ls.wi, ls.distance - (o - sf.p).length()))
                     })
                     .collect();
-                if sh.len() == PACKET_SIZE {
-                    shadow.push(sh);
+                if wave.len() == PACKET_SIZE {
+                    shadow.push(wave);
                 }
             }
             pixel.push(rays);

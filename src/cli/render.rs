@@ -62,7 +62,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "slices")]
     pub schedule: Schedule,
     /// Trace coherent batches (one pixel's camera samples, the shadow rays
-    /// from one hit to one light) as 8-ray packets: auto where measured to pay
+    /// from their hits to one light) as 8-ray packets: auto where measured to pay
     /// (camera batches of 7 or more rays), on, or off. The image is
     /// bit-identical in every mode.
     #[arg(long, default_value = "auto")]

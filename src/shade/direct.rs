@@ -7,6 +7,13 @@
 //! square roots, and eight lanes run eight chains at once. Every lane's
 //! numbers are exactly those of lighting its point alone.
 //!
+//! Their shadow rays then travel in waves: sample `j` of one light from
+//! every lane, gathered first and traced back to back (a packet only under
+//! `--packets on`; see [`super::packets`]). Tracing a wave's rays together
+//! rather than between the shading of each was 3–7% faster per render on
+//! one thread (seed-mc, the bunny, the dragon), and each lane still adds
+//! its contributions in sample order.
+//!
 //! [`Light::seen_from_lanes`]: crate::light::Light::seen_from_lanes
 
 use super::bsdf::phong_brdf;
@@ -73,19 +80,11 @@ impl Integrator<'_> {
             }
             let dim = Dim::light(depth, light_index as u32);
             let except = light.prim().unwrap_or(u32::MAX);
-            // Where a batch may be traced as a packet, each lane's shadow
-            // rays wait in its `batches` slot and are traced PACKET_SIZE at
-            // a time; else each is traced at once. Contributions are added
-            // in sample order either way.
-            let full = (m_samples as usize).min(PACKET_SIZE);
-            let mut batches = self
-                .packets
-                .use_packet(full, SHADOW_PACKET_MIN)
-                .then(|| std::array::from_fn::<ShadowBatch, LANES, _>(|_| ShadowBatch::default()));
             let mut sum = [Vec3::ZERO; LANES];
             // What every sample of this light from a point shares (a rect
             // light's spherical rectangle), built once per lane.
             let seen = light.seen_from_lanes(&points, active, method);
+            let mut wave = ShadowWave::default();
             let mut u = [Vec2::ZERO; LANES];
             for j in 0..m_samples {
                 if light.is_area() {
@@ -99,6 +98,7 @@ impl Integrator<'_> {
                     }
                 }
                 let samples = seen.sample(active, &u);
+                wave.len = 0;
                 for i in mask_lanes(active) {
                     let Some(ls) = samples[i] else {
                         continue;
@@ -130,44 +130,30 @@ impl Integrator<'_> {
                     } else {
                         f32::INFINITY
                     };
-                    let shadow = Ray::segment(origin, ls.wi, tmax);
-                    match &mut batches {
-                        Some(b) => {
-                            let b = &mut b[i];
-                            b.rays[b.len] = shadow;
-                            b.contribution[b.len] = f * ls.weight * cos_i;
-                            b.len += 1;
-                            if b.len == PACKET_SIZE {
-                                self.flush_shadows(b, except, &mut sum[i]);
-                            }
-                        }
-                        None => {
-                            if !scene.geometry.occluded_except(&shadow, except) {
-                                sum[i] += f * ls.weight * cos_i;
-                            }
-                        }
-                    }
+                    let n = wave.len;
+                    wave.rays[n] = Ray::segment(origin, ls.wi, tmax);
+                    wave.contribution[n] = f * ls.weight * cos_i;
+                    wave.lane[n] = i as u8;
+                    wave.len += 1;
                 }
+                self.trace_wave(&wave, except, &mut sum);
             }
             for i in mask_lanes(active) {
-                if let Some(b) = &mut batches {
-                    self.flush_shadows(&mut b[i], except, &mut sum[i]);
-                }
                 l[i] += sum[i] / m_samples as f32;
             }
         }
         l
     }
 
-    /// Trace the waiting shadow rays (ignoring primitive `except`, the
-    /// light's own surface) and add the contributions of those that reach
-    /// the light to `sum`, in order.
-    fn flush_shadows(&mut self, batch: &mut ShadowBatch, except: u32, sum: &mut Vec3) {
-        let n = batch.len;
+    /// Trace one sample's shadow rays from every lane (ignoring primitive
+    /// `except`, the light's own surface) and add the contributions of those
+    /// that reach the light to their lanes' sums.
+    fn trace_wave(&mut self, wave: &ShadowWave, except: u32, sum: &mut [Vec3; LANES]) {
+        let n = wave.len;
         if n == 0 {
             return;
         }
-        let rays = &batch.rays[..n];
+        let rays = &wave.rays[..n];
         let mut blocked = [false; PACKET_SIZE];
         if self.packets.use_packet(n, SHADOW_PACKET_MIN) {
             self.scene
@@ -178,28 +164,29 @@ impl Integrator<'_> {
                 *b = self.scene.geometry.occluded_except(r, except);
             }
         }
-        for (c, b) in batch.contribution[..n].iter().zip(&blocked) {
+        for ((c, &lane), b) in wave.contribution.iter().zip(&wave.lane).zip(&blocked[..n]) {
             if !b {
-                *sum += *c;
+                sum[lane as usize] += *c;
             }
         }
-        batch.len = 0;
     }
 }
 
-/// Shadow rays from one hit point towards one light, waiting to be traced,
-/// with what each adds if it reaches the light.
-struct ShadowBatch {
+/// One sample's shadow rays towards one light, one from each lane's hit
+/// point, waiting to be traced, with what each adds if it reaches the light.
+struct ShadowWave {
     rays: [Ray; PACKET_SIZE],
     contribution: [Vec3; PACKET_SIZE],
+    lane: [u8; PACKET_SIZE],
     len: usize,
 }
 
-impl Default for ShadowBatch {
+impl Default for ShadowWave {
     fn default() -> Self {
         Self {
             rays: [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE],
             contribution: [Vec3::ZERO; PACKET_SIZE],
+            lane: [0; PACKET_SIZE],
             len: 0,
         }
     }

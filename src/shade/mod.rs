@@ -20,7 +20,8 @@
 //!
 //! Coherent batches are traced as packets ([`PacketMode`]): the camera rays
 //! of neighbouring samples ([`Integrator::camera_batch`]) and the shadow rays
-//! from one hit point towards one light. Packets return exactly the hits of
+//! from their hits towards one light, one per hit (a wave; `direct.rs`).
+//! Packets return exactly the hits of
 //! single rays and every batch is shaded in sample order, so the image is
 //! bit-identical with packets on or off. The hits of one camera batch are
 //! lit together, one SIMD lane each (a rect light's spherical rectangles

@@ -8,7 +8,7 @@ crate::mode::mode_enum! {
     #[derive(Default)]
     pub enum PacketMode("packet mode") {
         /// Packets where they were measured to pay: camera batches of at least
-        /// [`CAMERA_PACKET_MIN`] rays, and shadow batches of at least
+        /// [`CAMERA_PACKET_MIN`] rays, and shadow waves of at least
         /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
         #[default]
         Auto = "auto",
@@ -28,7 +28,7 @@ crate::mode::mode_enum! {
 //   (bunny, thin lens), 1.44x (bunny, pinhole), 1.13x (scenes/thin-lens.toml,
 //   one node) and 1.66x (scenes/mesh.toml); at 7 rays 1.00-1.37x; at 6 rays
 //   1.00-1.25x; below 6 rays 0.3-1.0x. Scene size no longer matters;
-// - shadow batches (8 stratified samples from one hit towards a rect
+// - shadow batches (then 8 stratified samples from one hit towards a rect
 //   light): 0.83-1.05x at every size, never a clear gain; about half of
 //   them differed in direction sign (the light straddles the point) and
 //   then fell back to single rays inside `Scene::occluded_packet`.
@@ -38,11 +38,17 @@ crate::mode::mode_enum! {
 // measuring slabs from an apex: camera batches at 8 rays 1.14-2.50x, at 7
 // rays 1.00-1.67x, at 6 rays 1.00-1.67x; shadow batches 0.76-0.87x at 3
 // to 8 rays (one origin, but eight points on the light spread too wide).
+// Re-measured when shadow rays began travelling in waves (one from each
+// hit of a pixel's batch, towards one light; `shade::direct`): waves of 8
+// rays 0.87x (bunny, thin lens) and 0.93x (bunny, pinhole). Whole renders
+// with waves of at least 4 or 6 rays as packets, against none, in one
+// process, alternating, nine runs, one thread: within 2% either way on
+// seed-mc, soft-shadow, the bunny and both dragon scenes.
 // The thresholds stand.
 
 /// Fewest rays a camera batch must hold for `auto` to trace it as a packet.
 pub const CAMERA_PACKET_MIN: usize = 7;
-/// Fewest rays a shadow batch must hold for `auto` to trace it as a packet:
+/// Fewest rays a shadow wave must hold for `auto` to trace it as a packet:
 /// more than a packet holds, so never (see above).
 pub const SHADOW_PACKET_MIN: usize = PACKET_SIZE + 1;
 
