@@ -2,6 +2,7 @@
 //! nodes chosen by the surface area heuristic over the whole subtree
 //! (Ylitie, Karras and Laine 2017), see [`super::collapse`].
 
+use super::cluster::Clusters;
 use super::collapse::{LEAF_COST, NODE_COST};
 use super::node::{is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
 use crate::math::Aabb;
@@ -29,11 +30,12 @@ crate::mode::mode_enum! {
 /// A render that traces fewer rays than this per primitive builds a big
 /// mesh's tree with the fastest preset under `auto`. Measured on the
 /// dragon (871k triangles, `scenes/large/dragon-rect.toml`, 2 threads,
-/// three alternating runs, medians): `fastest` builds in 0.33 s against
-/// `medium`'s 0.42 s and renders 5% slower (1.31 s against 1.22 s at 64
-/// spp), so the two break even near 15 rays a triangle; 8 keeps `auto` on
-/// the safe side of that noisy figure.
-const FASTEST_BELOW_RAYS_PER_PRIM: u64 = 8;
+/// three alternating runs, medians): `fastest` (over clusters,
+/// [`super::cluster`]) builds in 0.17 s against `medium`'s 0.41 s and
+/// renders 5% slower (0.92 s against 0.88 s at 64 spp, 11 rays a
+/// triangle), so the two break even near 60 rays a triangle; 32 keeps
+/// `auto` on the safe side of that noisy figure.
+const FASTEST_BELOW_RAYS_PER_PRIM: u64 = 32;
 
 /// Below this many primitives every preset builds in a few milliseconds:
 /// `auto` keeps the better tree whatever the render.
@@ -218,21 +220,31 @@ fn binary_tree_and_bounds(boxes: &[Aabb], quality: BuildQuality) -> Option<(Bvh2
         boxes.len()
     );
     let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-    Some((binary_tree(boxes, quality), bounds))
+    Some((binary_tree(boxes, bounds, quality), bounds))
 }
 
-/// obvhs's binary tree over `boxes` (not empty), one primitive a leaf.
-fn binary_tree(boxes: &[Aabb], quality: BuildQuality) -> Bvh2 {
+/// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one
+/// primitive a leaf, or for the speed presets one cluster of up to
+/// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
+/// ([`super::cluster`]).
+fn binary_tree(boxes: &[Aabb], bounds: Aabb, quality: BuildQuality) -> Bvh2 {
+    let preset = quality.preset(boxes.len());
     let params = quality.params(boxes.len());
-    // obvhs reads our boxes through `Boundable`: no converted copy
-    // (32 bytes a primitive) at the build's memory peak.
-    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
-        params.ploc_search_distance,
-        boxes,
-        (0..boxes.len() as u32).collect(),
-        params.sort_precision,
-        params.search_depth_threshold,
-    );
+    let mut bvh2 = if matches!(preset, BuildQuality::Fastest | BuildQuality::Fast) {
+        let clusters = Clusters::new(boxes, bounds);
+        let mut bvh2 = ploc(&clusters.boxes, &params);
+        // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
+        // from starts[c] to starts[c + 1].
+        for node in bvh2.nodes.iter_mut().filter(|node| node.prim_count > 0) {
+            let c = node.first_index as usize;
+            node.first_index = clusters.starts[c];
+            node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
+        }
+        bvh2.primitive_indices = clusters.order;
+        bvh2
+    } else {
+        ploc(boxes, &params)
+    };
     if params.reinsertion_batch_ratio > 0.0 {
         ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
     }
@@ -241,6 +253,19 @@ fn binary_tree(boxes: &[Aabb], quality: BuildQuality) -> Bvh2 {
     bvh2.parents = Vec::new();
     bvh2.primitives_to_nodes = Vec::new();
     bvh2
+}
+
+/// obvhs's PLOC tree over `boxes`, one leaf each, leaf `i` holding id `i`.
+fn ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
+    // obvhs reads our boxes through `Boundable`: no converted copy
+    // (32 bytes a primitive) at the build's memory peak.
+    PlocBuilder::with_capacity(boxes.len()).build(
+        params.ploc_search_distance,
+        boxes,
+        (0..boxes.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    )
 }
 
 #[cfg(test)]
@@ -272,11 +297,11 @@ mod tests {
             (BuildQuality::High, 3),
         ] {
             let boxes = random_boxes(3000, seed);
-            let bvh2 = binary_tree(&boxes, quality);
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            let bvh2 = binary_tree(&boxes, bounds, quality);
             let costs = CollapseCosts::new(&bvh2);
             costs.assert_choices_match_tables();
             let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
-            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
             let stats = Bvh8::collapse(&bvh2, bounds).stats();
             assert!(
                 (stats.sah_cost - promised).abs() < 1e-4 * promised,
@@ -298,13 +323,20 @@ mod tests {
 
     /// Every leaf holds the primitives of its binary subtree: each
     /// primitive's box lies inside the box of the slot that holds it, and
-    /// each is held once, for a preset whose tree is PLOC's (fastest) and
-    /// one whose nodes reinsertion has moved (high), on one thread and on
-    /// three (the leaf order the tables record is joined from pieces).
+    /// each is held once, for a preset whose tree is PLOC's over clusters
+    /// (fastest), one whose clustered tree reinsertion has moved (fast),
+    /// and one with a primitive per PLOC leaf and reinsertion (high), on
+    /// one thread and on three (the leaf order the tables record is joined
+    /// from pieces). The tree is the same on both.
     #[test]
     fn every_leaf_holds_the_primitives_of_its_subtree() {
         let boxes = random_boxes(150_000, 8);
-        for quality in [BuildQuality::Fastest, BuildQuality::High] {
+        for quality in [
+            BuildQuality::Fastest,
+            BuildQuality::Fast,
+            BuildQuality::High,
+        ] {
+            let mut trees = Vec::new();
             for threads in [1, 3] {
                 let bvh = on_threads(threads, || Bvh8::build(&boxes, quality));
                 let mut held = vec![0u32; boxes.len()];
@@ -332,7 +364,10 @@ mod tests {
                     held.iter().all(|&h| h == 1),
                     "{quality:?}, {threads} threads"
                 );
+                trees.push(bvh);
             }
+            assert_eq!(trees[0].prim_ids, trees[1].prim_ids, "{quality:?}");
+            assert_eq!(trees[0].stats(), trees[1].stats(), "{quality:?}");
         }
     }
 
@@ -363,8 +398,8 @@ mod tests {
     #[test]
     fn parallel_collapse_matches_the_sequential_walk_on_any_thread_count() {
         let boxes = random_boxes(200_000, 6);
-        let bvh2 = binary_tree(&boxes, BuildQuality::Fastest);
         let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        let bvh2 = binary_tree(&boxes, bounds, BuildQuality::Fastest);
         let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds));
         let (one, three) = (on(1), on(3));
         let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
@@ -511,8 +546,8 @@ mod tests {
     #[test]
     fn collapse_does_not_depend_on_the_scale_of_the_scene() {
         let boxes = random_boxes(2000, 4);
-        let bvh2 = binary_tree(&boxes, BuildQuality::Medium);
         let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        let bvh2 = binary_tree(&boxes, bounds, BuildQuality::Medium);
         let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
         let reference = Bvh8::collapse(&bvh2, bounds).stats();
         for scale in [2f32.powi(60), 2f32.powi(-60)] {

@@ -41,7 +41,7 @@ pub const LEAF_BLOCK: usize = 8;
 pub const NO_PRIM: u32 = u32::MAX;
 
 /// Subtrees with at most this many primitives become one leaf.
-const LEAF_PRIMS: u32 = 8;
+pub(super) const LEAF_PRIMS: u32 = 8;
 const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEAF_BLOCK);
 
 /// Subtrees of at least this many primitives are emitted in parallel, one

@@ -1,7 +1,8 @@
 //! One BVH over every bounded primitive.
 //!
 //! obvhs builds the tree (PLOC, Meister and Bittner 2018, with parallel
-//! reinsertion); we collapse its binary tree into an 8-wide layout of our
+//! reinsertion; the speed presets start it from clusters of neighbouring
+//! primitives, `cluster`); we collapse its binary tree into an 8-wide layout of our
 //! own whose child boxes are plain f32 in structure-of-arrays form, so one
 //! `wide::f32x8` slab test checks all eight children of a node. We traverse
 //! it ourselves: obvhs's own traversal clamps tmin to 1e-4, uses a
@@ -10,6 +11,7 @@
 //! spills to the heap instead of dropping work.
 
 pub mod build;
+mod cluster;
 mod collapse;
 pub mod hit;
 pub mod node;

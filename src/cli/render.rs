@@ -67,7 +67,7 @@ pub struct RenderArgs {
     /// bit-identical in every mode.
     #[arg(long, default_value = "auto")]
     pub packets: strata::shade::PacketMode,
-    /// BVH build effort; auto picks by primitive count, and builds fastest for a big mesh that the render crosses with fewer than 8 rays a primitive (a preview).
+    /// BVH build effort; auto picks by primitive count, and builds fastest for a big mesh that the render crosses with fewer than 32 rays a primitive.
     #[arg(long, default_value = "auto")]
     pub bvh_quality: strata::accel::BuildQuality,
     /// Write statistics (rays by kind, Mrays/s, phase times, peak RSS) as JSON.

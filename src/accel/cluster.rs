@@ -1,0 +1,228 @@
+//! Clusters of primitives near each other on a Morton curve, as the leaves
+//! the speed presets hand to PLOC.
+//!
+//! PLOC (Meister and Bittner 2018) sorts its leaves along a Morton curve and
+//! merges nodes that are each other's nearest neighbour within a window of
+//! the sorted order; the speed presets' window is one or a few nodes to
+//! each side. Its first iterations spend most of its time and memory
+//! pairing primitives that are neighbours on the curve. Here [`ROUNDS`]
+//! rounds of that merge with a window of one run first, over a radix sort
+//! of 30-bit Morton codes, and PLOC starts from the clusters they make (a
+//! quarter as many as primitives on the dragon). That shrinks what PLOC
+//! sorts and merges, the binary tree it writes and the cost tables the
+//! collapse fills over that tree.
+//!
+//! Dragon (871k triangles), one thread (`strata bench assets/dragon.ply
+//! --bvh-quality Q --no-embree --threads 1`): fastest preset, build 0.23 →
+//! 0.17 s, peak 312 → 138 bytes a triangle, SAH cost 20.3 → 19.8; fast
+//! preset 0.30 → 0.20 s, 280 → 140 bytes, SAH cost 17.9 → 18.4. The
+//! quality presets would lose more tree quality (medium 18.0 → 18.4, high
+//! 17.5 → 18.1) and keep one primitive a leaf. A cluster holds at most
+//! 2^ROUNDS primitives, which the 8-wide leaves hold whole.
+
+use super::collapse::LEAF_PRIMS;
+use crate::math::Aabb;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Rounds of pairing: clusters hold up to 2^ROUNDS primitives. Two rounds
+/// made the dragon's fastest build 0.26 s (its BVH phase in `strata
+/// render`), three 0.22 s, from 0.35 s without; the tree's SAH cost was
+/// 19.8 either way.
+const ROUNDS: u32 = 3;
+const _: () = assert!(1 << ROUNDS <= LEAF_PRIMS);
+
+/// Primitives grouped into clusters: `order` lists primitive ids along the
+/// curve, cluster `c` holds `order[starts[c]..starts[c + 1]]` and has box
+/// `boxes[c]`.
+pub(super) struct Clusters {
+    pub order: Vec<u32>,
+    pub starts: Vec<u32>,
+    pub boxes: Vec<Aabb>,
+}
+
+impl Clusters {
+    /// The clusters of primitives with boxes `boxes` inside `bounds`. Ties
+    /// in Morton code keep id order (the sort is stable), so the clusters
+    /// are the same on any thread count.
+    pub(super) fn new(boxes: &[Aabb], bounds: Aabb) -> Self {
+        let order = morton_order(boxes, bounds);
+        let mut clusters = Self {
+            starts: (0..=order.len() as u32).collect(),
+            boxes: order.iter().map(|&id| boxes[id as usize]).collect(),
+            order,
+        };
+        for _ in 0..ROUNDS {
+            clusters.pair_neighbours();
+        }
+        clusters
+    }
+
+    /// One round of pairing: clusters i and i + 1 merge where each is the
+    /// other's nearer neighbour by the surface area of their union, that
+    /// is where `area[i]` is a local minimum (PLOC's merge with a window
+    /// of one). Minima are never adjacent, so no cluster pairs twice.
+    fn pair_neighbours(&mut self) {
+        let area: Vec<f32> = self
+            .boxes
+            .par_windows(2)
+            .map(|w| w[0].union(w[1]).half_area())
+            .collect();
+        let mut starts = Vec::with_capacity(self.boxes.len() + 1);
+        let mut boxes = Vec::with_capacity(self.boxes.len());
+        let mut i = 0;
+        while i < self.boxes.len() {
+            starts.push(self.starts[i]);
+            let pair = i < area.len()
+                && (i == 0 || area[i] <= area[i - 1])
+                && (i + 1 == area.len() || area[i] < area[i + 1]);
+            boxes.push(if pair {
+                self.boxes[i].union(self.boxes[i + 1])
+            } else {
+                self.boxes[i]
+            });
+            i += 1 + pair as usize;
+        }
+        starts.push(self.order.len() as u32);
+        self.starts = starts;
+        self.boxes = boxes;
+    }
+}
+
+/// Primitive ids sorted by the Morton code of their boxes' centres, ties
+/// by id.
+fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
+    let extent = bounds.max - bounds.min;
+    // Centres map to [0, 1023] on each axis; a flat axis maps to 0.
+    let scale = Vec3::select(extent.cmpgt(Vec3::ZERO), 1023.0 / extent, Vec3::ZERO);
+    let keys: Vec<u64> = boxes
+        .par_iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let c = ((b.min + b.max) * 0.5 - bounds.min) * scale;
+            let q = c.clamp(Vec3::ZERO, Vec3::splat(1023.0)).as_uvec3();
+            let code = spread_bits(q.x) << 2 | spread_bits(q.y) << 1 | spread_bits(q.z);
+            (code as u64) << 32 | i as u64
+        })
+        .collect();
+    radix_sort_by_high_30_bits(keys)
+        .into_iter()
+        .map(|k| k as u32)
+        .collect()
+}
+
+/// The ten low bits of `v` spread to every third bit (bit k to bit 3k).
+fn spread_bits(v: u32) -> u32 {
+    let mut x = v & 0x3ff;
+    x = (x | x << 16) & 0x0300_00ff;
+    x = (x | x << 8) & 0x0300_f00f;
+    x = (x | x << 4) & 0x030c_30c3;
+    (x | x << 2) & 0x0924_9249
+}
+
+/// `keys` sorted stably by bits 32..62 (the Morton code above the id): an
+/// LSD radix sort, three passes of ten bits.
+fn radix_sort_by_high_30_bits(mut keys: Vec<u64>) -> Vec<u64> {
+    let mut other = vec![0u64; keys.len()];
+    for pass in 0..3 {
+        let shift = 32 + 10 * pass;
+        let digit = |k: u64| ((k >> shift) & 0x3ff) as usize;
+        let mut start = vec![0usize; 1024];
+        for &k in &keys {
+            start[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for s in &mut start {
+            (*s, sum) = (sum, sum + *s);
+        }
+        for &k in &keys {
+            let d = digit(k);
+            other[start[d]] = k;
+            start[d] += 1;
+        }
+        std::mem::swap(&mut keys, &mut other);
+    }
+    keys
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::stream::{seeded, Draw};
+
+    #[test]
+    fn spread_bits_interleaves_three_axes_into_one_code() {
+        assert_eq!(spread_bits(0b1), 0b1);
+        assert_eq!(spread_bits(0b11), 0b1001);
+        assert_eq!(spread_bits(0x3ff), 0x0924_9249);
+        // The three spread axes never share a bit.
+        let all = spread_bits(0x3ff) << 2 | spread_bits(0x3ff) << 1 | spread_bits(0x3ff);
+        assert_eq!(all, (1 << 30) - 1);
+    }
+
+    #[test]
+    fn radix_sort_is_a_stable_sort_by_the_code() {
+        let mut rng = seeded(5);
+        // Few distinct codes, so that ties are many and order among them shows.
+        let keys: Vec<u64> = (0..20_000u64)
+            .map(|i| (((rng.unit() * 300.0) as u64 * 0x0123_4567) % (1 << 30)) << 32 | i)
+            .collect();
+        let mut want = keys.clone();
+        want.sort_by_key(|k| k >> 32);
+        assert_eq!(radix_sort_by_high_30_bits(keys), want);
+    }
+
+    #[test]
+    fn clusters_cover_every_primitive_once_and_bound_their_members() {
+        let mut rng = seeded(9);
+        for n in [1usize, 2, 3, 1001, 20_000] {
+            let boxes: Vec<Aabb> = (0..n)
+                .map(|_| {
+                    let c = rng.cube(10.0);
+                    Aabb::new(c - Vec3::splat(0.1), c + Vec3::splat(0.2))
+                })
+                .collect();
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            let clusters = Clusters::new(&boxes, bounds);
+            let mut seen = clusters.order.clone();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..n as u32).collect::<Vec<u32>>());
+            assert_eq!(clusters.starts.len(), clusters.boxes.len() + 1);
+            assert_eq!(clusters.starts[0], 0);
+            assert_eq!(*clusters.starts.last().unwrap(), n as u32);
+            for (c, w) in clusters.boxes.iter().zip(clusters.starts.windows(2)) {
+                let size = w[1] - w[0];
+                assert!((1..=1 << ROUNDS).contains(&size), "a cluster of {size}");
+                let members = &clusters.order[w[0] as usize..w[1] as usize];
+                let union = members
+                    .iter()
+                    .fold(Aabb::EMPTY, |a, &id| a.union(boxes[id as usize]));
+                assert_eq!(*c, union, "a cluster's box is its members' union");
+            }
+            if n >= 1001 {
+                // Pairing merges: far fewer clusters than primitives.
+                assert!(
+                    clusters.boxes.len() < n / 2,
+                    "{} clusters",
+                    clusters.boxes.len()
+                );
+            }
+        }
+    }
+
+    /// Neighbours along the order pair where each is the other's nearer
+    /// neighbour: three boxes on a line, the middle one nearer the right.
+    #[test]
+    fn a_box_pairs_with_its_nearer_neighbour() {
+        let unit = |x: f32| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
+        let boxes = [unit(0.0), unit(3.0), unit(4.5)];
+        let mut clusters = Clusters {
+            order: vec![0, 1, 2],
+            starts: vec![0, 1, 2, 3],
+            boxes: boxes.to_vec(),
+        };
+        clusters.pair_neighbours();
+        assert_eq!(clusters.starts, vec![0, 1, 3]);
+        assert_eq!(clusters.boxes, vec![boxes[0], boxes[1].union(boxes[2])]);
+    }
+}
