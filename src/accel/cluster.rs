@@ -47,46 +47,53 @@ impl Clusters {
     /// are the same on any thread count.
     pub(super) fn new(boxes: &[Aabb], bounds: Aabb) -> Self {
         let order = morton_order(boxes, bounds);
-        let mut clusters = Self {
-            starts: (0..=order.len() as u32).collect(),
-            boxes: order.iter().map(|&id| boxes[id as usize]).collect(),
+        // The first round reads the boxes through `order` rather than from
+        // a sorted copy (24 bytes a primitive, written and read once).
+        let (mut starts, mut merged) =
+            pair_round(order.len(), |i| i as u32, |i| boxes[order[i] as usize]);
+        for _ in 1..ROUNDS {
+            (starts, merged) = pair_round(merged.len(), |i| starts[i], |i| merged[i]);
+        }
+        starts.push(order.len() as u32);
+        Self {
             order,
-        };
-        for _ in 0..ROUNDS {
-            clusters.pair_neighbours();
+            starts,
+            boxes: merged,
         }
-        clusters
     }
+}
 
-    /// One round of pairing: clusters i and i + 1 merge where each is the
-    /// other's nearer neighbour by the surface area of their union, that
-    /// is where `area[i]` is a local minimum (PLOC's merge with a window
-    /// of one). Minima are never adjacent, so no cluster pairs twice.
-    fn pair_neighbours(&mut self) {
-        let area: Vec<f32> = self
-            .boxes
-            .par_windows(2)
-            .map(|w| w[0].union(w[1]).half_area())
-            .collect();
-        let mut starts = Vec::with_capacity(self.boxes.len() + 1);
-        let mut boxes = Vec::with_capacity(self.boxes.len());
-        let mut i = 0;
-        while i < self.boxes.len() {
-            starts.push(self.starts[i]);
-            let pair = i < area.len()
-                && (i == 0 || area[i] <= area[i - 1])
-                && (i + 1 == area.len() || area[i] < area[i + 1]);
-            boxes.push(if pair {
-                self.boxes[i].union(self.boxes[i + 1])
-            } else {
-                self.boxes[i]
-            });
-            i += 1 + pair as usize;
-        }
-        starts.push(self.order.len() as u32);
-        self.starts = starts;
-        self.boxes = boxes;
+/// One round of pairing over `len` clusters in curve order, cluster `i`
+/// starting at `start(i)` with box `bounds(i)`: clusters i and i + 1 merge
+/// where each is the other's nearer neighbour by the surface area of their
+/// union, that is where `area[i]` is a local minimum (PLOC's merge with a
+/// window of one). Minima are never adjacent, so no cluster pairs twice.
+/// Returns the merged clusters' starts (without the end) and boxes.
+fn pair_round(
+    len: usize,
+    start: impl Fn(usize) -> u32,
+    bounds: impl Fn(usize) -> Aabb + Sync,
+) -> (Vec<u32>, Vec<Aabb>) {
+    let area: Vec<f32> = (1..len)
+        .into_par_iter()
+        .map(|i| bounds(i - 1).union(bounds(i)).half_area())
+        .collect();
+    let mut starts = Vec::with_capacity(len / 2 + len / 4 + 2);
+    let mut boxes = Vec::with_capacity(len / 2 + len / 4 + 1);
+    let mut i = 0;
+    while i < len {
+        starts.push(start(i));
+        let pair = i < area.len()
+            && (i == 0 || area[i] <= area[i - 1])
+            && (i + 1 == area.len() || area[i] < area[i + 1]);
+        boxes.push(if pair {
+            bounds(i).union(bounds(i + 1))
+        } else {
+            bounds(i)
+        });
+        i += 1 + pair as usize;
     }
+    (starts, boxes)
 }
 
 /// Primitive ids sorted by the Morton code of their boxes' centres, ties
@@ -216,13 +223,8 @@ mod tests {
     fn a_box_pairs_with_its_nearer_neighbour() {
         let unit = |x: f32| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
         let boxes = [unit(0.0), unit(3.0), unit(4.5)];
-        let mut clusters = Clusters {
-            order: vec![0, 1, 2],
-            starts: vec![0, 1, 2, 3],
-            boxes: boxes.to_vec(),
-        };
-        clusters.pair_neighbours();
-        assert_eq!(clusters.starts, vec![0, 1, 3]);
-        assert_eq!(clusters.boxes, vec![boxes[0], boxes[1].union(boxes[2])]);
+        let (starts, merged) = pair_round(3, |i| i as u32, |i| boxes[i]);
+        assert_eq!(starts, vec![0, 1]);
+        assert_eq!(merged, vec![boxes[0], boxes[1].union(boxes[2])]);
     }
 }
