@@ -224,13 +224,13 @@ fn binary_tree_and_bounds(boxes: &[Aabb], quality: BuildQuality) -> Option<(Bvh2
 }
 
 /// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one
-/// primitive a leaf, or for the speed presets one cluster of up to
+/// primitive a leaf, or for the fastest preset one cluster of up to
 /// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
 /// ([`super::cluster`]).
 fn binary_tree(boxes: &[Aabb], bounds: Aabb, quality: BuildQuality) -> Bvh2 {
     let preset = quality.preset(boxes.len());
     let params = quality.params(boxes.len());
-    let mut bvh2 = if matches!(preset, BuildQuality::Fastest | BuildQuality::Fast) {
+    let mut bvh2 = if preset == BuildQuality::Fastest {
         let clusters = Clusters::new(boxes, bounds);
         let mut bvh2 = ploc(&clusters.boxes, &params);
         // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
@@ -324,8 +324,8 @@ mod tests {
     /// Every leaf holds the primitives of its binary subtree: each
     /// primitive's box lies inside the box of the slot that holds it, and
     /// each is held once, for a preset whose tree is PLOC's over clusters
-    /// (fastest), one whose clustered tree reinsertion has moved (fast),
-    /// and one with a primitive per PLOC leaf and reinsertion (high), on
+    /// (fastest), and two with a primitive per PLOC leaf whose nodes
+    /// reinsertion has moved (fast, high), on
     /// one thread and on three (the leaf order the tables record is joined
     /// from pieces). The tree is the same on both.
     #[test]

@@ -1,24 +1,25 @@
 //! Clusters of primitives near each other on a Morton curve, as the leaves
-//! the speed presets hand to PLOC.
+//! the fastest preset hands to PLOC.
 //!
 //! PLOC (Meister and Bittner 2018) sorts its leaves along a Morton curve and
 //! merges nodes that are each other's nearest neighbour within a window of
-//! the sorted order; the speed presets' window is one or a few nodes to
-//! each side. Its first iterations spend most of its time and memory
-//! pairing primitives that are neighbours on the curve. Here [`ROUNDS`]
-//! rounds of that merge with a window of one run first, over a radix sort
-//! of 30-bit Morton codes, and PLOC starts from the clusters they make (a
-//! quarter as many as primitives on the dragon). That shrinks what PLOC
-//! sorts and merges, the binary tree it writes and the cost tables the
-//! collapse fills over that tree.
+//! the sorted order; the fastest preset's window is one node to each side.
+//! Its first iterations spend most of its time and memory pairing
+//! primitives that are neighbours on the curve. Here [`ROUNDS`] rounds of
+//! that merge run first, over a radix sort of 30-bit Morton codes, and PLOC
+//! starts from the clusters they make (a quarter as many as primitives on
+//! the dragon). That shrinks what PLOC sorts and merges, the binary tree it
+//! writes and the cost tables the collapse fills over that tree. A cluster
+//! holds at most 2^ROUNDS primitives, which the 8-wide leaves hold whole.
 //!
 //! Dragon (871k triangles), one thread (`strata bench assets/dragon.ply
-//! --bvh-quality Q --no-embree --threads 1`): fastest preset, build 0.23 →
-//! 0.17 s, peak 312 → 138 bytes a triangle, SAH cost 20.3 → 19.8; fast
-//! preset 0.30 → 0.20 s, 280 → 140 bytes, SAH cost 17.9 → 18.4. The
-//! quality presets would lose more tree quality (medium 18.0 → 18.4, high
-//! 17.5 → 18.1) and keep one primitive a leaf. A cluster holds at most
-//! 2^ROUNDS primitives, which the 8-wide leaves hold whole.
+//! --bvh-quality fastest --no-embree --threads 1`): build 0.23 → 0.17 s,
+//! peak 280 → 133 bytes a triangle, SAH cost 20.3 → 19.8, and rays as fast
+//! or faster. The other presets keep one primitive a PLOC leaf: their
+//! wider windows and reinsertion make better trees than the clusters allow
+//! (SAH cost with clusters: fast 17.9 → 18.4, medium 18.0 → 18.4, high 17.5
+//! → 18.1), and on the 14M-triangle mesh the fast preset over clusters
+//! built in 3.8 s instead of 8.8 s but traced 4–12% slower.
 
 use super::collapse::LEAF_PRIMS;
 use crate::math::Aabb;

@@ -1,7 +1,7 @@
 //! One BVH over every bounded primitive.
 //!
 //! obvhs builds the tree (PLOC, Meister and Bittner 2018, with parallel
-//! reinsertion; the speed presets start it from clusters of neighbouring
+//! reinsertion; the fastest preset starts it from clusters of neighbouring
 //! primitives, `cluster`); we collapse its binary tree into an 8-wide layout of our
 //! own whose child boxes are plain f32 in structure-of-arrays form, so one
 //! `wide::f32x8` slab test checks all eight children of a node. We traverse
