@@ -427,10 +427,10 @@ mod tests {
             (fastest.1, medium.1),
             (BuildQuality::Fastest, BuildQuality::Medium)
         );
-        // 64·64·1·2 rays ≪ 8 per triangle; 64·64·256·2 ≫. The timings
-        // name the preset used.
+        // 64·64·1·2 rays ≪ 32 per triangle; 64·64·1024·2 (79 per
+        // triangle) ≫. The timings name the preset used.
         assert_eq!(tree(1, BuildQuality::Auto), fastest);
-        assert_eq!(tree(256, BuildQuality::Auto), medium);
+        assert_eq!(tree(1024, BuildQuality::Auto), medium);
         let (traced, timings) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
         assert_eq!((traced.geometry.bvh.stats(), timings.bvh_quality), medium);
         std::fs::remove_dir_all(&dir).unwrap();
