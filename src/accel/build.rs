@@ -325,9 +325,9 @@ mod tests {
     /// primitive's box lies inside the box of the slot that holds it, and
     /// each is held once, for a preset whose tree is PLOC's over clusters
     /// (fastest), and two with a primitive per PLOC leaf whose nodes
-    /// reinsertion has moved (fast, high), on
-    /// one thread and on three (the leaf order the tables record is joined
-    /// from pieces). The tree is the same on both.
+    /// reinsertion has moved (fast, high), on one thread and on three (the
+    /// leaf order the tables record is joined from pieces). The tree is the
+    /// same on both.
     #[test]
     fn every_leaf_holds_the_primitives_of_its_subtree() {
         let boxes = random_boxes(150_000, 8);
