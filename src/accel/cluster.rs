@@ -23,7 +23,8 @@
 
 use super::collapse::LEAF_PRIMS;
 use crate::math::Aabb;
-use glam::Vec3;
+use glam::{UVec3, Vec3};
+use obvhs::ploc::morton::morton_encode_u32;
 use rayon::prelude::*;
 
 /// Rounds of pairing: clusters hold up to 2^ROUNDS primitives. Two rounds
@@ -109,8 +110,7 @@ fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
         .map(|(i, b)| {
             let c = ((b.min + b.max) * 0.5 - bounds.min) * scale;
             let q = c.clamp(Vec3::ZERO, Vec3::splat(1023.0)).as_uvec3();
-            let code = spread_bits(q.x) << 2 | spread_bits(q.y) << 1 | spread_bits(q.z);
-            (code as u64) << 32 | i as u64
+            (morton_code(q) as u64) << 32 | i as u64
         })
         .collect();
     radix_sort_by_high_30_bits(keys)
@@ -119,13 +119,11 @@ fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
         .collect()
 }
 
-/// The ten low bits of `v` spread to every third bit (bit k to bit 3k).
-fn spread_bits(v: u32) -> u32 {
-    let mut x = v & 0x3ff;
-    x = (x | x << 16) & 0x0300_00ff;
-    x = (x | x << 8) & 0x0300_f00f;
-    x = (x | x << 4) & 0x030c_30c3;
-    (x | x << 2) & 0x0924_9249
+/// The 30-bit Morton code of a cell (ten bits an axis): bit k of z, y
+/// and x at bits 3k, 3k + 1 and 3k + 2 (obvhs's interleave, which puts
+/// its first argument lowest).
+fn morton_code(q: UVec3) -> u32 {
+    morton_encode_u32(q.z as u16, q.y as u16, q.x as u16)
 }
 
 /// `keys` sorted stably by bits 32..62 (the Morton code above the id): an
@@ -159,13 +157,14 @@ mod tests {
     use crate::sampling::stream::{seeded, Draw};
 
     #[test]
-    fn spread_bits_interleaves_three_axes_into_one_code() {
-        assert_eq!(spread_bits(0b1), 0b1);
-        assert_eq!(spread_bits(0b11), 0b1001);
-        assert_eq!(spread_bits(0x3ff), 0x0924_9249);
-        // The three spread axes never share a bit.
-        let all = spread_bits(0x3ff) << 2 | spread_bits(0x3ff) << 1 | spread_bits(0x3ff);
-        assert_eq!(all, (1 << 30) - 1);
+    fn morton_code_interleaves_three_axes_into_one_code() {
+        assert_eq!(morton_code(UVec3::new(0, 0, 0b1)), 0b1);
+        assert_eq!(morton_code(UVec3::new(0, 0, 0b11)), 0b1001);
+        assert_eq!(morton_code(UVec3::new(0, 0, 0x3ff)), 0x0924_9249);
+        assert_eq!(morton_code(UVec3::new(0, 0x3ff, 0)), 0x0924_9249 << 1);
+        assert_eq!(morton_code(UVec3::new(0x3ff, 0, 0)), 0x0924_9249 << 2);
+        // The three axes never share a bit.
+        assert_eq!(morton_code(UVec3::splat(0x3ff)), (1 << 30) - 1);
     }
 
     #[test]
