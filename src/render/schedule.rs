@@ -352,13 +352,14 @@ pub fn render_pixels(
         let (x, y, index) = run.window.pixel(run.first + j);
         let (x, y) = (x as f32, y as f32);
         let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
+        let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
         let mut start = samples.start;
         while start < samples.end {
             let end = samples.end.min(start + PACKET_SIZE as u32);
             batch.clear();
             batch.extend((start..end).map(|sample| CameraSample {
                 ctx: SampleContext::new(sampler, sample, s.spp),
-                film: Vec2::new(x, y) + sampler.get_2d(Dim::PIXEL, sample, s.spp),
+                film: Vec2::new(x, y) + jitter.get_2d(sample),
             }));
             let first = aov.is_some().then_some(&mut first_hits[..]);
             integrator.camera_batch(&batch, &mut out, first);

@@ -125,6 +125,67 @@ impl PixelSampler {
     }
 }
 
+impl PixelSampler {
+    /// Whether `other` draws exactly the numbers `self` draws (the same
+    /// kind, seed and pixel), so that one [`DimSampler`] serves both.
+    #[inline]
+    pub fn same_numbers(&self, other: &PixelSampler) -> bool {
+        (self.kind, self.seed, self.pixel) == (other.kind, other.seed, other.pixel)
+    }
+
+    /// Dimension `dim`'s sets of `count` points, for drawing many of them:
+    /// [`DimSampler::get_2d`]`(index)` is `self.get_2d(dim, index, count)`
+    /// bit for bit, with what every call shares (the dimension's pattern,
+    /// the random sampler's hash state after it, the prepared set) worked
+    /// out here once.
+    #[inline]
+    pub fn dim_2d(&self, dim: Dim, count: u32) -> DimSampler {
+        let pattern = self.pattern(dim);
+        DimSampler {
+            kind: self.kind,
+            count,
+            pattern,
+            random_state: hash_step(HASH_WORDS_INIT, pattern),
+            set: self
+                .sets
+                .iter()
+                .find(|set| set.n == count)
+                .copied()
+                .unwrap_or(CmjSet::EMPTY),
+        }
+    }
+}
+
+/// One pixel's numbers of one dimension, in sets of one size (see
+/// [`PixelSampler::dim_2d`]).
+#[derive(Debug, Clone, Copy)]
+pub struct DimSampler {
+    kind: SamplerKind,
+    count: u32,
+    pattern: u32,
+    /// `hash_words(&[pattern])`: the random sampler's state before the index.
+    random_state: u32,
+    /// The prepared grid of `count` points, or [`CmjSet::EMPTY`].
+    set: CmjSet,
+}
+
+impl DimSampler {
+    /// Point `index` of the set: [`PixelSampler::get_2d`]'s number.
+    #[inline]
+    pub fn get_2d(&self, index: u32) -> Vec2 {
+        match self.kind {
+            SamplerKind::Stratified if self.set.n == self.count => {
+                self.set.sample(index, self.pattern)
+            }
+            SamplerKind::Stratified => cmj_2d(index, self.count, self.pattern),
+            SamplerKind::Random => {
+                let h = hash_step(self.random_state, index);
+                Vec2::new(unit_float(hash_step(h, 0)), unit_float(hash_step(h, 1)))
+            }
+        }
+    }
+}
+
 /// The random sampler's `hash_words(&[p, index, k])` state before `k`, which
 /// a sample's coordinates (k = 0, 1 in 2D, 2 in 1D) share.
 #[inline]
@@ -160,7 +221,12 @@ mod tests {
                     for n in [1u32, 5, 16, 64, 100] {
                         for i in 0..n {
                             let want = plain_2d(kind, seed, pixel, dim, i, n).to_array();
-                            for got in [plain.get_2d(dim, i, n), prepared.get_2d(dim, i, n)] {
+                            for got in [
+                                plain.get_2d(dim, i, n),
+                                prepared.get_2d(dim, i, n),
+                                plain.dim_2d(dim, n).get_2d(i),
+                                prepared.dim_2d(dim, n).get_2d(i),
+                            ] {
                                 assert_eq!(
                                     got.to_array().map(f32::to_bits),
                                     want.map(f32::to_bits)

@@ -86,15 +86,24 @@ impl Integrator<'_> {
             let seen = light.seen_from_lanes(&points, active, method);
             let mut wave = ShadowWave::default();
             let mut u = [Vec2::ZERO; LANES];
+            // The lanes of a camera batch are samples of one pixel: what
+            // their draws share is worked out once, from the first lane.
+            let first = lanes[active.trailing_zeros() as usize].ctx;
+            let shared = light
+                .is_area()
+                .then(|| first.sampler.dim_2d(dim, first.count() * m_samples));
             for j in 0..m_samples {
-                if light.is_area() {
+                if let Some(shared) = &shared {
                     for i in mask_lanes(active) {
                         let ctx = lanes[i].ctx;
-                        u[i] = ctx.sampler.get_2d(
-                            dim,
-                            ctx.index() * m_samples + j,
-                            ctx.count() * m_samples,
-                        );
+                        let (index, count) = (ctx.index() * m_samples + j, ctx.count() * m_samples);
+                        u[i] = if ctx.sampler.same_numbers(&first.sampler)
+                            && ctx.count() == first.count()
+                        {
+                            shared.get_2d(index)
+                        } else {
+                            ctx.sampler.get_2d(dim, index, count)
+                        };
                     }
                 }
                 let samples = seen.sample(active, &u);
