@@ -212,6 +212,19 @@ mod tests {
     }
 
     #[test]
+    fn same_numbers_means_same_kind_seed_and_pixel() {
+        let a = PixelSampler::new(SamplerKind::Random, 7, 12);
+        assert!(a.same_numbers(&a.with_sets(PixelSampler::prepare_sets([4, 8]))));
+        for other in [
+            PixelSampler::new(SamplerKind::Stratified, 7, 12),
+            PixelSampler::new(SamplerKind::Random, 8, 12),
+            PixelSampler::new(SamplerKind::Random, 7, 13),
+        ] {
+            assert!(!a.same_numbers(&other) && !other.same_numbers(&a));
+        }
+    }
+
+    #[test]
     fn kept_prefixes_and_prepared_sets_change_no_number() {
         for kind in [SamplerKind::Stratified, SamplerKind::Random] {
             for (seed, pixel) in [(0u32, 0u32), (7, 12_345), (0xffff_ffff, 76_799)] {
