@@ -147,7 +147,10 @@ mod tests {
         ];
         let mut state = 0x1234_5678u32;
         for _ in 0..20_000 {
-            state = crate::sampling::hash::hash_u32(state);
+            // xorshift32 (Marsaglia 2003): every bit pattern but zero.
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
             let x = f32::from_bits(state);
             if !x.is_nan() {
                 xs.push(x);
