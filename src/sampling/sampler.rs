@@ -103,17 +103,7 @@ impl PixelSampler {
     /// spp·m points form one stratified set.
     #[inline]
     pub fn get_2d(&self, dim: Dim, index: u32, count: u32) -> Vec2 {
-        let p = self.pattern(dim);
-        match self.kind {
-            SamplerKind::Stratified => match self.sets.iter().find(|set| set.n == count) {
-                Some(set) => set.sample(index, p),
-                None => cmj_2d(index, count, p),
-            },
-            SamplerKind::Random => {
-                let h = random_prefix(p, index);
-                Vec2::new(unit_float(hash_step(h, 0)), unit_float(hash_step(h, 1)))
-            }
-        }
+        self.dim_2d(dim, count).get_2d(index)
     }
 
     pub fn get_1d(&self, dim: Dim, index: u32, count: u32) -> f32 {
@@ -123,9 +113,7 @@ impl PixelSampler {
             SamplerKind::Random => unit_float(hash_step(random_prefix(p, index), 2)),
         }
     }
-}
 
-impl PixelSampler {
     /// Whether `other` draws exactly the numbers `self` draws (the same
     /// kind, seed and pixel), so that one [`DimSampler`] serves both.
     #[inline]
@@ -133,25 +121,30 @@ impl PixelSampler {
         (self.kind, self.seed, self.pixel) == (other.kind, other.seed, other.pixel)
     }
 
-    /// Dimension `dim`'s sets of `count` points, for drawing many of them:
-    /// [`DimSampler::get_2d`]`(index)` is `self.get_2d(dim, index, count)`
-    /// bit for bit, with what every call shares (the dimension's pattern,
-    /// the random sampler's hash state after it, the prepared set) worked
-    /// out here once.
+    /// Dimension `dim`'s sets of `count` points: what every draw of them
+    /// shares (the dimension's pattern, and the random sampler's hash state
+    /// after it or the stratified sampler's prepared set), worked out once
+    /// for [`DimSampler::get_2d`], which [`PixelSampler::get_2d`] calls.
     #[inline]
     pub fn dim_2d(&self, dim: Dim, count: u32) -> DimSampler {
         let pattern = self.pattern(dim);
+        let (random_state, set) = match self.kind {
+            SamplerKind::Stratified => (
+                0,
+                self.sets
+                    .iter()
+                    .find(|set| set.n == count)
+                    .copied()
+                    .unwrap_or(CmjSet::EMPTY),
+            ),
+            SamplerKind::Random => (hash_step(HASH_WORDS_INIT, pattern), CmjSet::EMPTY),
+        };
         DimSampler {
             kind: self.kind,
             count,
             pattern,
-            random_state: hash_step(HASH_WORDS_INIT, pattern),
-            set: self
-                .sets
-                .iter()
-                .find(|set| set.n == count)
-                .copied()
-                .unwrap_or(CmjSet::EMPTY),
+            random_state,
+            set,
         }
     }
 }
@@ -163,14 +156,16 @@ pub struct DimSampler {
     kind: SamplerKind,
     count: u32,
     pattern: u32,
-    /// `hash_words(&[pattern])`: the random sampler's state before the index.
+    /// `hash_words(&[pattern])`, the random sampler's state before the
+    /// index (random sampler only).
     random_state: u32,
-    /// The prepared grid of `count` points, or [`CmjSet::EMPTY`].
+    /// The prepared grid of `count` points, or [`CmjSet::EMPTY`]
+    /// (stratified sampler only).
     set: CmjSet,
 }
 
 impl DimSampler {
-    /// Point `index` of the set: [`PixelSampler::get_2d`]'s number.
+    /// Point `index` of the set (see [`PixelSampler::get_2d`]).
     #[inline]
     pub fn get_2d(&self, index: u32) -> Vec2 {
         match self.kind {
