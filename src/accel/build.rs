@@ -297,8 +297,7 @@ mod tests {
             (BuildQuality::High, 3),
         ] {
             let boxes = random_boxes(3000, seed);
-            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-            let bvh2 = binary_tree(&boxes, bounds, quality);
+            let (bvh2, bounds) = binary_tree_and_bounds(&boxes, quality).unwrap();
             let costs = CollapseCosts::new(&bvh2);
             costs.assert_choices_match_tables();
             let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
@@ -398,8 +397,7 @@ mod tests {
     #[test]
     fn parallel_collapse_matches_the_sequential_walk_on_any_thread_count() {
         let boxes = random_boxes(200_000, 6);
-        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-        let bvh2 = binary_tree(&boxes, bounds, BuildQuality::Fastest);
+        let (bvh2, bounds) = binary_tree_and_bounds(&boxes, BuildQuality::Fastest).unwrap();
         let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds));
         let (one, three) = (on(1), on(3));
         let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
@@ -546,8 +544,7 @@ mod tests {
     #[test]
     fn collapse_does_not_depend_on_the_scale_of_the_scene() {
         let boxes = random_boxes(2000, 4);
-        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-        let bvh2 = binary_tree(&boxes, bounds, BuildQuality::Medium);
+        let (bvh2, bounds) = binary_tree_and_bounds(&boxes, BuildQuality::Medium).unwrap();
         let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
         let reference = Bvh8::collapse(&bvh2, bounds).stats();
         for scale in [2f32.powi(60), 2f32.powi(-60)] {
