@@ -375,7 +375,7 @@ impl LightLanes<'_> {
                 normal,
                 weight,
             } => {
-                let q = rects.sample(active, u);
+                let q = rects.sample(u);
                 for i in mask_lanes(active) {
                     out[i] = if rects.valid() >> i & 1 != 0 {
                         towards(points[i], q[i], *normal, weight[i], None)

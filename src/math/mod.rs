@@ -1,11 +1,12 @@
-//! Geometry basics: rays, boxes, orthonormal frames, transforms, and the
-//! robust origin offset for spawned rays.
+//! Geometry basics: rays, boxes, orthonormal frames, transforms, the robust
+//! origin offset for spawned rays, and trigonometry in SIMD lanes.
 
 pub mod aabb;
 pub mod frame;
 pub mod offset;
 pub mod ray;
 pub mod transform;
+pub mod trig;
 
 pub use aabb::Aabb;
 pub use frame::Frame;

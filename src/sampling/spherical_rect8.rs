@@ -7,11 +7,12 @@
 //! divisions and square roots; one lane per point runs eight chains in the
 //! time of one. Every lane performs exactly the scalar code's operations in
 //! its order (no fused multiply-adds, IEEE division and square roots, the
-//! scalar clamps' NaN behaviour, and the same `acosf`, `sinf` and `cosf`
-//! calls, per lane), so each lane is bit for bit the scalar
+//! scalar clamps' NaN behaviour, and the same vector arc cosine, sine and
+//! cosine of [`crate::math::trig`]), so each lane is bit for bit the scalar
 //! [`SphericalRect`](super::spherical_rect::SphericalRect): the tests check that, and the image does not depend
 //! on how samples were batched.
 
+use crate::math::trig::{acos8, sin_cos8};
 use glam::{Vec2, Vec3};
 use std::f32::consts::TAU;
 use wide::f32x8;
@@ -164,20 +165,12 @@ impl SphericalRects {
         let (n3, ok3) = v01.cross(v00).try_normalize();
         let in_plane = z0.simd_eq(f32x8::ZERO);
         let formed = (ok0 & ok1 & ok2 & ok3 & !in_plane).to_bitmask() & active;
-        // Interior angles, by the scalar acosf per lane (there is no
-        // vector acos that rounds as it does).
-        let cosines = [n0.dot(n1), n1.dot(n2), n2.dot(n3), n3.dot(n0)].map(|c| c.to_array());
-        let mut k = [0.0f32; LANES];
-        let mut solid_angle = [0.0f32; LANES];
-        let mut valid = 0;
-        for i in mask_lanes(formed) {
-            let [g0, g1, g2, g3] = cosines.map(|c| (-c[i]).clamp(-1.0, 1.0).acos());
-            k[i] = TAU - g2 - g3;
-            solid_angle[i] = g0 + g1 - k[i];
-            if solid_angle[i] > 1e-6 {
-                valid |= 1 << i;
-            }
-        }
+        // Interior angles; their excess over 2π is the solid angle.
+        let angle = |c: f32x8| acos8(clamp(-c, -f32x8::ONE, f32x8::ONE));
+        let [g0, g1, g2, g3] = [n0.dot(n1), n1.dot(n2), n2.dot(n3), n3.dot(n0)].map(angle);
+        let k = f32x8::splat(TAU) - g2 - g3;
+        let solid_angle = g0 + g1 - k;
+        let valid = solid_angle.simd_gt(f32x8::splat(1e-6)).to_bitmask() & formed;
         Self {
             origin,
             x,
@@ -190,8 +183,8 @@ impl SphericalRects {
             z0,
             b0: n0.z,
             b1: n2.z,
-            k: f32x8::from(k),
-            solid_angle,
+            k,
+            solid_angle: solid_angle.to_array(),
             valid,
         }
     }
@@ -208,19 +201,15 @@ impl SphericalRects {
 
     /// Lane `i`'s point on the rectangle for its uniform sample `u[i]`:
     /// exactly the scalar `SphericalRect::sample` of that lane. Lanes outside
-    /// `mask & self.valid()` hold no meaningful point.
-    pub fn sample(&self, mask: u32, u: &[Vec2; LANES]) -> [Vec3; LANES] {
-        let mask = mask & self.valid;
+    /// `self.valid()` hold no meaningful point.
+    pub fn sample(&self, u: &[Vec2; LANES]) -> [Vec3; LANES] {
         let ux = f32x8::from(u.map(|u| u.x));
         let uy = f32x8::from(u.map(|u| u.y));
         // Choose the x coordinate by the area to its left.
-        let au = (ux * f32x8::from(self.solid_angle) + self.k).to_array();
-        let (mut cos, mut sin) = ([1.0f32; LANES], [1.0f32; LANES]);
-        for i in mask_lanes(mask) {
-            (cos[i], sin[i]) = (au[i].cos(), au[i].sin());
-        }
+        let au = ux * f32x8::from(self.solid_angle) + self.k;
+        let (sin, cos) = sin_cos8(au);
         let one = f32x8::ONE;
-        let fu = (f32x8::from(cos) * self.b0 - self.b1) / f32x8::from(sin);
+        let fu = (cos * self.b0 - self.b1) / sin;
         let cu = clamp(
             copysign(one / (fu * fu + self.b0 * self.b0).sqrt(), fu),
             -one,
@@ -296,7 +285,7 @@ mod tests {
             let active = (rng.unit() * 256.0) as u32 & 0xff;
             let rects = SphericalRects::new(&origins, active, corner, edge_u, edge_v);
             let u: [Vec2; LANES] = std::array::from_fn(|_| Vec2::new(rng.unit(), rng.unit()));
-            let points = rects.sample(0xff, &u);
+            let points = rects.sample(&u);
             for (i, o) in origins.iter().enumerate() {
                 let scalar = SphericalRect::new(*o, corner, edge_u, edge_v);
                 let lane_valid = rects.valid() >> i & 1 != 0;
@@ -329,7 +318,7 @@ mod tests {
         assert_eq!(rects.valid(), 0xff);
         for u in [0.0, 1e-7, 0.5, 1.0 - 1e-7, 1.0] {
             for v in [0.0, 1e-7, 0.5, 1.0 - 1e-7, 1.0] {
-                let points = rects.sample(0xff, &[Vec2::new(u, v); LANES]);
+                let points = rects.sample(&[Vec2::new(u, v); LANES]);
                 for (i, o) in origins.iter().enumerate() {
                     let s = SphericalRect::new(*o, corner, eu, ev).unwrap();
                     assert_eq!(bits(s.sample(Vec2::new(u, v))), bits(points[i]));
