@@ -573,4 +573,79 @@ mod tests {
             .sample(Vec3::Y * 2.0, Vec2::splat(0.5), LightSampling::Area)
             .is_none());
     }
+
+    /// Each lane of [`Light::seen_from_lanes`] samples exactly what
+    /// [`Light::seen_from`] samples from its point alone, bit for bit, for
+    /// every kind of light and method, from points around, behind, in the
+    /// plane of and far from the light, with any lanes active.
+    #[test]
+    fn each_lane_samples_what_its_point_samples_alone() {
+        use crate::sampling::stream::{seeded, Draw};
+        let rect = |corner: Vec3, eu: Vec3, ev: Vec3| Light::Rect {
+            rect: Rect::new(corner, eu, ev).unwrap(),
+            radiance: Vec3::new(1.0, 2.0, 3.0),
+            prim: 0,
+        };
+        let lights = [
+            rect(Vec3::new(-1.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Z * 2.0),
+            rect(
+                Vec3::new(0.3, 0.5, -2.0),
+                Vec3::new(0.0, 0.6, 0.8),
+                Vec3::X * 0.01,
+            ),
+            Light::Disk {
+                disk: Disk::new(Vec3::Y * 2.0, -Vec3::Y, 0.5),
+                radiance: Vec3::ONE,
+                prim: 0,
+            },
+            Light::Sphere {
+                center: Vec3::Y * 3.0,
+                radius: 0.7,
+                radiance: Vec3::ONE,
+                prim: 0,
+            },
+            Light::Point {
+                position: Vec3::Y,
+                intensity: Vec3::ONE,
+            },
+        ];
+        let bits = |s: Option<LightSample>| {
+            s.map(|s| {
+                let v = [s.wi.to_array(), s.weight.to_array(), [s.distance; 3]];
+                v.map(|c| c.map(f32::to_bits))
+            })
+        };
+        let mut rng = seeded(11);
+        let mut sampled = 0;
+        for case in 0..3000 {
+            let light = &lights[case % lights.len()];
+            let points: [Vec3; LANES] = std::array::from_fn(|lane| match (case + lane) % 4 {
+                // In the first light's plane, or a hair off it.
+                0 => Vec3::new(rng.range(-2.0, 2.0), 1.0 + rng.range(-1e-6, 1e-6), 0.0),
+                1 => Vec3::new(rng.range(-1e3, 1e3), rng.range(-1e3, 1e3), 7.0),
+                _ => Vec3::new(
+                    rng.range(-3.0, 3.0),
+                    rng.range(-2.0, 4.0),
+                    rng.range(-3.0, 3.0),
+                ),
+            });
+            let active = 1 + (rng.unit() * 255.0) as u32;
+            let u: [Vec2; LANES] = std::array::from_fn(|_| Vec2::new(rng.unit(), rng.unit()));
+            for method in [LightSampling::Area, LightSampling::SolidAngle] {
+                let lanes = light
+                    .seen_from_lanes(&points, active, method)
+                    .sample(active, &u);
+                for i in mask_lanes(active) {
+                    let alone = light.seen_from(points[i], method).sample(u[i]);
+                    sampled += alone.is_some() as u32;
+                    assert_eq!(
+                        bits(lanes[i]),
+                        bits(alone),
+                        "case {case} lane {i} {method:?}"
+                    );
+                }
+            }
+        }
+        assert!(sampled > 10_000, "only {sampled} samples reached a light");
+    }
 }
