@@ -103,12 +103,6 @@ pub fn sin_cos8(x: f32x8) -> (f32x8, f32x8) {
     )
 }
 
-/// [`acos8`] of one value: the bits lane 0 gets.
-#[inline]
-pub fn acos(x: f32) -> f32 {
-    acos8(f32x8::splat(x)).to_array()[0]
-}
-
 /// [`sin_cos8`] of one value: the bits lane 0 gets.
 #[inline]
 pub fn sin_cos(x: f32) -> (f32, f32) {
@@ -119,6 +113,12 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`acos8`] of one value: the bits lane 0 gets. (The renderer's scalar
+    /// rectangle makes its four arc cosines in one vector call instead.)
+    fn acos(x: f32) -> f32 {
+        acos8(f32x8::splat(x)).to_array()[0]
+    }
 
     /// Error of `got` in units in the last place of the f64 value `exact`
     /// (the spacing of f32 numbers at its magnitude).
@@ -222,8 +222,8 @@ mod tests {
         }
     }
 
-    /// A lane's result does not depend on its neighbours: the scalar
-    /// wrappers (lane 0 of a splat) give the bits every lane gives.
+    /// A lane's result does not depend on its neighbours: a value alone
+    /// (lane 0 of a splat: `acos`, [`sin_cos`]) gets the bits every lane gets.
     #[test]
     fn a_lane_gives_the_same_bits_as_the_value_alone() {
         let xs: Vec<f32> = (0..4000).map(|i| (i as f32 * 0.7371).sin()).collect();
