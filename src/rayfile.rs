@@ -54,6 +54,15 @@ impl HitRecord {
         v: 0.0,
     };
 
+    /// The record of an occlusion query's answer.
+    pub fn occluded(blocked: bool) -> Self {
+        if blocked {
+            Self::OCCLUDED
+        } else {
+            Self::MISS
+        }
+    }
+
     pub fn from_hit(hit: Option<PrimHit>) -> Self {
         hit.map_or(Self::MISS, |h| HitRecord {
             t: h.t,

@@ -1,4 +1,5 @@
-//! Packets and single rays return identical hits: the same primitive, t,
+//! Packets, streams (several single rays in flight) and single rays return
+//! identical hits: the same primitive, t,
 //! u, v bit for bit, and the same occlusion answer, on coherent (lens
 //! samples of a pixel, shadow rays from one point to an area light),
 //! incoherent (random chords) and tie-heavy (aimed at shared vertices and
@@ -192,6 +193,47 @@ fn packets_and_single_rays_return_identical_hits() {
                 .map(|batch| assert_packet_matches_single_rays(&scene, batch, except, &label))
                 .sum();
             assert!(hits > 0, "{name}: the set should hit something");
+        }
+    }
+}
+
+/// A stream of rays (several in flight at once where the tree prefetches;
+/// one at a time where it does not) gets exactly the single rays' closest
+/// hits and occlusion answers, with a plane outside the BVH and a sphere
+/// as the excepted primitive.
+#[test]
+fn streams_and_single_rays_return_identical_hits() {
+    for (quality, mut scene) in scenes() {
+        let rays: Vec<Ray> = ray_sets(&scene)
+            .into_iter()
+            .flat_map(|(_, batches)| batches.into_iter().flatten())
+            .collect();
+        let except = scene.geometry.triangle_count; // the sphere
+        for prefetch in [true, false] {
+            scene.geometry.bvh.prefetch = prefetch;
+            let mut hits = vec![None; rays.len()];
+            scene.geometry.intersect_stream(&rays, &mut hits);
+            let mut blocked = vec![true; rays.len()];
+            scene.geometry.occluded_stream(&rays, except, &mut blocked);
+            for (i, ray) in rays.iter().enumerate() {
+                let label = format!("{quality:?} prefetch {prefetch}: ray {ray:?}");
+                assert_eq!(
+                    hit_bits(hits[i]),
+                    hit_bits(scene.geometry.intersect(ray)),
+                    "{label}"
+                );
+                assert_eq!(
+                    blocked[i],
+                    scene.geometry.occluded_except(ray, except),
+                    "{label}"
+                );
+            }
+            let found = hits.iter().filter(|h| h.is_some()).count();
+            let open = blocked.iter().filter(|&&b| !b).count();
+            assert!(
+                found > 1000 && open > 100,
+                "{quality:?}: {found} hits, {open} unblocked"
+            );
         }
     }
 }

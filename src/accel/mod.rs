@@ -8,7 +8,9 @@
 //! it ourselves: obvhs's own traversal clamps tmin to 1e-4, uses a
 //! non-watertight triangle test and drops nodes when its 32-entry stack
 //! overflows. Ours honours `[tmin, tmax]`, uses the watertight test and
-//! spills to the heap instead of dropping work.
+//! spills to the heap instead of dropping work. Given many rays at once,
+//! `stream` keeps several single-ray walks in flight on one thread so
+//! that their cache misses overlap.
 
 pub mod build;
 mod cluster;
@@ -17,7 +19,9 @@ pub mod hit;
 pub mod node;
 pub mod packet;
 pub mod prefetch;
+pub mod stream;
 pub mod traverse;
+mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};
 pub use collapse::{LEAF_BLOCK, NO_PRIM};

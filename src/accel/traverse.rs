@@ -45,6 +45,14 @@ impl<T: Copy + Default> Stack<T> {
         }
     }
 
+    /// Empties the stack, keeping its memory. Entries are always written
+    /// before they are read, so the old ones need no clearing.
+    #[inline(always)]
+    pub(crate) fn clear(&mut self) {
+        self.len = 0;
+        self.spill.clear();
+    }
+
     #[inline(always)]
     pub(crate) fn push(&mut self, e: T) {
         if self.len == STACK_INLINE {
@@ -194,7 +202,7 @@ impl RayBoxes {
 /// `t` as a key whose unsigned order is the order of t (negative values
 /// flipped below the positive ones), for sorting distances as integers.
 #[inline(always)]
-fn order_key(t: f32) -> u32 {
+pub(super) fn order_key(t: f32) -> u32 {
     let bits = t.to_bits();
     if bits >> 31 == 1 {
         !bits
@@ -287,7 +295,7 @@ impl Bvh8 {
     /// random dragon rays, and only the two nearest 2–11% slower
     /// (interleaved wall-time A/B).
     #[inline(always)]
-    fn descend_nearest<L>(
+    pub(super) fn descend_nearest<L>(
         &self,
         stack: &mut Stack<u64>,
         leaf_data: &[L],
@@ -338,72 +346,6 @@ impl Bvh8 {
         }
     }
 
-    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_leaf(start, count, ray)`
-    /// tests the leaf holding slots `start..start + count` of `prim_ids`
-    /// (where a scene keeps the vertices the test reads, in the same
-    /// order) and returns its closest hit nearer than `ray.tmax`, ties
-    /// broken by the smaller primitive id ([`Bvh8::closest_in_leaf`] does
-    /// that for a per-primitive test).
-    ///
-    /// `leaf_data[start / LEAF_BLOCK]` is what `hit_leaf` reads for the leaf
-    /// at `start` (a scene's triangle blocks), prefetched when the leaf is
-    /// deferred; a caller whose leaf tests read nothing block-shaped passes
-    /// an empty slice, and only nodes are prefetched.
-    #[inline(always)]
-    pub fn closest<L, F>(&self, ray: &Ray, leaf_data: &[L], mut hit_leaf: F) -> Option<PrimHit>
-    where
-        F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
-    {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let mut ray = *ray;
-        let boxes = RayBoxes::new(&ray);
-        let mut best = None;
-        let mut stack: Stack<u64> = Stack::new();
-        // The node or leaf being visited. A node descends straight into its
-        // nearest hit child and pushes only the others (farthest first), so
-        // a ray that enters one child per level never touches the stack.
-        let mut current = 0u32;
-        loop {
-            if !is_leaf(current) {
-                let node = &self.nodes[current as usize];
-                let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
-                if mask != 0 {
-                    current = self.descend_nearest(&mut stack, leaf_data, &node.child, tn, mask);
-                    continue;
-                }
-            } else {
-                let (start, count) = leaf_range(current);
-                let test = tie_ray(&ray, best.as_ref());
-                if let Some(h) = hit_leaf(start, count, &test) {
-                    if closer(&h, best.as_ref()) {
-                        ray.tmax = h.t;
-                        best = Some(h);
-                    }
-                }
-            }
-            // Next: the nearest pushed child the ray can still reach. The
-            // entry distance carries rounding error like the box test's far
-            // distance, so it is compared with the same widening: a child
-            // whose box holds a triangle at exactly the best t (a ray along
-            // an edge shared across two leaves) must still be visited, or
-            // the tie would go to whichever leaf came first.
-            // Keys carry a slot in their low bits (see `nearest_last`).
-            let reach = order_key(ray.tmax * WIDEN) | 7;
-            loop {
-                match stack.pop() {
-                    None => return best,
-                    Some(entry) if (entry >> 32) as u32 <= reach => {
-                        current = entry as u32;
-                        break;
-                    }
-                    Some(_) => {}
-                }
-            }
-        }
-    }
-
     /// A leaf test for [`Bvh8::closest`] from a per-primitive one:
     /// `hit_prim(slot, id, ray)` must return a hit only if it is nearer
     /// than `ray.tmax`.
@@ -430,56 +372,6 @@ impl Bvh8 {
             }
         }
         best
-    }
-
-    /// True if any leaf reports a blocker in `(tmin, tmax)`;
-    /// `leaf_data` and `blocks_leaf(start, count, ray)` as for
-    /// [`Bvh8::closest`].
-    ///
-    /// Children are visited nearest first, as in [`Bvh8::closest`] (no
-    /// culling: the first blocker ends the walk). The sort costs 9–17% more
-    /// instructions than pushing the children unsorted, yet on the dragon's
-    /// `strata rays` sets it was faster in wall time on every kind (camera
-    /// +17%, edges +5–7%, inside +3–5%, random +2–4%, grazing +1%), even on
-    /// `strata bench`'s sets, and mixed on the bunny (edges +9%, camera
-    /// +1%, random even, grazing −2%, inside −8%: from inside a closed mesh
-    /// every direction is blocked, so any order finds a blocker and the
-    /// sort is pure cost). The branch-free network replaces
-    /// a push loop whose trip count mispredicts (dragon camera rays: 1.49 →
-    /// 1.09 mispredicted branches per ray in callgrind's simulation), and
-    /// the nearest boxes hold the blocker a little more often (about 5%
-    /// fewer node and leaf tests there). On the greedy tree before the SAH
-    /// collapse it had been a wash.
-    #[inline(always)]
-    pub fn any_hit<L, F>(&self, ray: &Ray, leaf_data: &[L], mut blocks_leaf: F) -> bool
-    where
-        F: FnMut(u32, u32, &Ray) -> bool,
-    {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let boxes = RayBoxes::new(ray);
-        let mut stack: Stack<u64> = Stack::new();
-        let mut current = 0u32;
-        loop {
-            if !is_leaf(current) {
-                let node = &self.nodes[current as usize];
-                let (tn, mask) = boxes.test(&node.bounds, ray.tmin, ray.tmax);
-                if mask != 0 {
-                    current = self.descend_nearest(&mut stack, leaf_data, &node.child, tn, mask);
-                    continue;
-                }
-            } else {
-                let (start, count) = leaf_range(current);
-                if blocks_leaf(start, count, ray) {
-                    return true;
-                }
-            }
-            match stack.pop() {
-                Some(entry) => current = entry as u32,
-                None => return false,
-            }
-        }
     }
 
     /// The primitives of leaf `start..start + count`, for per-primitive

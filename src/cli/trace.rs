@@ -1,7 +1,8 @@
 //! `strata trace MESH --rays RAYS.bin --hits HITS.bin [--occlusion] [--threads T]`:
 //! trace a ray file against one mesh with the renderer's own queries
-//! ([`Scene::intersect`] and [`Scene::occluded`]) and write one hit record
-//! per ray (see [`strata::rayfile`]).
+//! (`Geometry::intersect_stream` and `occluded_stream`, or one ray at a
+//! time through `intersect` and `occluded`) and write one hit record per
+//! ray (see [`strata::rayfile`]).
 
 use super::CliError;
 use clap::Args;
@@ -42,12 +43,22 @@ pub struct TraceArgs {
     /// Software prefetching of deferred BVH children: auto | on | off. Auto
     /// turns it on for trees of 8 MiB and more (nodes and leaf blocks).
     /// It changes no hit, only the time: compare `on` with `off` to measure it.
+    /// Where it is on, each thread keeps several rays in flight at once.
     #[arg(long, default_value = "auto")]
     pub prefetch: Prefetch,
+    /// Trace one ray at a time, as the renderer traces a lone ray, instead
+    /// of several in flight at once on each thread. The hits are the same;
+    /// compare the two to measure the interleaving.
+    #[arg(long)]
+    pub one_at_a_time: bool,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
 }
+
+/// Rays a thread takes at a time: many interleaved walks' worth, few
+/// enough that threads balance.
+const CHUNK: usize = 256;
 
 /// Trace every ray with `threads` threads (0: all cores); returns the
 /// records, the thread count used and the seconds the tracing took (the
@@ -57,26 +68,39 @@ pub fn trace(
     scene: &Scene,
     rays: &[strata::math::Ray],
     occlusion: bool,
+    one_at_a_time: bool,
     threads: usize,
 ) -> Result<(Vec<HitRecord>, usize, f64), CliError> {
     let pool = super::thread_pool(threads)?;
     let (hits, seconds) = pool.install(|| {
         let start = Instant::now();
-        let hits: Vec<HitRecord> = rays
-            .par_iter()
-            .with_min_len(256)
-            .map(|ray| {
-                if occlusion {
-                    if scene.geometry.occluded(ray) {
-                        HitRecord::OCCLUDED
+        let hits: Vec<HitRecord> = if one_at_a_time {
+            rays.par_iter()
+                .with_min_len(CHUNK)
+                .map(|ray| {
+                    if occlusion {
+                        HitRecord::occluded(scene.geometry.occluded(ray))
                     } else {
-                        HitRecord::MISS
+                        HitRecord::from_hit(scene.geometry.intersect(ray))
                     }
-                } else {
-                    HitRecord::from_hit(scene.geometry.intersect(ray))
-                }
-            })
-            .collect();
+                })
+                .collect()
+        } else {
+            rays.par_chunks(CHUNK)
+                .flat_map_iter(|chunk| {
+                    let records: Vec<HitRecord> = if occlusion {
+                        let mut out = vec![false; chunk.len()];
+                        scene.geometry.occluded_stream(chunk, u32::MAX, &mut out);
+                        out.into_iter().map(HitRecord::occluded).collect()
+                    } else {
+                        let mut out = vec![None; chunk.len()];
+                        scene.geometry.intersect_stream(chunk, &mut out);
+                        out.into_iter().map(HitRecord::from_hit).collect()
+                    };
+                    records
+                })
+                .collect()
+        };
         (hits, start.elapsed().as_secs_f64())
     });
     Ok((hits, pool.current_num_threads(), seconds))
@@ -95,10 +119,25 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
         )
         .into());
     }
-    let (hits, threads, first) = trace(&scene, &rays, args.occlusion, args.threads)?;
+    let (hits, threads, first) = trace(
+        &scene,
+        &rays,
+        args.occlusion,
+        args.one_at_a_time,
+        args.threads,
+    )?;
     let mut times = vec![first];
     for _ in 1..args.repeats {
-        times.push(trace(&scene, &rays, args.occlusion, args.threads)?.2);
+        times.push(
+            trace(
+                &scene,
+                &rays,
+                args.occlusion,
+                args.one_at_a_time,
+                args.threads,
+            )?
+            .2,
+        );
     }
     times.sort_by(f64::total_cmp);
     let seconds = times[times.len() / 2];

@@ -125,4 +125,59 @@ impl Geometry {
             self.blocks_leaf(start, count, r, s, except)
         })
     }
+
+    /// Closest hits of any number of rays: `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. Where the BVH prefetches (a tree that
+    /// outgrows the caches, [`crate::accel::prefetch`]) several rays are
+    /// in flight at once ([`crate::accel::stream`]); on a tree that fits
+    /// the caches there is no wait to overlap, and one ray at a time is as
+    /// fast or faster (bunny, 300,000 rays: random 7.4–7.5 Mrays/s in
+    /// flight against 7.1–8.0, camera 10.8–14.3 against 14.7–14.9).
+    pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        if !self.bvh.prefetch {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.intersect(r);
+            }
+            return;
+        }
+        self.bvh.closest_stream(
+            rays,
+            &self.leaf_blocks,
+            |sheared: &mut Option<ShearedRay>, start, count, r| {
+                let s = sheared.get_or_insert_with(|| ShearedRay::new(r));
+                self.hit_leaf(start, count, r, s)
+            },
+            out,
+        );
+        if !self.planes.is_empty() {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.closest_plane(r, *o);
+            }
+        }
+    }
+
+    /// Occlusion of any number of rays, ignoring primitive `except`
+    /// (`u32::MAX`: none): `out[i]` is exactly
+    /// `self.occluded_except(&rays[i], except)`. Several rays in flight
+    /// where the BVH prefetches, as for [`Geometry::intersect_stream`].
+    pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        if !self.bvh.prefetch {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.occluded_except(r, except);
+            }
+            return;
+        }
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.planes.iter().any(|p| p.intersect(r).is_some());
+        }
+        self.bvh.any_hit_stream(
+            rays,
+            &self.leaf_blocks,
+            |sheared: &mut Option<ShearedRay>, start, count, r| {
+                let s = sheared.get_or_insert_with(|| ShearedRay::new(r));
+                self.blocks_leaf(start, count, r, s, except)
+            },
+            out,
+        );
+    }
 }

@@ -169,6 +169,10 @@ impl Integrator<'_> {
                 .geometry
                 .occluded_packet(rays, except, &mut blocked[..n]);
         } else {
+            // One ray at a time, not `occluded_stream`: a wave's rays start
+            // close together and head for one light, so they share cached
+            // nodes and interleaving their walks only adds work
+            // (docs/mitsuba.md, "What was tried for the render").
             for (b, r) in blocked.iter_mut().zip(rays) {
                 *b = self.scene.geometry.occluded_except(r, except);
             }
