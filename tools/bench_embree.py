@@ -3,7 +3,7 @@
 
     bench_embree.py MESH [RAYS.bin] [MESH [RAYS.bin] ...] [-n 100000] [--seed 1]
                     [--strata target/release/strata] [--threads 1] [--repeats 3]
-                    [--csv embree_bench.csv]
+                    [--mode stream|single] [--csv embree_bench.csv]
 
 Each MESH (OBJ or PLY) is traced with the rays of the RAYS.bin that follows
 it, or, if none follows, with `strata rays all MESH -n N --seed S` (N rays
@@ -12,20 +12,31 @@ the kind of each run of rays. For every mesh, kind and query (closest hit,
 occlusion) the engines trace the same rays on --threads N threads (default
 1; 0: every core this process may run on, a count then passed to both):
 
+How the rays are handed over (--mode):
+
+* `stream` (default): each engine is given chunks of 256 rays to trace as
+  it finds best: `strata trace`, which keeps several rays in flight on each
+  thread on a mesh that outgrows the caches, against Embree's stream API
+  (rtcIntersect1M / rtcOccluded1M, which groups coherent rays into
+  packets);
+* `single`: one ray at a time, `strata trace --one-at-a-time` against
+  rtcIntersect1 / rtcOccluded1 in a plain loop.
+
+The engines:
+
 * strata through `strata trace --threads N --repeats 3` (its own timing of
   the trace phase, after load and BVH build: the median of three passes in
   one process), with RAYON_NUM_THREADS=N so that its BVH build runs on N
   threads too;
 * Embree through tools/embree/embree_trace (compiled here on demand with
   `make -C tools/embree`, into target/embree/), a C program on Embree 3's
-  API: rtcIntersect1 / rtcOccluded1 in a plain loop on N threads taking
-  chunks of 256 rays, the scene built at RTC_BUILD_QUALITY_HIGH on N
+  API on N threads taking chunks of 256 rays, the scene built at RTC_BUILD_QUALITY_HIGH on N
   threads, once in default mode and once with RTC_SCENE_FLAG_ROBUST. Each
   harness builds once and then answers pass requests (--serve); a
   measurement is the median of three passes, as strata's is.
 
-Single rays only: `strata trace` has no packet mode, so strata's 8-ray
-packets against rtcIntersect8 / rtcOccluded8 are compared by `strata bench`.
+strata's 8-ray packets against rtcIntersect8 / rtcOccluded8 are compared
+by `strata bench`.
 
 Each row's figure is the median of --repeats such measurements, strata's and
 Embree's alternating, so that a change in the machine's load falls on all.
@@ -103,11 +114,11 @@ class Harness:
         self.build_s = float(ready[2])
         self.bytes = int(ready[3])
 
-    def rate(self, first, count, query):
-        """Mrays/s: the median of PASSES passes (single rays) over rays first..first + count."""
+    def rate(self, first, count, query, mode):
+        """Mrays/s: the median of PASSES passes (`mode`: single or stream) over rays first..first + count."""
         times = []
         for _ in range(PASSES):
-            self.proc.stdin.write(f"{first} {count} {query} single {self.threads}\n")
+            self.proc.stdin.write(f"{first} {count} {query} {mode} {self.threads}\n")
             self.proc.stdin.flush()
             reply = self.proc.stdout.readline().split()
             if len(reply) != 2:
@@ -186,13 +197,15 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
                 args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", str(a.threads), "--repeats", str(PASSES)]
                 if query == "occlusion":
                     args.append("--occlusion")
+                if a.mode == "single":
+                    args.append("--one-at-a-time")
                 s, e = [], ([], [])
                 for _ in range(a.repeats):
                     rate, build = strata_rate(args, mesh, a.threads)
                     s.append(rate)
                     builds.append(build)
                     for h, out in zip(harnesses, e):
-                        out.append(h.rate(first, count, query))
+                        out.append(h.rate(first, count, query, a.mode))
                 s = statistics.median(s)
                 ed, er = (statistics.median(x) if x else None for x in e)
                 if ed:
@@ -223,6 +236,9 @@ def main(argv=None):
     p.add_argument("--strata", default="target/release/strata", help="the strata executable")
     p.add_argument("--threads", type=int, default=1, help="threads each engine traces (and builds) on; 0: all cores (default 1)")
     p.add_argument("--repeats", type=int, default=3, help="measurements per row; the median is kept")
+    p.add_argument("--mode", choices=("stream", "single"), default="stream",
+                   help="stream: chunks of 256 rays (strata trace, rtcIntersect1M); single: one ray at a time "
+                        "(strata trace --one-at-a-time, rtcIntersect1) (default stream)")
     p.add_argument("--csv", default="embree_bench.csv", help="where to save the rows (default embree_bench.csv)")
     a = p.parse_args(argv)
     if a.threads < 0:
@@ -233,8 +249,9 @@ def main(argv=None):
     try:
         jobs = pairs(a.inputs)
         exe = build_harness()
-        if a.threads != 1:
-            print(f"# single rays on {threads_word(a.threads)} per engine: strata trace --threads {a.threads}, embree_trace --threads {a.threads}")
+        how = {"stream": "streams of 256 rays (strata trace, rtcIntersect1M)",
+               "single": "one ray at a time (strata trace --one-at-a-time, rtcIntersect1)"}[a.mode]
+        print(f"# {how} on {threads_word(a.threads)} per engine")
         print(f"{'mesh':<16} {'tris':>8} {'kind':<8} {'query':<10} {'rays':>8} {'strata':>7} {'embree':>7} {'robust':>7} {'s/embree':>8} {'s/robust':>8}")
         with tempfile.TemporaryDirectory() as workdir:
             for mesh, rays_path in jobs:
@@ -243,11 +260,11 @@ def main(argv=None):
         print(f"error: {e}", file=sys.stderr)
         return 2
     with open(a.csv, "w") as f:
-        f.write("mesh,triangles,kind,query,rays,threads,strata_mrays_per_s,embree_mrays_per_s,embree_robust_mrays_per_s,"
+        f.write("mesh,triangles,kind,query,rays,threads,mode,strata_mrays_per_s,embree_mrays_per_s,embree_robust_mrays_per_s,"
                 "strata_over_embree,strata_over_embree_robust\n")
         for name, tris, kind, query, count, s, ed, er in rows:
             cols = [f"{x:.4f}" if x else "" for x in (ed, er, ed and s / ed, er and s / er)]
-            f.write(f"{name},{tris},{kind},{query},{count},{a.threads},{s:.4f},{','.join(cols)}\n")
+            f.write(f"{name},{tris},{kind},{query},{count},{a.threads},{a.mode},{s:.4f},{','.join(cols)}\n")
     print(f"-> {a.csv}")
     return 0
 

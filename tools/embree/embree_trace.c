@@ -1,7 +1,7 @@
 /* embree_trace: Intel Embree 3's own C API on strata's ray files, the
  * anchor of strata's performance comparison (docs/embree.md).
  *
- *   embree_trace MESH.tris RAYS.bin [--hits HITS.bin] [--occlusion] [--packet]
+ *   embree_trace MESH.tris RAYS.bin [--hits HITS.bin] [--occlusion] [--packet | --stream]
  *                [--robust] [--quality low|medium|high] [--threads N] [--repeats R]
  *                [--first F --count C] [--isa ISA] [--verbose]
  *   embree_trace MESH.tris RAYS.bin --serve [--robust] [--quality Q] [--threads N]
@@ -20,7 +20,9 @@
  * requested quality (default high: spatial splits for triangles) with
  * RTC_SCENE_FLAG_ROBUST if --robust. Tracing is a plain loop of
  * rtcIntersect1 / rtcOccluded1 (or rtcIntersect8 / rtcOccluded8 over
- * consecutive groups of 8 rays with --packet) writing one hit record per
+ * consecutive groups of 8 rays with --packet, or rtcIntersect1M /
+ * rtcOccluded1M, Embree's stream API, over each chunk of rays with --stream)
+ * writing one hit record per
  * ray, on --threads threads (0: all cores) taking chunks of 256 rays from a
  * shared counter. Like `strata trace`, only tracing is timed: loading and
  * building are not, nor is starting the threads; --repeats passes, the
@@ -30,7 +32,7 @@
  * X Mrays/s on N threads (load L s, BVH B s) -> HITS"), so one parser reads
  * both. With --serve it builds once, prints
  *   ready TRIANGLES BUILD_SECONDS EMBREE_BYTES PEAK_BYTES
- * and then answers each line "FIRST COUNT closest|occlusion single|packet
+ * and then answers each line "FIRST COUNT closest|occlusion single|packet|stream
  * THREADS" on stdin with "SECONDS HITS" (one pass over rays FIRST..FIRST +
  * COUNT), until end of input: `strata bench` drives it that way so that its
  * passes and Embree's can alternate without building twice.
@@ -104,7 +106,7 @@ typedef struct {
     const float *rays; /* 8 f32 per ray */
     float *hits;       /* 4 x 32 bits per ray, or NULL */
     size_t first, count;
-    int occlusion, packet;
+    int occlusion, packet, stream;
     _Atomic size_t next;
     _Atomic size_t found;
 } Job;
@@ -206,6 +208,47 @@ static void trace_packets(Job *job, size_t lo, size_t hi, size_t *found) {
     }
 }
 
+/* Each chunk of rays through Embree's stream API (rtcIntersect1M /
+ * rtcOccluded1M, array of structures, the default incoherent context): the
+ * rays handed over together, for Embree to trace them as it finds best. */
+static void trace_stream(Job *job, size_t lo, size_t hi, size_t *found) {
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTC_ALIGN(64) struct RTCRayHit rh[CHUNK];
+    size_t n = hi - lo;
+    for (size_t k = 0; k < n; k++) {
+        const float *r = job->rays + 8 * (lo + k);
+        rh[k].ray = (struct RTCRay){
+            .org_x = r[0], .org_y = r[1], .org_z = r[2], .tnear = r[6],
+            .dir_x = r[3], .dir_y = r[4], .dir_z = r[5], .time = 0.0f,
+            .tfar = r[7], .mask = 0xffffffffu, .id = 0, .flags = 0,
+        };
+        rh[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh[k].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+    if (job->occlusion)
+        rtcOccluded1M(job->scene, &context, &rh[0].ray, (unsigned)n, sizeof rh[0]);
+    else
+        rtcIntersect1M(job->scene, &context, rh, (unsigned)n, sizeof rh[0]);
+    for (size_t k = 0; k < n; k++) {
+        float *out = job->hits ? job->hits + 4 * (lo + k) : NULL;
+        if (job->occlusion) {
+            int occluded = rh[k].ray.tfar == -INFINITY;
+            *found += occluded;
+            if (out) write_hit(out, occluded ? 0.0f : INFINITY, occluded ? 0u : 0xffffffffu, 0.0f, 0.0f);
+        } else {
+            int hit = rh[k].hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            *found += hit;
+            if (out) {
+                if (hit)
+                    write_hit(out, rh[k].ray.tfar, rh[k].hit.primID, rh[k].hit.u, rh[k].hit.v);
+                else
+                    write_hit(out, INFINITY, 0xffffffffu, 0.0f, 0.0f);
+            }
+        }
+    }
+}
+
 static void *worker(void *arg) {
     Job *job = arg;
     size_t found = 0;
@@ -215,6 +258,8 @@ static void *worker(void *arg) {
         size_t hi = lo + CHUNK < job->count ? lo + CHUNK : job->count;
         if (job->packet)
             trace_packets(job, job->first + lo, job->first + hi, &found);
+        else if (job->stream)
+            trace_stream(job, job->first + lo, job->first + hi, &found);
         else
             trace_single(job, job->first + lo, job->first + hi, &found);
     }
@@ -283,7 +328,7 @@ static int cmp_double(const void *a, const void *b) {
 
 static void usage(void) {
     fprintf(stderr,
-            "usage: embree_trace MESH.tris RAYS.bin [--hits HITS.bin] [--occlusion] [--packet] [--robust]\n"
+            "usage: embree_trace MESH.tris RAYS.bin [--hits HITS.bin] [--occlusion] [--packet | --stream] [--robust]\n"
             "                    [--quality low|medium|high] [--threads N] [--repeats R] [--first F --count C]\n"
             "                    [--isa ISA] [--verbose] [--serve]\n");
     exit(2);
@@ -291,7 +336,7 @@ static void usage(void) {
 
 int main(int argc, char **argv) {
     const char *mesh_path = NULL, *rays_path = NULL, *hits_path = NULL, *isa = NULL;
-    int occlusion = 0, packet = 0, robust = 0, serve = 0, verbose = 0;
+    int occlusion = 0, packet = 0, stream = 0, robust = 0, serve = 0, verbose = 0;
     int threads = 1, repeats = 1;
     long long first = 0, count = -1;
     enum RTCBuildQuality quality = RTC_BUILD_QUALITY_HIGH;
@@ -301,6 +346,7 @@ int main(int argc, char **argv) {
         if (!strcmp(a, "--hits") && next) hits_path = argv[++i];
         else if (!strcmp(a, "--occlusion")) occlusion = 1;
         else if (!strcmp(a, "--packet")) packet = 1;
+        else if (!strcmp(a, "--stream")) stream = 1;
         else if (!strcmp(a, "--robust")) robust = 1;
         else if (!strcmp(a, "--serve")) serve = 1;
         else if (!strcmp(a, "--verbose")) verbose = 1;
@@ -320,7 +366,7 @@ int main(int argc, char **argv) {
         else if (!rays_path) rays_path = a;
         else usage();
     }
-    if (!mesh_path || !rays_path || repeats < 1 || threads < 0) usage();
+    if (!mesh_path || !rays_path || repeats < 1 || threads < 0 || (packet && stream)) usage();
     if (threads == 0) threads = (int)sysconf(_SC_NPROCESSORS_ONLN);
 
     double t_load = now();
@@ -382,7 +428,7 @@ int main(int argc, char **argv) {
             if (sscanf(line, "%lld %lld %31s %31s %d", &f, &c, query, mode, &th) != 5 || f < 0 || c < 0 ||
                 (size_t)f > nrays || (size_t)c > nrays - (size_t)f || th < 0 ||
                 (strcmp(query, "closest") && strcmp(query, "occlusion")) ||
-                (strcmp(mode, "single") && strcmp(mode, "packet"))) {
+                (strcmp(mode, "single") && strcmp(mode, "packet") && strcmp(mode, "stream"))) {
                 printf("error: bad request: %s", line);
                 fflush(stdout);
                 continue;
@@ -391,6 +437,7 @@ int main(int argc, char **argv) {
             job.count = (size_t)c;
             job.occlusion = !strcmp(query, "occlusion");
             job.packet = !strcmp(mode, "packet");
+            job.stream = !strcmp(mode, "stream");
             job.hits = NULL;
             double s = trace_pass(&job, th ? th : (int)sysconf(_SC_NPROCESSORS_ONLN));
             printf("%.9f %zu\n", s, (size_t)atomic_load(&job.found));
@@ -405,6 +452,7 @@ int main(int argc, char **argv) {
     job.count = (size_t)count;
     job.occlusion = occlusion;
     job.packet = packet;
+    job.stream = stream;
     float *hits = hits_path ? aligned_alloc(64, (16 * (size_t)nrays + 63) / 64 * 64) : NULL;
     double *times = calloc((size_t)repeats, sizeof *times);
     for (int r = 0; r < repeats; r++) {
@@ -421,7 +469,7 @@ int main(int argc, char **argv) {
     }
     printf("traced %zu rays (%s%s, Embree %s%s) against %u triangles: %zu %s in %.3f s = %.2f Mrays/s on %d threads "
            "(load %.2f s, BVH %.2f s, %.1f B/tri) -> %s\n",
-           job.count, occlusion ? "occlusion" : "closest hit", packet ? ", packets of 8" : "",
+           job.count, occlusion ? "occlusion" : "closest hit", packet ? ", packets of 8" : stream ? ", stream" : "",
            robust ? "robust" : "default", quality == RTC_BUILD_QUALITY_HIGH ? ", high quality" : "", nt,
            (size_t)atomic_load(&job.found), occlusion ? "occluded" : "hits", seconds,
            job.count / (seconds > 1e-9 ? seconds : 1e-9) / 1e6, threads, t_load, t_build,
