@@ -144,6 +144,7 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::super::build::BuildQuality;
+    use super::super::traverse::tests::sphere_hit;
     use super::*;
     use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
@@ -171,6 +172,14 @@ mod tests {
         out
     }
 
+    /// [`spheres`] and their tree.
+    fn cloud() -> (Vec<Sphere>, Bvh8) {
+        let spheres = spheres();
+        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        (spheres, bvh)
+    }
+
     /// Rays through the cloud, a third of them aimed at the clump; every
     /// origin differs, so a leaf test can tell which ray called it.
     fn rays(n: usize) -> Vec<Ray> {
@@ -196,23 +205,22 @@ mod tests {
         r.origin.to_array().map(f32::to_bits)
     }
 
+    /// Notes that the ray with `r`'s origin visited leaf `start..start + count`.
+    fn record(visits: &Visits, r: &Ray, start: u32, count: u32) {
+        visits
+            .borrow_mut()
+            .entry(key(r))
+            .or_default()
+            .push((start, count));
+    }
+
     /// Every ray's answer and the leaves it visited, in order, are those of
     /// its own single-ray walk, for any number of rays (fewer than
     /// [`IN_FLIGHT`] too); each walk's state starts fresh.
     #[test]
     fn streams_answer_and_visit_what_single_rays_do() {
-        let spheres = spheres();
-        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
-        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
-        let hit = |id: u32, r: &Ray| {
-            spheres[id as usize].intersect(r).map(|t| PrimHit {
-                t,
-                prim: id,
-                u: 0.0,
-                v: 0.0,
-                part: 0,
-            })
-        };
+        let (spheres, bvh) = cloud();
+        let hit = |id: u32, r: &Ray| sphere_hit(&spheres, id, r);
         for n in [0, 1, 3, IN_FLIGHT, IN_FLIGHT + 1, 1001] {
             let rays = rays(n);
             let (single, in_flight): (Visits, Visits) = Default::default();
@@ -220,11 +228,7 @@ mod tests {
                 .iter()
                 .map(|ray| {
                     bvh.closest(ray, NO_DATA, |start, count, r| {
-                        single
-                            .borrow_mut()
-                            .entry(key(r))
-                            .or_default()
-                            .push((start, count));
+                        record(&single, r, start, count);
                         bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
                     })
                 })
@@ -240,11 +244,7 @@ mod tests {
                         in_flight.borrow().get(&key(r)).map_or(0, Vec::len) + 1,
                         "a walk's state is its own ray's"
                     );
-                    in_flight
-                        .borrow_mut()
-                        .entry(key(r))
-                        .or_default()
-                        .push((start, count));
+                    record(&in_flight, r, start, count);
                     bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
                 },
                 &mut got,
@@ -259,9 +259,7 @@ mod tests {
     /// still hold entries, spilled ones included, before the next ray reuses them.
     #[test]
     fn any_hit_streams_answer_and_visit_what_single_rays_do() {
-        let spheres = spheres();
-        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
-        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        let (spheres, bvh) = cloud();
         let blocks = |start: u32, count: u32, r: &Ray| {
             bvh.leaf_prims(start, count)
                 .any(|(_, id)| spheres[id as usize].intersect(r).is_some())
@@ -276,11 +274,7 @@ mod tests {
                 .map(|(i, ray)| {
                     skipped(i)
                         || bvh.any_hit(ray, NO_DATA, |start, count, r| {
-                            single
-                                .borrow_mut()
-                                .entry(key(r))
-                                .or_default()
-                                .push((start, count));
+                            record(&single, r, start, count);
                             blocks(start, count, r)
                         })
                 })
@@ -290,11 +284,7 @@ mod tests {
                 &rays,
                 NO_DATA,
                 |_: &mut (), start, count, r| {
-                    in_flight
-                        .borrow_mut()
-                        .entry(key(r))
-                        .or_default()
-                        .push((start, count));
+                    record(&in_flight, r, start, count);
                     blocks(start, count, r)
                 },
                 &mut got,

@@ -418,7 +418,7 @@ impl Bvh8 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::build::BuildQuality;
     use super::*;
     use crate::accel::NO_PRIM;
@@ -429,6 +429,18 @@ mod tests {
 
     /// Leaf tests here read spheres by id: no block-shaped leaf data.
     const NO_DATA: &[()] = &[];
+
+    /// Sphere `id`'s hit on `r` as traversal reports it: the leaf test of
+    /// the traversal tests here and in `stream`.
+    pub(in crate::accel) fn sphere_hit(spheres: &[Sphere], id: u32, r: &Ray) -> Option<PrimHit> {
+        spheres[id as usize].intersect(r).map(|t| PrimHit {
+            t,
+            prim: id,
+            u: 0.0,
+            v: 0.0,
+            part: 0,
+        })
+    }
 
     /// Random spheres, checked against brute force for every preset.
     #[test]
@@ -468,15 +480,7 @@ mod tests {
                 let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
                 let mut ray = Ray::new(o, d);
                 ray.tmax = 5.0 + rnd() * 40.0;
-                let hit = |id: u32, r: &Ray| {
-                    spheres[id as usize].intersect(r).map(|t| PrimHit {
-                        t,
-                        prim: id,
-                        u: 0.0,
-                        v: 0.0,
-                        part: 0,
-                    })
-                };
+                let hit = |id: u32, r: &Ray| sphere_hit(&spheres, id, r);
                 let brute = (0..500u32)
                     .filter_map(|i| hit(i, &ray))
                     .min_by(|a, b| a.t.total_cmp(&b.t));

@@ -11,14 +11,71 @@ use super::node::{is_leaf, leaf_range};
 use super::traverse::{order_key, RayBoxes, Stack, WIDEN};
 use crate::math::Ray;
 
+/// Where a walk of either kind stands: the ray's slab constants, the
+/// children it deferred, and the node or leaf its next step visits.
+struct Cursor {
+    boxes: RayBoxes,
+    stack: Stack<u64>,
+    current: u32,
+}
+
+impl Cursor {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        Self {
+            boxes: RayBoxes::new(ray),
+            stack: Stack::new(),
+            current: 0,
+        }
+    }
+
+    /// Back at the root for `ray`, reusing the stack's memory.
+    #[inline(always)]
+    fn restart(&mut self, ray: &Ray) {
+        self.boxes = RayBoxes::new(ray);
+        self.stack.clear();
+        self.current = 0;
+    }
+
+    /// At an inner node: moves into its nearest child `ray` enters in
+    /// `[ray.tmin, ray.tmax]`, pushing the others (farthest first), and returns
+    /// true; false if it enters none. A ray that enters one child per
+    /// level never touches the stack.
+    #[inline(always)]
+    fn enter_node<L>(
+        &mut self,
+        bvh: &Bvh8,
+        leaf_data: &[L],
+        ray: &Ray,
+        prefetch_next: bool,
+    ) -> bool {
+        let node = &bvh.nodes[self.current as usize];
+        let (tn, mask) = self.boxes.test(&node.bounds, ray.tmin, ray.tmax);
+        if mask == 0 {
+            return false;
+        }
+        self.current = bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask);
+        if prefetch_next {
+            bvh.prefetch_child(self.current, leaf_data);
+        }
+        true
+    }
+
+    /// Moves to a stack entry popped for the next step.
+    #[inline(always)]
+    fn resume<L>(&mut self, entry: u64, bvh: &Bvh8, leaf_data: &[L], prefetch_next: bool) {
+        self.current = entry as u32;
+        if prefetch_next {
+            bvh.prefetch_child(self.current, leaf_data);
+        }
+    }
+}
+
 /// A closest-hit walk in progress. `state` is the leaf test's own data for
 /// this ray (a scene keeps the ray's shear there, made at its first leaf).
 pub(crate) struct ClosestWalk<S> {
     ray: Ray,
-    boxes: RayBoxes,
-    stack: Stack<u64>,
-    /// The node or leaf the next step visits.
-    current: u32,
+    at: Cursor,
     best: Option<PrimHit>,
     state: S,
 }
@@ -29,9 +86,7 @@ impl<S> ClosestWalk<S> {
     pub(crate) fn new(ray: &Ray, state: S) -> Self {
         Self {
             ray: *ray,
-            boxes: RayBoxes::new(ray),
-            stack: Stack::new(),
-            current: 0,
+            at: Cursor::new(ray),
             best: None,
             state,
         }
@@ -41,9 +96,7 @@ impl<S> ClosestWalk<S> {
     #[inline(always)]
     pub(crate) fn restart(&mut self, ray: &Ray, state: S) {
         self.ray = *ray;
-        self.boxes = RayBoxes::new(ray);
-        self.stack.clear();
-        self.current = 0;
+        self.at.restart(ray);
         self.best = None;
         self.state = state;
     }
@@ -64,22 +117,12 @@ impl<S> ClosestWalk<S> {
     where
         F: FnMut(&mut S, u32, u32, &Ray) -> Option<PrimHit>,
     {
-        if !is_leaf(self.current) {
-            let node = &bvh.nodes[self.current as usize];
-            let (tn, mask) = self.boxes.test(&node.bounds, self.ray.tmin, self.ray.tmax);
-            if mask != 0 {
-                // A node descends straight into its nearest hit child and
-                // pushes only the others (farthest first), so a ray that
-                // enters one child per level never touches the stack.
-                self.current =
-                    bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask);
-                if prefetch_next {
-                    bvh.prefetch_child(self.current, leaf_data);
-                }
+        if !is_leaf(self.at.current) {
+            if self.at.enter_node(bvh, leaf_data, &self.ray, prefetch_next) {
                 return None;
             }
         } else {
-            let (start, count) = leaf_range(self.current);
+            let (start, count) = leaf_range(self.at.current);
             let test = tie_ray(&self.ray, self.best.as_ref());
             if let Some(h) = hit_leaf(&mut self.state, start, count, &test) {
                 if closer(&h, self.best.as_ref()) {
@@ -97,13 +140,10 @@ impl<S> ClosestWalk<S> {
         // Keys carry a slot in their low bits (see `nearest_last`).
         let reach = order_key(self.ray.tmax * WIDEN) | 7;
         loop {
-            match self.stack.pop() {
+            match self.at.stack.pop() {
                 None => return Some(self.best),
                 Some(entry) if (entry >> 32) as u32 <= reach => {
-                    self.current = entry as u32;
-                    if prefetch_next {
-                        bvh.prefetch_child(self.current, leaf_data);
-                    }
+                    self.at.resume(entry, bvh, leaf_data, prefetch_next);
                     return None;
                 }
                 Some(_) => {}
@@ -114,9 +154,7 @@ impl<S> ClosestWalk<S> {
 
 /// An any-hit walk in progress; `state` as in [`ClosestWalk`].
 pub(crate) struct AnyHitWalk<S> {
-    boxes: RayBoxes,
-    stack: Stack<u64>,
-    current: u32,
+    at: Cursor,
     state: S,
 }
 
@@ -125,9 +163,7 @@ impl<S> AnyHitWalk<S> {
     #[inline(always)]
     pub(crate) fn new(ray: &Ray, state: S) -> Self {
         Self {
-            boxes: RayBoxes::new(ray),
-            stack: Stack::new(),
-            current: 0,
+            at: Cursor::new(ray),
             state,
         }
     }
@@ -135,9 +171,7 @@ impl<S> AnyHitWalk<S> {
     /// Starts the walk over for `ray`, reusing the stack's memory.
     #[inline(always)]
     pub(crate) fn restart(&mut self, ray: &Ray, state: S) {
-        self.boxes = RayBoxes::new(ray);
-        self.stack.clear();
-        self.current = 0;
+        self.at.restart(ray);
         self.state = state;
     }
 
@@ -156,29 +190,19 @@ impl<S> AnyHitWalk<S> {
     where
         F: FnMut(&mut S, u32, u32, &Ray) -> bool,
     {
-        if !is_leaf(self.current) {
-            let node = &bvh.nodes[self.current as usize];
-            let (tn, mask) = self.boxes.test(&node.bounds, ray.tmin, ray.tmax);
-            if mask != 0 {
-                self.current =
-                    bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask);
-                if prefetch_next {
-                    bvh.prefetch_child(self.current, leaf_data);
-                }
+        if !is_leaf(self.at.current) {
+            if self.at.enter_node(bvh, leaf_data, ray, prefetch_next) {
                 return None;
             }
         } else {
-            let (start, count) = leaf_range(self.current);
+            let (start, count) = leaf_range(self.at.current);
             if blocks_leaf(&mut self.state, start, count, ray) {
                 return Some(true);
             }
         }
-        match self.stack.pop() {
+        match self.at.stack.pop() {
             Some(entry) => {
-                self.current = entry as u32;
-                if prefetch_next {
-                    bvh.prefetch_child(self.current, leaf_data);
-                }
+                self.at.resume(entry, bvh, leaf_data, prefetch_next);
                 None
             }
             None => Some(false),
