@@ -133,7 +133,9 @@ impl Bvh8 {
             out,
             || AnyHitWalk::new(&rays[0], S::default()),
             |walk, i, &blocked| {
-                walk.restart(&rays[i], S::default());
+                if !blocked {
+                    walk.restart(&rays[i], S::default());
+                }
                 !blocked
             },
             |walk, i| walk.step(self, &rays[i], leaf_data, &mut blocks_leaf, self.prefetch),
