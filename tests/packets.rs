@@ -1,4 +1,5 @@
-//! Packets, streams (several single rays in flight) and single rays return
+//! Packets, streams (narrow groups as packets, the rest as several single
+//! rays in flight) and single rays return
 //! identical hits: the same primitive, t,
 //! u, v bit for bit, and the same occlusion answer, on coherent (lens
 //! samples of a pixel, shadow rays from one point to an area light),
@@ -10,6 +11,7 @@ mod common;
 use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
+use strata::accel::beam::split_narrow;
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::math::Ray;
 use strata::scene::{compile, parse, RenderOverrides, Scene};
@@ -197,17 +199,48 @@ fn packets_and_single_rays_return_identical_hits() {
     }
 }
 
-/// A stream of rays (several in flight at once where the tree prefetches;
-/// one at a time where it does not) gets exactly the single rays' closest
-/// hits and occlusion answers, with a plane outside the BVH and a sphere
-/// as the excepted primitive.
+/// Rows of eight rays from one eye to points 0.002 apart, narrow enough
+/// for a stream to send them as packets: a pinhole camera's pixels, every
+/// other row sweeping the bumpy sphere and the grid, the others passing
+/// beyond the grid's edge to the plane below.
+fn pinhole_rows() -> Vec<Ray> {
+    let eye = Vec3::new(0.3, 0.4, 3.0);
+    (0..300)
+        .flat_map(|row| {
+            let r = row as f32;
+            (0..PACKET_SIZE).map(move |i| {
+                let x = i as f32 * 0.002;
+                let target = if row % 2 == 0 {
+                    Vec3::new(-1.8 + r * 0.011 + x, 1.5 - r * 0.012, 0.0)
+                } else {
+                    Vec3::new(6.0 + r * 0.01 + x, -3.0, -6.0)
+                };
+                Ray::new(eye, target - eye)
+            })
+        })
+        .collect()
+}
+
+/// A stream of rays (narrow groups as packets, the rest several in flight
+/// at once where the tree prefetches and one at a time where it does not)
+/// gets exactly the single rays' closest hits and occlusion answers, with
+/// a plane outside the BVH and a sphere as the excepted primitive.
 #[test]
 fn streams_and_single_rays_return_identical_hits() {
     for (quality, mut scene) in scenes() {
-        let rays: Vec<Ray> = ray_sets(&scene)
+        let mut rays: Vec<Ray> = ray_sets(&scene)
             .into_iter()
             .flat_map(|(_, batches)| batches.into_iter().flatten())
             .collect();
+        // A group that would straddle the two sets is not narrow.
+        rays.truncate(rays.len() / PACKET_SIZE * PACKET_SIZE + 3);
+        rays.extend(pinhole_rows());
+        let extent = scene.geometry.bvh.bounds.diagonal().length();
+        let mut packets = 0;
+        split_narrow(&rays, extent, |_, packet| {
+            packets += packet.is_some() as usize
+        });
+        assert!(packets >= 250, "{quality:?}: {packets} packets");
         let except = scene.geometry.triangle_count; // the sphere
         for prefetch in [true, false] {
             scene.geometry.bvh.prefetch = prefetch;
@@ -216,7 +249,7 @@ fn streams_and_single_rays_return_identical_hits() {
             let mut blocked = vec![true; rays.len()];
             scene.geometry.occluded_stream(&rays, except, &mut blocked);
             for (i, ray) in rays.iter().enumerate() {
-                let label = format!("{quality:?} prefetch {prefetch}: ray {ray:?}");
+                let label = format!("{quality:?} prefetch {prefetch}: ray {i} {ray:?}");
                 assert_eq!(
                     hit_bits(hits[i]),
                     hit_bits(scene.geometry.intersect(ray)),
@@ -230,9 +263,20 @@ fn streams_and_single_rays_return_identical_hits() {
             }
             let found = hits.iter().filter(|h| h.is_some()).count();
             let open = blocked.iter().filter(|&&b| !b).count();
+            let rows = &hits[hits.len() - pinhole_rows().len()..];
+            let (on_plane, on_bvh) = (
+                rows.iter()
+                    .flatten()
+                    .filter(|h| h.prim > u32::MAX / 2)
+                    .count(),
+                rows.iter()
+                    .flatten()
+                    .filter(|h| h.prim < u32::MAX / 2)
+                    .count(),
+            );
             assert!(
-                found > 1000 && open > 100,
-                "{quality:?}: {found} hits, {open} unblocked"
+                found > 1000 && open > 100 && on_plane > 100 && on_bvh > 100,
+                "{quality:?}: {found} hits ({on_bvh} and {on_plane} on the BVH and plane from the rows), {open} unblocked"
             );
         }
     }

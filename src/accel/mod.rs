@@ -10,8 +10,10 @@
 //! overflows. Ours honours `[tmin, tmax]`, uses the watertight test and
 //! spills to the heap instead of dropping work. Given many rays at once,
 //! `stream` keeps several single-ray walks in flight on one thread so
-//! that their cache misses overlap.
+//! that their cache misses overlap, and `beam` sends the groups of rays
+//! narrow enough to share a walk through `packet` instead.
 
+pub mod beam;
 pub mod build;
 mod cluster;
 mod collapse;

@@ -199,6 +199,12 @@ impl<'r> Packet<'r> {
         })
     }
 
+    /// The point the rays pass near (module docs).
+    #[inline(always)]
+    pub(super) fn apex(&self) -> [f32; 3] {
+        self.apex
+    }
+
     /// The rays in lanes: `[ox, oy, oz, dx, dy, dz, tmin, tmax][lane]`.
     #[inline(always)]
     pub fn lanes(&self) -> &[f32x8; 8] {
