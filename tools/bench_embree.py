@@ -15,8 +15,10 @@ occlusion) the engines trace the same rays on --threads N threads (default
 How the rays are handed over (--mode):
 
 * `stream` (default): each engine is given chunks of 256 rays to trace as
-  it finds best: `strata trace`, which keeps several rays in flight on each
-  thread on a mesh that outgrows the caches, against Embree's stream API
+  it finds best: `strata trace`, which sends groups of eight nearly
+  parallel rays through one point as packets and keeps several of the
+  other rays in flight on each thread on a mesh that outgrows the caches,
+  against Embree's stream API
   (rtcIntersect1M / rtcOccluded1M, which groups coherent rays into
   packets);
 * `single`: one ray at a time, `strata trace --one-at-a-time` against

@@ -14,12 +14,13 @@
 //! of eight consecutive rays, from their geometry.
 //!
 //! The measure is the width of the group's beam inside the tree's box.
-//! Every ray's line passes within wᵢ of the packet's apex F (the point
-//! the rays pass near, [`Packet`]'s module docs), and its unit direction
-//! lies within the chord aᵢ of the first ray's, so inside a box of
-//! diagonal L a ray strays from the first by at most about wᵢ + w₀ + aᵢ·L.
-//! A group whose every ray keeps 2wᵢ + aᵢ·L within [`NARROW`]·L travels
-//! as a packet.
+//! Where every ray's direction lies within angle θ of the first ray's and
+//! its line passes within w of the packet's apex F (the point the rays
+//! pass near, [`Packet`]'s module docs), two rays are at most about
+//! 2w + θ·L apart inside a box of diagonal L. A group travels as a packet
+//! where sin θ ≤ [`NARROW`] and 2w ≤ `NARROW`·L for every ray, a beam at
+//! most about 2·`NARROW`·L wide. Both tests compare squares of cross
+//! products, so they need neither a square root nor a division.
 
 use super::packet::{Packet, PACKET_SIZE};
 use crate::math::ray::ray_lanes;
@@ -27,57 +28,64 @@ use crate::math::Ray;
 use std::ops::Range;
 use wide::f32x8;
 
-/// The widest beam, as a fraction of the tree's diagonal, that travels as
-/// a packet. Camera rays on the dragon, one per pixel, eight neighbours in
-/// a row to a group, one thread (`strata trace`, Mrays/s, packets against
-/// alone): a beam 0.007 of the diagonal wide (1000 pixels to a row) 13.7
-/// against 10.7 for closest hits and 16.9 against 13.2 for occlusion;
-/// 0.014 wide (500 to a row) and 0.022 (316) level within noise, so the
-/// line is drawn below them.
+/// The largest sine of the angle between two rays' directions, and the
+/// largest distance of a ray's line from the apex as a fraction of half
+/// the tree's diagonal, of a group that travels as a packet. Camera rays
+/// on the dragon, one per pixel, eight neighbours in a row to a group, one
+/// thread (`strata trace`, Mrays/s, packets against alone): directions
+/// 0.007 apart (1000 pixels to a row) 13.7 against 10.7 for closest hits
+/// and 16.9 against 13.2 for occlusion; 0.014 apart (500 to a row) and
+/// 0.022 (316) level within noise, so the line is drawn below them.
 pub const NARROW: f32 = 0.01;
 
+/// `a × b`, in glam's order of operations (see [`ends_narrow`]).
+fn cross(a: [f32x8; 3], b: [f32x8; 3]) -> [f32x8; 3] {
+    [
+        a[1] * b[2] - b[1] * a[2],
+        a[2] * b[0] - b[2] * a[0],
+        a[0] * b[1] - b[0] * a[1],
+    ]
+}
+
+fn dot(a: [f32x8; 3], b: [f32x8; 3]) -> f32x8 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
 impl Packet<'_> {
-    /// Whether every ray stays within `NARROW · extent` of the first
-    /// inside a box of diagonal `extent` (module docs). False for a
-    /// non-finite extent or ray.
+    /// Whether the rays are narrow enough to travel together in a tree of
+    /// diagonal `extent` (module docs). False for a non-finite extent.
     pub fn is_narrow(&self, extent: f32) -> bool {
+        if !extent.is_finite() {
+            return false;
+        }
         let soa = self.lanes();
-        let apex = self.apex().map(f32x8::splat);
         let dir = [soa[3], soa[4], soa[5]];
-        let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
-        let unit = dir.map(|d| d / norm);
-        let first = unit.map(|u| f32x8::splat(u.to_array()[0]));
-        let chord = length(std::array::from_fn(|a| unit[a] - first[a]));
-        let to_apex: [f32x8; 3] = std::array::from_fn(|a| apex[a] - soa[a]);
-        // |(F − o) × d̂|: the distance from F to the ray's line.
-        let off = length([
-            to_apex[1] * unit[2] - to_apex[2] * unit[1],
-            to_apex[2] * unit[0] - to_apex[0] * unit[2],
-            to_apex[0] * unit[1] - to_apex[1] * unit[0],
-        ]);
-        let l = f32x8::splat(extent);
-        let width = off + off + chord * l;
-        // NaN anywhere (a zero direction, an infinite extent) fails the test.
-        width.simd_le(l * f32x8::splat(NARROW)).to_bitmask() == (1 << PACKET_SIZE) - 1
+        let first = dir.map(|d| f32x8::splat(d.to_array()[0]));
+        let len2 = dot(dir, dir);
+        // sin²θ = |d₀ × d|² / (|d₀|² |d|²) ≤ NARROW², on the same side.
+        let sin = dot(cross(first, dir), cross(first, dir));
+        let square = f32x8::splat(NARROW * NARROW);
+        let angle =
+            sin.simd_le(square * dot(first, first) * len2) & dot(first, dir).simd_gt(f32x8::ZERO);
+        // w² = |(F − o) × d|² / |d|² ≤ (NARROW · extent / 2)².
+        let to_apex: [f32x8; 3] = std::array::from_fn(|a| f32x8::splat(self.apex()[a]) - soa[a]);
+        let off = dot(cross(to_apex, dir), cross(to_apex, dir));
+        let half = 0.5 * NARROW * extent;
+        let near = off.simd_le(f32x8::splat(half * half) * len2);
+        // NaN anywhere (a zero direction) fails the comparisons.
+        (angle & near).to_bitmask() == (1 << PACKET_SIZE) - 1
     }
 }
 
-/// Whether the group's first and last directions are close enough for
-/// [`Packet::is_narrow`]: a necessary condition in a few multiplications,
-/// which turns groups of unrelated rays away before their packet is
-/// built (building it cost such rays a few percent of their tracing
-/// time). The width counts the chord 2 sin(θ/2) between the unit
-/// directions, which is at least sin θ = |a × b| / (|a| |b|); so directions
-/// with sin θ > [`NARROW`], or 90° or more apart, cannot be narrow.
+/// [`Packet::is_narrow`]'s angle test on the group's first and last rays,
+/// in the same operations: a necessary condition in a few multiplications,
+/// which turns groups of unrelated rays away before their packet is built
+/// (building it cost such rays a few percent of their tracing time).
 #[inline(always)]
 fn ends_narrow(group: &[Ray]) -> bool {
     let (a, b) = (group[0].direction, group[group.len() - 1].direction);
-    let (cross, dot) = (a.cross(b), a.dot(b));
-    dot > 0.0 && cross.length_squared() <= NARROW * NARROW * a.length_squared() * b.length_squared()
-}
-
-fn length(v: [f32x8; 3]) -> f32x8 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    let sin = a.cross(b).length_squared();
+    sin <= NARROW * NARROW * a.length_squared() * b.length_squared() && a.dot(b) > 0.0
 }
 
 /// Splits `rays` into the groups of [`PACKET_SIZE`] consecutive rays that
@@ -158,7 +166,7 @@ mod tests {
                 })
                 .collect()
         };
-        // Chords between directions are about 2·radius / 10.
+        // Opposite rays' directions are about 2·radius / 10 apart.
         assert!(narrow(&lens(1e-3), 20.0));
         assert!(!narrow(&lens(0.1), 20.0));
     }
@@ -176,8 +184,8 @@ mod tests {
                 .collect()
         };
         // The lines are parallel, so the apex is ray 0's origin; the last
-        // line passes 7·spread·sin(x, d) ≈ 6.9·spread from it, so the
-        // width is 13.7·spread against 0.01 of a unit box.
+        // line passes 7·spread·sin(x, d) ≈ 6.9·spread from it, against
+        // half of 0.01 of a unit box.
         assert!(narrow(&rays(5e-4), 1.0));
         assert!(!narrow(&rays(1e-3), 1.0));
     }
