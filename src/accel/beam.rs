@@ -127,6 +127,17 @@ mod tests {
     use super::*;
     use glam::Vec3;
 
+    /// Xorshift numbers in [−0.5, 0.5].
+    fn uniform(seed: u32) -> impl FnMut() -> f32 {
+        let mut state = seed;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32 - 0.5
+        }
+    }
+
     fn narrow(rays: &[Ray], extent: f32) -> bool {
         Packet::new(rays).is_some_and(|p| p.is_narrow(extent))
     }
@@ -192,13 +203,7 @@ mod tests {
 
     #[test]
     fn unrelated_or_unbounded_groups_are_not_narrow() {
-        let mut state = 7u32;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            state as f32 / u32::MAX as f32 - 0.5
-        };
+        let mut next = uniform(7);
         let random: Vec<Ray> = (0..8)
             .map(|_| {
                 Ray::new(
@@ -218,13 +223,7 @@ mod tests {
     /// direction, with and without spread origins.
     #[test]
     fn the_first_and_last_rays_never_turn_away_a_narrow_group() {
-        let mut state = 99u32;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            state as f32 / u32::MAX as f32 - 0.5
-        };
+        let mut next = uniform(99);
         let (mut accepted, mut rejected) = (0, 0);
         for k in 0..4000 {
             let axis = Vec3::new(next(), next(), next()).normalize() * (1.0 + 10.0 * next().abs());
