@@ -19,8 +19,8 @@ How the rays are handed over (--mode):
   parallel rays through one point as packets and keeps several of the
   other rays in flight on each thread on a mesh that outgrows the caches,
   against Embree's stream API
-  (rtcIntersect1M / rtcOccluded1M, which groups coherent rays into
-  packets);
+  (rtcIntersect1M / rtcOccluded1M, which traces each eight consecutive
+  rays with its packet kernel, dropping to single rays as they part);
 * `single`: one ray at a time, `strata trace --one-at-a-time` against
   rtcIntersect1 / rtcOccluded1 in a plain loop.
 

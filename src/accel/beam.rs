@@ -6,12 +6,13 @@
 //! as one ray at a time (`strata bench`). Where the rays part ways, each
 //! node that any of them enters costs the packet its lane tests, and
 //! unrelated rays run slower as a packet than as single rays in flight
-//! ([`super::stream`]). Embree's stream API makes the same choice, at run
-//! time, by dropping from packet to single-ray traversal as a packet's
-//! rays diverge (Benthin, Wald, Woop, Ernst and Mark 2012, "Combining
-//! Single and Packet-Ray Tracing for Arbitrary Ray Distributions on the
-//! Intel MIC Architecture", TVCG 18(9)); here it is made once per group
-//! of eight consecutive rays, from their geometry.
+//! ([`super::stream`]). Embree's stream API hands every eight consecutive
+//! rays to its packet kernel, which drops to single-ray traversal once
+//! few of a packet's rays remain active, so it makes the choice during
+//! the walk (Benthin, Wald, Woop, Ernst and Mark 2012, "Combining Single
+//! and Packet-Ray Tracing for Arbitrary Ray Distributions on the Intel MIC
+//! Architecture", TVCG 18(9)); here it is made once per group of eight
+//! consecutive rays, before the walk, from their geometry.
 //!
 //! The measure is the width of the group's beam inside the tree's box.
 //! Where every ray's direction lies within angle θ of the first ray's and
@@ -32,10 +33,10 @@ use wide::f32x8;
 /// largest distance of a ray's line from the apex as a fraction of half
 /// the tree's diagonal, of a group that travels as a packet. Camera rays
 /// on the dragon, one per pixel, eight neighbours in a row to a group, one
-/// thread (`strata trace`, Mrays/s, packets against alone): directions
-/// 0.007 apart (1000 pixels to a row) 13.7 against 10.7 for closest hits
-/// and 16.9 against 13.2 for occlusion; 0.014 apart (500 to a row) and
-/// 0.022 (316) level within noise, so the line is drawn below them.
+/// thread (`strata trace`, packets against alone): directions 0.007
+/// apart (1000 pixels to a row) ran 1.3× faster as packets, for closest
+/// hits and occlusion alike; 0.014 apart (500 to a row) and 0.022 (316)
+/// level within noise, so the line is drawn below them.
 pub const NARROW: f32 = 0.01;
 
 /// `a × b`, in glam's order of operations (see [`ends_narrow`]).
