@@ -1,5 +1,6 @@
-//! The queries: closest hit and occlusion, for one ray or a packet of up
-//! to [`PACKET_SIZE`]. Packets return bit for bit the single-ray answers.
+//! The queries: closest hit and occlusion, for one ray, a packet of up to
+//! [`PACKET_SIZE`], or a stream of any number. Packets and streams return
+//! bit for bit the single-ray answers.
 
 use super::Geometry;
 use crate::accel::beam::split_narrow;
