@@ -61,6 +61,16 @@ impl Geometry {
         best
     }
 
+    /// `out[i]`, or a plane hit nearer than it, for every ray.
+    #[inline]
+    fn closest_planes(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        if !self.planes.is_empty() {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.closest_plane(r, *o);
+            }
+        }
+    }
+
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
     /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
     /// [`Packet::new`] refuses them (directions differing in sign on every
@@ -74,11 +84,7 @@ impl Geometry {
                 }
             }
         }
-        if !self.planes.is_empty() {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.closest_plane(r, *o);
-            }
-        }
+        self.closest_planes(rays, out);
     }
 
     /// The BVH's closest hits of `packet`, whose rays are `rays` (planes
@@ -173,11 +179,7 @@ impl Geometry {
                 }
             },
         );
-        if !self.planes.is_empty() {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.closest_plane(r, *o);
-            }
-        }
+        self.closest_planes(rays, out);
     }
 
     /// The BVH's closest hits of rays that walk alone (planes aside).
