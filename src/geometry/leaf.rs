@@ -97,10 +97,12 @@ impl Geometry {
 
     /// [`Geometry::hit_leaf`] for the packet rays in the bits of `rays_mask`:
     /// each triangle of the leaf against all those rays in one 8-wide test
-    /// (rays in lanes), updating `out[ray]` with any hit [`closer`] than
-    /// it. Returns whether any changed. The result per ray is the minimum
-    /// of the same total order over the same candidates as
-    /// [`Geometry::hit_leaf`], so it is bit for bit the single-ray answer.
+    /// (rays in lanes), or, where fewer rays than primitives reach the
+    /// leaf, each ray against the whole leaf as a single ray would test it.
+    /// Updates `out[ray]` with any hit [`closer`] than it and returns
+    /// whether any changed. The result per ray is the minimum of the same
+    /// total order over the same candidates as [`Geometry::hit_leaf`], so
+    /// it is bit for bit the single-ray answer.
     #[inline(always)]
     pub(super) fn hit_leaf_packet(
         &self,
@@ -114,6 +116,25 @@ impl Geometry {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
         let mut changed = false;
+        if rays_mask.count_ones() <= count {
+            let mut r = rays_mask;
+            while r != 0 {
+                let i = r.trailing_zeros() as usize;
+                r &= r - 1;
+                // Up to and including the best t, for ties, as below.
+                let ray = Ray {
+                    tmax: out[i].map_or(rays[i].tmax, |h| h.t.next_up()),
+                    ..rays[i]
+                };
+                if let Some(h) = self.hit_leaf(start, count, &ray, &ShearedRay::new(&ray)) {
+                    if closer(&h, out[i].as_ref()) {
+                        out[i] = Some(h);
+                        changed = true;
+                    }
+                }
+            }
+            return changed;
+        }
         // Each ray's interval: up to and including its best t, for ties.
         let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
         for (i, r) in rays.iter().enumerate() {
@@ -166,7 +187,8 @@ impl Geometry {
     }
 
     /// [`Geometry::blocks_leaf`] for the packet rays in the bits of
-    /// `rays_mask`; returns the rays blocked.
+    /// `rays_mask`, by triangle or by ray as [`Geometry::hit_leaf_packet`]
+    /// chooses; returns the rays blocked.
     #[inline(always)]
     pub(super) fn blocks_leaf_packet(
         &self,
@@ -177,6 +199,19 @@ impl Geometry {
         rays_mask: u32,
         except: u32,
     ) -> u32 {
+        if rays_mask.count_ones() <= count {
+            let mut blocked = 0;
+            let mut r = rays_mask;
+            while r != 0 {
+                let i = r.trailing_zeros() as usize;
+                r &= r - 1;
+                let ray = &rays[i];
+                if self.blocks_leaf(start, count, ray, &ShearedRay::new(ray), except) {
+                    blocked |= 1 << i;
+                }
+            }
+            return blocked;
+        }
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
         let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
