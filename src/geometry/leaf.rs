@@ -97,9 +97,11 @@ impl Geometry {
 
     /// [`Geometry::hit_leaf`] for the packet rays in the bits of `rays_mask`:
     /// each triangle of the leaf against all those rays in one 8-wide test
-    /// (rays in lanes), or, where fewer rays than primitives reach the
-    /// leaf, each ray against the whole leaf as a single ray would test it.
-    /// Updates `out[ray]` with any hit [`closer`] than it and returns
+    /// (rays in lanes), or, where no more rays reach the leaf than it holds
+    /// primitives, each ray against the whole leaf as a single ray tests
+    /// it: one 8-wide test per ray instead of one per primitive, for the
+    /// one or two rays that reach most of a camera packet's leaves
+    /// (docs/embree.md, "Narrow groups as packets"). Updates `out[ray]` with any hit [`closer`] than it and returns
     /// whether any changed. The result per ray is the minimum of the same
     /// total order over the same candidates as [`Geometry::hit_leaf`], so
     /// it is bit for bit the single-ray answer.
