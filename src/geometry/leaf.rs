@@ -95,13 +95,21 @@ impl Geometry {
         false
     }
 
+    /// Whether a packet leaf holding `count` primitives is cheaper tested
+    /// ray by ray, each ray against the whole leaf as a single ray tests it
+    /// (one 8-wide test per ray), than primitive by primitive against the
+    /// rays in lanes (one per primitive): where no more rays reach it than
+    /// it holds primitives. One or two rays reach most of a camera
+    /// packet's leaves (docs/embree.md, "Narrow groups as packets").
+    #[inline(always)]
+    fn ray_by_ray(rays_mask: u32, count: u32) -> bool {
+        rays_mask.count_ones() <= count
+    }
+
     /// [`Geometry::hit_leaf`] for the packet rays in the bits of `rays_mask`:
     /// each triangle of the leaf against all those rays in one 8-wide test
-    /// (rays in lanes), or, where no more rays reach the leaf than it holds
-    /// primitives, each ray against the whole leaf as a single ray tests
-    /// it: one 8-wide test per ray instead of one per primitive, for the
-    /// one or two rays that reach most of a camera packet's leaves
-    /// (docs/embree.md, "Narrow groups as packets"). Updates `out[ray]` with any hit [`closer`] than it and returns
+    /// (rays in lanes), or ray by ray where [`Geometry::ray_by_ray`] says.
+    /// Updates `out[ray]` with any hit [`closer`] than it and returns
     /// whether any changed. The result per ray is the minimum of the same
     /// total order over the same candidates as [`Geometry::hit_leaf`], so
     /// it is bit for bit the single-ray answer.
@@ -115,10 +123,8 @@ impl Geometry {
         rays_mask: u32,
         out: &mut [Option<PrimHit>],
     ) -> bool {
-        let (b, lanes) = Self::leaf_lanes(start, count);
-        let block = &self.leaf_blocks[b];
         let mut changed = false;
-        if rays_mask.count_ones() <= count {
+        if Self::ray_by_ray(rays_mask, count) {
             let mut r = rays_mask;
             while r != 0 {
                 let i = r.trailing_zeros() as usize;
@@ -137,6 +143,8 @@ impl Geometry {
             }
             return changed;
         }
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
         // Each ray's interval: up to and including its best t, for ties.
         let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
         for (i, r) in rays.iter().enumerate() {
@@ -189,8 +197,8 @@ impl Geometry {
     }
 
     /// [`Geometry::blocks_leaf`] for the packet rays in the bits of
-    /// `rays_mask`, by triangle or by ray as [`Geometry::hit_leaf_packet`]
-    /// chooses; returns the rays blocked.
+    /// `rays_mask`, by triangle or by ray as [`Geometry::ray_by_ray`] says;
+    /// returns the rays blocked.
     #[inline(always)]
     pub(super) fn blocks_leaf_packet(
         &self,
@@ -201,7 +209,7 @@ impl Geometry {
         rays_mask: u32,
         except: u32,
     ) -> u32 {
-        if rays_mask.count_ones() <= count {
+        if Self::ray_by_ray(rays_mask, count) {
             let mut blocked = 0;
             let mut r = rays_mask;
             while r != 0 {
