@@ -233,7 +233,7 @@ fn a_killed_render_resumes_to_the_same_bits() {
 
 /// The parts of a 3-way split of a small scene, and the whole as EXR.
 struct Parts {
-    dir: PathBuf,
+    dir: common::TempDir,
     scene: PathBuf,
 }
 

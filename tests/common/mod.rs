@@ -55,10 +55,36 @@ pub fn bumpy_sphere_obj(nu: u32, nv: u32, radius: f32, bump: f32) -> String {
     obj
 }
 
+/// A temporary directory that is removed, with everything in it, when
+/// the guard is dropped. It derefs to its `Path`, so `dir.join(..)` and
+/// `&dir` work where a `&Path` is wanted; keep the guard itself (not a
+/// path derived from it) alive for as long as the directory is needed.
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// A fresh, empty temporary directory, unique to this call: tests of one
 /// binary run in parallel in one process, so the name and the process id
-/// alone would let two of them share (and delete) one directory.
-pub fn temp_dir(name: &str) -> PathBuf {
+/// alone would let two of them share (and delete) one directory. Removed
+/// when the returned guard is dropped.
+pub fn temp_dir(name: &str) -> TempDir {
     static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let call = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!(
@@ -68,7 +94,7 @@ pub fn temp_dir(name: &str) -> PathBuf {
     ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
 }
 
 /// Tiny deterministic generator for test inputs.

@@ -251,12 +251,24 @@ fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<
 mod tests {
     use super::*;
 
-    fn write(name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("strata-ply-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join(name);
-        std::fs::write(&p, bytes).unwrap();
-        p
+    /// A file written into a directory of its own, removed (with the
+    /// directory) when dropped: at the end of the statement that made it.
+    struct PlyFile {
+        _dir: super::super::test_files::TempDir,
+        path: std::path::PathBuf,
+    }
+
+    impl std::ops::Deref for PlyFile {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.path
+        }
+    }
+
+    fn write(name: &str, bytes: &[u8]) -> PlyFile {
+        let dir = super::super::test_files::temp_dir("ply");
+        let path = super::super::test_files::write(&dir, name, bytes);
+        PlyFile { _dir: dir, path }
     }
 
     const HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
