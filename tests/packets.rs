@@ -11,7 +11,7 @@ mod common;
 use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
-use strata::accel::beam::split_narrow;
+use strata::accel::beam::{split_narrow, Travel};
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::math::Ray;
 use strata::scene::{compile, parse, RenderOverrides, Scene};
@@ -200,9 +200,11 @@ fn packets_and_single_rays_return_identical_hits() {
 }
 
 /// Rows of eight rays from one eye to points 0.002 apart, narrow enough
-/// for a stream to send them as packets: a pinhole camera's pixels, every
-/// other row sweeping the bumpy sphere and the grid, the others passing
-/// beyond the grid's edge to the plane below.
+/// for a stream to send them as packets: a pinhole camera's pixels, a
+/// third of the rows sweeping the bumpy sphere and the grid, a third
+/// passing through the tree's box beyond the grid's edge to the plane
+/// below, and a third heading away from the tree's box to the plane
+/// behind the eye.
 fn pinhole_rows() -> Vec<Ray> {
     let eye = Vec3::new(0.3, 0.4, 3.0);
     (0..300)
@@ -210,10 +212,10 @@ fn pinhole_rows() -> Vec<Ray> {
             let r = row as f32;
             (0..PACKET_SIZE).map(move |i| {
                 let x = i as f32 * 0.002;
-                let target = if row % 2 == 0 {
-                    Vec3::new(-1.8 + r * 0.011 + x, 1.5 - r * 0.012, 0.0)
-                } else {
-                    Vec3::new(6.0 + r * 0.01 + x, -3.0, -6.0)
+                let target = match row % 3 {
+                    0 => Vec3::new(-1.8 + r * 0.011 + x, 1.5 - r * 0.012, 0.0),
+                    1 => Vec3::new(6.0 + r * 0.01 + x, -3.0, -6.0),
+                    _ => Vec3::new(-2.6 + r * 0.01 + x, -3.0, 4.5),
                 };
                 Ray::new(eye, target - eye)
             })
@@ -235,12 +237,20 @@ fn streams_and_single_rays_return_identical_hits() {
         // A group that would straddle the two sets is not narrow.
         rays.truncate(rays.len() / PACKET_SIZE * PACKET_SIZE + 3);
         rays.extend(pinhole_rows());
-        let extent = scene.geometry.bvh.bounds.diagonal().length();
-        let mut packets = 0;
-        split_narrow(&rays, extent, |_, packet| {
-            packets += packet.is_some() as usize
-        });
-        assert!(packets >= 250, "{quality:?}: {packets} packets");
+        let (mut packets, mut outside) = (0, 0);
+        split_narrow(
+            &rays,
+            &scene.geometry.bvh.bounds,
+            |_, travel| match travel {
+                Travel::Packet(_) => packets += 1,
+                Travel::Outside => outside += 1,
+                Travel::Alone => {}
+            },
+        );
+        assert!(
+            packets >= 100 && outside >= 100,
+            "{quality:?}: {packets} packets, {outside} groups outside the tree's box"
+        );
         let except = scene.geometry.triangle_count; // the sphere
         for prefetch in [true, false] {
             scene.geometry.bvh.prefetch = prefetch;

@@ -23,9 +23,9 @@
 //! most about 2·`NARROW`·L wide. Both tests compare squares of cross
 //! products, so they need neither a square root nor a division.
 
-use super::packet::{Packet, PACKET_SIZE};
+use super::packet::{misses_box, reciprocals, Packet, PACKET_SIZE};
 use crate::math::ray::ray_lanes;
-use crate::math::Ray;
+use crate::math::{Aabb, Ray};
 use std::ops::Range;
 use wide::f32x8;
 
@@ -89,37 +89,61 @@ fn ends_narrow(group: &[Ray]) -> bool {
     sin <= NARROW * NARROW * a.length_squared() * b.length_squared() && a.dot(b) > 0.0
 }
 
+/// How a run of a stream's rays travels ([`split_narrow`]).
+pub enum Travel<'p, 'r> {
+    /// Eight narrow rays, as one packet.
+    Packet(&'p Packet<'r>),
+    /// Eight narrow rays that all miss the tree's box
+    /// ([`super::packet::misses_box`]): nothing to walk, no hit in the tree.
+    Outside,
+    /// Rays that walk alone.
+    Alone,
+}
+
 /// Splits `rays` into the groups of [`PACKET_SIZE`] consecutive rays that
-/// travel as packets (narrow in a tree of diagonal `extent`) and the runs
-/// of rays between them, and calls `visit` on each in order:
-/// `visit(range, Some(packet))` for the former, `visit(range, None)` for
-/// each non-empty one of the latter. A last group of fewer rays than a
-/// packet holds is part of the rest.
+/// travel as packets (narrow in a tree whose box is `bounds`) or miss that
+/// box altogether, and the runs of rays between them, and calls `visit`
+/// on each in order: `visit(range, Travel::Packet(..))` or
+/// `visit(range, Travel::Outside)` for the former, `visit(range,
+/// Travel::Alone)` for each non-empty one of the latter. A last group of
+/// fewer rays than a packet holds is part of the rest.
 pub fn split_narrow<'r>(
     rays: &'r [Ray],
-    extent: f32,
-    mut visit: impl FnMut(Range<usize>, Option<&Packet<'r>>),
+    bounds: &Aabb,
+    mut visit: impl FnMut(Range<usize>, Travel<'_, 'r>),
 ) {
+    let extent = bounds.diagonal().length();
     let mut run = 0;
     for (g, group) in rays.chunks_exact(PACKET_SIZE).enumerate() {
         if !ends_narrow(group) {
             continue;
         }
-        let Some(p) = Packet::from_lanes(group, &ray_lanes(group)) else {
+        let lanes = ray_lanes(group);
+        let inv = reciprocals(&lanes);
+        let start = g * PACKET_SIZE;
+        let range = start..start + PACKET_SIZE;
+        if misses_box(&lanes, &inv, bounds) {
+            if run < start {
+                visit(run..start, Travel::Alone);
+            }
+            visit(range, Travel::Outside);
+            run = start + PACKET_SIZE;
+            continue;
+        }
+        let Some(p) = Packet::from_parts(group, &lanes, &inv) else {
             continue;
         };
         if !p.is_narrow(extent) {
             continue;
         }
-        let start = g * PACKET_SIZE;
         if run < start {
-            visit(run..start, None);
+            visit(run..start, Travel::Alone);
         }
-        visit(start..start + PACKET_SIZE, Some(&p));
+        visit(range, Travel::Packet(&p));
         run = start + PACKET_SIZE;
     }
     if run < rays.len() {
-        visit(run..rays.len(), None);
+        visit(run..rays.len(), Travel::Alone);
     }
 }
 
@@ -252,26 +276,38 @@ mod tests {
     #[test]
     fn split_covers_every_ray_once_in_order() {
         let good = fan(Vec3::ZERO, 1.0, 1e-4);
+        // Narrow too, but heading away from the box.
+        let away = fan(Vec3::ZERO, -1.0, 1e-4);
         let bad: Vec<Ray> = (0..8)
             .map(|i| Ray::new(Vec3::ZERO, Vec3::new(1.0, i as f32 - 3.5, 0.5)))
             .collect();
-        // bad, good, good, bad, 3 left over.
-        let rays: Vec<Ray> = [&bad[..], &good, &good, &bad, &good[..3]].concat();
+        let bounds = Aabb {
+            min: Vec3::new(-0.5, -0.5, 0.5),
+            max: Vec3::new(0.5, 0.5, 1.5),
+        };
+        // bad, good, away, good, bad, 3 left over.
+        let rays: Vec<Ray> = [&bad[..], &good, &away, &good, &bad, &good[..3]].concat();
         let mut seen = Vec::new();
-        split_narrow(&rays, 1.0, |range, p| {
-            seen.push((if p.is_some() { "packet" } else { "rest" }, range))
+        split_narrow(&rays, &bounds, |range, travel| {
+            let how = match travel {
+                Travel::Packet(_) => "packet",
+                Travel::Outside => "outside",
+                Travel::Alone => "rest",
+            };
+            seen.push((how, range))
         });
         assert_eq!(
             seen,
             [
                 ("rest", 0..8),
                 ("packet", 8..16),
-                ("packet", 16..24),
-                ("rest", 24..35)
+                ("outside", 16..24),
+                ("packet", 24..32),
+                ("rest", 32..43)
             ]
         );
         let mut none = 0;
-        split_narrow(&[], 1.0, |_, _| none += 1);
+        split_narrow(&[], &bounds, |_, _| none += 1);
         assert_eq!(none, 0);
     }
 }

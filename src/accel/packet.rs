@@ -43,7 +43,7 @@ use super::hit::PrimHit;
 use super::node::{decode, ChildRef};
 use super::traverse::{Stack, WIDEN};
 use crate::math::offset::gamma;
-use crate::math::Ray;
+use crate::math::{Aabb, Ray};
 use glam::DVec3;
 use wide::f32x8;
 
@@ -128,17 +128,17 @@ impl<'r> Packet<'r> {
     /// ([`crate::math::ray::ray_lanes`]; unused lanes repeat ray 0).
     #[inline(always)]
     pub fn from_lanes(rays: &'r [Ray], soa: &[f32x8; 8]) -> Option<Self> {
+        Self::from_parts(rays, soa, &reciprocals(soa))
+    }
+
+    /// [`Packet::from_lanes`] given the lanes' [`reciprocals`] too.
+    #[inline(always)]
+    pub fn from_parts(rays: &'r [Ray], soa: &[f32x8; 8], inv: &[f32x8; 3]) -> Option<Self> {
         if rays.is_empty() || rays.len() > PACKET_SIZE {
             return None;
         }
+        let inv = *inv;
         let origin = [soa[0], soa[1], soa[2]];
-        let dir = [soa[3], soa[4], soa[5]];
-        // The single-ray reciprocal, lane by lane: zero components become
-        // ±f32::MAX with the zero's sign (as `RayBoxes::new` does).
-        let inv = dir.map(|d| {
-            let max = f32x8::splat(f32::MAX) | (d & f32x8::splat(-0.0));
-            d.simd_eq(f32x8::ZERO).select(max, f32x8::splat(1.0) / d)
-        });
         // Lanes past the last ray repeat ray 0, so the first and last ray
         // give the apex.
         let f = apex(&rays[0], &rays[rays.len() - 1]).as_vec3();
@@ -272,6 +272,47 @@ impl<'r> Packet<'r> {
         let tf = tf * f32x8::splat(WIDEN);
         tn.simd_le(tf).to_bitmask()
     }
+}
+
+/// The single-ray reciprocal directions of rays in lanes
+/// ([`crate::math::ray::ray_lanes`]), lane by lane: zero components become
+/// ±f32::MAX with the zero's sign, as `RayBoxes::new` makes them.
+#[inline(always)]
+pub fn reciprocals(soa: &[f32x8; 8]) -> [f32x8; 3] {
+    [soa[3], soa[4], soa[5]].map(|d| {
+        let max = f32x8::splat(f32::MAX) | (d & f32x8::splat(-0.0));
+        d.simd_eq(f32x8::ZERO).select(max, f32x8::splat(1.0) / d)
+    })
+}
+
+/// Whether every ray in lanes `soa`, with reciprocals `inv`, misses
+/// `bounds` (the box of a whole tree): each lane's slab test, the
+/// arithmetic of the single-ray node test (the nearer and farther slab of
+/// each axis by min/max, which is the slab its direction's sign picks, as
+/// for a skipped axis in `test_lanes`; the exit widened by `WIDEN`).
+/// Every node's boxes lie inside the tree's box and each step of that
+/// arithmetic is monotone in the bounds, so a ray that misses the tree's
+/// box enters no node either: a group this test turns away needs no walk,
+/// and its answers are the single rays' (no hit in the tree). Camera rays
+/// that see past a mesh are most groups of a view (67% of the dragon's
+/// `strata rays camera` set miss its box); for them this test replaces
+/// the packet's setup and its root visit. A lane with a NaN anywhere in
+/// its test counts as entering, so such rays keep their usual path.
+#[inline(always)]
+pub fn misses_box(soa: &[f32x8; 8], inv: &[f32x8; 3], bounds: &Aabb) -> bool {
+    let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
+    let mut tn = soa[6];
+    let mut tf = soa[7];
+    let mut nan = tn.simd_ne(tn) | tf.simd_ne(tf);
+    for axis in 0..3 {
+        let a = (f32x8::splat(lo[axis]) - soa[axis]) * inv[axis];
+        let b = (f32x8::splat(hi[axis]) - soa[axis]) * inv[axis];
+        nan |= a.simd_ne(a) | b.simd_ne(b);
+        tn = tn.fast_max(a.fast_min(b));
+        tf = tf.fast_min(a.fast_max(b));
+    }
+    let miss = tn.simd_gt(tf * f32x8::splat(WIDEN)).to_bitmask() & !nan.to_bitmask();
+    miss == (1 << PACKET_SIZE) - 1
 }
 
 #[inline(always)]
@@ -547,6 +588,63 @@ mod tests {
             }
         }
         node
+    }
+
+    /// A group that `misses_box` turns away enters none of the boxes
+    /// inside the box it tested, by any lane's single-ray test: boxes near
+    /// the rays, moved aside by up to their own scale so that many groups
+    /// miss, and the tested box exactly their union (the tightest box a
+    /// tree can have).
+    #[test]
+    fn a_group_that_misses_the_box_enters_nothing_inside_it() {
+        let mut rng = seeded(8);
+        let (mut missed, mut kept) = (0, 0);
+        for round in 0..4000 {
+            let kind = round % 4;
+            let (centre, scale) = [
+                (Vec3::ZERO, 1.0),
+                (Vec3::splat(1e5), 10.0),
+                (Vec3::new(3e5, -2e5, 1e5), 1e-2),
+                (Vec3::splat(-3.0), 1e-3),
+            ][round / 4 % 4];
+            let rays = packet_rays(&mut rng, kind, centre, scale);
+            let mut node = node_near(&mut rng, &rays, scale);
+            if round % 3 == 0 {
+                // Only the point on a ray, entered or not by rounding
+                // alone: the box is exactly that point.
+                for row in 0..6 {
+                    node.bounds[row][..6].copy_from_slice(&Node8::EMPTY.bounds[row][..6]);
+                }
+            }
+            let shift = rng.cube(1.0) * scale * [0.0, 0.01, 0.1, 1.0][round / 16 % 4];
+            let mut bounds = Aabb::EMPTY;
+            for slot in (0..7).filter(|&slot| round % 3 != 0 || slot == 6) {
+                for axis in 0..3 {
+                    node.bounds[2 * axis][slot] += shift[axis];
+                    node.bounds[2 * axis + 1][slot] += shift[axis];
+                }
+                let corner = |row: usize| {
+                    Vec3::from_array(std::array::from_fn(|axis| {
+                        node.bounds[2 * axis + row][slot]
+                    }))
+                };
+                bounds = bounds.union(Aabb {
+                    min: corner(0),
+                    max: corner(1),
+                });
+            }
+            let lanes = crate::math::ray::ray_lanes(&rays);
+            if !misses_box(&lanes, &reciprocals(&lanes), &bounds) {
+                kept += 1;
+                continue;
+            }
+            missed += 1;
+            for (i, ray) in rays.iter().enumerate() {
+                let (_, single) = RayBoxes::new(ray).test(&node.bounds, ray.tmin, ray.tmax);
+                assert_eq!(single, 0, "kind {kind}, lane {i}: {ray:?} enters {node:?}");
+            }
+        }
+        assert!(missed > 500 && kept > 500, "{missed} missed, {kept} kept");
     }
 
     /// Every child a lane's single-ray test enters passes the packet's

@@ -3,26 +3,48 @@
 //! bit for bit the single-ray answers.
 
 use super::Geometry;
-use crate::accel::beam::split_narrow;
+use crate::accel::beam::{split_narrow, Travel};
+use crate::accel::packet::{misses_box, reciprocals};
 use crate::accel::{Packet, PrimHit, PACKET_SIZE};
 use crate::math::ray::ray_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle8::ShearedRays;
 
-/// The packet of up to [`PACKET_SIZE`] rays, whose lanes a leaf test makes
-/// the per-lane shears from ([`ShearedRays::from_lanes`]) once a leaf is
-/// reached; `None` where the rays cannot travel as a packet (see
-/// [`Packet::new`]).
-#[inline(always)]
-fn packet_of(rays: &[Ray]) -> Option<Packet<'_>> {
-    if rays.is_empty() || rays.len() > PACKET_SIZE {
-        return None;
-    }
-    Packet::from_lanes(rays, &ray_lanes(rays))
+/// How a batch of up to [`PACKET_SIZE`] rays is traced. Made and matched
+/// on the stack within one query, so the packet stays unboxed: boxing it
+/// would allocate once per batch.
+#[allow(clippy::large_enum_variant)]
+enum Batch<'r> {
+    /// As one packet, whose lanes a leaf test makes the per-lane shears
+    /// from ([`ShearedRays::from_lanes`]) once a leaf is reached.
+    Packet(Packet<'r>),
+    /// Not at all: every ray misses the tree's box ([`misses_box`]).
+    Outside,
+    /// One ray at a time: the rays cannot travel as a packet (see
+    /// [`Packet::new`]).
+    Alone,
 }
 
 impl Geometry {
+    /// How `rays` travel: not at all where they all miss the tree's box,
+    /// else as a packet where they can.
+    #[inline(always)]
+    fn batch_of<'r>(&self, rays: &'r [Ray]) -> Batch<'r> {
+        if rays.is_empty() || rays.len() > PACKET_SIZE {
+            return Batch::Alone;
+        }
+        let lanes = ray_lanes(rays);
+        let inv = reciprocals(&lanes);
+        if misses_box(&lanes, &inv, &self.bvh.bounds) {
+            return Batch::Outside;
+        }
+        match Packet::from_parts(rays, &lanes, &inv) {
+            Some(packet) => Batch::Packet(packet),
+            None => Batch::Alone,
+        }
+    }
+
     /// The closest hit in `(ray.tmin, ray.tmax)`. Planes report prim ids
     /// `u32::MAX - plane index`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
@@ -73,12 +95,13 @@ impl Geometry {
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
     /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
-    /// [`Packet::new`] refuses them (directions differing in sign on every
-    /// axis).
+    /// they all miss the tree's box (then not at all) or [`Packet::new`]
+    /// refuses them (directions differing in sign on every axis).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        match packet_of(rays) {
-            Some(packet) => self.closest_in_packet(&packet, rays, out),
-            None => {
+        match self.batch_of(rays) {
+            Batch::Packet(packet) => self.closest_in_packet(&packet, rays, out),
+            Batch::Outside => out[..rays.len()].fill(None),
+            Batch::Alone => {
                 for (o, r) in out.iter_mut().zip(rays) {
                     *o = self.closest_in_bvh(r);
                 }
@@ -111,11 +134,13 @@ impl Geometry {
     /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
     /// `self.occluded_except(&rays[i], except)`. One packet unless the
-    /// rays' directions differ in sign on every axis ([`Packet::new`]).
+    /// rays all miss the tree's box or their directions differ in sign on
+    /// every axis ([`Packet::new`]).
     pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        match packet_of(rays) {
-            Some(packet) => self.blocked_in_packet(&packet, rays, except, out),
-            None => {
+        match self.batch_of(rays) {
+            Batch::Packet(packet) => self.blocked_in_packet(&packet, rays, except, out),
+            Batch::Outside => out[..rays.len()].fill(false),
+            Batch::Alone => {
                 for (o, r) in out.iter_mut().zip(rays) {
                     *o = self.blocked_in_bvh(r, except);
                 }
@@ -168,17 +193,14 @@ impl Geometry {
     /// 14.7–14.9).
     pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        split_narrow(
-            rays,
-            self.bvh.bounds.diagonal().length(),
-            |range, packet| {
-                let (rays, out) = (&rays[range.clone()], &mut out[range]);
-                match packet {
-                    Some(packet) => self.closest_in_packet(packet, rays, out),
-                    None => self.closest_alone(rays, out),
-                }
-            },
-        );
+        split_narrow(rays, &self.bvh.bounds, |range, travel| {
+            let (rays, out) = (&rays[range.clone()], &mut out[range]);
+            match travel {
+                Travel::Packet(packet) => self.closest_in_packet(packet, rays, out),
+                Travel::Outside => out.fill(None),
+                Travel::Alone => self.closest_alone(rays, out),
+            }
+        });
         self.closest_planes(rays, out);
     }
 
@@ -214,23 +236,21 @@ impl Geometry {
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.planes.iter().any(|p| p.intersect(r).is_some());
         }
-        split_narrow(
-            rays,
-            self.bvh.bounds.diagonal().length(),
-            |range, packet| {
-                let (rays, out) = (&rays[range.clone()], &mut out[range]);
-                match packet {
-                    Some(packet) => {
-                        let mut blocked = [false; PACKET_SIZE];
-                        self.blocked_in_packet(packet, rays, except, &mut blocked);
-                        for (o, b) in out.iter_mut().zip(blocked) {
-                            *o |= b;
-                        }
+        split_narrow(rays, &self.bvh.bounds, |range, travel| {
+            let (rays, out) = (&rays[range.clone()], &mut out[range]);
+            match travel {
+                Travel::Packet(packet) => {
+                    let mut blocked = [false; PACKET_SIZE];
+                    self.blocked_in_packet(packet, rays, except, &mut blocked);
+                    for (o, b) in out.iter_mut().zip(blocked) {
+                        *o |= b;
                     }
-                    None => self.blocked_alone(rays, except, out),
                 }
-            },
-        );
+                // Planes aside (already in `out`), nothing can block them.
+                Travel::Outside => {}
+                Travel::Alone => self.blocked_alone(rays, except, out),
+            }
+        });
     }
 
     /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside), for
