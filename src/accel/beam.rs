@@ -24,6 +24,7 @@
 //! products, so they need neither a square root nor a division.
 
 use super::packet::{misses_box, reciprocals, Packet, PACKET_SIZE};
+use super::prefetch::prefetch;
 use crate::math::ray::ray_lanes;
 use crate::math::{Aabb, Ray};
 use std::ops::Range;
@@ -115,6 +116,16 @@ pub fn split_narrow<'r>(
     let extent = bounds.diagonal().length();
     let mut run = 0;
     for (g, group) in rays.chunks_exact(PACKET_SIZE).enumerate() {
+        // The rays two groups on, asked for now: the walks between two
+        // groups push the stream's own lines out of the hardware
+        // prefetcher's reach, and the first load of each group missed
+        // (a fifth of the packet setup's samples in `perf` on camera rays).
+        // Dragon, one thread, five alternating runs: random rays +2.4%
+        // (closest hit), camera rays level.
+        let ahead = (g + 2) * PACKET_SIZE;
+        if let Some(next) = rays.get(ahead..ahead + PACKET_SIZE) {
+            prefetch(<&[Ray; PACKET_SIZE]>::try_from(next).unwrap());
+        }
         if !ends_narrow(group) {
             continue;
         }
