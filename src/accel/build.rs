@@ -326,7 +326,7 @@ mod tests {
     /// (fastest), and two with a primitive per PLOC leaf whose nodes
     /// reinsertion has moved (fast, high), on one thread and on three (the
     /// leaf order the tables record is joined from pieces). The tree is the
-    /// same on both.
+    /// same on both. And every node's boxes lie inside the tree's box.
     #[test]
     fn every_leaf_holds_the_primitives_of_its_subtree() {
         let boxes = random_boxes(150_000, 8);
@@ -342,12 +342,22 @@ mod tests {
                 for node in &bvh.nodes {
                     for slot in 0..8 {
                         let child = node.child[slot];
-                        if child == EMPTY || !is_leaf(child) {
+                        if child == EMPTY {
                             continue;
                         }
                         let b = |row: usize| node.bounds[row][slot];
                         let leaf =
                             Aabb::new(Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)));
+                        // Every box lies inside the tree's box, which
+                        // `packet::misses_box` relies on.
+                        assert!(
+                            bvh.bounds.min.cmple(leaf.min).all()
+                                && leaf.max.cmple(bvh.bounds.max).all(),
+                            "{quality:?}, {threads} threads: a box outside the tree's"
+                        );
+                        if !is_leaf(child) {
+                            continue;
+                        }
                         let (start, count) = leaf_range(child);
                         for &id in &bvh.prim_ids[start as usize..(start + count) as usize] {
                             let p = boxes[id as usize];

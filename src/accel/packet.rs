@@ -293,11 +293,11 @@ pub fn reciprocals(soa: &[f32x8; 8]) -> [f32x8; 3] {
 /// Every node's boxes lie inside the tree's box and each step of that
 /// arithmetic is monotone in the bounds, so a ray that misses the tree's
 /// box enters no node either: a group this test turns away needs no walk,
-/// and its answers are the single rays' (no hit in the tree). Camera rays
-/// that see past a mesh are most groups of a view (67% of the dragon's
-/// `strata rays camera` set miss its box); for them this test replaces
-/// the packet's setup and its root visit. A lane with a NaN anywhere in
-/// its test counts as entering, so such rays keep their usual path.
+/// and its answers are the single rays' (no hit in the tree). For camera
+/// rays that see past a mesh (67% of the dragon's `strata rays camera`
+/// set miss its box) this test replaces the packet's setup and its root
+/// visit. A lane with a NaN anywhere in its test counts as entering, so
+/// such rays keep their usual path.
 #[inline(always)]
 pub fn misses_box(soa: &[f32x8; 8], inv: &[f32x8; 3], bounds: &Aabb) -> bool {
     let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
