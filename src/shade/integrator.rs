@@ -29,7 +29,10 @@ pub(super) struct Shading<'s> {
 
 impl<'s> Shading<'s> {
     /// The hit `surface` of `ray`, with its material and its normals faced
-    /// towards the viewer.
+    /// towards the viewer. Inlined, so that the shading is built where the
+    /// caller keeps it rather than returned through memory and copied:
+    /// dragon-rect render 2% faster.
+    #[inline(always)]
     fn new(scene: &'s Scene, surface: &'s Surface, ray: &Ray) -> Self {
         let material = &scene.materials[surface.material as usize];
         let wo = -ray.direction.normalize();
@@ -229,14 +232,22 @@ impl Integrator<'_> {
         first: Option<&mut [FirstHit]>,
     ) {
         let scene = self.scene;
-        let surfaces: [Option<Surface>; N] = std::array::from_fn(|i| {
-            let lane = lanes.get(i)?;
-            Some(scene.geometry.surface(&lane.ray, &lane.hit?))
-        });
-        let shadings: [Option<Shading>; N] = std::array::from_fn(|i| {
-            let surface = surfaces[i].as_ref()?;
-            Some(Shading::new(scene, surface, &lanes[i].ray))
-        });
+        // Filled in place, slot by slot: built through `array::from_fn`
+        // and `?`, each element was written into a temporary and copied
+        // with wide loads that waited on its narrower stores (`perf`: a
+        // third of this function's samples on those loads).
+        let mut surfaces: [Option<Surface>; N] = [None; N];
+        for (surface, lane) in surfaces.iter_mut().zip(lanes) {
+            if let Some(hit) = &lane.hit {
+                *surface = Some(scene.geometry.surface(&lane.ray, hit));
+            }
+        }
+        let mut shadings: [Option<Shading>; N] = std::array::from_fn(|_| None);
+        for ((shading, surface), lane) in shadings.iter_mut().zip(&surfaces).zip(lanes) {
+            if let Some(surface) = surface {
+                *shading = Some(Shading::new(scene, surface, &lane.ray));
+            }
+        }
         if let Some(first) = first.filter(|_| depth == 0) {
             for (i, lane) in lanes.iter().enumerate() {
                 first[i] = match (&shadings[i], lane.hit) {
