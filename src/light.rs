@@ -377,12 +377,17 @@ impl LightLanes<'_> {
             } => {
                 let q = rects.sample(u);
                 for i in mask_lanes(active) {
-                    out[i] = if rects.valid() >> i & 1 != 0 {
-                        towards(points[i], q[i], *normal, weight[i], None)
+                    // Each branch writes the slot itself: one value
+                    // chosen between the branches was built on the stack
+                    // and copied with wide loads that waited on its narrow
+                    // stores (`perf`: almost half of this function's
+                    // samples).
+                    if rects.valid() >> i & 1 != 0 {
+                        out[i] = towards(points[i], q[i], *normal, weight[i], None);
                     } else {
                         // The point is (nearly) in the light's plane: sample by area.
-                        light.sample_from(points[i], u[i], LightSampling::Area)
-                    };
+                        out[i] = light.sample_from(points[i], u[i], LightSampling::Area);
+                    }
                 }
             }
             LightLanes::Each {
