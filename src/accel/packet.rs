@@ -590,6 +590,20 @@ mod tests {
         node
     }
 
+    /// Round `round`'s rays, of kind `round % 4` ([`packet_rays`]), at one
+    /// of four places and scales, from the origin's to far from it and
+    /// small: (kind, scale, rays).
+    fn round_rays(rng: &mut Rng, round: usize) -> (usize, f32, Vec<Ray>) {
+        let kind = round % 4;
+        let (centre, scale) = [
+            (Vec3::ZERO, 1.0),
+            (Vec3::splat(1e5), 10.0),
+            (Vec3::new(3e5, -2e5, 1e5), 1e-2),
+            (Vec3::splat(-3.0), 1e-3),
+        ][round / 4 % 4];
+        (kind, scale, packet_rays(rng, kind, centre, scale))
+    }
+
     /// A group that `misses_box` turns away enters none of the boxes
     /// inside the box it tested, by any lane's single-ray test: boxes near
     /// the rays, moved aside by up to their own scale so that many groups
@@ -600,14 +614,7 @@ mod tests {
         let mut rng = seeded(8);
         let (mut missed, mut kept) = (0, 0);
         for round in 0..4000 {
-            let kind = round % 4;
-            let (centre, scale) = [
-                (Vec3::ZERO, 1.0),
-                (Vec3::splat(1e5), 10.0),
-                (Vec3::new(3e5, -2e5, 1e5), 1e-2),
-                (Vec3::splat(-3.0), 1e-3),
-            ][round / 4 % 4];
-            let rays = packet_rays(&mut rng, kind, centre, scale);
+            let (kind, scale, rays) = round_rays(&mut rng, round);
             let mut node = node_near(&mut rng, &rays, scale);
             if round % 3 == 0 {
                 // Only the point on a ray, entered or not by rounding
@@ -655,14 +662,7 @@ mod tests {
         let mut rng = seeded(5);
         let (mut entered, mut skipped) = (0, 0);
         for round in 0..4000 {
-            let kind = round % 4;
-            let (centre, scale) = [
-                (Vec3::ZERO, 1.0),
-                (Vec3::splat(1e5), 10.0),
-                (Vec3::new(3e5, -2e5, 1e5), 1e-2),
-                (Vec3::splat(-3.0), 1e-3),
-            ][round / 4 % 4];
-            let rays = packet_rays(&mut rng, kind, centre, scale);
+            let (kind, scale, rays) = round_rays(&mut rng, round);
             let Some(packet) = Packet::new(&rays) else {
                 continue;
             };
