@@ -148,7 +148,7 @@ impl Geometry {
         }
         if !self.planes.is_empty() {
             for (o, r) in out.iter_mut().zip(rays) {
-                *o = *o || self.planes.iter().any(|p| p.intersect(r).is_some());
+                *o = *o || self.blocked_by_planes(r);
             }
         }
     }
@@ -168,7 +168,13 @@ impl Geometry {
     /// sampled) blocks the ray. Skipping the light's own primitive is exact,
     /// where stopping the shadow ray a little short of it would need an epsilon.
     pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
-        self.planes.iter().any(|p| p.intersect(ray).is_some()) || self.blocked_in_bvh(ray, except)
+        self.blocked_by_planes(ray) || self.blocked_in_bvh(ray, except)
+    }
+
+    /// Whether a plane (outside the BVH) blocks the ray.
+    #[inline]
+    fn blocked_by_planes(&self, ray: &Ray) -> bool {
+        self.planes.iter().any(|p| p.intersect(ray).is_some())
     }
 
     /// Whether the BVH blocks the ray (planes aside).
@@ -234,7 +240,7 @@ impl Geometry {
     pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (o, r) in out.iter_mut().zip(rays) {
-            *o = self.planes.iter().any(|p| p.intersect(r).is_some());
+            *o = self.blocked_by_planes(r);
         }
         split_narrow(rays, &self.bvh.bounds, |range, travel| {
             let (rays, out) = (&rays[range.clone()], &mut out[range]);
