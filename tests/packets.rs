@@ -236,6 +236,7 @@ fn streams_and_single_rays_return_identical_hits() {
             .collect();
         // A group that would straddle the two sets is not narrow.
         rays.truncate(rays.len() / PACKET_SIZE * PACKET_SIZE + 3);
+        let first_row = rays.len();
         rays.extend(pinhole_rows());
         let (mut packets, mut outside) = (0, 0);
         split_narrow(
@@ -273,7 +274,7 @@ fn streams_and_single_rays_return_identical_hits() {
             }
             let found = hits.iter().filter(|h| h.is_some()).count();
             let open = blocked.iter().filter(|&&b| !b).count();
-            let rows = &hits[hits.len() - pinhole_rows().len()..];
+            let rows = &hits[first_row..];
             let (on_plane, on_bvh) = (
                 rows.iter()
                     .flatten()
