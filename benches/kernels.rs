@@ -16,6 +16,10 @@
 //! test (one triangle against eight rays in lanes, `ShearedRays`); and
 //! `Scene::intersect` on 8 rays against `Scene::intersect_packet` on a
 //! one-triangle scene, the packet path's fixed cost.
+//!
+//! Sampling: a pixel's 2D draws one at a time (`DimSampler::get_2d`)
+//! against eight at once (`DimSampler::get_2d_lanes`), for CMJ sets of a
+//! square, a partial grid and a prepared size, and for the random sampler.
 
 mod common;
 
@@ -32,6 +36,7 @@ use strata::accel::PrimHit;
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
 use strata::math::{Aabb, Ray};
 use strata::scene::{scene_from_str, RenderOverrides};
+use strata::sampling::{Dim, PixelSampler, SamplerKind};
 use strata::shape::triangle::{intersect, ShearedRay};
 
 /// One node, eight leaf children with random boxes in [-1, 1]³.
@@ -280,12 +285,54 @@ fn ray_triangle(c: &mut Criterion) {
     g.finish();
 }
 
+fn sampling(c: &mut Criterion) {
+    const PIXELS: u32 = 1024;
+    let mut g = c.benchmark_group("sampling");
+    for (kind, n) in [
+        (SamplerKind::Stratified, 16u32),
+        (SamplerKind::Stratified, 35),
+        (SamplerKind::Random, 16),
+    ] {
+        g.throughput(Throughput::Elements((PIXELS * n) as u64));
+        let sets = PixelSampler::prepare_sets([n, 0]);
+        let pixel = |p: u32| PixelSampler::new(kind, 7, p).with_sets(sets).dim_2d(Dim::PIXEL, n);
+        g.bench_function(format!("{kind}_{n}_one_at_a_time"), |b| {
+            b.iter(|| {
+                let mut sum = 0.0;
+                for p in 0..PIXELS {
+                    let draws = pixel(p);
+                    for i in 0..n {
+                        sum += draws.get_2d(i).x;
+                    }
+                }
+                black_box(sum)
+            })
+        });
+        g.bench_function(format!("{kind}_{n}_eight_lanes"), |b| {
+            b.iter(|| {
+                let mut sum = 0.0;
+                for p in 0..PIXELS {
+                    let draws = pixel(p);
+                    for first in (0..n).step_by(8) {
+                        let index = std::array::from_fn(|i| (first + i as u32).min(n - 1));
+                        let live = (n - first).min(8);
+                        let points = draws.get_2d_lanes(index, (1 << live) - 1);
+                        sum += points[..live as usize].iter().map(|p| p.x).sum::<f32>();
+                    }
+                }
+                black_box(sum)
+            })
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(30)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(2));
-    targets = ray_box, ray_triangle
+    targets = ray_box, ray_triangle, sampling
 }
 criterion_main!(benches);

@@ -19,7 +19,7 @@ trait Divisor: Copy {
     fn mask(self) -> u32;
 }
 
-fn mask_of(len: u32) -> u32 {
+pub(super) fn mask_of(len: u32) -> u32 {
     let mut w = len.wrapping_sub(1);
     w |= w >> 1;
     w |= w >> 2;
@@ -175,15 +175,30 @@ fn grid_columns(n: u32) -> u32 {
     ((n as f32).sqrt() as u32).max(1)
 }
 
+/// The patterns a set's `pattern` gives a sample's permutation of cells,
+/// of columns and of rows, and its x and y jitter.
+#[inline(always)]
+pub(super) fn sample_patterns(pattern: u32) -> [u32; 5] {
+    [
+        0x5163_3e2d,
+        0x68bc_21eb,
+        0x02e5_be93,
+        0x967a_889b,
+        0x368c_c8b7,
+    ]
+    .map(|k| pattern.wrapping_mul(k))
+}
+
 /// Sample `s` of the set on a grid of `m` columns, `rows` rows and `cells` = m × rows.
 #[inline(always)]
 fn cmj_point<D: Divisor>(s: u32, pattern: u32, m: D, rows: D, cells: D) -> Vec2 {
-    let s = permute_by(s, cells, pattern.wrapping_mul(0x5163_3e2d));
+    let [p_cells, p_columns, p_rows, p_jitter_x, p_jitter_y] = sample_patterns(pattern);
+    let s = permute_by(s, cells, p_cells);
     let (col, row) = (m.rem(s), m.div(s));
-    let sx = permute_by(col, m, pattern.wrapping_mul(0x68bc_21eb));
-    let sy = permute_by(row, rows, pattern.wrapping_mul(0x02e5_be93));
-    let jx = rand_float(s, pattern.wrapping_mul(0x967a_889b));
-    let jy = rand_float(s, pattern.wrapping_mul(0x368c_c8b7));
+    let sx = permute_by(col, m, p_columns);
+    let sy = permute_by(row, rows, p_rows);
+    let jx = rand_float(s, p_jitter_x);
+    let jy = rand_float(s, p_jitter_y);
     let (m, rows) = (m.get() as f32, rows.get() as f32);
     let x = (sx as f32 + (sy as f32 + jx) / rows) / m;
     let y = (row as f32 + jy) / rows;
@@ -220,6 +235,29 @@ impl CmjSet {
             rows: FastDiv::new(rows),
             cells: FastDiv::new(m * rows),
         }
+    }
+
+    /// The grid's columns, rows and cells.
+    pub(super) fn grid(&self) -> (u32, u32, u32) {
+        (self.m.d, self.rows.d, self.cells.d)
+    }
+
+    /// 2³² modulo the grid's columns, rows and cells (from 2³² − 1's
+    /// remainders, which multiplications give).
+    pub(super) fn two32_mods(&self) -> [u32; 3] {
+        [self.m, self.rows, self.cells].map(|d| {
+            let r = d.rem(u32::MAX) + 1;
+            if r == d.d {
+                0
+            } else {
+                r
+            }
+        })
+    }
+
+    /// `[a, b, c]` modulo the grid's columns, rows and cells.
+    pub(super) fn grid_mods(&self, [a, b, c]: [u32; 3]) -> [u32; 3] {
+        [self.m.rem(a), self.rows.rem(b), self.cells.rem(c)]
     }
 
     /// Exactly `cmj_2d(s, self.n, pattern)`.

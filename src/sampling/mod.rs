@@ -10,6 +10,7 @@
 //! rays) come from seeded `rand` streams instead ([`stream`]).
 
 pub mod cmj;
+pub mod cmj8;
 pub mod hash;
 pub mod sampler;
 pub mod spherical_rect;

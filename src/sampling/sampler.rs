@@ -6,8 +6,11 @@
 //! form one stratified set, and sample `i` depends on nothing but `i`.
 
 use super::cmj::{cmj_2d, stratified_1d, CmjSet};
-use super::hash::{hash_step, unit_float, HASH_WORDS_INIT};
+use super::cmj8::CmjLanes;
+use super::hash::{hash_step, hash_step_lanes, unit_float, unit_float_lanes, HASH_WORDS_INIT};
+use super::spherical_rect8::{mask_lanes, LANES};
 use glam::Vec2;
+use wide::u32x8;
 
 crate::mode::mode_enum! {
     /// `random`: independent uniform numbers. `stratified`: correlated
@@ -181,6 +184,40 @@ impl DimSampler {
     }
 }
 
+impl DimSampler {
+    /// Points `index[i]` of the set for the lanes `i` in mask `wanted`
+    /// (zero in the others): exactly [`DimSampler::get_2d`] of each. Where
+    /// two or more lanes are wanted, from the random sampler or a prepared
+    /// stratified set, all eight are drawn at once in SIMD lanes, so every
+    /// `index[i]` must then be below the set's size, wanted or not.
+    #[inline]
+    pub fn get_2d_lanes(&self, index: [u32; LANES], wanted: u32) -> [Vec2; LANES] {
+        if wanted.count_ones() > 1 {
+            match self.kind {
+                SamplerKind::Stratified if self.set.n == self.count => {
+                    if let Some(lanes) = CmjLanes::new(&self.set, self.pattern) {
+                        return lanes.sample(index);
+                    }
+                }
+                SamplerKind::Stratified => {}
+                SamplerKind::Random => {
+                    let state = u32x8::splat(self.random_state);
+                    let h = hash_step_lanes(state, u32x8::new(index));
+                    let [x, y] =
+                        [0, 1].map(|k| unit_float_lanes(hash_step_lanes(h, u32x8::splat(k))));
+                    let (x, y) = (x.to_array(), y.to_array());
+                    return std::array::from_fn(|i| Vec2::new(x[i], y[i]));
+                }
+            }
+        }
+        let mut points = [Vec2::ZERO; LANES];
+        for i in mask_lanes(wanted) {
+            points[i] = self.get_2d(index[i]);
+        }
+        points
+    }
+}
+
 /// The random sampler's `hash_words(&[p, index, k])` state before `k`, which
 /// a sample's coordinates (k = 0, 1 in 2D, 2 in 1D) share.
 #[inline]
@@ -239,6 +276,24 @@ mod tests {
                                     got.to_array().map(f32::to_bits),
                                     want.map(f32::to_bits)
                                 );
+                            }
+                        }
+                        // Eight at a time, lanes in any order, from
+                        // prepared sets (drawn in SIMD lanes) and plain ones.
+                        for first in 0..n {
+                            let index = std::array::from_fn(|k| (first + 3 * k as u32) % n);
+                            for (sampler, wanted) in
+                                [(plain, 0xff), (prepared, 0xff), (prepared, 0b1000)]
+                            {
+                                let got = sampler.dim_2d(dim, n).get_2d_lanes(index, wanted);
+                                for i in mask_lanes(wanted) {
+                                    let (got, i) = (got[i], index[i]);
+                                    let want = plain_2d(kind, seed, pixel, dim, i, n);
+                                    assert_eq!(
+                                        got.to_array().map(f32::to_bits),
+                                        want.to_array().map(f32::to_bits)
+                                    );
+                                }
                             }
                         }
                     }

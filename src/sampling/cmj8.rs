@@ -1,0 +1,278 @@
+//! Eight samples of one correlated multi-jittered set at once: the
+//! arithmetic of [`super::cmj`] (Kensler 2013) in `wide::u32x8` lanes, for
+//! the samples of one batch of camera samples (one pixel's pixel or light
+//! samples).
+//!
+//! A CMJ sample is three hashed permutations and two hashed floats: chains
+//! of dependent 32-bit multiplications, about a hundred cycles each, where
+//! eight lanes run eight chains in the time of one. What the scalar code
+//! does per sample with 64-bit multiplications (the remainder that ends a
+//! permutation, the column and row of a cell) is done here with 32-bit
+//! lanes, exactly:
+//!
+//! - `(i + p) mod len` (wrapping add) from `p mod len` and `2³² mod len`,
+//!   made once per set and pattern, and at most two subtractions;
+//! - `s / m` for a cell `s` as `⌊(s + ½) / m⌋` in `f32`, which is exact
+//!   while the set has fewer than 2²² cells (the quotient's rounding error
+//!   stays below the distance ½/m to the nearest integer).
+//!
+//! The floats are computed in the scalar code's order with IEEE operations
+//! and exact integer-to-float conversions, so every lane is bit for bit
+//! [`super::cmj::cmj_2d`]; the tests check that.
+
+use super::cmj::{mask_of, sample_patterns, CmjSet, ONE_MINUS_EPSILON};
+use super::hash::unit_float_lanes;
+use super::spherical_rect8::LANES;
+use glam::Vec2;
+use wide::{f32x8, u32x8};
+
+/// Sets with this many cells or more are drawn one sample at a time (the
+/// `f32` quotient is exact below it, see the module docs).
+const MAX_CELLS: u32 = 1 << 22;
+
+/// One of a sample's permutations of `0..len` under one pattern, with what
+/// its lanes share.
+#[derive(Debug, Clone, Copy)]
+struct PermuteLanes {
+    len: u32,
+    /// The cycle-walking mask (all ones up to the top bit of `len - 1`).
+    w: u32,
+    p: u32,
+    /// `p mod len`.
+    p_mod: u32,
+    /// `len - (2³² mod len)`: what a wrapped `i + p` adds, modulo `len`.
+    wrap_add: u32,
+}
+
+impl PermuteLanes {
+    fn new(len: u32, p: u32, p_mod: u32, two32_mod: u32) -> Self {
+        Self {
+            len,
+            w: mask_of(len),
+            p,
+            p_mod,
+            wrap_add: len - two32_mod,
+        }
+    }
+
+    /// `permute(i, len, p)` of [`super::cmj`] in each lane (every `i < len`).
+    #[inline(always)]
+    fn apply(&self, i: u32x8) -> u32x8 {
+        if self.len == 1 {
+            return u32x8::ZERO;
+        }
+        let (p, w) = (self.p, u32x8::splat(self.w));
+        let len = u32x8::splat(self.len);
+        let splat = u32x8::splat;
+        let mut i = i;
+        // Cycle walking: each lane steps until it lands in 0..len; lanes
+        // that have landed keep their value while the others walk on.
+        let mut walking = u32x8::splat(u32::MAX);
+        loop {
+            let mut x = i ^ splat(p);
+            x *= splat(0xe170_893d);
+            x ^= splat(p >> 16);
+            x ^= (x & w) >> 4;
+            x ^= splat(p >> 8);
+            x *= splat(0x0929_eb3f);
+            x ^= splat(p >> 23);
+            x ^= (x & w) >> 1;
+            x *= splat(1 | p >> 27);
+            x *= splat(0x6935_fa69);
+            x ^= (x & w) >> 11;
+            x *= splat(0x74dc_b303);
+            x ^= (x & w) >> 2;
+            x *= splat(0x9e50_1cc3);
+            x ^= (x & w) >> 2;
+            x *= splat(0xc860_a3df);
+            x &= w;
+            x ^= x >> 5;
+            i = walking.select(x, i);
+            walking &= !x.simd_lt(len);
+            if !walking.any() {
+                break;
+            }
+        }
+        // (i + p) mod len with the scalar code's wrapping add: i + p mod len,
+        // plus len − 2³² mod len where the add wrapped; below 3·len.
+        let wrapped = (i + splat(p)).simd_lt(splat(p));
+        let mut r = i + splat(self.p_mod) + (wrapped & splat(self.wrap_add));
+        for _ in 0..2 {
+            r = r - (r.simd_ge(len) & len);
+        }
+        r
+    }
+}
+
+/// `rand_float(i, p)` of [`super::cmj`] in each lane.
+#[inline(always)]
+fn rand_float(i: u32x8, p: u32) -> f32x8 {
+    let splat = u32x8::splat;
+    let mut i = i ^ splat(p);
+    i ^= i >> 17;
+    i ^= i >> 10;
+    i *= splat(0xb365_34e5);
+    i ^= i >> 12;
+    i ^= i >> 21;
+    i *= splat(0x93fc_4795);
+    i ^= splat(0xdf6e_307f);
+    i ^= i >> 17;
+    i *= splat(1 | p >> 18);
+    unit_float_lanes(i)
+}
+
+/// Lanes below 2²⁴ as exact floats.
+#[inline(always)]
+fn to_f32(v: u32x8) -> f32x8 {
+    v.cast_signed().round_float()
+}
+
+/// What the draws of one prepared CMJ set under one pattern share, for
+/// drawing eight samples at a time.
+#[derive(Debug, Clone, Copy)]
+pub struct CmjLanes {
+    n: u32,
+    cells: PermuteLanes,
+    columns: PermuteLanes,
+    rows: PermuteLanes,
+    jitter_x: u32,
+    jitter_y: u32,
+}
+
+impl CmjLanes {
+    /// The lanes of `set` under `pattern`, or `None` for an empty set or
+    /// one of [`MAX_CELLS`] cells or more.
+    pub fn new(set: &CmjSet, pattern: u32) -> Option<Self> {
+        let (m, rows, cells) = set.grid();
+        if set.n == 0 || cells >= MAX_CELLS {
+            return None;
+        }
+        let [p_cells, p_columns, p_rows, jitter_x, jitter_y] = sample_patterns(pattern);
+        let [m_mod, rows_mod, cells_mod] = set.grid_mods([p_columns, p_rows, p_cells]);
+        let [m_wrap, rows_wrap, cells_wrap] = set.two32_mods();
+        Some(Self {
+            n: set.n,
+            cells: PermuteLanes::new(cells, p_cells, cells_mod, cells_wrap),
+            columns: PermuteLanes::new(m, p_columns, m_mod, m_wrap),
+            rows: PermuteLanes::new(rows, p_rows, rows_mod, rows_wrap),
+            jitter_x,
+            jitter_y,
+        })
+    }
+
+    /// Samples `s[i]` of the set (each below its size), lane by lane
+    /// exactly [`CmjSet::sample`].
+    pub fn sample(&self, s: [u32; LANES]) -> [Vec2; LANES] {
+        debug_assert!(s.iter().all(|&s| s < self.n));
+        let s = self.cells.apply(u32x8::new(s));
+        let (m, rows) = (self.columns.len as f32, self.rows.len as f32);
+        let (mf, rows_f) = (f32x8::splat(m), f32x8::splat(rows));
+        let row = ((to_f32(s) + f32x8::splat(0.5)) / mf)
+            .trunc_int()
+            .cast_unsigned();
+        let col = s - row * u32x8::splat(self.columns.len);
+        let sx = self.columns.apply(col);
+        let sy = self.rows.apply(row);
+        let jx = rand_float(s, self.jitter_x);
+        let jy = rand_float(s, self.jitter_y);
+        let x = (to_f32(sx) + (to_f32(sy) + jx) / rows_f) / mf;
+        let y = (to_f32(row) + jy) / rows_f;
+        let limit = f32x8::splat(ONE_MINUS_EPSILON);
+        let (x, y) = (x.fast_min(limit).to_array(), y.fast_min(limit).to_array());
+        std::array::from_fn(|i| Vec2::new(x[i], y[i]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::cmj::cmj_2d;
+    use crate::sampling::hash::hash_u32;
+
+    fn assert_lanes_match(n: u32, pattern: u32, s: [u32; LANES]) {
+        let set = CmjSet::new(n);
+        let got = CmjLanes::new(&set, pattern).expect("fits").sample(s);
+        for (lane, &s) in s.iter().enumerate() {
+            let want = cmj_2d(s, n, pattern);
+            assert_eq!(
+                got[lane].to_array().map(f32::to_bits),
+                want.to_array().map(f32::to_bits),
+                "n {n} pattern {pattern:#x} sample {s}"
+            );
+        }
+    }
+
+    /// The inverse of odd `k` modulo 2³² (Newton's iteration).
+    fn inverse(k: u32) -> u32 {
+        let mut x = k;
+        for _ in 0..5 {
+            x = x.wrapping_mul(2u32.wrapping_sub(k.wrapping_mul(x)));
+        }
+        x
+    }
+
+    /// Every sample of many set sizes (squares, partial grids, primes,
+    /// sizes whose cycle walking takes several steps) under hashed
+    /// patterns, and under patterns that make one permutation's pattern
+    /// just below 2³², so that its final `i + p` wraps.
+    #[test]
+    fn lanes_are_the_scalar_samples_bit_for_bit() {
+        let multipliers = sample_patterns(1);
+        assert!(multipliers.iter().all(|&k| inverse(k).wrapping_mul(k) == 1));
+        let wrapping = multipliers[..3]
+            .iter()
+            .flat_map(|&k| [1u32, 3, 40, 1000].map(|j| inverse(k).wrapping_mul(j.wrapping_neg())));
+        let patterns: Vec<u32> = [0, u32::MAX, 0x8000_0000]
+            .into_iter()
+            .chain(wrapping)
+            .chain((0..8).map(|k| hash_u32(k * 7919)))
+            .collect();
+        let sizes = (1u32..=70).chain([100, 127, 128, 129, 255, 1000, 1024, 4097, 65_537]);
+        for n in sizes {
+            for &pattern in &patterns {
+                let mut s = 0;
+                while s < n {
+                    let lanes = std::array::from_fn(|i| (s + i as u32 * n.div_ceil(8)) % n);
+                    assert_lanes_match(n, pattern, lanes);
+                    s += (n / 64).max(1);
+                }
+            }
+        }
+    }
+
+    /// The largest sets drawn in lanes, where the f32 quotient's margin is
+    /// thinnest: the last cells of every row.
+    #[test]
+    fn the_largest_sets_still_find_every_row_exactly() {
+        for n in [MAX_CELLS - 5000, 4_000_000, 3_999_999] {
+            for pattern in [1u32, 0xdead_beef, 0x1234_5678] {
+                let lanes = std::array::from_fn(|i| n - 1 - i as u32 * 977);
+                assert_lanes_match(n, pattern, lanes);
+            }
+        }
+        assert!(CmjLanes::new(&CmjSet::new(MAX_CELLS), 1).is_none());
+        assert!(CmjLanes::new(&CmjSet::EMPTY, 1).is_none());
+    }
+
+    /// The cell quotient itself, over the first and last cells of grids of
+    /// nearly [`MAX_CELLS`] cells, where its rounding error is largest.
+    #[test]
+    fn float_quotients_of_cells_are_exact() {
+        for m in [1u32, 2, 3, 7, 64, 1023, 2047, 2048] {
+            let cells = (MAX_CELLS - 1) / m * m;
+            let mf = f32x8::splat(m as f32);
+            let ends = (0..100_000).chain(cells - 100_000..cells);
+            for s in ends.step_by(8) {
+                let lanes = u32x8::new(std::array::from_fn(|i| (s + i as u32).min(cells - 1)));
+                let q = ((to_f32(lanes) + f32x8::splat(0.5)) / mf)
+                    .trunc_int()
+                    .cast_unsigned()
+                    .to_array();
+                for (i, q) in q.iter().enumerate() {
+                    let v = (s + i as u32).min(cells - 1);
+                    assert_eq!(*q, v / m, "{v} / {m}");
+                }
+            }
+        }
+    }
+}
