@@ -342,7 +342,6 @@ pub fn render_pixels(
     samples: Range<u32>,
 ) {
     let s = &scene.settings;
-    let mut batch: Vec<CameraSample> = Vec::with_capacity(PACKET_SIZE);
     let mut out = [Vec3::ZERO; PACKET_SIZE];
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
     // The common set sizes, prepared once for all these pixels: camera
@@ -353,21 +352,33 @@ pub fn render_pixels(
         let (x, y) = (x as f32, y as f32);
         let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
         let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
+        // The pixel's context is written once; each batch then sets only
+        // the sample indices and film positions. (Built whole per sample,
+        // the 168-byte samples were copied through the stack with wide
+        // loads that stalled on narrower stores: `perf annotate`.)
+        let mut batch = [CameraSample {
+            ctx: SampleContext::new(sampler, 0, s.spp),
+            film: Vec2::ZERO,
+        }; PACKET_SIZE];
         let mut start = samples.start;
         while start < samples.end {
             let end = samples.end.min(start + PACKET_SIZE as u32);
-            batch.clear();
-            batch.extend((start..end).map(|sample| CameraSample {
-                ctx: SampleContext::new(sampler, sample, s.spp),
-                film: Vec2::new(x, y) + jitter.get_2d(sample),
-            }));
+            let n = (end - start) as usize;
+            // The batch's pixel samples in SIMD lanes (unused lanes repeat
+            // the last sample).
+            let index = std::array::from_fn(|i| (start + i as u32).min(end - 1));
+            let offsets = jitter.get_2d_lanes(index, (1 << n) - 1);
+            for ((camera, offset), sample) in batch.iter_mut().zip(offsets).zip(start..end) {
+                camera.ctx.sample = sample;
+                camera.film = Vec2::new(x, y) + offset;
+            }
             let first = aov.is_some().then_some(&mut first_hits[..]);
-            integrator.camera_batch(&batch, &mut out, first);
+            integrator.camera_batch(&batch[..n], &mut out, first);
             for (v, sample) in out.iter().zip(start..end) {
                 acc.add(*v, sample);
             }
             if let Some(aov) = aov.as_deref_mut() {
-                for hit in &first_hits[..batch.len()] {
+                for hit in &first_hits[..n] {
                     aov[j].add(hit);
                 }
             }

@@ -19,7 +19,8 @@
 use super::bsdf::phong_brdf;
 use super::integrator::{ShadeLane, Shading};
 use super::packets::SHADOW_PACKET_MIN;
-use super::Integrator;
+use super::sample::draw_2d_lanes;
+use super::{Integrator, SampleContext};
 use crate::accel::PACKET_SIZE;
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
@@ -86,25 +87,12 @@ impl Integrator<'_> {
             let seen = light.seen_from_lanes(&points, active, method);
             let mut wave = ShadowWave::default();
             let mut u = [Vec2::ZERO; LANES];
-            // The lanes of a camera batch are samples of one pixel: what
-            // their draws share is worked out once, from the first lane.
-            let first = lanes[active.trailing_zeros() as usize].ctx;
-            let shared = light
-                .is_area()
-                .then(|| first.sampler.dim_2d(dim, first.count() * m_samples));
             for j in 0..m_samples {
-                if let Some(shared) = &shared {
-                    for i in mask_lanes(active) {
-                        let ctx = lanes[i].ctx;
-                        let (index, count) = (ctx.index() * m_samples + j, ctx.count() * m_samples);
-                        u[i] = if ctx.sampler.same_numbers(&first.sampler)
-                            && ctx.count() == first.count()
-                        {
-                            shared.get_2d(index)
-                        } else {
-                            ctx.sampler.get_2d(dim, index, count)
-                        };
-                    }
+                if light.is_area() {
+                    let at = |ctx: &SampleContext| {
+                        (ctx.index() * m_samples + j, ctx.count() * m_samples)
+                    };
+                    u = draw_2d_lanes(active, |i| lanes[i].ctx, dim, at);
                 }
                 let samples = seen.sample(active, &u);
                 wave.len = 0;

@@ -2,6 +2,7 @@
 //! recursion from a hit to its emitted, direct and specular light.
 
 use super::packets::CAMERA_PACKET_MIN;
+use super::sample::draw_2d_lanes;
 use super::{CameraSample, FirstHit, PacketMode, PathEvent, RayCounts, SampleContext};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::geometry::Surface;
@@ -150,9 +151,16 @@ impl Integrator<'_> {
             out[0] = self.trace_and_shade(&batch[0].ctx, &ray, 0, 1.0, "camera", first);
             return;
         }
+        // The lens samples as `camera_ray` draws them, eight at a time.
+        let lens = if self.scene.camera.uses_lens() {
+            let at = |ctx: &SampleContext| (ctx.sample, ctx.spp);
+            draw_2d_lanes((1 << n) - 1, |i| &batch[i].ctx, Dim::LENS, at)
+        } else {
+            [Vec2::splat(0.5); PACKET_SIZE]
+        };
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE];
-        for (r, s) in rays.iter_mut().zip(batch) {
-            *r = self.camera_ray(&s.ctx, s.film);
+        for ((r, s), lens) in rays.iter_mut().zip(batch).zip(lens) {
+            *r = self.scene.camera.generate_ray(s.film, lens);
         }
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];

@@ -1,7 +1,8 @@
 //! What identifies one sample and what a render counts.
 
 use crate::math::Ray;
-use crate::sampling::PixelSampler;
+use crate::sampling::spherical_rect8::{mask_lanes, LANES};
+use crate::sampling::{Dim, PixelSampler};
 use glam::{Vec2, Vec3};
 
 /// Rays traced, by kind.
@@ -69,6 +70,47 @@ impl SampleContext {
     pub fn count(&self) -> u32 {
         self.spp * self.branches
     }
+}
+
+/// The 2D draws of dimension `dim` for the lanes `i` in mask `wanted`:
+/// point `at(ctx)` = (index, count) of lane `i`'s context `ctx_of(i)`,
+/// exactly what its own sampler gives (zero in the other lanes). The lanes
+/// that share the first wanted lane's numbers and set size (a batch's
+/// samples of one pixel) are drawn together in SIMD lanes
+/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]).
+#[inline]
+pub(super) fn draw_2d_lanes<'c>(
+    wanted: u32,
+    ctx_of: impl Fn(usize) -> &'c SampleContext,
+    dim: Dim,
+    at: impl Fn(&SampleContext) -> (u32, u32),
+) -> [Vec2; LANES] {
+    let mut points = [Vec2::ZERO; LANES];
+    if wanted == 0 {
+        return points;
+    }
+    let first = ctx_of(wanted.trailing_zeros() as usize);
+    let (first_index, count) = at(first);
+    let mut index = [first_index; LANES];
+    let mut sharing = 0u32;
+    for i in mask_lanes(wanted) {
+        let ctx = ctx_of(i);
+        let (i_index, i_count) = at(ctx);
+        if i_count == count && ctx.sampler.same_numbers(&first.sampler) {
+            sharing |= 1 << i;
+            index[i] = i_index;
+        } else {
+            points[i] = ctx.sampler.get_2d(dim, i_index, i_count);
+        }
+    }
+    let drawn = first
+        .sampler
+        .dim_2d(dim, count)
+        .get_2d_lanes(index, sharing);
+    for i in mask_lanes(sharing) {
+        points[i] = drawn[i];
+    }
+    points
 }
 
 /// One path vertex, for `--debug-sample` replays.
