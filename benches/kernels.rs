@@ -35,8 +35,8 @@ use strata::accel::node::{encode_leaf, Node8};
 use strata::accel::PrimHit;
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
 use strata::math::{Aabb, Ray};
-use strata::scene::{scene_from_str, RenderOverrides};
 use strata::sampling::{Dim, PixelSampler, SamplerKind};
+use strata::scene::{scene_from_str, RenderOverrides};
 use strata::shape::triangle::{intersect, ShearedRay};
 
 /// One node, eight leaf children with random boxes in [-1, 1]³.
@@ -295,7 +295,11 @@ fn sampling(c: &mut Criterion) {
     ] {
         g.throughput(Throughput::Elements((PIXELS * n) as u64));
         let sets = PixelSampler::prepare_sets([n, 0]);
-        let pixel = |p: u32| PixelSampler::new(kind, 7, p).with_sets(sets).dim_2d(Dim::PIXEL, n);
+        let pixel = |p: u32| {
+            PixelSampler::new(kind, 7, p)
+                .with_sets(sets)
+                .dim_2d(Dim::PIXEL, n)
+        };
         g.bench_function(format!("{kind}_{n}_one_at_a_time"), |b| {
             b.iter(|| {
                 let mut sum = 0.0;
