@@ -187,19 +187,26 @@ impl DimSampler {
 impl DimSampler {
     /// Points `index[i]` of the set for the lanes `i` in mask `wanted`
     /// (zero in the others): exactly [`DimSampler::get_2d`] of each. Where
-    /// two or more lanes are wanted, from the random sampler or a prepared
-    /// stratified set, all eight are drawn at once in SIMD lanes, so every
-    /// `index[i]` must then be below the set's size, wanted or not.
+    /// two or more lanes are wanted, all eight are drawn at once in SIMD
+    /// lanes, so every `index[i]` must then be below the set's size,
+    /// wanted or not.
     #[inline]
     pub fn get_2d_lanes(&self, index: [u32; LANES], wanted: u32) -> [Vec2; LANES] {
         if wanted.count_ones() > 1 {
             match self.kind {
-                SamplerKind::Stratified if self.set.n == self.count => {
-                    if let Some(lanes) = CmjLanes::new(&self.set, self.pattern) {
+                SamplerKind::Stratified => {
+                    // A set not prepared is prepared here: three 64-bit
+                    // divisions, against the scalar code's three 32-bit
+                    // divisions per sample.
+                    let set = if self.set.n == self.count {
+                        self.set
+                    } else {
+                        CmjSet::new(self.count)
+                    };
+                    if let Some(lanes) = CmjLanes::new(&set, self.pattern) {
                         return lanes.sample(index);
                     }
                 }
-                SamplerKind::Stratified => {}
                 SamplerKind::Random => {
                     let state = u32x8::splat(self.random_state);
                     let h = hash_step_lanes(state, u32x8::new(index));

@@ -20,7 +20,7 @@ use super::bsdf::phong_brdf;
 use super::integrator::{ShadeLane, Shading};
 use super::packets::SHADOW_PACKET_MIN;
 use super::sample::draw_2d_lanes;
-use super::{Integrator, SampleContext};
+use super::Integrator;
 use crate::accel::PACKET_SIZE;
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
@@ -82,24 +82,50 @@ impl Integrator<'_> {
             let dim = Dim::light(depth, light_index as u32);
             let except = light.prim().unwrap_or(u32::MAX);
             let mut sum = [Vec3::ZERO; LANES];
+            // The SIMD lanes hold either the batch's hits, one sample `j`
+            // of each per round, or, where a single hit is lit with several
+            // samples (a reflected ray's hit, a one-sample pass), that
+            // hit's samples, eight per round. Each hit's contributions are
+            // added in sample order either way, so the sums are the same.
+            let one_hit = (active.count_ones() == 1 && m_samples > 1)
+                .then(|| active.trailing_zeros() as usize);
             // What every sample of this light from a point shares (a rect
             // light's spherical rectangle), built once per lane.
-            let seen = light.seen_from_lanes(&points, active, method);
+            let seen = match one_hit {
+                Some(h) => light.seen_from_lanes(&[points[h]; LANES], u32::MAX >> 24, method),
+                None => light.seen_from_lanes(&points, active, method),
+            };
+            let rounds = match one_hit {
+                Some(_) => m_samples.div_ceil(LANES as u32),
+                None => m_samples,
+            };
             let mut wave = ShadowWave::default();
             let mut u = [Vec2::ZERO; LANES];
-            for j in 0..m_samples {
+            for round in 0..rounds {
+                // The slots of this round, and each slot's hit and sample.
+                let (slots, hit, j): (u32, [usize; LANES], [u32; LANES]) = match one_hit {
+                    Some(h) => {
+                        let first = round * LANES as u32;
+                        let live = (m_samples - first).min(LANES as u32);
+                        let j = std::array::from_fn(|k| first + k as u32);
+                        (u32::MAX >> (32 - live), [h; LANES], j)
+                    }
+                    None => (active, std::array::from_fn(|k| k), [round; LANES]),
+                };
                 if light.is_area() {
-                    let at = |ctx: &SampleContext| {
-                        (ctx.index() * m_samples + j, ctx.count() * m_samples)
+                    let at = |k: usize| {
+                        let ctx = lanes[hit[k]].ctx;
+                        (ctx.index() * m_samples + j[k], ctx.count() * m_samples)
                     };
-                    u = draw_2d_lanes(active, |i| lanes[i].ctx, dim, at);
+                    u = draw_2d_lanes(slots, |k| lanes[hit[k]].ctx, dim, at);
                 }
-                let samples = seen.sample(active, &u);
+                let samples = seen.sample(slots, &u);
                 wave.len = 0;
-                for i in mask_lanes(active) {
-                    let Some(ls) = samples[i] else {
+                for k in mask_lanes(slots) {
+                    let Some(ls) = samples[k] else {
                         continue;
                     };
+                    let i = hit[k];
                     let sh = shading(i);
                     let s = sh.surface;
                     let cos_i = sh.ns.dot(ls.wi);

@@ -153,7 +153,7 @@ impl Integrator<'_> {
         }
         // The lens samples as `camera_ray` draws them, eight at a time.
         let lens = if self.scene.camera.uses_lens() {
-            let at = |ctx: &SampleContext| (ctx.sample, ctx.spp);
+            let at = |i: usize| (batch[i].ctx.sample, batch[i].ctx.spp);
             draw_2d_lanes((1 << n) - 1, |i| &batch[i].ctx, Dim::LENS, at)
         } else {
             [Vec2::splat(0.5); PACKET_SIZE]

@@ -73,29 +73,30 @@ impl SampleContext {
 }
 
 /// The 2D draws of dimension `dim` for the lanes `i` in mask `wanted`:
-/// point `at(ctx)` = (index, count) of lane `i`'s context `ctx_of(i)`,
+/// point `at(i)` = (index, count) of lane `i`'s context `ctx_of(i)`,
 /// exactly what its own sampler gives (zero in the other lanes). The lanes
 /// that share the first wanted lane's numbers and set size (a batch's
-/// samples of one pixel) are drawn together in SIMD lanes
-/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]).
+/// samples of one pixel, or one sample's several draws) are drawn together
+/// in SIMD lanes ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]).
 #[inline]
 pub(super) fn draw_2d_lanes<'c>(
     wanted: u32,
     ctx_of: impl Fn(usize) -> &'c SampleContext,
     dim: Dim,
-    at: impl Fn(&SampleContext) -> (u32, u32),
+    at: impl Fn(usize) -> (u32, u32),
 ) -> [Vec2; LANES] {
     let mut points = [Vec2::ZERO; LANES];
     if wanted == 0 {
         return points;
     }
-    let first = ctx_of(wanted.trailing_zeros() as usize);
-    let (first_index, count) = at(first);
+    let first_lane = wanted.trailing_zeros() as usize;
+    let first = ctx_of(first_lane);
+    let (first_index, count) = at(first_lane);
     let mut index = [first_index; LANES];
     let mut sharing = 0u32;
     for i in mask_lanes(wanted) {
         let ctx = ctx_of(i);
-        let (i_index, i_count) = at(ctx);
+        let (i_index, i_count) = at(i);
         if i_count == count && ctx.sampler.same_numbers(&first.sampler) {
             sharing |= 1 << i;
             index[i] = i_index;
