@@ -8,15 +8,18 @@ use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 /// stratified disk. Returns a point on the unit disk.
 pub fn concentric_disk(u: Vec2) -> Vec2 {
     let a = 2.0 * u - Vec2::ONE;
-    if a.x == 0.0 && a.y == 0.0 {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if a.x.abs() > a.y.abs() {
-        (a.x, FRAC_PI_4 * (a.y / a.x))
-    } else {
-        (a.y, FRAC_PI_2 - FRAC_PI_4 * (a.x / a.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+    // Both wedges computed and one chosen without a branch: which wedge a
+    // random sample falls in is a coin toss, and as a branch it
+    // mispredicted half the time (thin-lens lens samples). The quotient of
+    // the wedge not chosen may be ±∞ or NaN; it is never used.
+    let wide = a.x.abs() > a.y.abs();
+    let x_wedge = FRAC_PI_4 * (a.y / a.x);
+    let y_wedge = FRAC_PI_2 - FRAC_PI_4 * (a.x / a.y);
+    let r = std::hint::select_unpredictable(wide, a.x, a.y);
+    let theta = std::hint::select_unpredictable(wide, x_wedge, y_wedge);
+    let d = r * Vec2::new(theta.cos(), theta.sin());
+    // The centre: r is 0 there, but θ (0/0) would make the point NaN.
+    std::hint::select_unpredictable(a.x == 0.0 && a.y == 0.0, Vec2::ZERO, d)
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method), pdf cosθ/π.
