@@ -4,6 +4,7 @@
 //! y in [0, height) downwards. `lens` is a point in [0,1)² that only the
 //! thin lens uses.
 
+pub mod lanes;
 pub mod orthographic;
 pub mod perspective;
 pub mod projection;

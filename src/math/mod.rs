@@ -1,8 +1,10 @@
 //! Geometry basics: rays, boxes, orthonormal frames, transforms, the robust
-//! origin offset for spawned rays, and trigonometry in SIMD lanes.
+//! origin offset for spawned rays, and vectors and trigonometry in SIMD
+//! lanes.
 
 pub mod aabb;
 pub mod frame;
+pub mod lanes3;
 pub mod offset;
 pub mod ray;
 pub mod transform;

@@ -12,6 +12,7 @@
 //! [`SphericalRect`](super::spherical_rect::SphericalRect): the tests check that, and the image does not depend
 //! on how samples were batched.
 
+use crate::math::lanes3::Lanes3;
 use crate::math::trig::{acos8, sin_cos8};
 use glam::{Vec2, Vec3};
 use std::f32::consts::TAU;
@@ -19,56 +20,6 @@ use wide::f32x8;
 
 /// Points per batch: one per `f32x8` lane.
 pub const LANES: usize = 8;
-
-/// Three coordinates in lanes, with glam's `Vec3` arithmetic in its order.
-#[derive(Debug, Clone, Copy)]
-struct Lanes3 {
-    x: f32x8,
-    y: f32x8,
-    z: f32x8,
-}
-
-impl Lanes3 {
-    fn splat(v: Vec3) -> Self {
-        Self {
-            x: f32x8::splat(v.x),
-            y: f32x8::splat(v.y),
-            z: f32x8::splat(v.z),
-        }
-    }
-
-    fn dot(self, o: Self) -> f32x8 {
-        (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
-    }
-
-    fn cross(self, o: Self) -> Self {
-        Self {
-            x: self.y * o.z - o.y * self.z,
-            y: self.z * o.x - o.z * self.x,
-            z: self.x * o.y - o.x * self.y,
-        }
-    }
-
-    /// `Vec3::try_normalize`: the unit vector, and whether it exists.
-    fn try_normalize(self) -> (Self, f32x8) {
-        let rcp = f32x8::ONE / self.dot(self).sqrt();
-        let ok = rcp.is_finite() & rcp.simd_gt(f32x8::ZERO);
-        let unit = Self {
-            x: self.x * rcp,
-            y: self.y * rcp,
-            z: self.z * rcp,
-        };
-        (unit, ok)
-    }
-
-    fn lane(&self, i: usize) -> Vec3 {
-        Vec3::new(
-            self.x.to_array()[i],
-            self.y.to_array()[i],
-            self.z.to_array()[i],
-        )
-    }
-}
 
 /// `f32::clamp`: NaN stays NaN (a plain min/max pair would not keep it).
 fn clamp(v: f32x8, lo: f32x8, hi: f32x8) -> f32x8 {

@@ -158,10 +158,9 @@ impl Integrator<'_> {
         } else {
             [Vec2::splat(0.5); PACKET_SIZE]
         };
-        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE];
-        for ((r, s), lens) in rays.iter_mut().zip(batch).zip(lens) {
-            *r = self.scene.camera.generate_ray(s.film, lens);
-        }
+        // (Lanes past `n` repeat the last sample, unused.)
+        let film = std::array::from_fn(|i| batch[i.min(n - 1)].film);
+        let rays = self.scene.camera.generate_rays(&film, &lens);
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];
         if self.packets.use_packet(n, CAMERA_PACKET_MIN) {
