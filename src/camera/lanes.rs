@@ -12,14 +12,11 @@
 //! [`Camera::generate_ray`] makes; the tests check that for every camera.
 
 use super::{Camera, View};
-use crate::math::lanes3::Lanes3;
+use crate::math::lanes3::{Lanes3, LANES};
 use crate::math::Ray;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 use wide::f32x8;
-
-/// Rays per batch: one per `f32x8` lane.
-pub const LANES: usize = 8;
 
 /// Eight 2D points as two lanes.
 fn split(points: &[Vec2; LANES]) -> (f32x8, f32x8) {

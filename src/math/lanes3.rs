@@ -6,6 +6,9 @@
 use glam::Vec3;
 use wide::f32x8;
 
+/// Values per vector: one per `f32x8` lane.
+pub const LANES: usize = 8;
+
 /// Three coordinates in lanes, with glam's `Vec3` arithmetic in its order.
 #[derive(Debug, Clone, Copy)]
 pub struct Lanes3 {

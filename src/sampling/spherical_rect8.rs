@@ -19,7 +19,7 @@ use std::f32::consts::TAU;
 use wide::f32x8;
 
 /// Points per batch: one per `f32x8` lane.
-pub const LANES: usize = 8;
+pub use crate::math::lanes3::LANES;
 
 /// `f32::clamp`: NaN stays NaN (a plain min/max pair would not keep it).
 fn clamp(v: f32x8, lo: f32x8, hi: f32x8) -> f32x8 {
