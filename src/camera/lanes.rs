@@ -14,7 +14,7 @@
 use super::{Camera, View};
 use crate::math::lanes3::{Lanes3, LANES};
 use crate::math::Ray;
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 use wide::f32x8;
 
@@ -70,22 +70,8 @@ fn concentric_disk(u: &[Vec2; LANES]) -> (f32x8, f32x8) {
 
 /// Rays from lanes of origins and directions.
 fn rays(origin: Lanes3, direction: Lanes3) -> [Ray; LANES] {
-    let (ox, oy, oz) = (
-        origin.x.to_array(),
-        origin.y.to_array(),
-        origin.z.to_array(),
-    );
-    let (dx, dy, dz) = (
-        direction.x.to_array(),
-        direction.y.to_array(),
-        direction.z.to_array(),
-    );
-    std::array::from_fn(|i| {
-        Ray::new(
-            Vec3::new(ox[i], oy[i], oz[i]),
-            Vec3::new(dx[i], dy[i], dz[i]),
-        )
-    })
+    let (origin, direction) = (origin.to_vecs(), direction.to_vecs());
+    std::array::from_fn(|i| Ray::new(origin[i], direction[i]))
 }
 
 impl Camera {
@@ -138,6 +124,7 @@ mod tests {
     use super::*;
     use crate::camera::{Orthographic, Perspective, ThinLens};
     use crate::sampling::stream::{seeded, Draw};
+    use glam::Vec3;
 
     fn cameras() -> Vec<Camera> {
         let view = View::look_at(

@@ -54,13 +54,11 @@ impl Lanes3 {
         (unit, ok)
     }
 
+    /// The eight vectors, lane by lane.
     #[inline]
-    pub fn lane(&self, i: usize) -> Vec3 {
-        Vec3::new(
-            self.x.to_array()[i],
-            self.y.to_array()[i],
-            self.z.to_array()[i],
-        )
+    pub fn to_vecs(self) -> [Vec3; LANES] {
+        let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
+        std::array::from_fn(|i| Vec3::new(x[i], y[i], z[i]))
     }
 
     /// `Vec3::normalize`: the vector times the reciprocal of its length.

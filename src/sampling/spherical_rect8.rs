@@ -187,7 +187,7 @@ impl SphericalRects {
             y: self.origin.y + xu * x.y + yv * y.y + self.z0 * self.z.y,
             z: self.origin.z + xu * x.z + yv * y.z + self.z0 * self.z.z,
         };
-        std::array::from_fn(|i| point.lane(i))
+        point.to_vecs()
     }
 }
 
