@@ -308,7 +308,7 @@ impl Light {
         method: LightSampling,
     ) -> LightLanes<'_> {
         if active.count_ones() == 1 {
-            // One point (a reflected ray's hit, a one-sample pass): the
+            // One point (a reflected ray's hit, a lone pixel's one sample): the
             // scalar code, which each lane equals, without the lanes' cost.
             let lane = active.trailing_zeros() as usize;
             return LightLanes::One {

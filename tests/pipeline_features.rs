@@ -277,6 +277,18 @@ fn aovs_hold_the_first_hits_albedo_normal_and_depth() {
     }
     assert_eq!(channel("depth.Z")[outside], f32::INFINITY);
     assert_eq!(channel("albedo.G")[outside], 0.0);
+    // Every pixel's channels are its own samples' (four samples a pixel,
+    // two pixels to a batch of eight): the quad's 16 × 16 pixels exactly.
+    for (k, (depth, albedo)) in channel("depth.Z")
+        .iter()
+        .zip(channel("albedo.G"))
+        .enumerate()
+    {
+        let (x, y) = (k % 32, k / 32);
+        let on_quad = (8..24).contains(&x) && (8..24).contains(&y);
+        assert_eq!(depth.is_finite(), on_quad, "depth of pixel ({x}, {y})");
+        assert_eq!(*albedo > 0.0, on_quad, "albedo of pixel ({x}, {y})");
+    }
     // The same bits on one thread.
     let one = render("1", "b.exr");
     for ((name, a), (_, b)) in exr.channels.iter().zip(&one.channels) {

@@ -127,10 +127,10 @@ fn film(scene: &Scene, packets: PacketMode, threads: usize, passes: u32, slice: 
 fn packets_on_off_and_auto_render_the_same_film() {
     let base = busy_scene("films");
     // One to eleven shadow samples per hit; one sample per pixel per pass,
-    // three, and all twelve at once. The passes change how many hits are
-    // lit together in SIMD lanes, and so how many shadow rays travel in
-    // one wave (one, three, eight and four), which must not change the
-    // film either.
+    // three, and all twelve at once. The passes change which hits are lit
+    // together in SIMD lanes, and so which shadow rays travel in one wave
+    // (eight pixels' samples, two pixels' and a third's, or one pixel's
+    // eight and then four), which must not change the film either.
     for shadow_samples in [1, 3, 5, 8, 11] {
         let mut scene = base.clone();
         scene.settings.shadow_samples = shadow_samples;

@@ -15,7 +15,7 @@
 //! its contributions in sample order.
 //!
 //! A single hit lit with several samples of an area light (a reflected
-//! ray's hit, a one-sample pass) would leave seven lanes idle, so its
+//! or refracted ray's hit) would leave seven lanes idle, so its
 //! samples fill the lanes instead, eight per round and per wave (seed-mc
 //! 20% faster).
 //!
@@ -92,7 +92,7 @@ impl Integrator<'_> {
             let mut sum = [Vec3::ZERO; LANES];
             // The SIMD lanes hold either the batch's hits, one sample `j`
             // of each per round, or, where a single hit is lit with several
-            // samples (a reflected ray's hit, a one-sample pass), that
+            // samples (a reflected or refracted ray's hit), that
             // hit's samples, eight per round. Each hit's contributions are
             // added in sample order either way, so the sums are the same.
             let one_hit = (active.count_ones() == 1 && m_samples > 1)
