@@ -328,9 +328,10 @@ pub struct PixelRun<'w> {
 ///
 /// Each pixel's samples go to the integrator [`PACKET_SIZE`] at a time,
 /// in index order: a batch is the pixel and lens samples of one pixel,
-/// whose rays start close together and point nearly the same way. A pass
-/// of fewer than eight samples per pixel fills its batches from
-/// neighbouring pixels instead ([`render_packed`]). Each sample is still
+/// whose rays start close together and point nearly the same way. What
+/// is left of each pixel's samples after its whole batches (all of them,
+/// in a pass of fewer than eight per pixel) fills batches together with
+/// its neighbours' ([`render_packed`]). Each sample is still
 /// computed from its own index alone and added in the same order, so the
 /// sums are those of sample-by-sample rendering.
 pub fn render_pixels(
@@ -347,11 +348,14 @@ pub fn render_pixels(
     // The common set sizes, prepared once for all these pixels: camera
     // samples, and first-hit light samples.
     let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
-    if samples.len() < PACKET_SIZE {
-        render_packed(integrator, scene, run, accs, aov, samples, sets);
-        return;
-    }
-    for (j, acc) in accs.iter_mut().enumerate() {
+    // Whole batches pixel by pixel, then the samples left over (fewer
+    // than a batch per pixel) from all the pixels together, which keeps
+    // each pixel's samples in index order.
+    let whole = samples.start + (samples.len() - samples.len() % PACKET_SIZE) as u32;
+    let rest = whole..samples.end;
+    let samples = samples.start..whole;
+    let pixels = if samples.is_empty() { 0 } else { accs.len() };
+    for (j, acc) in accs.iter_mut().enumerate().take(pixels) {
         let (x, y, index) = run.window.pixel(run.first + j);
         let (x, y) = (x as f32, y as f32);
         let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
@@ -389,10 +393,13 @@ pub fn render_pixels(
             start = end;
         }
     }
+    if !rest.is_empty() {
+        render_packed(integrator, scene, run, accs, aov, rest, sets);
+    }
 }
 
-/// [`render_pixels`] for a pass of fewer than [`PACKET_SIZE`] samples per
-/// pixel: the pixels' samples in one stream, pixel by pixel and in index
+/// [`render_pixels`] for fewer than [`PACKET_SIZE`] samples per pixel (a
+/// pass's leftovers): the pixels' samples in one stream, pixel by pixel and in index
 /// order within each, eight to a batch, so that a batch's SIMD lanes (its
 /// light samples, its shading) are full where one pixel's samples would
 /// fill only some of them, and a one-sample pass does not shade one ray
