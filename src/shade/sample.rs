@@ -74,10 +74,14 @@ impl SampleContext {
 
 /// The 2D draws of dimension `dim` for the lanes `i` in mask `wanted`:
 /// point `at(i)` = (index, count) of lane `i`'s context `ctx_of(i)`,
-/// exactly what its own sampler gives (zero in the other lanes). The lanes
-/// that share the first wanted lane's numbers and set size (a batch's
-/// samples of one pixel, or one sample's several draws) are drawn together
-/// in SIMD lanes ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]).
+/// exactly what its own sampler gives (zero in the other lanes). Lanes
+/// that share their numbers and set size (a batch's samples of one pixel,
+/// or one sample's several draws) are drawn together in SIMD lanes
+/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]), one group
+/// after another where a batch holds several pixels' samples (rather than
+/// the first group in lanes and the rest one by one: one thread, seven
+/// alternating runs, soft-shadow at 4 spp 0.0157 → 0.0147 s, thin-lens at
+/// 4 spp 0.0794 → 0.0731 s, dragon-rect at 5 spp 0.1068 → 0.1020 s).
 #[inline]
 pub(super) fn draw_2d_lanes<'c>(
     wanted: u32,
@@ -86,30 +90,28 @@ pub(super) fn draw_2d_lanes<'c>(
     at: impl Fn(usize) -> (u32, u32),
 ) -> [Vec2; LANES] {
     let mut points = [Vec2::ZERO; LANES];
-    if wanted == 0 {
-        return points;
-    }
-    let first_lane = wanted.trailing_zeros() as usize;
-    let first = ctx_of(first_lane);
-    let (first_index, count) = at(first_lane);
-    let mut index = [first_index; LANES];
-    let mut sharing = 0u32;
-    for i in mask_lanes(wanted) {
-        let ctx = ctx_of(i);
-        let (i_index, i_count) = at(i);
-        if i_count == count && ctx.sampler.same_numbers(&first.sampler) {
-            sharing |= 1 << i;
-            index[i] = i_index;
-        } else {
-            points[i] = ctx.sampler.get_2d(dim, i_index, i_count);
+    let mut left = wanted;
+    while left != 0 {
+        let first_lane = left.trailing_zeros() as usize;
+        let first = ctx_of(first_lane);
+        let (first_index, count) = at(first_lane);
+        let mut index = [first_index; LANES];
+        let mut sharing = 1u32 << first_lane;
+        for i in mask_lanes(left & !sharing) {
+            let (i_index, i_count) = at(i);
+            if i_count == count && ctx_of(i).sampler.same_numbers(&first.sampler) {
+                sharing |= 1 << i;
+                index[i] = i_index;
+            }
         }
-    }
-    let drawn = first
-        .sampler
-        .dim_2d(dim, count)
-        .get_2d_lanes(index, sharing);
-    for i in mask_lanes(sharing) {
-        points[i] = drawn[i];
+        let drawn = first
+            .sampler
+            .dim_2d(dim, count)
+            .get_2d_lanes(index, sharing);
+        for i in mask_lanes(sharing) {
+            points[i] = drawn[i];
+        }
+        left &= !sharing;
     }
     points
 }
@@ -141,4 +143,53 @@ impl FirstHit {
         normal: Vec3::ZERO,
         depth: f32::INFINITY,
     };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::SamplerKind;
+
+    /// Every wanted lane gets exactly its own sampler's draw, whatever mix
+    /// of pixels, sample indices and set sizes the lanes hold, and the
+    /// other lanes zero: batches of one pixel, of several pixels' runs,
+    /// and lanes with a set size of their own.
+    #[test]
+    fn each_lane_draws_what_its_own_sampler_gives() {
+        let mut state = 12345u32;
+        let mut next = |n: u32| {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (state >> 8) % n
+        };
+        for round in 0..2000 {
+            let kind = [SamplerKind::Stratified, SamplerKind::Random][round % 2];
+            let pixels = 1 + next(4);
+            let counts = [16, 5, 35, 1];
+            let contexts: Vec<SampleContext> = (0..LANES)
+                .map(|_| {
+                    let pixel = next(pixels);
+                    let spp = counts[(next(8) as usize).min(3) * (round / 2 % 2)];
+                    let sampler = PixelSampler::new(kind, 7, pixel);
+                    SampleContext::new(sampler, next(spp), spp)
+                })
+                .collect();
+            let wanted = next(256);
+            let dim = [Dim::LENS, Dim::light(1, 2)][round / 4 % 2];
+            let at = |i: usize| (contexts[i].sample, contexts[i].spp);
+            let drawn = draw_2d_lanes(wanted, |i| &contexts[i], dim, at);
+            for (i, point) in drawn.iter().enumerate() {
+                let expected = if wanted >> i & 1 == 1 {
+                    let (index, count) = at(i);
+                    contexts[i].sampler.get_2d(dim, index, count)
+                } else {
+                    Vec2::ZERO
+                };
+                assert_eq!(
+                    (point.x.to_bits(), point.y.to_bits()),
+                    (expected.x.to_bits(), expected.y.to_bits()),
+                    "round {round}, lane {i}"
+                );
+            }
+        }
+    }
 }
