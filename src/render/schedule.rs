@@ -419,47 +419,51 @@ fn render_packed(
     sets: [CmjSet; 2],
 ) {
     let s = &scene.settings;
-    let per_pixel = samples.len();
-    if per_pixel == 0 || accs.is_empty() {
+    if samples.is_empty() || accs.is_empty() {
         return;
     }
     let mut out = [Vec3::ZERO; PACKET_SIZE];
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
-    let sampler_of = |j: usize| {
-        let (_, _, index) = run.window.pixel(run.first + j);
-        PixelSampler::new(s.sampler, s.seed, index).with_sets(sets)
+    // The pixel the stream is in (`j`), what it shares among its samples,
+    // and its next sample; kept across batches, so that each pixel is set
+    // up once and the stream needs no divisions.
+    let setup = |j: usize| {
+        let (x, y, index) = run.window.pixel(run.first + j);
+        let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
+        let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
+        (Vec2::new(x as f32, y as f32), sampler, jitter)
     };
+    let (mut j, mut next) = (0, samples.start);
+    let (mut corner, mut sampler, mut jitter) = setup(0);
     let mut batch = [CameraSample {
-        ctx: SampleContext::new(sampler_of(0), 0, s.spp),
+        ctx: SampleContext::new(sampler, 0, s.spp),
         film: Vec2::ZERO,
     }; PACKET_SIZE];
     let mut pixel_of = [0usize; PACKET_SIZE];
-    let total = accs.len() * per_pixel;
-    let mut next = 0;
-    while next < total {
-        let n = (total - next).min(PACKET_SIZE);
+    while j < accs.len() {
         // The batch's runs of one pixel's samples.
-        let mut lane = 0;
-        while lane < n {
-            let j = (next + lane) / per_pixel;
-            let first = ((next + lane) % per_pixel) as u32;
-            let len = (per_pixel - first as usize).min(n - lane);
-            let (x, y, _) = run.window.pixel(run.first + j);
-            let sampler = sampler_of(j);
-            let start = samples.start + first;
-            let end = start + len as u32;
-            let index = std::array::from_fn(|i| (start + i as u32).min(end - 1));
-            let offsets = sampler
-                .dim_2d(Dim::PIXEL, s.spp)
-                .get_2d_lanes(index, (1 << len) - 1);
-            for (i, sample) in (start..end).enumerate() {
-                batch[lane + i] = CameraSample {
+        let mut n = 0;
+        while n < PACKET_SIZE && j < accs.len() {
+            let end = samples.end.min(next + (PACKET_SIZE - n) as u32);
+            let len = (end - next) as usize;
+            let index = std::array::from_fn(|i| (next + i as u32).min(end - 1));
+            let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
+            for (i, sample) in (next..end).enumerate() {
+                batch[n + i] = CameraSample {
                     ctx: SampleContext::new(sampler, sample, s.spp),
-                    film: Vec2::new(x as f32, y as f32) + offsets[i],
+                    film: corner + offsets[i],
                 };
-                pixel_of[lane + i] = j;
+                pixel_of[n + i] = j;
             }
-            lane += len;
+            n += len;
+            next = end;
+            if next == samples.end {
+                j += 1;
+                next = samples.start;
+                if j < accs.len() {
+                    (corner, sampler, jitter) = setup(j);
+                }
+            }
         }
         let first = aov.is_some().then_some(&mut first_hits[..]);
         integrator.camera_batch(&batch[..n], &mut out, first);
@@ -471,7 +475,6 @@ fn render_packed(
                 aov[j].add(hit);
             }
         }
-        next += n;
     }
 }
 
