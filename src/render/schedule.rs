@@ -399,16 +399,16 @@ pub fn render_pixels(
 }
 
 /// [`render_pixels`] for fewer than [`PACKET_SIZE`] samples per pixel (a
-/// pass's leftovers): the pixels' samples in one stream, pixel by pixel and in index
-/// order within each, eight to a batch, so that a batch's SIMD lanes (its
-/// light samples, its shading) are full where one pixel's samples would
-/// fill only some of them, and a one-sample pass does not shade one ray
-/// at a time. Whether the batch's camera rays travel as a packet is left
-/// to the packet test (`accel::beam`): neighbouring pixels' rays are often
-/// too far apart for one. One thread, `render_s`, seven alternating runs,
-/// medians: soft-shadow at 1 spp 0.0104 → 0.0044 s, at 4 spp 0.027 →
-/// 0.020 s; dragon-rect at 5 spp 0.122 → 0.110 s; seed-mc at 4 spp 0.097
-/// → 0.091 s. The same images.
+/// pass's leftovers): the pixels' samples in one stream, pixel by pixel
+/// and in index order within each, eight to a batch, so that a batch's
+/// SIMD lanes (its camera packet, its light samples) are full where one
+/// pixel's samples would fill only some of them, and a one-sample pass
+/// does not shade one ray at a time. One thread, `render_s`, seven
+/// alternating runs, medians: soft-shadow at 1 spp 0.0104 → 0.0044 s, at
+/// 4 spp 0.027 → 0.020 s; dragon-rect at 5 spp 0.122 → 0.110 s; seed-mc
+/// at 4 spp 0.097 → 0.091 s. The same images. Such batches still gain
+/// from travelling as packets (`--packets off` against `auto`: dragon-rect
+/// at 1 spp 0.0283 against 0.0263 s, at 5 spp 0.116 against 0.103 s).
 fn render_packed(
     integrator: &mut Integrator,
     scene: &Scene,
