@@ -72,4 +72,10 @@ impl Material {
     pub fn has_specular_lobe(&self) -> bool {
         self.specular.max_element() > 0.0
     }
+
+    /// Whether light arrives through a mirror or glass layer (a reflected
+    /// or refracted ray), beyond the direct light.
+    pub fn transports_specular(&self) -> bool {
+        self.reflectivity > 0.0 || self.transparency > 0.0
+    }
 }

@@ -281,7 +281,9 @@ impl Integrator<'_> {
                 Vec3::ZERO
             };
             l += direct[i];
-            if depth < scene.settings.max_depth {
+            // A material without mirror or glass layers (most of them)
+            // skips the call, which then returns zero.
+            if depth < scene.settings.max_depth && material.transports_specular() {
                 l += self.specular_transport(lane.ctx, sh, depth, lane.weight);
             }
             self.finish_record(lane.slot, Some((hit.t, hit.prim, sh.surface.p)), l);
