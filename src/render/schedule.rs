@@ -13,7 +13,6 @@ use super::film::{Film, PixelSum};
 use super::progress;
 use super::window::Window;
 use crate::accel::PACKET_SIZE;
-use crate::sampling::cmj::CmjSet;
 use crate::sampling::{Dim, PixelSampler};
 use crate::scene::Scene;
 use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext};
@@ -326,14 +325,22 @@ pub struct PixelRun<'w> {
 /// accs.len()` of its window, into `accs`, and with `aov`, what their camera
 /// rays hit first into it.
 ///
-/// Each pixel's samples go to the integrator [`PACKET_SIZE`] at a time,
-/// in index order: a batch is the pixel and lens samples of one pixel,
-/// whose rays start close together and point nearly the same way. What
-/// is left of each pixel's samples after its whole batches (all of them,
-/// in a pass of fewer than eight per pixel) fills batches together with
-/// its neighbours' ([`render_packed`]). Each sample is still
-/// computed from its own index alone and added in the same order, so the
-/// sums are those of sample-by-sample rendering.
+/// The pixels' samples form one stream, pixel by pixel and in index order
+/// within each, and go to the integrator [`PACKET_SIZE`] at a time: with
+/// eight or more samples per pixel a batch is mostly the pixel and lens
+/// samples of one pixel, whose rays start close together and point nearly
+/// the same way; with fewer (or a pixel's last few) it takes the next
+/// pixels' samples too, so that its SIMD lanes (its camera packet, its
+/// light samples) are full and a one-sample pass does not shade one ray
+/// at a time. One thread, `render_s`, seven alternating runs, medians,
+/// against batches of one pixel's samples: soft-shadow at 1 spp 0.0104 →
+/// 0.0044 s, at 4 spp 0.027 → 0.020 s; dragon-rect at 5 spp 0.122 →
+/// 0.110 s, at 12 spp (random) 0.212 → 0.201 s; seed-mc at 4 spp 0.097 →
+/// 0.091 s. Such batches still gain from travelling as packets
+/// (`--packets off` against `auto`: dragon-rect at 1 spp 0.0283 against
+/// 0.0263 s, at 5 spp 0.116 against 0.103 s). Each sample is still
+/// computed from its own index alone and added to its own pixel in index
+/// order, so the sums are those of sample-by-sample rendering.
 pub fn render_pixels(
     integrator: &mut Integrator,
     scene: &Scene,
@@ -343,87 +350,14 @@ pub fn render_pixels(
     samples: Range<u32>,
 ) {
     let s = &scene.settings;
-    let mut out = [Vec3::ZERO; PACKET_SIZE];
-    let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
-    // The common set sizes, prepared once for all these pixels: camera
-    // samples, and first-hit light samples.
-    let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
-    // Whole batches pixel by pixel, then the samples left over (fewer
-    // than a batch per pixel) from all the pixels together, which keeps
-    // each pixel's samples in index order.
-    let whole = samples.start + (samples.len() - samples.len() % PACKET_SIZE) as u32;
-    let rest = whole..samples.end;
-    let samples = samples.start..whole;
-    let pixels = if samples.is_empty() { 0 } else { accs.len() };
-    for (j, acc) in accs.iter_mut().enumerate().take(pixels) {
-        let (x, y, index) = run.window.pixel(run.first + j);
-        let (x, y) = (x as f32, y as f32);
-        let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
-        let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
-        // The pixel's context is written once; each batch then sets only
-        // the sample indices and film positions. (Built whole per sample,
-        // the 168-byte samples were copied through the stack with wide
-        // loads that stalled on narrower stores: `perf annotate`.)
-        let mut batch = [CameraSample {
-            ctx: SampleContext::new(sampler, 0, s.spp),
-            film: Vec2::ZERO,
-        }; PACKET_SIZE];
-        let mut start = samples.start;
-        while start < samples.end {
-            let end = samples.end.min(start + PACKET_SIZE as u32);
-            let n = (end - start) as usize;
-            // The batch's pixel samples in SIMD lanes (unused lanes repeat
-            // the last sample).
-            let index = std::array::from_fn(|i| (start + i as u32).min(end - 1));
-            let offsets = jitter.get_2d_lanes(index, (1 << n) - 1);
-            for ((camera, offset), sample) in batch.iter_mut().zip(offsets).zip(start..end) {
-                camera.ctx.sample = sample;
-                camera.film = Vec2::new(x, y) + offset;
-            }
-            let first = aov.is_some().then_some(&mut first_hits[..]);
-            integrator.camera_batch(&batch[..n], &mut out, first);
-            for (v, sample) in out.iter().zip(start..end) {
-                acc.add(*v, sample);
-            }
-            if let Some(aov) = aov.as_deref_mut() {
-                for hit in &first_hits[..n] {
-                    aov[j].add(hit);
-                }
-            }
-            start = end;
-        }
-    }
-    if !rest.is_empty() {
-        render_packed(integrator, scene, run, accs, aov, rest, sets);
-    }
-}
-
-/// [`render_pixels`] for fewer than [`PACKET_SIZE`] samples per pixel (a
-/// pass's leftovers): the pixels' samples in one stream, pixel by pixel
-/// and in index order within each, eight to a batch, so that a batch's
-/// SIMD lanes (its camera packet, its light samples) are full where one
-/// pixel's samples would fill only some of them, and a one-sample pass
-/// does not shade one ray at a time. One thread, `render_s`, seven
-/// alternating runs, medians: soft-shadow at 1 spp 0.0104 → 0.0044 s, at
-/// 4 spp 0.027 → 0.020 s; dragon-rect at 5 spp 0.122 → 0.110 s; seed-mc
-/// at 4 spp 0.097 → 0.091 s. The same images. Such batches still gain
-/// from travelling as packets (`--packets off` against `auto`: dragon-rect
-/// at 1 spp 0.0283 against 0.0263 s, at 5 spp 0.116 against 0.103 s).
-fn render_packed(
-    integrator: &mut Integrator,
-    scene: &Scene,
-    run: PixelRun,
-    accs: &mut [PixelSum],
-    mut aov: Option<&mut [AovSum]>,
-    samples: Range<u32>,
-    sets: [CmjSet; 2],
-) {
-    let s = &scene.settings;
     if samples.is_empty() || accs.is_empty() {
         return;
     }
     let mut out = [Vec3::ZERO; PACKET_SIZE];
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
+    // The common set sizes, prepared once for all these pixels: camera
+    // samples, and first-hit light samples.
+    let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
     // The pixel the stream is in (`j`), what it shares among its samples,
     // and its next sample; kept across batches, so that each pixel is set
     // up once and the stream needs no divisions.
@@ -439,21 +373,31 @@ fn render_packed(
         ctx: SampleContext::new(sampler, 0, s.spp),
         film: Vec2::ZERO,
     }; PACKET_SIZE];
-    let mut pixel_of = [0usize; PACKET_SIZE];
+    // Each lane's pixel: a lane that stays with its pixel from one batch
+    // to the next keeps its sample context and changes only the index.
+    // (Written whole per sample, the 168-byte contexts were copied through
+    // the stack with wide loads that stalled on narrower stores: `perf
+    // annotate`.)
+    let mut pixel_of = [usize::MAX; PACKET_SIZE];
     while j < accs.len() {
         // The batch's runs of one pixel's samples.
         let mut n = 0;
         while n < PACKET_SIZE && j < accs.len() {
             let end = samples.end.min(next + (PACKET_SIZE - n) as u32);
             let len = (end - next) as usize;
+            // The run's pixel samples in SIMD lanes (unused lanes repeat
+            // the last sample).
             let index = std::array::from_fn(|i| (next + i as u32).min(end - 1));
             let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
-            for (i, sample) in (next..end).enumerate() {
-                batch[n + i] = CameraSample {
-                    ctx: SampleContext::new(sampler, sample, s.spp),
-                    film: corner + offsets[i],
-                };
-                pixel_of[n + i] = j;
+            let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);
+            for ((camera, pixel), (sample, offset)) in lanes.zip((next..end).zip(offsets)) {
+                if *pixel == j {
+                    camera.ctx.sample = sample;
+                } else {
+                    camera.ctx = SampleContext::new(sampler, sample, s.spp);
+                    *pixel = j;
+                }
+                camera.film = corner + offset;
             }
             n += len;
             next = end;
@@ -467,8 +411,8 @@ fn render_packed(
         }
         let first = aov.is_some().then_some(&mut first_hits[..]);
         integrator.camera_batch(&batch[..n], &mut out, first);
-        for i in 0..n {
-            accs[pixel_of[i]].add(out[i], batch[i].ctx.sample);
+        for ((v, camera), &pixel) in out.iter().zip(&batch[..n]).zip(&pixel_of) {
+            accs[pixel].add(*v, camera.ctx.sample);
         }
         if let Some(aov) = aov.as_deref_mut() {
             for (hit, &j) in first_hits[..n].iter().zip(&pixel_of) {
