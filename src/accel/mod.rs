@@ -10,11 +10,13 @@
 //! overflows. Ours honours `[tmin, tmax]`, uses the watertight test and
 //! spills to the heap instead of dropping work. Given many rays at once,
 //! `stream` keeps several single-ray walks in flight on one thread so
-//! that their cache misses overlap, and `beam` sends the groups of rays
-//! narrow enough to share a walk through `packet` instead.
+//! that their cache misses overlap, `beam` sends the groups of rays
+//! narrow enough to share a walk through `packet` instead, and `bundle`
+//! walks up to 64 occlusion rays from one origin together.
 
 pub mod beam;
 pub mod build;
+pub mod bundle;
 mod cluster;
 mod collapse;
 pub mod hit;

@@ -300,6 +300,13 @@ pub fn reciprocals(soa: &[f32x8; 8]) -> [f32x8; 3] {
 /// such rays keep their usual path.
 #[inline(always)]
 pub fn misses_box(soa: &[f32x8; 8], inv: &[f32x8; 3], bounds: &Aabb) -> bool {
+    lanes_missing_box(soa, inv, bounds) == (1 << PACKET_SIZE) - 1
+}
+
+/// The lanes that [`misses_box`]'s test finds missing `bounds`, as a bit
+/// mask: rays that enter no node of a tree whose box that is.
+#[inline(always)]
+pub fn lanes_missing_box(soa: &[f32x8; 8], inv: &[f32x8; 3], bounds: &Aabb) -> u32 {
     let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
     let mut tn = soa[6];
     let mut tf = soa[7];
@@ -311,8 +318,7 @@ pub fn misses_box(soa: &[f32x8; 8], inv: &[f32x8; 3], bounds: &Aabb) -> bool {
         tn = tn.fast_max(a.fast_min(b));
         tf = tf.fast_min(a.fast_max(b));
     }
-    let miss = tn.simd_gt(tf * f32x8::splat(WIDEN)).to_bitmask() & !nan.to_bitmask();
-    miss == (1 << PACKET_SIZE) - 1
+    tn.simd_gt(tf * f32x8::splat(WIDEN)).to_bitmask() & !nan.to_bitmask()
 }
 
 #[inline(always)]

@@ -249,7 +249,7 @@ const BITONIC: [([u32; 8], [u32; 8]); 6] = [
 /// too), so comparing it with a limit's key with those bits set (`| 7`)
 /// never culls a child whose entry is within the limit.
 #[inline(always)]
-fn nearest_last(tn: f32x8, mask: u32, child: &[u32; 8]) -> [u64; 8] {
+pub(super) fn nearest_last(tn: f32x8, mask: u32, child: &[u32; 8]) -> [u64; 8] {
     let bits = tn.to_bits();
     let sign = u32x8::splat(1 << 31);
     let negative = (bits & sign).simd_eq(sign);
