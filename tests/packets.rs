@@ -12,6 +12,7 @@ use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
 use strata::accel::beam::{split_narrow, Travel};
+use strata::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::math::Ray;
 use strata::scene::{compile, parse, RenderOverrides, Scene};
@@ -201,21 +202,23 @@ fn packets_and_single_rays_return_identical_hits() {
 
 /// Rows of eight rays from one eye to points 0.002 apart, narrow enough
 /// for a stream to send them as packets: a pinhole camera's pixels, a
-/// third of the rows sweeping the bumpy sphere and the grid, a third
+/// quarter of the rows sweeping the bumpy sphere and the grid, a quarter
 /// passing through the tree's box beyond the grid's edge to the plane
-/// below, and a third heading away from the tree's box to the plane
-/// behind the eye.
+/// below, a quarter heading away from the tree's box to the plane behind
+/// the eye, and a quarter through the analytic sphere (the primitive the
+/// occlusion queries except) to what lies behind it.
 fn pinhole_rows() -> Vec<Ray> {
     let eye = Vec3::new(0.3, 0.4, 3.0);
-    (0..300)
+    (0..400)
         .flat_map(|row| {
             let r = row as f32;
             (0..PACKET_SIZE).map(move |i| {
                 let x = i as f32 * 0.002;
-                let target = match row % 3 {
-                    0 => Vec3::new(-1.8 + r * 0.011 + x, 1.5 - r * 0.012, 0.0),
-                    1 => Vec3::new(6.0 + r * 0.01 + x, -3.0, -6.0),
-                    _ => Vec3::new(-2.6 + r * 0.01 + x, -3.0, 4.5),
+                let target = match row % 4 {
+                    0 => Vec3::new(-1.8 + r * 0.008 + x, 1.5 - r * 0.009, 0.0),
+                    1 => Vec3::new(6.0 + r * 0.0075 + x, -3.0, -6.0),
+                    2 => Vec3::new(-2.6 + r * 0.0075 + x, -3.0, 4.5),
+                    _ => Vec3::new(1.05 + r * 0.0007 + x, 0.9 - r * 0.0005, 0.5),
                 };
                 Ray::new(eye, target - eye)
             })
@@ -223,10 +226,11 @@ fn pinhole_rows() -> Vec<Ray> {
         .collect()
 }
 
-/// A stream of rays (narrow groups as packets, the rest several in flight
-/// at once where the tree prefetches and one at a time where it does not)
-/// gets exactly the single rays' closest hits and occlusion answers, with
-/// a plane outside the BVH and a sphere as the excepted primitive.
+/// A stream of rays (narrow groups as packets, runs of rays from one
+/// origin as occlusion bundles, the rest several in flight at once where
+/// the tree prefetches and one at a time where it does not) gets exactly
+/// the single rays' closest hits and occlusion answers, with a plane
+/// outside the BVH and a sphere as the excepted primitive.
 #[test]
 fn streams_and_single_rays_return_identical_hits() {
     for (quality, mut scene) in scenes() {
@@ -251,6 +255,16 @@ fn streams_and_single_rays_return_identical_hits() {
         assert!(
             packets >= 100 && outside >= 100,
             "{quality:?}: {packets} packets, {outside} groups outside the tree's box"
+        );
+        // The pinhole rows' windows share one origin: occlusion walks them
+        // as bundles.
+        let bundles = rays
+            .chunks(BUNDLE_SIZE)
+            .filter(|w| w.iter().all(|r| r.origin == w[0].origin))
+            .count();
+        assert!(
+            bundles >= 30 && scene.geometry.traversal_bytes() <= BUNDLE_MAX_BYTES,
+            "{quality:?}: {bundles} bundles"
         );
         let except = scene.geometry.triangle_count; // the sphere
         for prefetch in [true, false] {

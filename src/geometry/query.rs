@@ -4,6 +4,7 @@
 
 use super::Geometry;
 use crate::accel::beam::{split_narrow, Travel};
+use crate::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
 use crate::accel::packet::{misses_box, reciprocals};
 use crate::accel::{Packet, PrimHit, PACKET_SIZE};
 use crate::math::ray::ray_lanes;
@@ -235,13 +236,48 @@ impl Geometry {
 
     /// Occlusion of any number of rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. Narrow groups as packets,
-    /// the rest alone, as for [`Geometry::intersect_stream`].
+    /// `self.occluded_except(&rays[i], except)`. Runs of [`BUNDLE_SIZE`]
+    /// rays from one origin walk as bundles ([`crate::accel::bundle`]) in
+    /// a tree of up to [`BUNDLE_MAX_BYTES`]; of the rest, narrow groups go
+    /// as packets and the others alone, as for
+    /// [`Geometry::intersect_stream`].
+    ///
+    /// Rays from one point (a pinhole camera's) share the top of their
+    /// walks, and in a bundle each node there is read once for all of
+    /// them; see [`BUNDLE_MAX_BYTES`] for what they gain. Rays from many
+    /// origins part too soon for a bundle to pay (an early version of the
+    /// bundles walked random dragon rays at 4.1 Mrays/s, against 7.9 in
+    /// flight), so they never form one.
     pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.blocked_by_planes(r);
         }
+        let bundles = self.traversal_bytes() <= BUNDLE_MAX_BYTES;
+        let one_origin = |w: &[Ray]| {
+            bundles && w.len() > PACKET_SIZE && w.iter().all(|r| r.origin == w[0].origin)
+        };
+        // The rays between bundles go on together, so that as many of
+        // their walks as before stay in flight.
+        let mut rest = 0;
+        for start in (0..rays.len()).step_by(BUNDLE_SIZE) {
+            let end = (start + BUNDLE_SIZE).min(rays.len());
+            if one_origin(&rays[start..end]) {
+                if rest < start {
+                    self.blocked_narrow_or_alone(&rays[rest..start], except, &mut out[rest..start]);
+                }
+                self.blocked_in_bundle(&rays[start..end], except, &mut out[start..end]);
+                rest = end;
+            }
+        }
+        if rest < rays.len() {
+            self.blocked_narrow_or_alone(&rays[rest..], except, &mut out[rest..]);
+        }
+    }
+
+    /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside): narrow
+    /// groups as packets, the rest alone.
+    fn blocked_narrow_or_alone(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         split_narrow(rays, &self.bvh.bounds, |range, travel| {
             let (rays, out) = (&rays[range.clone()], &mut out[range]);
             match travel {
@@ -257,6 +293,17 @@ impl Geometry {
                 Travel::Alone => self.blocked_alone(rays, except, out),
             }
         });
+    }
+
+    /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside), for up
+    /// to [`BUNDLE_SIZE`] rays walked as bundles.
+    fn blocked_in_bundle(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        let mut sheared: [Option<ShearedRay>; BUNDLE_SIZE] = [None; BUNDLE_SIZE];
+        self.bvh
+            .any_hit_bundle(rays, out, &self.leaf_blocks, |i, start, count| {
+                let s = sheared[i].get_or_insert_with(|| ShearedRay::new(&rays[i]));
+                self.blocks_leaf(start, count, &rays[i], s, except)
+            });
     }
 
     /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside), for
