@@ -227,7 +227,7 @@ fn pinhole_rows() -> Vec<Ray> {
 }
 
 /// A stream of rays (narrow groups as packets, runs of rays from one
-/// origin as occlusion bundles, the rest several in flight at once where
+/// origin as bundles, the rest several in flight at once where
 /// the tree prefetches and one at a time where it does not) gets exactly
 /// the single rays' closest hits and occlusion answers, with a plane
 /// outside the BVH and a sphere as the excepted primitive.
@@ -256,8 +256,7 @@ fn streams_and_single_rays_return_identical_hits() {
             packets >= 100 && outside >= 100,
             "{quality:?}: {packets} packets, {outside} groups outside the tree's box"
         );
-        // The pinhole rows' windows share one origin: occlusion walks them
-        // as bundles.
+        // The pinhole rows' windows share one origin: they walk as bundles.
         let bundles = rays
             .chunks(BUNDLE_SIZE)
             .filter(|w| w.iter().all(|r| r.origin == w[0].origin))

@@ -1,31 +1,37 @@
-//! Bundles: up to [`BUNDLE_SIZE`] rays of an occlusion stream walk the tree
-//! together, node by node, each node read once for all the bundle's rays
-//! that reach it (the ray streams of Tsakok 2009, "Faster Incoherent Rays:
-//! Multi-BVH Ray Stream Tracing", HPG; Embree's stream API traces
-//! occlusion this way).
+//! Bundles: up to [`BUNDLE_SIZE`] rays of a stream walk the tree together,
+//! node by node, each node read once for all the bundle's rays that reach
+//! it (the ray streams of Tsakok 2009, "Faster Incoherent Rays: Multi-BVH
+//! Ray Stream Tracing", HPG; Embree's stream API traces occlusion this
+//! way).
 //!
 //! A stack entry carries a node and the mask of the bundle's rays that
 //! entered its box. At a node, each of those rays runs the single-ray box
 //! test and adds its bit to the children it enters; the children that any
 //! ray entered are then visited, the one some ray enters nearest first. At
-//! a leaf, each ray of its mask runs the leaf test, and a ray it blocks
-//! leaves the bundle: its bit is cleared from every mask popped after.
-//! The rays of each direction octant walk as one bundle, so that a node's
-//! near and far planes are the same rows for all of them and are loaded
-//! once per node.
+//! a leaf, each ray of its mask runs the leaf test. For occlusion a ray it
+//! blocks leaves the bundle: its bit is cleared from every mask popped
+//! after. For closest hits a ray's nearest hit so far becomes the `tmax`
+//! of its later node and leaf tests, as in its single walk. The rays of
+//! each direction octant walk as one bundle, so that a node's near and
+//! far planes are the same rows for all of them and are loaded once per
+//! node.
 //!
 //! Exactness: a ray tests a node's children only where its own test
 //! entered the node, in the single-ray test's own operations, so it
-//! reaches exactly the leaves its single walk may reach. It is blocked if
-//! and only if one of them blocks it, whatever the order: its answer is
-//! [`Bvh8::any_hit`]'s.
+//! reaches the leaves its single walk may reach, with a `tmax` no smaller
+//! than its closest hit's. It is blocked if and only if one of those
+//! leaves blocks it, and its closest hit is the least of their hits in a
+//! total order (t, then primitive id; [`super::hit::closer`]), whatever
+//! the order of the leaves: its answers are [`Bvh8::any_hit`]'s and
+//! [`Bvh8::closest`]'s, bit for bit.
 
 use super::build::Bvh8;
+use super::hit::{closer, tie_ray, PrimHit};
 use super::node::{is_leaf, leaf_range};
 use super::packet::{lanes_missing_box, reciprocals, PACKET_SIZE};
 use super::traverse::{nearest_last, Stack, WIDEN};
 use crate::math::ray::ray_lanes;
-use crate::math::Ray;
+use crate::math::{Aabb, Ray};
 use wide::{f32x8, u32x8};
 
 /// Most rays in one bundle: one bit each in a `u64` mask. Camera rays that
@@ -37,8 +43,10 @@ pub const BUNDLE_SIZE: usize = 64;
 /// The size of a tree's nodes and leaf blocks up to which a stream's rays
 /// from one origin walk as bundles: eight times this machine's 32 MiB of
 /// last-level cache, between the two sizes where bundles went from level
-/// to slower. Camera rays, occlusion, one thread, bundles against packets
-/// and single rays in flight (Mrays/s, alternating runs, medians):
+/// to slower (for occlusion; closest hits gained on all three trees
+/// measured, up to 185 MB). Camera rays, occlusion, one thread, bundles
+/// against packets and single rays in flight (Mrays/s, alternating runs,
+/// medians):
 ///
 /// - the bunny, 3.5 MB, 300,000 rays: 37.5 against 21.2;
 /// - the dragon, 46 MB: 100,000 rays 16.8–19.4 against 14.3–14.8, a
@@ -47,6 +55,10 @@ pub const BUNDLE_SIZE: usize = 64;
 ///   a million 23.9 against 24.4;
 /// - subdivided twice, 740 MB: 200,000 rays 10.0 against 11.9, a million
 ///   16.4 against 15.8.
+///
+/// Closest hits: the bunny 32.8–34.9 against 15.8–15.9; the dragon,
+/// 100,000 rays 14.3–14.6 against 12.1, a million 27.5 against 23.7;
+/// subdivided once 12.4 against 11.5 and 20.8 against 17.3.
 ///
 /// A bundle saves instructions (a node's test set up once for all its
 /// rays, no sort or stack work per ray) but walks one node at a time; on a
@@ -97,6 +109,142 @@ impl BundleRay {
     }
 }
 
+/// A bundle's rays, and the rays of each direction octant.
+struct Bundle {
+    rays: [BundleRay; BUNDLE_SIZE],
+    octants: [u64; 8],
+}
+
+impl Bundle {
+    /// The rays not in `skip` that may enter a tree whose box is `bounds`.
+    /// Eight rays at a time: their reciprocals in one division, and those
+    /// that miss the box set aside at once (they would enter no node; see
+    /// `lanes_missing_box`).
+    #[inline(always)]
+    fn new(rays: &[Ray], skip: impl Fn(usize) -> bool, bounds: &Aabb) -> Self {
+        let mut bundle = Self {
+            rays: [BundleRay::default(); BUNDLE_SIZE],
+            octants: [0; 8],
+        };
+        for (g, eight) in rays.chunks(PACKET_SIZE).enumerate() {
+            let soa = ray_lanes(eight);
+            let inv = reciprocals(&soa);
+            let misses = lanes_missing_box(&soa, &inv, bounds);
+            let soa = soa.map(|v| v.to_array());
+            let neg_inv = inv.map(|v| (-v).to_array());
+            for (k, ray) in eight.iter().enumerate() {
+                let i = g * PACKET_SIZE + k;
+                if skip(i) || misses >> k & 1 == 1 {
+                    continue;
+                }
+                bundle.rays[i] = BundleRay {
+                    origin: [soa[0][k], soa[1][k], soa[2][k]],
+                    neg_inv: [neg_inv[0][k], neg_inv[1][k], neg_inv[2][k]],
+                    tmin: soa[6][k],
+                    tmax: soa[7][k],
+                };
+                bundle.octants[BundleRay::octant(ray)] |= 1 << i;
+            }
+        }
+        bundle
+    }
+}
+
+/// Where one octant's walk stands: the node's near and far plane rows for
+/// its direction signs, the children it deferred with their rays, and the
+/// node or leaf it visits next with the rays that reach it.
+struct Walk {
+    near_rows: [usize; 3],
+    far_rows: [usize; 3],
+    stack: Stack<(u32, u64)>,
+    current: u32,
+    mask: u64,
+}
+
+impl Walk {
+    #[inline(always)]
+    fn new(octant: usize, mask: u64) -> Self {
+        // Row 2·axis holds the minima, 2·axis + 1 the maxima; a negative
+        // direction enters through the maximum.
+        let near_rows: [usize; 3] = std::array::from_fn(|a| 2 * a + (octant >> a & 1));
+        Self {
+            near_rows,
+            far_rows: near_rows.map(|row| row ^ 1),
+            stack: Stack::new(),
+            current: 0,
+            mask,
+        }
+    }
+
+    /// At an inner node: each ray of the mask runs its node test, and the
+    /// walk moves into the child some ray enters nearest, with the rays
+    /// that enter it, pushing the others farthest first. False if no ray
+    /// enters any child.
+    #[inline(always)]
+    fn enter_node<L>(
+        &mut self,
+        bvh: &Bvh8,
+        rays: &[BundleRay; BUNDLE_SIZE],
+        leaf_data: &[L],
+    ) -> bool {
+        let node = &bvh.nodes[self.current as usize];
+        let near = self.near_rows.map(|row| f32x8::from(node.bounds[row]));
+        let far = self.far_rows.map(|row| f32x8::from(node.bounds[row]));
+        // Per child, the rays entering it (bits 0–31 and 32–63 in two
+        // registers) and the least entry distance among them.
+        let mut rays_lo = u32x8::ZERO;
+        let mut rays_hi = u32x8::ZERO;
+        let mut nearest = f32x8::splat(f32::INFINITY);
+        let mut m = self.mask;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
+            m &= m - 1;
+            let (tn, enters) = rays[i].test(&near, &far);
+            let lanes = enters.to_bits();
+            let bit = 1u64 << i;
+            rays_lo |= lanes & u32x8::splat(bit as u32);
+            rays_hi |= lanes & u32x8::splat((bit >> 32) as u32);
+            nearest = nearest.fast_min(enters.select(tn, f32x8::splat(f32::INFINITY)));
+        }
+        let (lo, hi) = (rays_lo.to_array(), rays_hi.to_array());
+        let rays_in: [u64; 8] = std::array::from_fn(|k| lo[k] as u64 | (hi[k] as u64) << 32);
+        let children = (0..8).fold(0u32, |c, k| c | ((rays_in[k] != 0) as u32) << k);
+        if children == 0 {
+            return false;
+        }
+        // The nearest child next, the others pushed farthest first: 12.2
+        // Mrays/s against 11.2 in slot order (occlusion, the dragon's camera
+        // rays that enter its box, three alternating runs).
+        let entries = nearest_last(nearest, children, &node.child);
+        let n = children.count_ones() as usize;
+        for &e in &entries[..n - 1] {
+            let (child, slot) = (e as u32, (e >> 32) as usize & 7);
+            if bvh.prefetch {
+                bvh.prefetch_child(child, leaf_data);
+            }
+            self.stack.push((child, rays_in[slot]));
+        }
+        let last = entries[n - 1];
+        self.current = last as u32;
+        self.mask = rays_in[(last >> 32) as usize & 7];
+        true
+    }
+
+    /// Moves to the next deferred child that a ray of `alive` entered;
+    /// false once none is left.
+    #[inline(always)]
+    fn pop(&mut self, alive: u64) -> bool {
+        while let Some((child, rays)) = self.stack.pop() {
+            self.mask = rays & alive;
+            if self.mask != 0 {
+                self.current = child;
+                return true;
+            }
+        }
+        false
+    }
+}
+
 impl Bvh8 {
     /// Occlusion of up to [`BUNDLE_SIZE`] rays walked as bundles, one per
     /// direction octant: sets `out[i]` where `blocks_leaf(i, start, count)`
@@ -116,123 +264,89 @@ impl Bvh8 {
         if self.nodes.is_empty() {
             return;
         }
-        let mut bundle = [BundleRay::default(); BUNDLE_SIZE];
-        let mut octants = [0u64; 8];
-        // Eight rays at a time: their reciprocals in one division, and
-        // those that miss the tree's box set aside at once (they would
-        // enter no node; see `lanes_missing_box`).
-        for (g, eight) in rays.chunks(PACKET_SIZE).enumerate() {
-            let soa = ray_lanes(eight);
-            let inv = reciprocals(&soa);
-            let misses = lanes_missing_box(&soa, &inv, &self.bounds);
-            let soa = soa.map(|v| v.to_array());
-            let neg_inv = inv.map(|v| (-v).to_array());
-            for (k, ray) in eight.iter().enumerate() {
-                let i = g * PACKET_SIZE + k;
-                if out[i] || misses >> k & 1 == 1 {
+        let bundle = Bundle::new(rays, |i| out[i], &self.bounds);
+        for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
+            if rays_of_octant == 0 {
+                continue;
+            }
+            let mut alive = rays_of_octant;
+            let mut walk = Walk::new(octant, alive);
+            loop {
+                if is_leaf(walk.current) {
+                    let (start, count) = leaf_range(walk.current);
+                    let mut m = walk.mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
+                        m &= m - 1;
+                        if blocks_leaf(i, start, count) {
+                            out[i] = true;
+                            alive &= !(1 << i);
+                        }
+                    }
+                    if alive == 0 {
+                        break;
+                    }
+                } else if walk.enter_node(self, &bundle.rays, leaf_data) {
                     continue;
                 }
-                bundle[i] = BundleRay {
-                    origin: [soa[0][k], soa[1][k], soa[2][k]],
-                    neg_inv: [neg_inv[0][k], neg_inv[1][k], neg_inv[2][k]],
-                    tmin: soa[6][k],
-                    tmax: soa[7][k],
-                };
-                octants[BundleRay::octant(ray)] |= 1 << i;
-            }
-        }
-        for (octant, &mask) in octants.iter().enumerate() {
-            if mask != 0 {
-                self.walk_bundle(&bundle, octant, mask, out, leaf_data, &mut blocks_leaf);
+                if !walk.pop(alive) {
+                    break;
+                }
             }
         }
     }
 
-    /// The walk of the rays in `alive`, all of direction octant `octant`.
-    #[inline(always)]
-    fn walk_bundle<L, F>(
+    /// Closest hits of up to [`BUNDLE_SIZE`] rays walked as bundles, one
+    /// per direction octant: `out[i]` is exactly `closest(&rays[i], ..)`
+    /// given `hit_leaf(i, start, count, ray)`, ray `i`'s leaf test, which
+    /// returns its closest hit nearer than `ray.tmax`, ties broken by the
+    /// smaller primitive id (as for [`Bvh8::closest`]). Each ray's node
+    /// tests use its nearest hit so far as their `tmax`, as its single
+    /// walk's do; the closest hit is the least in a total order (t, then
+    /// primitive id), found whatever the order of the leaves.
+    pub fn closest_bundle<L, F>(
         &self,
-        bundle: &[BundleRay; BUNDLE_SIZE],
-        octant: usize,
-        mut alive: u64,
-        out: &mut [bool],
+        rays: &[Ray],
+        out: &mut [Option<PrimHit>],
         leaf_data: &[L],
-        blocks_leaf: &mut F,
+        mut hit_leaf: F,
     ) where
-        F: FnMut(usize, u32, u32) -> bool,
+        F: FnMut(usize, u32, u32, &Ray) -> Option<PrimHit>,
     {
-        // Row 2·axis holds the minima, 2·axis + 1 the maxima; a negative
-        // direction enters through the maximum.
-        let near_rows: [usize; 3] = std::array::from_fn(|a| 2 * a + (octant >> a & 1));
-        let far_rows = near_rows.map(|row| row ^ 1);
-        let mut stack: Stack<(u32, u64)> = Stack::new();
-        let mut current = 0u32;
-        let mut mask = alive;
-        loop {
-            if !is_leaf(current) {
-                let node = &self.nodes[current as usize];
-                let near = near_rows.map(|row| f32x8::from(node.bounds[row]));
-                let far = far_rows.map(|row| f32x8::from(node.bounds[row]));
-                // Per child, the rays entering it (bits 0–31 and 32–63 in
-                // two registers) and the least entry distance among them.
-                let mut rays_lo = u32x8::ZERO;
-                let mut rays_hi = u32x8::ZERO;
-                let mut nearest = f32x8::splat(f32::INFINITY);
-                let mut m = mask;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
-                    m &= m - 1;
-                    let (tn, enters) = bundle[i].test(&near, &far);
-                    let lanes = enters.to_bits();
-                    let bit = 1u64 << i;
-                    rays_lo |= lanes & u32x8::splat(bit as u32);
-                    rays_hi |= lanes & u32x8::splat((bit >> 32) as u32);
-                    nearest = nearest.fast_min(enters.select(tn, f32x8::splat(f32::INFINITY)));
-                }
-                let (lo, hi) = (rays_lo.to_array(), rays_hi.to_array());
-                let rays_in: [u64; 8] =
-                    std::array::from_fn(|k| lo[k] as u64 | (hi[k] as u64) << 32);
-                let children = (0..8).fold(0u32, |c, k| c | ((rays_in[k] != 0) as u32) << k);
-                if children != 0 {
-                    // The nearest child next, the others pushed farthest
-                    // first: 12.2 Mrays/s against 11.2 in slot order on
-                    // the camera rays above (three alternating runs).
-                    let entries = nearest_last(nearest, children, &node.child);
-                    let n = children.count_ones() as usize;
-                    for &e in &entries[..n - 1] {
-                        let (child, slot) = (e as u32, (e >> 32) as usize & 7);
-                        if self.prefetch {
-                            self.prefetch_child(child, leaf_data);
+        assert!(rays.len() <= BUNDLE_SIZE && out.len() == rays.len());
+        out.fill(None);
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut bundle = Bundle::new(rays, |_| false, &self.bounds);
+        for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
+            if rays_of_octant == 0 {
+                continue;
+            }
+            let mut walk = Walk::new(octant, rays_of_octant);
+            loop {
+                if is_leaf(walk.current) {
+                    let (start, count) = leaf_range(walk.current);
+                    let mut m = walk.mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
+                        m &= m - 1;
+                        let nearest_so_far = Ray {
+                            tmax: bundle.rays[i].tmax,
+                            ..rays[i]
+                        };
+                        let test = tie_ray(&nearest_so_far, out[i].as_ref());
+                        if let Some(h) = hit_leaf(i, start, count, &test) {
+                            if closer(&h, out[i].as_ref()) {
+                                bundle.rays[i].tmax = h.t;
+                                out[i] = Some(h);
+                            }
                         }
-                        stack.push((child, rays_in[slot]));
                     }
-                    let last = entries[n - 1];
-                    current = last as u32;
-                    mask = rays_in[(last >> 32) as usize & 7];
+                } else if walk.enter_node(self, &bundle.rays, leaf_data) {
                     continue;
                 }
-            } else {
-                let (start, count) = leaf_range(current);
-                let mut m = mask;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
-                    m &= m - 1;
-                    if blocks_leaf(i, start, count) {
-                        out[i] = true;
-                        alive &= !(1 << i);
-                    }
-                }
-                if alive == 0 {
-                    return;
-                }
-            }
-            loop {
-                let Some((child, rays)) = stack.pop() else {
-                    return;
-                };
-                mask = rays & alive;
-                if mask != 0 {
-                    current = child;
+                if !walk.pop(u64::MAX) {
                     break;
                 }
             }
@@ -243,6 +357,7 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::super::build::BuildQuality;
+    use super::super::traverse::tests::sphere_hit;
     use super::*;
     use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
@@ -252,29 +367,38 @@ mod tests {
 
     const NO_DATA: &[()] = &[];
 
-    /// Random spheres around the origin, and their tree.
+    /// Random spheres around the origin and a clump of identical ones (hits
+    /// at equal t, which the primitive id decides), and their tree.
     fn cloud() -> (Vec<Sphere>, Bvh8) {
         let mut rng = seeded(7);
-        let spheres: Vec<Sphere> = (0..2000)
+        let mut spheres: Vec<Sphere> = (0..2000)
             .map(|_| Sphere {
                 center: Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 20.0 - 10.0,
                 radius: 0.05 + rng.unit() * 0.5,
             })
             .collect();
+        spheres.extend((0..40).map(|_| Sphere {
+            center: CLUMP,
+            radius: 0.7,
+        }));
         let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
         let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
         (spheres, bvh)
     }
 
+    const CLUMP: Vec3 = Vec3::new(4.0, -3.0, 2.0);
+
     /// `n` rays from `eye` in every octant: a third towards random points
-    /// of the cloud, a third along directions with zero components, a
-    /// third away from it; segments and whole rays.
+    /// of the cloud (every other one at the clump), a third along
+    /// directions with zero components, a third away from it; segments
+    /// and whole rays.
     fn rays_from(eye: Vec3, n: usize, seed: u64) -> Vec<Ray> {
         let mut rng = seeded(seed);
         (0..n)
             .map(|i| {
                 let p = Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 24.0 - 12.0;
                 let d = match i % 3 {
+                    0 if i % 2 == 0 => CLUMP + (p / 24.0) - eye,
                     0 => p - eye,
                     1 => {
                         let axis = i / 3 % 3;
@@ -342,6 +466,45 @@ mod tests {
             assert!(none.iter().all(|&b| !b));
         }
         assert!(seen_blocked > 20, "some rays are blocked: {seen_blocked}");
+    }
+
+    /// Every ray's closest hit is its single walk's, bit for bit, ties at
+    /// equal t (the clump) included.
+    #[test]
+    fn bundles_find_the_closest_hits_single_rays_do() {
+        let (spheres, bvh) = cloud();
+        let hit = |start: u32, count: u32, r: &Ray| {
+            bvh.closest_in_leaf(start, count, r, |_, id, r| sphere_hit(&spheres, id, r))
+        };
+        let bits = |h: Option<PrimHit>| h.map(|h| (h.t.to_bits(), h.prim));
+        let (mut found, mut ties) = (0, 0);
+        for (k, (eye, n)) in [
+            (Vec3::ZERO, BUNDLE_SIZE),
+            (Vec3::new(30.0, -25.0, 12.0), BUNDLE_SIZE),
+            (Vec3::new(3.0, 2.0, -1.0), 37),
+            (Vec3::new(-4.0, 0.5, 9.0), 9),
+            (Vec3::new(1.0, 1.0, 1.0), 1),
+            (Vec3::ZERO, 0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let rays = rays_from(eye, n, 21 + k as u64);
+            let expected: Vec<_> = rays
+                .iter()
+                .map(|r| bvh.closest(r, NO_DATA, |s, c, r| hit(s, c, r)))
+                .collect();
+            let mut got = vec![None; n];
+            bvh.closest_bundle(&rays, &mut got, NO_DATA, |_, s, c, r| hit(s, c, r));
+            assert_eq!(
+                got.iter().map(|&h| bits(h)).collect::<Vec<_>>(),
+                expected.iter().map(|&h| bits(h)).collect::<Vec<_>>(),
+                "eye {eye}, {n} rays"
+            );
+            found += expected.iter().flatten().count();
+            ties += expected.iter().flatten().filter(|h| h.prim >= 2000).count();
+        }
+        assert!(found > 30 && ties > 5, "{found} hits, {ties} on the clump");
     }
 
     /// An empty tree walks nothing.

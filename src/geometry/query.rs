@@ -11,6 +11,7 @@ use crate::math::ray::ray_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle8::ShearedRays;
+use std::ops::Range;
 
 /// How a batch of up to [`PACKET_SIZE`] rays is traced. Made and matched
 /// on the stack within one query, so the packet stays unboxed: boxing it
@@ -189,7 +190,9 @@ impl Geometry {
     }
 
     /// Closest hits of any number of rays: `out[i]` is bit for bit
-    /// `self.intersect(&rays[i])`. Groups of eight consecutive rays narrow
+    /// `self.intersect(&rays[i])`. Runs of rays from one origin walk as
+    /// bundles ([`crate::accel::bundle`], [`Geometry::split_bundles`]). Of
+    /// the rest, groups of eight consecutive rays narrow
     /// enough to share their walk travel as packets
     /// ([`crate::accel::beam`]); the others walk alone, several in flight
     /// at once where the BVH prefetches (a tree that outgrows the caches,
@@ -200,15 +203,66 @@ impl Geometry {
     /// 14.7–14.9).
     pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        split_narrow(rays, &self.bvh.bounds, |range, travel| {
+        self.split_bundles(rays, |range, bundle| {
             let (rays, out) = (&rays[range.clone()], &mut out[range]);
-            match travel {
-                Travel::Packet(packet) => self.closest_in_packet(packet, rays, out),
-                Travel::Outside => out.fill(None),
-                Travel::Alone => self.closest_alone(rays, out),
+            if bundle {
+                self.closest_in_bundle(rays, out);
+                return;
             }
+            split_narrow(rays, &self.bvh.bounds, |range, travel| {
+                let (rays, out) = (&rays[range.clone()], &mut out[range]);
+                match travel {
+                    Travel::Packet(packet) => self.closest_in_packet(packet, rays, out),
+                    Travel::Outside => out.fill(None),
+                    Travel::Alone => self.closest_alone(rays, out),
+                }
+            });
         });
         self.closest_planes(rays, out);
+    }
+
+    /// Calls `visit(range, true)` for each run of [`BUNDLE_SIZE`] rays
+    /// from one origin, where the tree is small enough for bundles to pay
+    /// ([`BUNDLE_MAX_BYTES`]), and `visit(range, false)` for the rays
+    /// between them, in order. The rays between two bundles come as one
+    /// range, so that as many of their walks as before stay in flight.
+    ///
+    /// Rays from one point (a pinhole camera's) share the top of their
+    /// walks, and in a bundle each node there is read once for all of
+    /// them; see [`BUNDLE_MAX_BYTES`] for what they gain. Rays from many
+    /// origins part too soon for a bundle to pay (an early version of the
+    /// bundles walked random dragon rays at 4.1 Mrays/s, against 7.9 in
+    /// flight), so they never form one.
+    fn split_bundles(&self, rays: &[Ray], mut visit: impl FnMut(Range<usize>, bool)) {
+        let bundles = self.traversal_bytes() <= BUNDLE_MAX_BYTES;
+        let one_origin = |w: &[Ray]| {
+            bundles && w.len() > PACKET_SIZE && w.iter().all(|r| r.origin == w[0].origin)
+        };
+        let mut rest = 0;
+        for start in (0..rays.len()).step_by(BUNDLE_SIZE) {
+            let end = (start + BUNDLE_SIZE).min(rays.len());
+            if one_origin(&rays[start..end]) {
+                if rest < start {
+                    visit(rest..start, false);
+                }
+                visit(start..end, true);
+                rest = end;
+            }
+        }
+        if rest < rays.len() {
+            visit(rest..rays.len(), false);
+        }
+    }
+
+    /// The BVH's closest hits of up to [`BUNDLE_SIZE`] rays walked as
+    /// bundles (planes aside).
+    fn closest_in_bundle(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        let mut sheared: [Option<ShearedRay>; BUNDLE_SIZE] = [None; BUNDLE_SIZE];
+        self.bvh
+            .closest_bundle(rays, out, &self.leaf_blocks, |i, start, count, r| {
+                let s = sheared[i].get_or_insert_with(|| ShearedRay::new(&rays[i]));
+                self.hit_leaf(start, count, r, s)
+            });
     }
 
     /// The BVH's closest hits of rays that walk alone (planes aside).
@@ -236,43 +290,23 @@ impl Geometry {
 
     /// Occlusion of any number of rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. Runs of [`BUNDLE_SIZE`]
-    /// rays from one origin walk as bundles ([`crate::accel::bundle`]) in
-    /// a tree of up to [`BUNDLE_MAX_BYTES`]; of the rest, narrow groups go
-    /// as packets and the others alone, as for
+    /// `self.occluded_except(&rays[i], except)`. Runs of rays from one
+    /// origin walk as bundles ([`crate::accel::bundle`]); of the rest,
+    /// narrow groups go as packets and the others alone, as for
     /// [`Geometry::intersect_stream`].
-    ///
-    /// Rays from one point (a pinhole camera's) share the top of their
-    /// walks, and in a bundle each node there is read once for all of
-    /// them; see [`BUNDLE_MAX_BYTES`] for what they gain. Rays from many
-    /// origins part too soon for a bundle to pay (an early version of the
-    /// bundles walked random dragon rays at 4.1 Mrays/s, against 7.9 in
-    /// flight), so they never form one.
     pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.blocked_by_planes(r);
         }
-        let bundles = self.traversal_bytes() <= BUNDLE_MAX_BYTES;
-        let one_origin = |w: &[Ray]| {
-            bundles && w.len() > PACKET_SIZE && w.iter().all(|r| r.origin == w[0].origin)
-        };
-        // The rays between bundles go on together, so that as many of
-        // their walks as before stay in flight.
-        let mut rest = 0;
-        for start in (0..rays.len()).step_by(BUNDLE_SIZE) {
-            let end = (start + BUNDLE_SIZE).min(rays.len());
-            if one_origin(&rays[start..end]) {
-                if rest < start {
-                    self.blocked_narrow_or_alone(&rays[rest..start], except, &mut out[rest..start]);
-                }
-                self.blocked_in_bundle(&rays[start..end], except, &mut out[start..end]);
-                rest = end;
+        self.split_bundles(rays, |range, bundle| {
+            let (rays, out) = (&rays[range.clone()], &mut out[range]);
+            if bundle {
+                self.blocked_in_bundle(rays, except, out);
+            } else {
+                self.blocked_narrow_or_alone(rays, except, out);
             }
-        }
-        if rest < rays.len() {
-            self.blocked_narrow_or_alone(&rays[rest..], except, &mut out[rest..]);
-        }
+        });
     }
 
     /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside): narrow
