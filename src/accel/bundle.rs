@@ -243,6 +243,42 @@ impl Walk {
         }
         false
     }
+
+    /// Walks to the end: at each leaf, `visit(rays, i, start, count)` for
+    /// every ray `i` that reaches it, which returns true where ray `i`
+    /// leaves the bundle (blocked). Ends when no ray is left or nothing is
+    /// left to visit.
+    #[inline(always)]
+    fn run<L>(
+        mut self,
+        bvh: &Bvh8,
+        rays: &mut [BundleRay; BUNDLE_SIZE],
+        leaf_data: &[L],
+        mut visit: impl FnMut(&mut [BundleRay; BUNDLE_SIZE], usize, u32, u32) -> bool,
+    ) {
+        let mut alive = self.mask;
+        loop {
+            if is_leaf(self.current) {
+                let (start, count) = leaf_range(self.current);
+                let mut m = self.mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
+                    m &= m - 1;
+                    if visit(rays, i, start, count) {
+                        alive &= !(1 << i);
+                    }
+                }
+                if alive == 0 {
+                    return;
+                }
+            } else if self.enter_node(bvh, rays, leaf_data) {
+                continue;
+            }
+            if !self.pop(alive) {
+                return;
+            }
+        }
+    }
 }
 
 impl Bvh8 {
@@ -264,34 +300,15 @@ impl Bvh8 {
         if self.nodes.is_empty() {
             return;
         }
-        let bundle = Bundle::new(rays, |i| out[i], &self.bounds);
+        let mut bundle = Bundle::new(rays, |i| out[i], &self.bounds);
         for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
-            if rays_of_octant == 0 {
-                continue;
-            }
-            let mut alive = rays_of_octant;
-            let mut walk = Walk::new(octant, alive);
-            loop {
-                if is_leaf(walk.current) {
-                    let (start, count) = leaf_range(walk.current);
-                    let mut m = walk.mask;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
-                        m &= m - 1;
-                        if blocks_leaf(i, start, count) {
-                            out[i] = true;
-                            alive &= !(1 << i);
-                        }
-                    }
-                    if alive == 0 {
-                        break;
-                    }
-                } else if walk.enter_node(self, &bundle.rays, leaf_data) {
-                    continue;
-                }
-                if !walk.pop(alive) {
-                    break;
-                }
+            if rays_of_octant != 0 {
+                let walk = Walk::new(octant, rays_of_octant);
+                walk.run(self, &mut bundle.rays, leaf_data, |_, i, start, count| {
+                    let blocked = blocks_leaf(i, start, count);
+                    out[i] |= blocked;
+                    blocked
+                });
             }
         }
     }
@@ -320,35 +337,27 @@ impl Bvh8 {
         }
         let mut bundle = Bundle::new(rays, |_| false, &self.bounds);
         for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
-            if rays_of_octant == 0 {
-                continue;
-            }
-            let mut walk = Walk::new(octant, rays_of_octant);
-            loop {
-                if is_leaf(walk.current) {
-                    let (start, count) = leaf_range(walk.current);
-                    let mut m = walk.mask;
-                    while m != 0 {
-                        let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
-                        m &= m - 1;
+            if rays_of_octant != 0 {
+                let walk = Walk::new(octant, rays_of_octant);
+                walk.run(
+                    self,
+                    &mut bundle.rays,
+                    leaf_data,
+                    |bundled, i, start, count| {
                         let nearest_so_far = Ray {
-                            tmax: bundle.rays[i].tmax,
+                            tmax: bundled[i].tmax,
                             ..rays[i]
                         };
                         let test = tie_ray(&nearest_so_far, out[i].as_ref());
                         if let Some(h) = hit_leaf(i, start, count, &test) {
                             if closer(&h, out[i].as_ref()) {
-                                bundle.rays[i].tmax = h.t;
+                                bundled[i].tmax = h.t;
                                 out[i] = Some(h);
                             }
                         }
-                    }
-                } else if walk.enter_node(self, &bundle.rays, leaf_data) {
-                    continue;
-                }
-                if !walk.pop(u64::MAX) {
-                    break;
-                }
+                        false
+                    },
+                );
             }
         }
     }
@@ -417,6 +426,23 @@ mod tests {
             .collect()
     }
 
+    /// Bundles of every size from 0 to [`BUNDLE_SIZE`] rays, each from its
+    /// own eye (one inside the cloud, one far outside it), with the eye.
+    fn bundles(seed: u64) -> Vec<(Vec3, Vec<Ray>)> {
+        [
+            (Vec3::ZERO, BUNDLE_SIZE),
+            (Vec3::new(30.0, -25.0, 12.0), BUNDLE_SIZE),
+            (Vec3::new(3.0, 2.0, -1.0), 37),
+            (Vec3::new(-4.0, 0.5, 9.0), 9),
+            (Vec3::new(1.0, 1.0, 1.0), 1),
+            (Vec3::ZERO, 0),
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(k, (eye, n))| (eye, rays_from(eye, n, seed + k as u64)))
+        .collect()
+    }
+
     /// Every ray's answer is its single walk's, for bundles of any size,
     /// with rays already answered left alone; and every ray of a bundle
     /// tests exactly the leaves its single walk may reach (both walks with
@@ -429,18 +455,8 @@ mod tests {
                 .any(|(_, id)| spheres[id as usize].intersect(r).is_some())
         };
         let mut seen_blocked = 0;
-        for (k, (eye, n)) in [
-            (Vec3::ZERO, BUNDLE_SIZE),
-            (Vec3::new(30.0, -25.0, 12.0), BUNDLE_SIZE),
-            (Vec3::new(3.0, 2.0, -1.0), 37),
-            (Vec3::new(-4.0, 0.5, 9.0), 9),
-            (Vec3::new(1.0, 1.0, 1.0), 1),
-            (Vec3::ZERO, 0),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let rays = rays_from(eye, n, 11 + k as u64);
+        for (eye, rays) in bundles(11) {
+            let n = rays.len();
             let answered = |i: usize| i % 7 == 3;
             let expected: Vec<bool> = rays
                 .iter()
@@ -478,18 +494,8 @@ mod tests {
         };
         let bits = |h: Option<PrimHit>| h.map(|h| (h.t.to_bits(), h.prim));
         let (mut found, mut ties) = (0, 0);
-        for (k, (eye, n)) in [
-            (Vec3::ZERO, BUNDLE_SIZE),
-            (Vec3::new(30.0, -25.0, 12.0), BUNDLE_SIZE),
-            (Vec3::new(3.0, 2.0, -1.0), 37),
-            (Vec3::new(-4.0, 0.5, 9.0), 9),
-            (Vec3::new(1.0, 1.0, 1.0), 1),
-            (Vec3::ZERO, 0),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let rays = rays_from(eye, n, 21 + k as u64);
+        for (eye, rays) in bundles(21) {
+            let n = rays.len();
             let expected: Vec<_> = rays
                 .iter()
                 .map(|r| bvh.closest(r, NO_DATA, |s, c, r| hit(s, c, r)))
