@@ -366,9 +366,8 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::super::build::BuildQuality;
-    use super::super::traverse::tests::sphere_hit;
+    use super::super::traverse::tests::{sphere_cloud, sphere_hit, spheres_block};
     use super::*;
-    use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
     use crate::shape::sphere::Sphere;
     use glam::Vec3;
@@ -379,20 +378,7 @@ mod tests {
     /// Random spheres around the origin and a clump of identical ones (hits
     /// at equal t, which the primitive id decides), and their tree.
     fn cloud() -> (Vec<Sphere>, Bvh8) {
-        let mut rng = seeded(7);
-        let mut spheres: Vec<Sphere> = (0..2000)
-            .map(|_| Sphere {
-                center: Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 20.0 - 10.0,
-                radius: 0.05 + rng.unit() * 0.5,
-            })
-            .collect();
-        spheres.extend((0..40).map(|_| Sphere {
-            center: CLUMP,
-            radius: 0.7,
-        }));
-        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
-        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
-        (spheres, bvh)
+        sphere_cloud(7, 2000, 0.5, (CLUMP, 0.7, 40))
     }
 
     const CLUMP: Vec3 = Vec3::new(4.0, -3.0, 2.0);
@@ -450,10 +436,7 @@ mod tests {
     #[test]
     fn bundles_answer_and_reach_what_single_rays_do() {
         let (spheres, bvh) = cloud();
-        let blocks = |start: u32, count: u32, r: &Ray| {
-            bvh.leaf_prims(start, count)
-                .any(|(_, id)| spheres[id as usize].intersect(r).is_some())
-        };
+        let blocks = |start, count, r: &Ray| spheres_block(&bvh, &spheres, start, count, r);
         let mut seen_blocked = 0;
         for (eye, rays) in bundles(11) {
             let n = rays.len();

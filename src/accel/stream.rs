@@ -146,9 +146,8 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::super::build::BuildQuality;
-    use super::super::traverse::tests::sphere_hit;
+    use super::super::traverse::tests::{sphere_cloud, sphere_hit, spheres_block};
     use super::*;
-    use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
     use crate::shape::sphere::Sphere;
     use glam::Vec3;
@@ -158,28 +157,9 @@ mod tests {
     const NO_DATA: &[()] = &[];
 
     /// Random spheres, and a clump of identical ones deep enough that the
-    /// rays through it spill their stacks to the heap.
-    fn spheres() -> Vec<Sphere> {
-        let mut rng = seeded(3);
-        let mut out: Vec<Sphere> = (0..600)
-            .map(|_| Sphere {
-                center: Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 20.0 - 10.0,
-                radius: 0.05 + rng.unit() * 0.6,
-            })
-            .collect();
-        out.extend((0..3000).map(|_| Sphere {
-            center: Vec3::new(4.0, 4.0, 4.0),
-            radius: 0.5,
-        }));
-        out
-    }
-
-    /// [`spheres`] and their tree.
+    /// rays through it spill their stacks to the heap, and their tree.
     fn cloud() -> (Vec<Sphere>, Bvh8) {
-        let spheres = spheres();
-        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
-        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
-        (spheres, bvh)
+        sphere_cloud(3, 600, 0.6, (Vec3::new(4.0, 4.0, 4.0), 0.5, 3000))
     }
 
     /// Rays through the cloud, a third of them aimed at the clump; every
@@ -262,10 +242,7 @@ mod tests {
     #[test]
     fn any_hit_streams_answer_and_visit_what_single_rays_do() {
         let (spheres, bvh) = cloud();
-        let blocks = |start: u32, count: u32, r: &Ray| {
-            bvh.leaf_prims(start, count)
-                .any(|(_, id)| spheres[id as usize].intersect(r).is_some())
-        };
+        let blocks = |start, count, r: &Ray| spheres_block(&bvh, &spheres, start, count, r);
         for n in [0, 1, 5, 1001] {
             let rays = rays(n);
             let skipped = |i: usize| i % 4 == 1;

@@ -430,8 +430,46 @@ pub(super) mod tests {
     /// Leaf tests here read spheres by id: no block-shaped leaf data.
     const NO_DATA: &[()] = &[];
 
+    /// Whether a sphere of leaf `start..start + count` of `bvh` blocks `r`:
+    /// the any-hit leaf test of the walk tests here and in `stream` and
+    /// `bundle`.
+    pub(in crate::accel) fn spheres_block(
+        bvh: &Bvh8,
+        spheres: &[Sphere],
+        start: u32,
+        count: u32,
+        r: &Ray,
+    ) -> bool {
+        bvh.leaf_prims(start, count)
+            .any(|(_, id)| sphere_hit(spheres, id, r).is_some())
+    }
+
+    /// Random spheres in the 20-unit cube around the origin (`count` of
+    /// them, radii from 0.05 to 0.05 + `spread`), then `copies` identical
+    /// spheres of radius `radius` at `center` (hits at equal t, which the
+    /// primitive id decides), and their tree: the scene of the walk tests
+    /// in `stream` and `bundle`.
+    pub(in crate::accel) fn sphere_cloud(
+        seed: u64,
+        count: usize,
+        spread: f32,
+        (center, radius, copies): (Vec3, f32, usize),
+    ) -> (Vec<Sphere>, Bvh8) {
+        let mut rng = seeded(seed);
+        let mut spheres: Vec<Sphere> = (0..count)
+            .map(|_| Sphere {
+                center: Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 20.0 - 10.0,
+                radius: 0.05 + rng.unit() * spread,
+            })
+            .collect();
+        spheres.extend((0..copies).map(|_| Sphere { center, radius }));
+        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        (spheres, bvh)
+    }
+
     /// Sphere `id`'s hit on `r` as traversal reports it: the leaf test of
-    /// the traversal tests here and in `stream`.
+    /// the traversal tests here and in `stream` and `bundle`.
     pub(in crate::accel) fn sphere_hit(spheres: &[Sphere], id: u32, r: &Ray) -> Option<PrimHit> {
         spheres[id as usize].intersect(r).map(|t| PrimHit {
             t,
@@ -490,8 +528,7 @@ pub(super) mod tests {
                 assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
                 assert_eq!(
                     bvh.any_hit(&ray, NO_DATA, |start, count, r| {
-                        bvh.leaf_prims(start, count)
-                            .any(|(_, id)| hit(id, r).is_some())
+                        spheres_block(&bvh, &spheres, start, count, r)
                     }),
                     brute.is_some()
                 );
