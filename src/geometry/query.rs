@@ -207,18 +207,24 @@ impl Geometry {
             let (rays, out) = (&rays[range.clone()], &mut out[range]);
             if bundle {
                 self.closest_in_bundle(rays, out);
-                return;
+            } else {
+                self.closest_narrow_or_alone(rays, out);
             }
-            split_narrow(rays, &self.bvh.bounds, |range, travel| {
-                let (rays, out) = (&rays[range.clone()], &mut out[range]);
-                match travel {
-                    Travel::Packet(packet) => self.closest_in_packet(packet, rays, out),
-                    Travel::Outside => out.fill(None),
-                    Travel::Alone => self.closest_alone(rays, out),
-                }
-            });
         });
         self.closest_planes(rays, out);
+    }
+
+    /// The BVH's closest hits (planes aside): narrow groups as packets,
+    /// the rest alone.
+    fn closest_narrow_or_alone(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        split_narrow(rays, &self.bvh.bounds, |range, travel| {
+            let (rays, out) = (&rays[range.clone()], &mut out[range]);
+            match travel {
+                Travel::Packet(packet) => self.closest_in_packet(packet, rays, out),
+                Travel::Outside => out.fill(None),
+                Travel::Alone => self.closest_alone(rays, out),
+            }
+        });
     }
 
     /// Calls `visit(range, true)` for each run of [`BUNDLE_SIZE`] rays
