@@ -1,5 +1,5 @@
-//! Packets, streams (narrow groups as packets, the rest as several single
-//! rays in flight) and single rays return
+//! Packets, streams (bundles, narrow groups as packets, the rest as
+//! several single rays in flight) and single rays return
 //! identical hits: the same primitive, t,
 //! u, v bit for bit, and the same occlusion answer, on coherent (lens
 //! samples of a pixel, shadow rays from one point to an area light),
@@ -14,6 +14,7 @@ use std::time::Instant;
 use strata::accel::beam::{split_narrow, Travel};
 use strata::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
 use strata::accel::{BuildQuality, PACKET_SIZE};
+use strata::geometry::bundles::StreamPart;
 use strata::math::Ray;
 use strata::scene::{compile, parse, RenderOverrides, Scene};
 
@@ -226,8 +227,24 @@ fn pinhole_rows() -> Vec<Ray> {
         .collect()
 }
 
-/// A stream of rays (narrow groups as packets, runs of rays from one
-/// origin as bundles, the rest several in flight at once where
+/// Rays from one eye to the bumpy sphere, the grid and the plane,
+/// left and right of the eye in turn (so their octants alternate, and a
+/// window sorted by octant makes bundles of rays that are not neighbours
+/// in the stream).
+fn alternating_fan() -> Vec<Ray> {
+    let eye = Vec3::new(0.1, 0.4, 3.0);
+    (0..3 * 256)
+        .map(|i| {
+            let side = if i % 2 == 0 { 1.0 } else { -1.0 };
+            let k = i as f32 / (3.0 * 256.0);
+            let target = Vec3::new(eye.x + side * (0.05 + 2.0 * k), 1.2 - 4.0 * k, 0.0);
+            Ray::new(eye, target - eye)
+        })
+        .collect()
+}
+
+/// A stream of rays (windows of alike rays as bundles, narrow groups as
+/// packets, the rest several in flight at once where
 /// the tree prefetches and one at a time where it does not) gets exactly
 /// the single rays' closest hits and occlusion answers, with a plane
 /// outside the BVH and a sphere as the excepted primitive.
@@ -242,6 +259,7 @@ fn streams_and_single_rays_return_identical_hits() {
         rays.truncate(rays.len() / PACKET_SIZE * PACKET_SIZE + 3);
         let first_row = rays.len();
         rays.extend(pinhole_rows());
+        rays.extend(alternating_fan());
         let (mut packets, mut outside) = (0, 0);
         split_narrow(
             &rays,
@@ -256,15 +274,35 @@ fn streams_and_single_rays_return_identical_hits() {
             packets >= 100 && outside >= 100,
             "{quality:?}: {packets} packets, {outside} groups outside the tree's box"
         );
-        // The pinhole rows' windows share one origin: they walk as bundles.
-        let bundles = rays
-            .chunks(BUNDLE_SIZE)
-            .filter(|w| w.iter().all(|r| r.origin == w[0].origin))
-            .count();
+        // Every ray is in one part. The pinhole rows' windows share one
+        // origin and walk as bundles; so do windows of rays from close
+        // origins (lens samples, rays aimed from a short line) or with
+        // close directions (chords in one octant), from many origins.
+        let mut seen = vec![0; rays.len()];
+        let (mut one_origin, mut many_origins, mut scattered) = (0, 0, 0);
+        scene.geometry.split_stream(&rays, |part| match part {
+            StreamPart::Run(range) => range.for_each(|i| seen[i] += 1),
+            StreamPart::Bundle(ids) => {
+                assert!(!ids.is_empty() && ids.len() <= BUNDLE_SIZE);
+                ids.iter().for_each(|&i| seen[i as usize] += 1);
+                scattered += ids.windows(2).any(|w| w[1] != w[0] + 1) as usize;
+                let o = rays[ids[0] as usize].origin;
+                match ids.iter().all(|&i| rays[i as usize].origin == o) {
+                    true => one_origin += 1,
+                    false => many_origins += 1,
+                }
+            }
+        });
         assert!(
-            bundles >= 30 && scene.geometry.traversal_bytes() <= BUNDLE_MAX_BYTES,
-            "{quality:?}: {bundles} bundles"
+            seen.iter().all(|&n| n == 1),
+            "{quality:?}: a ray in no part or two"
         );
+        assert!(
+            one_origin >= 30 && many_origins >= 10 && scattered >= 10,
+            "{quality:?}: {one_origin} bundles from one origin, {many_origins} from many, \
+             {scattered} of rays apart in the stream"
+        );
+        assert!(scene.geometry.traversal_bytes() <= BUNDLE_MAX_BYTES);
         let except = scene.geometry.triangle_count; // the sphere
         for prefetch in [true, false] {
             scene.geometry.bvh.prefetch = prefetch;

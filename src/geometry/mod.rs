@@ -12,6 +12,7 @@
 //! [`crate::shape`], and [`surface`] turns the closest hit into a
 //! [`Surface`].
 
+pub mod bundles;
 pub mod csg;
 pub mod leaf;
 pub mod primitive;

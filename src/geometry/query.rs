@@ -2,16 +2,16 @@
 //! [`PACKET_SIZE`], or a stream of any number. Packets and streams return
 //! bit for bit the single-ray answers.
 
+use super::bundles::StreamPart;
 use super::Geometry;
 use crate::accel::beam::{split_narrow, Travel};
-use crate::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
+use crate::accel::bundle::BUNDLE_SIZE;
 use crate::accel::packet::{misses_box, reciprocals};
 use crate::accel::{Packet, PrimHit, PACKET_SIZE};
 use crate::math::ray::ray_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle8::ShearedRays;
-use std::ops::Range;
 
 /// How a batch of up to [`PACKET_SIZE`] rays is traced. Made and matched
 /// on the stack within one query, so the packet stays unboxed: boxing it
@@ -190,9 +190,9 @@ impl Geometry {
     }
 
     /// Closest hits of any number of rays: `out[i]` is bit for bit
-    /// `self.intersect(&rays[i])`. Runs of rays from one origin walk as
-    /// bundles ([`crate::accel::bundle`], [`Geometry::split_bundles`]). Of
-    /// the rest, groups of eight consecutive rays narrow
+    /// `self.intersect(&rays[i])`. Windows of rays from close origins or
+    /// with close directions walk as bundles ([`crate::accel::bundle`],
+    /// [`Geometry::split_stream`]). Of the rest, groups of eight consecutive rays narrow
     /// enough to share their walk travel as packets
     /// ([`crate::accel::beam`]); the others walk alone, several in flight
     /// at once where the BVH prefetches (a tree that outgrows the caches,
@@ -203,13 +203,21 @@ impl Geometry {
     /// 14.7–14.9).
     pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        self.split_bundles(rays, |range, bundle| {
-            let (rays, out) = (&rays[range.clone()], &mut out[range]);
-            if bundle {
-                self.closest_in_bundle(rays, out);
-            } else {
-                self.closest_narrow_or_alone(rays, out);
+        self.split_stream(rays, |part| match part {
+            StreamPart::Run(range) => {
+                self.closest_narrow_or_alone(&rays[range.clone()], &mut out[range]);
             }
+            StreamPart::Bundle(ids) => match contiguous(ids) {
+                Some(range) => self.closest_in_bundle(&rays[range.clone()], &mut out[range]),
+                None => {
+                    let group = gather(rays, ids);
+                    let mut hits = [None; BUNDLE_SIZE];
+                    self.closest_in_bundle(&group[..ids.len()], &mut hits[..ids.len()]);
+                    for (&i, h) in ids.iter().zip(hits) {
+                        out[i as usize] = h;
+                    }
+                }
+            },
         });
         self.closest_planes(rays, out);
     }
@@ -225,39 +233,6 @@ impl Geometry {
                 Travel::Alone => self.closest_alone(rays, out),
             }
         });
-    }
-
-    /// Calls `visit(range, true)` for each run of [`BUNDLE_SIZE`] rays
-    /// from one origin, where the tree is small enough for bundles to pay
-    /// ([`BUNDLE_MAX_BYTES`]), and `visit(range, false)` for the rays
-    /// between them, in order. The rays between two bundles come as one
-    /// range, so that as many of their walks as before stay in flight.
-    ///
-    /// Rays from one point (a pinhole camera's) share the top of their
-    /// walks, and in a bundle each node there is read once for all of
-    /// them; see [`BUNDLE_MAX_BYTES`] for what they gain. Rays from many
-    /// origins part too soon for a bundle to pay (an early version of the
-    /// bundles walked random dragon rays at 4.1 Mrays/s, against 7.9 in
-    /// flight), so they never form one.
-    fn split_bundles(&self, rays: &[Ray], mut visit: impl FnMut(Range<usize>, bool)) {
-        let bundles = self.traversal_bytes() <= BUNDLE_MAX_BYTES;
-        let one_origin = |w: &[Ray]| {
-            bundles && w.len() > PACKET_SIZE && w.iter().all(|r| r.origin == w[0].origin)
-        };
-        let mut rest = 0;
-        for start in (0..rays.len()).step_by(BUNDLE_SIZE) {
-            let end = (start + BUNDLE_SIZE).min(rays.len());
-            if one_origin(&rays[start..end]) {
-                if rest < start {
-                    visit(rest..start, false);
-                }
-                visit(start..end, true);
-                rest = end;
-            }
-        }
-        if rest < rays.len() {
-            visit(rest..rays.len(), false);
-        }
     }
 
     /// The BVH's closest hits of up to [`BUNDLE_SIZE`] rays walked as
@@ -296,22 +271,32 @@ impl Geometry {
 
     /// Occlusion of any number of rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. Runs of rays from one
-    /// origin walk as bundles ([`crate::accel::bundle`]); of the rest,
-    /// narrow groups go as packets and the others alone, as for
-    /// [`Geometry::intersect_stream`].
+    /// `self.occluded_except(&rays[i], except)`. Bundles, packets and
+    /// single rays as for [`Geometry::intersect_stream`].
     pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.blocked_by_planes(r);
         }
-        self.split_bundles(rays, |range, bundle| {
-            let (rays, out) = (&rays[range.clone()], &mut out[range]);
-            if bundle {
-                self.blocked_in_bundle(rays, except, out);
-            } else {
-                self.blocked_narrow_or_alone(rays, except, out);
+        self.split_stream(rays, |part| match part {
+            StreamPart::Run(range) => {
+                self.blocked_narrow_or_alone(&rays[range.clone()], except, &mut out[range]);
             }
+            StreamPart::Bundle(ids) => match contiguous(ids) {
+                Some(range) => {
+                    self.blocked_in_bundle(&rays[range.clone()], except, &mut out[range])
+                }
+                None => {
+                    let group = gather(rays, ids);
+                    let mut blocked: [bool; BUNDLE_SIZE] =
+                        std::array::from_fn(|k| ids.get(k).is_some_and(|&i| out[i as usize]));
+                    let n = ids.len();
+                    self.blocked_in_bundle(&group[..n], except, &mut blocked[..n]);
+                    for (&i, b) in ids.iter().zip(blocked) {
+                        out[i as usize] = b;
+                    }
+                }
+            },
         });
     }
 
@@ -366,5 +351,40 @@ impl Geometry {
             },
             out,
         );
+    }
+}
+
+/// The rays `ids` name, in that order, for a bundle (the slots past
+/// `ids.len()` repeat the first, unused).
+fn gather(rays: &[Ray], ids: &[u32]) -> [Ray; BUNDLE_SIZE] {
+    let filler = rays[ids[0] as usize];
+    std::array::from_fn(|k| ids.get(k).map_or(filler, |&i| rays[i as usize]))
+}
+
+/// The range `ids` covers where they are consecutive, each one more than
+/// the one before (as in a window whose rays all head into one octant),
+/// which a bundle then reads in place.
+fn contiguous(ids: &[u32]) -> Option<std::ops::Range<usize>> {
+    let first = *ids.first()? as usize;
+    ids.windows(2)
+        .all(|w| w[1] == w[0] + 1)
+        .then_some(first..first + ids.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::contiguous;
+
+    /// Only ids that each follow the one before are a range: a window
+    /// sorted by octant can put a later ray first, and a span from the
+    /// first id to the last as long as the list is not enough.
+    #[test]
+    fn only_consecutive_ids_are_a_range() {
+        assert_eq!(contiguous(&[5, 6, 7]), Some(5..8));
+        assert_eq!(contiguous(&[9]), Some(9..10));
+        assert_eq!(contiguous(&[]), None);
+        assert_eq!(contiguous(&[1, 0, 2, 4]), None);
+        assert_eq!(contiguous(&[3, 1, 2]), None);
+        assert_eq!(contiguous(&[0, 2, 1, 3]), None);
     }
 }
