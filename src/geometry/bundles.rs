@@ -1,24 +1,29 @@
 //! Which rays of a stream walk the tree as bundles ([`crate::accel::bundle`]).
 //!
 //! A stream is read in windows of [`WINDOW`] rays. A window whose rays are
-//! alike, all from close origins (a pinhole camera's rays, from one
-//! point) or all in close directions (the shadow rays of neighbouring
-//! pixels' hits towards one light), is sorted by direction octant, as
-//! Embree's stream API sorts its rays (its `rtcOccluded1M`; Tsakok 2009,
-//! "Faster Incoherent Rays: Multi-BVH Ray Stream Tracing"), and walks as
-//! bundles of up to [`BUNDLE_SIZE`] rays in that order. Alike rays share
-//! much of their walks, and in a bundle each node on the shared part is
-//! read once for all of them. The other windows stay in order, and
-//! consecutive ones go on as one run, so that narrow groups still travel
-//! as packets and the rest keep several walks in flight.
+//! alike, all from close origins (a camera's rays) or all in close
+//! directions (the shadow rays of neighbouring pixels' hits towards one
+//! light), walks as bundles of up to [`BUNDLE_SIZE`] rays. Alike rays
+//! share much of their walks, and in a bundle each node on the shared
+//! part is read once for all of them. A bundle walks the rays of each
+//! direction octant on their own, so a window from many origins is first
+//! sorted by octant, as Embree's stream API sorts its rays (its
+//! `rtcOccluded1M`; Tsakok 2009, "Faster Incoherent Rays: Multi-BVH Ray
+//! Stream Tracing"): its shadow rays change octant from one pixel to the
+//! next. A window from one origin keeps its order, since a camera's rays
+//! change octant only where the image crosses an axis. The windows whose
+//! rays are not alike stay in order, and consecutive ones go on as one
+//! run, so that narrow groups still travel as packets and the rest keep
+//! several walks in flight.
 //!
 //! Rays that are not alike part too soon for a bundle to pay: the
 //! dragon's random rays (origins anywhere around it, directions
 //! anywhere) took 4.4 Mrays/s in octant-sorted bundles against 7.7 in
 //! flight, its grazing rays 0.97 against 1.76 (occlusion, one thread).
 //! The renderer's shadow rays on the dragon, 900,177 from
-//! `scenes/large/dragon-rect.toml` at 16 spp, took 16.6 in bundles
-//! against 12.9 in flight; its camera rays walk as bundles in both.
+//! `scenes/large/dragon-rect.toml` at 16 spp, took 16.3 in bundles
+//! against 13.1 in flight (14.5 against 11.7 for closest hits). Sorting a
+//! million camera rays by octant too cost a tenth of their occlusion time.
 
 use super::Geometry;
 use crate::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
@@ -52,10 +57,12 @@ pub const CLOSE_DIRECTIONS: f32 = 2.0;
 pub enum StreamPart<'a> {
     /// A run of consecutive rays traced as packets or alone.
     Run(Range<usize>),
+    /// Up to [`BUNDLE_SIZE`] consecutive rays walked as one bundle.
+    Bundle(Range<usize>),
     /// The indices of up to [`BUNDLE_SIZE`] rays of one window, sorted by
     /// direction octant and in stream order within one, walked as one
     /// bundle.
-    Bundle(&'a [u32]),
+    Sorted(&'a [u32]),
 }
 
 /// The direction octant of a ray: bit `axis` set where the component is
@@ -111,9 +118,9 @@ fn alike(rays: &[Ray], reach: f32) -> bool {
 
 impl Geometry {
     /// Calls `visit` with the parts of a stream of rays: every ray in
-    /// exactly one part, runs in stream order, and each window of rays
-    /// from close origins as bundles ([module docs](self)) where the tree
-    /// is small enough for them to pay ([`BUNDLE_MAX_BYTES`]).
+    /// exactly one part, runs in stream order, and each window of alike
+    /// rays as bundles ([module docs](self)) where the tree is small
+    /// enough for them to pay ([`BUNDLE_MAX_BYTES`]).
     pub fn split_stream(&self, rays: &[Ray], mut visit: impl FnMut(StreamPart)) {
         if self.traversal_bytes() > BUNDLE_MAX_BYTES || self.bvh.nodes.is_empty() {
             visit(StreamPart::Run(0..rays.len()));
@@ -127,20 +134,13 @@ impl Geometry {
         for start in (0..rays.len()).step_by(WINDOW) {
             let end = (start + WINDOW).min(rays.len());
             let window = &rays[start..end];
-            // One pass over the window: each ray's octant, how many rays
-            // each octant has, and whether they all share the first ray's
-            // origin (without branches, so that the rays' first loads,
-            // misses in a long stream, overlap).
+            // Without branches, so that the rays' first loads (misses, in
+            // a long stream) overlap.
             let first_origin = window[0].origin;
-            let mut one_origin = true;
-            let mut first = [0usize; 9];
-            for (o, r) in octants.iter_mut().zip(window) {
+            let one_origin = window.iter().fold(true, |same, r| {
                 let p = r.origin;
-                one_origin &=
-                    (p.x == first_origin.x) & (p.y == first_origin.y) & (p.z == first_origin.z);
-                *o = octant(r) as u8;
-                first[*o as usize + 1] += 1;
-            }
+                same & (p.x == first_origin.x) & (p.y == first_origin.y) & (p.z == first_origin.z)
+            });
             if !one_origin && !alike(window, reach) {
                 continue;
             }
@@ -148,7 +148,19 @@ impl Geometry {
                 visit(StreamPart::Run(run_start..start));
             }
             run_start = end;
+            if one_origin {
+                // In stream order (module docs).
+                for first in (start..end).step_by(BUNDLE_SIZE) {
+                    visit(StreamPart::Bundle(first..(first + BUNDLE_SIZE).min(end)));
+                }
+                continue;
+            }
             // A counting sort by octant keeps each octant's rays in order.
+            let mut first = [0usize; 9];
+            for (o, r) in octants.iter_mut().zip(window) {
+                *o = octant(r) as u8;
+                first[*o as usize + 1] += 1;
+            }
             for o in 0..8 {
                 first[o + 1] += first[o];
             }
@@ -157,11 +169,10 @@ impl Geometry {
                 sorted[next[o as usize]] = (start + k) as u32;
                 next[o as usize] += 1;
             }
-            // A bundle walks each of its octants' rays on its own, so one
-            // may hold the end of one octant's rays and the start of the
-            // next: a window then makes as few bundles as it can.
+            // A bundle may hold the end of one octant's rays and the start
+            // of the next: a window then makes as few bundles as it can.
             for ids in sorted[..window.len()].chunks(BUNDLE_SIZE) {
-                visit(StreamPart::Bundle(ids));
+                visit(StreamPart::Sorted(ids));
             }
         }
         if run_start < rays.len() {

@@ -207,17 +207,17 @@ impl Geometry {
             StreamPart::Run(range) => {
                 self.closest_narrow_or_alone(&rays[range.clone()], &mut out[range]);
             }
-            StreamPart::Bundle(ids) => match contiguous(ids) {
-                Some(range) => self.closest_in_bundle(&rays[range.clone()], &mut out[range]),
-                None => {
-                    let group = gather(rays, ids);
-                    let mut hits = [None; BUNDLE_SIZE];
-                    self.closest_in_bundle(&group[..ids.len()], &mut hits[..ids.len()]);
-                    for (&i, h) in ids.iter().zip(hits) {
-                        out[i as usize] = h;
-                    }
+            StreamPart::Bundle(range) => {
+                self.closest_in_bundle(&rays[range.clone()], &mut out[range]);
+            }
+            StreamPart::Sorted(ids) => {
+                let group = gather(rays, ids);
+                let mut hits = [None; BUNDLE_SIZE];
+                self.closest_in_bundle(&group[..ids.len()], &mut hits[..ids.len()]);
+                for (&i, h) in ids.iter().zip(hits) {
+                    out[i as usize] = h;
                 }
-            },
+            }
         });
         self.closest_planes(rays, out);
     }
@@ -282,21 +282,19 @@ impl Geometry {
             StreamPart::Run(range) => {
                 self.blocked_narrow_or_alone(&rays[range.clone()], except, &mut out[range]);
             }
-            StreamPart::Bundle(ids) => match contiguous(ids) {
-                Some(range) => {
-                    self.blocked_in_bundle(&rays[range.clone()], except, &mut out[range])
+            StreamPart::Bundle(range) => {
+                self.blocked_in_bundle(&rays[range.clone()], except, &mut out[range]);
+            }
+            StreamPart::Sorted(ids) => {
+                let group = gather(rays, ids);
+                let mut blocked: [bool; BUNDLE_SIZE] =
+                    std::array::from_fn(|k| ids.get(k).is_some_and(|&i| out[i as usize]));
+                let n = ids.len();
+                self.blocked_in_bundle(&group[..n], except, &mut blocked[..n]);
+                for (&i, b) in ids.iter().zip(blocked) {
+                    out[i as usize] = b;
                 }
-                None => {
-                    let group = gather(rays, ids);
-                    let mut blocked: [bool; BUNDLE_SIZE] =
-                        std::array::from_fn(|k| ids.get(k).is_some_and(|&i| out[i as usize]));
-                    let n = ids.len();
-                    self.blocked_in_bundle(&group[..n], except, &mut blocked[..n]);
-                    for (&i, b) in ids.iter().zip(blocked) {
-                        out[i as usize] = b;
-                    }
-                }
-            },
+            }
         });
     }
 
@@ -359,32 +357,4 @@ impl Geometry {
 fn gather(rays: &[Ray], ids: &[u32]) -> [Ray; BUNDLE_SIZE] {
     let filler = rays[ids[0] as usize];
     std::array::from_fn(|k| ids.get(k).map_or(filler, |&i| rays[i as usize]))
-}
-
-/// The range `ids` covers where they are consecutive, each one more than
-/// the one before (as in a window whose rays all head into one octant),
-/// which a bundle then reads in place.
-fn contiguous(ids: &[u32]) -> Option<std::ops::Range<usize>> {
-    let first = *ids.first()? as usize;
-    ids.windows(2)
-        .all(|w| w[1] == w[0] + 1)
-        .then_some(first..first + ids.len())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::contiguous;
-
-    /// Only ids that each follow the one before are a range: a window
-    /// sorted by octant can put a later ray first, and a span from the
-    /// first id to the last as long as the list is not enough.
-    #[test]
-    fn only_consecutive_ids_are_a_range() {
-        assert_eq!(contiguous(&[5, 6, 7]), Some(5..8));
-        assert_eq!(contiguous(&[9]), Some(9..10));
-        assert_eq!(contiguous(&[]), None);
-        assert_eq!(contiguous(&[1, 0, 2, 4]), None);
-        assert_eq!(contiguous(&[3, 1, 2]), None);
-        assert_eq!(contiguous(&[0, 2, 1, 3]), None);
-    }
 }
