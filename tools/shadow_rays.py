@@ -2,7 +2,8 @@
 """Write the shadow rays a render of a mesh scene traces, as a ray file.
 
     tools/.venv/bin/python tools/shadow_rays.py SCENE.toml -o SHADOW.rays
-                          [--spp 16] [--seed 1] [--strata target/release/strata]
+                          [--camera-rays CAMERA.rays] [--spp 16] [--seed 1]
+                          [--strata target/release/strata]
 
 For a scene like scenes/large/dragon-rect.toml (one mesh, a floor plane,
 one rect light, a perspective camera), this makes the rays its render
@@ -17,7 +18,8 @@ renderer's do; they come in the same order and the same numbers (at 16
 spp on dragon-rect: 1,228,800 camera rays, about 0.9 million shadow rays).
 The renderer samples the light by solid angle rather than area, so the
 directions differ a little; `strata trace` and tools/bench_embree.py take
-the file (`shadow` rays in its .json).
+the file (`shadow` rays in its .json). With --camera-rays the camera
+rays are written too, in the renderer's order.
 
 Needs numpy (tools/.venv) and a built strata.
 """
@@ -72,6 +74,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene")
     p.add_argument("-o", "--output", required=True)
+    p.add_argument("--camera-rays", help="also write the camera rays here")
     p.add_argument("--spp", type=int, default=None)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--strata", default="target/release/strata")
@@ -95,6 +98,8 @@ def main():
     spp = a.spp or render.get("spp", 16)
     cams = camera_rays(cam, render.get("width", 320), render.get("height", 240), spp, rng)
     vertices, triangles = load_mesh(mesh)
+    if a.camera_rays:
+        write_rays(a.camera_rays, cams, "camera")
     with tempfile.TemporaryDirectory() as tmp:
         cam_path, hits_path = os.path.join(tmp, "camera.rays"), os.path.join(tmp, "camera.hits")
         write_rays(cam_path, cams, "camera")
