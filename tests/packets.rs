@@ -229,7 +229,7 @@ fn pinhole_rows() -> Vec<Ray> {
 
 /// Rays from one eye to the bumpy sphere, the grid and the plane,
 /// left and right of the eye in turn, so that every bundle of them walks
-/// two octants.
+/// at least two octants.
 fn alternating_fan() -> Vec<Ray> {
     let eye = Vec3::new(0.1, 0.4, 3.0);
     (0..3 * 256)
@@ -274,9 +274,8 @@ fn streams_and_single_rays_return_identical_hits() {
             "{quality:?}: {packets} packets, {outside} groups outside the tree's box"
         );
         // Every ray is in one part. The pinhole rows' windows share one
-        // origin and walk as bundles; so do windows of rays from close
-        // origins (lens samples, rays aimed from a short line) or with
-        // close directions (chords in one octant), from many origins.
+        // origin and walk as bundles in order; windows of alike rays from
+        // many origins (the lens samples, for one) walk sorted by octant.
         let mut seen = vec![0; rays.len()];
         let (mut one_origin, mut many_origins, mut scattered) = (0, 0, 0);
         scene.geometry.split_stream(&rays, |part| match part {

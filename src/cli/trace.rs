@@ -2,8 +2,8 @@
 //! trace a ray file against one mesh with the renderer's own queries
 //! (`Geometry::intersect_stream` and `occluded_stream`, which send
 //! windows of alike rays as bundles and narrow groups of eight as
-//! packets, or one ray at a time through `intersect` and `occluded`) and write one hit record per ray (see
-//! [`strata::rayfile`]).
+//! packets, or one ray at a time through `intersect` and `occluded`) and
+//! write one hit record per ray (see [`strata::rayfile`]).
 
 use super::CliError;
 use clap::Args;
@@ -51,7 +51,8 @@ pub struct TraceArgs {
     /// Trace one ray at a time, as the renderer traces a lone ray, instead
     /// of windows of alike rays (close origins or close directions) in
     /// bundles of 64, narrow groups of eight as packets and the rest
-    /// several in flight at once on each thread. The hits are the same; compare the two to measure them.
+    /// several in flight at once on each thread. The hits are the same;
+    /// compare the two to measure them.
     #[arg(long)]
     pub one_at_a_time: bool,
     /// No summary line.

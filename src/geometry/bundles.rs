@@ -20,10 +20,11 @@
 //! dragon's random rays (origins anywhere around it, directions
 //! anywhere) took 4.4 Mrays/s in octant-sorted bundles against 7.7 in
 //! flight, its grazing rays 0.97 against 1.76 (occlusion, one thread).
-//! The renderer's shadow rays on the dragon, 900,177 from
-//! `scenes/large/dragon-rect.toml` at 16 spp, took 16.3 in bundles
-//! against 13.1 in flight (14.5 against 11.7 for closest hits). Sorting a
-//! million camera rays by octant too cost a tenth of their occlusion time.
+//! Shadow rays like the renderer's on the dragon (`tools/shadow_rays.py`
+//! on `scenes/large/dragon-rect.toml`, 900,046 rays) took 17.2 in
+//! bundles against 13.3 in flight (15.0 against 12.0 for closest hits).
+//! Sorting a million camera rays by octant too cost a tenth of their
+//! occlusion time.
 
 use super::Geometry;
 use crate::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
@@ -46,11 +47,12 @@ pub const CLOSE_ORIGINS: f32 = 1.0 / 8.0;
 /// box of their unit vectors is at most this. Rays of every direction (the
 /// random, grazing, edge and inside rays of `strata rays`) span 3.4, the
 /// diagonal of the cube around the unit sphere, in every window; the
-/// renderer's shadow rays on the dragon (`scenes/large/dragon-rect.toml`),
-/// 256 at a time, span 0.62 (median; 1.28 at the 90th percentile, 1.64
-/// at the 99th), and its camera rays at most 0.9. Those shadow rays, one
-/// thread, Mrays/s, medians of five: 14.2 at a bound of 1.0, 16.2 at 1.5,
-/// 16.6 at 2.0, 16.4 at 3.0 (in flight, none bundled: 12.8).
+/// renderer's shadow rays on the dragon (`scenes/large/dragon-rect.toml`
+/// at 16 spp, as a build instrumented for it wrote them), 256 at a time,
+/// span 0.62 (median; 1.28 at the 90th percentile, 1.64 at the 99th),
+/// and its camera rays at most 0.9. Those shadow rays, one thread,
+/// Mrays/s, medians of five: 14.2 at a bound of 1.0, 16.2 at 1.5, 16.6
+/// at 2.0, 16.4 at 3.0 (in flight, none bundled: 12.8).
 pub const CLOSE_DIRECTIONS: f32 = 2.0;
 
 /// A part of a stream, in the order [`Geometry::split_stream`] gives them.
@@ -78,8 +80,9 @@ fn octant(ray: &Ray) -> usize {
 /// of their box. (The box ignores NaN coordinates; so does this test,
 /// which only chooses how rays travel, never their answers.) Four boxes
 /// grow side by side, so that the minima and maxima are four chains, not
-/// one, and the test stops at the first 16 points that reach too far
-/// (the first 16 of a window of random rays almost always do).
+/// one, and the test stops after the first sixteen points whose box
+/// reaches too far (the first sixteen rays of a window of random rays
+/// almost always do).
 fn within(points: &[Vec3], reach: f32) -> bool {
     let mut lo = [Vec3A::INFINITY; 4];
     let mut hi = [Vec3A::NEG_INFINITY; 4];

@@ -192,8 +192,8 @@ impl Geometry {
     /// Closest hits of any number of rays: `out[i]` is bit for bit
     /// `self.intersect(&rays[i])`. Windows of rays from close origins or
     /// with close directions walk as bundles ([`crate::accel::bundle`],
-    /// [`Geometry::split_stream`]). Of the rest, groups of eight consecutive rays narrow
-    /// enough to share their walk travel as packets
+    /// [`Geometry::split_stream`]). Of the rest, groups of eight
+    /// consecutive rays narrow enough to share their walk travel as packets
     /// ([`crate::accel::beam`]); the others walk alone, several in flight
     /// at once where the BVH prefetches (a tree that outgrows the caches,
     /// [`crate::accel::prefetch`]; [`crate::accel::stream`]). On a tree
