@@ -76,19 +76,19 @@ fn octant(ray: &Ray) -> usize {
         | (d.z.is_sign_negative() as usize) << 2
 }
 
-/// True where the points lie within `reach` of each other: the diagonal
-/// of their box. (The box ignores NaN coordinates; so does this test,
+/// True where the `count` points `point(k)` lie within `reach` of each
+/// other: the diagonal of their box. (The box ignores NaN coordinates; so does this test,
 /// which only chooses how rays travel, never their answers.) Four boxes
 /// grow side by side, so that the minima and maxima are four chains, not
 /// one, and the test stops after the first sixteen points whose box
 /// reaches too far (the first sixteen rays of a window of random rays
 /// almost always do).
-fn within(points: &[Vec3], reach: f32) -> bool {
+fn within(count: usize, point: impl Fn(usize) -> Vec3, reach: f32) -> bool {
     let mut lo = [Vec3A::INFINITY; 4];
     let mut hi = [Vec3A::NEG_INFINITY; 4];
-    for sixteen in points.chunks(16) {
-        for (k, &p) in sixteen.iter().enumerate() {
-            let p = Vec3A::from(p);
+    for first in (0..count).step_by(16) {
+        for k in first..(first + 16).min(count) {
+            let p = Vec3A::from(point(k));
             lo[k % 4] = lo[k % 4].min(p);
             hi[k % 4] = hi[k % 4].max(p);
         }
@@ -103,20 +103,15 @@ fn within(points: &[Vec3], reach: f32) -> bool {
 
 /// True where the rays of a window are alike enough to walk as bundles:
 /// their origins lie within `reach` of each other, or their directions
-/// within [`CLOSE_DIRECTIONS`].
+/// within [`CLOSE_DIRECTIONS`]. A direction is made a unit vector only
+/// when the test reaches it.
 fn alike(rays: &[Ray], reach: f32) -> bool {
-    let mut points = [Vec3::ZERO; WINDOW];
-    let points = &mut points[..rays.len()];
-    for (p, r) in points.iter_mut().zip(rays) {
-        *p = r.origin;
-    }
-    if within(points, reach) {
-        return true;
-    }
-    for (p, r) in points.iter_mut().zip(rays) {
-        *p = r.direction.normalize_or_zero();
-    }
-    within(points, CLOSE_DIRECTIONS)
+    within(rays.len(), |k| rays[k].origin, reach)
+        || within(
+            rays.len(),
+            |k| rays[k].direction.normalize_or_zero(),
+            CLOSE_DIRECTIONS,
+        )
 }
 
 impl Geometry {
@@ -200,15 +195,15 @@ mod tests {
     #[test]
     fn within_measures_the_box_diagonal() {
         let points = [Vec3::ZERO, Vec3::new(3.0, 4.0, 0.0)];
-        assert!(within(&points, 5.0));
-        assert!(!within(&points, 4.99));
-        assert!(within(&points[..1], 0.0));
+        assert!(within(2, |k| points[k], 5.0));
+        assert!(!within(2, |k| points[k], 4.99));
+        assert!(within(1, |k| points[k], 0.0));
         // The last of 40 points, past the first sixteen, decides.
         let mut many: Vec<Vec3> = (0..40)
             .map(|i| Vec3::new(i as f32 * 0.1, 0.0, 0.0))
             .collect();
-        assert!(within(&many, 3.9));
+        assert!(within(40, |k| many[k], 3.9));
         many[39].y = 5.0;
-        assert!(!within(&many, 3.9 * 1.5));
+        assert!(!within(40, |k| many[k], 3.9 * 1.5));
     }
 }
