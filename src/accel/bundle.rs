@@ -40,8 +40,8 @@ use wide::{f32x8, u32x8};
 /// bundles of 16.
 pub const BUNDLE_SIZE: usize = 64;
 
-/// The size of a tree's nodes and leaf blocks up to which a stream's rays
-/// from one origin walk as bundles: eight times this machine's 32 MiB of
+/// The size of a tree's nodes and leaf blocks up to which a stream's
+/// alike rays walk as bundles (`geometry::bundles`): eight times this machine's 32 MiB of
 /// last-level cache, between the two sizes where bundles went from level
 /// to slower (for occlusion; closest hits gained on all three trees
 /// measured, up to 185 MB). Camera rays, occlusion, one thread, bundles
@@ -79,18 +79,19 @@ struct BundleRay {
     tmax: f32,
 }
 
-impl BundleRay {
-    /// The octant of the direction: bit `axis` set where its component is
-    /// negative, −0 included (as the sign of its reciprocal, which decides
-    /// the single-ray test's near plane).
-    #[inline(always)]
-    fn octant(ray: &Ray) -> usize {
-        let d = ray.direction;
-        (d.x.is_sign_negative() as usize)
-            | (d.y.is_sign_negative() as usize) << 1
-            | (d.z.is_sign_negative() as usize) << 2
-    }
+/// The octant of a ray's direction, the unit a bundle walks its rays in:
+/// bit `axis` set where the component is negative, −0 included (as the
+/// sign of its reciprocal, which decides the single-ray test's near
+/// plane).
+#[inline(always)]
+pub fn octant(ray: &Ray) -> usize {
+    let d = ray.direction;
+    (d.x.is_sign_negative() as usize)
+        | (d.y.is_sign_negative() as usize) << 1
+        | (d.z.is_sign_negative() as usize) << 2
+}
 
+impl BundleRay {
     /// The single-ray node test (`RayBoxes::test`) given a node's near and
     /// far planes, in the same operations: the children's entry distances
     /// and the lanes of those the ray may enter.
@@ -143,7 +144,7 @@ impl Bundle {
                     tmin: soa[6][k],
                     tmax: soa[7][k],
                 };
-                bundle.octants[BundleRay::octant(ray)] |= 1 << i;
+                bundle.octants[octant(ray)] |= 1 << i;
             }
         }
         bundle
@@ -517,6 +518,15 @@ mod tests {
             ties += expected.iter().flatten().filter(|h| h.prim >= 2000).count();
         }
         assert!(found > 30 && ties > 5, "{found} hits, {ties} on the clump");
+    }
+
+    #[test]
+    fn octants_follow_the_signs_of_the_direction() {
+        let ray = |d: Vec3| Ray::new(Vec3::ZERO, d);
+        assert_eq!(octant(&ray(Vec3::new(1.0, 2.0, 3.0))), 0);
+        assert_eq!(octant(&ray(Vec3::new(-1.0, 2.0, 3.0))), 1);
+        assert_eq!(octant(&ray(Vec3::new(1.0, -0.0, 3.0))), 2);
+        assert_eq!(octant(&ray(Vec3::new(-1.0, -2.0, -3.0))), 7);
     }
 
     /// An empty tree walks nothing.

@@ -12,7 +12,7 @@
 //! `stream` keeps several single-ray walks in flight on one thread so
 //! that their cache misses overlap, `beam` sends the groups of rays
 //! narrow enough to share a walk through `packet` instead, and `bundle`
-//! walks up to 64 rays from one origin together.
+//! walks up to 64 alike rays together, node by node.
 
 pub mod beam;
 pub mod build;

@@ -27,7 +27,7 @@
 //! occlusion time.
 
 use super::Geometry;
-use crate::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
+use crate::accel::bundle::{octant, BUNDLE_MAX_BYTES, BUNDLE_SIZE};
 use crate::math::Ray;
 use glam::{Vec3, Vec3A};
 use std::ops::Range;
@@ -65,15 +65,6 @@ pub enum StreamPart<'a> {
     /// direction octant and in stream order within one, walked as one
     /// bundle.
     Sorted(&'a [u32]),
-}
-
-/// The direction octant of a ray: bit `axis` set where the component is
-/// negative, −0 included (see `accel::bundle`).
-fn octant(ray: &Ray) -> usize {
-    let d = ray.direction;
-    (d.x.is_sign_negative() as usize)
-        | (d.y.is_sign_negative() as usize) << 1
-        | (d.z.is_sign_negative() as usize) << 2
 }
 
 /// True where the `count` points `point(k)` lie within `reach` of each
@@ -182,15 +173,6 @@ impl Geometry {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn octants_follow_the_signs_of_the_direction() {
-        let ray = |d: Vec3| Ray::new(Vec3::ZERO, d);
-        assert_eq!(octant(&ray(Vec3::new(1.0, 2.0, 3.0))), 0);
-        assert_eq!(octant(&ray(Vec3::new(-1.0, 2.0, 3.0))), 1);
-        assert_eq!(octant(&ray(Vec3::new(1.0, -0.0, 3.0))), 2);
-        assert_eq!(octant(&ray(Vec3::new(-1.0, -2.0, -3.0))), 7);
-    }
 
     #[test]
     fn within_measures_the_box_diagonal() {
