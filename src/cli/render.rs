@@ -52,11 +52,10 @@ pub struct RenderArgs {
     #[arg(long, requires = "resume")]
     pub force: bool,
     /// Progressive passes (each a progress tick and a checkpoint); capped by
-    /// the sample count. Default: up to 16, each with at least 8 samples
+    /// the sample count. Default: up to 16, each with at least 32 samples
     /// per pixel, since a pixel's samples are traced and lit in batches of
-    /// 8 within a pass (with fewer, a batch takes samples of neighbouring
-    /// pixels, whose rays share less of their walk and whose samplers are
-    /// set up again every pass: slower, never a different image).
+    /// 8 within a pass, each batch walking where the pixel's last one left
+    /// the caches (thinner passes are slower, never a different image).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub passes: Option<u32>,
     /// slices: work stealing over sample slices of pixel batches; regions: one
