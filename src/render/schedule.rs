@@ -38,15 +38,15 @@ pub const DEFAULT_PASSES: u32 = 16;
 /// film. `scenes/large/dragon-rect.toml`, random sampler, one thread,
 /// `render_s`, alternating runs, medians: at 64 spp, passes of 8 samples
 /// 0.987 s, of 16 0.945 s, of 32 0.918 s, of 64 0.914 s; at 16 spp, two
-/// passes of 8 0.255 s, one of 16 0.240 s (`perf`: the camera packets'
+/// passes of 8 0.245 s, one of 16 0.237 s (`perf`: the camera packets'
 /// and shadow rays' walks, the same code, take 8% fewer cycles).
 pub const MIN_PASS_SAMPLES: u32 = 4 * PACKET_SIZE as u32;
 
 /// Passes for `samples` samples per pixel when none are asked for: up to
 /// [`DEFAULT_PASSES`], each with at least [`MIN_PASS_SAMPLES`] samples per
-/// pixel. A pixel's samples are shaded in batches within a pass, and a
-/// pass of one sample per pixel would trace every camera ray alone and
-/// light every hit alone (docs/performance.md, "Passes and lanes").
+/// pixel. A pixel's samples are shaded in batches within a pass; in a
+/// thinner pass a batch mixes neighbouring pixels' samples, and each pixel
+/// is set up again in every pass (docs/performance.md, "Passes and lanes").
 pub fn default_passes(samples: u32) -> u32 {
     (samples / MIN_PASS_SAMPLES).clamp(1, DEFAULT_PASSES)
 }
