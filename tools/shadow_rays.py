@@ -8,8 +8,8 @@
 For a scene like scenes/large/dragon-rect.toml (one mesh, a floor plane,
 one rect light, a perspective camera), this makes the rays its render
 traces towards the light: the camera's rays in the renderer's order
-(pass by pass, eight samples of a pixel after another, pixels row by
-row), their closest hits on the mesh (from `strata trace`) or the floor
+(its default passes, within each a pixel's samples one after another,
+pixels row by row), their closest hits on the mesh (from `strata trace`) or the floor
 (in closed form), and from each hit that faces the light one segment to a
 uniform point of the light, stopping just short of it. The rays start a
 little off the surface (1e-5 of the mesh's size, along the normal facing
@@ -38,8 +38,15 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from validate_embree import InputError, load_mesh  # noqa: E402
 
 
+def pass_ranges(spp):
+    """The sample ranges of a render's default passes, as strata splits them
+    (render::schedule: up to 16 passes of at least 32 samples a pixel)."""
+    passes = max(1, min(16, spp // 32))
+    return [(i * spp // passes, (i + 1) * spp // passes) for i in range(passes)]
+
+
 def camera_rays(cam, width, height, spp, rng):
-    """Pinhole rays, pass by pass (eight samples a pixel each), pixels row by row."""
+    """Pinhole rays, pass by pass (each pixel's samples of the pass in a row), pixels row by row."""
     pos, look = np.array(cam["position"], float), np.array(cam["look_at"], float)
     up = np.array(cam.get("up", [0.0, 1.0, 0.0]), float)
     f = (look - pos) / np.linalg.norm(look - pos)
@@ -49,8 +56,8 @@ def camera_rays(cam, width, height, spp, rng):
     half = np.tan(np.radians(cam.get("fov", 45.0)) / 2)
     ys, xs = np.mgrid[0:height, 0:width]
     batches = []
-    for first in range(0, spp, 8):
-        k = min(8, spp - first)
+    for lo, hi in pass_ranges(spp):
+        k = hi - lo
         x = np.repeat(xs.reshape(-1), k) + rng.random(xs.size * k)
         y = np.repeat(ys.reshape(-1), k) + rng.random(xs.size * k)
         sx = (x / width * 2 - 1) * half * width / height
