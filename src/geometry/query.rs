@@ -211,12 +211,7 @@ impl Geometry {
                 self.closest_in_bundle(&rays[range.clone()], &mut out[range]);
             }
             StreamPart::Sorted(ids) => {
-                let group = gather(rays, ids);
-                let mut hits = [None; BUNDLE_SIZE];
-                self.closest_in_bundle(&group[..ids.len()], &mut hits[..ids.len()]);
-                for (&i, h) in ids.iter().zip(hits) {
-                    out[i as usize] = h;
-                }
+                on_gathered(rays, ids, out, |r, o| self.closest_in_bundle(r, o));
             }
         });
         self.closest_planes(rays, out);
@@ -286,14 +281,7 @@ impl Geometry {
                 self.blocked_in_bundle(&rays[range.clone()], except, &mut out[range]);
             }
             StreamPart::Sorted(ids) => {
-                let group = gather(rays, ids);
-                let mut blocked: [bool; BUNDLE_SIZE] =
-                    std::array::from_fn(|k| ids.get(k).is_some_and(|&i| out[i as usize]));
-                let n = ids.len();
-                self.blocked_in_bundle(&group[..n], except, &mut blocked[..n]);
-                for (&i, b) in ids.iter().zip(blocked) {
-                    out[i as usize] = b;
-                }
+                on_gathered(rays, ids, out, |r, o| self.blocked_in_bundle(r, except, o));
             }
         });
     }
@@ -352,9 +340,24 @@ impl Geometry {
     }
 }
 
-/// The rays `ids` name, in that order, for a bundle (the slots past
-/// `ids.len()` repeat the first, unused).
-fn gather(rays: &[Ray], ids: &[u32]) -> [Ray; BUNDLE_SIZE] {
+/// Runs `walk` on the rays `ids` names (up to [`BUNDLE_SIZE`], not
+/// consecutive in the stream) gathered in that order, with their answers
+/// in `out` gathered beside them (an occlusion bundle skips the rays a
+/// plane already blocks), then scatters the answers back to `out`.
+fn on_gathered<T: Copy + Default>(
+    rays: &[Ray],
+    ids: &[u32],
+    out: &mut [T],
+    walk: impl FnOnce(&[Ray], &mut [T]),
+) {
+    let n = ids.len();
     let filler = rays[ids[0] as usize];
-    std::array::from_fn(|k| ids.get(k).map_or(filler, |&i| rays[i as usize]))
+    let group: [Ray; BUNDLE_SIZE] =
+        std::array::from_fn(|k| ids.get(k).map_or(filler, |&i| rays[i as usize]));
+    let mut answers: [T; BUNDLE_SIZE] =
+        std::array::from_fn(|k| ids.get(k).map_or(T::default(), |&i| out[i as usize]));
+    walk(&group[..n], &mut answers[..n]);
+    for (&i, a) in ids.iter().zip(answers) {
+        out[i as usize] = a;
+    }
 }
