@@ -35,7 +35,7 @@ import tomllib
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from validate_embree import InputError, load_mesh  # noqa: E402
+from validate_embree import InputError, load_mesh, read_hit_file  # noqa: E402
 
 
 def pass_ranges(spp):
@@ -111,7 +111,7 @@ def main():
         cam_path, hits_path = os.path.join(tmp, "camera.rays"), os.path.join(tmp, "camera.hits")
         write_rays(cam_path, cams, "camera")
         subprocess.run([a.strata, "trace", mesh, "--rays", cam_path, "--hits", hits_path, "--quiet"], check=True)
-        hits = np.fromfile(hits_path, dtype=np.dtype([("t", "<f4"), ("prim", "<u4"), ("u", "<f4"), ("v", "<f4")]))
+        hits = read_hit_file(hits_path, len(cams))
     o, d = cams[:, 0:3].astype(float), cams[:, 3:6].astype(float)
     t = hits["t"].astype(float)
     tri = vertices[triangles[np.minimum(hits["prim"], len(triangles) - 1)]].astype(float)
