@@ -6,7 +6,7 @@
 //! The node test (`RayBoxes::test`, `Packet::test_node`/`test_lanes`) and
 //! the packet setup are crate-private, so the node test is measured
 //! through the nearest public API: `Bvh8::closest` / `Bvh8::any_hit` /
-//! `Bvh8::closest_packet` on a hand-built BVH of one node whose eight
+//! `Bvh8::walk_packet` on a hand-built BVH of one node whose eight
 //! children are one-primitive leaves, with a primitive test that never
 //! hits. Per ray that is one 8-wide slab test, the child sort and a visit
 //! of each entered leaf.
@@ -32,7 +32,7 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 use strata::accel::node::{encode_leaf, Node8};
-use strata::accel::PrimHit;
+use strata::accel::{AnyHitPacket, ClosestPacket, PrimHit};
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
 use strata::math::{Aabb, Ray};
 use strata::sampling::{Dim, PixelSampler, SamplerKind};
@@ -135,7 +135,8 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [None::<PrimHit>; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.closest_packet(p, &mut out, &[] as &[()], |_, _, _, _| false);
+                let mut query = ClosestPacket(|_, _, _, _: &mut [Option<PrimHit>]| false);
+                bvh.walk_packet(p, &mut out, &[] as &[()], &mut query);
                 n += out.iter().filter(|h| h.is_some()).count();
             }
             black_box(n)
@@ -146,7 +147,7 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [false; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.any_hit_packet(p, &mut out, &[] as &[()], |_, _, _| 0);
+                bvh.walk_packet(p, &mut out, &[] as &[()], &mut AnyHitPacket(|_, _, _| 0));
                 n += out.iter().filter(|&&o| o).count();
             }
             black_box(n)

@@ -11,8 +11,8 @@ mod common;
 use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
-use strata::accel::beam::{split_narrow, Travel};
 use strata::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
+use strata::accel::narrow::{split_narrow, Travel};
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::geometry::bundles::StreamPart;
 use strata::math::Ray;
@@ -242,7 +242,7 @@ fn alternating_fan() -> Vec<Ray> {
         .collect()
 }
 
-/// A stream of rays (windows of alike rays as bundles, narrow groups as
+/// A stream of rays (spans of alike rays as bundles, narrow rays as
 /// packets, the rest several in flight at once where
 /// the tree prefetches and one at a time where it does not) gets exactly
 /// the single rays' closest hits and occlusion answers, with a plane
@@ -254,7 +254,7 @@ fn streams_and_single_rays_return_identical_hits() {
             .into_iter()
             .flat_map(|(_, batches)| batches.into_iter().flatten())
             .collect();
-        // A group that would straddle the two sets is not narrow.
+        // Eight rays that straddle the two sets are not narrow.
         rays.truncate(rays.len() / PACKET_SIZE * PACKET_SIZE + 3);
         let first_row = rays.len();
         rays.extend(pinhole_rows());
@@ -271,15 +271,15 @@ fn streams_and_single_rays_return_identical_hits() {
         );
         assert!(
             packets >= 100 && outside >= 100,
-            "{quality:?}: {packets} packets, {outside} groups outside the tree's box"
+            "{quality:?}: {packets} packets, {outside} packets outside the tree's box"
         );
-        // Every ray is in one part. The pinhole rows' windows share one
-        // origin and walk as bundles in order; windows of alike rays from
+        // Every ray is in one part. The pinhole rows' spans share one
+        // origin and walk as bundles in order; spans of alike rays from
         // many origins (the lens samples, for one) walk sorted by octant.
         let mut seen = vec![0; rays.len()];
         let (mut one_origin, mut many_origins, mut scattered) = (0, 0, 0);
         scene.geometry.split_stream(&rays, |part| match part {
-            StreamPart::Run(range) => range.for_each(|i| seen[i] += 1),
+            StreamPart::Unlike(range) => range.for_each(|i| seen[i] += 1),
             StreamPart::Bundle(range) => {
                 assert!(!range.is_empty() && range.len() <= BUNDLE_SIZE);
                 let o = rays[range.start].origin;

@@ -26,10 +26,11 @@
 //! [`Bvh8::closest`]'s, bit for bit.
 
 use super::build::Bvh8;
-use super::hit::{closer, tie_ray, PrimHit};
+use super::descend::{nearest_last, WIDEN};
 use super::node::{is_leaf, leaf_range};
 use super::packet::{lanes_missing_box, reciprocals, PACKET_SIZE};
-use super::traverse::{nearest_last, Stack, WIDEN};
+use super::query::Query;
+use super::stack::Stack;
 use crate::math::ray::ray_lanes;
 use crate::math::{Aabb, Ray};
 use wide::{f32x8, u32x8};
@@ -154,7 +155,7 @@ impl Bundle {
 /// Where one octant's walk stands: the node's near and far plane rows for
 /// its direction signs, the children it deferred with their rays, and the
 /// node or leaf it visits next with the rays that reach it.
-struct Walk {
+struct OctantWalk {
     near_rows: [usize; 3],
     far_rows: [usize; 3],
     stack: Stack<(u32, u64)>,
@@ -162,7 +163,7 @@ struct Walk {
     mask: u64,
 }
 
-impl Walk {
+impl OctantWalk {
     #[inline(always)]
     fn new(octant: usize, mask: u64) -> Self {
         // Row 2·axis holds the minima, 2·axis + 1 the maxima; a negative
@@ -306,82 +307,59 @@ impl Walk {
 }
 
 impl Bvh8 {
-    /// Occlusion of up to [`BUNDLE_SIZE`] rays walked as bundles, one per
-    /// direction octant: sets `out[i]` where `blocks_leaf(i, start, count)`
-    /// reports a blocker of ray `i` in the leaf at `start..start + count`.
-    /// Rays whose `out` is already set are not walked. `leaf_data` as for
-    /// [`Bvh8::closest`].
-    pub fn any_hit_bundle<L, F>(
+    /// `out[i] = self.walk(&rays[i], ..)` for up to [`BUNDLE_SIZE`] rays
+    /// walked as bundles, one per direction octant, one `query` shared by
+    /// all; rays whose `out[i]` is already an answer by `done` (for
+    /// occlusion, a ray a cheaper test found blocked) are not walked.
+    /// Each ray's node tests use its own end, which a closest hit
+    /// shortens as in its single walk.
+    pub fn walk_bundle<Q, L>(
         &self,
         rays: &[Ray],
-        out: &mut [bool],
         leaf_data: &[L],
-        mut blocks_leaf: F,
+        query: &mut Q,
+        out: &mut [Q::Answer],
+        done: impl Fn(&Q::Answer) -> bool,
     ) where
-        F: FnMut(usize, u32, u32) -> bool,
+        Q: Query,
     {
         assert!(rays.len() <= BUNDLE_SIZE && out.len() == rays.len());
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut bundle = Bundle::new(rays, |i| out[i], &self.bounds);
-        for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
-            if rays_of_octant != 0 {
-                let walk = Walk::new(octant, rays_of_octant);
-                walk.run(self, &mut bundle.rays, leaf_data, |_, i, start, count| {
-                    let blocked = blocks_leaf(i, start, count);
-                    out[i] |= blocked;
-                    blocked
-                });
+        let mut states: [Option<Q::State>; BUNDLE_SIZE] = std::array::from_fn(|_| None);
+        for (i, ray) in rays.iter().enumerate() {
+            if !done(&out[i]) {
+                states[i] = Some(query.start(ray));
             }
         }
-    }
-
-    /// Closest hits of up to [`BUNDLE_SIZE`] rays walked as bundles, one
-    /// per direction octant: `out[i]` is exactly `closest(&rays[i], ..)`
-    /// given `hit_leaf(i, start, count, ray)`, ray `i`'s leaf test, which
-    /// returns its closest hit nearer than `ray.tmax`, ties broken by the
-    /// smaller primitive id (as for [`Bvh8::closest`]). Each ray's node
-    /// tests use its nearest hit so far as their `tmax`, as its single
-    /// walk's do; the closest hit is the least in a total order (t, then
-    /// primitive id), found whatever the order of the leaves.
-    pub fn closest_bundle<L, F>(
-        &self,
-        rays: &[Ray],
-        out: &mut [Option<PrimHit>],
-        leaf_data: &[L],
-        mut hit_leaf: F,
-    ) where
-        F: FnMut(usize, u32, u32, &Ray) -> Option<PrimHit>,
-    {
-        assert!(rays.len() <= BUNDLE_SIZE && out.len() == rays.len());
-        out.fill(None);
-        if self.nodes.is_empty() {
-            return;
+        let mut ended = 0u64;
+        if !self.nodes.is_empty() {
+            let mut bundle = Bundle::new(rays, |i| states[i].is_none(), &self.bounds);
+            for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
+                if rays_of_octant != 0 {
+                    let walk = OctantWalk::new(octant, rays_of_octant);
+                    walk.run(
+                        self,
+                        &mut bundle.rays,
+                        leaf_data,
+                        |bundled, i, start, count| {
+                            let Some(state) = &mut states[i] else {
+                                return true;
+                            };
+                            let mut ray = Ray {
+                                tmax: bundled[i].tmax,
+                                ..rays[i]
+                            };
+                            let end = query.leaf(state, start, count, &mut ray);
+                            bundled[i].tmax = ray.tmax;
+                            ended |= (end as u64) << i;
+                            end
+                        },
+                    );
+                }
+            }
         }
-        let mut bundle = Bundle::new(rays, |_| false, &self.bounds);
-        for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
-            if rays_of_octant != 0 {
-                let walk = Walk::new(octant, rays_of_octant);
-                walk.run(
-                    self,
-                    &mut bundle.rays,
-                    leaf_data,
-                    |bundled, i, start, count| {
-                        let nearest_so_far = Ray {
-                            tmax: bundled[i].tmax,
-                            ..rays[i]
-                        };
-                        let test = tie_ray(&nearest_so_far, out[i].as_ref());
-                        if let Some(h) = hit_leaf(i, start, count, &test) {
-                            if closer(&h, out[i].as_ref()) {
-                                bundled[i].tmax = h.t;
-                                out[i] = Some(h);
-                            }
-                        }
-                        false
-                    },
-                );
+        for (i, (o, state)) in out.iter_mut().zip(&states).enumerate() {
+            if let Some(state) = state {
+                *o = query.answer(state, ended >> i & 1 == 1);
             }
         }
     }
@@ -390,12 +368,15 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::super::build::BuildQuality;
-    use super::super::traverse::tests::{sphere_cloud, sphere_hit, spheres_block};
+    use super::super::hit::PrimHit;
+    use super::super::query::{AnyHit, Closest};
+    use super::super::walk::tests::{sphere_cloud, sphere_hit, spheres_block};
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
     use crate::shape::sphere::Sphere;
     use glam::Vec3;
-    use std::collections::BTreeSet;
+    use std::cell::RefCell;
+    use std::collections::{BTreeMap, BTreeSet};
 
     const NO_DATA: &[()] = &[];
 
@@ -453,6 +434,18 @@ mod tests {
         .collect()
     }
 
+    /// A ray's direction, which tells a bundle's rays apart in a leaf test.
+    fn key(r: &Ray) -> [u32; 3] {
+        r.direction.to_array().map(f32::to_bits)
+    }
+
+    type Leaves = RefCell<BTreeMap<[u32; 3], BTreeSet<u32>>>;
+
+    /// Notes that ray `r` reached the leaf at `start`; never blocks.
+    fn reach(leaves: &Leaves, r: &Ray, start: u32) -> bool {
+        !leaves.borrow_mut().entry(key(r)).or_default().insert(start)
+    }
+
     /// Every ray's answer is its single walk's, for bundles of any size,
     /// with rays already answered left alone; and every ray of a bundle
     /// tests exactly the leaves its single walk may reach (both walks with
@@ -471,20 +464,27 @@ mod tests {
                 .map(|(i, r)| answered(i) || bvh.any_hit(r, NO_DATA, |s, c, r| blocks(s, c, r)))
                 .collect();
             let mut got: Vec<bool> = (0..n).map(answered).collect();
-            bvh.any_hit_bundle(&rays, &mut got, NO_DATA, |i, s, c| {
-                assert!(!answered(i), "ray {i} was answered already");
-                blocks(s, c, &rays[i])
+            let walked = RefCell::new(BTreeSet::new());
+            let mut query = AnyHit::new(|_: &mut (), s, c, r: &Ray| {
+                walked.borrow_mut().insert(key(r));
+                blocks(s, c, r)
             });
+            bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut got, |&b| b);
             assert_eq!(got, expected, "eye {eye}, {n} rays");
+            for (i, r) in rays.iter().enumerate() {
+                let was_walked = walked.borrow().contains(&key(r));
+                assert!(!(answered(i) && was_walked), "ray {i} was answered already");
+            }
             seen_blocked += expected.iter().filter(|&&b| b).count();
 
-            let mut single: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); n];
-            for (i, r) in rays.iter().enumerate() {
-                bvh.any_hit(r, NO_DATA, |s, _, _| !single[i].insert(s));
+            let single: Leaves = Default::default();
+            for r in &rays {
+                bvh.any_hit(r, NO_DATA, |s, _, r| reach(&single, r, s));
             }
-            let mut bundled: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); n];
+            let bundled: Leaves = Default::default();
             let mut none = vec![false; n];
-            bvh.any_hit_bundle(&rays, &mut none, NO_DATA, |i, s, _| !bundled[i].insert(s));
+            let mut query = AnyHit::new(|_: &mut (), s, _, r: &Ray| reach(&bundled, r, s));
+            bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut none, |&b| b);
             assert_eq!(bundled, single, "eye {eye}, {n} rays: leaves reached");
             assert!(none.iter().all(|&b| !b));
         }
@@ -508,7 +508,8 @@ mod tests {
                 .map(|r| bvh.closest(r, NO_DATA, |s, c, r| hit(s, c, r)))
                 .collect();
             let mut got = vec![None; n];
-            bvh.closest_bundle(&rays, &mut got, NO_DATA, |_, s, c, r| hit(s, c, r));
+            let mut query = Closest::new(|_: &mut (), s, c, r: &Ray| hit(s, c, r));
+            bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut got, |_| false);
             assert_eq!(
                 got.iter().map(|&h| bits(h)).collect::<Vec<_>>(),
                 expected.iter().map(|&h| bits(h)).collect::<Vec<_>>(),
@@ -535,7 +536,8 @@ mod tests {
         let bvh = Bvh8::build(&[], BuildQuality::Medium);
         let rays = rays_from(Vec3::ZERO, 20, 1);
         let mut blocked: Vec<bool> = (0..20).map(|i| i % 2 == 0).collect();
-        bvh.any_hit_bundle(&rays, &mut blocked, NO_DATA, |_, _, _| unreachable!());
+        let mut query = AnyHit::new(|_: &mut (), _, _, _: &Ray| unreachable!());
+        bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut blocked, |&b| b);
         assert_eq!(blocked, (0..20).map(|i| i % 2 == 0).collect::<Vec<_>>());
     }
 }

@@ -8,26 +8,33 @@
 //! it ourselves: obvhs's own traversal clamps tmin to 1e-4, uses a
 //! non-watertight triangle test and drops nodes when its 32-entry stack
 //! overflows. Ours honours `[tmin, tmax]`, uses the watertight test and
-//! spills to the heap instead of dropping work. Given many rays at once,
-//! `stream` keeps several single-ray walks in flight on one thread so
-//! that their cache misses overlap, `beam` sends the groups of rays
-//! narrow enough to share a walk through `packet` instead, and `bundle`
-//! walks up to 64 alike rays together, node by node.
+//! spills to the heap instead of dropping work.
+//!
+//! Four traversal orders, each written once and generic over its
+//! [`Query`] (closest hit, any hit): one ray at a time (`walk`, going
+//! down a node as `descend` says, deferring children on a `stack`);
+//! several single-ray walks `in_flight` on one thread, so that their cache
+//! misses overlap; a `packet` of eight rays in lanes, for the eight
+//! consecutive rays of a stream `narrow` enough to share a walk; a
+//! `bundle` of up to 64 alike rays, node by node.
 
-pub mod beam;
 pub mod build;
 pub mod bundle;
 mod cluster;
 mod collapse;
+mod descend;
 pub mod hit;
+pub mod in_flight;
+pub mod narrow;
 pub mod node;
 pub mod packet;
 pub mod prefetch;
-pub mod stream;
-pub mod traverse;
+pub mod query;
+mod stack;
 mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};
 pub use collapse::{LEAF_BLOCK, NO_PRIM};
 pub use hit::PrimHit;
 pub use packet::{Packet, PACKET_SIZE};
+pub use query::{AnyHit, AnyHitPacket, Closest, ClosestPacket, PacketQuery, Query};

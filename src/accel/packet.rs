@@ -39,9 +39,10 @@
 //! by one.
 
 use super::build::Bvh8;
-use super::hit::PrimHit;
+use super::descend::WIDEN;
 use super::node::{decode, ChildRef};
-use super::traverse::{Stack, WIDEN};
+use super::query::PacketQuery;
+use super::stack::Stack;
 use crate::math::offset::gamma;
 use crate::math::{Aabb, Ray};
 use glam::DVec3;
@@ -205,6 +206,12 @@ impl<'r> Packet<'r> {
         self.apex
     }
 
+    /// The packet's rays, one per lane from lane 0.
+    #[inline(always)]
+    pub fn rays(&self) -> &'r [Ray] {
+        self.rays
+    }
+
     /// The rays in lanes: `[ox, oy, oz, dx, dy, dz, tmin, tmax][lane]`.
     #[inline(always)]
     pub fn lanes(&self) -> &[f32x8; 8] {
@@ -339,61 +346,91 @@ fn lanes(mut mask: u32) -> impl Iterator<Item = usize> {
 }
 
 impl Bvh8 {
-    /// Closest hits of a packet: `out[i]` is exactly what
-    /// [`Bvh8::closest`] returns for `packet`'s ray `i`.
-    /// `hit_leaf(start, count, lanes, out)` tests the leaf for the rays in
-    /// the bits of `lanes`, replacing `out[lane]` by any hit [`closer`](super::hit::closer)
-    /// than it within the ray's interval, and returns whether any changed.
-    /// `leaf_data` as for [`Bvh8::closest`]: the children pushed for later
-    /// are prefetched.
-    pub fn closest_packet<L, F>(
+    /// The walk of a packet: `out[i]` ends as [`Bvh8::walk`]'s answer for
+    /// `packet`'s ray `i` with the same query, which `query` answers for
+    /// the rays in lanes. `leaf_data` as for [`Bvh8::walk`]: the children
+    /// pushed for later are prefetched.
+    pub fn walk_packet<Q, L>(
         &self,
         packet: &Packet,
-        out: &mut [Option<PrimHit>],
+        out: &mut [Q::Answer],
         leaf_data: &[L],
-        hit_leaf: F,
+        query: &mut Q,
     ) where
-        F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
+        Q: PacketQuery,
     {
         if packet.skipped == 0 {
-            self.closest_packet_in::<false, L, F>(packet, out, leaf_data, hit_leaf)
+            self.walk_packet_in::<false, Q, L>(packet, out, leaf_data, query)
         } else {
-            self.closest_packet_in::<true, L, F>(packet, out, leaf_data, hit_leaf)
+            self.walk_packet_in::<true, Q, L>(packet, out, leaf_data, query)
         }
     }
 
     #[inline(always)]
-    fn closest_packet_in<const SKIP: bool, L, F>(
+    fn walk_packet_in<const SKIP: bool, Q, L>(
         &self,
         packet: &Packet,
-        out: &mut [Option<PrimHit>],
+        out: &mut [Q::Answer],
         leaf_data: &[L],
-        mut hit_leaf: F,
+        query: &mut Q,
     ) where
-        F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
+        Q: PacketQuery,
     {
         let rays = packet.rays;
-        out[..rays.len()].fill(None);
+        out[..rays.len()].fill(Q::Answer::default());
         if self.nodes.is_empty() {
             return;
         }
-        let mut tmax = [f32::NEG_INFINITY; 8];
-        for (t, r) in tmax.iter_mut().zip(rays) {
-            *t = r.tmax;
+        // The rays' ends straight from the lanes (unused lanes repeat ray
+        // 0, which leaves the maximum alone): filling an array lane by lane
+        // and loading it whole would stall on store forwarding.
+        let mut tmax_v = packet.lanes[7];
+        let mut tmax = tmax_v.to_array();
+        if Q::SHORTENS {
+            // Lanes without a ray must not hold the end of a ray whose hit
+            // has since shortened it.
+            tmax[rays.len()..].fill(f32::NEG_INFINITY);
+            tmax_v = f32x8::from(tmax);
         }
-        let mut tmax_v = f32x8::from(tmax);
         let mut packet_tmax = max_lane(&tmax);
+        // Rays still walking: an any-hit ray leaves at its first blocker.
+        let mut open = packet.live;
         let mut stack: Stack<(u32, f32, u32)> = Stack::new();
-        stack.push((0, f32::NEG_INFINITY, packet.live));
+        stack.push((0, f32::NEG_INFINITY, open));
         while let Some((child, t_enter, mask)) = stack.pop() {
-            // Widened as in `Bvh8::closest`, so ties across leaves are seen.
-            if t_enter > packet_tmax * WIDEN {
+            let mask = if Q::SHORTENS {
+                // Widened as in `Bvh8::walk`, so ties across leaves are seen.
+                if t_enter > packet_tmax * WIDEN {
+                    continue;
+                }
+                mask
+            } else {
+                mask & open
+            };
+            if mask == 0 {
                 continue;
             }
             match decode(child) {
                 ChildRef::Node(n) => {
                     let node = &self.nodes[n as usize];
                     let (tn, mut hit) = packet.test_node::<SKIP>(&node.bounds, packet_tmax);
+                    if !Q::SHORTENS {
+                        // Children in slot order: the first blocker ends a
+                        // ray wherever it is.
+                        while hit != 0 {
+                            let slot = hit.trailing_zeros() as usize;
+                            hit &= hit - 1;
+                            let m = mask & packet.test_lanes::<SKIP>(&node.bounds, slot, tmax_v);
+                            if m != 0 {
+                                if self.prefetch {
+                                    self.prefetch_child(node.child[slot], leaf_data);
+                                }
+                                stack.push((node.child[slot], 0.0, m));
+                            }
+                        }
+                        continue;
+                    }
+                    // Nearest last on the stack, so it is visited first.
                     let tn = tn.to_array();
                     let mut order = [(0u32, 0.0f32, 0u32); 8];
                     let mut count = 0;
@@ -420,92 +457,20 @@ impl Bvh8 {
                     }
                 }
                 ChildRef::Leaf { start, count } => {
-                    if hit_leaf(start, count, mask, out) {
-                        for lane in lanes(mask) {
-                            tmax[lane] = out[lane].map_or(rays[lane].tmax, |h| h.t);
-                        }
-                        tmax_v = f32x8::from(tmax);
-                        packet_tmax = max_lane(&tmax);
-                    }
-                }
-                ChildRef::Empty => {}
-            }
-        }
-    }
-
-    /// Occlusion for a packet: `out[i]` is exactly what [`Bvh8::any_hit`]
-    /// returns for ray `i`, with `blocks_leaf(start, count, lanes)` its
-    /// leaf test for the rays in the bits of `lanes`, returning the lanes
-    /// it blocks. Lanes stop as soon as they are blocked. `leaf_data` as
-    /// for [`Bvh8::closest_packet`].
-    pub fn any_hit_packet<L, F>(
-        &self,
-        packet: &Packet,
-        out: &mut [bool],
-        leaf_data: &[L],
-        blocks_leaf: F,
-    ) where
-        F: FnMut(u32, u32, u32) -> u32,
-    {
-        if packet.skipped == 0 {
-            self.any_hit_packet_in::<false, L, F>(packet, out, leaf_data, blocks_leaf)
-        } else {
-            self.any_hit_packet_in::<true, L, F>(packet, out, leaf_data, blocks_leaf)
-        }
-    }
-
-    #[inline(always)]
-    fn any_hit_packet_in<const SKIP: bool, L, F>(
-        &self,
-        packet: &Packet,
-        out: &mut [bool],
-        leaf_data: &[L],
-        mut blocks_leaf: F,
-    ) where
-        F: FnMut(u32, u32, u32) -> u32,
-    {
-        let rays = packet.rays;
-        out[..rays.len()].fill(false);
-        if self.nodes.is_empty() {
-            return;
-        }
-        // The rays' tmax straight from the lanes (unused lanes repeat ray
-        // 0, which leaves the maximum alone): filling an array lane by lane
-        // and loading it whole would stall on store forwarding.
-        let tmax_v = packet.lanes[7];
-        let packet_tmax = max_lane(&tmax_v.to_array());
-        let mut open = packet.live;
-        let mut stack: Stack<(u32, u32)> = Stack::new();
-        stack.push((0, open));
-        while let Some((child, mask)) = stack.pop() {
-            let mask = mask & open;
-            if mask == 0 {
-                continue;
-            }
-            match decode(child) {
-                ChildRef::Node(n) => {
-                    let node = &self.nodes[n as usize];
-                    let (_, mut hit) = packet.test_node::<SKIP>(&node.bounds, packet_tmax);
-                    while hit != 0 {
-                        let slot = hit.trailing_zeros() as usize;
-                        hit &= hit - 1;
-                        let m = mask & packet.test_lanes::<SKIP>(&node.bounds, slot, tmax_v);
-                        if m != 0 {
-                            if self.prefetch {
-                                self.prefetch_child(node.child[slot], leaf_data);
+                    let changed = query.leaf(start, count, mask, out);
+                    if Q::SHORTENS {
+                        if changed != 0 {
+                            for lane in lanes(changed) {
+                                tmax[lane] = Q::end(&out[lane]).unwrap_or(rays[lane].tmax);
                             }
-                            stack.push((node.child[slot], m));
+                            tmax_v = f32x8::from(tmax);
+                            packet_tmax = max_lane(&tmax);
                         }
-                    }
-                }
-                ChildRef::Leaf { start, count } => {
-                    let blocked = blocks_leaf(start, count, mask) & mask;
-                    for lane in lanes(blocked) {
-                        out[lane] = true;
-                    }
-                    open &= !blocked;
-                    if open == 0 {
-                        return;
+                    } else {
+                        open &= !changed;
+                        if open == 0 {
+                            return;
+                        }
                     }
                 }
                 ChildRef::Empty => {}
@@ -516,8 +481,8 @@ impl Bvh8 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::descend::RayBoxes;
     use super::super::node::Node8;
-    use super::super::traverse::RayBoxes;
     use super::*;
     use crate::sampling::stream::{seeded, Draw, StreamRng as Rng};
     use glam::Vec3;

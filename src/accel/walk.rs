@@ -1,93 +1,45 @@
-//! One ray's walk through the 8-wide BVH, one node or leaf per step: the
-//! loops of [`Bvh8::closest`] and [`Bvh8::any_hit`], and the unit that
-//! [`super::stream`] interleaves across several rays. Keeping a walk's
+//! One ray's walk through the 8-wide BVH, one node or leaf per step,
+//! generic over its [`Query`]: the loop of [`Bvh8::walk`] (and so of
+//! [`Bvh8::closest`] and [`Bvh8::any_hit`]), and the unit that
+//! [`super::in_flight`] interleaves across several rays. Keeping a walk's
 //! state in a value rather than in a loop's locals is what lets both run
 //! the same steps, so a ray's answer does not depend on which of them
 //! traced it.
+//!
+//! Children are visited nearest first ([`super::descend`]). A closest-hit
+//! walk skips a deferred child beyond its nearest hit; an any-hit walk
+//! ends at its first blocker, and sorting its children still pays: the
+//! nearest boxes hold the blocker a little more often
+//! (docs/embree.md, "Sorted occlusion").
 
 use super::build::Bvh8;
+use super::descend::{order_key, RayBoxes, WIDEN};
 use super::hit::{closer, tie_ray, PrimHit};
-use super::node::{is_leaf, leaf_range};
-use super::traverse::{order_key, RayBoxes, Stack, WIDEN};
+use super::node::{decode, is_leaf, leaf_range, ChildRef};
+use super::query::{AnyHit, Closest, Query};
+use super::stack::Stack;
 use crate::math::Ray;
 
-/// Where a walk of either kind stands: the ray's slab constants, the
-/// children it deferred, and the node or leaf its next step visits.
-struct Cursor {
+/// Where a walk stands: its ray (whose `tmax` a closest hit lowers), the
+/// ray's slab constants, the children it deferred, the node or leaf its
+/// next step visits, and its query's state.
+pub(crate) struct Walk<S> {
+    ray: Ray,
     boxes: RayBoxes,
     stack: Stack<u64>,
     current: u32,
-}
-
-impl Cursor {
-    #[inline(always)]
-    fn new(ray: &Ray) -> Self {
-        Self {
-            boxes: RayBoxes::new(ray),
-            stack: Stack::new(),
-            current: 0,
-        }
-    }
-
-    /// Back at the root for `ray`, reusing the stack's memory.
-    #[inline(always)]
-    fn restart(&mut self, ray: &Ray) {
-        self.boxes = RayBoxes::new(ray);
-        self.stack.clear();
-        self.current = 0;
-    }
-
-    /// At an inner node: moves into its nearest child `ray` enters in
-    /// `[ray.tmin, ray.tmax]`, pushing the others (farthest first), and returns
-    /// true; false if it enters none. A ray that enters one child per
-    /// level never touches the stack.
-    #[inline(always)]
-    fn enter_node<L>(
-        &mut self,
-        bvh: &Bvh8,
-        leaf_data: &[L],
-        ray: &Ray,
-        prefetch_next: bool,
-    ) -> bool {
-        let node = &bvh.nodes[self.current as usize];
-        let (tn, mask) = self.boxes.test(&node.bounds, ray.tmin, ray.tmax);
-        if mask == 0 {
-            return false;
-        }
-        self.current = bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask);
-        if prefetch_next {
-            bvh.prefetch_child(self.current, leaf_data);
-        }
-        true
-    }
-
-    /// Moves to a stack entry popped for the next step.
-    #[inline(always)]
-    fn resume<L>(&mut self, entry: u64, bvh: &Bvh8, leaf_data: &[L], prefetch_next: bool) {
-        self.current = entry as u32;
-        if prefetch_next {
-            bvh.prefetch_child(self.current, leaf_data);
-        }
-    }
-}
-
-/// A closest-hit walk in progress. `state` is the leaf test's own data for
-/// this ray (a scene keeps the ray's shear there, made at its first leaf).
-pub(crate) struct ClosestWalk<S> {
-    ray: Ray,
-    at: Cursor,
-    best: Option<PrimHit>,
     state: S,
 }
 
-impl<S> ClosestWalk<S> {
+impl<S> Walk<S> {
     /// A walk that starts at the root of a tree with at least one node.
     #[inline(always)]
     pub(crate) fn new(ray: &Ray, state: S) -> Self {
         Self {
             ray: *ray,
-            at: Cursor::new(ray),
-            best: None,
+            boxes: RayBoxes::new(ray),
+            stack: Stack::new(),
+            current: 0,
             state,
         }
     }
@@ -96,54 +48,64 @@ impl<S> ClosestWalk<S> {
     #[inline(always)]
     pub(crate) fn restart(&mut self, ray: &Ray, state: S) {
         self.ray = *ray;
-        self.at.restart(ray);
-        self.best = None;
+        self.boxes = RayBoxes::new(ray);
+        self.stack.clear();
+        self.current = 0;
         self.state = state;
     }
 
-    /// Visits the current node or leaf and picks the next; the closest hit
-    /// once nothing is left to visit. `hit_leaf(state, start, count, ray)`
-    /// as for [`Bvh8::closest`]. With `prefetch_next` the node or leaf
-    /// picked is prefetched at once: worth it only when other rays' steps
-    /// run before this walk's next one.
+    /// Visits the current node or leaf and picks the next; once nothing is
+    /// left to visit, or the query ends the walk, the query's answer. With
+    /// `prefetch_next` the node or leaf picked is prefetched at once: worth
+    /// it only when other rays' steps run before this walk's next one.
     #[inline(always)]
-    pub(crate) fn step<L, F>(
+    pub(crate) fn step<Q, L>(
         &mut self,
         bvh: &Bvh8,
         leaf_data: &[L],
-        hit_leaf: &mut F,
+        query: &mut Q,
         prefetch_next: bool,
-    ) -> Option<Option<PrimHit>>
+    ) -> Option<Q::Answer>
     where
-        F: FnMut(&mut S, u32, u32, &Ray) -> Option<PrimHit>,
+        Q: Query<State = S>,
     {
-        if !is_leaf(self.at.current) {
-            if self.at.enter_node(bvh, leaf_data, &self.ray, prefetch_next) {
+        if !is_leaf(self.current) {
+            // An inner node: into its nearest child the ray enters, the
+            // others pushed farthest first. A ray that enters one child
+            // per level never touches the stack.
+            let node = &bvh.nodes[self.current as usize];
+            let (tn, mask) = self.boxes.test(&node.bounds, self.ray.tmin, self.ray.tmax);
+            if mask != 0 {
+                self.current =
+                    bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask);
+                if prefetch_next {
+                    bvh.prefetch_child(self.current, leaf_data);
+                }
                 return None;
             }
         } else {
-            let (start, count) = leaf_range(self.at.current);
-            let test = tie_ray(&self.ray, self.best.as_ref());
-            if let Some(h) = hit_leaf(&mut self.state, start, count, &test) {
-                if closer(&h, self.best.as_ref()) {
-                    self.ray.tmax = h.t;
-                    self.best = Some(h);
-                }
+            let (start, count) = leaf_range(self.current);
+            if query.leaf(&mut self.state, start, count, &mut self.ray) {
+                return Some(query.answer(&self.state, true));
             }
         }
-        // Next: the nearest pushed child the ray can still reach. The
+        // Next: the nearest deferred child the ray can still reach. The
         // entry distance carries rounding error like the box test's far
         // distance, so it is compared with the same widening: a child
         // whose box holds a triangle at exactly the best t (a ray along
-        // an edge shared across two leaves) must still be visited, or
-        // the tie would go to whichever leaf came first.
-        // Keys carry a slot in their low bits (see `nearest_last`).
+        // an edge shared across two leaves) must still be visited, or the
+        // tie would go to whichever leaf came first. Keys carry a slot in
+        // their low bits (see `nearest_last`). An any-hit ray's end never
+        // moves, so every child it pushed is still in reach.
         let reach = order_key(self.ray.tmax * WIDEN) | 7;
         loop {
-            match self.at.stack.pop() {
-                None => return Some(self.best),
-                Some(entry) if (entry >> 32) as u32 <= reach => {
-                    self.at.resume(entry, bvh, leaf_data, prefetch_next);
+            match self.stack.pop() {
+                None => return Some(query.answer(&self.state, false)),
+                Some(entry) if !Q::SHORTENS || (entry >> 32) as u32 <= reach => {
+                    self.current = entry as u32;
+                    if prefetch_next {
+                        bvh.prefetch_child(self.current, leaf_data);
+                    }
                     return None;
                 }
                 Some(_) => {}
@@ -152,125 +114,302 @@ impl<S> ClosestWalk<S> {
     }
 }
 
-/// An any-hit walk in progress; `state` as in [`ClosestWalk`].
-pub(crate) struct AnyHitWalk<S> {
-    at: Cursor,
-    state: S,
-}
-
-impl<S> AnyHitWalk<S> {
-    /// A walk that starts at the root of a tree with at least one node.
-    #[inline(always)]
-    pub(crate) fn new(ray: &Ray, state: S) -> Self {
-        Self {
-            at: Cursor::new(ray),
-            state,
-        }
-    }
-
-    /// Starts the walk over for `ray`, reusing the stack's memory.
-    #[inline(always)]
-    pub(crate) fn restart(&mut self, ray: &Ray, state: S) {
-        self.at.restart(ray);
-        self.state = state;
-    }
-
-    /// Like [`ClosestWalk::step`] for occlusion: `Some(true)` at the first
-    /// blocker, `Some(false)` once nothing is left to visit. The walk does
-    /// not keep its ray (nothing about it changes), so each step is given it.
-    #[inline(always)]
-    pub(crate) fn step<L, F>(
-        &mut self,
-        bvh: &Bvh8,
-        ray: &Ray,
-        leaf_data: &[L],
-        blocks_leaf: &mut F,
-        prefetch_next: bool,
-    ) -> Option<bool>
-    where
-        F: FnMut(&mut S, u32, u32, &Ray) -> bool,
-    {
-        if !is_leaf(self.at.current) {
-            if self.at.enter_node(bvh, leaf_data, ray, prefetch_next) {
-                return None;
-            }
-        } else {
-            let (start, count) = leaf_range(self.at.current);
-            if blocks_leaf(&mut self.state, start, count, ray) {
-                return Some(true);
-            }
-        }
-        match self.at.stack.pop() {
-            Some(entry) => {
-                self.at.resume(entry, bvh, leaf_data, prefetch_next);
-                None
-            }
-            None => Some(false),
-        }
-    }
-}
-
 impl Bvh8 {
-    /// Closest hit in `(ray.tmin, ray.tmax)`. `hit_leaf(start, count, ray)`
-    /// tests the leaf holding slots `start..start + count` of `prim_ids`
-    /// (where a scene keeps the vertices the test reads, in the same
-    /// order) and returns its closest hit nearer than `ray.tmax`, ties
-    /// broken by the smaller primitive id ([`Bvh8::closest_in_leaf`] does
-    /// that for a per-primitive test).
+    /// Walks `ray` through the tree asking `query` at every leaf it may
+    /// reach, nearest first, and returns the query's answer.
     ///
-    /// `leaf_data[start / LEAF_BLOCK]` is what `hit_leaf` reads for the leaf
+    /// `leaf_data[start / LEAF_BLOCK]` is what the query reads for the leaf
     /// at `start` (a scene's triangle blocks), prefetched when the leaf is
     /// deferred; a caller whose leaf tests read nothing block-shaped passes
     /// an empty slice, and only nodes are prefetched.
+    #[inline(always)]
+    pub fn walk<Q, L>(&self, ray: &Ray, leaf_data: &[L], query: &mut Q) -> Q::Answer
+    where
+        Q: Query,
+    {
+        let state = query.start(ray);
+        if self.nodes.is_empty() {
+            return query.answer(&state, false);
+        }
+        let mut walk = Walk::new(ray, state);
+        loop {
+            if let Some(answer) = walk.step(self, leaf_data, query, false) {
+                return answer;
+            }
+        }
+    }
+
+    /// Closest hit in `(ray.tmin, ray.tmax)`: [`Bvh8::walk`] with
+    /// [`Closest`], whose leaf test is `hit_leaf(start, count, ray)`.
     #[inline(always)]
     pub fn closest<L, F>(&self, ray: &Ray, leaf_data: &[L], mut hit_leaf: F) -> Option<PrimHit>
     where
         F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
     {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let mut walk = ClosestWalk::new(ray, ());
-        let mut leaf = |_: &mut (), start, count, r: &Ray| hit_leaf(start, count, r);
-        loop {
-            if let Some(best) = walk.step(self, leaf_data, &mut leaf, false) {
-                return best;
-            }
-        }
+        let mut query = Closest::new(|_: &mut (), start, count, r: &Ray| hit_leaf(start, count, r));
+        self.walk(ray, leaf_data, &mut query)
     }
 
-    /// True if any leaf reports a blocker in `(tmin, tmax)`;
-    /// `leaf_data` and `blocks_leaf(start, count, ray)` as for
-    /// [`Bvh8::closest`].
-    ///
-    /// Children are visited nearest first, as in [`Bvh8::closest`] (no
-    /// culling: the first blocker ends the walk). The sort costs 9–17% more
-    /// instructions than pushing the children unsorted, yet on the dragon's
-    /// `strata rays` sets it was faster in wall time on every kind (camera
-    /// +17%, edges +5–7%, inside +3–5%, random +2–4%, grazing +1%), even on
-    /// `strata bench`'s sets, and mixed on the bunny (edges +9%, camera
-    /// +1%, random even, grazing −2%, inside −8%: from inside a closed mesh
-    /// every direction is blocked, so any order finds a blocker and the
-    /// sort is pure cost). The branch-free network replaces
-    /// a push loop whose trip count mispredicts (dragon camera rays: 1.49 →
-    /// 1.09 mispredicted branches per ray in callgrind's simulation), and
-    /// the nearest boxes hold the blocker a little more often (about 5%
-    /// fewer node and leaf tests there). On the greedy tree before the SAH
-    /// collapse it had been a wash.
+    /// True if any leaf reports a blocker in `(tmin, tmax)`: [`Bvh8::walk`]
+    /// with [`AnyHit`], whose leaf test is `blocks_leaf(start, count, ray)`.
     #[inline(always)]
     pub fn any_hit<L, F>(&self, ray: &Ray, leaf_data: &[L], mut blocks_leaf: F) -> bool
     where
         F: FnMut(u32, u32, &Ray) -> bool,
     {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let mut walk = AnyHitWalk::new(ray, ());
-        let mut leaf = |_: &mut (), start, count, r: &Ray| blocks_leaf(start, count, r);
-        loop {
-            if let Some(blocked) = walk.step(self, ray, leaf_data, &mut leaf, false) {
-                return blocked;
+        let mut query =
+            AnyHit::new(|_: &mut (), start, count, r: &Ray| blocks_leaf(start, count, r));
+        self.walk(ray, leaf_data, &mut query)
+    }
+
+    /// A leaf test for [`Bvh8::closest`] from a per-primitive one:
+    /// `hit_prim(slot, id, ray)` must return a hit only if it is nearer
+    /// than `ray.tmax`.
+    #[inline(always)]
+    pub fn closest_in_leaf<F>(
+        &self,
+        start: u32,
+        count: u32,
+        ray: &Ray,
+        mut hit_prim: F,
+    ) -> Option<PrimHit>
+    where
+        F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
+    {
+        let mut ray = *ray;
+        let mut best: Option<PrimHit> = None;
+        for slot in start..start + count {
+            let test = tie_ray(&ray, best.as_ref());
+            if let Some(h) = hit_prim(slot, self.prim_ids[slot as usize], &test) {
+                if closer(&h, best.as_ref()) {
+                    ray.tmax = h.t;
+                    best = Some(h);
+                }
             }
         }
+        best
+    }
+
+    /// The primitives of leaf `start..start + count`, for per-primitive
+    /// tests: (slot, id).
+    #[inline(always)]
+    pub fn leaf_prims(&self, start: u32, count: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (start..start + count).map(|slot| (slot, self.prim_ids[slot as usize]))
+    }
+
+    /// Calls `visit` for every primitive whose box the line
+    /// `origin + t·direction` may meet for t in `[tmin, tmax]`, which may be
+    /// infinite: CSG needs the crossings of the whole line, behind the
+    /// origin too. No order; `visit` sees each candidate once.
+    pub fn visit_line<F>(&self, ray: &Ray, mut visit: F)
+    where
+        F: FnMut(u32),
+    {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let boxes = RayBoxes::new(ray);
+        let mut stack: Stack<u32> = Stack::new();
+        stack.push(0);
+        while let Some(child) = stack.pop() {
+            match decode(child) {
+                ChildRef::Node(n) => {
+                    let node = &self.nodes[n as usize];
+                    let mut mask = boxes.test_line(&node.bounds, ray.tmin, ray.tmax);
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack.push(node.child[slot]);
+                    }
+                }
+                ChildRef::Leaf { start, count } => {
+                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
+                        visit(prim);
+                    }
+                }
+                ChildRef::Empty => {}
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[cfg(test)]
+pub(super) mod tests {
+    use super::super::build::BuildQuality;
+    use super::*;
+    use crate::accel::NO_PRIM;
+    use crate::math::Aabb;
+    use crate::sampling::stream::{seeded, Draw};
+    use crate::shape::sphere::Sphere;
+    use glam::Vec3;
+
+    /// Leaf tests here read spheres by id: no block-shaped leaf data.
+    const NO_DATA: &[()] = &[];
+
+    /// Whether a sphere of leaf `start..start + count` of `bvh` blocks `r`:
+    /// the any-hit leaf test of the walk tests here and in `stream` and
+    /// `bundle`.
+    pub(in crate::accel) fn spheres_block(
+        bvh: &Bvh8,
+        spheres: &[Sphere],
+        start: u32,
+        count: u32,
+        r: &Ray,
+    ) -> bool {
+        bvh.leaf_prims(start, count)
+            .any(|(_, id)| sphere_hit(spheres, id, r).is_some())
+    }
+
+    /// Random spheres in the 20-unit cube around the origin (`count` of
+    /// them, radii from 0.05 to 0.05 + `spread`), then `copies` identical
+    /// spheres of radius `radius` at `center` (hits at equal t, which the
+    /// primitive id decides), and their tree: the scene of the walk tests
+    /// in `stream` and `bundle`.
+    pub(in crate::accel) fn sphere_cloud(
+        seed: u64,
+        count: usize,
+        spread: f32,
+        (center, radius, copies): (Vec3, f32, usize),
+    ) -> (Vec<Sphere>, Bvh8) {
+        let mut rng = seeded(seed);
+        let mut spheres: Vec<Sphere> = (0..count)
+            .map(|_| Sphere {
+                center: Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 20.0 - 10.0,
+                radius: 0.05 + rng.unit() * spread,
+            })
+            .collect();
+        spheres.extend((0..copies).map(|_| Sphere { center, radius }));
+        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        (spheres, bvh)
+    }
+
+    /// Sphere `id`'s hit on `r` as traversal reports it: the leaf test of
+    /// the traversal tests here and in `stream` and `bundle`.
+    pub(in crate::accel) fn sphere_hit(spheres: &[Sphere], id: u32, r: &Ray) -> Option<PrimHit> {
+        spheres[id as usize].intersect(r).map(|t| PrimHit {
+            t,
+            prim: id,
+            u: 0.0,
+            v: 0.0,
+            part: 0,
+        })
+    }
+
+    /// Random spheres, checked against brute force for every preset.
+    #[test]
+    fn closest_and_any_hit_agree_with_brute_force_for_every_quality() {
+        let mut spheres = Vec::new();
+        let mut rng = seeded(1);
+        let mut rnd = || rng.unit();
+        for _ in 0..500 {
+            let c = Vec3::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
+            spheres.push(Sphere {
+                center: c,
+                radius: 0.05 + rnd() * 0.5,
+            });
+        }
+        let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
+        for quality in [
+            BuildQuality::Fastest,
+            BuildQuality::Fast,
+            BuildQuality::Medium,
+            BuildQuality::High,
+        ] {
+            let bvh = Bvh8::build(&boxes, quality);
+            let mut seen: Vec<u32> = bvh
+                .prim_ids
+                .iter()
+                .copied()
+                .filter(|&id| id != NO_PRIM)
+                .collect();
+            seen.sort();
+            assert_eq!(
+                seen,
+                (0..500).collect::<Vec<_>>(),
+                "each primitive in exactly one leaf"
+            );
+            for _ in 0..2000 {
+                let o = Vec3::new(rnd(), rnd(), rnd()) * 30.0 - 15.0;
+                let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+                let mut ray = Ray::new(o, d);
+                ray.tmax = 5.0 + rnd() * 40.0;
+                let hit = |id: u32, r: &Ray| sphere_hit(&spheres, id, r);
+                let brute = (0..500u32)
+                    .filter_map(|i| hit(i, &ray))
+                    .min_by(|a, b| a.t.total_cmp(&b.t));
+                let got = bvh.closest(&ray, NO_DATA, |start, count, r| {
+                    bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
+                });
+                assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
+                assert_eq!(
+                    bvh.any_hit(&ray, NO_DATA, |start, count, r| {
+                        spheres_block(&bvh, &spheres, start, count, r)
+                    }),
+                    brute.is_some()
+                );
+            }
+        }
+    }
+
+    /// Pushes past the inline part spill to the heap and come back in
+    /// last-in first-out order, with block pushes mixed in.
+    #[test]
+    fn axis_parallel_rays_and_empty_trees() {
+        let boxes = [Aabb::new(Vec3::ZERO, Vec3::ONE)];
+        let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
+        // A ray along +x exactly in the box's bottom face plane.
+        let ray = Ray::new(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
+        let hit = bvh.closest(&ray, NO_DATA, |start, _, _| {
+            Some(PrimHit {
+                t: 1.0,
+                prim: bvh.prim_ids[start as usize],
+                u: 0.0,
+                v: 0.0,
+                part: 0,
+            })
+        });
+        assert!(hit.is_some());
+        let empty = Bvh8::build(&[], BuildQuality::Auto);
+        assert!(empty.closest(&ray, NO_DATA, |_, _, _| None).is_none());
+        assert!(!empty.any_hit(&ray, NO_DATA, |_, _, _| true));
+    }
+
+    #[test]
+    fn visit_line_finds_every_box_the_line_meets_on_both_sides_of_the_origin() {
+        let boxes: Vec<Aabb> = (0..200)
+            .map(|i| {
+                let c = Vec3::new(i as f32 - 100.0, (i % 7) as f32, 0.0);
+                Aabb::new(c - Vec3::splat(0.4), c + Vec3::splat(0.4))
+            })
+            .collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
+        let mut line = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+        line.tmin = f32::NEG_INFINITY;
+        let mut seen = Vec::new();
+        bvh.visit_line(&line, |id| seen.push(id));
+        seen.sort();
+        let expected: Vec<u32> = (0..200).filter(|i| i % 7 == 0).collect();
+        assert!(expected.iter().all(|i| seen.contains(i)), "{seen:?}");
+        // Clipped to t ≥ 0 only the boxes ahead remain candidates.
+        line.tmin = 0.0;
+        let mut ahead = Vec::new();
+        bvh.visit_line(&line, |id| ahead.push(id));
+        assert!(ahead.iter().all(|&i| boxes[i as usize].max.x >= 0.0));
+    }
+
+    #[test]
+    fn many_identical_boxes_build_and_are_all_found() {
+        // Degenerate input: 10k identical boxes (e.g. duplicate triangles).
+        let boxes = vec![Aabb::new(Vec3::ZERO, Vec3::ONE); 10_000];
+        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        let ray = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z);
+        let mut visited = 0;
+        bvh.any_hit(&ray, NO_DATA, |_, count, _| {
+            visited += count;
+            false
+        });
+        assert_eq!(visited, 10_000, "no node dropped however deep the tree");
     }
 }

@@ -1,31 +1,24 @@
 //! Which rays of a stream walk the tree as bundles ([`crate::accel::bundle`]).
 //!
-//! A stream is read in windows of [`WINDOW`] rays. A window whose rays are
+//! A stream is read in spans of [`SPAN`] rays. A span whose rays are
 //! alike, all from close origins (a camera's rays) or all in close
 //! directions (the shadow rays of neighbouring pixels' hits towards one
 //! light), walks as bundles of up to [`BUNDLE_SIZE`] rays. Alike rays
 //! share much of their walks, and in a bundle each node on the shared
 //! part is read once for all of them. A bundle walks the rays of each
-//! direction octant on their own, so a window from many origins is first
+//! direction octant on their own, so a span from many origins is first
 //! sorted by octant, as Embree's stream API sorts its rays (its
 //! `rtcOccluded1M`; Tsakok 2009, "Faster Incoherent Rays: Multi-BVH Ray
 //! Stream Tracing"): its shadow rays change octant from one pixel to the
-//! next. A window from one origin keeps its order, since a camera's rays
-//! change octant only where the image crosses an axis. The windows whose
-//! rays are not alike stay in order, and consecutive ones go on as one
-//! run, so that narrow groups still travel as packets and the rest keep
-//! several walks in flight.
+//! next. A span from one origin keeps its order, since a camera's rays
+//! change octant only where the image crosses an axis. The spans whose
+//! rays are not alike stay in order, and consecutive ones go on together,
+//! so that narrow rays still walk as packets and the rest keep several
+//! walks in flight.
 //!
-//! Rays that are not alike part too soon for a bundle to pay: the
-//! dragon's random rays (origins anywhere around it, directions
-//! anywhere) took 4.4 Mrays/s in octant-sorted bundles against 7.7 in
-//! flight, its grazing rays 0.97 against 1.76 (occlusion, one thread).
-//! Shadow rays like the renderer's on the dragon (`tools/shadow_rays.py`
-//! on `scenes/large/dragon-rect.toml`, 900,046 rays in the order of two
-//! passes of eight samples) took 17.2 in
-//! bundles against 13.3 in flight (15.0 against 12.0 for closest hits).
-//! Sorting a million camera rays by octant too cost a tenth of their
-//! occlusion time.
+//! Rays that are not alike part too soon for a bundle to pay, and sorting
+//! a camera's rays by octant costs more than it saves (docs/embree.md,
+//! "Bundles").
 
 use super::Geometry;
 use crate::accel::bundle::{octant, BUNDLE_MAX_BYTES, BUNDLE_SIZE};
@@ -33,36 +26,31 @@ use crate::math::Ray;
 use glam::{Vec3, Vec3A};
 use std::ops::Range;
 
-/// Rays a window sorts into bundles: Embree's stream API takes its rays
-/// in chunks of this size in `tools/embree`, and so does `strata trace`.
-pub const WINDOW: usize = 256;
+/// Rays a span sorts into bundles: Embree's stream API takes its rays in
+/// chunks of this size in `tools/embree`, and so does `strata trace`.
+pub const SPAN: usize = 256;
 
-/// A window's origins are close together when the diagonal of their box
+/// A span's origins are close together when the diagonal of their box
 /// is at most this fraction of the diagonal of the tree's box: a pinhole
 /// camera's rays (one point) and a thin lens's (a lens much smaller than
 /// the scene) are; random rays, whose origins span the scene's box and
 /// more, are not.
 pub const CLOSE_ORIGINS: f32 = 1.0 / 8.0;
 
-/// Or a window's directions are close together when the diagonal of the
-/// box of their unit vectors is at most this. Rays of every direction (the
-/// random, grazing, edge and inside rays of `strata rays`) span 3.4, the
-/// diagonal of the cube around the unit sphere, in every window; the
-/// renderer's shadow rays on the dragon (`scenes/large/dragon-rect.toml`
-/// at 16 spp, as a build instrumented for it wrote them), 256 at a time,
-/// span 0.62 (median; 1.28 at the 90th percentile, 1.64 at the 99th),
-/// and its camera rays at most 0.9. Those shadow rays, one thread,
-/// Mrays/s, medians of five: 14.2 at a bound of 1.0, 16.2 at 1.5, 16.6
-/// at 2.0, 16.4 at 3.0 (in flight, none bundled: 12.8).
+/// Or a span's directions are close together when the diagonal of the
+/// box of their unit vectors is at most this: rays of every direction
+/// spread over 3.4 (the diagonal of the cube around the unit sphere), the
+/// renderer's shadow rays over 0.62 (median span; docs/embree.md,
+/// "Bundles", has the sweep that chose the bound).
 pub const CLOSE_DIRECTIONS: f32 = 2.0;
 
 /// A part of a stream, in the order [`Geometry::split_stream`] gives them.
 pub enum StreamPart<'a> {
-    /// A run of consecutive rays traced as packets or alone.
-    Run(Range<usize>),
+    /// Consecutive rays that are not alike, traced as packets or alone.
+    Unlike(Range<usize>),
     /// Up to [`BUNDLE_SIZE`] consecutive rays walked as one bundle.
     Bundle(Range<usize>),
-    /// The indices of up to [`BUNDLE_SIZE`] rays of one window, sorted by
+    /// The indices of up to [`BUNDLE_SIZE`] rays of one span, sorted by
     /// direction octant and in stream order within one, walked as one
     /// bundle.
     Sorted(&'a [u32]),
@@ -73,8 +61,7 @@ pub enum StreamPart<'a> {
 /// which only chooses how rays travel, never their answers.) Four boxes
 /// grow side by side, so that the minima and maxima are four chains, not
 /// one, and the test stops after the first sixteen points whose box
-/// reaches too far (the first sixteen rays of a window of random rays
-/// almost always do).
+/// reaches too far (the first sixteen random rays almost always do).
 fn within(count: usize, point: impl Fn(usize) -> Vec3, reach: f32) -> bool {
     let mut lo = [Vec3A::INFINITY; 4];
     let mut hi = [Vec3A::NEG_INFINITY; 4];
@@ -93,7 +80,7 @@ fn within(count: usize, point: impl Fn(usize) -> Vec3, reach: f32) -> bool {
     true
 }
 
-/// True where the rays of a window are alike enough to walk as bundles:
+/// True where the rays of a span are alike enough to walk as bundles:
 /// their origins lie within `reach` of each other, or their directions
 /// within [`CLOSE_DIRECTIONS`]. A direction is made a unit vector only
 /// when the test reaches it.
@@ -108,36 +95,36 @@ fn alike(rays: &[Ray], reach: f32) -> bool {
 
 impl Geometry {
     /// Calls `visit` with the parts of a stream of rays: every ray in
-    /// exactly one part, runs in stream order, and each window of alike
+    /// exactly one part, unlike rays in stream order, and each span of alike
     /// rays as bundles ([module docs](self)) where the tree is small
     /// enough for them to pay ([`BUNDLE_MAX_BYTES`]).
     pub fn split_stream(&self, rays: &[Ray], mut visit: impl FnMut(StreamPart)) {
         if self.traversal_bytes() > BUNDLE_MAX_BYTES || self.bvh.nodes.is_empty() {
-            visit(StreamPart::Run(0..rays.len()));
+            visit(StreamPart::Unlike(0..rays.len()));
             return;
         }
         let bounds = &self.bvh.bounds;
         let reach = (bounds.max - bounds.min).length() * CLOSE_ORIGINS;
-        let mut run_start = 0;
-        let mut octants = [0u8; WINDOW];
-        let mut sorted = [0u32; WINDOW];
-        for start in (0..rays.len()).step_by(WINDOW) {
-            let end = (start + WINDOW).min(rays.len());
-            let window = &rays[start..end];
+        let mut unlike_from = 0;
+        let mut octants = [0u8; SPAN];
+        let mut sorted = [0u32; SPAN];
+        for start in (0..rays.len()).step_by(SPAN) {
+            let end = (start + SPAN).min(rays.len());
+            let span = &rays[start..end];
             // Without branches, so that the rays' first loads (misses, in
             // a long stream) overlap.
-            let first_origin = window[0].origin;
-            let one_origin = window.iter().fold(true, |same, r| {
+            let first_origin = span[0].origin;
+            let one_origin = span.iter().fold(true, |same, r| {
                 let p = r.origin;
                 same & (p.x == first_origin.x) & (p.y == first_origin.y) & (p.z == first_origin.z)
             });
-            if !one_origin && !alike(window, reach) {
+            if !one_origin && !alike(span, reach) {
                 continue;
             }
-            if run_start < start {
-                visit(StreamPart::Run(run_start..start));
+            if unlike_from < start {
+                visit(StreamPart::Unlike(unlike_from..start));
             }
-            run_start = end;
+            unlike_from = end;
             if one_origin {
                 // In stream order (module docs).
                 for first in (start..end).step_by(BUNDLE_SIZE) {
@@ -147,7 +134,7 @@ impl Geometry {
             }
             // A counting sort by octant keeps each octant's rays in order.
             let mut first = [0usize; 9];
-            for (o, r) in octants.iter_mut().zip(window) {
+            for (o, r) in octants.iter_mut().zip(span) {
                 *o = octant(r) as u8;
                 first[*o as usize + 1] += 1;
             }
@@ -155,18 +142,18 @@ impl Geometry {
                 first[o + 1] += first[o];
             }
             let mut next = first;
-            for (k, &o) in octants[..window.len()].iter().enumerate() {
+            for (k, &o) in octants[..span.len()].iter().enumerate() {
                 sorted[next[o as usize]] = (start + k) as u32;
                 next[o as usize] += 1;
             }
             // A bundle may hold the end of one octant's rays and the start
-            // of the next: a window then makes as few bundles as it can.
-            for ids in sorted[..window.len()].chunks(BUNDLE_SIZE) {
+            // of the next: a span then makes as few bundles as it can.
+            for ids in sorted[..span.len()].chunks(BUNDLE_SIZE) {
                 visit(StreamPart::Sorted(ids));
             }
         }
-        if run_start < rays.len() {
-            visit(StreamPart::Run(run_start..rays.len()));
+        if unlike_from < rays.len() {
+            visit(StreamPart::Unlike(unlike_from..rays.len()));
         }
     }
 }

@@ -1,68 +1,305 @@
-//! The queries: closest hit and occlusion, for one ray, a packet of up to
-//! [`PACKET_SIZE`], or a stream of any number. Packets and streams return
-//! bit for bit the single-ray answers.
+//! The scene's queries, closest hit and occlusion, for one ray, a packet
+//! of up to [`PACKET_SIZE`] rays, or a stream of any number. Each way of
+//! tracing is written once, generic over a [`SceneQuery`]: the query's
+//! leaf tests ([`crate::accel::Query`] for single rays, in flight or in
+//! bundles; [`PacketQuery`] for packets) and what the planes outside the
+//! BVH add. Packets and streams return bit for bit the single-ray answers.
 
 use super::bundles::StreamPart;
 use super::Geometry;
-use crate::accel::beam::{split_narrow, Travel};
 use crate::accel::bundle::BUNDLE_SIZE;
-use crate::accel::packet::{misses_box, reciprocals};
-use crate::accel::{Packet, PrimHit, PACKET_SIZE};
-use crate::math::ray::ray_lanes;
+use crate::accel::narrow::{split_narrow, Travel};
+use crate::accel::query::{keep_closest, ClosestState};
+use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle8::ShearedRays;
 
-/// How a batch of up to [`PACKET_SIZE`] rays is traced. Made and matched
-/// on the stack within one query, so the packet stays unboxed: boxing it
-/// would allocate once per batch.
-#[allow(clippy::large_enum_variant)]
-enum Batch<'r> {
-    /// As one packet, whose lanes a leaf test makes the per-lane shears
-    /// from ([`ShearedRays::from_lanes`]) once a leaf is reached.
-    Packet(Packet<'r>),
-    /// Not at all: every ray misses the tree's box ([`misses_box`]).
-    Outside,
-    /// One ray at a time: the rays cannot travel as a packet (see
-    /// [`Packet::new`]).
-    Alone,
+/// A question asked of the scene, the same in every way of tracing.
+trait SceneQuery<'g>: Query<Answer: Copy + Default> + Copy {
+    /// The query's leaf tests for a packet's rays.
+    type Packet<'p>: PacketQuery<Answer = Self::Answer>
+    where
+        'g: 'p;
+
+    fn packet<'p>(self, packet: &'p Packet<'p>) -> Self::Packet<'p>
+    where
+        'g: 'p;
+
+    /// What the planes (outside the BVH) answer before the BVH is walked.
+    fn planes_first(self, ray: &Ray) -> Self::Answer;
+
+    /// Whether `answer` is final, so the ray is not walked.
+    fn done(answer: &Self::Answer) -> bool;
+
+    /// The answer once the planes have been asked after the BVH.
+    fn planes_last(self, ray: &Ray, answer: Self::Answer) -> Self::Answer;
+}
+
+/// The closest hit: the walk's leaf test is [`Geometry::hit_leaf`], with the
+/// ray's shear made at its first leaf (most rays of a sparse view miss every
+/// leaf box). Planes report prim ids `u32::MAX - plane index`.
+#[derive(Clone, Copy)]
+struct ClosestHit<'g>(&'g Geometry);
+
+impl Query for ClosestHit<'_> {
+    type State = ClosestState<Option<ShearedRay>>;
+    type Answer = Option<PrimHit>;
+    const SHORTENS: bool = true;
+
+    #[inline(always)]
+    fn start(&mut self, _: &Ray) -> Self::State {
+        ClosestState {
+            best: None,
+            leaf: None,
+        }
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, state: &mut Self::State, start: u32, count: u32, ray: &mut Ray) -> bool {
+        let sheared = &mut state.leaf;
+        keep_closest(&mut state.best, ray, |r| {
+            let s = sheared.get_or_insert_with(|| ShearedRay::new(r));
+            self.0.hit_leaf(start, count, r, s)
+        });
+        false
+    }
+
+    #[inline(always)]
+    fn answer(&mut self, state: &Self::State, _: bool) -> Option<PrimHit> {
+        state.best
+    }
+}
+
+/// [`ClosestHit`] for a packet's rays, with their shears in lanes made at
+/// the first leaf.
+struct ClosestHitPacket<'p> {
+    geometry: &'p Geometry,
+    packet: &'p Packet<'p>,
+    sheared: Option<ShearedRays>,
+}
+
+impl PacketQuery for ClosestHitPacket<'_> {
+    type Answer = Option<PrimHit>;
+    const SHORTENS: bool = true;
+
+    #[inline(always)]
+    fn leaf(&mut self, start: u32, count: u32, lanes: u32, out: &mut [Option<PrimHit>]) -> u32 {
+        let packet = self.packet;
+        let s = self
+            .sheared
+            .get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
+        let changed = self
+            .geometry
+            .hit_leaf_packet(packet.rays(), s, start, count, lanes, out);
+        if changed {
+            lanes
+        } else {
+            0
+        }
+    }
+
+    #[inline(always)]
+    fn end(answer: &Option<PrimHit>) -> Option<f32> {
+        answer.map(|h| h.t)
+    }
+}
+
+impl<'g> SceneQuery<'g> for ClosestHit<'g> {
+    type Packet<'p>
+        = ClosestHitPacket<'p>
+    where
+        'g: 'p;
+
+    fn packet<'p>(self, packet: &'p Packet<'p>) -> ClosestHitPacket<'p>
+    where
+        'g: 'p,
+    {
+        ClosestHitPacket {
+            geometry: self.0,
+            packet,
+            sheared: None,
+        }
+    }
+
+    #[inline(always)]
+    fn planes_first(self, _: &Ray) -> Option<PrimHit> {
+        None
+    }
+
+    #[inline(always)]
+    fn done(_: &Option<PrimHit>) -> bool {
+        false
+    }
+
+    #[inline(always)]
+    fn planes_last(self, ray: &Ray, best: Option<PrimHit>) -> Option<PrimHit> {
+        self.0.closest_plane(ray, best)
+    }
+}
+
+/// Occlusion by anything but primitive `except` (the light being sampled;
+/// `u32::MAX`: none): skipping the light's own primitive is exact, where
+/// stopping the shadow ray a little short of it would need an epsilon.
+#[derive(Clone, Copy)]
+struct Occlusion<'g> {
+    geometry: &'g Geometry,
+    except: u32,
+}
+
+impl Query for Occlusion<'_> {
+    type State = Option<ShearedRay>;
+    type Answer = bool;
+    const SHORTENS: bool = false;
+
+    #[inline(always)]
+    fn start(&mut self, _: &Ray) -> Option<ShearedRay> {
+        None
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, sheared: &mut Self::State, start: u32, count: u32, ray: &mut Ray) -> bool {
+        let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
+        self.geometry.blocks_leaf(start, count, ray, s, self.except)
+    }
+
+    #[inline(always)]
+    fn answer(&mut self, _: &Option<ShearedRay>, ended: bool) -> bool {
+        ended
+    }
+}
+
+/// [`Occlusion`] for a packet's rays.
+struct OcclusionPacket<'p> {
+    geometry: &'p Geometry,
+    packet: &'p Packet<'p>,
+    sheared: Option<ShearedRays>,
+    except: u32,
+}
+
+impl PacketQuery for OcclusionPacket<'_> {
+    type Answer = bool;
+    const SHORTENS: bool = false;
+
+    #[inline(always)]
+    fn leaf(&mut self, start: u32, count: u32, lanes: u32, out: &mut [bool]) -> u32 {
+        let packet = self.packet;
+        let s = self
+            .sheared
+            .get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
+        let blocked =
+            self.geometry
+                .blocks_leaf_packet(packet.rays(), s, start, count, lanes, self.except)
+                & lanes;
+        let mut m = blocked;
+        while m != 0 {
+            out[m.trailing_zeros() as usize] = true;
+            m &= m - 1;
+        }
+        blocked
+    }
+
+    #[inline(always)]
+    fn end(_: &bool) -> Option<f32> {
+        None
+    }
+}
+
+impl<'g> SceneQuery<'g> for Occlusion<'g> {
+    type Packet<'p>
+        = OcclusionPacket<'p>
+    where
+        'g: 'p;
+
+    fn packet<'p>(self, packet: &'p Packet<'p>) -> OcclusionPacket<'p>
+    where
+        'g: 'p,
+    {
+        OcclusionPacket {
+            geometry: self.geometry,
+            packet,
+            sheared: None,
+            except: self.except,
+        }
+    }
+
+    #[inline(always)]
+    fn planes_first(self, ray: &Ray) -> bool {
+        self.geometry
+            .planes
+            .iter()
+            .any(|p| p.intersect(ray).is_some())
+    }
+
+    #[inline(always)]
+    fn done(&blocked: &bool) -> bool {
+        blocked
+    }
+
+    #[inline(always)]
+    fn planes_last(self, _: &Ray, blocked: bool) -> bool {
+        blocked
+    }
 }
 
 impl Geometry {
-    /// How `rays` travel: not at all where they all miss the tree's box,
-    /// else as a packet where they can.
-    #[inline(always)]
-    fn batch_of<'r>(&self, rays: &'r [Ray]) -> Batch<'r> {
-        if rays.is_empty() || rays.len() > PACKET_SIZE {
-            return Batch::Alone;
-        }
-        let lanes = ray_lanes(rays);
-        let inv = reciprocals(&lanes);
-        if misses_box(&lanes, &inv, &self.bvh.bounds) {
-            return Batch::Outside;
-        }
-        match Packet::from_parts(rays, &lanes, &inv) {
-            Some(packet) => Batch::Packet(packet),
-            None => Batch::Alone,
-        }
-    }
-
-    /// The closest hit in `(ray.tmin, ray.tmax)`. Planes report prim ids
-    /// `u32::MAX - plane index`.
+    /// The closest hit in `(ray.tmin, ray.tmax)`.
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        self.closest_plane(ray, self.closest_in_bvh(ray))
+        self.one(ClosestHit(self), ray)
     }
 
-    /// The BVH's closest hit (planes aside).
-    #[inline]
-    fn closest_in_bvh(&self, ray: &Ray) -> Option<PrimHit> {
-        // The shear is made at the first leaf: most rays of a sparse view
-        // miss every leaf box.
-        let mut sheared = None;
-        self.bvh.closest(ray, &self.leaf_blocks, |start, count, r| {
-            let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
-            self.hit_leaf(start, count, r, s)
-        })
+    /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        // No primitive has id u32::MAX (planes count down from it, outside the BVH).
+        self.occluded_except(ray, u32::MAX)
+    }
+
+    /// True if anything other than primitive `except` blocks the ray.
+    pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
+        self.one(self.occlusion(except), ray)
+    }
+
+    /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
+    /// they all miss the tree's box (then not at all) or [`Packet::new`]
+    /// refuses them (directions differing in sign on every axis).
+    pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        self.packet(ClosestHit(self), rays, out);
+    }
+
+    /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
+    /// (`u32::MAX`: none): `out[i]` is exactly
+    /// `self.occluded_except(&rays[i], except)`; one packet as for
+    /// [`Geometry::intersect_packet`].
+    pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        self.packet(self.occlusion(except), rays, out);
+    }
+
+    /// Closest hits of any number of rays: `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. Spans of alike rays (close origins or
+    /// close directions) walk as bundles ([`crate::accel::bundle`],
+    /// [`Geometry::split_stream`]). Of the rest, eight consecutive rays
+    /// narrow enough to share their walk travel as a packet
+    /// ([`crate::accel::narrow`]); the others walk alone, several in
+    /// flight at once where the BVH prefetches (a tree that outgrows the
+    /// caches, [`crate::accel::prefetch`]; [`crate::accel::in_flight`]).
+    pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        self.stream(ClosestHit(self), rays, out);
+    }
+
+    /// Occlusion of any number of rays, ignoring primitive `except`
+    /// (`u32::MAX`: none): `out[i]` is exactly
+    /// `self.occluded_except(&rays[i], except)`. Bundles, packets and
+    /// single rays as for [`Geometry::intersect_stream`].
+    pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        self.stream(self.occlusion(except), rays, out);
+    }
+
+    fn occlusion(&self, except: u32) -> Occlusion<'_> {
+        Occlusion {
+            geometry: self,
+            except,
+        }
     }
 
     /// `best`, or a plane hit nearer than it.
@@ -85,258 +322,140 @@ impl Geometry {
         best
     }
 
-    /// `out[i]`, or a plane hit nearer than it, for every ray.
-    #[inline]
-    fn closest_planes(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        if !self.planes.is_empty() {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.closest_plane(r, *o);
-            }
+    /// One ray: the planes, the BVH's walk unless they settle it, the
+    /// planes again.
+    #[inline(always)]
+    fn one<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, ray: &Ray) -> Q::Answer {
+        let first = query.planes_first(ray);
+        if Q::done(&first) {
+            return first;
         }
+        let answer = self.bvh.walk(ray, &self.leaf_blocks, &mut query);
+        query.planes_last(ray, answer)
     }
 
-    /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
-    /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
-    /// they all miss the tree's box (then not at all) or [`Packet::new`]
-    /// refuses them (directions differing in sign on every axis).
-    pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        match self.batch_of(rays) {
-            Batch::Packet(packet) => self.closest_in_packet(&packet, rays, out),
-            Batch::Outside => out[..rays.len()].fill(None),
-            Batch::Alone => {
-                for (o, r) in out.iter_mut().zip(rays) {
-                    *o = self.closest_in_bvh(r);
+    /// Up to [`PACKET_SIZE`] rays a caller chose to trace together.
+    fn packet<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
+        let n = rays.len();
+        assert!(
+            n <= PACKET_SIZE,
+            "a packet holds at most {PACKET_SIZE} rays"
+        );
+        let mut first = [Q::Answer::default(); PACKET_SIZE];
+        if !self.planes.is_empty() {
+            for (f, r) in first.iter_mut().zip(rays) {
+                *f = query.planes_first(r);
+            }
+        }
+        match Travel::of_packet(rays, &self.bvh.bounds) {
+            Travel::Packet(packet) => {
+                let mut lanes = query.packet(&packet);
+                self.bvh
+                    .walk_packet(&packet, &mut out[..n], &self.leaf_blocks, &mut lanes);
+                for (o, f) in out.iter_mut().zip(first) {
+                    if Q::done(&f) {
+                        *o = f;
+                    }
                 }
             }
-        }
-        self.closest_planes(rays, out);
-    }
-
-    /// The BVH's closest hits of `packet`, whose rays are `rays` (planes
-    /// aside).
-    fn closest_in_packet(&self, packet: &Packet, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        let mut sheared = None;
-        self.bvh.closest_packet(
-            packet,
-            out,
-            &self.leaf_blocks,
-            |start, count, lanes, out| {
-                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
-                self.hit_leaf_packet(rays, s, start, count, lanes, out)
-            },
-        );
-    }
-
-    /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        // No primitive has id u32::MAX (planes count down from it, outside the BVH).
-        self.occluded_except(ray, u32::MAX)
-    }
-
-    /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
-    /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. One packet unless the
-    /// rays all miss the tree's box or their directions differ in sign on
-    /// every axis ([`Packet::new`]).
-    pub fn occluded_packet(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        match self.batch_of(rays) {
-            Batch::Packet(packet) => self.blocked_in_packet(&packet, rays, except, out),
-            Batch::Outside => out[..rays.len()].fill(false),
-            Batch::Alone => {
-                for (o, r) in out.iter_mut().zip(rays) {
-                    *o = self.blocked_in_bvh(r, except);
+            Travel::Outside => out[..n].copy_from_slice(&first[..n]),
+            Travel::Alone => {
+                for ((o, r), f) in out.iter_mut().zip(rays).zip(first) {
+                    *o = if Q::done(&f) {
+                        f
+                    } else {
+                        self.bvh.walk(r, &self.leaf_blocks, &mut query)
+                    };
                 }
             }
         }
         if !self.planes.is_empty() {
             for (o, r) in out.iter_mut().zip(rays) {
-                *o = *o || self.blocked_by_planes(r);
+                *o = query.planes_last(r, *o);
             }
         }
     }
 
-    /// Whether the BVH blocks each of `packet`'s rays, `rays` (planes
-    /// aside).
-    fn blocked_in_packet(&self, packet: &Packet, rays: &[Ray], except: u32, out: &mut [bool]) {
-        let mut sheared = None;
-        self.bvh
-            .any_hit_packet(packet, out, &self.leaf_blocks, |start, count, lanes| {
-                let s = sheared.get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
-                self.blocks_leaf_packet(rays, s, start, count, lanes, except)
-            });
-    }
-
-    /// True if anything other than primitive `except` (the light being
-    /// sampled) blocks the ray. Skipping the light's own primitive is exact,
-    /// where stopping the shadow ray a little short of it would need an epsilon.
-    pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
-        self.blocked_by_planes(ray) || self.blocked_in_bvh(ray, except)
-    }
-
-    /// Whether a plane (outside the BVH) blocks the ray.
-    #[inline]
-    fn blocked_by_planes(&self, ray: &Ray) -> bool {
-        self.planes.iter().any(|p| p.intersect(ray).is_some())
-    }
-
-    /// Whether the BVH blocks the ray (planes aside).
-    #[inline]
-    fn blocked_in_bvh(&self, ray: &Ray, except: u32) -> bool {
-        let mut sheared = None;
-        self.bvh.any_hit(ray, &self.leaf_blocks, |start, count, r| {
-            let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
-            self.blocks_leaf(start, count, r, s, except)
-        })
-    }
-
-    /// Closest hits of any number of rays: `out[i]` is bit for bit
-    /// `self.intersect(&rays[i])`. Windows of rays from close origins or
-    /// with close directions walk as bundles ([`crate::accel::bundle`],
-    /// [`Geometry::split_stream`]). Of the rest, groups of eight
-    /// consecutive rays narrow enough to share their walk travel as packets
-    /// ([`crate::accel::beam`]); the others walk alone, several in flight
-    /// at once where the BVH prefetches (a tree that outgrows the caches,
-    /// [`crate::accel::prefetch`]; [`crate::accel::stream`]). On a tree
-    /// that fits the caches there is no wait to overlap, and one ray at a
-    /// time is as fast or faster (bunny, 300,000 rays: random 7.4–7.5
-    /// Mrays/s in flight against 7.1–8.0, camera 10.8–14.3 against
-    /// 14.7–14.9).
-    pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+    /// Any number of rays: bundles, packets and single rays (see
+    /// [`Geometry::intersect_stream`]).
+    fn stream<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        self.split_stream(rays, |part| match part {
-            StreamPart::Run(range) => {
-                self.closest_narrow_or_alone(&rays[range.clone()], &mut out[range]);
-            }
-            StreamPart::Bundle(range) => {
-                self.closest_in_bundle(&rays[range.clone()], &mut out[range]);
-            }
-            StreamPart::Sorted(ids) => {
-                on_gathered(rays, ids, out, |r, o| self.closest_in_bundle(r, o));
-            }
-        });
-        self.closest_planes(rays, out);
-    }
-
-    /// The BVH's closest hits (planes aside): narrow groups as packets,
-    /// the rest alone.
-    fn closest_narrow_or_alone(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        split_narrow(rays, &self.bvh.bounds, |range, travel| {
-            let (rays, out) = (&rays[range.clone()], &mut out[range]);
-            match travel {
-                Travel::Packet(packet) => self.closest_in_packet(packet, rays, out),
-                Travel::Outside => out.fill(None),
-                Travel::Alone => self.closest_alone(rays, out),
-            }
-        });
-    }
-
-    /// The BVH's closest hits of up to [`BUNDLE_SIZE`] rays walked as
-    /// bundles (planes aside).
-    fn closest_in_bundle(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        let mut sheared: [Option<ShearedRay>; BUNDLE_SIZE] = [None; BUNDLE_SIZE];
-        self.bvh
-            .closest_bundle(rays, out, &self.leaf_blocks, |i, start, count, r| {
-                let s = sheared[i].get_or_insert_with(|| ShearedRay::new(&rays[i]));
-                self.hit_leaf(start, count, r, s)
-            });
-    }
-
-    /// The BVH's closest hits of rays that walk alone (planes aside).
-    /// Not inlined into the stream's split: inlined there, next to the
-    /// packet code, it compiled to 2% more instructions per random ray
-    /// and ran 3% slower (dragon, one thread).
-    #[inline(never)]
-    fn closest_alone(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        if !self.bvh.prefetch {
+        if self.planes.is_empty() {
+            out.fill(Q::Answer::default());
+        } else {
             for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.closest_in_bvh(r);
+                *o = query.planes_first(r);
             }
-            return;
-        }
-        self.bvh.closest_stream(
-            rays,
-            &self.leaf_blocks,
-            |sheared: &mut Option<ShearedRay>, start, count, r| {
-                let s = sheared.get_or_insert_with(|| ShearedRay::new(r));
-                self.hit_leaf(start, count, r, s)
-            },
-            out,
-        );
-    }
-
-    /// Occlusion of any number of rays, ignoring primitive `except`
-    /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. Bundles, packets and
-    /// single rays as for [`Geometry::intersect_stream`].
-    pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        assert_eq!(rays.len(), out.len(), "one answer per ray");
-        for (o, r) in out.iter_mut().zip(rays) {
-            *o = self.blocked_by_planes(r);
         }
         self.split_stream(rays, |part| match part {
-            StreamPart::Run(range) => {
-                self.blocked_narrow_or_alone(&rays[range.clone()], except, &mut out[range]);
+            StreamPart::Unlike(range) => {
+                self.narrow_or_alone(query, &rays[range.clone()], &mut out[range]);
             }
             StreamPart::Bundle(range) => {
-                self.blocked_in_bundle(&rays[range.clone()], except, &mut out[range]);
+                self.bundle(query, &rays[range.clone()], &mut out[range]);
             }
             StreamPart::Sorted(ids) => {
-                on_gathered(rays, ids, out, |r, o| self.blocked_in_bundle(r, except, o));
+                on_gathered(rays, ids, out, |r, o| self.bundle(query, r, o));
             }
         });
+        if !self.planes.is_empty() {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = query.planes_last(r, *o);
+            }
+        }
     }
 
-    /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside): narrow
-    /// groups as packets, the rest alone.
-    fn blocked_narrow_or_alone(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+    /// Rays of a stream that are not alike: narrow packets as packets, the
+    /// rest alone. `out` holds the planes' first answers.
+    fn narrow_or_alone<'g, Q: SceneQuery<'g>>(
+        &'g self,
+        query: Q,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+    ) {
         split_narrow(rays, &self.bvh.bounds, |range, travel| {
             let (rays, out) = (&rays[range.clone()], &mut out[range]);
             match travel {
                 Travel::Packet(packet) => {
-                    let mut blocked = [false; PACKET_SIZE];
-                    self.blocked_in_packet(packet, rays, except, &mut blocked);
-                    for (o, b) in out.iter_mut().zip(blocked) {
-                        *o |= b;
+                    let mut answers = [Q::Answer::default(); PACKET_SIZE];
+                    let mut lanes = query.packet(&packet);
+                    self.bvh
+                        .walk_packet(&packet, &mut answers, &self.leaf_blocks, &mut lanes);
+                    for (o, a) in out.iter_mut().zip(answers) {
+                        if !Q::done(o) {
+                            *o = a;
+                        }
                     }
                 }
-                // Planes aside (already in `out`), nothing can block them.
+                // Nothing in the tree can answer them.
                 Travel::Outside => {}
-                Travel::Alone => self.blocked_alone(rays, except, out),
+                Travel::Alone => self.alone(query, rays, out),
             }
         });
     }
 
-    /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside), for up
-    /// to [`BUNDLE_SIZE`] rays walked as bundles.
-    fn blocked_in_bundle(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        let mut sheared: [Option<ShearedRay>; BUNDLE_SIZE] = [None; BUNDLE_SIZE];
+    /// Up to [`BUNDLE_SIZE`] alike rays walked as bundles.
+    fn bundle<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         self.bvh
-            .any_hit_bundle(rays, out, &self.leaf_blocks, |i, start, count| {
-                let s = sheared[i].get_or_insert_with(|| ShearedRay::new(&rays[i]));
-                self.blocks_leaf(start, count, &rays[i], s, except)
-            });
+            .walk_bundle(rays, &self.leaf_blocks, &mut query, out, Q::done);
     }
 
-    /// `out[i] |= ` whether the BVH blocks ray `i` (planes aside), for
-    /// rays that walk alone; rays already blocked are not walked. Not
-    /// inlined, as for [`Geometry::closest_alone`].
+    /// Rays that walk alone: several in flight where the BVH prefetches,
+    /// else one at a time (on a tree that fits the caches there is no wait
+    /// to overlap). Not inlined into the stream's split: next to the packet
+    /// code it compiled to slower code (docs/embree.md, "Rays in flight").
     #[inline(never)]
-    fn blocked_alone(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+    fn alone<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         if !self.bvh.prefetch {
             for (o, r) in out.iter_mut().zip(rays) {
-                *o = *o || self.blocked_in_bvh(r, except);
+                if !Q::done(o) {
+                    *o = self.bvh.walk(r, &self.leaf_blocks, &mut query);
+                }
             }
             return;
         }
-        self.bvh.any_hit_stream(
-            rays,
-            &self.leaf_blocks,
-            |sheared: &mut Option<ShearedRay>, start, count, r| {
-                let s = sheared.get_or_insert_with(|| ShearedRay::new(r));
-                self.blocks_leaf(start, count, r, s, except)
-            },
-            out,
-        );
+        self.bvh
+            .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
     }
 }
 
@@ -352,11 +471,11 @@ fn on_gathered<T: Copy + Default>(
 ) {
     let n = ids.len();
     let filler = rays[ids[0] as usize];
-    let group: [Ray; BUNDLE_SIZE] =
+    let gathered: [Ray; BUNDLE_SIZE] =
         std::array::from_fn(|k| ids.get(k).map_or(filler, |&i| rays[i as usize]));
     let mut answers: [T; BUNDLE_SIZE] =
         std::array::from_fn(|k| ids.get(k).map_or(T::default(), |&i| out[i as usize]));
-    walk(&group[..n], &mut answers[..n]);
+    walk(&gathered[..n], &mut answers[..n]);
     for (&i, a) in ids.iter().zip(answers) {
         out[i as usize] = a;
     }

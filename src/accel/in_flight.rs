@@ -1,4 +1,4 @@
-//! Several rays in flight on one thread.
+//! Several single-ray walks in flight on one thread.
 //!
 //! One ray's walk is a chain of dependent loads: a node's boxes decide
 //! which node is read next, and on a mesh that outgrows the caches most of
@@ -10,143 +10,96 @@
 //! lookups of Kocberber, Falsafi and Grot 2015 ("Asynchronous Memory
 //! Access Chaining", PVLDB 9(4)), applied to BVH walks.
 //!
-//! Each ray takes exactly the steps of its own [`Bvh8::closest`] or
-//! [`Bvh8::any_hit`] walk ([`super::walk`]), so its answer is bit for bit
-//! the single-ray one; only the order of memory accesses across rays
-//! changes.
+//! Each ray takes exactly the steps of its own [`Bvh8::walk`]
+//! ([`super::walk`]), so its answer is bit for bit the single-ray one;
+//! only the order of memory accesses across rays changes.
 
 use super::build::Bvh8;
-use super::hit::PrimHit;
-use super::walk::{AnyHitWalk, ClosestWalk};
+use super::query::Query;
+use super::walk::Walk;
 use crate::math::Ray;
 
-/// Rays in flight at once. Random dragon rays that enter the mesh's box,
-/// occlusion, one thread, Mrays/s (medians of three): 2.7 for one ray at
-/// a time, 3.3 for two, 3.4 for three, 3.5 to 3.6 for six to twelve
-/// without the prefetch of each walk's next node, and with it 4.4 for
-/// six, 4.7 for eight and twelve, 4.9 for sixteen. Eight matches a render
-/// batch's width, and more would spend registers and cache on walk state
-/// for rays that finish early.
+/// Rays in flight at once: a batch's width; more would spend registers
+/// and cache on walks of rays that finish early (docs/embree.md, "Rays in
+/// flight").
 pub const IN_FLIGHT: usize = 8;
 
-/// Runs `step` round-robin over up to [`IN_FLIGHT`] walks until every
-/// index of `out` is answered. Walks are made once by `make` and reused:
-/// `start(walk, i, &out[i])` restarts `walk` for ray `i`, or returns false
-/// if `out[i]` already holds its answer; `step(walk, i)` advances ray `i`'s
-/// walk by one node or leaf and returns its answer when it is over.
-#[inline(always)]
-fn interleave<W, O>(
-    out: &mut [O],
-    make: impl Fn() -> W,
-    mut start: impl FnMut(&mut W, usize, &O) -> bool,
-    mut step: impl FnMut(&mut W, usize) -> Option<O>,
-) {
-    let mut next = 0;
-    // Starts the next ray that needs a walk in `walk`; its index, or None
-    // once every ray has been started.
-    let mut launch = |walk: &mut W, out: &[O]| {
-        while next < out.len() {
-            let i = next;
-            next += 1;
-            if start(walk, i, &out[i]) {
-                return Some(i);
-            }
-        }
-        None
-    };
-    let mut walks: [W; IN_FLIGHT] = std::array::from_fn(|_| make());
-    let mut index = [0; IN_FLIGHT];
-    let mut live = 0u32;
-    for (k, (walk, i)) in walks.iter_mut().zip(&mut index).enumerate() {
-        if let Some(first) = launch(walk, out) {
-            *i = first;
-            live |= 1 << k;
-        }
-    }
-    while live != 0 {
-        let mut m = live;
-        while m != 0 {
-            let k = m.trailing_zeros() as usize % IN_FLIGHT;
-            m &= m - 1;
-            if let Some(answer) = step(&mut walks[k], index[k]) {
-                out[index[k]] = answer;
-                match launch(&mut walks[k], out) {
-                    Some(i) => index[k] = i,
-                    None => live &= !(1 << k),
-                }
-            }
-        }
-    }
-}
-
 impl Bvh8 {
-    /// `out[i] = self.closest(&rays[i], ..)` for every ray, with up to
-    /// [`IN_FLIGHT`] rays in flight. `hit_leaf(state, start, count, ray)`
-    /// as for [`Bvh8::closest`], plus `state`: the leaf test's own data for
-    /// the ray, `S::default()` when its walk starts.
-    pub fn closest_stream<L, S, F>(
+    /// `out[i] = self.walk(&rays[i], ..)` for every ray whose `out[i]` is
+    /// not already an answer by `done` (for occlusion, a ray a cheaper
+    /// test found blocked), with up to [`IN_FLIGHT`] rays in flight and
+    /// one `query` shared by all.
+    #[inline(always)]
+    pub fn walk_in_flight<Q, L>(
         &self,
         rays: &[Ray],
         leaf_data: &[L],
-        mut hit_leaf: F,
-        out: &mut [Option<PrimHit>],
+        query: &mut Q,
+        out: &mut [Q::Answer],
+        done: impl Fn(&Q::Answer) -> bool,
     ) where
-        S: Default,
-        F: FnMut(&mut S, u32, u32, &Ray) -> Option<PrimHit>,
+        Q: Query,
     {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        if self.nodes.is_empty() || rays.is_empty() {
-            out.fill(None);
+        if rays.is_empty() {
             return;
         }
-        interleave(
-            out,
-            || ClosestWalk::new(&rays[0], S::default()),
-            |walk, i, _| {
-                walk.restart(&rays[i], S::default());
-                true
-            },
-            |walk, _| walk.step(self, leaf_data, &mut hit_leaf, self.prefetch),
-        );
-    }
-
-    /// `out[i] |= self.any_hit(&rays[i], ..)` for every ray, with up to
-    /// [`IN_FLIGHT`] rays in flight; rays whose `out` is already true (a
-    /// caller's cheaper test found a blocker) are not walked.
-    /// `blocks_leaf(state, start, count, ray)` as for [`Bvh8::any_hit`],
-    /// `state` as for [`Bvh8::closest_stream`].
-    pub fn any_hit_stream<L, S, F>(
-        &self,
-        rays: &[Ray],
-        leaf_data: &[L],
-        mut blocks_leaf: F,
-        out: &mut [bool],
-    ) where
-        S: Default,
-        F: FnMut(&mut S, u32, u32, &Ray) -> bool,
-    {
-        assert_eq!(rays.len(), out.len(), "one answer per ray");
-        if self.nodes.is_empty() || rays.is_empty() {
-            return;
-        }
-        interleave(
-            out,
-            || AnyHitWalk::new(&rays[0], S::default()),
-            |walk, i, &blocked| {
-                if !blocked {
-                    walk.restart(&rays[i], S::default());
+        if self.nodes.is_empty() {
+            for (o, ray) in out.iter_mut().zip(rays) {
+                if !done(o) {
+                    let state = query.start(ray);
+                    *o = query.answer(&state, false);
                 }
-                !blocked
-            },
-            |walk, i| walk.step(self, &rays[i], leaf_data, &mut blocks_leaf, self.prefetch),
-        );
+            }
+            return;
+        }
+        let mut next = 0;
+        // Restarts `walk` for the next ray to walk; its index, or None
+        // once every ray has been started.
+        let mut launch = |walk: &mut Walk<Q::State>, query: &mut Q, out: &[Q::Answer]| {
+            while next < rays.len() {
+                let i = next;
+                next += 1;
+                if !done(&out[i]) {
+                    walk.restart(&rays[i], query.start(&rays[i]));
+                    return Some(i);
+                }
+            }
+            None
+        };
+        let mut walks: [Walk<Q::State>; IN_FLIGHT] =
+            std::array::from_fn(|_| Walk::new(&rays[0], query.start(&rays[0])));
+        let mut index = [0; IN_FLIGHT];
+        let mut live = 0u32;
+        for (k, (walk, i)) in walks.iter_mut().zip(&mut index).enumerate() {
+            if let Some(first) = launch(walk, query, out) {
+                *i = first;
+                live |= 1 << k;
+            }
+        }
+        while live != 0 {
+            let mut m = live;
+            while m != 0 {
+                let k = m.trailing_zeros() as usize % IN_FLIGHT;
+                m &= m - 1;
+                if let Some(a) = walks[k].step(self, leaf_data, query, self.prefetch) {
+                    out[index[k]] = a;
+                    match launch(&mut walks[k], query, out) {
+                        Some(i) => index[k] = i,
+                        None => live &= !(1 << k),
+                    }
+                }
+            }
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::build::BuildQuality;
-    use super::super::traverse::tests::{sphere_cloud, sphere_hit, spheres_block};
+    use super::super::hit::PrimHit;
+    use super::super::query::{AnyHit, Closest};
+    use super::super::walk::tests::{sphere_cloud, sphere_hit, spheres_block};
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
     use crate::shape::sphere::Sphere;
@@ -216,21 +169,17 @@ mod tests {
                 })
                 .collect();
             let mut got = vec![None; n];
-            bvh.closest_stream(
-                &rays,
-                NO_DATA,
-                |calls: &mut u32, start, count, r| {
-                    *calls += 1;
-                    assert_eq!(
-                        *calls as usize,
-                        in_flight.borrow().get(&key(r)).map_or(0, Vec::len) + 1,
-                        "a walk's state is its own ray's"
-                    );
-                    record(&in_flight, r, start, count);
-                    bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
-                },
-                &mut got,
-            );
+            let mut query = Closest::new(|calls: &mut u32, start, count, r: &Ray| {
+                *calls += 1;
+                assert_eq!(
+                    *calls as usize,
+                    in_flight.borrow().get(&key(r)).map_or(0, Vec::len) + 1,
+                    "a walk's state is its own ray's"
+                );
+                record(&in_flight, r, start, count);
+                bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
+            });
+            bvh.walk_in_flight(&rays, NO_DATA, &mut query, &mut got, |_| false);
             assert_eq!(got, expected, "{n} rays");
             assert_eq!(in_flight.into_inner(), single.into_inner(), "{n} rays");
         }
@@ -259,15 +208,11 @@ mod tests {
                 })
                 .collect();
             let mut got: Vec<bool> = (0..n).map(skipped).collect();
-            bvh.any_hit_stream(
-                &rays,
-                NO_DATA,
-                |_: &mut (), start, count, r| {
-                    record(&in_flight, r, start, count);
-                    blocks(start, count, r)
-                },
-                &mut got,
-            );
+            let mut query = AnyHit::new(|_: &mut (), start, count, r: &Ray| {
+                record(&in_flight, r, start, count);
+                blocks(start, count, r)
+            });
+            bvh.walk_in_flight(&rays, NO_DATA, &mut query, &mut got, |&b| b);
             assert_eq!(got, expected, "{n} rays");
             assert_eq!(in_flight.into_inner(), single.into_inner(), "{n} rays");
             if n > 100 {
@@ -295,20 +240,12 @@ mod tests {
             });
             20
         ];
-        bvh.closest_stream(
-            &rays,
-            NO_DATA,
-            |_: &mut (), _, _, _| unreachable!(),
-            &mut closest,
-        );
+        let mut query = Closest::new(|_: &mut (), _, _, _: &Ray| unreachable!());
+        bvh.walk_in_flight(&rays, NO_DATA, &mut query, &mut closest, |_| false);
         assert!(closest.iter().all(Option::is_none));
         let mut blocked: Vec<bool> = (0..20).map(|i| i % 2 == 0).collect();
-        bvh.any_hit_stream(
-            &rays,
-            NO_DATA,
-            |_: &mut (), _, _, _| unreachable!(),
-            &mut blocked,
-        );
+        let mut query = AnyHit::new(|_: &mut (), _, _, _: &Ray| unreachable!());
+        bvh.walk_in_flight(&rays, NO_DATA, &mut query, &mut blocked, |&b| b);
         assert_eq!(blocked, (0..20).map(|i| i % 2 == 0).collect::<Vec<_>>());
     }
 }

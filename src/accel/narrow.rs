@@ -1,4 +1,5 @@
-//! Which groups of a stream of rays travel as packets.
+//! Which eight consecutive rays of a stream are narrow enough to walk as
+//! a packet.
 //!
 //! A packet's node test serves its eight rays at once, which pays while
 //! they enter mostly the same nodes: the lens samples of one pixel, or
@@ -6,19 +7,19 @@
 //! as one ray at a time (`strata bench`). Where the rays part ways, each
 //! node that any of them enters costs the packet its lane tests, and
 //! unrelated rays run slower as a packet than as single rays in flight
-//! ([`super::stream`]). Embree's stream API hands every eight consecutive
+//! ([`super::in_flight`]). Embree's stream API hands every eight consecutive
 //! rays to its packet kernel, which drops to single-ray traversal once
 //! few of a packet's rays remain active, so it makes the choice during
 //! the walk (Benthin, Wald, Woop, Ernst and Mark 2012, "Combining Single
 //! and Packet-Ray Tracing for Arbitrary Ray Distributions on the Intel MIC
-//! Architecture", TVCG 18(9)); here it is made once per group of eight
+//! Architecture", TVCG 18(9)); here it is made once per eight
 //! consecutive rays, before the walk, from their geometry.
 //!
-//! The measure is the width of the group's beam inside the tree's box.
+//! The measure is how wide the rays spread inside the tree's box.
 //! Where every ray's direction lies within angle θ of the first ray's and
 //! its line passes within w of the packet's apex F (the point the rays
 //! pass near, [`Packet`]'s module docs), two rays are at most about
-//! 2w + θ·L apart inside a box of diagonal L. A group travels as a packet
+//! 2w + θ·L apart inside a box of diagonal L. Eight rays walk as a packet
 //! where sin θ ≤ [`NARROW`] and 2w ≤ `NARROW`·L for every ray, a beam at
 //! most about 2·`NARROW`·L wide. Both tests compare squares of cross
 //! products, so they need neither a square root nor a division.
@@ -32,12 +33,9 @@ use wide::f32x8;
 
 /// The largest sine of the angle between two rays' directions, and the
 /// largest distance of a ray's line from the apex as a fraction of half
-/// the tree's diagonal, of a group that travels as a packet. Camera rays
-/// on the dragon, one per pixel, eight neighbours in a row to a group, one
-/// thread (`strata trace`, packets against alone): directions 0.007
-/// apart (1000 pixels to a row) ran 1.3× faster as packets, for closest
-/// hits and occlusion alike; 0.014 apart (500 to a row) and 0.022 (316)
-/// level within noise, so the line is drawn below them.
+/// the tree's diagonal, of eight rays that walk as a packet: drawn below
+/// the spread where packets stopped paying (docs/embree.md, "Narrow
+/// packets").
 pub const NARROW: f32 = 0.01;
 
 /// `a × b`, in glam's order of operations (see [`ends_narrow`]).
@@ -79,82 +77,101 @@ impl Packet<'_> {
     }
 }
 
-/// [`Packet::is_narrow`]'s angle test on the group's first and last rays,
+/// [`Packet::is_narrow`]'s angle test on the first and last of eight rays,
 /// in the same operations: a necessary condition in a few multiplications,
-/// which turns groups of unrelated rays away before their packet is built
-/// (building it cost such rays a few percent of their tracing time).
+/// which turns unrelated rays away before their packet is built.
 #[inline(always)]
-fn ends_narrow(group: &[Ray]) -> bool {
-    let (a, b) = (group[0].direction, group[group.len() - 1].direction);
+fn ends_narrow(eight: &[Ray]) -> bool {
+    let (a, b) = (eight[0].direction, eight[eight.len() - 1].direction);
     let sin = a.cross(b).length_squared();
     sin <= NARROW * NARROW * a.length_squared() * b.length_squared() && a.dot(b) > 0.0
 }
 
-/// How a run of a stream's rays travels ([`split_narrow`]).
-pub enum Travel<'p, 'r> {
-    /// Eight narrow rays, as one packet.
-    Packet(&'p Packet<'r>),
-    /// Eight narrow rays that all miss the tree's box
-    /// ([`super::packet::misses_box`]): nothing to walk, no hit in the tree.
+/// How rays travel through the tree.
+#[allow(clippy::large_enum_variant)]
+pub enum Travel<'r> {
+    /// Eight rays or fewer, as one packet. Made and matched on the stack,
+    /// so the packet stays unboxed.
+    Packet(Packet<'r>),
+    /// Rays that all miss the tree's box ([`misses_box`]): nothing to
+    /// walk, no hit in the tree.
     Outside,
     /// Rays that walk alone.
     Alone,
 }
 
-/// Splits `rays` into the groups of [`PACKET_SIZE`] consecutive rays that
-/// travel as packets (narrow in a tree whose box is `bounds`) or miss that
-/// box altogether, and the runs of rays between them, and calls `visit`
+impl<'r> Travel<'r> {
+    /// How up to [`PACKET_SIZE`] rays a caller chose to trace together
+    /// travel in a tree whose box is `bounds`: not at all where they all
+    /// miss it, else as a packet where [`Packet::from_parts`] can make one,
+    /// else alone.
+    #[inline(always)]
+    pub fn of_packet(rays: &'r [Ray], bounds: &Aabb) -> Self {
+        if rays.is_empty() || rays.len() > PACKET_SIZE {
+            return Travel::Alone;
+        }
+        let lanes = ray_lanes(rays);
+        let inv = reciprocals(&lanes);
+        if misses_box(&lanes, &inv, bounds) {
+            return Travel::Outside;
+        }
+        match Packet::from_parts(rays, &lanes, &inv) {
+            Some(packet) => Travel::Packet(packet),
+            None => Travel::Alone,
+        }
+    }
+}
+
+/// Splits `rays` into the [`PACKET_SIZE`] consecutive rays that walk as
+/// packets (narrow in a tree whose box is `bounds`) or miss that box
+/// altogether, and the stretches of rays between them, and calls `visit`
 /// on each in order: `visit(range, Travel::Packet(..))` or
 /// `visit(range, Travel::Outside)` for the former, `visit(range,
-/// Travel::Alone)` for each non-empty one of the latter. A last group of
-/// fewer rays than a packet holds is part of the rest.
+/// Travel::Alone)` for each non-empty one of the latter. A last few rays
+/// fewer than a packet holds walk alone.
 pub fn split_narrow<'r>(
     rays: &'r [Ray],
     bounds: &Aabb,
-    mut visit: impl FnMut(Range<usize>, Travel<'_, 'r>),
+    mut visit: impl FnMut(Range<usize>, Travel<'r>),
 ) {
     let extent = bounds.diagonal().length();
-    let mut run = 0;
-    for (g, group) in rays.chunks_exact(PACKET_SIZE).enumerate() {
-        // The rays two groups on, asked for now: the walks between two
-        // groups push the stream's own lines out of the hardware
-        // prefetcher's reach, and the first load of each group missed
-        // (a fifth of the packet setup's samples in `perf` on camera rays).
-        // Dragon, one thread, five alternating runs: random rays +2.4%
-        // (closest hit), camera rays level.
+    let mut alone_from = 0;
+    for (g, eight) in rays.chunks_exact(PACKET_SIZE).enumerate() {
+        // The rays sixteen on, asked for now: the walks in between push
+        // the stream's own lines out of the hardware prefetcher's reach.
         let ahead = (g + 2) * PACKET_SIZE;
         if let Some(next) = rays.get(ahead..ahead + PACKET_SIZE) {
             prefetch(<&[Ray; PACKET_SIZE]>::try_from(next).unwrap());
         }
-        if !ends_narrow(group) {
+        if !ends_narrow(eight) {
             continue;
         }
-        let lanes = ray_lanes(group);
+        let lanes = ray_lanes(eight);
         let inv = reciprocals(&lanes);
         let start = g * PACKET_SIZE;
         let range = start..start + PACKET_SIZE;
         if misses_box(&lanes, &inv, bounds) {
-            if run < start {
-                visit(run..start, Travel::Alone);
+            if alone_from < start {
+                visit(alone_from..start, Travel::Alone);
             }
             visit(range, Travel::Outside);
-            run = start + PACKET_SIZE;
+            alone_from = start + PACKET_SIZE;
             continue;
         }
-        let Some(p) = Packet::from_parts(group, &lanes, &inv) else {
+        let Some(p) = Packet::from_parts(eight, &lanes, &inv) else {
             continue;
         };
         if !p.is_narrow(extent) {
             continue;
         }
-        if run < start {
-            visit(run..start, Travel::Alone);
+        if alone_from < start {
+            visit(alone_from..start, Travel::Alone);
         }
-        visit(range, Travel::Packet(&p));
-        run = start + PACKET_SIZE;
+        visit(range, Travel::Packet(p));
+        alone_from = start + PACKET_SIZE;
     }
-    if run < rays.len() {
-        visit(run..rays.len(), Travel::Alone);
+    if alone_from < rays.len() {
+        visit(alone_from..rays.len(), Travel::Alone);
     }
 }
 
@@ -238,7 +255,7 @@ mod tests {
     }
 
     #[test]
-    fn unrelated_or_unbounded_groups_are_not_narrow() {
+    fn unrelated_or_unbounded_rays_are_not_narrow() {
         let mut next = uniform(7);
         let random: Vec<Ray> = (0..8)
             .map(|_| {
@@ -254,11 +271,11 @@ mod tests {
         assert!(!narrow(&fan, f32::NAN));
     }
 
-    /// The cheap test turns away no group the full test would accept:
-    /// fans and lens groups of every width around the line, in every
+    /// The cheap test turns away no eight rays the full test would accept:
+    /// fans and lens samples of every width around the line, in every
     /// direction, with and without spread origins.
     #[test]
-    fn the_first_and_last_rays_never_turn_away_a_narrow_group() {
+    fn the_first_and_last_rays_never_turn_away_a_narrow_packet() {
         let mut next = uniform(99);
         let (mut accepted, mut rejected) = (0, 0);
         for k in 0..4000 {
@@ -267,16 +284,16 @@ mod tests {
             let spread = NARROW * (next() + 0.5) * 0.3;
             let lens = if k % 2 == 0 { 0.0 } else { 1e-3 * next() };
             let eye = Vec3::new(next(), next(), next()) * 10.0;
-            let group: Vec<Ray> = (0..8)
+            let eight: Vec<Ray> = (0..8)
                 .map(|i| {
                     let d = axis + side * (axis.length() * spread * (i as f32 + next()));
                     let o = eye + side * lens * i as f32;
                     Ray::new(o, d)
                 })
                 .collect();
-            if narrow(&group, 1.0) {
+            if narrow(&eight, 1.0) {
                 accepted += 1;
-                assert!(ends_narrow(&group), "{group:?}");
+                assert!(ends_narrow(&eight), "{eight:?}");
             } else {
                 rejected += 1;
             }
