@@ -43,7 +43,7 @@
 
 use crate::math::Frame;
 use crate::sampling::spherical_rect::SphericalRect;
-use crate::sampling::spherical_rect8::{mask_lanes, SphericalRects, LANES};
+use crate::sampling::spherical_rect_lanes::{mask_lanes, SphericalRects, LANES};
 use crate::sampling::warp::{concentric_disk, uniform_cone, uniform_sphere};
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;

@@ -22,7 +22,7 @@ pub mod surface;
 use crate::accel::{Bvh8, PrimHit};
 use crate::math::{Ray, Transform};
 use crate::shape::plane::Plane;
-use crate::shape::triangle8::{TriangleBlock, LANES};
+use crate::shape::triangle_lanes::{TriangleBlock, LANES};
 use csg::Csg;
 use glam::Vec3;
 pub use primitive::{

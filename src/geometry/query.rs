@@ -11,7 +11,7 @@ use crate::accel::{Packet, PrimHit, PACKET_SIZE};
 use crate::math::ray::ray_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
-use crate::shape::triangle8::ShearedRays;
+use crate::shape::triangle_lanes::ShearedRays;
 
 /// How a batch of up to [`PACKET_SIZE`] rays is traced. Made and matched
 /// on the stack within one query, so the packet stays unboxed: boxing it

@@ -29,7 +29,7 @@ use super::Integrator;
 use crate::accel::PACKET_SIZE;
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
-use crate::sampling::spherical_rect8::{mask_lanes, LANES};
+use crate::sampling::spherical_rect_lanes::{mask_lanes, LANES};
 use crate::sampling::Dim;
 use glam::{Vec2, Vec3};
 

@@ -11,7 +11,7 @@ use crate::material::Material;
 use crate::math::Transform;
 use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
-use crate::shape::triangle8::{TriangleBlock, LANES};
+use crate::shape::triangle_lanes::{TriangleBlock, LANES};
 use glam::{Affine3A, Vec3};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
