@@ -23,7 +23,7 @@
 
 mod common;
 
-use strata::shape::triangle_lanes::{self, ShearedRays, TriangleBlock, LANES};
+use strata::shape::triangle_lanes::{self, ShearedRays, TriangleBlock};
 
 use common::{seeded, Draw, StreamRng as Rng};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -34,6 +34,7 @@ use std::time::Duration;
 use strata::accel::node::{encode_leaf, Node8};
 use strata::accel::PrimHit;
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
+use strata::math::lanes::LANES;
 use strata::math::{Aabb, Ray};
 use strata::sampling::{Dim, PixelSampler, SamplerKind};
 use strata::scene::{scene_from_str, RenderOverrides};

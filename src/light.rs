@@ -41,9 +41,10 @@
 //! Calculations"); disks, parallelograms and points inside a sphere light
 //! fall back to sampling by area, which `light_sampling = "area"` forces.
 
+use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::Frame;
 use crate::sampling::spherical_rect::SphericalRect;
-use crate::sampling::spherical_rect_lanes::{mask_lanes, SphericalRects, LANES};
+use crate::sampling::spherical_rect_lanes::SphericalRects;
 use crate::sampling::warp::{concentric_disk, uniform_cone, uniform_sphere};
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;

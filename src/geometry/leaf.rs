@@ -6,9 +6,10 @@
 use super::Geometry;
 use crate::accel::hit::closer;
 use crate::accel::{PrimHit, PACKET_SIZE};
+use crate::math::lanes::LANES;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
-use crate::shape::triangle_lanes::{self, ShearedRays, LANES};
+use crate::shape::triangle_lanes::{self, ShearedRays};
 
 impl Geometry {
     /// The lanes of leaf `start..start + count` in its block.

@@ -8,7 +8,7 @@
 use super::cmj::{cmj_2d, stratified_1d, CmjSet};
 use super::cmj_lanes::CmjLanes;
 use super::hash::{hash_step, hash_step_lanes, unit_float, unit_float_lanes, HASH_WORDS_INIT};
-use super::spherical_rect_lanes::{mask_lanes, LANES};
+use crate::math::lanes::{mask_lanes, LANES};
 use glam::Vec2;
 use wide::u32x8;
 
