@@ -96,8 +96,8 @@ impl LightLanes<'_> {
                     // Each branch writes the slot itself: one value
                     // chosen between the branches was built on the stack
                     // and copied with wide loads that waited on its narrow
-                    // stores (`perf`: almost half of this function's
-                    // samples).
+                    // stores (see docs/mitsuba.md, "What was tried for the
+                    // render").
                     if rects.valid() >> i & 1 != 0 {
                         out[i] = towards(points[i], q[i], *normal, weight[i], None);
                     } else {

@@ -49,8 +49,8 @@ impl Light {
     /// distance to the light (or more), lies far outside the rounding of a sample's
     /// position and direction, so the answer never differs from what the
     /// samples would have found. Other lights answer false. Inlined into
-    /// the per-lane loop that asks it (dragon-rect render 2% faster than
-    /// the call).
+    /// the per-lane loop that asks it: the call cost the dragon-rect render
+    /// 2% (see docs/mitsuba.md, "What was tried for the render").
     #[inline]
     pub fn hidden_from(&self, p: Vec3, n: Vec3) -> bool {
         let Light::Rect { rect, .. } = self else {
