@@ -12,7 +12,7 @@
 //! of each entered leaf.
 //!
 //! Ray–triangle: the scalar watertight test; the 8-wide leaf test (one ray
-//! against a block of eight triangles, `triangle8::intersect`); the packet
+//! against a block of eight triangles, `triangle_lanes::intersect`); the packet
 //! test (one triangle against eight rays in lanes, `ShearedRays`); and
 //! `Scene::intersect` on 8 rays against `Scene::intersect_packet` on a
 //! one-triangle scene, the packet path's fixed cost.
@@ -23,7 +23,7 @@
 
 mod common;
 
-use strata::shape::triangle8::{self, ShearedRays, TriangleBlock, LANES};
+use strata::shape::triangle_lanes::{self, ShearedRays, TriangleBlock};
 
 use common::{seeded, Draw, StreamRng as Rng};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -34,6 +34,7 @@ use std::time::Duration;
 use strata::accel::node::{encode_leaf, Node8};
 use strata::accel::{AnyHitPacket, ClosestPacket, PrimHit};
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
+use strata::math::lanes::LANES;
 use strata::math::{Aabb, Ray};
 use strata::sampling::{Dim, PixelSampler, SamplerKind};
 use strata::scene::{scene_from_str, RenderOverrides};
@@ -219,7 +220,7 @@ fn ray_triangle(c: &mut Criterion) {
         b.iter(|| {
             let mut n = 0;
             for (block, r, s) in &blocks {
-                n += triangle8::intersect(r, s, block, 0xff).0.count_ones();
+                n += triangle_lanes::intersect(r, s, block, 0xff).0.count_ones();
             }
             black_box(n)
         })

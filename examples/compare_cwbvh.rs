@@ -34,7 +34,7 @@ fn main() {
         Instant::now(),
     )
     .unwrap();
-    let rays = strata::rayfile::read_rays(std::path::Path::new(rays_path)).unwrap();
+    let rays = strata::rays::file::read_rays(std::path::Path::new(rays_path)).unwrap();
     let tris: Vec<Triangle> = scene
         .geometry
         .file_order_triangles()

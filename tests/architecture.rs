@@ -19,7 +19,7 @@ const LAYERS: &[&[&str]] = &[
     &["shade"],
     &["render"],
     &["partial"],
-    &["experiment", "rayfile", "raygen"],
+    &["experiment", "rays"],
 ];
 
 const MAX_LINES: usize = 800;

@@ -14,7 +14,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use strata::accel::BuildQuality;
-use strata::rayfile::{encode_triangles, parse_hits, read_rays, HitRecord};
+use strata::rays::file::{encode_triangles, parse_hits, read_rays, HitRecord};
 use strata::scene::load_mesh_scene;
 
 /// Rays of each kind.

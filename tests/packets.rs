@@ -391,7 +391,7 @@ fn prefetching_changes_no_hit() {
 #[test]
 fn packets_match_single_rays_on_every_strata_rays_kind() {
     use strata::accel::Packet;
-    use strata::raygen::{generate, RayKind};
+    use strata::rays::{generate, RayKind};
     let dir = temp_dir("packets-kinds");
     let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
     let scene = scene_at(

@@ -6,7 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use strata::accel::BuildQuality;
-use strata::rayfile::{encode_rays, parse_hits, read_rays, HitRecord};
+use strata::rays::file::{encode_rays, parse_hits, read_rays, HitRecord};
 use strata::scene::load_mesh_scene;
 
 const ICOSPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");

@@ -34,7 +34,7 @@ pub(super) const LEAF_COST: f32 = 1.5;
 
 /// Slots per leaf block. A leaf is a run of slots inside one block, so the
 /// scene can store each block as one 8-lane triangle block
-/// ([`crate::shape::triangle8`]) and test a whole leaf at once.
+/// ([`crate::shape::triangle_lanes`]) and test a whole leaf at once.
 pub const LEAF_BLOCK: usize = 8;
 
 /// The id of a slot that holds no primitive (padding at the end of a block).
@@ -603,7 +603,7 @@ impl Choices {
 
 /// Places leaves into blocks of [`LEAF_BLOCK`] slots so that no leaf
 /// straddles two blocks: a leaf is then one 8-wide triangle test over one
-/// contiguous block (see `shape::triangle8`). First fit among the last few
+/// contiguous block (see `shape::triangle_lanes`). First fit among the last few
 /// blocks that still have room keeps the padding small (a fraction of a
 /// percent on scanned meshes) and keeps leaves that are near in the tree
 /// near in memory.

@@ -134,7 +134,7 @@ mod tests {
             assert!(offsets.len() <= size.div_ceil(LINE) + 1);
         }
         check::<crate::accel::node::Node8>();
-        check::<crate::shape::triangle8::TriangleBlock>();
+        check::<crate::shape::triangle_lanes::TriangleBlock>();
         check::<[u8; 64]>();
         check::<[u32; 17]>();
         check::<u8>();

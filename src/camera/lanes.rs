@@ -12,7 +12,7 @@
 //! [`Camera::generate_ray`] makes; the tests check that for every camera.
 
 use super::{Camera, View};
-use crate::math::lanes3::{Lanes3, LANES};
+use crate::math::lanes::{Lanes3, LANES};
 use crate::math::Ray;
 use glam::Vec2;
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};

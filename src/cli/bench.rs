@@ -21,7 +21,7 @@ use strata::error::InputError;
 use strata::experiment::bench::{rays, trace, Query, RayKind};
 use strata::geometry::Geometry;
 use strata::math::Ray;
-use strata::rayfile::{encode_rays, encode_triangles};
+use strata::rays::file::{encode_rays, encode_triangles};
 use strata::scene::load_mesh_scene;
 use strata::system::memory::peak_rss_bytes;
 

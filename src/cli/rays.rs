@@ -1,5 +1,5 @@
 //! `strata rays KIND MESH -n N [--seed S] -o RAYS.bin`: write a ray set for
-//! testing intersection (see [`strata::raygen`] for the kinds), plus a
+//! testing intersection (see [`strata::rays`] for the kinds), plus a
 //! description `RAYS.bin.json` that names the kind of each run of rays.
 //!
 //! ```json
@@ -19,8 +19,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
-use strata::rayfile::{encode_rays, write_file};
-use strata::raygen::{generate, topology::Topology, RayKind};
+use strata::rays::file::{encode_rays, write_file};
+use strata::rays::{generate, topology::Topology, RayKind};
 use strata::scene::load_mesh_scene;
 
 /// A kind of ray set, or all of them.

@@ -3,7 +3,7 @@
 //! (`Geometry::intersect_stream` and `occluded_stream`, which send
 //! windows of alike rays as bundles and narrow groups of eight as
 //! packets, or one ray at a time through `intersect` and `occluded`) and
-//! write one hit record per ray (see [`strata::rayfile`]).
+//! write one hit record per ray (see [`strata::rays::file`]).
 
 use super::CliError;
 use clap::Args;
@@ -13,7 +13,7 @@ use std::time::Instant;
 use strata::accel::prefetch::Prefetch;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
-use strata::rayfile::{encode_hits, read_rays, write_file, HitRecord};
+use strata::rays::file::{encode_hits, read_rays, write_file, HitRecord};
 use strata::scene::{load_mesh_scene, Scene};
 
 #[derive(Debug, Args, Clone)]

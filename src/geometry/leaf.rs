@@ -1,14 +1,15 @@
 //! Leaf kernels: what traversal runs when it reaches a BVH leaf. A leaf
-//! is a run of slots inside one [`TriangleBlock`](crate::shape::triangle8::TriangleBlock): its triangles are tested
-//! in one 8-wide watertight test ([`crate::shape::triangle8`]), then any
+//! is a run of slots inside one [`TriangleBlock`](crate::shape::triangle_lanes::TriangleBlock): its triangles are tested
+//! in one 8-wide watertight test ([`crate::shape::triangle_lanes`]), then any
 //! analytic shapes the leaf holds one by one.
 
 use super::Geometry;
 use crate::accel::hit::closer;
 use crate::accel::{PrimHit, PACKET_SIZE};
+use crate::math::lanes::LANES;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
-use crate::shape::triangle8::{self, ShearedRays, LANES};
+use crate::shape::triangle_lanes::{self, ShearedRays};
 
 impl Geometry {
     /// The lanes of leaf `start..start + count` in its block.
@@ -31,7 +32,7 @@ impl Geometry {
     ) -> Option<PrimHit> {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
-        let mut best = triangle8::closest(ray, sheared, block, lanes).map(|h| PrimHit {
+        let mut best = triangle_lanes::closest(ray, sheared, block, lanes).map(|h| PrimHit {
             t: h.t,
             prim: block.id[h.lane],
             u: h.u,
@@ -73,7 +74,7 @@ impl Geometry {
     ) -> bool {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
-        let mut hit = triangle8::intersect(ray, sheared, block, lanes).0;
+        let mut hit = triangle_lanes::intersect(ray, sheared, block, lanes).0;
         while hit != 0 {
             let lane = hit.trailing_zeros() as usize;
             hit &= hit - 1;

@@ -20,9 +20,10 @@ pub mod query;
 pub mod surface;
 
 use crate::accel::{Bvh8, PrimHit};
+use crate::math::lanes::LANES;
 use crate::math::{Ray, Transform};
 use crate::shape::plane::Plane;
-use crate::shape::triangle8::{TriangleBlock, LANES};
+use crate::shape::triangle_lanes::TriangleBlock;
 use csg::Csg;
 use glam::Vec3;
 pub use primitive::{

@@ -13,7 +13,7 @@ use crate::accel::query::{keep_closest, ClosestState};
 use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
-use crate::shape::triangle8::ShearedRays;
+use crate::shape::triangle_lanes::ShearedRays;
 
 /// A question asked of the scene, the same in every way of tracing.
 trait SceneQuery<'g>: Query<Answer: Copy + Default> + Copy {

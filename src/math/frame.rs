@@ -26,10 +26,6 @@ impl Frame {
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         v.x * self.x + v.y * self.y + v.z * self.z
     }
-
-    pub fn to_local(&self, v: Vec3) -> Vec3 {
-        Vec3::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
-    }
 }
 
 #[cfg(test)]

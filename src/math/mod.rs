@@ -1,10 +1,10 @@
 //! Geometry basics: rays, boxes, orthonormal frames, transforms, the robust
-//! origin offset for spawned rays, and vectors and trigonometry in SIMD
-//! lanes.
+//! origin offset for spawned rays, and SIMD lanes: the one lane width
+//! ([`lanes::LANES`]), vectors and trigonometry in lanes.
 
 pub mod aabb;
 pub mod frame;
-pub mod lanes3;
+pub mod lanes;
 pub mod offset;
 pub mod ray;
 pub mod transform;

@@ -59,10 +59,6 @@ impl Transform {
         })
     }
 
-    pub fn is_identity(&self) -> bool {
-        self.to_world == Affine3A::IDENTITY
-    }
-
     pub fn point(&self, p: Vec3) -> Vec3 {
         self.to_world.transform_point3(p)
     }

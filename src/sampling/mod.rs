@@ -10,11 +10,11 @@
 //! rays) come from seeded `rand` streams instead ([`stream`]).
 
 pub mod cmj;
-pub mod cmj8;
+pub mod cmj_lanes;
 pub mod hash;
 pub mod sampler;
 pub mod spherical_rect;
-pub mod spherical_rect8;
+pub mod spherical_rect_lanes;
 pub mod stream;
 pub mod warp;
 

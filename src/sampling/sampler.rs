@@ -6,9 +6,9 @@
 //! form one stratified set, and sample `i` depends on nothing but `i`.
 
 use super::cmj::{cmj_2d, stratified_1d, CmjSet};
-use super::cmj8::CmjLanes;
+use super::cmj_lanes::CmjLanes;
 use super::hash::{hash_step, hash_step_lanes, unit_float, unit_float_lanes, HASH_WORDS_INIT};
-use super::spherical_rect8::{mask_lanes, LANES};
+use crate::math::lanes::{mask_lanes, LANES};
 use glam::Vec2;
 use wide::u32x8;
 

@@ -22,13 +22,6 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     std::hint::select_unpredictable(a.x == 0.0 && a.y == 0.0, Vec2::ZERO, d)
 }
 
-/// Cosine-weighted hemisphere around +z (Malley's method), pdf cosθ/π.
-pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
-    let d = concentric_disk(u);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    Vec3::new(d.x, d.y, z)
-}
-
 /// Uniform hemisphere around +z, pdf 1/(2π).
 pub fn uniform_hemisphere(u: Vec2) -> Vec3 {
     let z = u.x;

@@ -27,9 +27,9 @@ use super::packets::SHADOW_PACKET_MIN;
 use super::sample::draw_2d_lanes;
 use super::Integrator;
 use crate::accel::PACKET_SIZE;
+use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
-use crate::sampling::spherical_rect8::{mask_lanes, LANES};
 use crate::sampling::Dim;
 use glam::{Vec2, Vec3};
 

@@ -1,7 +1,7 @@
 //! What identifies one sample and what a render counts.
 
+use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::Ray;
-use crate::sampling::spherical_rect8::{mask_lanes, LANES};
 use crate::sampling::{Dim, PixelSampler};
 use glam::{Vec2, Vec3};
 

@@ -12,4 +12,4 @@ pub mod plane;
 pub mod rect;
 pub mod sphere;
 pub mod triangle;
-pub mod triangle8;
+pub mod triangle_lanes;

@@ -1,5 +1,6 @@
 //! Ray sets for testing intersection against a mesh (`strata rays`), one
-//! file per kind:
+//! file per kind (the `camera` set in [`view`]), and the binary ray and
+//! hit files they travel in ([`file`]):
 //!
 //! | kind      | rays                                                                   |
 //! |-----------|------------------------------------------------------------------------|
@@ -18,12 +19,13 @@
 //! count, and (except for `camera`, whose image size follows the ray count)
 //! ray `i` does not depend on how many rays are asked for.
 
-pub mod camera;
 pub mod edges;
+pub mod file;
 pub mod grazing;
 pub mod inside;
 pub mod random;
 pub mod topology;
+pub mod view;
 
 use crate::math::{Aabb, Ray};
 use crate::sampling::stream::{item_stream, StreamRng};
@@ -144,7 +146,7 @@ pub fn generate(
     let info = MeshInfo::new(triangles)?;
     match kind {
         RayKind::Random => run(kind, &random::Chords::new(&info), n, seed),
-        RayKind::Camera => run(kind, &camera::Pinhole::new(&info, n, seed), n, seed),
+        RayKind::Camera => run(kind, &view::Pinhole::new(&info, n, seed), n, seed),
         RayKind::Grazing => run(kind, &grazing::Grazing::new(&info)?, n, seed),
         RayKind::Edges => run(kind, &edges::Edges::new(&info)?, n, seed),
         RayKind::Inside => run(kind, &inside::Inside::new(&info)?, n, seed),

@@ -154,7 +154,7 @@ impl Topology {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raygen::tests::octahedron;
+    use crate::rays::tests::octahedron;
 
     #[test]
     fn an_octahedron_is_closed_with_12_edges_and_6_vertices() {

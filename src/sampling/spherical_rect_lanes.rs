@@ -12,14 +12,11 @@
 //! [`SphericalRect`](super::spherical_rect::SphericalRect): the tests check that, and the image does not depend
 //! on how samples were batched.
 
-use crate::math::lanes3::Lanes3;
+use crate::math::lanes::{Lanes3, LANES};
 use crate::math::trig::{acos8, sin_cos8};
 use glam::{Vec2, Vec3};
 use std::f32::consts::TAU;
 use wide::f32x8;
-
-/// Points per batch: one per `f32x8` lane.
-pub use crate::math::lanes3::LANES;
 
 /// `f32::clamp`: NaN stays NaN (a plain min/max pair would not keep it).
 fn clamp(v: f32x8, lo: f32x8, hi: f32x8) -> f32x8 {
@@ -36,11 +33,6 @@ fn max_num(v: f32x8, lo: f32x8) -> f32x8 {
 fn copysign(magnitude: f32x8, sign: f32x8) -> f32x8 {
     let bit = f32x8::splat(-0.0);
     (magnitude & !bit) | (sign & bit)
-}
-
-/// The lanes of `mask` that are set (bit `i` for lane `i`).
-pub fn mask_lanes(mask: u32) -> impl Iterator<Item = usize> {
-    (0..LANES).filter(move |i| mask >> i & 1 != 0)
 }
 
 /// One rectangle seen from up to eight points, ready to sample.

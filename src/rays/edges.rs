@@ -92,8 +92,8 @@ impl Generator for Edges<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raygen::tests::octahedron;
-    use crate::raygen::{generate, RayKind};
+    use crate::rays::tests::octahedron;
+    use crate::rays::{generate, RayKind};
     use crate::shape::triangle::{intersect, ShearedRay};
 
     /// Brute force: the first hit's t, if any.

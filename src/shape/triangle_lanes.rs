@@ -14,13 +14,11 @@
 //! can then mix the two tests and still agree.
 
 use super::triangle::ShearedRay;
+use crate::math::lanes::LANES;
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use glam::Vec3;
 use wide::f32x8;
-
-/// Triangles per block: one per `f32x8` lane.
-pub const LANES: usize = 8;
 
 /// Eight triangles in structure-of-arrays form with their primitive ids.
 /// Lanes that hold no triangle (padding, or an analytic primitive sharing

@@ -1,51 +1,11 @@
-//! Lights: a closed enum. Point and directional lights are deltas (one
-//! shadow ray each). Area lights are also visible emitting surfaces, and are
-//! sampled `shadow_samples` times per hit.
-//!
-//! ```toml
-//! [[lights]]
-//! type = "point"
-//! position = [0.0, 4.0, 0.0]
-//! intensity = [10.0, 10.0, 10.0]   # W/sr: irradiance I cosθ / r²
-//!
-//! [[lights]]
-//! type = "directional"
-//! direction = [0.0, -1.0, 0.0]     # the way the light travels
-//! irradiance = [1.0, 1.0, 1.0]     # W/m² on a surface facing the light
-//!
-//! [[lights]]
-//! type = "rect"                    # one-sided, emits towards edge_u × edge_v
-//! corner = [-0.5, 3.0, -0.5]
-//! edge_u = [1.0, 0.0, 0.0]
-//! edge_v = [0.0, 0.0, 1.0]
-//! radiance = [5.0, 5.0, 5.0]
-//!
-//! [[lights]]
-//! type = "disk"                    # one-sided, emits towards normal
-//! center = [0.0, 3.0, 0.0]
-//! normal = [0.0, -1.0, 0.0]
-//! radius = 0.5
-//! radiance = [5.0, 5.0, 5.0]
-//!
-//! [[lights]]
-//! type = "sphere"                  # emits outwards everywhere
-//! center = [0.0, 3.0, 0.0]
-//! radius = 0.25
-//! radiance = [5.0, 5.0, 5.0]
-//! ```
-//!
-//! Sampling by solid angle (`light_sampling = "solid_angle"`, the default)
-//! uses spherical rectangles for rectangular `rect` lights (Ureña, Fajardo
-//! and King 2013) and the cone of directions for spheres (Shirley, Wang and
-//! Zimmerman 1996, "Monte Carlo Techniques for Direct Lighting
-//! Calculations"); disks, parallelograms and points inside a sphere light
-//! fall back to sampling by area, which `light_sampling = "area"` forces.
+//! One light's samples from one shading point: by area or by solid angle
+//! ([`LightSampling`]), with what a point's samples share worked out once
+//! ([`Light::seen_from`]).
 
+use super::Light;
 use crate::math::Frame;
 use crate::sampling::spherical_rect::SphericalRect;
-use crate::sampling::spherical_rect8::{mask_lanes, SphericalRects, LANES};
 use crate::sampling::warp::{concentric_disk, uniform_cone, uniform_sphere};
-use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -62,36 +22,6 @@ crate::mode::mode_enum! {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Light {
-    Point {
-        position: Vec3,
-        intensity: Vec3,
-    },
-    /// `direction` is the unit direction the light travels.
-    Directional {
-        direction: Vec3,
-        irradiance: Vec3,
-    },
-    /// `prim` is the light's visible surface, skipped by its own shadow rays.
-    Rect {
-        rect: Rect,
-        radiance: Vec3,
-        prim: u32,
-    },
-    Disk {
-        disk: Disk,
-        radiance: Vec3,
-        prim: u32,
-    },
-    Sphere {
-        center: Vec3,
-        radius: f32,
-        radiance: Vec3,
-        prim: u32,
-    },
-}
-
 /// One light sample seen from a shading point.
 #[derive(Debug, Clone, Copy)]
 pub struct LightSample {
@@ -105,21 +35,6 @@ pub struct LightSample {
 }
 
 impl Light {
-    /// True for lights with a surface, which take `shadow_samples` samples.
-    pub fn is_area(&self) -> bool {
-        !matches!(self, Light::Point { .. } | Light::Directional { .. })
-    }
-
-    /// The primitive that is this light's visible surface, if any.
-    pub fn prim(&self) -> Option<u32> {
-        match *self {
-            Light::Rect { prim, .. } | Light::Disk { prim, .. } | Light::Sphere { prim, .. } => {
-                Some(prim)
-            }
-            _ => None,
-        }
-    }
-
     /// Sample the light as seen from `p`, with `u` uniform in [0,1)².
     pub fn sample(&self, p: Vec3, u: Vec2, method: LightSampling) -> Option<LightSample> {
         self.seen_from(p, method).sample(u)
@@ -134,8 +49,8 @@ impl Light {
     /// distance to the light (or more), lies far outside the rounding of a sample's
     /// position and direction, so the answer never differs from what the
     /// samples would have found. Other lights answer false. Inlined into
-    /// the per-lane loop that asks it (dragon-rect render 2% faster than
-    /// the call).
+    /// the per-lane loop that asks it: the call cost the dragon-rect render
+    /// 2% (see docs/mitsuba.md, "What was tried for the render").
     #[inline]
     pub fn hidden_from(&self, p: Vec3, n: Vec3) -> bool {
         let Light::Rect { rect, .. } = self else {
@@ -195,7 +110,7 @@ impl Light {
     /// solid angle of its spherical rectangle (which needs perpendicular
     /// edges; a parallelogram is sampled by area). One decision for
     /// [`Light::seen_from`] and [`Light::seen_from_lanes`].
-    fn solid_angle_rect(&self, method: LightSampling) -> Option<(&Rect, Vec3)> {
+    pub(super) fn solid_angle_rect(&self, method: LightSampling) -> Option<(&Rect, Vec3)> {
         match self {
             Light::Rect { rect, radiance, .. }
                 if method == LightSampling::SolidAngle && rect.is_rectangle() =>
@@ -207,7 +122,12 @@ impl Light {
     }
 
     /// One sample of the light from `p` by `method`, all of it per sample.
-    fn sample_from(&self, p: Vec3, u: Vec2, method: LightSampling) -> Option<LightSample> {
+    pub(super) fn sample_from(
+        &self,
+        p: Vec3,
+        u: Vec2,
+        method: LightSampling,
+    ) -> Option<LightSample> {
         match *self {
             Light::Point {
                 position,
@@ -280,131 +200,6 @@ impl Light {
             }
         }
     }
-
-    /// Total emitted power in watts (∞ for directional light).
-    pub fn power(&self) -> Vec3 {
-        match *self {
-            Light::Point { intensity, .. } => 4.0 * PI * intensity,
-            Light::Directional { .. } => Vec3::splat(f32::INFINITY),
-            Light::Rect { rect, radiance, .. } => PI * rect.area() * radiance,
-            Light::Disk { disk, radiance, .. } => PI * disk.area() * radiance,
-            Light::Sphere {
-                radius, radiance, ..
-            } => 4.0 * PI * PI * radius * radius * radiance,
-        }
-    }
-}
-
-impl Light {
-    /// The light as seen from up to eight points at once, `points[i]` for
-    /// the lanes `i` of `active` (the hit points of one batch of camera
-    /// samples): [`Light::seen_from`] per lane, with a rect light's
-    /// spherical rectangles built in SIMD lanes. Lane `i`'s samples are
-    /// exactly those of `self.seen_from(points[i], method)`.
-    pub fn seen_from_lanes(
-        &self,
-        points: &[Vec3; LANES],
-        active: u32,
-        method: LightSampling,
-    ) -> LightLanes<'_> {
-        if active.count_ones() == 1 {
-            // One point (a reflected ray's hit, a lone pixel's one sample): the
-            // scalar code, which each lane equals, without the lanes' cost.
-            let lane = active.trailing_zeros() as usize;
-            return LightLanes::One {
-                lane,
-                seen: self.seen_from(points[lane], method),
-            };
-        }
-        if let Some((rect, radiance)) = self.solid_angle_rect(method) {
-            let rects = SphericalRects::new(points, active, rect.corner, rect.edge_u, rect.edge_v);
-            return LightLanes::Rects {
-                light: self,
-                points: *points,
-                weight: std::array::from_fn(|i| radiance * rects.solid_angle(i)),
-                normal: rect.normal,
-                rects,
-            };
-        }
-        LightLanes::Each {
-            light: self,
-            points: *points,
-            method,
-        }
-    }
-}
-
-/// A light seen from up to eight shading points (see
-/// [`Light::seen_from_lanes`]).
-// One lives on the stack per light and batch; boxing the large variant
-// would allocate there instead.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug, Clone, Copy)]
-pub enum LightLanes<'l> {
-    /// A single point, seen as [`Light::seen_from`] sees it.
-    One { lane: usize, seen: LightFrom<'l> },
-    /// A rect light sampled by solid angle: its spherical rectangles, its
-    /// normal, and radiance times each lane's solid angle.
-    Rects {
-        light: &'l Light,
-        points: [Vec3; LANES],
-        rects: SphericalRects,
-        normal: Vec3,
-        weight: [Vec3; LANES],
-    },
-    /// Any other light or method: each sample does all its work.
-    Each {
-        light: &'l Light,
-        points: [Vec3; LANES],
-        method: LightSampling,
-    },
-}
-
-impl LightLanes<'_> {
-    /// One sample per lane of `active`, lane `i` with `u[i]` uniform in
-    /// [0,1)²: exactly [`LightFrom::sample`] of that lane's point.
-    pub fn sample(&self, active: u32, u: &[Vec2; LANES]) -> [Option<LightSample>; LANES] {
-        let mut out = [None; LANES];
-        match self {
-            LightLanes::One { lane, seen } => {
-                if active >> lane & 1 != 0 {
-                    out[*lane] = seen.sample(u[*lane]);
-                }
-            }
-            LightLanes::Rects {
-                light,
-                points,
-                rects,
-                normal,
-                weight,
-            } => {
-                let q = rects.sample(u);
-                for i in mask_lanes(active) {
-                    // Each branch writes the slot itself: one value
-                    // chosen between the branches was built on the stack
-                    // and copied with wide loads that waited on its narrow
-                    // stores (`perf`: almost half of this function's
-                    // samples).
-                    if rects.valid() >> i & 1 != 0 {
-                        out[i] = towards(points[i], q[i], *normal, weight[i], None);
-                    } else {
-                        // The point is (nearly) in the light's plane: sample by area.
-                        out[i] = light.sample_from(points[i], u[i], LightSampling::Area);
-                    }
-                }
-            }
-            LightLanes::Each {
-                light,
-                points,
-                method,
-            } => {
-                for i in mask_lanes(active) {
-                    out[i] = light.sample_from(points[i], u[i], *method);
-                }
-            }
-        }
-        out
-    }
 }
 
 /// A light seen from one shading point `p` (see [`Light::seen_from`]).
@@ -445,7 +240,13 @@ impl LightFrom<'_> {
 /// A sample towards point `q` on a one-sided surface with normal `n`.
 /// `area = Some(A)` converts an area-density sample (pdf 1/A) to solid angle;
 /// `None` means `weight` already is radiance over the solid-angle pdf.
-fn towards(p: Vec3, q: Vec3, n: Vec3, weight: Vec3, area: Option<f32>) -> Option<LightSample> {
+pub(super) fn towards(
+    p: Vec3,
+    q: Vec3,
+    n: Vec3,
+    weight: Vec3,
+    area: Option<f32>,
+) -> Option<LightSample> {
     let to = q - p;
     let d2 = to.length_squared();
     if !(d2 > 0.0) {
@@ -472,6 +273,7 @@ fn towards(p: Vec3, q: Vec3, n: Vec3, weight: Vec3, area: Option<f32>) -> Option
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shape::disk::Disk;
 
     /// Irradiance at the origin from each light by both methods must agree
     /// with each other and with the analytic value where one exists.
@@ -580,80 +382,5 @@ mod tests {
         assert!(rect
             .sample(Vec3::Y * 2.0, Vec2::splat(0.5), LightSampling::Area)
             .is_none());
-    }
-
-    /// Each lane of [`Light::seen_from_lanes`] samples exactly what
-    /// [`Light::seen_from`] samples from its point alone, bit for bit, for
-    /// every kind of light and method, from points around, behind, in the
-    /// plane of and far from the light, with any lanes active.
-    #[test]
-    fn each_lane_samples_what_its_point_samples_alone() {
-        use crate::sampling::stream::{seeded, Draw};
-        let rect = |corner: Vec3, eu: Vec3, ev: Vec3| Light::Rect {
-            rect: Rect::new(corner, eu, ev).unwrap(),
-            radiance: Vec3::new(1.0, 2.0, 3.0),
-            prim: 0,
-        };
-        let lights = [
-            rect(Vec3::new(-1.0, 1.0, -1.0), Vec3::X * 2.0, Vec3::Z * 2.0),
-            rect(
-                Vec3::new(0.3, 0.5, -2.0),
-                Vec3::new(0.0, 0.6, 0.8),
-                Vec3::X * 0.01,
-            ),
-            Light::Disk {
-                disk: Disk::new(Vec3::Y * 2.0, -Vec3::Y, 0.5),
-                radiance: Vec3::ONE,
-                prim: 0,
-            },
-            Light::Sphere {
-                center: Vec3::Y * 3.0,
-                radius: 0.7,
-                radiance: Vec3::ONE,
-                prim: 0,
-            },
-            Light::Point {
-                position: Vec3::Y,
-                intensity: Vec3::ONE,
-            },
-        ];
-        let bits = |s: Option<LightSample>| {
-            s.map(|s| {
-                let v = [s.wi.to_array(), s.weight.to_array(), [s.distance; 3]];
-                v.map(|c| c.map(f32::to_bits))
-            })
-        };
-        let mut rng = seeded(11);
-        let mut sampled = 0;
-        for case in 0..3000 {
-            let light = &lights[case % lights.len()];
-            let points: [Vec3; LANES] = std::array::from_fn(|lane| match (case + lane) % 4 {
-                // In the first light's plane, or a hair off it.
-                0 => Vec3::new(rng.range(-2.0, 2.0), 1.0 + rng.range(-1e-6, 1e-6), 0.0),
-                1 => Vec3::new(rng.range(-1e3, 1e3), rng.range(-1e3, 1e3), 7.0),
-                _ => Vec3::new(
-                    rng.range(-3.0, 3.0),
-                    rng.range(-2.0, 4.0),
-                    rng.range(-3.0, 3.0),
-                ),
-            });
-            let active = 1 + (rng.unit() * 255.0) as u32;
-            let u: [Vec2; LANES] = std::array::from_fn(|_| Vec2::new(rng.unit(), rng.unit()));
-            for method in [LightSampling::Area, LightSampling::SolidAngle] {
-                let lanes = light
-                    .seen_from_lanes(&points, active, method)
-                    .sample(active, &u);
-                for i in mask_lanes(active) {
-                    let alone = light.seen_from(points[i], method).sample(u[i]);
-                    sampled += alone.is_some() as u32;
-                    assert_eq!(
-                        bits(lanes[i]),
-                        bits(alone),
-                        "case {case} lane {i} {method:?}"
-                    );
-                }
-            }
-        }
-        assert!(sampled > 10_000, "only {sampled} samples reached a light");
     }
 }

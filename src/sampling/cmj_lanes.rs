@@ -22,7 +22,7 @@
 
 use super::cmj::{mask_of, sample_patterns, CmjSet, ONE_MINUS_EPSILON};
 use super::hash::unit_float_lanes;
-use super::spherical_rect8::LANES;
+use crate::math::lanes::LANES;
 use glam::Vec2;
 use wide::{f32x8, u32x8};
 

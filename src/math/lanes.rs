@@ -1,13 +1,20 @@
-//! Three coordinates in `wide::f32x8` lanes, with glam's `Vec3`
-//! arithmetic in its order (no fused multiply-adds), so each lane is bit
-//! for bit what glam computes for that lane's vector: for code that does
-//! eight points' or rays' scalar work at once.
+//! SIMD lanes: the one lane width, the lanes a mask selects, and three
+//! coordinates in `wide::f32x8` lanes with glam's `Vec3` arithmetic in its
+//! order (no fused multiply-adds), so each lane is bit for bit what glam
+//! computes for that lane's vector: for code that does eight points' or
+//! rays' scalar work at once.
 
 use glam::Vec3;
 use wide::f32x8;
 
-/// Values per vector: one per `f32x8` lane.
+/// Values per SIMD register (one per `f32x8` lane): the rays of a packet,
+/// the samples of a batch, the triangles of a leaf block.
 pub const LANES: usize = 8;
+
+/// The lanes of `mask` that are set (bit `i` for lane `i`).
+pub fn mask_lanes(mask: u32) -> impl Iterator<Item = usize> {
+    (0..LANES).filter(move |i| mask >> i & 1 != 0)
+}
 
 /// Three coordinates in lanes, with glam's `Vec3` arithmetic in its order.
 #[derive(Debug, Clone, Copy)]

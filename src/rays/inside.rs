@@ -116,8 +116,8 @@ impl Generator for Inside<'_> {
 
 #[cfg(test)]
 mod tests {
-    use crate::raygen::tests::octahedron;
-    use crate::raygen::{generate, RayKind};
+    use crate::rays::tests::octahedron;
+    use crate::rays::{generate, RayKind};
     use glam::Vec3;
 
     #[test]
@@ -136,7 +136,7 @@ mod tests {
     fn origins_on_the_surface_are_rejected() {
         let offset = Vec3::splat(1e5);
         let tris = octahedron(0.2, offset);
-        let info = crate::raygen::MeshInfo::new(&tris).unwrap();
+        let info = crate::rays::MeshInfo::new(&tris).unwrap();
         let inside = super::Inside::new(&info).unwrap();
         let vertex = offset + Vec3::new(0.2, 0.0, 0.0);
         assert!(inside.touches_surface(vertex, Vec3::new(0.6, 0.8, 0.0)));

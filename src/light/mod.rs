@@ -1,0 +1,113 @@
+//! Lights: a closed enum. Point and directional lights are deltas (one
+//! shadow ray each). Area lights are also visible emitting surfaces, and are
+//! sampled `shadow_samples` times per hit.
+//!
+//! ```toml
+//! [[lights]]
+//! type = "point"
+//! position = [0.0, 4.0, 0.0]
+//! intensity = [10.0, 10.0, 10.0]   # W/sr: irradiance I cosθ / r²
+//!
+//! [[lights]]
+//! type = "directional"
+//! direction = [0.0, -1.0, 0.0]     # the way the light travels
+//! irradiance = [1.0, 1.0, 1.0]     # W/m² on a surface facing the light
+//!
+//! [[lights]]
+//! type = "rect"                    # one-sided, emits towards edge_u × edge_v
+//! corner = [-0.5, 3.0, -0.5]
+//! edge_u = [1.0, 0.0, 0.0]
+//! edge_v = [0.0, 0.0, 1.0]
+//! radiance = [5.0, 5.0, 5.0]
+//!
+//! [[lights]]
+//! type = "disk"                    # one-sided, emits towards normal
+//! center = [0.0, 3.0, 0.0]
+//! normal = [0.0, -1.0, 0.0]
+//! radius = 0.5
+//! radiance = [5.0, 5.0, 5.0]
+//!
+//! [[lights]]
+//! type = "sphere"                  # emits outwards everywhere
+//! center = [0.0, 3.0, 0.0]
+//! radius = 0.25
+//! radiance = [5.0, 5.0, 5.0]
+//! ```
+//!
+//! Sampling by solid angle (`light_sampling = "solid_angle"`, the default)
+//! uses spherical rectangles for rectangular `rect` lights (Ureña, Fajardo
+//! and King 2013) and the cone of directions for spheres (Shirley, Wang and
+//! Zimmerman 1996, "Monte Carlo Techniques for Direct Lighting
+//! Calculations"); disks, parallelograms and points inside a sphere light
+//! fall back to sampling by area, which `light_sampling = "area"` forces.
+
+mod lanes;
+mod sample;
+
+pub use lanes::LightLanes;
+pub use sample::{LightFrom, LightSample, LightSampling};
+
+use crate::shape::disk::Disk;
+use crate::shape::rect::Rect;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Light {
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+    },
+    /// `direction` is the unit direction the light travels.
+    Directional {
+        direction: Vec3,
+        irradiance: Vec3,
+    },
+    /// `prim` is the light's visible surface, skipped by its own shadow rays.
+    Rect {
+        rect: Rect,
+        radiance: Vec3,
+        prim: u32,
+    },
+    Disk {
+        disk: Disk,
+        radiance: Vec3,
+        prim: u32,
+    },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        radiance: Vec3,
+        prim: u32,
+    },
+}
+
+impl Light {
+    /// True for lights with a surface, which take `shadow_samples` samples.
+    pub fn is_area(&self) -> bool {
+        !matches!(self, Light::Point { .. } | Light::Directional { .. })
+    }
+
+    /// The primitive that is this light's visible surface, if any.
+    pub fn prim(&self) -> Option<u32> {
+        match *self {
+            Light::Rect { prim, .. } | Light::Disk { prim, .. } | Light::Sphere { prim, .. } => {
+                Some(prim)
+            }
+            _ => None,
+        }
+    }
+
+    /// Total emitted power in watts (∞ for directional light).
+    pub fn power(&self) -> Vec3 {
+        match *self {
+            Light::Point { intensity, .. } => 4.0 * PI * intensity,
+            Light::Directional { .. } => Vec3::splat(f32::INFINITY),
+            Light::Rect { rect, radiance, .. } => PI * rect.area() * radiance,
+            Light::Disk { disk, radiance, .. } => PI * disk.area() * radiance,
+            Light::Sphere {
+                radius, radiance, ..
+            } => 4.0 * PI * PI * radius * radius * radiance,
+        }
+    }
+}
