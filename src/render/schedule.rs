@@ -19,7 +19,6 @@ use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, Sa
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// Pixels per work item: small enough that 64 threads stay busy on small images.
@@ -202,13 +201,7 @@ pub fn render(
     let n = film.pixel_count();
     let batches = n.div_ceil(BATCH) as u64;
     let bar = progress::bar(batches * passes.len() as u64, opts.quiet, "render");
-    let rays = [
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-    ];
+    let mut counts = RayCounts::default();
     let mut scratch = vec![PixelSum::default(); n];
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
     let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
@@ -235,12 +228,14 @@ pub fn render(
             Some(a) => a.chunks_mut(chunk).map(Some).collect(),
             None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
         };
-        pool.install(|| {
+        // Each chunk's rays are counted by its own integrator and the
+        // pass sums the counts.
+        counts += pool.install(|| {
             scratch
                 .par_chunks_mut(chunk)
                 .zip(aov_chunks.into_par_iter())
                 .enumerate()
-                .for_each(|(b, (pixels, mut aov_pixels))| {
+                .map(|(b, (pixels, mut aov_pixels))| {
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
                     for (k, accs) in pixels.chunks_mut(BATCH).enumerate() {
                         accs.fill(PixelSum::default());
@@ -256,26 +251,18 @@ pub fn render(
                             bar.inc(1);
                         }
                     }
-                    let c = integrator.counts;
-                    for (a, v) in rays.iter().zip([
-                        c.camera,
-                        c.shadow,
-                        c.reflection,
-                        c.refraction,
-                        c.glossy_rejected,
-                    ]) {
-                        a.fetch_add(v, Ordering::Relaxed);
-                    }
                     if opts.schedule == Schedule::Slices {
                         bar.inc(1);
                     }
-                });
+                    integrator.counts
+                })
+                .reduce(RayCounts::default, |a, b| a + b)
         });
         for (i, acc) in scratch.iter().enumerate() {
             film.add_pixel(i, acc);
         }
         let elapsed = start.elapsed().as_secs_f64();
-        let total: u64 = rays[..4].iter().map(|a| a.load(Ordering::Relaxed)).sum();
+        let total = counts.total();
         rate = format!(
             " {:.2} Mrays/s",
             (total - last_rays) as f64 / (elapsed - last_time).max(1e-9) / 1e6
@@ -286,16 +273,9 @@ pub fn render(
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
-    let load = |i: usize| rays[i].load(Ordering::Relaxed);
     RenderOutcome {
         film,
-        counts: RayCounts {
-            camera: load(0),
-            shadow: load(1),
-            reflection: load(2),
-            refraction: load(3),
-            glossy_rejected: load(4),
-        },
+        counts,
         seconds,
         threads,
         samples: full,

@@ -20,13 +20,25 @@ impl RayCounts {
     pub fn total(&self) -> u64 {
         self.camera + self.shadow + self.reflection + self.refraction
     }
+}
 
-    pub fn add(&mut self, o: &RayCounts) {
+/// Counts summed field by field: each work item counts its own rays, and
+/// the render adds them up.
+impl std::ops::AddAssign for RayCounts {
+    fn add_assign(&mut self, o: RayCounts) {
         self.camera += o.camera;
         self.shadow += o.shadow;
         self.reflection += o.reflection;
         self.refraction += o.refraction;
         self.glossy_rejected += o.glossy_rejected;
+    }
+}
+
+impl std::ops::Add for RayCounts {
+    type Output = RayCounts;
+    fn add(mut self, o: RayCounts) -> RayCounts {
+        self += o;
+        self
     }
 }
 
