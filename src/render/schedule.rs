@@ -1,9 +1,10 @@
-//! Work is (pixel batch × sample slice): a pass renders one slice of every
-//! pixel's samples, and rayon steals pixel batches within the pass. Because
-//! a slice is a range of indices of each pixel's one stratified set
-//! (`sampling::cmj`), splitting work never weakens stratification, and
-//! because sums are fixed point (`render::film`), the image does not depend
-//! on the thread count or on how slices are split across processes.
+//! Work is (work item × sample slice): a pass renders one slice of every
+//! pixel's samples, and rayon steals work items of [`WORK_ITEM_PIXELS`]
+//! consecutive pixels within the pass. Because a slice is a range of
+//! indices of each pixel's one stratified set (`sampling::cmj`), splitting
+//! work never weakens stratification, and because sums are fixed point
+//! (`render::film`), the image does not depend on the thread count or on
+//! how slices are split across processes.
 //!
 //! `Schedule::Regions` is the classic baseline for `strata scaling`: the
 //! image cut into one band of rows per thread, no stealing.
@@ -22,7 +23,7 @@ use std::ops::Range;
 use std::time::Instant;
 
 /// Pixels per work item: small enough that 64 threads stay busy on small images.
-pub const BATCH: usize = 64;
+pub const WORK_ITEM_PIXELS: usize = 64;
 /// Most passes a render is split into by default (each pass is a progress
 /// tick and a checkpoint).
 pub const DEFAULT_PASSES: u32 = 16;
@@ -51,8 +52,8 @@ pub fn default_passes(samples: u32) -> u32 {
 }
 
 crate::mode::mode_enum! {
-    /// How work is split over threads: `slices` (work stealing over pixel
-    /// batches × sample slices) or `regions` (one static band of rows per
+    /// How work is split over threads: `slices` (work stealing over work
+    /// items × sample slices) or `regions` (one static band of rows per
     /// thread, the classic baseline).
     #[derive(Default)]
     pub enum Schedule("schedule") {
@@ -113,8 +114,8 @@ pub struct RenderOptions {
     pub passes: Option<u32>,
     /// Sample indices already rendered (from a checkpoint), skipped.
     pub resume_from: Option<u32>,
-    /// Trace coherent batches (camera rays, shadow rays to one light) as
-    /// packets; the image is bit-identical for every mode.
+    /// Trace a batch's camera rays, and its shadow rays towards one light
+    /// sample, as packets; the image is bit-identical for every mode.
     pub packets: PacketMode,
     /// The pixels to render (`--crop`); `None` for the whole image.
     pub window: Option<Window>,
@@ -199,15 +200,15 @@ pub fn render(
         .unwrap_or_else(|| default_passes(full.end - full.start));
     let passes = pass_ranges(start_sample..full.end, passes);
     let n = film.pixel_count();
-    let batches = n.div_ceil(BATCH) as u64;
-    let bar = progress::bar(batches * passes.len() as u64, opts.quiet, "render");
+    let work_items = n.div_ceil(WORK_ITEM_PIXELS) as u64;
+    let bar = progress::bar(work_items * passes.len() as u64, opts.quiet, "render");
     let mut counts = RayCounts::default();
     let mut scratch = vec![PixelSum::default(); n];
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
     let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
     let chunk = match opts.schedule {
-        Schedule::Slices => BATCH,
+        Schedule::Slices => WORK_ITEM_PIXELS,
         Schedule::Regions => n.div_ceil(threads),
     };
     // Rays and time at the end of the previous pass, for the current rate.
@@ -237,17 +238,17 @@ pub fn render(
                 .enumerate()
                 .map(|(b, (pixels, mut aov_pixels))| {
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
-                    for (k, accs) in pixels.chunks_mut(BATCH).enumerate() {
+                    for (k, accs) in pixels.chunks_mut(WORK_ITEM_PIXELS).enumerate() {
                         accs.fill(PixelSum::default());
-                        let first = b * chunk + k * BATCH;
-                        let range = k * BATCH..k * BATCH + accs.len();
+                        let first = b * chunk + k * WORK_ITEM_PIXELS;
+                        let range = k * WORK_ITEM_PIXELS..k * WORK_ITEM_PIXELS + accs.len();
                         let aov = aov_pixels.as_deref_mut().map(|a| &mut a[range]);
                         let pixels = PixelRun {
                             window: &window,
                             first,
                         };
                         render_pixels(&mut integrator, scene, pixels, accs, aov, pass.clone());
-                        if opts.schedule == Schedule::Regions && accs.len() == BATCH {
+                        if opts.schedule == Schedule::Regions && accs.len() == WORK_ITEM_PIXELS {
                             bar.inc(1);
                         }
                     }
@@ -319,8 +320,8 @@ pub struct PixelRun<'w> {
 /// accs.len()` of its window, into `accs`, and with `aov`, what their camera
 /// rays hit first into it.
 ///
-/// The pixels' samples form one stream, pixel by pixel and in index order
-/// within each, and go to the integrator [`PACKET_SIZE`] at a time: with
+/// The pixels' samples form one sequence, pixel by pixel and in index order
+/// within each, and go to the integrator a batch of [`PACKET_SIZE`] at a time: with
 /// eight or more samples per pixel a batch is mostly the pixel and lens
 /// samples of one pixel, whose rays start close together and point nearly
 /// the same way; with fewer (or a pixel's last few) it takes the next
@@ -352,9 +353,9 @@ pub fn render_pixels(
     // The common set sizes, prepared once for all these pixels: camera
     // samples, and first-hit light samples.
     let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
-    // The pixel the stream is in (`j`), what it shares among its samples,
-    // and its next sample; kept across batches, so that each pixel is set
-    // up once and the stream needs no divisions.
+    // The pixel the sequence is in (`j`), what it shares among its
+    // samples, and its next sample; kept across batches, so that each pixel
+    // is set up once and the sequence needs no divisions.
     let setup = |j: usize| {
         let (x, y, index) = run.window.pixel(run.first + j);
         let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
@@ -374,13 +375,13 @@ pub fn render_pixels(
     // annotate`.)
     let mut pixel_of = [usize::MAX; PACKET_SIZE];
     while j < accs.len() {
-        // The batch's runs of one pixel's samples.
+        // The batch's samples, one pixel's at a time.
         let mut n = 0;
         while n < PACKET_SIZE && j < accs.len() {
             let end = samples.end.min(next + (PACKET_SIZE - n) as u32);
             let len = (end - next) as usize;
-            // The run's pixel samples in SIMD lanes (unused lanes repeat
-            // the last sample).
+            // This pixel's share of the batch: its pixel samples in SIMD
+            // lanes (unused lanes repeat the last sample).
             let index = std::array::from_fn(|i| (next + i as u32).min(end - 1));
             let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
             let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);

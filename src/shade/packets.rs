@@ -1,18 +1,19 @@
-//! When coherent batches of rays travel as packets. Packets return
+//! When a batch's rays travel as packets. Packets return
 //! exactly the hits of single rays, so this decides speed, never the image.
 
 use crate::accel::PACKET_SIZE;
 
 crate::mode::mode_enum! {
-    /// Whether coherent batches of rays are traced as packets.
+    /// Whether a batch's camera rays and shadow rays are traced as packets.
     #[derive(Default)]
     pub enum PacketMode("packet mode") {
-        /// Packets where they were measured to pay: camera batches of at least
-        /// [`CAMERA_PACKET_MIN`] rays, and shadow waves of at least
-        /// [`SHADOW_PACKET_MIN`] rays (never). Single rays otherwise.
+        /// Packets where they were measured to pay: a batch's camera rays
+        /// when there are at least [`CAMERA_PACKET_MIN`], its shadow rays
+        /// towards one light sample when at least [`SHADOW_PACKET_MIN`]
+        /// (never). Single rays otherwise.
         #[default]
         Auto = "auto",
-        /// Every batch as a packet, however few rays it holds.
+        /// A batch's rays as a packet, however few they are.
         On = "on",
         /// Single rays only.
         Off = "off",
@@ -46,14 +47,14 @@ crate::mode::mode_enum! {
 // seed-mc, soft-shadow, the bunny and both dragon scenes.
 // The thresholds stand.
 
-/// Fewest rays a camera batch must hold for `auto` to trace it as a packet.
+/// Fewest camera rays a batch must have for `auto` to trace them as a packet.
 pub const CAMERA_PACKET_MIN: usize = 7;
-/// Fewest rays a shadow wave must hold for `auto` to trace it as a packet:
-/// more than a packet holds, so never (see above).
+/// Fewest shadow rays towards one light sample a batch must have for `auto`
+/// to trace them as a packet: more than a packet holds, so never (see above).
 pub const SHADOW_PACKET_MIN: usize = PACKET_SIZE + 1;
 
 impl PacketMode {
-    /// Trace a batch of `live` rays as a packet, where `auto` asks for at
+    /// Trace `live` rays of a batch as a packet, where `auto` asks for at
     /// least `auto_min`?
     #[inline]
     pub fn use_packet(self, live: usize, auto_min: usize) -> bool {

@@ -164,7 +164,7 @@ mod tests {
 
     /// Every wanted lane gets exactly its own sampler's draw, whatever mix
     /// of pixels, sample indices and set sizes the lanes hold, and the
-    /// other lanes zero: batches of one pixel, of several pixels' runs,
+    /// other lanes zero: batches of one pixel, of several pixels' samples,
     /// and lanes with a set size of their own.
     #[test]
     fn each_lane_draws_what_its_own_sampler_gives() {
