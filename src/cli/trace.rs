@@ -71,9 +71,8 @@ const CHUNK: usize = 256;
 /// answers' buffer is timed: embreex's timing does not count Embree's
 /// start, and the native harness (`tools/embree`) writes into a buffer it
 /// allocated before its clock started, so a pass here must not pay for
-/// allocating, growing and first touching 16 bytes a ray either: timed,
-/// they held the dragon's camera rays to 22 Mrays/s of occlusion, against
-/// 29 without them (one thread).
+/// allocating, growing and first touching 16 bytes a ray either (what
+/// timing them cost: docs/embree.md, "The harness").
 pub fn trace(
     scene: &Scene,
     rays: &[strata::math::Ray],

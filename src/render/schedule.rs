@@ -35,11 +35,8 @@ pub const DEFAULT_PASSES: u32 = 16;
 /// the tree nodes and leaves its first one walked still in the caches;
 /// the next pass comes back to the pixel only after every other pixel.
 /// Passes are also each a barrier for the threads and a loop over the
-/// film. `scenes/large/dragon-rect.toml`, random sampler, one thread,
-/// `render_s`, alternating runs, medians: at 64 spp, passes of 8 samples
-/// 0.987 s, of 16 0.945 s, of 32 0.918 s, of 64 0.914 s; at 16 spp, two
-/// passes of 8 0.245 s, one of 16 0.237 s (`perf`: the camera packets'
-/// and shadow rays' walks, the same code, take 8% fewer cycles).
+/// film. Passes of 8, 16, 32 and 64 samples are timed in
+/// docs/performance.md, "Passes and lanes".
 pub const MIN_PASS_SAMPLES: u32 = 4 * PACKET_SIZE as u32;
 
 /// Passes for `samples` samples per pixel when none are asked for: up to
@@ -327,13 +324,10 @@ pub struct PixelRun<'w> {
 /// the same way; with fewer (or a pixel's last few) it takes the next
 /// pixels' samples too, so that its SIMD lanes (its camera packet, its
 /// light samples) are full and a one-sample pass does not shade one ray
-/// at a time. One thread, `render_s`, seven alternating runs, medians,
-/// against batches of one pixel's samples: soft-shadow at 1 spp 0.0104 →
-/// 0.0044 s, at 4 spp 0.027 → 0.020 s; dragon-rect at 5 spp 0.122 →
-/// 0.110 s, at 12 spp (random) 0.212 → 0.201 s; seed-mc at 4 spp 0.097 →
-/// 0.091 s. Such batches still gain from travelling as packets
-/// (`--packets off` against `auto`: dragon-rect at 1 spp 0.0283 against
-/// 0.0263 s, at 5 spp 0.116 against 0.103 s). Each sample is still
+/// at a time; such batches' camera rays still gain from travelling as a
+/// packet (the timings against batches of one pixel's samples and against
+/// `--packets off` are in docs/performance.md, "Passes and lanes", and
+/// "Measurements behind the renderer's defaults"). Each sample is still
 /// computed from its own index alone and added to its own pixel in index
 /// order, so the sums are those of sample-by-sample rendering.
 pub fn render_pixels(
@@ -371,8 +365,8 @@ pub fn render_pixels(
     // Each lane's pixel: a lane that stays with its pixel from one batch
     // to the next keeps its sample context and changes only the index.
     // (Written whole per sample, the 168-byte contexts were copied through
-    // the stack with wide loads that stalled on narrower stores: `perf
-    // annotate`.)
+    // the stack with wide loads that stalled on narrower stores; see
+    // docs/mitsuba.md, "What was tried for the render".)
     let mut pixel_of = [usize::MAX; PACKET_SIZE];
     while j < accs.len() {
         // The batch's samples, one pixel's at a time.

@@ -12,12 +12,14 @@
 //! traced back to back (a packet only under `--packets on`; see
 //! [`super::packets`]). Traced together rather than between the shading
 //! of each hit, they leave one another's tree nodes in the caches (3–7%
-//! faster per render on one thread: seed-mc, the bunny, the dragon), and
-//! each lane still adds its contributions in sample order.
+//! off a render on one thread; docs/mitsuba.md, "What was tried for the
+//! whole process"), and each lane still adds its contributions in sample
+//! order.
 //!
 //! A single hit lit with several samples of an area light (a reflected
 //! or refracted ray's hit) would leave seven lanes idle, so its
-//! samples fill the lanes instead, eight per round (seed-mc 20% faster).
+//! samples fill the lanes instead, eight per round (docs/mitsuba.md,
+//! "What was tried for the render").
 //!
 //! [`Light::seen_from_lanes`]: crate::light::Light::seen_from_lanes
 

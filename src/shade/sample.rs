@@ -89,11 +89,10 @@ impl SampleContext {
 /// exactly what its own sampler gives (zero in the other lanes). Lanes
 /// that share their numbers and set size (a batch's samples of one pixel,
 /// or one sample's several draws) are drawn together in SIMD lanes
-/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]), one group
-/// after another where a batch holds several pixels' samples (rather than
-/// the first group in lanes and the rest one by one: one thread, seven
-/// alternating runs, soft-shadow at 4 spp 0.0157 → 0.0147 s, thin-lens at
-/// 4 spp 0.0794 → 0.0731 s, dragon-rect at 5 spp 0.1068 → 0.1020 s).
+/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]), each such set
+/// of lanes in turn where a batch holds several pixels' samples, rather
+/// than the first set in lanes and the rest one by one (timed in
+/// docs/mitsuba.md, "What was tried for the render").
 #[inline]
 pub(super) fn draw_2d_lanes<'c>(
     wanted: u32,
