@@ -6,7 +6,7 @@
 //! `make -C tools/embree` into target/embree/. It builds the same
 //! triangles once at high quality and then traces the same rays on request
 //! (`--serve`): rtcIntersect1 / rtcOccluded1 ray by ray, rtcIntersect8 /
-//! rtcOccluded8 on the same batches of 8 for the packet rows. Its passes and
+//! rtcOccluded8 on the same packets of 8 for the packet rows. Its passes and
 //! strata's alternate, so a change in the machine's load falls on both.
 //! Without a C compiler or libembree-dev, one line says so and the column
 //! stays empty.
@@ -29,9 +29,9 @@ use strata::system::memory::peak_rss_bytes;
 pub struct BenchArgs {
     /// Meshes (OBJ, glTF, GLB or PLY); default: every mesh in assets/.
     pub meshes: Vec<PathBuf>,
-    /// Batches of 8 rays per ray set.
-    #[arg(long, default_value_t = 50_000)]
-    pub batches: usize,
+    /// Packets of 8 rays per ray set (the single rows trace them ray by ray).
+    #[arg(long = "batches", value_name = "N", default_value_t = 50_000)]
+    pub packets: usize,
     /// Timed runs per row; the median is reported.
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
@@ -287,7 +287,7 @@ fn bench_meshes(
             scene.geometry.traversal_bytes() as f64 / 1e6
         );
         let sets =
-            [RayKind::Camera, RayKind::Random].map(|k| (k, rays(&scene, k, args.batches, 1)));
+            [RayKind::Camera, RayKind::Random].map(|k| (k, rays(&scene, k, args.packets, 1)));
         let mut embree = match harness {
             Some(exe) => {
                 let flat: Vec<Ray> = sets
@@ -306,15 +306,15 @@ fn bench_meshes(
             None => None,
         };
         let mut first = 0;
-        for (kind, batches) in &sets {
-            let (kind, count) = (*kind, batches.len() * 8);
+        for (kind, packets) in &sets {
+            let (kind, count) = (*kind, packets.len() * 8);
             for query in [Query::Closest, Query::Occlusion] {
                 for (threads, pool) in pools {
                     for packet in [false, true] {
                         // strata's passes and Embree's alternate.
                         let (mut times, mut theirs) = (vec![], vec![]);
                         for _ in 0..args.repeats.max(1) {
-                            times.push(trace(&scene, batches, query, packet, pool).0);
+                            times.push(trace(&scene, packets, query, packet, pool).0);
                             if let Some(e) = embree.as_mut() {
                                 theirs.push(e.pass(first, count, query, packet, *threads)?);
                             }

@@ -1,6 +1,6 @@
 //! `strata rays KIND MESH -n N [--seed S] -o RAYS.bin`: write a ray set for
 //! testing intersection (see [`strata::rays`] for the kinds), plus a
-//! description `RAYS.bin.json` that names the kind of each run of rays.
+//! description `RAYS.bin.json` that names the kind of each ray set in it.
 //!
 //! ```json
 //! { "format": "strata-rays", "mesh": "bunny.obj", "triangles": 69666,

@@ -58,13 +58,13 @@ pub struct RenderArgs {
     /// the caches (thinner passes are slower, never a different image).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub passes: Option<u32>,
-    /// slices: work stealing over sample slices of pixel batches; regions: one
+    /// slices: work stealing over sample slices of work items (64 pixels); regions: one
     /// static band of rows per thread, a baseline for `strata scaling`.
     #[arg(long, default_value = "slices")]
     pub schedule: Schedule,
-    /// Trace coherent batches (one pixel's camera samples, the shadow rays
-    /// from their hits to one light) as 8-ray packets: auto where measured to pay
-    /// (camera batches of 7 or more rays), on, or off. The image is
+    /// Trace a batch's coherent rays (one pixel's camera samples, the shadow
+    /// rays from their hits to one light sample) as 8-ray packets: auto where
+    /// measured to pay (7 or more camera rays), on, or off. The image is
     /// bit-identical in every mode.
     #[arg(long, default_value = "auto")]
     pub packets: strata::shade::PacketMode,

@@ -33,7 +33,7 @@ pub struct ScalingArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeats: u32,
     /// Which in-process scheduler(s) to measure: slices (work stealing over
-    /// pixel batches × sample slices), regions (one static band per thread,
+    /// work items × sample slices), regions (one static band per thread,
     /// the classic baseline), or both.
     #[arg(long, value_enum, default_value = "both")]
     pub schedule: ScheduleChoice,

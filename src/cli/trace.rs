@@ -1,9 +1,10 @@
 //! `strata trace MESH --rays RAYS.bin --hits HITS.bin [--occlusion] [--threads T]`:
 //! trace a ray file against one mesh with the renderer's own queries
 //! (`Geometry::intersect_stream` and `occluded_stream`, which send
-//! windows of alike rays as bundles and narrow groups of eight as
-//! packets, or one ray at a time through `intersect` and `occluded`) and
-//! write one hit record per ray (see [`strata::rays::file`]).
+//! spans of alike rays as bundles and eight consecutive rays narrow
+//! enough as packets, or one ray at a time through `intersect` and
+//! `occluded`) and write one hit record per ray (see
+//! [`strata::rays::file`]).
 
 use super::CliError;
 use clap::Args;
@@ -49,8 +50,8 @@ pub struct TraceArgs {
     #[arg(long, default_value = "auto")]
     pub prefetch: Prefetch,
     /// Trace one ray at a time, as the renderer traces a lone ray, instead
-    /// of windows of alike rays (close origins or close directions) in
-    /// bundles of 64, narrow groups of eight as packets and the rest
+    /// of spans of alike rays (close origins or close directions) in
+    /// bundles of 64, eight consecutive rays narrow enough as packets and the rest
     /// several in flight at once on each thread. The hits are the same;
     /// compare the two to measure them.
     #[arg(long)]
@@ -70,9 +71,8 @@ const CHUNK: usize = 256;
 /// answers' buffer is timed: embreex's timing does not count Embree's
 /// start, and the native harness (`tools/embree`) writes into a buffer it
 /// allocated before its clock started, so a pass here must not pay for
-/// allocating, growing and first touching 16 bytes a ray either: timed,
-/// they held the dragon's camera rays to 22 Mrays/s of occlusion, against
-/// 29 without them (one thread).
+/// allocating, growing and first touching 16 bytes a ray either (what
+/// timing them cost: docs/embree.md, "The harness").
 pub fn trace(
     scene: &Scene,
     rays: &[strata::math::Ray],

@@ -1,6 +1,6 @@
 //! The throughput suite behind `strata bench`: per mesh, BVH build time,
 //! bytes per triangle, and Mrays/s for closest hit and occlusion on
-//! coherent rays (the lens samples of one pixel, 8 per batch) and
+//! coherent rays (the 8 lens samples of one pixel to a packet) and
 //! incoherent rays (random chords of the bounding sphere), traced one by
 //! one and as packets, at 1 thread and at all threads.
 //!
@@ -14,10 +14,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Coherent or incoherent rays, in batches of [`PACKET_SIZE`].
+/// Coherent or incoherent rays, in packets of [`PACKET_SIZE`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RayKind {
-    /// A `side`² pixel camera looking at the mesh; each batch is the 8 lens
+    /// A `side`² pixel camera looking at the mesh; each packet is the 8 lens
     /// samples (a lens of 2% of the scene radius) of one pixel.
     Camera,
     /// Chords between two uniform points on the bounding sphere.
@@ -40,14 +40,14 @@ fn sphere_point(rng: &mut StreamRng) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
-/// `batches` batches of 8 rays of `kind` around the scene's BVH bounds;
-/// batch `k` draws from its own seeded stream.
-pub fn rays(scene: &Scene, kind: RayKind, batches: usize, seed: u32) -> Vec<[Ray; PACKET_SIZE]> {
+/// `packets` packets of 8 rays of `kind` around the scene's BVH bounds;
+/// packet `k` draws from its own seeded stream.
+pub fn rays(scene: &Scene, kind: RayKind, packets: usize, seed: u32) -> Vec<[Ray; PACKET_SIZE]> {
     let b = scene.geometry.bvh.bounds;
     let center = (b.min + b.max) * 0.5;
     let radius = ((b.max - b.min).length() * 0.5).max(1e-6);
-    let side = (batches as f64).sqrt().ceil() as usize;
-    (0..batches)
+    let side = (packets as f64).sqrt().ceil() as usize;
+    (0..packets)
         .map(|k| {
             let mut rng = item_stream(seed, kind as u32, k as u32);
             std::array::from_fn(|_| match kind {
@@ -78,40 +78,40 @@ pub enum Query {
     Occlusion,
 }
 
-/// Trace every batch once; returns (seconds, hits). `packet` traces each
-/// batch with [`Geometry::intersect_packet`](crate::geometry::Geometry::intersect_packet) /
+/// Trace every packet's rays once; returns (seconds, hits). `packet`
+/// traces each packet with [`Geometry::intersect_packet`](crate::geometry::Geometry::intersect_packet) /
 /// [`Geometry::occluded_packet`](crate::geometry::Geometry::occluded_packet),
 /// else ray by ray.
 pub fn trace(
     scene: &Scene,
-    batches: &[[Ray; PACKET_SIZE]],
+    packets: &[[Ray; PACKET_SIZE]],
     query: Query,
     packet: bool,
     pool: &rayon::ThreadPool,
 ) -> (f64, u64) {
     let start = Instant::now();
     let hits: u64 = pool.install(|| {
-        batches
+        packets
             .par_chunks(64)
             .map(|chunk| {
                 let mut hits = 0u64;
-                for batch in chunk {
+                for rays in chunk {
                     hits += match (query, packet) {
-                        (Query::Closest, false) => batch
+                        (Query::Closest, false) => rays
                             .iter()
                             .filter(|r| scene.geometry.intersect(r).is_some())
                             .count(),
                         (Query::Occlusion, false) => {
-                            batch.iter().filter(|r| scene.geometry.occluded(r)).count()
+                            rays.iter().filter(|r| scene.geometry.occluded(r)).count()
                         }
                         (Query::Closest, true) => {
                             let mut out = [None; PACKET_SIZE];
-                            scene.geometry.intersect_packet(batch, &mut out);
+                            scene.geometry.intersect_packet(rays, &mut out);
                             out.iter().filter(|h| h.is_some()).count()
                         }
                         (Query::Occlusion, true) => {
                             let mut out = [false; PACKET_SIZE];
-                            scene.geometry.occluded_packet(batch, u32::MAX, &mut out);
+                            scene.geometry.occluded_packet(rays, u32::MAX, &mut out);
                             out.iter().filter(|&&b| b).count()
                         }
                     } as u64;

@@ -70,8 +70,8 @@ impl PixelSum {
 /// m shifted left by e + 32, or shifted right with the half added first
 /// (rounding half up, which for v ≥ 0 is `round`'s half away from zero).
 /// Through f64 this took two saturating f64 → i64 conversions and a
-/// rounding per channel, with their range checks (`perf`: most of the
-/// film's cost in a render).
+/// rounding per channel, with their range checks, which were most of the
+/// film's cost (docs/mitsuba.md, "What was tried for the render").
 #[inline]
 fn fixed(v: f32) -> i128 {
     let bits = v.to_bits() & 0x7fff_ffff;

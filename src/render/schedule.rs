@@ -1,9 +1,10 @@
-//! Work is (pixel batch × sample slice): a pass renders one slice of every
-//! pixel's samples, and rayon steals pixel batches within the pass. Because
-//! a slice is a range of indices of each pixel's one stratified set
-//! (`sampling::cmj`), splitting work never weakens stratification, and
-//! because sums are fixed point (`render::film`), the image does not depend
-//! on the thread count or on how slices are split across processes.
+//! Work is (work item × sample slice): a pass renders one slice of every
+//! pixel's samples, and rayon steals work items of [`WORK_ITEM_PIXELS`]
+//! consecutive pixels within the pass. Because a slice is a range of
+//! indices of each pixel's one stratified set (`sampling::cmj`), splitting
+//! work never weakens stratification, and because sums are fixed point
+//! (`render::film`), the image does not depend on the thread count or on
+//! how slices are split across processes.
 //!
 //! `Schedule::Regions` is the classic baseline for `strata scaling`: the
 //! image cut into one band of rows per thread, no stealing.
@@ -19,11 +20,10 @@ use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, Sa
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// Pixels per work item: small enough that 64 threads stay busy on small images.
-pub const BATCH: usize = 64;
+pub const WORK_ITEM_PIXELS: usize = 64;
 /// Most passes a render is split into by default (each pass is a progress
 /// tick and a checkpoint).
 pub const DEFAULT_PASSES: u32 = 16;
@@ -35,11 +35,8 @@ pub const DEFAULT_PASSES: u32 = 16;
 /// the tree nodes and leaves its first one walked still in the caches;
 /// the next pass comes back to the pixel only after every other pixel.
 /// Passes are also each a barrier for the threads and a loop over the
-/// film. `scenes/large/dragon-rect.toml`, random sampler, one thread,
-/// `render_s`, alternating runs, medians: at 64 spp, passes of 8 samples
-/// 0.987 s, of 16 0.945 s, of 32 0.918 s, of 64 0.914 s; at 16 spp, two
-/// passes of 8 0.245 s, one of 16 0.237 s (`perf`: the camera packets'
-/// and shadow rays' walks, the same code, take 8% fewer cycles).
+/// film. Passes of 8, 16, 32 and 64 samples are timed in
+/// docs/performance.md, "Passes and lanes".
 pub const MIN_PASS_SAMPLES: u32 = 4 * PACKET_SIZE as u32;
 
 /// Passes for `samples` samples per pixel when none are asked for: up to
@@ -52,8 +49,8 @@ pub fn default_passes(samples: u32) -> u32 {
 }
 
 crate::mode::mode_enum! {
-    /// How work is split over threads: `slices` (work stealing over pixel
-    /// batches × sample slices) or `regions` (one static band of rows per
+    /// How work is split over threads: `slices` (work stealing over work
+    /// items × sample slices) or `regions` (one static band of rows per
     /// thread, the classic baseline).
     #[derive(Default)]
     pub enum Schedule("schedule") {
@@ -114,8 +111,8 @@ pub struct RenderOptions {
     pub passes: Option<u32>,
     /// Sample indices already rendered (from a checkpoint), skipped.
     pub resume_from: Option<u32>,
-    /// Trace coherent batches (camera rays, shadow rays to one light) as
-    /// packets; the image is bit-identical for every mode.
+    /// Trace a batch's camera rays, and its shadow rays towards one light
+    /// sample, as packets; the image is bit-identical for every mode.
     pub packets: PacketMode,
     /// The pixels to render (`--crop`); `None` for the whole image.
     pub window: Option<Window>,
@@ -200,21 +197,15 @@ pub fn render(
         .unwrap_or_else(|| default_passes(full.end - full.start));
     let passes = pass_ranges(start_sample..full.end, passes);
     let n = film.pixel_count();
-    let batches = n.div_ceil(BATCH) as u64;
-    let bar = progress::bar(batches * passes.len() as u64, opts.quiet, "render");
-    let rays = [
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-        AtomicU64::new(0),
-    ];
+    let work_items = n.div_ceil(WORK_ITEM_PIXELS) as u64;
+    let bar = progress::bar(work_items * passes.len() as u64, opts.quiet, "render");
+    let mut counts = RayCounts::default();
     let mut scratch = vec![PixelSum::default(); n];
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
     let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
     let chunk = match opts.schedule {
-        Schedule::Slices => BATCH,
+        Schedule::Slices => WORK_ITEM_PIXELS,
         Schedule::Regions => n.div_ceil(threads),
     };
     // Rays and time at the end of the previous pass, for the current rate.
@@ -235,47 +226,41 @@ pub fn render(
             Some(a) => a.chunks_mut(chunk).map(Some).collect(),
             None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
         };
-        pool.install(|| {
+        // Each chunk's rays are counted by its own integrator and the
+        // pass sums the counts.
+        counts += pool.install(|| {
             scratch
                 .par_chunks_mut(chunk)
                 .zip(aov_chunks.into_par_iter())
                 .enumerate()
-                .for_each(|(b, (pixels, mut aov_pixels))| {
+                .map(|(b, (pixels, mut aov_pixels))| {
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
-                    for (k, accs) in pixels.chunks_mut(BATCH).enumerate() {
+                    for (k, accs) in pixels.chunks_mut(WORK_ITEM_PIXELS).enumerate() {
                         accs.fill(PixelSum::default());
-                        let first = b * chunk + k * BATCH;
-                        let range = k * BATCH..k * BATCH + accs.len();
+                        let first = b * chunk + k * WORK_ITEM_PIXELS;
+                        let range = k * WORK_ITEM_PIXELS..k * WORK_ITEM_PIXELS + accs.len();
                         let aov = aov_pixels.as_deref_mut().map(|a| &mut a[range]);
                         let pixels = PixelRun {
                             window: &window,
                             first,
                         };
                         render_pixels(&mut integrator, scene, pixels, accs, aov, pass.clone());
-                        if opts.schedule == Schedule::Regions && accs.len() == BATCH {
+                        if opts.schedule == Schedule::Regions && accs.len() == WORK_ITEM_PIXELS {
                             bar.inc(1);
                         }
-                    }
-                    let c = integrator.counts;
-                    for (a, v) in rays.iter().zip([
-                        c.camera,
-                        c.shadow,
-                        c.reflection,
-                        c.refraction,
-                        c.glossy_rejected,
-                    ]) {
-                        a.fetch_add(v, Ordering::Relaxed);
                     }
                     if opts.schedule == Schedule::Slices {
                         bar.inc(1);
                     }
-                });
+                    integrator.counts
+                })
+                .reduce(RayCounts::default, |a, b| a + b)
         });
         for (i, acc) in scratch.iter().enumerate() {
             film.add_pixel(i, acc);
         }
         let elapsed = start.elapsed().as_secs_f64();
-        let total: u64 = rays[..4].iter().map(|a| a.load(Ordering::Relaxed)).sum();
+        let total = counts.total();
         rate = format!(
             " {:.2} Mrays/s",
             (total - last_rays) as f64 / (elapsed - last_time).max(1e-9) / 1e6
@@ -286,16 +271,9 @@ pub fn render(
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
-    let load = |i: usize| rays[i].load(Ordering::Relaxed);
     RenderOutcome {
         film,
-        counts: RayCounts {
-            camera: load(0),
-            shadow: load(1),
-            reflection: load(2),
-            refraction: load(3),
-            glossy_rejected: load(4),
-        },
+        counts,
         seconds,
         threads,
         samples: full,
@@ -339,20 +317,17 @@ pub struct PixelRun<'w> {
 /// accs.len()` of its window, into `accs`, and with `aov`, what their camera
 /// rays hit first into it.
 ///
-/// The pixels' samples form one stream, pixel by pixel and in index order
-/// within each, and go to the integrator [`PACKET_SIZE`] at a time: with
+/// The pixels' samples form one sequence, pixel by pixel and in index order
+/// within each, and go to the integrator a batch of [`PACKET_SIZE`] at a time: with
 /// eight or more samples per pixel a batch is mostly the pixel and lens
 /// samples of one pixel, whose rays start close together and point nearly
 /// the same way; with fewer (or a pixel's last few) it takes the next
 /// pixels' samples too, so that its SIMD lanes (its camera packet, its
 /// light samples) are full and a one-sample pass does not shade one ray
-/// at a time. One thread, `render_s`, seven alternating runs, medians,
-/// against batches of one pixel's samples: soft-shadow at 1 spp 0.0104 →
-/// 0.0044 s, at 4 spp 0.027 → 0.020 s; dragon-rect at 5 spp 0.122 →
-/// 0.110 s, at 12 spp (random) 0.212 → 0.201 s; seed-mc at 4 spp 0.097 →
-/// 0.091 s. Such batches still gain from travelling as packets
-/// (`--packets off` against `auto`: dragon-rect at 1 spp 0.0283 against
-/// 0.0263 s, at 5 spp 0.116 against 0.103 s). Each sample is still
+/// at a time; such batches' camera rays still gain from travelling as a
+/// packet (the timings against batches of one pixel's samples and against
+/// `--packets off` are in docs/performance.md, "Passes and lanes", and
+/// "Measurements behind the renderer's defaults"). Each sample is still
 /// computed from its own index alone and added to its own pixel in index
 /// order, so the sums are those of sample-by-sample rendering.
 pub fn render_pixels(
@@ -372,9 +347,9 @@ pub fn render_pixels(
     // The common set sizes, prepared once for all these pixels: camera
     // samples, and first-hit light samples.
     let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
-    // The pixel the stream is in (`j`), what it shares among its samples,
-    // and its next sample; kept across batches, so that each pixel is set
-    // up once and the stream needs no divisions.
+    // The pixel the sequence is in (`j`), what it shares among its
+    // samples, and its next sample; kept across batches, so that each pixel
+    // is set up once and the sequence needs no divisions.
     let setup = |j: usize| {
         let (x, y, index) = run.window.pixel(run.first + j);
         let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
@@ -390,17 +365,17 @@ pub fn render_pixels(
     // Each lane's pixel: a lane that stays with its pixel from one batch
     // to the next keeps its sample context and changes only the index.
     // (Written whole per sample, the 168-byte contexts were copied through
-    // the stack with wide loads that stalled on narrower stores: `perf
-    // annotate`.)
+    // the stack with wide loads that stalled on narrower stores; see
+    // docs/mitsuba.md, "What was tried for the render".)
     let mut pixel_of = [usize::MAX; PACKET_SIZE];
     while j < accs.len() {
-        // The batch's runs of one pixel's samples.
+        // The batch's samples, one pixel's at a time.
         let mut n = 0;
         while n < PACKET_SIZE && j < accs.len() {
             let end = samples.end.min(next + (PACKET_SIZE - n) as u32);
             let len = (end - next) as usize;
-            // The run's pixel samples in SIMD lanes (unused lanes repeat
-            // the last sample).
+            // This pixel's share of the batch: its pixel samples in SIMD
+            // lanes (unused lanes repeat the last sample).
             let index = std::array::from_fn(|i| (next + i as u32).min(end - 1));
             let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
             let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);

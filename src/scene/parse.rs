@@ -7,12 +7,6 @@ use super::source_map::SourceMap;
 use crate::error::{InputError, InputResult};
 use std::path::Path;
 
-pub fn read_description(path: &Path) -> InputResult<SceneDescription> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;
-    parse_description(path, &text)
-}
-
 /// Parse scene text with `--set` edits applied. The text as written is
 /// checked first, so its own mistakes are reported at its lines; what is
 /// wrong after that comes from an edit, and is reported as that `--set`.

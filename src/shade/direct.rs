@@ -7,17 +7,19 @@
 //! square roots, and eight lanes run eight chains at once. Every lane's
 //! numbers are exactly those of lighting its point alone.
 //!
-//! Their shadow rays then travel in waves: sample `j` of one light from
-//! every lane, gathered first and traced back to back (a packet only under
-//! `--packets on`; see [`super::packets`]). Tracing a wave's rays together
-//! rather than between the shading of each was 3–7% faster per render on
-//! one thread (seed-mc, the bunny, the dragon), and each lane still adds
-//! its contributions in sample order.
+//! Their shadow rays are then the batch's shadow rays towards one light
+//! sample: sample `j` of one light from every lane, gathered first and
+//! traced back to back (a packet only under `--packets on`; see
+//! [`super::packets`]). Traced together rather than between the shading
+//! of each hit, they leave one another's tree nodes in the caches (3–7%
+//! off a render on one thread; docs/mitsuba.md, "What was tried for the
+//! whole process"), and each lane still adds its contributions in sample
+//! order.
 //!
 //! A single hit lit with several samples of an area light (a reflected
 //! or refracted ray's hit) would leave seven lanes idle, so its
-//! samples fill the lanes instead, eight per round and per wave (seed-mc
-//! 20% faster).
+//! samples fill the lanes instead, eight per round (docs/mitsuba.md,
+//! "What was tried for the render").
 //!
 //! [`Light::seen_from_lanes`]: crate::light::Light::seen_from_lanes
 
@@ -107,7 +109,7 @@ impl Integrator<'_> {
                 Some(_) => m_samples.div_ceil(LANES as u32),
                 None => m_samples,
             };
-            let mut wave = ShadowWave::default();
+            let mut shadow = ShadowRays::default();
             let mut u = [Vec2::ZERO; LANES];
             for round in 0..rounds {
                 // The slots of this round, and each slot's hit and sample.
@@ -128,7 +130,7 @@ impl Integrator<'_> {
                     u = draw_2d_lanes(slots, |k| lanes[hit[k]].ctx, dim, at);
                 }
                 let samples = seen.sample(slots, &u);
-                wave.len = 0;
+                shadow.len = 0;
                 for k in mask_lanes(slots) {
                     let Some(ls) = samples[k] else {
                         continue;
@@ -161,13 +163,13 @@ impl Integrator<'_> {
                     } else {
                         f32::INFINITY
                     };
-                    let n = wave.len;
-                    wave.rays[n] = Ray::segment(origin, ls.wi, tmax);
-                    wave.contribution[n] = f * ls.weight * cos_i;
-                    wave.lane[n] = i as u8;
-                    wave.len += 1;
+                    let n = shadow.len;
+                    shadow.rays[n] = Ray::segment(origin, ls.wi, tmax);
+                    shadow.contribution[n] = f * ls.weight * cos_i;
+                    shadow.lane[n] = i as u8;
+                    shadow.len += 1;
                 }
-                self.trace_wave(&wave, except, &mut sum);
+                self.trace_shadow_rays(&shadow, except, &mut sum);
             }
             for i in mask_lanes(active) {
                 l[i] += sum[i] / m_samples as f32;
@@ -179,19 +181,19 @@ impl Integrator<'_> {
     /// Trace one sample's shadow rays from every lane (ignoring primitive
     /// `except`, the light's own surface) and add the contributions of those
     /// that reach the light to their lanes' sums.
-    fn trace_wave(&mut self, wave: &ShadowWave, except: u32, sum: &mut [Vec3; LANES]) {
-        let n = wave.len;
+    fn trace_shadow_rays(&mut self, shadow: &ShadowRays, except: u32, sum: &mut [Vec3; LANES]) {
+        let n = shadow.len;
         if n == 0 {
             return;
         }
-        let rays = &wave.rays[..n];
+        let rays = &shadow.rays[..n];
         let mut blocked = [false; PACKET_SIZE];
         if self.packets.use_packet(n, SHADOW_PACKET_MIN) {
             self.scene
                 .geometry
                 .occluded_packet(rays, except, &mut blocked[..n]);
         } else {
-            // One ray at a time, not `occluded_stream`: a wave's rays start
+            // One ray at a time, not `occluded_stream`: these rays start
             // close together and head for one light, so they share cached
             // nodes and interleaving their walks only adds work
             // (docs/mitsuba.md, "What was tried for the render").
@@ -199,7 +201,12 @@ impl Integrator<'_> {
                 *b = self.scene.geometry.occluded_except(r, except);
             }
         }
-        for ((c, &lane), b) in wave.contribution.iter().zip(&wave.lane).zip(&blocked[..n]) {
+        for ((c, &lane), b) in shadow
+            .contribution
+            .iter()
+            .zip(&shadow.lane)
+            .zip(&blocked[..n])
+        {
             if !b {
                 sum[lane as usize] += *c;
             }
@@ -207,16 +214,17 @@ impl Integrator<'_> {
     }
 }
 
-/// One sample's shadow rays towards one light, one from each lane's hit
-/// point, waiting to be traced, with what each adds if it reaches the light.
-struct ShadowWave {
+/// The shadow rays of a batch towards one light sample, one from each
+/// lane's hit point (or, for a single hit, one per sample of the round),
+/// waiting to be traced, with what each adds if it reaches the light.
+struct ShadowRays {
     rays: [Ray; PACKET_SIZE],
     contribution: [Vec3; PACKET_SIZE],
     lane: [u8; PACKET_SIZE],
     len: usize,
 }
 
-impl Default for ShadowWave {
+impl Default for ShadowRays {
     fn default() -> Self {
         Self {
             rays: [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_SIZE],

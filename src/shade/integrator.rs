@@ -32,7 +32,8 @@ impl<'s> Shading<'s> {
     /// The hit `surface` of `ray`, with its material and its normals faced
     /// towards the viewer. Inlined, so that the shading is built where the
     /// caller keeps it rather than returned through memory and copied:
-    /// dragon-rect render 2% faster.
+    /// dragon-rect render 2% faster (docs/mitsuba.md, "What was tried for
+    /// the render").
     #[inline(always)]
     fn new(scene: &'s Scene, surface: &'s Surface, ray: &Ray) -> Self {
         let material = &scene.materials[surface.material as usize];
@@ -241,8 +242,8 @@ impl Integrator<'_> {
         let scene = self.scene;
         // Filled in place, slot by slot: built through `array::from_fn`
         // and `?`, each element was written into a temporary and copied
-        // with wide loads that waited on its narrower stores (`perf`: a
-        // third of this function's samples on those loads).
+        // with wide loads that waited on its narrower stores (docs/mitsuba.md,
+        // "What was tried for the render").
         let mut surfaces: [Option<Surface>; N] = [None; N];
         for (surface, lane) in surfaces.iter_mut().zip(lanes) {
             if let Some(hit) = &lane.hit {

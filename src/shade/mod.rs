@@ -18,12 +18,12 @@
 //! the cost grows by K once, not Kᵈᵉᵖᵗʰ. Lobe directions that fall below the
 //! surface are rejected (they contribute nothing) and counted.
 //!
-//! Coherent batches are traced as packets ([`PacketMode`]): the camera rays
-//! of neighbouring samples ([`Integrator::camera_batch`]) and the shadow rays
-//! from their hits towards one light, one per hit (a wave; `direct.rs`).
-//! Packets return exactly the hits of
+//! A batch's coherent rays are traced as packets ([`PacketMode`]): the
+//! camera rays of its neighbouring samples ([`Integrator::camera_batch`])
+//! and the shadow rays of the batch, from its hits towards one light
+//! sample, one per hit (`direct.rs`). Packets return exactly the hits of
 //! single rays and every batch is shaded in sample order, so the image is
-//! bit-identical with packets on or off. The hits of one camera batch are
+//! bit-identical with packets on or off. The hits of one batch are
 //! lit together, one SIMD lane each (a rect light's spherical rectangles
 //! are built and sampled in `f32x8` lanes); each lane computes exactly what
 //! its sample alone would, so the image does not depend on the batching.
@@ -35,7 +35,7 @@
 //! | [`specular`] | mirror, glossy and refracted rays |
 //! | [`bsdf`] | the Phong BRDF, Snell's law and Schlick's Fresnel |
 //! | [`sample`] | what identifies a sample, ray counts, replay events |
-//! | [`packets`] | when coherent batches travel as packets |
+//! | [`packets`] | when a batch's rays travel as packets |
 
 pub mod bsdf;
 pub mod direct;

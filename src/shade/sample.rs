@@ -20,13 +20,25 @@ impl RayCounts {
     pub fn total(&self) -> u64 {
         self.camera + self.shadow + self.reflection + self.refraction
     }
+}
 
-    pub fn add(&mut self, o: &RayCounts) {
+/// Counts summed field by field: each work item counts its own rays, and
+/// the render adds them up.
+impl std::ops::AddAssign for RayCounts {
+    fn add_assign(&mut self, o: RayCounts) {
         self.camera += o.camera;
         self.shadow += o.shadow;
         self.reflection += o.reflection;
         self.refraction += o.refraction;
         self.glossy_rejected += o.glossy_rejected;
+    }
+}
+
+impl std::ops::Add for RayCounts {
+    type Output = RayCounts;
+    fn add(mut self, o: RayCounts) -> RayCounts {
+        self += o;
+        self
     }
 }
 
@@ -77,11 +89,10 @@ impl SampleContext {
 /// exactly what its own sampler gives (zero in the other lanes). Lanes
 /// that share their numbers and set size (a batch's samples of one pixel,
 /// or one sample's several draws) are drawn together in SIMD lanes
-/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]), one group
-/// after another where a batch holds several pixels' samples (rather than
-/// the first group in lanes and the rest one by one: one thread, seven
-/// alternating runs, soft-shadow at 4 spp 0.0157 → 0.0147 s, thin-lens at
-/// 4 spp 0.0794 → 0.0731 s, dragon-rect at 5 spp 0.1068 → 0.1020 s).
+/// ([`crate::sampling::sampler::DimSampler::get_2d_lanes`]), each such set
+/// of lanes in turn where a batch holds several pixels' samples, rather
+/// than the first set in lanes and the rest one by one (timed in
+/// docs/mitsuba.md, "What was tried for the render").
 #[inline]
 pub(super) fn draw_2d_lanes<'c>(
     wanted: u32,
@@ -152,7 +163,7 @@ mod tests {
 
     /// Every wanted lane gets exactly its own sampler's draw, whatever mix
     /// of pixels, sample indices and set sizes the lanes hold, and the
-    /// other lanes zero: batches of one pixel, of several pixels' runs,
+    /// other lanes zero: batches of one pixel, of several pixels' samples,
     /// and lanes with a set size of their own.
     #[test]
     fn each_lane_draws_what_its_own_sampler_gives() {

@@ -157,9 +157,8 @@ pub(super) fn read_body(
 ///
 /// This scan is the serial part of a parallel parse, so it finds line
 /// ends 64 bytes at a time ([`line_feeds`]) instead of one search per
-/// line, which took 15 ms of the dragon's 107 ms two-thread load (34 MB,
-/// 1.3 M lines). Load, dragon, medians of five interleaved runs: one
-/// thread 0.144 → 0.133 s, two 0.106 → 0.093 s.
+/// line (timed in docs/performance.md, "Measurements behind the
+/// renderer's defaults").
 fn take_elements(text: &str, n: usize) -> Option<(&str, usize)> {
     if n == 0 {
         return Some(("", 0));
