@@ -28,13 +28,9 @@ crate::mode::mode_enum! {
 }
 
 /// A render that traces fewer rays than this per primitive builds a big
-/// mesh's tree with the fastest preset under `auto`. Measured on the
-/// dragon (871k triangles, `scenes/large/dragon-rect.toml`, 2 threads,
-/// three alternating runs, medians): `fastest` (over clusters,
-/// [`super::cluster`]) builds in 0.17 s against `medium`'s 0.41 s and
-/// renders 5% slower (0.92 s against 0.88 s at 64 spp, 11 rays a
-/// triangle), so the two break even near 60 rays a triangle; 32 keeps
-/// `auto` on the safe side of that noisy figure.
+/// mesh's tree with the fastest preset under `auto`: the presets' build
+/// and render times break even near 60 rays a triangle, and 32 keeps
+/// `auto` on the safe side (docs/embree.md, "Build and collapse").
 const FASTEST_BELOW_RAYS_PER_PRIM: u64 = 32;
 
 /// Below this many primitives every preset builds in a few milliseconds:
@@ -75,7 +71,7 @@ impl BuildQuality {
 }
 
 /// The 8-wide BVH. `prim_ids` lists primitive ids in leaf order, in
-/// blocks of [`LEAF_BLOCK`](super::LEAF_BLOCK) slots that no leaf straddles; unused slots
+/// blocks of [`LANES`](crate::math::lanes::LANES) slots that no leaf straddles; unused slots
 /// hold [`NO_PRIM`](super::NO_PRIM).
 #[derive(Debug, Clone)]
 pub struct Bvh8 {

@@ -35,36 +35,18 @@ use crate::math::ray::ray_lanes;
 use crate::math::{Aabb, Ray};
 use wide::{f32x8, u32x8};
 
-/// Most rays in one bundle: one bit each in a `u64` mask. Camera rays that
-/// enter the dragon's box, occlusion, one thread (Mrays/s, medians of five
-/// alternating runs): 11.8 in bundles of 64, 11.5 in bundles of 32, 9.5 in
-/// bundles of 16.
+/// Most rays in one bundle: one bit each in a `u64` mask, the fastest of
+/// the sizes tried (docs/embree.md, "Bundles").
 pub const BUNDLE_SIZE: usize = 64;
 
 /// The size of a tree's nodes and leaf blocks up to which a stream's
-/// alike rays walk as bundles (`geometry::bundles`): eight times this machine's 32 MiB of
-/// last-level cache, between the two sizes where bundles went from level
-/// to slower (for occlusion; closest hits gained on all three trees
-/// measured, up to 185 MB). Camera rays, occlusion, one thread, bundles
-/// against packets and single rays in flight (Mrays/s, alternating runs,
-/// medians):
-///
-/// - the bunny, 3.5 MB, 300,000 rays: 37.5 against 21.2;
-/// - the dragon, 46 MB: 100,000 rays 16.8–19.4 against 14.3–14.8, a
-///   million 33.7–33.9 against 31.7–33.1;
-/// - the dragon subdivided once, 185 MB: 200,000 rays 13.4 against 13.5,
-///   a million 23.9 against 24.4;
-/// - subdivided twice, 740 MB: 200,000 rays 10.0 against 11.9, a million
-///   16.4 against 15.8.
-///
-/// Closest hits: the bunny 32.8–34.9 against 15.8–15.9; the dragon,
-/// 100,000 rays 14.3–14.6 against 12.1, a million 27.5 against 23.7;
-/// subdivided once 12.4 against 11.5 and 20.8 against 17.3.
-///
-/// A bundle saves instructions (a node's test set up once for all its
-/// rays, no sort or stack work per ray) but walks one node at a time; on a
-/// tree many times the caches' size the waits for memory dominate, and
-/// single rays in flight overlap them (`super::stream`).
+/// alike rays walk as bundles (`geometry::bundles`): eight times the 32 MiB
+/// of last-level cache it was measured on, between the sizes where bundles
+/// went from level to slower (docs/embree.md, "Bundles"). A bundle saves
+/// instructions (a node's test set up once for all its rays, no sort or
+/// stack work per ray) but walks one node at a time; on a tree many times
+/// the caches' size the waits for memory dominate, and single rays in
+/// flight overlap them (`super::in_flight`).
 pub const BUNDLE_MAX_BYTES: usize = 256 << 20;
 
 /// One ray of a bundle as its node tests read it: the single-ray test's
@@ -215,8 +197,7 @@ impl OctantWalk {
             return false;
         }
         // Every child entered is prefetched before the sort, the one visited
-        // next too: its first loads waited on memory (a leaf's block was a
-        // fifth of a camera occlusion bundle's `perf` samples).
+        // next too: its first loads waited on memory.
         if bvh.prefetch {
             let mut c = children;
             while c != 0 {
@@ -224,9 +205,8 @@ impl OctantWalk {
                 c &= c - 1;
             }
         }
-        // The nearest child next, the others pushed farthest first: 12.2
-        // Mrays/s against 11.2 in slot order (occlusion, the dragon's camera
-        // rays that enter its box, three alternating runs).
+        // The nearest child next, the others pushed farthest first, which
+        // beat slot order (docs/embree.md, "Bundles").
         let entries = nearest_last(nearest, children, &node.child);
         let n = children.count_ones() as usize;
         for &e in &entries[..n - 1] {

@@ -12,14 +12,9 @@
 //! writes and the cost tables the collapse fills over that tree. A cluster
 //! holds at most 2^ROUNDS primitives, which the 8-wide leaves hold whole.
 //!
-//! Dragon (871k triangles), one thread (`strata bench assets/dragon.ply
-//! --bvh-quality fastest --no-embree --threads 1`): build 0.23 → 0.17 s,
-//! peak 280 → 133 bytes a triangle, SAH cost 20.3 → 19.8, and rays as fast
-//! or faster. The other presets keep one primitive a PLOC leaf: their
-//! wider windows and reinsertion make better trees than the clusters allow
-//! (SAH cost with clusters: fast 17.9 → 18.4, medium 18.0 → 18.4, high 17.5
-//! → 18.1), and on the 14M-triangle mesh the fast preset over clusters
-//! built in 3.8 s instead of 8.8 s but traced 4–12% slower.
+//! Only the fastest preset starts from clusters: the others' wider windows
+//! and reinsertion make better trees than the clusters allow
+//! (docs/embree.md, "Build and collapse").
 
 use super::collapse::LEAF_PRIMS;
 use crate::math::Aabb;
@@ -27,10 +22,9 @@ use glam::{UVec3, Vec3};
 use obvhs::ploc::morton::morton_encode_u32;
 use rayon::prelude::*;
 
-/// Rounds of pairing: clusters hold up to 2^ROUNDS primitives. Two rounds
-/// made the dragon's fastest build 0.26 s (its BVH phase in `strata
-/// render`), three 0.22 s, from 0.35 s without; the tree's SAH cost was
-/// 19.8 either way.
+/// Rounds of pairing: clusters hold up to 2^ROUNDS primitives; three
+/// built fastest for the same SAH cost (docs/embree.md, "Build and
+/// collapse").
 const ROUNDS: u32 = 3;
 const _: () = assert!(1 << ROUNDS <= LEAF_PRIMS);
 

@@ -1,6 +1,6 @@
 //! The collapse of obvhs's binary tree into 8-wide nodes, chosen by the
 //! surface area heuristic over the whole subtree (Ylitie, Karras and Laine
-//! 2017), and the packing of its leaves into blocks of [`LEAF_BLOCK`] slots.
+//! 2017), and the packing of its leaves into blocks of [`LANES`] slots.
 //!
 //! Both passes run in parallel: the cost tables over the subtrees of the
 //! top [`PARALLEL_DEPTH`] levels, and the emission of 8-wide nodes over
@@ -8,11 +8,11 @@
 //! choice is a function of the binary tree alone, so the 8-wide tree is
 //! the same for any thread count. The tables record their choices as they
 //! are filled ([`Choices`]), so the emission follows them without
-//! recomputing a split: the same tree, built 8% faster (dragon, fastest
-//! preset, one thread: 0.368 → 0.337 s, medians of interleaved runs).
+//! recomputing a split: the same tree, built faster.
 
 use super::build::Bvh8;
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS};
+use crate::math::lanes::LANES;
 use crate::math::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::Bvh2;
@@ -23,26 +23,18 @@ use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 /// The relative costs the collapse weighs, per unit of surface area (the
 /// chance a ray enters a box): an 8-wide node test, and a leaf test, which
 /// is one 8-wide triangle test whatever the leaf's size (up to
-/// [`LEAF_PRIMS`]). On this code a node test with its share of child
-/// ordering and stack work is about 70 instructions and four cache lines,
-/// a leaf test about 110 and five. Instructions per dragon ray hardly move
-/// for LEAF_COST from 1 to 2.5; a cost per triangle in the leaf (0.05 or
-/// 0.15 of a node test) only added some (callgrind, random, grazing and
-/// camera rays).
+/// [`LEAF_PRIMS`]): a leaf test costs about half as much again as a node
+/// test with its share of ordering and stack work (docs/embree.md, "Build
+/// and collapse").
 pub(super) const NODE_COST: f32 = 1.0;
 pub(super) const LEAF_COST: f32 = 1.5;
-
-/// Slots per leaf block. A leaf is a run of slots inside one block, so the
-/// scene can store each block as one 8-lane triangle block
-/// ([`crate::shape::triangle_lanes`]) and test a whole leaf at once.
-pub const LEAF_BLOCK: usize = 8;
 
 /// The id of a slot that holds no primitive (padding at the end of a block).
 pub const NO_PRIM: u32 = u32::MAX;
 
 /// Subtrees with at most this many primitives become one leaf.
 pub(super) const LEAF_PRIMS: u32 = 8;
-const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LEAF_BLOCK);
+const _: () = assert!(LEAF_PRIMS <= MAX_LEAF_PRIMS && LEAF_PRIMS as usize <= LANES);
 
 /// Subtrees of at least this many primitives are emitted in parallel, one
 /// task per 8-wide child; smaller ones by one sequential walk. Large
@@ -218,9 +210,8 @@ impl<'a> CollapseCosts<'a> {
         for j in 2..=8 {
             let (split, k) = splits[j];
             // The tie goes to one slot fewer. Which wins is data: selects,
-            // not the branch the compiler made of `min` and a product (its
-            // mispredictions were a third of this function's cycles; tables
-            // 78 -> 70 ms on the dragon, one thread, fastest preset).
+            // not the branch the compiler made of `min` and a product, which
+            // mispredicted.
             let split_wins = split < c[j - 2];
             c[j - 1] = select_unpredictable(split_wins, split, c[j - 2]);
             choices.set_split(j, select_unpredictable(split_wins, k, 0));
@@ -542,8 +533,7 @@ fn leaf_cost(area: f32) -> f32 {
 /// one's share: the smallest share among equal costs.
 #[inline]
 fn split_costs(left: &[f32; 8], right: &[f32; 8]) -> [(f32, usize); 9] {
-    // Selects, not branches: which share wins is data (load and build
-    // 1.5% faster than with branches, dragon, interleaved runs).
+    // Selects, not branches: which share wins is data.
     let mut best = [(f32::INFINITY, 1); 9];
     for (j, entry) in best.iter_mut().enumerate().skip(2) {
         let (mut cost, mut share) = (f32::INFINITY, 1);
@@ -601,7 +591,7 @@ impl Choices {
     }
 }
 
-/// Places leaves into blocks of [`LEAF_BLOCK`] slots so that no leaf
+/// Places leaves into blocks of [`LANES`] slots so that no leaf
 /// straddles two blocks: a leaf is then one 8-wide triangle test over one
 /// contiguous block (see `shape::triangle_lanes`). First fit among the last few
 /// blocks that still have room keeps the padding small (a fraction of a
@@ -625,11 +615,11 @@ impl LanePacker {
             Some(i) => i,
             None => {
                 let start = prim_ids.len() as u32;
-                prim_ids.resize(prim_ids.len() + LEAF_BLOCK, NO_PRIM);
+                prim_ids.resize(prim_ids.len() + LANES, NO_PRIM);
                 if self.open.len() == Self::OPEN_BLOCKS {
                     self.open.remove(0);
                 }
-                self.open.push((start, start + LEAF_BLOCK as u32));
+                self.open.push((start, start + LANES as u32));
                 self.open.len() - 1
             }
         };

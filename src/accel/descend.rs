@@ -9,10 +9,10 @@
 //! slab computes 0·∞ = NaN.
 
 use super::build::Bvh8;
-use super::collapse::LEAF_BLOCK;
 use super::node::{is_leaf, leaf_range};
 use super::prefetch::prefetch;
 use super::stack::Stack;
+use crate::math::lanes::LANES;
 use crate::math::offset::gamma;
 use crate::math::Ray;
 use wide::{f32x8, u32x8};
@@ -27,8 +27,7 @@ pub(crate) struct RayBoxes {
     /// (origin − bound)·(−1/d): the value of (bound − origin)·(1/d), since
     /// negation is exact (only a zero's sign may differ), with the bound as
     /// the subtraction's second operand, which x86 reads straight from
-    /// memory (6 fewer loads per node test, 630 → 611 instructions per
-    /// random dragon ray).
+    /// memory (six fewer loads per node test).
     neg_inv: [f32x8; 3],
     near: [usize; 3],
     far: [usize; 3],
@@ -140,8 +139,7 @@ const BITONIC: [([u32; 8], [u32; 8]); 6] = [
 /// slot), sorted farthest first; the lanes after the last child hold
 /// nothing of use. Branch-free: a sorting network in one register and a
 /// permute of the child references, where an insertion sort mispredicted
-/// about one branch per node that has several children (callgrind's
-/// branch simulation on random dragon rays).
+/// about one branch per node that has several children.
 ///
 /// Clearing the key's low bits moves it toward smaller t (for negative t
 /// too), so comparing it with a limit's key with those bits set (`| 7`)
@@ -181,17 +179,9 @@ impl Bvh8 {
     /// a node. One child needs no sort; two need one comparison; three or
     /// more go through [`nearest_last`]. The two-child case costs an extra
     /// branch, which mispredicts on some nodes, but saves the network's
-    /// six stages where two boxes are hit (callgrind, 50k dragon rays:
-    /// −4.4% instructions for random closest hits, −2.7% for random
-    /// occlusion, −1.3% and −0.5% for camera rays; interleaved wall-time
-    /// A/B, `strata trace --threads 1`, medians of 3–7 runs: closest +13%
-    /// random, +13% inside, +8% grazing, +6% edges, −1.5% camera; occlusion
-    /// +10% camera, +11% edges, +2% random, +1% inside, −5% grazing).
-    /// Children hit are all prefetched first (see
-    /// [`super::prefetch`]). The nearest one included, and before the sort:
-    /// prefetching only the pushed ones, after the sort, was 1–7% slower on
-    /// random dragon rays, and only the two nearest 2–11% slower
-    /// (interleaved wall-time A/B).
+    /// six stages where two boxes are hit. Children hit are all prefetched
+    /// first ([`super::prefetch`]), the nearest one included, and before
+    /// the sort (docs/embree.md, "Node descent").
     #[inline(always)]
     pub(super) fn descend_nearest<L>(
         &self,
@@ -239,7 +229,7 @@ impl Bvh8 {
             if let Some(node) = self.nodes.get(c as usize) {
                 prefetch(node);
             }
-        } else if let Some(leaf) = leaf_data.get(leaf_range(c).0 as usize / LEAF_BLOCK) {
+        } else if let Some(leaf) = leaf_data.get(leaf_range(c).0 as usize / LANES) {
             prefetch(leaf);
         }
     }

@@ -34,7 +34,7 @@ mod stack;
 mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};
-pub use collapse::{LEAF_BLOCK, NO_PRIM};
+pub use collapse::NO_PRIM;
 pub use hit::PrimHit;
 pub use packet::{Packet, PACKET_SIZE};
 pub use query::{AnyHit, AnyHitPacket, Closest, ClosestPacket, PacketQuery, Query};

@@ -43,13 +43,14 @@ use super::descend::WIDEN;
 use super::node::{decode, ChildRef};
 use super::query::PacketQuery;
 use super::stack::Stack;
+use crate::math::lanes::LANES;
 use crate::math::offset::gamma;
 use crate::math::{Aabb, Ray};
 use glam::DVec3;
 use wide::f32x8;
 
-/// Rays per packet: one per `f32x8` lane.
-pub const PACKET_SIZE: usize = 8;
+/// Rays per packet: one per lane.
+pub const PACKET_SIZE: usize = LANES;
 
 /// Up to eight rays in SoA form, with the packet's interval bounds.
 pub struct Packet<'r> {
@@ -221,7 +222,7 @@ impl<'r> Packet<'r> {
     /// Entry distances (lower bounds over the packet) and the mask of the
     /// node's children that some ray with tmax ≤ `tmax` may enter.
     /// `SKIP`: whether any axis is skipped, a constant so that the common
-    /// case compiles without the per-axis checks (they cost 20% there).
+    /// case compiles without the per-axis checks.
     /// An empty slot (an inverted infinite box) may pass where an interval
     /// spans zero; its lane test rejects it on an axis that is not skipped.
     #[inline(always)]
@@ -299,11 +300,10 @@ pub fn reciprocals(soa: &[f32x8; 8]) -> [f32x8; 3] {
 /// for a skipped axis in `test_lanes`; the exit widened by `WIDEN`).
 /// Every node's boxes lie inside the tree's box and each step of that
 /// arithmetic is monotone in the bounds, so a ray that misses the tree's
-/// box enters no node either: a group this test turns away needs no walk,
-/// and its answers are the single rays' (no hit in the tree). For camera
-/// rays that see past a mesh (67% of the dragon's `strata rays camera`
-/// set miss its box) this test replaces the packet's setup and its root
-/// visit. A lane with a NaN anywhere in its test counts as entering, so
+/// box enters no node either: rays this test turns away need no walk,
+/// and their answers are the single rays' (no hit in the tree). For camera
+/// rays that see past a mesh this test replaces the packet's setup and its
+/// root visit. A lane with a NaN anywhere in its test counts as entering, so
 /// such rays keep their usual path.
 #[inline(always)]
 pub fn misses_box(soa: &[f32x8; 8], inv: &[f32x8; 3], bounds: &Aabb) -> bool {

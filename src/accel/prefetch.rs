@@ -11,8 +11,8 @@
 //! software-pipelined prefetch of Mowry, Lam and Gupta 1992, applied to
 //! the stack of a tree walk).
 //!
-//! On a mesh that fits the caches the hints are pure cost (about 14% more
-//! instructions per ray), so [`Prefetch::Auto`] turns them on only for
+//! On a mesh that fits the caches the hints are pure cost, so
+//! [`Prefetch::Auto`] turns them on only for
 //! scenes whose nodes and leaf blocks outgrow [`AUTO_MIN_BYTES`].
 //!
 //! A prefetch is a hint: it never faults and changes no result. Where the
@@ -35,13 +35,9 @@ crate::mode::mode_enum! {
 }
 
 /// The size of a tree's nodes and leaf blocks from which [`Prefetch::Auto`]
-/// prefetches: four times this machine's 2 MiB of L2 per core, between the
-/// two sizes where single-thread wall time was measured (interleaved
-/// `strata trace --repeats 3` runs, medians; `--prefetch on` against `off`):
-///
-/// - the bunny, 3.5 MB: random rays −5% to +4%, camera rays −3% to −9%;
-/// - the bunny subdivided once, 14 MB: random +6% to +10%, camera −2% to −3%;
-/// - the dragon, 45 MB: every `strata rays` kind +9% to +30%.
+/// prefetches: four times the 2 MiB of L2 per core it was measured on,
+/// between the sizes where prefetching lost and won (docs/embree.md,
+/// "Prefetch").
 pub const AUTO_MIN_BYTES: usize = 8 << 20;
 
 impl Prefetch {

@@ -15,9 +15,8 @@ pub(crate) struct Stack<T> {
 /// Entries a stack holds inline. A ray needs at most seven per level of an
 /// 8-wide tree (about 45 on a 14M-triangle mesh, depth 7 to 8 in practice,
 /// and far fewer on average); every ray pays for zeroing these, so 32 is
-/// the compromise: 64 made the zeroing a `memset` call costing 6% of a
-/// random ray's instructions on the bunny. A power of two, so indices are
-/// masked instead of bounds-checked.
+/// the compromise (64 made the zeroing a `memset` call). A power of two,
+/// so indices are masked instead of bounds-checked.
 const STACK_INLINE: usize = 32;
 
 impl<T: Copy + Default> Stack<T> {

@@ -118,7 +118,7 @@ impl Bvh8 {
     /// Walks `ray` through the tree asking `query` at every leaf it may
     /// reach, nearest first, and returns the query's answer.
     ///
-    /// `leaf_data[start / LEAF_BLOCK]` is what the query reads for the leaf
+    /// `leaf_data[start / LANES]` is what the query reads for the leaf
     /// at `start` (a scene's triangle blocks), prefetched when the leaf is
     /// deferred; a caller whose leaf tests read nothing block-shaped passes
     /// an empty slice, and only nodes are prefetched.

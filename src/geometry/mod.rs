@@ -31,10 +31,6 @@ pub use primitive::{
 };
 pub use surface::Surface;
 
-// A BVH leaf is a run of slots inside one block of `LEAF_BLOCK`, and the
-// scene stores each block as one 8-lane triangle block.
-const _: () = assert!(crate::accel::LEAF_BLOCK == LANES);
-
 #[derive(Debug, Clone)]
 pub struct Geometry {
     /// The BVH's leaves, eight slots to a block: slot `s` is lane `s % 8`
