@@ -1,4 +1,4 @@
-//! Packets, streams (bundles, narrow groups as packets, the rest as
+//! Packets, streams (bundles, narrow rays as packets, the rest as
 //! several single rays in flight) and single rays return
 //! identical hits: the same primitive, t,
 //! u, v bit for bit, and the same occlusion answer, on coherent (lens

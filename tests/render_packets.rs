@@ -128,7 +128,7 @@ fn packets_on_off_and_auto_render_the_same_film() {
     let base = busy_scene("films");
     // One to eleven shadow samples per hit; one sample per pixel per pass,
     // three, and all twelve at once. The passes change which hits are lit
-    // together in SIMD lanes, and so which shadow rays travel in one wave
+    // together in SIMD lanes, and so which shadow rays travel together
     // (eight pixels' samples, two pixels' and a third's, or one pixel's
     // eight and then four), which must not change the film either.
     for shadow_samples in [1, 3, 5, 8, 11] {
@@ -228,7 +228,7 @@ fn the_cli_renders_identical_images_with_packets_on_and_off() {
 //   cargo test --release --test render_packets -- --ignored --nocapture
 //
 // Batches are built as the renderer builds them: the camera rays of one
-// pixel (8 pixel and lens samples), and a wave of shadow rays to a rect
+// pixel (8 pixel and lens samples), and the batch's shadow rays to a rect
 // light, one from each of those 8 rays' hits (where all 8 hit and pass
 // the cosine test);
 // for comparison also "row" batches, one sample of each of 8 neighbouring
@@ -283,7 +283,7 @@ mesh = "{mesh}"
 }
 
 /// Pixel batches, row batches and (if the first light is an area light)
-/// full shadow waves.
+/// the shadow rays of full batches.
 fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
     let s = &scene.settings;
     let light = &scene.lights[0];
@@ -302,10 +302,10 @@ fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
                 row.push((0..n).map(|k| camera_ray(x + k, y, 0)).collect());
             }
             // One shadow ray from each sample's hit, as direct_light makes
-            // a wave of them (one light sample per camera sample).
+            // a batch's shadow rays (one light sample per camera sample).
             if light.is_area() {
                 let sampler = PixelSampler::new(s.sampler, s.seed, y * s.width + x);
-                let wave: Vec<Ray> = rays
+                let shadow_rays: Vec<Ray> = rays
                     .iter()
                     .enumerate()
                     .filter_map(|(i, ray)| {
@@ -326,8 +326,8 @@ fn batches(scene: &Scene) -> [Vec<Vec<Ray>>; 3] {
                         Some(Ray::segment(o, ls.wi, ls.distance - (o - sf.p).length()))
                     })
                     .collect();
-                if wave.len() == PACKET_SIZE {
-                    shadow.push(wave);
+                if shadow_rays.len() == PACKET_SIZE {
+                    shadow.push(shadow_rays);
                 }
             }
             pixel.push(rays);
