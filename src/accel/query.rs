@@ -89,10 +89,9 @@ where
 
     #[inline(always)]
     fn leaf(&mut self, state: &mut Self::State, start: u32, count: u32, ray: &mut Ray) -> bool {
-        let leaf = &mut state.leaf;
-        keep_closest(&mut state.best, ray, |r| {
-            (self.hit_leaf)(leaf, start, count, r)
-        });
+        let test = tie_ray(ray, state.best.as_ref());
+        let hit = (self.hit_leaf)(&mut state.leaf, start, count, &test);
+        keep_closer(&mut state.best, ray, hit);
         false
     }
 
@@ -102,16 +101,12 @@ where
     }
 }
 
-/// The leaf step of every closest-hit query: tests the leaf with `ray`'s
-/// interval reaching the best hit's t ([`tie_ray`]), keeps the hit if it is
-/// [`closer`], and ends `ray` there.
+/// The second half of every closest-hit query's leaf step: `hit`, found
+/// with `ray`'s interval reaching the best hit's t ([`tie_ray`], the
+/// first half), is kept if it is [`closer`], and `ray` ends there.
 #[inline(always)]
-pub fn keep_closest(
-    best: &mut Option<PrimHit>,
-    ray: &mut Ray,
-    hit_leaf: impl FnOnce(&Ray) -> Option<PrimHit>,
-) {
-    if let Some(h) = hit_leaf(&tie_ray(ray, best.as_ref())) {
+pub fn keep_closer(best: &mut Option<PrimHit>, ray: &mut Ray, hit: Option<PrimHit>) {
+    if let Some(h) = hit {
         if closer(&h, best.as_ref()) {
             ray.tmax = h.t;
             *best = Some(h);

@@ -8,8 +8,9 @@
 use super::bundles::StreamPart;
 use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
+use crate::accel::hit::tie_ray;
 use crate::accel::narrow::{split_narrow, Travel};
-use crate::accel::query::{keep_closest, ClosestState};
+use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
@@ -57,11 +58,10 @@ impl Query for ClosestHit<'_> {
 
     #[inline(always)]
     fn leaf(&mut self, state: &mut Self::State, start: u32, count: u32, ray: &mut Ray) -> bool {
-        let sheared = &mut state.leaf;
-        keep_closest(&mut state.best, ray, |r| {
-            let s = sheared.get_or_insert_with(|| ShearedRay::new(r));
-            self.0.hit_leaf(start, count, r, s)
-        });
+        let test = tie_ray(ray, state.best.as_ref());
+        let s = state.leaf.get_or_insert_with(|| ShearedRay::new(&test));
+        let hit = self.0.hit_leaf(start, count, &test, s);
+        keep_closer(&mut state.best, ray, hit);
         false
     }
 
