@@ -25,6 +25,7 @@ pub mod packet;
 pub mod prefetch;
 pub mod stream;
 pub mod traverse;
+mod validate;
 mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};
