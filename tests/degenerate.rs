@@ -108,7 +108,7 @@ fn every_scene_in_scenes_renders_without_nan_or_infinity() {
             spp: Some(4),
             ..Default::default()
         };
-        let (scene, _) = strata::scene::load_scene(&path, &overrides, Default::default())
+        let (scene, _) = common::load_scene(&path, &overrides, Default::default())
             .unwrap_or_else(|e| panic!("{e}"));
         let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
         assert_eq!(

@@ -296,7 +296,7 @@ fn toml_blocks(markdown: &str) -> Vec<(usize, String)> {
 /// saved in the repository's root: mesh paths are relative to it.
 fn compile_example(text: &str) -> Result<(), String> {
     let path = repo().join("example.toml");
-    strata::scene::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
+    common::checked::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
         .map(|_| ())
         .map_err(|e| e.to_string())
 }

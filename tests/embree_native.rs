@@ -11,11 +11,11 @@
 
 mod common;
 
+use common::load_mesh_scene;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use strata::accel::BuildQuality;
 use strata::rays::file::{encode_triangles, parse_hits, read_rays, HitRecord};
-use strata::scene::load_mesh_scene;
 
 /// Rays of each kind.
 const PER_KIND: usize = 600;

@@ -6,11 +6,11 @@
 
 mod common;
 
+use common::load_scene;
 use std::path::Path;
 use std::process::{Command, Output};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::{render, RenderOptions, SliceSpec};
-use strata::scene::load_scene;
 
 fn strata(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_strata"))

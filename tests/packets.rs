@@ -8,6 +8,7 @@
 
 mod common;
 
+use common::checked::compile;
 use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
@@ -16,7 +17,7 @@ use strata::accel::narrow::{split_narrow, Travel};
 use strata::accel::{BuildQuality, PACKET_SIZE};
 use strata::geometry::bundles::StreamPart;
 use strata::math::Ray;
-use strata::scene::{compile, parse, RenderOverrides, Scene};
+use strata::scene::{parse, RenderOverrides, Scene};
 
 /// A bumpy UV sphere (shared edges everywhere) and a flat grid (rays aimed
 /// at its vertices hit several triangles at exactly the same t).

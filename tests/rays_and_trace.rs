@@ -3,11 +3,11 @@
 
 mod common;
 
+use common::load_mesh_scene;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use strata::accel::BuildQuality;
 use strata::rays::file::{encode_rays, parse_hits, read_rays, HitRecord};
-use strata::scene::load_mesh_scene;
 
 const ICOSPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
 

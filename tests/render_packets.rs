@@ -406,7 +406,7 @@ fn measure_packet_against_single_rays_by_batch_size() {
         ..Default::default()
     };
     let load = |path: &str| {
-        strata::scene::load_scene(std::path::Path::new(path), &overrides, Default::default())
+        common::load_scene(std::path::Path::new(path), &overrides, Default::default())
             .unwrap()
             .0
     };

@@ -122,7 +122,7 @@ impl Bvh8 {
 
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
     fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Self {
-        super::collapse::collapse(bvh2, bounds)
+        super::collapse::collapse(bvh2, bounds).debug_validated(bvh2.primitive_indices.len())
     }
 
     /// Bytes held by the final structure.

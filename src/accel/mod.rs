@@ -31,6 +31,7 @@ pub mod packet;
 pub mod prefetch;
 pub mod query;
 mod stack;
+mod validate;
 mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};

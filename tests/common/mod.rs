@@ -2,16 +2,20 @@
 //! every one, hence the allows).
 #![allow(dead_code, unused_imports)]
 
+pub mod checked;
 pub mod exr;
 
+pub use checked::{check_bvhs, load_mesh_scene, load_scene};
+
+use checked::scene_from_str;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use strata::render::{render, RenderOptions};
-use strata::scene::{scene_from_str, RenderOverrides, Scene};
+use strata::scene::{RenderOverrides, Scene};
 
+/// The scene of `text`, its BVHs checked (as every loader here does).
 pub fn scene(text: &str) -> Scene {
-    scene_from_str(text, Path::new("test.toml"), &RenderOverrides::default())
-        .unwrap_or_else(|e| panic!("{e}"))
+    scene_at(text, Path::new("test.toml"))
 }
 
 pub fn scene_at(text: &str, path: &Path) -> Scene {

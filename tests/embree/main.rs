@@ -5,6 +5,8 @@
 //! The Python environment and the bunny are set up on first use (see
 //! `setup`); the tests fail, never skip, if that is impossible.
 
+#[path = "../common/mod.rs"]
+mod common;
 mod meshes;
 mod setup;
 
@@ -14,6 +16,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
+use strata::accel::BuildQuality;
 
 const STRATA: &str = env!("CARGO_BIN_EXE_strata");
 const KINDS: [&str; 5] = ["random", "camera", "grazing", "edges", "inside"];
@@ -61,6 +64,11 @@ fn validate(mesh: &Path, rays: &Path, hits: &Path, occ: Option<&Path>) -> (i32, 
 /// Rays of every kind for `mesh`, traced by strata (closest hit and
 /// occlusion) and checked by the validator.
 fn check_mesh(mesh: &Path, dir: &Path, name: &str, seed: u32) -> Value {
+    // The trees `strata trace` may build over the mesh, checked here: the
+    // binary, a release build, does not check them itself.
+    for quality in BuildQuality::ALL {
+        common::load_mesh_scene(mesh, quality).unwrap_or_else(|e| panic!("{e}"));
+    }
     let rays = dir.join(format!("{name}.rays"));
     let hits = dir.join(format!("{name}.hits"));
     let occ = dir.join(format!("{name}.occ"));

@@ -1,0 +1,93 @@
+//! `strata::scene`'s ways of loading a scene, with every BVH of the scene
+//! checked by `Bvh8::validate_leaves` before the test sees it: the tests
+//! run as release builds, which do not check the trees they build.
+
+use std::path::Path;
+use std::time::Instant;
+use strata::accel::BuildQuality;
+use strata::error::InputResult;
+use strata::geometry::csg::{ClosedMesh, Solid};
+use strata::math::Aabb;
+use strata::scene::description::SceneDescription;
+use strata::scene::{LoadTimings, RenderOverrides, Scene};
+
+/// Panics unless the scene's BVH, and the BVH of each of its CSG mesh
+/// operands, is valid: every primitive in one leaf, each triangle inside
+/// its leaf's box, boxes nested, leaf blocks padded (see `Bvh8::validate`).
+pub fn check_bvhs(scene: &Scene) {
+    let g = &scene.geometry;
+    // The scene keeps the tree's leaf slots in its leaf blocks, with the
+    // triangles' vertices: their boxes are the boxes the tree was built on.
+    let slots: Vec<u32> = g.leaf_blocks.iter().flat_map(|b| b.id).collect();
+    let mut boxes = vec![None; g.primitive_count()];
+    for block in &g.leaf_blocks {
+        for (lane, &id) in block.id.iter().enumerate() {
+            if id < g.triangle_count {
+                boxes[id as usize] = Some(Aabb::from_points(&block.triangle(lane)));
+            }
+        }
+    }
+    g.bvh
+        .validate_leaves(&slots, g.primitive_count(), |id| boxes[id as usize])
+        .unwrap_or_else(|e| panic!("the scene's BVH is invalid: {e}"));
+    for leaf in &g.csg.leaves {
+        if let Solid::Mesh(ClosedMesh {
+            first,
+            count,
+            bvh: Some(i),
+        }) = leaf.solid
+        {
+            let tris = &g.csg.triangles[first as usize..(first + count) as usize];
+            let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
+            g.csg.mesh_bvhs[i as usize]
+                .validate_boxes(&boxes)
+                .unwrap_or_else(|e| panic!("the BVH of CSG mesh {i} is invalid: {e}"));
+        }
+    }
+}
+
+fn checked<T>(loaded: InputResult<(Scene, T)>) -> InputResult<(Scene, T)> {
+    if let Ok((scene, _)) = &loaded {
+        check_bvhs(scene);
+    }
+    loaded
+}
+
+/// `strata::scene::load_scene`, checked.
+pub fn load_scene(
+    path: &Path,
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+) -> InputResult<(Scene, LoadTimings)> {
+    checked(strata::scene::load_scene(path, overrides, quality))
+}
+
+/// `strata::scene::load_mesh_scene`, checked.
+pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene, LoadTimings)> {
+    checked(strata::scene::load_mesh_scene(path, quality))
+}
+
+/// `strata::scene::scene_from_str`, checked.
+pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> InputResult<Scene> {
+    let scene = strata::scene::scene_from_str(text, path, overrides)?;
+    check_bvhs(&scene);
+    Ok(scene)
+}
+
+/// `strata::scene::compile`, checked.
+pub mod compile {
+    use super::*;
+
+    /// `strata::scene::compile::compile`, checked.
+    pub fn compile(
+        desc: &SceneDescription,
+        path: &Path,
+        overrides: &RenderOverrides,
+        quality: BuildQuality,
+        start: Instant,
+    ) -> InputResult<(Scene, LoadTimings)> {
+        checked(strata::scene::compile::compile(
+            desc, path, overrides, quality, start,
+        ))
+    }
+}
