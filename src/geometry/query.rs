@@ -140,7 +140,9 @@ impl<'g> SceneQuery<'g> for ClosestHit<'g> {
 
 /// Occlusion by anything but primitive `except` (the light being sampled;
 /// `u32::MAX`: none): skipping the light's own primitive is exact, where
-/// stopping the shadow ray a little short of it would need an epsilon.
+/// stopping the shadow ray a little short of it would need an epsilon. The
+/// ray's shear is made when its walk starts: a shadow ray nearly always
+/// reaches a leaf.
 #[derive(Clone, Copy)]
 struct Occlusion<'g> {
     geometry: &'g Geometry,
@@ -148,23 +150,23 @@ struct Occlusion<'g> {
 }
 
 impl Query for Occlusion<'_> {
-    type State = Option<ShearedRay>;
+    type State = ShearedRay;
     type Answer = bool;
     const SHORTENS: bool = false;
 
     #[inline(always)]
-    fn start(&mut self, _: &Ray) -> Option<ShearedRay> {
-        None
+    fn start(&mut self, ray: &Ray) -> ShearedRay {
+        ShearedRay::new(ray)
+    }
+
+    #[inline]
+    fn leaf(&mut self, sheared: &mut ShearedRay, start: u32, count: u32, ray: &mut Ray) -> bool {
+        self.geometry
+            .blocks_leaf(start, count, ray, sheared, self.except)
     }
 
     #[inline(always)]
-    fn leaf(&mut self, sheared: &mut Self::State, start: u32, count: u32, ray: &mut Ray) -> bool {
-        let s = sheared.get_or_insert_with(|| ShearedRay::new(ray));
-        self.geometry.blocks_leaf(start, count, ray, s, self.except)
-    }
-
-    #[inline(always)]
-    fn answer(&mut self, _: &Option<ShearedRay>, ended: bool) -> bool {
+    fn answer(&mut self, _: &ShearedRay, ended: bool) -> bool {
         ended
     }
 }
