@@ -43,7 +43,7 @@ use super::descend::WIDEN;
 use super::node::{decode, ChildRef};
 use super::query::PacketQuery;
 use super::stack::Stack;
-use crate::math::lanes::LANES;
+use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::offset::gamma;
 use crate::math::{Aabb, Ray};
 use glam::DVec3;
@@ -333,18 +333,6 @@ fn max_lane(t: &[f32; 8]) -> f32 {
     t.iter().copied().fold(f32::NEG_INFINITY, f32::max)
 }
 
-/// Lanes `mask` selects, as indices.
-#[inline(always)]
-fn lanes(mut mask: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (mask != 0).then(|| {
-            let lane = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            lane
-        })
-    })
-}
-
 impl Bvh8 {
     /// The walk of a packet: `out[i]` ends as [`Bvh8::walk`]'s answer for
     /// `packet`'s ray `i` with the same query, which `query` answers for
@@ -460,7 +448,7 @@ impl Bvh8 {
                     let changed = query.leaf(start, count, mask, out);
                     if Q::SHORTENS {
                         if changed != 0 {
-                            for lane in lanes(changed) {
+                            for lane in mask_lanes(changed) {
                                 tmax[lane] = Q::end(&out[lane]).unwrap_or(rays[lane].tmax);
                             }
                             tmax_v = f32x8::from(tmax);

@@ -10,6 +10,7 @@
 //! flight or a bundle's rays share one query.
 
 use super::hit::{closer, tie_ray, PrimHit};
+use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
 
 /// A question asked of the leaves of a single ray's walk (alone, in
@@ -219,11 +220,7 @@ where
     #[inline(always)]
     fn leaf(&mut self, start: u32, count: u32, lanes: u32, out: &mut [bool]) -> u32 {
         let blocked = (self.0)(start, count, lanes) & lanes;
-        let mut m = blocked;
-        while m != 0 {
-            out[m.trailing_zeros() as usize] = true;
-            m &= m - 1;
-        }
+        mask_lanes(blocked).for_each(|lane| out[lane] = true);
         blocked
     }
 

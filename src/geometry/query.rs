@@ -12,6 +12,7 @@ use crate::accel::hit::tie_ray;
 use crate::accel::narrow::{split_narrow, Travel};
 use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
+use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle_lanes::ShearedRays;
@@ -193,11 +194,7 @@ impl PacketQuery for OcclusionPacket<'_> {
             self.geometry
                 .blocks_leaf_packet(packet.rays(), s, start, count, lanes, self.except)
                 & lanes;
-        let mut m = blocked;
-        while m != 0 {
-            out[m.trailing_zeros() as usize] = true;
-            m &= m - 1;
-        }
+        mask_lanes(blocked).for_each(|lane| out[lane] = true);
         blocked
     }
 

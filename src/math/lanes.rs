@@ -11,9 +11,16 @@ use wide::f32x8;
 /// the samples of a batch, the triangles of a leaf block.
 pub const LANES: usize = 8;
 
-/// The lanes of `mask` that are set (bit `i` for lane `i`).
-pub fn mask_lanes(mask: u32) -> impl Iterator<Item = usize> {
-    (0..LANES).filter(move |i| mask >> i & 1 != 0)
+/// The lanes of `mask` that are set (bit `i` for lane `i`), in order.
+#[inline(always)]
+pub fn mask_lanes(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            lane
+        })
+    })
 }
 
 /// Three coordinates in lanes, with glam's `Vec3` arithmetic in its order.
