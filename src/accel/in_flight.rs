@@ -153,7 +153,7 @@ mod tests {
     /// its own single-ray walk, for any number of rays (fewer than
     /// [`IN_FLIGHT`] too); each walk's state starts fresh.
     #[test]
-    fn streams_answer_and_visit_what_single_rays_do() {
+    fn walks_in_flight_answer_and_visit_what_single_rays_do() {
         let (spheres, bvh) = cloud();
         let hit = |id: u32, r: &Ray| sphere_hit(&spheres, id, r);
         for n in [0, 1, 3, IN_FLIGHT, IN_FLIGHT + 1, 1001] {
@@ -189,7 +189,7 @@ mod tests {
     /// unwalked, and with walks that stop at a blocker while their stacks
     /// still hold entries, spilled ones included, before the next ray reuses them.
     #[test]
-    fn any_hit_streams_answer_and_visit_what_single_rays_do() {
+    fn any_hit_walks_in_flight_answer_and_visit_what_single_rays_do() {
         let (spheres, bvh) = cloud();
         let blocks = |start, count, r: &Ray| spheres_block(&bvh, &spheres, start, count, r);
         for n in [0, 1, 5, 1001] {
