@@ -14,9 +14,9 @@
 
 use super::build::Bvh8;
 use super::descend::{order_key, RayBoxes, WIDEN};
-use super::hit::{closer, tie_ray, PrimHit};
+use super::hit::{tie_ray, PrimHit};
 use super::node::{decode, is_leaf, leaf_range, ChildRef};
-use super::query::{AnyHit, Closest, Query};
+use super::query::{keep_closer, AnyHit, Closest, Query};
 use super::stack::Stack;
 use crate::math::Ray;
 
@@ -180,12 +180,8 @@ impl Bvh8 {
         let mut best: Option<PrimHit> = None;
         for slot in start..start + count {
             let test = tie_ray(&ray, best.as_ref());
-            if let Some(h) = hit_prim(slot, self.prim_ids[slot as usize], &test) {
-                if closer(&h, best.as_ref()) {
-                    ray.tmax = h.t;
-                    best = Some(h);
-                }
-            }
+            let hit = hit_prim(slot, self.prim_ids[slot as usize], &test);
+            keep_closer(&mut best, &mut ray, hit);
         }
         best
     }

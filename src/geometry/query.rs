@@ -334,58 +334,28 @@ impl Geometry {
     }
 
     /// Up to [`PACKET_SIZE`] rays a caller chose to trace together.
-    fn packet<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
+    fn packet<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         let n = rays.len();
         assert!(
             n <= PACKET_SIZE,
             "a packet holds at most {PACKET_SIZE} rays"
         );
-        let mut first = [Q::Answer::default(); PACKET_SIZE];
-        if !self.planes.is_empty() {
-            for (f, r) in first.iter_mut().zip(rays) {
-                *f = query.planes_first(r);
-            }
-        }
+        let out = &mut out[..n];
+        self.planes_before(query, rays, out);
         match Travel::of_packet(rays, &self.bvh.bounds) {
-            Travel::Packet(packet) => {
-                let mut lanes = query.packet(&packet);
-                self.bvh
-                    .walk_packet(&packet, &mut out[..n], &self.leaf_blocks, &mut lanes);
-                for (o, f) in out.iter_mut().zip(first) {
-                    if Q::done(&f) {
-                        *o = f;
-                    }
-                }
-            }
-            Travel::Outside => out[..n].copy_from_slice(&first[..n]),
-            Travel::Alone => {
-                for ((o, r), f) in out.iter_mut().zip(rays).zip(first) {
-                    *o = if Q::done(&f) {
-                        f
-                    } else {
-                        self.bvh.walk(r, &self.leaf_blocks, &mut query)
-                    };
-                }
-            }
+            Travel::Packet(packet) => self.walk_packet_unless_done(query, &packet, out),
+            // Nothing in the tree can answer them.
+            Travel::Outside => {}
+            Travel::Alone => self.one_by_one(query, rays, out),
         }
-        if !self.planes.is_empty() {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = query.planes_last(r, *o);
-            }
-        }
+        self.planes_after(query, rays, out);
     }
 
     /// Any number of rays: bundles, packets and single rays (see
     /// [`Geometry::intersect_stream`]).
     fn stream<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        if self.planes.is_empty() {
-            out.fill(Q::Answer::default());
-        } else {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = query.planes_first(r);
-            }
-        }
+        self.planes_before(query, rays, out);
         self.split_stream(rays, |part| match part {
             StreamPart::Unlike(range) => {
                 self.narrow_or_alone(query, &rays[range.clone()], &mut out[range]);
@@ -397,6 +367,35 @@ impl Geometry {
                 on_gathered(rays, ids, out, |r, o| self.bundle(query, r, o));
             }
         });
+        self.planes_after(query, rays, out);
+    }
+
+    /// `out[i]`: what the planes answer for ray `i` before the BVH is
+    /// walked (the query's default where there are none).
+    #[inline(always)]
+    fn planes_before<'g, Q: SceneQuery<'g>>(
+        &'g self,
+        query: Q,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+    ) {
+        if self.planes.is_empty() {
+            out.fill(Q::Answer::default());
+        } else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = query.planes_first(r);
+            }
+        }
+    }
+
+    /// `out[i]` once the planes have been asked after the BVH.
+    #[inline(always)]
+    fn planes_after<'g, Q: SceneQuery<'g>>(
+        &'g self,
+        query: Q,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+    ) {
         if !self.planes.is_empty() {
             for (o, r) in out.iter_mut().zip(rays) {
                 *o = query.planes_last(r, *o);
@@ -415,22 +414,47 @@ impl Geometry {
         split_narrow(rays, &self.bvh.bounds, |range, travel| {
             let (rays, out) = (&rays[range.clone()], &mut out[range]);
             match travel {
-                Travel::Packet(packet) => {
-                    let mut answers = [Q::Answer::default(); PACKET_SIZE];
-                    let mut lanes = query.packet(&packet);
-                    self.bvh
-                        .walk_packet(&packet, &mut answers, &self.leaf_blocks, &mut lanes);
-                    for (o, a) in out.iter_mut().zip(answers) {
-                        if !Q::done(o) {
-                            *o = a;
-                        }
-                    }
-                }
+                Travel::Packet(packet) => self.walk_packet_unless_done(query, &packet, out),
                 // Nothing in the tree can answer them.
                 Travel::Outside => {}
                 Travel::Alone => self.alone(query, rays, out),
             }
         });
+    }
+
+    /// `packet`'s walk, its answers written where `out` holds no final
+    /// answer yet (a ray a plane blocks keeps its answer).
+    #[inline(always)]
+    fn walk_packet_unless_done<'g, Q: SceneQuery<'g>>(
+        &'g self,
+        query: Q,
+        packet: &Packet,
+        out: &mut [Q::Answer],
+    ) {
+        let mut answers = [Q::Answer::default(); PACKET_SIZE];
+        let mut lanes = query.packet(packet);
+        self.bvh
+            .walk_packet(packet, &mut answers, &self.leaf_blocks, &mut lanes);
+        for (o, a) in out.iter_mut().zip(answers) {
+            if !Q::done(o) {
+                *o = a;
+            }
+        }
+    }
+
+    /// Rays walked one at a time, those `out` already answers skipped.
+    #[inline(always)]
+    fn one_by_one<'g, Q: SceneQuery<'g>>(
+        &'g self,
+        mut query: Q,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+    ) {
+        for (o, r) in out.iter_mut().zip(rays) {
+            if !Q::done(o) {
+                *o = self.bvh.walk(r, &self.leaf_blocks, &mut query);
+            }
+        }
     }
 
     /// Up to [`BUNDLE_SIZE`] alike rays walked as bundles.
@@ -446,11 +470,7 @@ impl Geometry {
     #[inline(never)]
     fn alone<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         if !self.bvh.prefetch {
-            for (o, r) in out.iter_mut().zip(rays) {
-                if !Q::done(o) {
-                    *o = self.bvh.walk(r, &self.leaf_blocks, &mut query);
-                }
-            }
+            self.one_by_one(query, rays, out);
             return;
         }
         self.bvh
