@@ -21,7 +21,10 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::texture::Textures;
 
-pub use compile::{load_edited_scene, load_mesh_scene, load_scene, scene_from_str, LoadTimings};
+pub use compile::{
+    load_edited_scene, load_mesh_scene, load_scene, mesh_geometry, scene_from_str, LoadTimings,
+    MeshArraysError,
+};
 pub use settings::{RenderOverrides, RenderSettings};
 
 /// A compiled scene. Primitives refer to materials by index.

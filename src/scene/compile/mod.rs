@@ -36,6 +36,9 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+pub use arrays::{mesh_geometry, MeshArraysError};
+
+mod arrays;
 mod camera;
 mod csg;
 mod light;

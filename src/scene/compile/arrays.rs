@@ -1,0 +1,156 @@
+//! A mesh given as arrays (a vertex array and a face array, as numpy and
+//! the Python package hand them over) compiled into [`Geometry`] the way a
+//! mesh file is: indexed until the BVH is built, then written once in leaf
+//! order. Face `i` is primitive `i`.
+
+use super::mesh::{leaf_blocks, TriangleSource};
+use crate::accel::prefetch::Prefetch;
+use crate::accel::{BuildQuality, Bvh8};
+use crate::geometry::csg::Csg;
+use crate::geometry::{Geometry, MeshRange};
+use crate::math::Aabb;
+use glam::Vec3;
+
+/// What is wrong with a mesh's arrays, in the names of the arguments
+/// (`vertices`, `faces`) that carried them.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshArraysError {
+    #[error("vertices[{vertex}] is not finite: {value:?}")]
+    NotFinite { vertex: usize, value: [f32; 3] },
+    #[error("faces[{face}][{corner}] = {index} is out of range for {vertices} vertices")]
+    IndexOutOfRange {
+        face: usize,
+        corner: usize,
+        index: u32,
+        vertices: usize,
+    },
+    #[error("faces has {faces} rows; at most {max} triangles fit in one mesh")]
+    TooManyFaces { faces: usize, max: usize },
+}
+
+/// Compile one triangle mesh from its vertices and faces (indices into
+/// `vertices`), with no transform, material or attributes: what ray
+/// queries need. Every vertex must be finite and every index in range;
+/// degenerate faces are kept (no ray hits them) so that face ids stay the
+/// caller's.
+pub fn mesh_geometry(
+    vertices: Vec<Vec3>,
+    faces: Vec<[u32; 3]>,
+    quality: BuildQuality,
+) -> Result<Geometry, MeshArraysError> {
+    if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
+        let value = vertices[vertex].to_array();
+        return Err(MeshArraysError::NotFinite { vertex, value });
+    }
+    // Planes take ids counting down from u32::MAX; keep well clear of them.
+    let max = (u32::MAX / 2) as usize;
+    if faces.len() > max {
+        return Err(MeshArraysError::TooManyFaces {
+            faces: faces.len(),
+            max,
+        });
+    }
+    for (face, f) in faces.iter().enumerate() {
+        if let Some(corner) = f.iter().position(|&k| k as usize >= vertices.len()) {
+            return Err(MeshArraysError::IndexOutOfRange {
+                face,
+                corner,
+                index: f[corner],
+                vertices: vertices.len(),
+            });
+        }
+    }
+    let count = faces.len() as u32;
+    let meshes = vec![MeshRange {
+        name: "mesh".into(),
+        first: 0,
+        count,
+        material: 0,
+        normals: None,
+        uvs: None,
+    }];
+    let source = TriangleSource::Indexed {
+        positions: vertices,
+        indices: faces,
+    };
+    let boxes: Vec<Aabb> = {
+        use rayon::prelude::*;
+        (0..source.len())
+            .into_par_iter()
+            .map(|i| Aabb::from_points(&source.get(i)))
+            .collect()
+    };
+    let mut bvh = Bvh8::build_from(boxes, quality);
+    bvh.nodes.shrink_to_fit();
+    let sources = [source];
+    let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
+    bvh.prim_ids = Vec::new();
+    let mut geometry = Geometry {
+        leaf_blocks: blocks,
+        triangle_count: count,
+        meshes,
+        shapes: Vec::new(),
+        transforms: Vec::new(),
+        csg: Csg::default(),
+        planes: Vec::new(),
+        bvh,
+    };
+    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    Ok(geometry)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Ray;
+
+    fn quad() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let v = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        (v, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    #[test]
+    fn face_ids_are_the_callers() {
+        let (v, f) = quad();
+        let g = mesh_geometry(v, f, BuildQuality::Auto).unwrap();
+        assert_eq!(g.triangle_count, 2);
+        let down = Vec3::new(0.0, 0.0, -1.0);
+        // Below the diagonal x = y lies face 0, above it face 1.
+        let hit = g
+            .intersect(&Ray::new(Vec3::new(0.5, -0.5, 1.0), down))
+            .unwrap();
+        assert_eq!((hit.prim, hit.t), (0, 1.0));
+        let hit = g
+            .intersect(&Ray::new(Vec3::new(-0.5, 0.5, 1.0), down))
+            .unwrap();
+        assert_eq!((hit.prim, hit.t), (1, 1.0));
+    }
+
+    #[test]
+    fn bad_arrays_are_named() {
+        let (mut v, f) = quad();
+        let err = mesh_geometry(v.clone(), vec![[0, 1, 4]], BuildQuality::Auto).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "faces[0][2] = 4 is out of range for 4 vertices"
+        );
+        v[3].y = f32::NAN;
+        let err = mesh_geometry(v, f, BuildQuality::Auto).unwrap_err();
+        assert!(
+            err.to_string().starts_with("vertices[3] is not finite"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn an_empty_mesh_hits_nothing() {
+        let g = mesh_geometry(Vec::new(), Vec::new(), BuildQuality::Auto).unwrap();
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        assert!(g.intersect(&ray).is_none());
+    }
+}
