@@ -27,7 +27,12 @@ impl Bvh8 {
     /// Box distances are computed in f32 and compared with `bound` as
     /// they are: a caller whose leaf distances carry rounding error of
     /// their own widens the bound it returns by that error.
-    pub fn nearest<F>(&self, point: Vec3, mut bound: f32, mut leaf: F)
+    ///
+    /// `leaf_data` is as for [`Bvh8::walk`]: what the leaf test reads for
+    /// the leaf at `start` is `leaf_data[start / LANES]`. Children are
+    /// prefetched as they are queued (where the tree prefetches), so the
+    /// misses of the nodes and leaves a walk will open overlap.
+    pub fn nearest<L, F>(&self, point: Vec3, mut bound: f32, leaf_data: &[L], mut leaf: F)
     where
         F: FnMut(u32, u32, f32) -> f32,
     {
@@ -37,9 +42,14 @@ impl Bvh8 {
         let p = point.to_array().map(f32x8::splat);
         // Entries are (squared distance bits << 32) | child reference:
         // distances are never negative, so their bits order as they do.
+        // Each entry's key is unique (child references are), so the walk's
+        // order is the same whatever the heap's own order of equal keys.
         let mut heap: BinaryHeap<Reverse<u64>> = BinaryHeap::with_capacity(64);
-        heap.push(Reverse(0));
-        while let Some(Reverse(entry)) = heap.pop() {
+        // The entry to open next when it is known to be the nearest left
+        // (a node's nearest child, if no queued entry is nearer): it skips
+        // the heap, as a ray's walk enters its nearest child at once.
+        let mut next = Some(0u64);
+        while let Some(entry) = next.take().or_else(|| heap.pop().map(|Reverse(e)| e)) {
             if f32::from_bits((entry >> 32) as u32) > bound {
                 break;
             }
@@ -51,10 +61,28 @@ impl Bvh8 {
             }
             let node = &self.nodes[child as usize];
             let d2 = box_distances(node, &p).to_array();
+            let mut nearest = u64::MAX;
             for (slot, &d2) in d2.iter().enumerate() {
                 let c = node.child[slot];
                 if c != EMPTY && d2 <= bound {
-                    heap.push(Reverse((d2.to_bits() as u64) << 32 | c as u64));
+                    if self.prefetch {
+                        self.prefetch_child(c, leaf_data);
+                    }
+                    let key = (d2.to_bits() as u64) << 32 | c as u64;
+                    if key < nearest {
+                        if nearest != u64::MAX {
+                            heap.push(Reverse(nearest));
+                        }
+                        nearest = key;
+                    } else {
+                        heap.push(Reverse(key));
+                    }
+                }
+            }
+            if nearest != u64::MAX {
+                match heap.peek() {
+                    Some(&Reverse(top)) if top < nearest => heap.push(Reverse(nearest)),
+                    _ => next = Some(nearest),
                 }
             }
         }
@@ -83,6 +111,9 @@ mod tests {
     use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
 
+    /// Leaf tests here read points by id: no block-shaped leaf data.
+    const NO_DATA: &[()] = &[];
+
     /// Random points as point boxes; the nearest of them to random query
     /// points, with and without a bound, against brute force, for every
     /// build quality.
@@ -110,7 +141,7 @@ mod tests {
                     .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let mut best: Option<(f32, u32)> = None;
                 let mut leaves = 0;
-                bvh.nearest(q, limit, |start, count, bound| {
+                bvh.nearest(q, limit, NO_DATA, |start, count, bound| {
                     leaves += 1;
                     for slot in start..start + count {
                         let id = bvh.prim_ids[slot as usize];
@@ -134,6 +165,8 @@ mod tests {
     #[test]
     fn an_empty_tree_visits_nothing() {
         let bvh = Bvh8::build(&[], BuildQuality::Auto);
-        bvh.nearest(Vec3::ZERO, f32::INFINITY, |_, _, _| panic!("no leaves"));
+        bvh.nearest(Vec3::ZERO, f32::INFINITY, NO_DATA, |_, _, _| {
+            panic!("no leaves")
+        });
     }
 }
