@@ -128,14 +128,26 @@ fn mesh_queries(c: &mut Criterion) {
             lo + (hi - lo) * f
         })
         .collect();
-    group.bench_function("nearest", |b| {
-        b.iter(|| {
-            points
-                .iter()
-                .map(|&p| g.nearest(p, f32::INFINITY).map_or(0.0, |n| n.distance))
-                .sum::<f32>()
+    // And points near the surface: triangle centroids moved by up to a
+    // hundredth of the box's diagonal.
+    let tris = g.file_order_triangles();
+    let reach = (hi - lo).length() * 0.01;
+    let near: Vec<Vec3> = (0..rays.len())
+        .map(|i| {
+            let t = tris[i * 104_729 % tris.len()];
+            (t[0] + t[1] + t[2]) / 3.0 + rng.cube(2.0 * reach)
         })
-    });
+        .collect();
+    for (name, points) in [("nearest_box", &points), ("nearest_surface", &near)] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                points
+                    .iter()
+                    .map(|&p| g.nearest(p, f32::INFINITY).map_or(0.0, |n| n.distance))
+                    .sum::<f32>()
+            })
+        });
+    }
     group.finish();
 }
 
