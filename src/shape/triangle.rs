@@ -115,7 +115,8 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
 /// [`intersect`] with its ties broken, so that a ray through an edge or a
 /// vertex shared by several triangles crosses exactly one of them where it
 /// crosses the surface, and none or two where it only touches it. Returns
-/// the hit's t in `(tmin, tmax]`, computed as [`intersect`] computes it.
+/// the hit's t in `(tmin, tmax]`, computed as [`intersect`] computes it
+/// (bit for bit where no edge function is zero).
 ///
 /// [`intersect`] accepts a ray whose edge functions are all ≥ 0 or all ≤ 0,
 /// so a ray exactly through a shared edge hits both triangles. Here each
