@@ -33,7 +33,7 @@ const DEGENERATE: f32 = 64.0 * f32::EPSILON * f32::EPSILON;
 /// made for the previous ones.
 ///
 /// A degenerate triangle (a segment or a point, or a sliver whose plane
-/// f32 cannot tell, [`DEGENERATE`]) answers the nearest point of its three
+/// f32 cannot tell, `DEGENERATE`) answers the nearest point of its three
 /// edges, so its answer is still a point of it.
 pub fn closest_point_on_triangle(p: Vec3, v: &[Vec3; 3]) -> Vec3 {
     let [a, b, c] = *v;
