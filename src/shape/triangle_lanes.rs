@@ -223,6 +223,91 @@ fn finish(
     )
 }
 
+/// The lanes (bits of `lanes`) whose triangle `ray` crosses in
+/// `(tmin, tmax]`, with their t: [`super::triangle::crossing`] lane by
+/// lane, bit for bit. Lanes whose f32 edge functions are all nonzero (all
+/// but a ray through an edge or a vertex) take their signs from those
+/// values in lanes; the rest resolve their edges one by one with the
+/// scalar test's own [`super::triangle::owned_edge`].
+#[inline(always)]
+pub fn crossings(
+    ray: &Ray,
+    s: &ShearedRay,
+    block: &TriangleBlock,
+    lanes: u32,
+) -> (u32, [f32; LANES]) {
+    let origin = [ray.origin.x, ray.origin.y, ray.origin.z];
+    let rel =
+        |k: usize, axis: usize| f32x8::from(block.v[3 * k + axis]) - f32x8::splat(origin[axis]);
+    let (sx, sy) = (f32x8::splat(s.sx), f32x8::splat(s.sy));
+    let (az_w, bz_w, cz_w) = (rel(0, s.kz), rel(1, s.kz), rel(2, s.kz));
+    let ax = rel(0, s.kx) - sx * az_w;
+    let ay = rel(0, s.ky) - sy * az_w;
+    let bx = rel(1, s.kx) - sx * bz_w;
+    let by = rel(1, s.ky) - sy * bz_w;
+    let cx = rel(2, s.kx) - sx * cz_w;
+    let cy = rel(2, s.ky) - sy * cz_w;
+    let mut e0 = cx * by - cy * bx;
+    let mut e1 = ax * cy - ay * cx;
+    let mut e2 = bx * ay - by * ax;
+    let (mut s0, mut s1, mut s2) = (e0, e1, e2);
+    let zero = f32x8::ZERO;
+    let unsure = |e: f32x8| e.simd_eq(zero) | e.is_nan();
+    let unsure = (unsure(e0) | unsure(e1) | unsure(e2)).to_bitmask() & lanes;
+    if unsure != 0 {
+        let [ax, ay, bx, by, cx, cy] = [ax, ay, bx, by, cx, cy].map(|x| x.to_array());
+        let mut e = [e0.to_array(), e1.to_array(), e2.to_array()];
+        let mut sign = e;
+        for i in crate::math::lanes::mask_lanes(unsure) {
+            let edges = [
+                (bx[i], by[i], cx[i], cy[i]),
+                (cx[i], cy[i], ax[i], ay[i]),
+                (ax[i], ay[i], bx[i], by[i]),
+            ];
+            for (k, (px, py, qx, qy)) in edges.into_iter().enumerate() {
+                (e[k][i], sign[k][i]) = super::triangle::owned_edge(px, py, qx, qy);
+            }
+        }
+        (e0, e1, e2) = (e[0].into(), e[1].into(), e[2].into());
+        (s0, s1, s2) = (sign[0].into(), sign[1].into(), sign[2].into());
+    }
+    let positive = s0.simd_gt(zero) & s1.simd_gt(zero) & s2.simd_gt(zero);
+    let negative = s0.simd_lt(zero) & s1.simd_lt(zero) & s2.simd_lt(zero);
+    let owned = (positive | negative).to_bitmask() & lanes;
+    if owned == 0 {
+        return (0, [0.0; LANES]);
+    }
+    let det = e0 + e1 + e2;
+    let sz = f32x8::splat(s.sz);
+    let (az, bz, cz) = (sz * az_w, sz * bz_w, sz * cz_w);
+    let t_scaled = e0 * az + e1 * bz + e2 * cz;
+    let inv_det = f32x8::splat(1.0) / det;
+    let t = t_scaled * inv_det;
+    let in_range = t.simd_gt(f32x8::splat(ray.tmin)) & t.simd_le(f32x8::splat(ray.tmax));
+    let mut hit = in_range.to_bitmask() & !det.simd_eq(zero).to_bitmask() & owned;
+    if hit == 0 {
+        return (0, [0.0; LANES]);
+    }
+    // The scalar test's `origin_error_bound`, as `finish` computes it.
+    let max3 = |a: f32x8, b: f32x8, c: f32x8| a.abs().fast_max(b.abs()).fast_max(c.abs());
+    let max_z = max3(az, bz, cz);
+    let delta_z = f32x8::splat(gamma(3)) * max_z;
+    let max_world_z = max3(az_w, bz_w, cz_w);
+    let max_x = max3(ax, bx, cx);
+    let max_y = max3(ay, by, cy);
+    let g5 = f32x8::splat(gamma(5));
+    let delta_x = g5 * (max_x + max_world_z);
+    let delta_y = g5 * (max_y + max_world_z);
+    let delta_e = f32x8::splat(2.0)
+        * (f32x8::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = max3(e0, e1, e2);
+    let bound = f32x8::splat(3.0)
+        * (f32x8::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
+        * inv_det.abs();
+    hit &= !t.simd_le(bound).to_bitmask();
+    (hit, t.to_array())
+}
+
 /// Up to eight rays in lanes, sheared as [`ShearedRay`] does for each:
 /// the other way round from [`intersect`], for testing one triangle
 /// against a packet of coherent rays (eight rays for the price of about
@@ -391,6 +476,71 @@ mod tests {
                 .count_ones();
         }
         assert!(hits > 2000, "the cases must exercise hits, got {hits}");
+    }
+
+    /// [`crossings`] agrees with the scalar [`triangle::crossing`] bit
+    /// for bit, on random triangles and on rays through shared edges and
+    /// vertices (fans, exact zeros, with and without the axis-aligned
+    /// shear) and degenerate lanes.
+    #[test]
+    fn crossing_lanes_match_the_scalar_test_bit_for_bit() {
+        let mut rng = Rng::seed_from_u64(13);
+        let mut hits = 0;
+        for round in 0..6000 {
+            let scale = [1e-4, 1.0, 1e5][round % 3];
+            let mut block = TriangleBlock::EMPTY;
+            let apex = cube(&mut rng, scale);
+            let lanes = 5 + round % 4;
+            for lane in 0..lanes {
+                // A fan around `apex` of `lanes` triangles, some lanes
+                // random or degenerate instead.
+                let ring = |k: usize| {
+                    let a = k as f32 / lanes as f32 * std::f32::consts::TAU;
+                    apex + Vec3::new(a.cos(), a.sin(), 0.3 * (k % 2) as f32) * scale
+                };
+                let tri = match (round / 3 + lane) % 7 {
+                    0 => std::array::from_fn(|_| apex + cube(&mut rng, scale)),
+                    1 => [apex, ring(lane), apex],
+                    _ => [apex, ring(lane), ring(lane + 1)],
+                };
+                block.set(lane, &tri, lane as u32);
+            }
+            let lane = round % lanes;
+            let tri = block.triangle(lane);
+            let target = match round % 5 {
+                0 => tri[0],
+                1 => (tri[0] + tri[1]) * 0.5,
+                2 => tri[1],
+                _ => {
+                    tri[0]
+                        + (tri[1] - tri[0]) * rng.random::<f32>() * 0.5
+                        + (tri[2] - tri[0]) * rng.random::<f32>() * 0.5
+                }
+            };
+            let dir = match round % 3 {
+                0 => Vec3::new(0.0, 0.0, if round % 2 == 0 { 1.0 } else { -1.0 }),
+                _ => cube(&mut rng, 2.0),
+            };
+            let mut ray = Ray::new(target - dir * 3.0, dir);
+            if round % 7 == 0 {
+                ray.tmax = 3.0;
+                ray.tmin = rng.random::<f32>() * 3.0;
+            }
+            let s = ShearedRay::new(&ray);
+            let (hit, t) = crossings(&ray, &s, &block, 0xff);
+            for (lane, &t) in t.iter().enumerate() {
+                let scalar = triangle::crossing(&ray, &s, &block.triangle(lane));
+                let simd = (hit >> lane & 1 == 1).then_some(t);
+                assert_eq!(
+                    scalar.map(f32::to_bits),
+                    simd.map(f32::to_bits),
+                    "round {round} lane {lane}: {:?} ray {ray:?}",
+                    block.triangle(lane)
+                );
+            }
+            hits += hit.count_ones();
+        }
+        assert!(hits > 3000, "the cases must exercise crossings, got {hits}");
     }
 
     /// Rays in lanes, each with its own dominant axis and so its own
