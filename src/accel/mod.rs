@@ -26,6 +26,7 @@ mod descend;
 pub mod hit;
 pub mod in_flight;
 pub mod narrow;
+mod nearest;
 pub mod node;
 pub mod packet;
 pub mod prefetch;

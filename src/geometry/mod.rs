@@ -13,8 +13,10 @@
 //! [`Surface`].
 
 pub mod bundles;
+pub mod crossings;
 pub mod csg;
 pub mod leaf;
+pub mod nearest;
 pub mod primitive;
 pub mod query;
 pub mod surface;
@@ -24,8 +26,10 @@ use crate::math::lanes::LANES;
 use crate::math::{Ray, Transform};
 use crate::shape::plane::Plane;
 use crate::shape::triangle_lanes::TriangleBlock;
+pub use crossings::Crossing;
 use csg::Csg;
 use glam::Vec3;
+pub use nearest::Nearest;
 pub use primitive::{
     AnalyticPrim, MeshAttribute, MeshNormals, MeshRange, MeshUvs, Shape, NO_TRANSFORM,
 };

@@ -111,6 +111,126 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
     Some((t, e1 * inv_det, e2 * inv_det))
 }
 
+/// The test of the mesh queries that list or count crossings (`geometry::crossings`):
+/// [`intersect`] with its ties broken, so that a ray through an edge or a
+/// vertex shared by several triangles crosses exactly one of them where it
+/// crosses the surface, and none or two where it only touches it. Returns
+/// the hit's t in `(tmin, tmax]`, computed as [`intersect`] computes it.
+///
+/// [`intersect`] accepts a ray whose edge functions are all ≥ 0 or all ≤ 0,
+/// so a ray exactly through a shared edge hits both triangles. Here each
+/// edge function gets an exact sign that is never zero, edge by edge, so
+/// that two triangles sharing an edge see it with opposite signs and
+/// exactly one of them owns the ray:
+/// - an f32 edge function that is not zero already has the exact sign:
+///   rounding is monotone, so the two rounded products keep their order
+///   and their difference its sign. Only a zero is recomputed in f64,
+///   where the products of f32 values are exact (as [`intersect`] does,
+///   but edge by edge, so an edge's value depends on that edge alone).
+/// - a sign still zero (the ray's sheared point exactly on the edge's
+///   line) is the sign the edge function takes when that point moves by
+///   (−ε², −ε) for an infinitesimal ε: Edelsbrunner and Mücke 1990,
+///   "Simulation of Simplicity" (ACM TOG 9(1)), as a rasteriser's fill
+///   rule. For the edge p → q, whose function at the ray's point is
+///   `q.x·p.y − q.y·p.x`, the move adds `ε·d.x − ε²·d.y` with `d = q − p`:
+///   the sign of `d.x`, or of `−d.y` where `d.x` is zero. Reversing the
+///   edge negates `d`, so its other triangle gets the other sign.
+///
+/// The signs then come from one exact predicate on the sheared vertices
+/// (each vertex sheared once per ray, whatever triangle reads it), for one
+/// point moved off every edge line, so the projected mesh covers it an
+/// even number of times along a closed mesh's whole line: a transversal
+/// crossing through an edge or a vertex fan counts once, a ray that only
+/// touches a silhouette edge or vertex counts zero or two times.
+///
+/// Limits: it holds for triangles that share vertices bit for bit (an
+/// indexed mesh; a T-junction or two copies of a vertex that differ are
+/// open to it). An edge parallel to the ray (both ends at one sheared
+/// point, `d = 0`) has no sign: its triangles are edge-on to the ray and
+/// are never crossed, so a ray along a shared edge counts the triangles
+/// around it as a fan. Nothing is perturbed along the ray: a crossing
+/// within t's rounding of `tmin`, `tmax` or the origin (the bound of
+/// [`intersect`]) may fall on either side. A triangle whose three edge
+/// functions underflow f32 (sheared coordinates below about 1e-22) is
+/// never crossed.
+#[inline(always)]
+pub fn crossing(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<f32> {
+    let a = v[0] - ray.origin;
+    let b = v[1] - ray.origin;
+    let c = v[2] - ray.origin;
+    let ax = a[s.kx] - s.sx * a[s.kz];
+    let ay = a[s.ky] - s.sy * a[s.kz];
+    let bx = b[s.kx] - s.sx * b[s.kz];
+    let by = b[s.ky] - s.sy * b[s.kz];
+    let cx = c[s.kx] - s.sx * c[s.kz];
+    let cy = c[s.ky] - s.sy * c[s.kz];
+    // The edges b → c, c → a, a → b: [`intersect`]'s e0, e1, e2.
+    let (e0, s0) = owned_edge(bx, by, cx, cy);
+    let (e1, s1) = owned_edge(cx, cy, ax, ay);
+    let (e2, s2) = owned_edge(ax, ay, bx, by);
+    if !((s0 > 0.0 && s1 > 0.0 && s2 > 0.0) || (s0 < 0.0 && s1 < 0.0 && s2 < 0.0)) {
+        return None;
+    }
+    // The values have their signs or are zero (perturbed, or an f64 value
+    // that underflows f32), so det is zero only if all three are.
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+    let az = s.sz * a[s.kz];
+    let bz = s.sz * b[s.kz];
+    let cz = s.sz * c[s.kz];
+    let t_scaled = e0 * az + e1 * bz + e2 * cz;
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t > ray.tmin && t <= ray.tmax) {
+        return None;
+    }
+    let world_z = [a[s.kz], b[s.kz], c[s.kz]];
+    if t <= origin_error_bound(
+        ax,
+        ay,
+        bx,
+        by,
+        cx,
+        cy,
+        world_z,
+        [az, bz, cz],
+        [e0, e1, e2],
+        inv_det,
+    ) {
+        return None;
+    }
+    Some(t)
+}
+
+/// The edge function of the sheared edge p → q at the ray's point,
+/// `q.x·p.y − q.y·p.x`, and its exact sign, never zero but for an edge
+/// with no length (see [`crossing`]): `(value, sign)`, the sign as a
+/// number of that sign (NaN for NaN input, which no test accepts).
+#[inline(always)]
+pub fn owned_edge(px: f32, py: f32, qx: f32, qy: f32) -> (f32, f32) {
+    let e = qx * py - qy * px;
+    // Not zero: the exact sign. NaN (∞ − ∞ from products that overflow)
+    // is recomputed too, and stays NaN only for NaN input.
+    if e != 0.0 && !e.is_nan() {
+        return (e, e);
+    }
+    let exact = qx as f64 * py as f64 - qy as f64 * px as f64;
+    if exact != 0.0 {
+        return (exact as f32, exact.signum() as f32);
+    }
+    let (dx, dy) = (qx - px, qy - py);
+    let sign = if dx != 0.0 {
+        dx.signum()
+    } else if dy != 0.0 {
+        -dy.signum()
+    } else {
+        0.0
+    };
+    (0.0, sign)
+}
+
 /// δt: the error bound of the computed t, from the bounds on the sheared
 /// coordinates and edge functions.
 ///
@@ -266,6 +386,164 @@ mod tests {
         for tri in [line, point] {
             let ray = Ray::new(Vec3::new(0.5, 0.0, 1.0), -Vec3::Z);
             assert!(intersect(&ray, &ShearedRay::new(&ray), &tri).is_none());
+        }
+    }
+
+    /// Seeded inputs, drawn with `rand` itself: shapes know only `math`.
+    struct Draws(rand::rngs::Xoshiro256PlusPlus);
+
+    impl Draws {
+        fn new(seed: u64) -> Self {
+            use rand::SeedableRng;
+            Self(rand::rngs::Xoshiro256PlusPlus::seed_from_u64(seed))
+        }
+
+        fn unit(&mut self) -> f32 {
+            use rand::RngExt;
+            self.0.random()
+        }
+
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.unit()
+        }
+
+        /// A point of the cube of side `scale` centred on the origin.
+        fn cube(&mut self, scale: f32) -> Vec3 {
+            (Vec3::new(self.unit(), self.unit(), self.unit()) - 0.5) * scale
+        }
+    }
+
+    /// How many of `tris` the ray crosses ([`crossing`]).
+    fn crossed(ray: &Ray, tris: &[[Vec3; 3]]) -> usize {
+        let s = ShearedRay::new(ray);
+        tris.iter()
+            .filter(|t| crossing(ray, &s, t).is_some())
+            .count()
+    }
+
+    /// A fan of `n` triangles around `apex`, its ring of radius 1 at z = 0.
+    fn fan(apex: Vec3, n: usize) -> Vec<[Vec3; 3]> {
+        let ring = |i: usize| {
+            let a = (i % n) as f32 / n as f32 * std::f32::consts::TAU + 0.1;
+            Vec3::new(a.cos(), a.sin(), 0.0)
+        };
+        (0..n).map(|i| [apex, ring(i), ring(i + 1)]).collect()
+    }
+
+    #[test]
+    fn crossing_is_intersect_away_from_edges() {
+        let mut rng = Draws::new(7);
+        let mut hits = 0;
+        for _ in 0..20_000 {
+            let v = [rng.cube(2.0), rng.cube(2.0), rng.cube(2.0)];
+            let (u, w) = (rng.unit(), rng.unit());
+            let target = v[0] + (v[1] - v[0]) * u + (v[2] - v[0]) * w;
+            let origin = rng.cube(6.0);
+            let ray = Ray::new(origin, (target - origin) * rng.range(0.1, 3.0));
+            let s = ShearedRay::new(&ray);
+            let want = intersect(&ray, &s, &v).map(|h| h.0.to_bits());
+            assert_eq!(crossing(&ray, &s, &v).map(f32::to_bits), want);
+            hits += want.is_some() as u32;
+        }
+        assert!(hits > 8_000, "{hits} hits");
+    }
+
+    #[test]
+    fn an_edge_has_opposite_signs_from_its_two_ends() {
+        let mut rng = Draws::new(3);
+        for i in 0..10_000 {
+            let (p, q) = (rng.cube(2.0), rng.cube(2.0));
+            // Every third edge runs exactly through the ray's point, and
+            // every fifth is parallel to an axis.
+            let (p, q) = match (i % 3, i % 5) {
+                (0, 0) => (Vec3::new(p.x, 0.0, 0.0), Vec3::new(q.x, 0.0, 0.0)),
+                (0, _) => (p, p * -2.0),
+                (_, 0) => (p, Vec3::new(q.x, p.y, 0.0)),
+                _ => (p, q),
+            };
+            let (e, s) = owned_edge(p.x, p.y, q.x, q.y);
+            let (e_back, s_back) = owned_edge(q.x, q.y, p.x, p.y);
+            assert_eq!((e, s), (-e_back, -s_back), "{p} {q}");
+            assert!(s != 0.0, "{p} {q}: no sign");
+            if e != 0.0 {
+                assert_eq!(e.signum(), s.signum(), "{p} {q}");
+            }
+        }
+        assert_eq!(owned_edge(0.5, 0.5, 0.5, 0.5).1, 0.0, "no length, no sign");
+    }
+
+    #[test]
+    fn an_edges_sign_is_exact_where_its_products_nearly_cancel() {
+        // Edges whose lines pass within rounding of the ray's point. The
+        // f32 difference of the rounded products is zero or of the exact
+        // sign (rounding is monotone); the zeros need f64, whose products
+        // of f32 values are exact, so is the sign of their difference.
+        let mut rng = Draws::new(4);
+        let mut zeros = 0;
+        for _ in 0..100_000 {
+            let p = rng.cube(2.0) * 10f32.powi(-(rng.unit() * 12.0) as i32);
+            let q = p * rng.range(-3.0, 3.0) + rng.cube(1e-8) * p.length();
+            let exact = q.x as f64 * p.y as f64 - q.y as f64 * p.x as f64;
+            let rounded = q.x * p.y - q.y * p.x;
+            if rounded != 0.0 {
+                assert_eq!((rounded as f64).signum(), exact.signum(), "{p} {q}");
+            }
+            let (e, s) = owned_edge(p.x, p.y, q.x, q.y);
+            if exact != 0.0 {
+                assert_eq!(s.signum() as f64, exact.signum(), "{p} {q}: {e}");
+                zeros += (rounded == 0.0) as u32;
+            }
+        }
+        assert!(zeros > 100, "only {zeros} f32 zeros with an exact sign");
+    }
+
+    #[test]
+    fn a_ray_through_a_shared_edge_crosses_one_triangle() {
+        // A unit square split along its diagonal, seen from both sides,
+        // down the axis (exact zeros) and at angles aimed at the diagonal.
+        let square = [
+            [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0)],
+            [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+        ];
+        for i in 0..=1000 {
+            let x = i as f32 / 1000.0 * 0.998 + 0.001;
+            let target = Vec3::new(x, x, 0.0);
+            for dir in [
+                -Vec3::Z,
+                Vec3::Z,
+                Vec3::new(0.1, -0.2, -1.0) * (1.0 + i as f32 * 1e-3),
+                Vec3::new(-0.3, 0.2, 0.7),
+            ] {
+                let ray = Ray::new(target - 3.0 * dir, dir);
+                assert_eq!(crossed(&ray, &square), 1, "at {x} along {dir}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_ray_through_a_fan_vertex_crosses_once_and_touching_it_twice_or_never() {
+        // A low pyramid of 7 triangles: every ray within 45° of the
+        // vertical through its apex crosses it once.
+        for apex_z in [0.0, 0.3] {
+            let tris = fan(Vec3::new(0.0, 0.0, apex_z), 7);
+            let apex = tris[0][0];
+            for i in 0..400 {
+                let a = i as f32 * 0.37;
+                let tilt = (i % 20) as f32 / 20.0 * 0.9;
+                let dir = Vec3::new(tilt * a.cos(), tilt * a.sin(), -1.0) * (0.5 + (i % 7) as f32);
+                for dir in [dir, -dir] {
+                    let ray = Ray::new(apex - 2.0 * dir, dir);
+                    assert_eq!(crossed(&ray, &tris), 1, "apex {apex} along {dir}");
+                }
+            }
+        }
+        // A tall one: a horizontal ray through its apex only touches it.
+        let tris = fan(Vec3::new(0.0, 0.0, 3.0), 7);
+        for i in 0..400 {
+            let a = i as f32 * 0.37;
+            let dir = Vec3::new(a.cos(), a.sin(), 0.0);
+            let ray = Ray::new(Vec3::new(0.0, 0.0, 3.0) - 2.0 * dir, dir);
+            assert_eq!(crossed(&ray, &tris) % 2, 0, "along {dir}");
         }
     }
 }

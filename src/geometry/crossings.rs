@@ -1,0 +1,129 @@
+//! Every crossing of a ray with a mesh's surface, for the mesh queries
+//! (`all_hits`, `count_hits` and `contains` of the Python package): one
+//! walk of the BVH that never ends early and never shortens the ray, as a
+//! [`Query`] of [`crate::accel`]'s single-ray walk.
+//!
+//! Each triangle is tested with [`crossing`], the watertight test with its
+//! ties broken, so a ray through an edge or a vertex that triangles share
+//! crosses one of them where it crosses the surface: never none and never
+//! two. These are mesh queries: analytic shapes and planes are not
+//! crossings.
+
+use super::Geometry;
+use crate::accel::Query;
+use crate::math::lanes::mask_lanes;
+use crate::math::Ray;
+use crate::shape::triangle::{crossing, ShearedRay};
+use glam::Vec3;
+
+/// One crossing of a ray with a triangle: its t along the ray and the
+/// triangle's primitive id (triangle `i` of the scene's meshes, in file
+/// order, is primitive `i`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crossing {
+    pub t: f32,
+    pub prim: u32,
+}
+
+/// The direction of [`Geometry::contains`]'s ray: no axis, no diagonal and
+/// no simple ratio of components, so that it does not run along the faces
+/// and edges of axis-aligned meshes (√2 − 1, (√5 − 1)/2, 1/√3).
+pub const CONTAINS_DIRECTION: Vec3 = Vec3::new(0.414_213_57, 0.618_034, 0.577_350_26);
+
+/// The walk's question: every crossing of each leaf it reaches, handed to
+/// `found` in the order the walk finds them. It never shortens the ray
+/// (a crossing beyond another still counts) and never ends the walk.
+struct EveryCrossing<'g, F> {
+    geometry: &'g Geometry,
+    found: F,
+}
+
+impl<F: FnMut(Crossing)> Query for EveryCrossing<'_, F> {
+    type State = ShearedRay;
+    type Answer = ();
+    const SHORTENS: bool = false;
+
+    #[inline(always)]
+    fn start(&mut self, ray: &Ray) -> ShearedRay {
+        ShearedRay::new(ray)
+    }
+
+    #[inline(always)]
+    fn leaf(&mut self, s: &mut ShearedRay, start: u32, count: u32, ray: &mut Ray) -> bool {
+        self.geometry
+            .crossings_in_leaf(start, count, ray, s, &mut self.found);
+        false
+    }
+
+    #[inline(always)]
+    fn answer(&mut self, _: &ShearedRay, _: bool) {}
+}
+
+impl Geometry {
+    /// Appends every crossing of the ray with the triangles in
+    /// `(ray.tmin, ray.tmax]` to `out`, sorted by t, then by primitive id.
+    ///
+    /// A ray through an edge or a vertex shared by triangles of a closed
+    /// mesh, where it crosses the surface, is reported once (by the
+    /// triangle that owns it, [`crossing`]); where it only touches the
+    /// surface (a silhouette edge or vertex) it is reported twice or not
+    /// at all. Triangles only: analytic shapes and planes are not counted.
+    pub fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
+        let first = out.len();
+        self.walk_crossings(ray, |c| out.push(c));
+        out[first..].sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+    }
+
+    /// How many crossings [`Geometry::crossings`] would append, without
+    /// storing them. Triangles only.
+    pub fn count_crossings(&self, ray: &Ray) -> u32 {
+        let mut n = 0;
+        self.walk_crossings(ray, |_| n += 1);
+        n
+    }
+
+    /// Whether `point` is inside a closed mesh: an odd number of crossings
+    /// along one ray from it, in the fixed direction [`CONTAINS_DIRECTION`].
+    /// Robust on edges and vertices the ray meets (see
+    /// [`Geometry::crossings`]); a point on the surface itself may go
+    /// either way. Triangles only: analytic shapes and planes are ignored.
+    ///
+    /// On an open mesh (a hole, a missing face) the answer is the parity
+    /// along that one direction, which another direction may contradict:
+    /// it does not mean inside or outside. An empty mesh contains nothing.
+    pub fn contains(&self, point: Vec3) -> bool {
+        self.count_crossings(&Ray::new(point, CONTAINS_DIRECTION)) % 2 == 1
+    }
+
+    /// Walks the BVH for every crossing of the ray, in no order.
+    #[inline(always)]
+    fn walk_crossings(&self, ray: &Ray, found: impl FnMut(Crossing)) {
+        let mut query = EveryCrossing {
+            geometry: self,
+            found,
+        };
+        self.bvh.walk(ray, &self.leaf_blocks, &mut query);
+    }
+
+    /// The crossings of leaf `start..start + count`, triangle by triangle.
+    #[inline(always)]
+    fn crossings_in_leaf(
+        &self,
+        start: u32,
+        count: u32,
+        ray: &Ray,
+        s: &ShearedRay,
+        found: &mut impl FnMut(Crossing),
+    ) {
+        let (b, lanes) = Self::leaf_lanes(start, count);
+        let block = &self.leaf_blocks[b];
+        for lane in mask_lanes(lanes) {
+            let prim = block.id[lane];
+            if prim < self.triangle_count {
+                if let Some(t) = crossing(ray, s, &block.triangle(lane)) {
+                    found(Crossing { t, prim });
+                }
+            }
+        }
+    }
+}

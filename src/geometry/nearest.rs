@@ -1,0 +1,272 @@
+//! The point of a mesh nearest to a given point (`closest_point` of the
+//! Python package): [`crate::accel`]'s best-first walk over the scene's
+//! BVH, whose leaf test finds each triangle's nearest point
+//! ([`closest_point_on_triangle`]). A mesh query: analytic shapes and
+//! planes are not candidates.
+
+use super::Geometry;
+use crate::math::lanes::mask_lanes;
+use glam::Vec3;
+
+/// The nearest point of a mesh to a query point: where it is, how far, and
+/// on which triangle (its primitive id, as [`super::Crossing::prim`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Nearest {
+    pub point: Vec3,
+    pub distance: f32,
+    pub prim: u32,
+}
+
+/// Below this ratio |ab × ac|² / (|ab|²·|ac|²), the squared sine of the
+/// triangle's angle at `a`, a triangle is taken as degenerate and its
+/// nearest point sought on its three edges: f32 rounding alone makes the
+/// cross product's squared length uncertain by about 12·(ε/2)² of the
+/// product, so a plane computed below 64·ε² would be noise. The edges of
+/// such a sliver are within about a millionth of its size of all of it.
+const DEGENERATE: f32 = 64.0 * f32::EPSILON * f32::EPSILON;
+
+/// The point of triangle `v` nearest to `p`, by the Voronoi regions of
+/// its vertices, edges and face: Ericson 2005, "Real-Time Collision
+/// Detection", §5.1.5. Each region's test reads dot products already
+/// made for the previous ones.
+///
+/// A degenerate triangle (a segment or a point, or a sliver whose plane
+/// f32 cannot tell, [`DEGENERATE`]) answers the nearest point of its three
+/// edges, so its answer is still a point of it.
+pub fn closest_point_on_triangle(p: Vec3, v: &[Vec3; 3]) -> Vec3 {
+    let [a, b, c] = *v;
+    let ab = b - a;
+    let ac = c - a;
+    let n = ab.cross(ac);
+    let n2 = n.length_squared();
+    if !(n2 > DEGENERATE * ab.length_squared() * ac.length_squared()) {
+        return closest_point_on_edges(p, v);
+    }
+    // Vertex a's region.
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    // Vertex b's region.
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    // Edge ab's region. Its weight's denominator d1 − d3 is |ab|² > 0.
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    // Vertex c's region.
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    // Edge ac's region.
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    // Edge bc's region.
+    let va = d3 * d6 - d5 * d4;
+    let (e4, e5) = (d4 - d3, d5 - d6);
+    if va <= 0.0 && e4 >= 0.0 && e5 >= 0.0 {
+        return b + (c - b) * (e4 / (e4 + e5));
+    }
+    // The face's, from its barycentric weights, so that the point lies in
+    // the triangle's span to rounding of its own coordinates. Far from a
+    // small triangle the weights cancel; where their sum has lost its
+    // sign, p's projection onto the plane.
+    let sum = va + vb + vc;
+    if sum > 0.0 {
+        return a + ab * (vb / sum) + ac * (vc / sum);
+    }
+    p - n * (n.dot(ap) / n2)
+}
+
+/// The point of the edges of triangle `v` nearest to `p` (the first edge
+/// of ab, bc, ca on a tie).
+fn closest_point_on_edges(p: Vec3, v: &[Vec3; 3]) -> Vec3 {
+    let mut best = closest_point_on_segment(p, v[0], v[1]);
+    let mut best_d2 = (p - best).length_squared();
+    for (a, b) in [(v[1], v[2]), (v[2], v[0])] {
+        let q = closest_point_on_segment(p, a, b);
+        let d2 = (p - q).length_squared();
+        if d2 < best_d2 {
+            (best, best_d2) = (q, d2);
+        }
+    }
+    best
+}
+
+/// The point of segment ab nearest to `p` (`a` where the segment has no
+/// length).
+fn closest_point_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    if !(len2 > 0.0) {
+        return a;
+    }
+    let t = (ab.dot(p - a) / len2).clamp(0.0, 1.0);
+    a + ab * t
+}
+
+impl Geometry {
+    /// The point of any triangle nearest to `point`, if one is no farther
+    /// than `max_distance` (`f32::INFINITY`: no limit); `None` for an
+    /// empty mesh, nothing that close, or a point or limit that is not a
+    /// number. Equally near triangles go to the smallest primitive id.
+    /// Triangles only: analytic shapes and planes are not candidates.
+    ///
+    /// A best-first walk of the BVH ([`crate::accel::Bvh8::nearest`]),
+    /// each triangle's point by [`closest_point_on_triangle`]: the answer
+    /// is the least (squared distance, primitive id) that a test of every
+    /// triangle would find, bit for bit.
+    pub fn nearest(&self, point: Vec3, max_distance: f32) -> Option<Nearest> {
+        if self.triangle_count == 0 || !point.is_finite() || !(max_distance >= 0.0) {
+            return None;
+        }
+        let reach = self.reach(point);
+        let mut best: Option<(f32, u32, Vec3)> = None;
+        self.bvh
+            .nearest(point, reach(max_distance), |start, count, bound| {
+                let (b, lanes) = Self::leaf_lanes(start, count);
+                let block = &self.leaf_blocks[b];
+                for lane in mask_lanes(lanes) {
+                    let prim = block.id[lane];
+                    if prim >= self.triangle_count {
+                        continue;
+                    }
+                    let q = closest_point_on_triangle(point, &block.triangle(lane));
+                    let d2 = (point - q).length_squared();
+                    let nearer = match best {
+                        Some((best_d2, best_prim, _)) => (d2, prim) < (best_d2, best_prim),
+                        None => d2.sqrt() <= max_distance,
+                    };
+                    if nearer {
+                        best = Some((d2, prim, q));
+                    }
+                }
+                best.map_or(bound, |(d2, _, _)| reach(d2.sqrt()))
+            });
+        best.map(|(d2, prim, point)| Nearest {
+            point,
+            distance: d2.sqrt(),
+            prim,
+        })
+    }
+
+    /// The squared box distance the walk must still open for a candidate
+    /// at distance `d` from `point`: `d` widened by the rounding of the
+    /// box distances and of a triangle's nearest point (a few ε of the
+    /// largest coordinate in play), so no box that may hold a triangle at
+    /// the same computed distance (a tie) or a slightly nearer one is
+    /// skipped.
+    fn reach(&self, point: Vec3) -> impl Fn(f32) -> f32 {
+        let bounds = &self.bvh.bounds;
+        let scale = point
+            .abs()
+            .max(bounds.min.abs())
+            .max(bounds.max.abs())
+            .max_element();
+        let slack = 16.0 * f32::EPSILON * scale;
+        let grow = 1.0 + 8.0 * f32::EPSILON;
+        move |d: f32| {
+            let r = d * grow + slack;
+            r * r * grow
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::stream::{seeded, Draw};
+
+    /// The nearest of many points of the triangle (a fine grid of
+    /// barycentric weights, its edges included): no answer may be farther
+    /// than it, and the answer must lie on the triangle.
+    fn check_against_samples(p: Vec3, v: &[Vec3; 3]) {
+        let q = closest_point_on_triangle(p, v);
+        let d = (p - q).length();
+        let size = (v[1] - v[0]).length().max((v[2] - v[0]).length());
+        let tol = 1e-5 * (size + (p - v[0]).length());
+        let n = 60;
+        let mut sampled = f32::INFINITY;
+        for i in 0..=n {
+            for j in 0..=n - i {
+                let (u, w) = (i as f32 / n as f32, j as f32 / n as f32);
+                let s = v[0] + (v[1] - v[0]) * u + (v[2] - v[0]) * w;
+                sampled = sampled.min((p - s).length());
+            }
+        }
+        assert!(d <= sampled + tol, "{p} {v:?}: {d} > sampled {sampled}");
+        // On the triangle: its distance to the triangle's plane is nil and
+        // the point is within the triangle's barycentric range.
+        let nrm = (v[1] - v[0]).cross(v[2] - v[0]);
+        if nrm.length_squared() > 0.0 {
+            let off = nrm.normalize().dot(q - v[0]).abs();
+            assert!(off <= tol, "{q} is {off} off the plane");
+        }
+    }
+
+    #[test]
+    fn nearest_points_of_random_triangles_beat_every_sample_of_them() {
+        let mut rng = seeded(5);
+        for _ in 0..3000 {
+            let v = [rng.cube(2.0), rng.cube(2.0), rng.cube(2.0)];
+            check_against_samples(rng.cube(6.0), &v);
+        }
+    }
+
+    #[test]
+    fn each_region_answers_its_analytic_point() {
+        let v = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let cases = [
+            (Vec3::new(-1.0, -1.0, 0.5), Vec3::ZERO),
+            (Vec3::new(2.0, -0.5, 0.0), Vec3::X),
+            (Vec3::new(-0.5, 2.0, -1.0), Vec3::Y),
+            (Vec3::new(0.5, -1.0, 3.0), Vec3::new(0.5, 0.0, 0.0)),
+            (Vec3::new(-2.0, 0.25, 0.0), Vec3::new(0.0, 0.25, 0.0)),
+            (Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.5, 0.5, 0.0)),
+            (Vec3::new(0.25, 0.25, -7.0), Vec3::new(0.25, 0.25, 0.0)),
+        ];
+        for (p, want) in cases {
+            let q = closest_point_on_triangle(p, &v);
+            assert!((q - want).length() < 1e-6, "{p}: {q}, not {want}");
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_answer_a_point_of_their_segments() {
+        let mut rng = seeded(9);
+        for i in 0..2000 {
+            let (a, b) = (rng.cube(2.0), rng.cube(2.0));
+            let v = match i % 4 {
+                0 => [a, b, a + (b - a) * rng.unit()],
+                1 => [a, a, b],
+                2 => [a, a, a],
+                _ => [a + (b - a) * 2.0, a, b],
+            };
+            let p = rng.cube(6.0);
+            let q = closest_point_on_triangle(p, &v);
+            assert!(q.is_finite(), "{v:?}");
+            // The farthest-apart pair of corners spans the segment.
+            let (s0, s1) = [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])]
+                .into_iter()
+                .max_by(|x, y| (x.0 - x.1).length().total_cmp(&(y.0 - y.1).length()))
+                .unwrap();
+            let want = closest_point_on_segment(p, s0, s1);
+            assert!(
+                ((p - q).length() - (p - want).length()).abs() < 1e-5,
+                "{v:?} {p}: {q} vs {want}"
+            );
+        }
+    }
+}
