@@ -29,6 +29,7 @@ pyo3::create_exception!(
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<mesh::Mesh>()?;
     m.add_class::<mesh::Hits>()?;
+    m.add_class::<mesh::ClosestPoints>()?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add("InputError", m.py().get_type::<InputError>())?;
     m.add("__version__", strata::VERSION)?;

@@ -387,4 +387,146 @@ impl Mesh {
         })?;
         Ok(PyArray1::from_vec(py, out))
     }
+
+    /// Every surface crossing along each ray in (0, t_max], nearest first,
+    /// as ``(splits, t, prim)`` in Open3D's layout: ray i's crossings are
+    /// ``t[splits[i]:splits[i+1]]`` (float32) on triangles
+    /// ``prim[splits[i]:splits[i+1]]`` (int64); ``splits`` is int64 (n+1,).
+    ///
+    /// One traversal per ray, not a re-cast from each hit: a ray through a
+    /// shared edge or vertex of a closed mesh crosses the surface there
+    /// once and is reported once, never zero times or twice, at any scale.
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    fn all_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        threads: Option<i64>,
+    ) -> PyResult<AllHits<'py>> {
+        let threads = Threads::new(threads)?;
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
+            for ray in rays {
+                let before = found.len();
+                self.geometry.crossings(ray, found);
+                counts.push((found.len() - before) as u32);
+            }
+        })?;
+        let mut splits = Vec::with_capacity(counts.len() + 1);
+        let mut total = 0i64;
+        splits.push(0);
+        for c in counts {
+            total += c as i64;
+            splits.push(total);
+        }
+        let t: Vec<f32> = found.iter().map(|c| c.t).collect();
+        let prim: Vec<i64> = found.iter().map(|c| c.prim as i64).collect();
+        Ok((
+            PyArray1::from_vec(py, splits),
+            PyArray1::from_vec(py, t),
+            PyArray1::from_vec(py, prim),
+        ))
+    }
+
+    /// The number of surface crossings along each ray in (0, t_max]: int64
+    /// (n,), as ``all_hits`` would list them.
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    fn count_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        threads: Option<i64>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let threads = Threads::new(threads)?;
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let mut out = vec![0i64; rays.len()];
+        run::each(py, &threads, &rays, &mut out, |rays, out| {
+            for (o, ray) in out.iter_mut().zip(rays) {
+                *o = self.geometry.count_crossings(ray) as i64;
+            }
+        })?;
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// Whether each point ((n, 3) floats) is inside the mesh: bool (n,), by
+    /// the parity of the surface crossings along a ray from it (the
+    /// watertight test makes that exact on shared edges and vertices).
+    ///
+    /// Meant for closed meshes. On an open mesh the answer is the parity
+    /// along that one ray, which a hole can flip: a point is reported
+    /// inside if that ray crosses the surface an odd number of times.
+    #[pyo3(signature = (points, threads=None))]
+    fn contains<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'_, PyAny>,
+        threads: Option<i64>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let threads = Threads::new(threads)?;
+        let points = convert::points(points, "points", &threads)?;
+        let mut out = vec![false; points.len()];
+        run::each(py, &threads, &points, &mut out, |points, out| {
+            for (o, &p) in out.iter_mut().zip(points) {
+                *o = self.geometry.contains(p);
+            }
+        })?;
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// The nearest point on the surface to each point ((n, 3) floats),
+    /// found by a best-first walk of the BVH: a ``ClosestPoints`` with
+    /// ``point`` (n, 3), ``distance`` (n,) and the triangle ``prim`` (n,).
+    ///
+    /// ``max_distance``: look no farther (a number; points with nothing
+    /// that near get NaN, inf and -1). ``signed=True`` makes the distance
+    /// negative inside the mesh (by ``contains``; meant for closed meshes).
+    #[pyo3(signature = (points, max_distance=None, signed=false, threads=None))]
+    fn closest_point(
+        &self,
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        max_distance: Option<f64>,
+        signed: bool,
+        threads: Option<i64>,
+    ) -> PyResult<ClosestPoints> {
+        let threads = Threads::new(threads)?;
+        let points = convert::points(points, "points", &threads)?;
+        let max_distance = match max_distance {
+            None => f32::INFINITY,
+            Some(d) if d >= 0.0 => d as f32,
+            Some(d) => {
+                return Err(PyValueError::new_err(format!(
+                    "max_distance must be >= 0 (None for no limit); got {d}"
+                )))
+            }
+        };
+        let mut near = vec![([f32::NAN; 3], f32::INFINITY, -1i64); points.len()];
+        run::each(py, &threads, &points, &mut near, |points, out| {
+            for (o, &p) in out.iter_mut().zip(points) {
+                if let Some(n) = self.geometry.nearest(p, max_distance) {
+                    let inside = signed && self.geometry.contains(p);
+                    let d = if inside { -n.distance } else { n.distance };
+                    *o = (n.point.to_array(), d, n.prim as i64);
+                }
+            }
+        })?;
+        let n = near.len();
+        let mut point = Vec::with_capacity(3 * n);
+        let mut distance = Vec::with_capacity(n);
+        let mut prim = Vec::with_capacity(n);
+        for (p, d, k) in near {
+            point.extend(p);
+            distance.push(d);
+            prim.push(k);
+        }
+        Ok(ClosestPoints {
+            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
+            distance: PyArray1::from_vec(py, distance).unbind(),
+            prim: PyArray1::from_vec(py, prim).unbind(),
+        })
+    }
 }

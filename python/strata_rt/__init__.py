@@ -23,6 +23,6 @@ on every core::
 trimesh's ray interface: ``mesh.ray = RayMeshIntersector(mesh)``.
 """
 
-from ._native import Hits, InputError, Mesh, __version__, render
+from ._native import ClosestPoints, Hits, InputError, Mesh, __version__, render
 
 __all__ = ["ClosestPoints", "Hits", "InputError", "Mesh", "__version__", "render"]

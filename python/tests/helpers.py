@@ -292,47 +292,61 @@ class BruteHits:
         return np.array([len(p) for _, p in self._hits], dtype=np.int64)
 
 
-def closest_on_triangles(points: np.ndarray, tris: np.ndarray, chunk: int = 16):
-    """The nearest surface point to each point, over every triangle
-    (Ericson's region test): (distance (n,), prim (n,), point (n, 3), and
-    the distance to the nearest other triangle that does not share that
-    point (n,), to tell clear answers from ties)."""
-    a, b, c = (np.asarray(tris[:, k], dtype=np.float64)[None] for k in range(3))
+def closest_pairs(points: np.ndarray, tris: np.ndarray):
+    """The point of triangle `tris[i]` nearest to `points[i]` (Ericson's
+    region test, float64), and its distance."""
+    p = np.asarray(points, dtype=np.float64)
+    a, b, c = (np.asarray(tris[:, k], dtype=np.float64) for k in range(3))
     ab, ac = b - a, c - a
-    dists, prims, nearest, seconds = [], [], [], []
+    ap, bp, cp = p - a, p - b, p - c
+    d1, d2 = (ab * ap).sum(-1), (ac * ap).sum(-1)
+    d3, d4 = (ab * bp).sum(-1), (ac * bp).sum(-1)
+    d5, d6 = (ab * cp).sum(-1), (ac * cp).sum(-1)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = 1.0 / (va + vb + vc)
+        res = a + ab * (vb * denom)[:, None] + ac * (vc * denom)[:, None]
+        # Edge regions, then vertex regions (later assignments win).
+        w_ab = d1 / (d1 - d3)
+        res = np.where(((vc <= 0) & (d1 >= 0) & (d3 <= 0))[:, None], a + ab * w_ab[:, None], res)
+        w_ac = d2 / (d2 - d6)
+        res = np.where(((vb <= 0) & (d2 >= 0) & (d6 <= 0))[:, None], a + ac * w_ac[:, None], res)
+        w_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        res = np.where(((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0))[:, None], b + (c - b) * w_bc[:, None], res)
+    res = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, res)
+    res = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, res)
+    res = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, res)
+    return np.linalg.norm(res - p, axis=-1), res
+
+
+def closest_on_triangles(points: np.ndarray, tris: np.ndarray, chunk: int = 64):
+    """The nearest surface point to each point, over every triangle that
+    bounding spheres do not rule out: (distance (n,), prim (n,), point
+    (n, 3), and the distance to the nearest triangle whose nearest point is
+    elsewhere (n,), to tell clear answers from near ties; inf where none
+    lies within 1e-4 of the extent past the nearest). Where triangles share
+    the nearest point (an edge or a vertex), prim may be any of them."""
+    tris = np.asarray(tris, dtype=np.float64)
+    centre = tris.mean(axis=1)
+    radius = np.linalg.norm(tris - centre[:, None], axis=-1).max(axis=1)
+    slack = 1e-4 * float(np.ptp(tris.reshape(-1, 3), axis=0).max() if len(tris) else 1.0)
+    out = ([], [], [], [])
     for s in range(0, len(points), chunk):
-        p = np.asarray(points[s:s + chunk], dtype=np.float64)[:, None, :]
-        ap, bp, cp = p - a, p - b, p - c
-        d1, d2 = (ab * ap).sum(-1), (ac * ap).sum(-1)
-        d3, d4 = (ab * bp).sum(-1), (ac * bp).sum(-1)
-        d5, d6 = (ab * cp).sum(-1), (ac * cp).sum(-1)
-        va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
-        with np.errstate(divide="ignore", invalid="ignore"):
-            denom = 1.0 / (va + vb + vc)
-            res = a + ab * (vb * denom)[..., None] + ac * (vc * denom)[..., None]
-            # Edge regions, then vertex regions (later assignments win).
-            w_ab = d1 / (d1 - d3)
-            res = np.where(((vc <= 0) & (d1 >= 0) & (d3 <= 0))[..., None], a + ab * w_ab[..., None], res)
-            w_ac = d2 / (d2 - d6)
-            res = np.where(((vb <= 0) & (d2 >= 0) & (d6 <= 0))[..., None], a + ac * w_ac[..., None], res)
-            w_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-            res = np.where(((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0))[..., None], b + (c - b) * w_bc[..., None], res)
-        res = np.where(((d1 <= 0) & (d2 <= 0))[..., None], a, res)
-        res = np.where(((d3 >= 0) & (d4 <= d3))[..., None], b, res)
-        res = np.where(((d6 >= 0) & (d5 <= d6))[..., None], c, res)
-        dist = np.linalg.norm(res - p, axis=-1)
-        best = np.argmin(dist, axis=1)
-        rows = np.arange(len(dist))
-        best_point = res[rows, best]
-        # The runner-up among triangles whose nearest point is elsewhere
-        # (neighbours sharing the nearest edge or vertex tie legitimately).
-        elsewhere = np.linalg.norm(res - best_point[:, None, :], axis=-1) > 1e-9
-        second = np.where(elsewhere, dist, np.inf).min(axis=1)
-        dists.append(dist[rows, best])
-        prims.append(best)
-        nearest.append(best_point)
-        seconds.append(second)
-    return np.concatenate(dists), np.concatenate(prims), np.vstack(nearest), np.concatenate(seconds)
+        p = np.asarray(points[s:s + chunk], dtype=np.float64)
+        gap = np.linalg.norm(p[:, None] - centre[None], axis=-1)
+        upper = (gap + radius[None]).min(axis=1)
+        i, j = np.nonzero(gap - radius[None] <= upper[:, None] + slack)
+        dist, res = closest_pairs(p[i], tris[j])
+        for k in range(len(p)):
+            mine = np.flatnonzero(i == k)
+            order = mine[np.lexsort((j[mine], dist[mine]))]
+            best = order[0]
+            elsewhere = np.linalg.norm(res[order] - res[best], axis=1) > 1e-9
+            out[0].append(dist[best])
+            out[1].append(j[best])
+            out[2].append(res[best])
+            out[3].append(dist[order][elsewhere].min() if elsewhere.any() else np.inf)
+    return np.array(out[0]), np.array(out[1], dtype=np.int64), np.array(out[2]).reshape(-1, 3), np.array(out[3])
 
 
 def parity_inside(tris: np.ndarray, points: np.ndarray, rng, edge=1e-4):

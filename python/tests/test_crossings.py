@@ -82,13 +82,13 @@ def test_rays_through_shared_edges_and_vertices_cross_a_convex_mesh_twice(name):
     targets = convex_targets(vertices, faces)
     centre = vertices.mean(axis=0)
     # Towards the centre (out through the opposite vertex or edge: both
-    # crossings on shared features), and in random directions that enter
-    # the body (out through a generic point).
+    # crossings on shared features), and towards random points of the
+    # body's inner half, so that the ray enters the body where it meets the
+    # edge or vertex (and leaves it at a generic point).
     inward = helpers.unit(centre - targets)
-    d = helpers.random_directions(rng, len(targets))
-    d = np.where(((d * inward).sum(1) < 0.3)[:, None], -d, d)
-    d = np.where(((d * inward).sum(1) < 0.3)[:, None], inward, d)
-    for directions in (inward, d):
+    inner = centre + 0.5 * (helpers.random_directions(rng, len(targets)) * rng.random((len(targets), 1)))
+    towards = helpers.unit(inner - targets)
+    for directions in (inward, towards):
         o, dd = through(targets, directions, back=3.0)
         counts = mesh.count_hits(o, dd)
         bad = np.flatnonzero(counts != 2)
@@ -102,6 +102,31 @@ def test_rays_through_shared_edges_and_vertices_cross_a_convex_mesh_twice(name):
         out_o = np.repeat(centre[None], len(targets), axis=0).astype(np.float32)
         out_d = (targets - centre).astype(np.float32)
         np.testing.assert_array_equal(mesh.count_hits(out_o, out_d), 1)
+
+
+def pyramid(sides):
+    """A closed pyramid: apex (0, 0, 1) over a regular polygon of radius 1
+    at z = 0, its base a fan from the centre vertex (0, 0, 0)."""
+    a = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    ring = np.stack([np.cos(a), np.sin(a), np.zeros(sides)], axis=1)
+    vertices = np.vstack([[0, 0, 1], ring, [0, 0, 0]])
+    centre = sides + 1
+    faces = [[0, 1 + i, 1 + (i + 1) % sides] for i in range(sides)]
+    faces += [[centre, 1 + (i + 1) % sides, 1 + i] for i in range(sides)]
+    return vertices, np.array(faces, dtype=np.int64)
+
+
+@pytest.mark.parametrize("sides", [3, 5, 8, 9, 16, 17, 24, 40, 80])
+def test_a_ray_through_a_vertex_of_any_valence_crosses_once_there(sides):
+    """Down the axis of a pyramid: in through the apex, out through the
+    base's centre, each shared by `sides` triangles; and tilted, through
+    one of them and a generic point."""
+    mesh = strata_rt.Mesh(*pyramid(sides))
+    tilt = np.array([0.013, 0.0071, -1.0])
+    o = np.array([[0, 0, 5.0], [0, 0, -5.0], [0, 0, 1] - 5 * tilt, -5 * tilt])
+    d = np.array([[0, 0, -1.0], [0, 0, 1.0], tilt, tilt])
+    np.testing.assert_array_equal(mesh.count_hits(o, d), 2)
+    np.testing.assert_array_equal(np.diff(mesh.all_hits(o, d)[0]), 2)
 
 
 def test_rays_through_the_closed_bunny_s_vertices_cross_it_an_even_number_of_times(closed_bunny):
