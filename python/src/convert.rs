@@ -1,0 +1,453 @@
+//! numpy in: arrays of any float (or integer) dtype, lists and
+//! non-contiguous views, read into strata's types. float32 and float64
+//! arrays (and int32, int64 and uint32 faces) are read where they lie, in
+//! place; anything else goes through one `numpy.asarray(...).astype(...)`.
+//! Every refusal is a `ValueError` that names the argument and what it
+//! wanted.
+
+use glam::Vec3;
+use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyList, PyTuple};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use strata::math::Ray;
+
+use crate::run::Threads;
+
+fn error(message: String) -> PyErr {
+    PyValueError::new_err(message)
+}
+
+/// A shape as Python prints it: `(4, 2)`, `(5,)`.
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [one] => format!("({one},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// The rows of an (n, 3) array of `T`, each element mapped by `f`.
+fn rows_of<T: Element + Copy, U>(
+    array: &PyReadonlyArray2<'_, T>,
+    name: &str,
+    what: &str,
+    f: impl Fn(T) -> U,
+) -> PyResult<Vec<[U; 3]>> {
+    let shape = array.shape();
+    if shape[0] == 0 {
+        return Ok(Vec::new());
+    }
+    if shape[1] != 3 {
+        return Err(error(format!(
+            "{name} must be an (n, 3) array of {what}; got shape {}",
+            shape_text(shape)
+        )));
+    }
+    // as_slice also takes Fortran order (contiguous, but by columns).
+    let flat = array
+        .is_c_contiguous()
+        .then(|| array.as_slice().ok())
+        .flatten();
+    Ok(match flat {
+        Some(flat) => flat
+            .chunks_exact(3)
+            .map(|r| [f(r[0]), f(r[1]), f(r[2])])
+            .collect(),
+        // Not row-major (a column slice, Fortran order): read by strides.
+        None => array
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| [f(r[0]), f(r[1]), f(r[2])])
+            .collect(),
+    })
+}
+
+/// `obj` through `numpy.asarray(obj)`, checked to hold numbers of a dtype
+/// kind in `kinds` ("f": float, "i"/"u": integers) with shape `(n, 3)` (or
+/// empty), then converted to `dtype`. `None` for an empty array.
+fn as_numpy<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    kinds: &str,
+    what: &str,
+    dtype: &str,
+    ndim: usize,
+) -> PyResult<Option<Bound<'py, PyAny>>> {
+    let py = obj.py();
+    let wanted = if ndim == 2 {
+        "an (n, 3) array"
+    } else {
+        "an (n,) array"
+    };
+    let array = py
+        .import("numpy")?
+        .call_method1("asarray", (obj,))
+        .map_err(|e| error(format!("{name} must be {wanted} of {what}: {e}")))?;
+    let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
+    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+    if shape.iter().product::<usize>() == 0 && shape.first() == Some(&0) {
+        return Ok(None);
+    }
+    if !kinds.contains(kind.as_str()) {
+        let dtype_name = array.getattr("dtype")?.str()?.to_string();
+        return Err(error(format!(
+            "{name} must be {wanted} of {what}; got dtype {dtype_name}"
+        )));
+    }
+    let shape_ok = shape.len() == ndim && (ndim == 1 || shape[1] == 3);
+    if !shape_ok {
+        return Err(error(format!(
+            "{name} must be {wanted} of {what}; got shape {}",
+            shape_text(&shape)
+        )));
+    }
+    Ok(Some(array.call_method1("astype", (dtype,))?))
+}
+
+/// An (n, 3) array held for reading: row-major float32 or float64 where it
+/// lies, or a float32 copy of anything else (other dtypes, lists, strided
+/// views).
+pub enum Vec3Array<'py> {
+    F32(PyReadonlyArray2<'py, f32>),
+    F64(PyReadonlyArray2<'py, f64>),
+    Copied(Vec<Vec3>),
+}
+
+/// The rows of a [`Vec3Array`], shareable by threads.
+#[derive(Clone, Copy)]
+pub enum Vec3Rows<'a> {
+    F32(&'a [f32]),
+    F64(&'a [f64]),
+    Copied(&'a [Vec3]),
+}
+
+impl Vec3Rows<'_> {
+    pub fn len(&self) -> usize {
+        match self {
+            Self::F32(flat) => flat.len() / 3,
+            Self::F64(flat) => flat.len() / 3,
+            Self::Copied(rows) => rows.len(),
+        }
+    }
+}
+
+/// Row `i` of an (n, 3) array, as float32: one implementation per layout,
+/// so that a loop over rows is compiled once for each (the [`with_rows`]
+/// dispatch), not matched on each row.
+trait Row: Sync {
+    fn row(&self, i: usize) -> Vec3;
+}
+
+struct Flat<'a, T>(&'a [T]);
+
+impl Row for Flat<'_, f32> {
+    #[inline(always)]
+    fn row(&self, i: usize) -> Vec3 {
+        Vec3::from_slice(&self.0[3 * i..3 * i + 3])
+    }
+}
+
+impl Row for Flat<'_, f64> {
+    #[inline(always)]
+    fn row(&self, i: usize) -> Vec3 {
+        let r = &self.0[3 * i..3 * i + 3];
+        Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32)
+    }
+}
+
+impl Row for &[Vec3] {
+    #[inline(always)]
+    fn row(&self, i: usize) -> Vec3 {
+        self[i]
+    }
+}
+
+/// `$body` with `$r` bound to `$rows` as a [`Row`] of its own type.
+macro_rules! with_rows {
+    ($rows:expr, |$r:ident| $body:expr) => {
+        match $rows {
+            Vec3Rows::F32(flat) => {
+                let $r = Flat(flat);
+                $body
+            }
+            Vec3Rows::F64(flat) => {
+                let $r = Flat(flat);
+                $body
+            }
+            Vec3Rows::Copied(rows) => {
+                let $r = rows;
+                $body
+            }
+        }
+    };
+}
+
+impl Vec3Array<'_> {
+    pub fn rows(&self) -> PyResult<Vec3Rows<'_>> {
+        let flat = |e: numpy::AsSliceError| error(e.to_string());
+        Ok(match self {
+            Self::F32(a) => Vec3Rows::F32(a.as_slice().map_err(flat)?),
+            Self::F64(a) => Vec3Rows::F64(a.as_slice().map_err(flat)?),
+            Self::Copied(rows) => Vec3Rows::Copied(rows),
+        })
+    }
+}
+
+/// Whether an (n, 3) array can be read in place: row-major, and of the
+/// right shape (else [`rows_of`] says what is wrong, or copies it).
+fn in_place<T: Element>(a: &PyReadonlyArray2<'_, T>) -> bool {
+    a.is_c_contiguous() && a.shape()[1] == 3
+}
+
+/// An (n, 3) array of any float or integer dtype, held for reading.
+pub fn read_vec3s<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Vec3Array<'py>> {
+    const WHAT: &str = "floats";
+    let copied =
+        |rows: Vec<[f32; 3]>| Vec3Array::Copied(rows.into_iter().map(Vec3::from).collect());
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<f32>>() {
+        if in_place(&a) {
+            return Ok(Vec3Array::F32(a));
+        }
+        return Ok(copied(rows_of(&a, name, WHAT, |x| x)?));
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<f64>>() {
+        if in_place(&a) {
+            return Ok(Vec3Array::F64(a));
+        }
+        return Ok(copied(rows_of(&a, name, WHAT, |x| x as f32)?));
+    }
+    match as_numpy(obj, name, "fiu", WHAT, "float64", 2)? {
+        None => Ok(Vec3Array::Copied(Vec::new())),
+        Some(a) => {
+            let a = a.extract::<PyReadonlyArray2<f64>>()?;
+            if in_place(&a) {
+                Ok(Vec3Array::F64(a))
+            } else {
+                Ok(copied(rows_of(&a, name, WHAT, |x| x as f32)?))
+            }
+        }
+    }
+}
+
+/// An (n, 3) array of any float or integer dtype, as float32 triples.
+pub fn vec3s(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec3>> {
+    let array = read_vec3s(obj, name)?;
+    let rows = array.rows()?;
+    let n = rows.len();
+    Ok(with_rows!(rows, |r| (0..n).map(|i| r.row(i)).collect()))
+}
+
+fn not_finite(name: &str, i: usize, v: Vec3) -> PyErr {
+    error(format!(
+        "{name}[{i}] is not finite (as float32): {:?}",
+        v.to_array()
+    ))
+}
+
+/// Points: an (n, 3) array of finite values (after rounding to float32),
+/// read on `threads` (with the GIL held, so that no Python code changes the
+/// array meanwhile).
+pub fn points(obj: &Bound<'_, PyAny>, name: &str, threads: &Threads) -> PyResult<Vec<Vec3>> {
+    let array = read_vec3s(obj, name)?;
+    let rows = array.rows()?;
+    let (points, bad) = with_rows!(rows, |r| gather(threads, rows.len(), |i| {
+        let p = r.row(i);
+        (p, !p.is_finite())
+    }));
+    match bad {
+        Some(i) => Err(not_finite(name, i, points[i])),
+        None => Ok(points),
+    }
+}
+
+/// `make(i)` for `i` in `0..n`, on `threads`, and the first `i` whose
+/// answer came back marked bad.
+fn gather<T: Send>(
+    threads: &Threads,
+    n: usize,
+    make: impl Fn(usize) -> (T, bool) + Sync,
+) -> (Vec<T>, Option<usize>) {
+    let first_bad = AtomicUsize::new(usize::MAX);
+    let out = threads.install(|| {
+        (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let (value, bad) = make(i);
+                if bad {
+                    first_bad.fetch_min(i, Ordering::Relaxed);
+                }
+                value
+            })
+            .collect()
+    });
+    let bad = first_bad.into_inner();
+    (out, (bad != usize::MAX).then_some(bad))
+}
+
+/// An (m, 3) array of any integer dtype, as vertex indices: each in
+/// `0..vertices` (which strata's own check repeats, naming the same face).
+pub fn faces(obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Vec<[u32; 3]>> {
+    const NAME: &str = "faces";
+    const WHAT: &str = "integers";
+    let rows: Vec<[i64; 3]> = if let Ok(a) = obj.extract::<PyReadonlyArray2<i64>>() {
+        rows_of(&a, NAME, WHAT, |x| x)?
+    } else if let Ok(a) = obj.extract::<PyReadonlyArray2<i32>>() {
+        rows_of(&a, NAME, WHAT, i64::from)?
+    } else if let Ok(a) = obj.extract::<PyReadonlyArray2<u32>>() {
+        rows_of(&a, NAME, WHAT, i64::from)?
+    } else if let Ok(a) = obj.extract::<PyReadonlyArray2<u64>>() {
+        rows_of(&a, NAME, WHAT, |x| i64::try_from(x).unwrap_or(i64::MAX))?
+    } else {
+        match as_numpy(obj, NAME, "iu", WHAT, "int64", 2)? {
+            None => Vec::new(),
+            Some(a) => rows_of(&a.extract::<PyReadonlyArray2<i64>>()?, NAME, WHAT, |x| x)?,
+        }
+    };
+    let mut out = Vec::with_capacity(rows.len());
+    for (face, row) in rows.iter().enumerate() {
+        if let Some(corner) = row
+            .iter()
+            .position(|&k| k < 0 || k as u64 >= vertices as u64)
+        {
+            return Err(error(format!(
+                "faces[{face}][{corner}] = {} is out of range for {vertices} vertices",
+                row[corner]
+            )));
+        }
+        out.push(row.map(|k| k as u32));
+    }
+    Ok(out)
+}
+
+/// A 1-D array of numbers (any float or integer dtype) as float64.
+fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
+    let read = |a: PyReadonlyArray1<f64>| a.as_array().to_vec();
+    if let Ok(a) = obj.extract::<PyReadonlyArray1<f64>>() {
+        return Ok(read(a));
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray1<f32>>() {
+        return Ok(a.as_array().iter().map(|&x| x as f64).collect());
+    }
+    match as_numpy(obj, name, "fiu", "numbers", "float64", 1)? {
+        None => Ok(Vec::new()),
+        Some(a) => Ok(read(a.extract()?)),
+    }
+}
+
+/// Whether `obj` is an array (or a list or tuple) rather than a number.
+fn is_sequence(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        return Ok(true);
+    }
+    Ok(obj.hasattr("ndim")? && obj.getattr("ndim")?.extract::<usize>().unwrap_or(0) > 0)
+}
+
+fn check_t_max(t: f64, name: &str) -> PyResult<f32> {
+    if t.is_nan() || t < 0.0 {
+        return Err(error(format!(
+            "{name} must be >= 0 (inf for no limit); got {t}"
+        )));
+    }
+    Ok(t as f32)
+}
+
+/// Where rays end: one t for all, or one each.
+pub enum TMax {
+    All(f32),
+    Each(Vec<f32>),
+}
+
+impl TMax {
+    #[inline]
+    fn get(&self, i: usize) -> f32 {
+        match self {
+            Self::All(t) => *t,
+            Self::Each(ts) => ts[i],
+        }
+    }
+}
+
+/// `t_max` (a number, or one per ray; `None`: no limit), checked, for `n`
+/// rays.
+fn t_maxes(t_max: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<TMax> {
+    let Some(obj) = t_max else {
+        return Ok(TMax::All(f32::INFINITY));
+    };
+    if !is_sequence(obj)? {
+        let t: f64 = obj.extract().map_err(|_| {
+            error(format!(
+                "t_max must be a number or an (n,) array with one per ray; got {}",
+                obj.get_type().name().map_or("?".into(), |s| s.to_string())
+            ))
+        })?;
+        return Ok(TMax::All(check_t_max(t, "t_max")?));
+    }
+    let ts = column(obj, "t_max")?;
+    if ts.len() != n {
+        return Err(error(format!(
+            "t_max must be a number or an (n,) array with one per ray; got {} values for {n} rays",
+            ts.len()
+        )));
+    }
+    let ts: PyResult<Vec<f32>> = ts
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| check_t_max(t, &format!("t_max[{i}]")))
+        .collect();
+    Ok(TMax::Each(ts?))
+}
+
+/// Rays from `origins` and `directions` ((n, 3) each, finite, no zero
+/// direction), starting at t = 0 and ending at `t_max`, read on `threads`
+/// (with the GIL held, so no Python code can change the arrays meanwhile).
+pub fn rays(
+    origins: &Bound<'_, PyAny>,
+    directions: &Bound<'_, PyAny>,
+    t_max: Option<&Bound<'_, PyAny>>,
+    threads: &Threads,
+) -> PyResult<Vec<Ray>> {
+    let o = read_vec3s(origins, "origins")?;
+    let d = read_vec3s(directions, "directions")?;
+    let (o, d) = (o.rows()?, d.rows()?);
+    if o.len() != d.len() {
+        return Err(error(format!(
+            "origins and directions must have the same length; got {} and {}",
+            o.len(),
+            d.len()
+        )));
+    }
+    let t = t_maxes(t_max, o.len())?;
+    let n = o.len();
+    let bad =
+        |r: &Ray| !r.origin.is_finite() || !r.direction.is_finite() || r.direction == Vec3::ZERO;
+    let (rays, bad) = with_rows!(o, |ro| with_rows!(d, |rd| gather(threads, n, |i| {
+        let ray = Ray::segment(ro.row(i), rd.row(i), t.get(i));
+        (ray, bad(&ray))
+    })));
+    let Some(i) = bad else {
+        return Ok(rays);
+    };
+    let r = rays[i];
+    if !r.origin.is_finite() {
+        return Err(not_finite("origins", i, r.origin));
+    }
+    let what = if r.direction.is_finite() {
+        "is zero"
+    } else {
+        "is not finite (as float32)"
+    };
+    Err(error(format!(
+        "directions[{i}] {what}: {:?}; a direction must be a finite, non-zero vector",
+        r.direction.to_array()
+    )))
+}

@@ -1,0 +1,37 @@
+//! `strata_rt._native`: strata's ray queries and renders for Python.
+//!
+//! A thin layer over the library: [`convert`] turns numpy arrays (any
+//! float or integer dtype, lists, non-contiguous views) into strata's
+//! types and refuses bad input with a `ValueError` that names the
+//! argument; [`mesh`] holds the BVH and answers the ray and point queries;
+//! [`run`] runs a query's rays on rayon with the GIL released, in chunks
+//! between which Ctrl-C is checked; [`render`] is `strata render` returning
+//! arrays. The Python package (`python/strata_rt/`) re-exports all of it.
+
+mod convert;
+mod mesh;
+mod render;
+mod run;
+
+use pyo3::prelude::*;
+
+pyo3::create_exception!(
+    strata_rt,
+    InputError,
+    pyo3::exceptions::PyValueError,
+    "A file or scene strata cannot use: the message is strata's one line, naming the file and the key or line."
+);
+
+/// strata's ray queries (first hit, occlusion, every crossing, inside or
+/// outside, closest point) on triangle meshes, and its renders, with numpy
+/// arrays in and out.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<mesh::Mesh>()?;
+    m.add_class::<mesh::Hits>()?;
+    m.add_class::<mesh::ClosestPoints>()?;
+    m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add("InputError", m.py().get_type::<InputError>())?;
+    m.add("__version__", strata::VERSION)?;
+    Ok(())
+}

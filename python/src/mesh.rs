@@ -1,0 +1,532 @@
+//! `Mesh`: a triangle mesh with its BVH, and the queries on it.
+
+use crate::convert;
+use crate::run::{self, Threads, CHUNK, TASK};
+use glam::Vec3;
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
+use pyo3::exceptions::{PyFileNotFoundError, PyKeyError, PyValueError};
+use pyo3::prelude::*;
+use rayon::prelude::*;
+use std::path::PathBuf;
+use strata::accel::BuildQuality;
+use strata::geometry::Geometry;
+use strata::math::lanes::LANES;
+
+/// A triangle mesh and its BVH, built once (on every core) and asked any
+/// number of queries.
+///
+/// ``Mesh(vertices, faces)`` takes an (n, 3) array of vertex positions
+/// (any float dtype; strata computes in float32) and an (m, 3) array of
+/// vertex indices (any integer dtype); face i is triangle i in every
+/// answer. Lists and non-contiguous arrays are accepted. Degenerate faces
+/// are kept (no ray hits them), so face ids stay yours.
+///
+/// Queries take (n, 3) ``origins`` and ``directions`` (any float dtype;
+/// a direction need not be unit length, and ``t`` is measured in its
+/// lengths) and ``t_max`` (a number or one per ray; a ray reports what
+/// lies in (0, t_max]). Every query releases the GIL and runs on every
+/// core, or on ``threads`` threads; Ctrl-C stops it between chunks of
+/// 65,536 rays. Bad input raises ``ValueError`` naming the argument.
+#[pyclass(frozen, module = "strata_rt._native")]
+pub struct Mesh {
+    geometry: Geometry,
+    /// [min, max] corners of the triangles' bounding box.
+    bounds: [Vec3; 2],
+}
+
+/// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
+/// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
+#[pyclass(frozen, module = "strata_rt._native")]
+pub struct Hits {
+    /// float32 (n,): distance along the ray, in direction lengths; inf on a miss.
+    #[pyo3(get)]
+    t: Py<PyArray1<f32>>,
+    /// int64 (n,): the triangle (face index) hit; -1 on a miss.
+    #[pyo3(get)]
+    prim: Py<PyArray1<i64>>,
+    /// float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss.
+    #[pyo3(get)]
+    u: Py<PyArray1<f32>>,
+    /// float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss.
+    #[pyo3(get)]
+    v: Py<PyArray1<f32>>,
+    /// float32 (n, 3): unit geometric normal of the triangle hit, by the
+    /// right-hand rule over its vertex order (trimesh's face normal); NaN on a miss.
+    #[pyo3(get)]
+    normal: Py<PyArray2<f32>>,
+    /// float32 (n, 3): the hit point on the triangle, (1-u-v)·v0 + u·v1 + v·v2; NaN on a miss.
+    #[pyo3(get)]
+    point: Py<PyArray2<f32>>,
+}
+
+const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
+
+#[pymethods]
+impl Hits {
+    /// The array named ``key``: one of ``keys()``.
+    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
+        Ok(match key {
+            "t" => self.t.clone_ref(py).into_any(),
+            "prim" => self.prim.clone_ref(py).into_any(),
+            "u" => self.u.clone_ref(py).into_any(),
+            "v" => self.v.clone_ref(py).into_any(),
+            "normal" => self.normal.clone_ref(py).into_any(),
+            "point" => self.point.clone_ref(py).into_any(),
+            _ => return Err(PyKeyError::new_err(key.to_string())),
+        })
+    }
+
+    /// The names of the arrays: t, prim, u, v, normal, point.
+    fn keys(&self) -> Vec<&'static str> {
+        HITS_KEYS.to_vec()
+    }
+
+    /// Whether ``key`` names one of the arrays.
+    fn __contains__(&self, key: &str) -> bool {
+        HITS_KEYS.contains(&key)
+    }
+
+    /// The number of rays.
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.t.bind(py).len().unwrap_or(0)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let t = self.t.bind(py);
+        let n = t.len().unwrap_or(0);
+        let hits = self
+            .prim
+            .bind(py)
+            .to_vec()
+            .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count());
+        format!("Hits({n} rays, {hits} hit; keys t, prim, u, v, normal, point)")
+    }
+}
+
+/// The nearest surface point to each query point (``Mesh.closest_point``),
+/// as attributes or keys (``near.distance`` or ``near["distance"]``).
+#[pyclass(frozen, module = "strata_rt._native")]
+pub struct ClosestPoints {
+    /// float32 (n, 3): the nearest point on the surface; NaN where none lies within max_distance.
+    #[pyo3(get)]
+    point: Py<PyArray2<f32>>,
+    /// float32 (n,): its distance (negative inside with ``signed=True``); inf where none.
+    #[pyo3(get)]
+    distance: Py<PyArray1<f32>>,
+    /// int64 (n,): the triangle (face index) it lies on; -1 where none.
+    #[pyo3(get)]
+    prim: Py<PyArray1<i64>>,
+}
+
+const CLOSEST_KEYS: [&str; 3] = ["point", "distance", "prim"];
+
+#[pymethods]
+impl ClosestPoints {
+    /// The array named ``key``: one of ``keys()``.
+    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
+        Ok(match key {
+            "point" => self.point.clone_ref(py).into_any(),
+            "distance" => self.distance.clone_ref(py).into_any(),
+            "prim" => self.prim.clone_ref(py).into_any(),
+            _ => return Err(PyKeyError::new_err(key.to_string())),
+        })
+    }
+
+    /// The names of the arrays: point, distance, prim.
+    fn keys(&self) -> Vec<&'static str> {
+        CLOSEST_KEYS.to_vec()
+    }
+
+    /// Whether ``key`` names one of the arrays.
+    fn __contains__(&self, key: &str) -> bool {
+        CLOSEST_KEYS.contains(&key)
+    }
+
+    /// The number of query points.
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.distance.bind(py).len().unwrap_or(0)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let n = self.distance.bind(py).len().unwrap_or(0);
+        format!("ClosestPoints({n} points; keys point, distance, prim)")
+    }
+}
+
+/// One ray's answer, written in place by the threads.
+struct HitColumns<'a> {
+    t: &'a mut [f32],
+    prim: &'a mut [i64],
+    u: &'a mut [f32],
+    v: &'a mut [f32],
+    /// Three per ray.
+    normal: &'a mut [f32],
+    point: &'a mut [f32],
+}
+
+impl Mesh {
+    fn new_from(geometry: Geometry) -> Self {
+        let mut lo = Vec3::INFINITY;
+        let mut hi = Vec3::NEG_INFINITY;
+        for block in &geometry.leaf_blocks {
+            for (lane, &id) in block.id.iter().enumerate().take(LANES) {
+                if id < geometry.triangle_count {
+                    for p in block.triangle(lane) {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+            }
+        }
+        Self {
+            geometry,
+            bounds: [lo, hi],
+        }
+    }
+
+    /// Fill `out` with the first hits of `rays`.
+    fn first_hits(&self, rays: &[strata::math::Ray], out: HitColumns<'_>) {
+        let mut found = [None; TASK];
+        let found = &mut found[..rays.len()];
+        self.geometry.intersect_stream(rays, found);
+        for (i, hit) in found.iter().enumerate() {
+            let Some(hit) = hit else {
+                out.t[i] = f32::INFINITY;
+                out.prim[i] = -1;
+                out.u[i] = f32::NAN;
+                out.v[i] = f32::NAN;
+                out.normal[3 * i..3 * i + 3].fill(f32::NAN);
+                out.point[3 * i..3 * i + 3].fill(f32::NAN);
+                continue;
+            };
+            let [a, b, c] = self.geometry.triangle(hit);
+            out.t[i] = hit.t;
+            out.prim[i] = hit.prim as i64;
+            out.u[i] = hit.u;
+            out.v[i] = hit.v;
+            let normal = (b - a).cross(c - a).normalize();
+            let point = (1.0 - hit.u - hit.v) * a + hit.u * b + hit.v * c;
+            normal.write_to_slice(&mut out.normal[3 * i..3 * i + 3]);
+            point.write_to_slice(&mut out.point[3 * i..3 * i + 3]);
+        }
+    }
+}
+
+/// `all_hits`'s answer: splits, t, prim.
+type AllHits<'py> = (
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f32>>,
+    Bound<'py, PyArray1<i64>>,
+);
+
+/// A flat vector of rows as an (n, 3) array.
+pub fn rows<'py>(py: Python<'py>, rows: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let n = rows.len();
+    let flat: Vec<f32> = rows.into_iter().flatten().collect();
+    PyArray1::from_vec(py, flat).reshape([n, 3])
+}
+
+#[pymethods]
+impl Mesh {
+    /// Build the mesh and its BVH from ``vertices`` ((n, 3) floats) and
+    /// ``faces`` ((m, 3) integer indices into ``vertices``).
+    ///
+    /// Raises ValueError naming what is wrong: a shape or dtype, a
+    /// vertex that is NaN or infinite (``vertices[i]``), an index out of
+    /// range (``faces[i][k]``).
+    #[new]
+    fn new(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        let vertices = convert::vec3s(vertices, "vertices")?;
+        let faces = convert::faces(faces, vertices.len())?;
+        let geometry = py
+            .detach(|| strata::scene::mesh_geometry(vertices, faces, BuildQuality::Auto))
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(Self::new_from(geometry))
+    }
+
+    /// Load a mesh file (OBJ, PLY, glTF or GLB) with strata's own loaders,
+    /// used as it is: triangle i of the file is face i.
+    ///
+    /// A file strata cannot read raises ``strata_rt.InputError`` (a
+    /// ValueError; FileNotFoundError if it does not exist) with strata's
+    /// one-line message naming the file and the line or key.
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let loaded = py.detach(|| strata::scene::load_mesh_scene(&path, BuildQuality::Auto));
+        match loaded {
+            Ok((scene, _)) => Ok(Self::new_from(scene.geometry)),
+            Err(e) if !path.exists() => Err(PyFileNotFoundError::new_err(e.to_string())),
+            Err(e) => Err(crate::InputError::new_err(e.to_string())),
+        }
+    }
+
+    /// The number of triangles (faces).
+    #[getter]
+    fn triangle_count(&self) -> usize {
+        self.geometry.triangle_count as usize
+    }
+
+    /// The number of triangles (faces).
+    fn __len__(&self) -> usize {
+        self.geometry.triangle_count as usize
+    }
+
+    /// float32 (2, 3): the [min, max] corners of the bounding box (inf and
+    /// -inf for a mesh without triangles).
+    #[getter]
+    fn bounds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        rows(py, self.bounds.map(|p| p.to_array()).to_vec())
+    }
+
+    /// float32 (m, 3, 3): each face's three vertices, in face order (a copy
+    /// of what the BVH stores).
+    #[getter]
+    fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let tris = self.geometry.file_order_triangles();
+        let m = tris.len();
+        let flat: Vec<f32> = tris
+            .into_iter()
+            .flat_map(|t| t.into_iter().flat_map(|p| p.to_array()))
+            .collect();
+        PyArray1::from_vec(py, flat).reshape([m, 3, 3])
+    }
+
+    fn __repr__(&self) -> String {
+        let [lo, hi] = self.bounds;
+        format!(
+            "Mesh({} triangles, bounds {:?} to {:?})",
+            self.geometry.triangle_count,
+            lo.to_array(),
+            hi.to_array()
+        )
+    }
+
+    /// The first hit of each ray in (0, t_max]: a ``Hits`` with ``t`` (inf
+    /// on a miss), ``prim`` (-1), barycentric ``u`` and ``v``, the unit
+    /// geometric ``normal`` and the hit ``point``.
+    ///
+    /// Watertight: a ray through a shared edge or vertex of a closed mesh
+    /// hits one of the triangles there, never none.
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    fn intersect(
+        &self,
+        py: Python<'_>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        threads: Option<i64>,
+    ) -> PyResult<Hits> {
+        let threads = Threads::new(threads)?;
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let n = rays.len();
+        let mut t = vec![0f32; n];
+        let mut prim = vec![0i64; n];
+        let mut u = vec![0f32; n];
+        let mut v = vec![0f32; n];
+        let mut normal = vec![0f32; 3 * n];
+        let mut point = vec![0f32; 3 * n];
+        for start in (0..n).step_by(CHUNK) {
+            let r = start..(start + CHUNK).min(n);
+            let columns = (
+                rays[r.clone()].par_chunks(TASK),
+                t[r.clone()].par_chunks_mut(TASK),
+                prim[r.clone()].par_chunks_mut(TASK),
+                u[r.clone()].par_chunks_mut(TASK),
+                v[r.clone()].par_chunks_mut(TASK),
+                normal[3 * r.start..3 * r.end].par_chunks_mut(3 * TASK),
+                point[3 * r.start..3 * r.end].par_chunks_mut(3 * TASK),
+            );
+            py.detach(|| {
+                threads.install(|| {
+                    columns
+                        .into_par_iter()
+                        .for_each(|(rays, t, prim, u, v, normal, point)| {
+                            let out = HitColumns {
+                                t,
+                                prim,
+                                u,
+                                v,
+                                normal,
+                                point,
+                            };
+                            self.first_hits(rays, out)
+                        })
+                })
+            });
+            py.check_signals()?;
+        }
+        Ok(Hits {
+            t: PyArray1::from_vec(py, t).unbind(),
+            prim: PyArray1::from_vec(py, prim).unbind(),
+            u: PyArray1::from_vec(py, u).unbind(),
+            v: PyArray1::from_vec(py, v).unbind(),
+            normal: PyArray1::from_vec(py, normal).reshape([n, 3])?.unbind(),
+            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
+        })
+    }
+
+    /// Whether anything blocks each ray in (0, t_max]: bool (n,).
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    fn occluded<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        threads: Option<i64>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let threads = Threads::new(threads)?;
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let mut out = vec![false; rays.len()];
+        run::each(py, &threads, &rays, &mut out, |rays, out| {
+            self.geometry.occluded_stream(rays, u32::MAX, out)
+        })?;
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// Every surface crossing along each ray in (0, t_max], nearest first,
+    /// as ``(splits, t, prim)`` in Open3D's layout: ray i's crossings are
+    /// ``t[splits[i]:splits[i+1]]`` (float32) on triangles
+    /// ``prim[splits[i]:splits[i+1]]`` (int64); ``splits`` is int64 (n+1,).
+    ///
+    /// One traversal per ray, not a re-cast from each hit: a ray through a
+    /// shared edge or vertex of a closed mesh crosses the surface there
+    /// once and is reported once, never zero times or twice, at any scale.
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    fn all_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        threads: Option<i64>,
+    ) -> PyResult<AllHits<'py>> {
+        let threads = Threads::new(threads)?;
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
+            for ray in rays {
+                let before = found.len();
+                self.geometry.crossings(ray, found);
+                counts.push((found.len() - before) as u32);
+            }
+        })?;
+        let mut splits = Vec::with_capacity(counts.len() + 1);
+        let mut total = 0i64;
+        splits.push(0);
+        for c in counts {
+            total += c as i64;
+            splits.push(total);
+        }
+        let t: Vec<f32> = found.iter().map(|c| c.t).collect();
+        let prim: Vec<i64> = found.iter().map(|c| c.prim as i64).collect();
+        Ok((
+            PyArray1::from_vec(py, splits),
+            PyArray1::from_vec(py, t),
+            PyArray1::from_vec(py, prim),
+        ))
+    }
+
+    /// The number of surface crossings along each ray in (0, t_max]: int64
+    /// (n,), as ``all_hits`` would list them.
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    fn count_hits<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        threads: Option<i64>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let threads = Threads::new(threads)?;
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let mut out = vec![0i64; rays.len()];
+        run::each(py, &threads, &rays, &mut out, |rays, out| {
+            for (o, ray) in out.iter_mut().zip(rays) {
+                *o = self.geometry.count_crossings(ray) as i64;
+            }
+        })?;
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// Whether each point ((n, 3) floats) is inside the mesh: bool (n,), by
+    /// the parity of the surface crossings along a ray from it (the
+    /// watertight test makes that exact on shared edges and vertices).
+    ///
+    /// Meant for closed meshes. On an open mesh the answer is the parity
+    /// along that one ray, which a hole can flip: a point is reported
+    /// inside if that ray crosses the surface an odd number of times.
+    #[pyo3(signature = (points, threads=None))]
+    fn contains<'py>(
+        &self,
+        py: Python<'py>,
+        points: &Bound<'_, PyAny>,
+        threads: Option<i64>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let threads = Threads::new(threads)?;
+        let points = convert::points(points, "points", &threads)?;
+        let mut out = vec![false; points.len()];
+        run::each(py, &threads, &points, &mut out, |points, out| {
+            for (o, &p) in out.iter_mut().zip(points) {
+                *o = self.geometry.contains(p);
+            }
+        })?;
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// The nearest point on the surface to each point ((n, 3) floats),
+    /// found by a best-first walk of the BVH: a ``ClosestPoints`` with
+    /// ``point`` (n, 3), ``distance`` (n,) and the triangle ``prim`` (n,).
+    ///
+    /// ``max_distance``: look no farther (a number; points with nothing
+    /// that near get NaN, inf and -1). ``signed=True`` makes the distance
+    /// negative inside the mesh (by ``contains``; meant for closed meshes).
+    #[pyo3(signature = (points, max_distance=None, signed=false, threads=None))]
+    fn closest_point(
+        &self,
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        max_distance: Option<f64>,
+        signed: bool,
+        threads: Option<i64>,
+    ) -> PyResult<ClosestPoints> {
+        let threads = Threads::new(threads)?;
+        let points = convert::points(points, "points", &threads)?;
+        let max_distance = match max_distance {
+            None => f32::INFINITY,
+            Some(d) if d >= 0.0 => d as f32,
+            Some(d) => {
+                return Err(PyValueError::new_err(format!(
+                    "max_distance must be >= 0 (None for no limit); got {d}"
+                )))
+            }
+        };
+        let mut near = vec![([f32::NAN; 3], f32::INFINITY, -1i64); points.len()];
+        run::each(py, &threads, &points, &mut near, |points, out| {
+            for (o, &p) in out.iter_mut().zip(points) {
+                if let Some(n) = self.geometry.nearest(p, max_distance) {
+                    let inside = signed && self.geometry.contains(p);
+                    let d = if inside { -n.distance } else { n.distance };
+                    *o = (n.point.to_array(), d, n.prim as i64);
+                }
+            }
+        })?;
+        let n = near.len();
+        let mut point = Vec::with_capacity(3 * n);
+        let mut distance = Vec::with_capacity(n);
+        let mut prim = Vec::with_capacity(n);
+        for (p, d, k) in near {
+            point.extend(p);
+            distance.push(d);
+            prim.push(k);
+        }
+        Ok(ClosestPoints {
+            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
+            distance: PyArray1::from_vec(py, distance).unbind(),
+            prim: PyArray1::from_vec(py, prim).unbind(),
+        })
+    }
+}

@@ -1,0 +1,320 @@
+//! `render(scene, **settings)`: `strata render` with the image returned as
+//! an array. The scene is loaded, edited and rendered by the library's own
+//! functions (`load_edited_scene`, `render::render`) and the image is the
+//! film's `to_rgb`, as the CLI writes into its EXR: the same pixels bit for
+//! bit. The thread count, passes, packets and schedule change only the time.
+
+use crate::mesh::rows;
+use crate::run::Threads;
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeWarning, PyUserWarning, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use std::ffi::CString;
+use std::path::PathBuf;
+use strata::accel::BuildQuality;
+use strata::render::aov::{self, Aov};
+use strata::render::{render as render_scene, RenderOptions, Schedule, SliceSpec, Window};
+use strata::scene::edit::Edit;
+use strata::scene::settings::GlossySampling;
+use strata::scene::{load_edited_scene, RenderOverrides};
+use toml::Value;
+
+fn error(message: String) -> PyErr {
+    PyValueError::new_err(message)
+}
+
+/// An optional count: `None`, or an int from `min` up.
+fn count(value: Option<i64>, name: &str, min: i64) -> PyResult<Option<u32>> {
+    match value {
+        None => Ok(None),
+        Some(v) if v >= min && v <= u32::MAX as i64 => Ok(Some(v as u32)),
+        Some(v) => Err(error(format!(
+            "{name} must be an int from {min} to {}; got {v}",
+            u32::MAX
+        ))),
+    }
+}
+
+/// An optional mode given by name (`"random"`), parsed as the CLI does.
+fn mode<T: std::str::FromStr<Err = String>>(
+    value: Option<&str>,
+    name: &str,
+) -> PyResult<Option<T>> {
+    value
+        .map(|text| text.parse().map_err(|e| error(format!("{name}: {e}"))))
+        .transpose()
+}
+
+/// A Python value as the TOML value a `--set` would give.
+fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
+    // numpy scalars and arrays, as Python numbers and lists.
+    if !obj.is_instance_of::<PyString>() && obj.hasattr("tolist")? {
+        return toml_value(&obj.call_method0("tolist")?, key);
+    }
+    if obj.is_instance_of::<PyBool>() {
+        return Ok(Value::Boolean(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyInt>() {
+        let v: i64 = obj
+            .extract()
+            .map_err(|_| error(format!("set[{key:?}]: {obj} does not fit a 64-bit integer")))?;
+        return Ok(Value::Integer(v));
+    }
+    if obj.is_instance_of::<PyFloat>() {
+        return Ok(Value::Float(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyString>() {
+        return Ok(Value::String(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        let items: PyResult<Vec<Value>> = obj
+            .try_iter()?
+            .map(|item| toml_value(&item?, key))
+            .collect();
+        return Ok(Value::Array(items?));
+    }
+    if let Ok(dict) = obj.cast::<PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, v) in dict.iter() {
+            let k: String = k
+                .extract()
+                .map_err(|_| error(format!("set[{key:?}]: table keys must be strings")))?;
+            table.insert(k, toml_value(&v, key)?);
+        }
+        return Ok(Value::Table(table));
+    }
+    Err(error(format!(
+        "set[{key:?}]: a {} is not a scene value (a bool, number, string, list or dict)",
+        obj.get_type().name()?
+    )))
+}
+
+/// `set=`: a dict of key path to value, or `"KEY=VALUE"` strings as
+/// `--set` takes them.
+fn edits(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Edit>> {
+    let Some(set) = set else {
+        return Ok(Vec::new());
+    };
+    if let Ok(dict) = set.cast::<PyDict>() {
+        let mut out = Vec::new();
+        for (k, v) in dict.iter() {
+            let path: String = k
+                .extract()
+                .map_err(|_| error("set: keys must be key paths such as \"camera.fov\"".into()))?;
+            let value = toml_value(&v, &path)?;
+            out.push(Edit { path, value });
+        }
+        return Ok(out);
+    }
+    let texts: Vec<String> = if set.is_instance_of::<PyString>() {
+        vec![set.extract()?]
+    } else {
+        set.extract().map_err(|_| {
+            error(
+                "set must be a dict {\"camera.fov\": 30} or a list of \"KEY=VALUE\" strings".into(),
+            )
+        })?
+    };
+    texts
+        .iter()
+        .map(|t| t.parse::<Edit>().map_err(|e| error(format!("set: {e}"))))
+        .collect()
+}
+
+/// `aovs=`: False or None (none), True (all three), or names.
+fn aov_list(aovs: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Aov>> {
+    let Some(aovs) = aovs else {
+        return Ok(Vec::new());
+    };
+    if let Ok(all) = aovs.extract::<bool>() {
+        return Ok(if all { Aov::ALL.to_vec() } else { Vec::new() });
+    }
+    let names: Vec<String> = if aovs.is_instance_of::<PyString>() {
+        vec![aovs.extract()?]
+    } else {
+        aovs.extract().map_err(|_| {
+            error("aovs must be True, False or a list of names (albedo, normal, depth)".into())
+        })?
+    };
+    names
+        .iter()
+        .map(|n| n.parse::<Aov>().map_err(|e| error(format!("aovs: {e}"))))
+        .collect()
+}
+
+/// `crop=`: (x0, y0, x1, y1) or `"X0,Y0,X1,Y1"`, as `--crop`.
+fn crop_text(crop: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
+    let Some(crop) = crop else {
+        return Ok(None);
+    };
+    if crop.is_instance_of::<PyString>() {
+        return Ok(Some(crop.extract()?));
+    }
+    let c: [i64; 4] = crop
+        .extract()
+        .map_err(|_| error("crop must be (x0, y0, x1, y1): four ints, pixels, half-open".into()))?;
+    Ok(Some(format!("{},{},{},{}", c[0], c[1], c[2], c[3])))
+}
+
+fn warn(py: Python<'_>, user: bool, message: String) -> PyResult<()> {
+    let category = if user {
+        py.get_type::<PyUserWarning>()
+    } else {
+        py.get_type::<PyRuntimeWarning>()
+    };
+    let message = CString::new(message).unwrap_or_default();
+    PyErr::warn(py, &category, &message, 1)
+}
+
+/// Render a scene file as ``strata render`` does, and return the image:
+/// float32 (height, width, 3), linear RGB, the pixels of the CLI's EXR
+/// output bit for bit.
+///
+/// Every setting is the flag of the same name (``spp=64`` is ``--spp
+/// 64``), and overrides the scene file's ``[render]`` table; ``set`` edits
+/// any value of the file by key path, as ``--set`` does: a dict
+/// (``{"camera.fov": 30, "lights[0].radiance": [1, 1, 1]}``) or
+/// ``"KEY=VALUE"`` strings. ``crop=(x0, y0, x1, y1)`` renders only that
+/// window (each pixel as in the whole image). ``aovs=True`` (or a list of
+/// ``"albedo"``, ``"normal"``, ``"depth"``) also returns a dict of the
+/// AOVs: albedo and normal (height, width, 3), depth (height, width).
+/// ``threads``, ``passes``, ``packets``, ``schedule`` and ``bvh_quality``
+/// change the time, never a pixel.
+///
+/// The GIL is released while it renders. A bad setting raises ValueError
+/// naming it; a scene strata cannot read raises ``strata_rt.InputError``
+/// with strata's one-line message.
+#[pyfunction]
+#[pyo3(signature = (
+    scene, *, width=None, height=None, spp=None, shadow_samples=None,
+    reflection_samples=None, max_depth=None, sampler=None, seed=None, background=None,
+    light_sampling=None, glossy_sampling=None, set=None, threads=None, passes=None,
+    packets=None, schedule=None, bvh_quality=None, crop=None, aovs=None
+))]
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    py: Python<'_>,
+    scene: PathBuf,
+    width: Option<i64>,
+    height: Option<i64>,
+    spp: Option<i64>,
+    shadow_samples: Option<i64>,
+    reflection_samples: Option<i64>,
+    max_depth: Option<i64>,
+    sampler: Option<&str>,
+    seed: Option<i64>,
+    background: Option<&Bound<'_, PyAny>>,
+    light_sampling: Option<&str>,
+    glossy_sampling: Option<&str>,
+    set: Option<&Bound<'_, PyAny>>,
+    threads: Option<i64>,
+    passes: Option<i64>,
+    packets: Option<&str>,
+    schedule: Option<&str>,
+    bvh_quality: Option<&str>,
+    crop: Option<&Bound<'_, PyAny>>,
+    aovs: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Py<PyAny>> {
+    let background = background
+        .map(|b| {
+            b.extract::<[f32; 3]>()
+                .map_err(|_| error("background must be three numbers [r, g, b]".into()))
+        })
+        .transpose()?;
+    let overrides = RenderOverrides {
+        width: count(width, "width", 1)?,
+        height: count(height, "height", 1)?,
+        spp: count(spp, "spp", 1)?,
+        shadow_samples: count(shadow_samples, "shadow_samples", 1)?,
+        reflection_samples: count(reflection_samples, "reflection_samples", 1)?,
+        max_depth: count(max_depth, "max_depth", 0)?,
+        sampler: mode(sampler, "sampler")?,
+        seed: count(seed, "seed", 0)?,
+        background,
+        light_sampling: mode(light_sampling, "light_sampling")?,
+        glossy_sampling: mode::<GlossySampling>(glossy_sampling, "glossy_sampling")?,
+    };
+    overrides
+        .check()
+        .map_err(|(field, message)| error(format!("{field}: {message}")))?;
+    let edits = edits(set)?;
+    let pool = Threads::new(threads)?;
+    let passes = count(passes, "passes", 1)?;
+    let packets = mode(packets, "packets")?.unwrap_or_default();
+    let schedule: Schedule = mode(schedule, "schedule")?.unwrap_or_default();
+    let quality: BuildQuality = mode(bvh_quality, "bvh_quality")?.unwrap_or_default();
+    let crop = crop_text(crop)?;
+    let aovs = aov_list(aovs)?;
+
+    let loaded =
+        py.detach(|| pool.install(|| load_edited_scene(&scene, &edits, &overrides, quality)));
+    let scene = match loaded {
+        Ok((scene, _)) => scene,
+        Err(e) if !scene.exists() => return Err(PyFileNotFoundError::new_err(e.to_string())),
+        Err(e) => return Err(crate::InputError::new_err(e.to_string())),
+    };
+    let s = &scene.settings;
+    let window = crop
+        .map(|text| Window::crop(&text, s.width, s.height).map_err(|e| error(format!("crop: {e}"))))
+        .transpose()?;
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+        warn(
+            py,
+            true,
+            "no lights and no emissive materials, so everything but the background renders black"
+                .into(),
+        )?;
+    }
+    let opts = RenderOptions {
+        threads: pool.count(),
+        slice: SliceSpec::WHOLE,
+        schedule,
+        quiet: true,
+        passes,
+        resume_from: None,
+        packets,
+        window: window.clone(),
+        aovs: !aovs.is_empty(),
+    };
+    let outcome = py.detach(|| render_scene(&scene, &opts, None, |_, _| {}));
+    if let Some(bad) = outcome.film.first_invalid {
+        warn(
+            py,
+            false,
+            format!(
+                "{} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {}",
+                outcome.film.invalid, bad.x, bad.y, bad.sample
+            ),
+        )?;
+    }
+    let window = window.unwrap_or_else(|| Window::whole(s.width, s.height));
+    let (w, h) = (window.width() as usize, window.height() as usize);
+    let pixels: Vec<[f32; 3]> = outcome.film.to_rgb().iter().map(|p| p.to_array()).collect();
+    let image = rows(py, pixels)?.reshape([h, w, 3])?;
+    let Some(sums) = outcome.aov.as_deref().filter(|_| !aovs.is_empty()) else {
+        return Ok(image.into_any().unbind());
+    };
+    // The EXR's own channels (`aov::channels`), regrouped per AOV.
+    let mut channels = aov::channels(sums, &aovs).into_iter();
+    let dict = PyDict::new(py);
+    for a in &aovs {
+        let planes: Vec<Vec<f32>> = channels
+            .by_ref()
+            .take(a.channels().len())
+            .map(|(_, v)| v)
+            .collect();
+        let array = if let [plane] = &planes[..] {
+            PyArray1::from_slice(py, plane).reshape([h, w])?.into_any()
+        } else {
+            let flat: Vec<f32> = (0..w * h)
+                .flat_map(|i| planes.iter().map(move |p| p[i]))
+                .collect();
+            PyArray1::from_vec(py, flat)
+                .reshape([h, w, planes.len()])?
+                .into_any()
+        };
+        dict.set_item(a.name(), array)?;
+    }
+    Ok((image, dict).into_pyobject(py)?.into_any().unbind())
+}

@@ -1,0 +1,125 @@
+//! Running a query: its rays (or points) in chunks, each on rayon with the
+//! GIL released, and Ctrl-C checked between chunks.
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+
+/// Items between two checks for Ctrl-C: a few milliseconds of work on
+/// one core, so an interrupt lands at once and the checks cost nothing.
+pub const CHUNK: usize = 65_536;
+/// Items a thread takes at a time: as `strata trace` does, many
+/// interleaved walks' worth (and a stream's span), few enough that
+/// threads balance.
+pub const TASK: usize = 256;
+/// More threads than any machine has cores: a typo, not a request.
+const MAX_THREADS: i64 = 4096;
+
+/// Where a query runs: rayon's global pool (one thread per core), or a
+/// pool of a given size, built once per size and kept.
+#[derive(Clone)]
+pub struct Threads(Option<Arc<rayon::ThreadPool>>);
+
+impl Threads {
+    /// The pool for the `threads` argument (`None`: every core).
+    pub fn new(threads: Option<i64>) -> PyResult<Self> {
+        let Some(n) = threads else {
+            return Ok(Self(None));
+        };
+        if !(1..=MAX_THREADS).contains(&n) {
+            return Err(PyValueError::new_err(format!(
+                "threads must be an int from 1 to {MAX_THREADS}, or None for every core; got {n}"
+            )));
+        }
+        static POOLS: Mutex<BTreeMap<usize, Arc<rayon::ThreadPool>>> = Mutex::new(BTreeMap::new());
+        let mut pools = POOLS.lock().unwrap_or_else(|e| e.into_inner());
+        let n = n as usize;
+        if let Some(pool) = pools.get(&n) {
+            return Ok(Self(Some(pool.clone())));
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .thread_name(|i| format!("strata_rt-{i}"))
+            .build()
+            .map_err(|e| {
+                PyValueError::new_err(format!("threads: cannot start {n} threads: {e}"))
+            })?;
+        let pool = Arc::new(pool);
+        pools.insert(n, pool.clone());
+        Ok(Self(Some(pool)))
+    }
+
+    /// The thread count this runs on (`0`: rayon's global pool).
+    pub fn count(&self) -> usize {
+        self.0.as_ref().map_or(0, |p| p.current_num_threads())
+    }
+
+    /// `work` on this pool.
+    pub fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
+        match &self.0 {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
+    }
+}
+
+/// `out[i] = answer of items[i]`: `answer` fills a task's answers from its
+/// items, on every thread of `threads`, with the GIL released, a chunk at a
+/// time; between chunks, a pending Ctrl-C raises `KeyboardInterrupt`.
+pub fn each<I: Sync, R: Send>(
+    py: Python<'_>,
+    threads: &Threads,
+    items: &[I],
+    out: &mut [R],
+    answer: impl Fn(&[I], &mut [R]) + Sync,
+) -> PyResult<()> {
+    debug_assert_eq!(items.len(), out.len());
+    for (items, out) in items.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+        py.detach(|| {
+            threads.install(|| {
+                items
+                    .par_chunks(TASK)
+                    .zip(out.par_chunks_mut(TASK))
+                    .for_each(|(items, out)| answer(items, out))
+            })
+        });
+        py.check_signals()?;
+    }
+    Ok(())
+}
+
+/// The answers of a query with any number of answers per item, in item
+/// order: `answer` appends a task's answers to its vector and returns how
+/// many each item had. Threads, GIL and Ctrl-C as for [`each`].
+pub fn flat<I: Sync, R: Send>(
+    py: Python<'_>,
+    threads: &Threads,
+    items: &[I],
+    answer: impl Fn(&[I], &mut Vec<R>, &mut Vec<u32>) + Sync,
+) -> PyResult<(Vec<u32>, Vec<R>)> {
+    let mut counts = Vec::with_capacity(items.len());
+    let mut answers = Vec::new();
+    for items in items.chunks(CHUNK) {
+        let parts: Vec<(Vec<u32>, Vec<R>)> = py.detach(|| {
+            threads.install(|| {
+                items
+                    .par_chunks(TASK)
+                    .map(|items| {
+                        let mut found = Vec::new();
+                        let mut counts = Vec::with_capacity(items.len());
+                        answer(items, &mut found, &mut counts);
+                        (counts, found)
+                    })
+                    .collect()
+            })
+        });
+        for (c, a) in parts {
+            counts.extend(c);
+            answers.extend(a);
+        }
+        py.check_signals()?;
+    }
+    Ok((counts, answers))
+}

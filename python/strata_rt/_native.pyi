@@ -1,0 +1,187 @@
+"""Type stubs of strata_rt._native, the compiled half of strata_rt."""
+
+import os
+from typing import Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__version__: str
+
+class InputError(ValueError):
+    """A file or scene strata cannot use: the message is strata's one line,
+    naming the file and the key or line."""
+
+class Hits:
+    """The first hit of each ray (``Mesh.intersect``), as attributes or keys."""
+
+    @property
+    def t(self) -> NDArray[np.float32]:
+        """float32 (n,): distance along the ray, in direction lengths; inf on a miss."""
+    @property
+    def prim(self) -> NDArray[np.int64]:
+        """int64 (n,): the triangle (face index) hit; -1 on a miss."""
+    @property
+    def u(self) -> NDArray[np.float32]:
+        """float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss."""
+    @property
+    def v(self) -> NDArray[np.float32]:
+        """float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss."""
+    @property
+    def normal(self) -> NDArray[np.float32]:
+        """float32 (n, 3): unit geometric normal of the triangle hit (right-hand rule); NaN on a miss."""
+    @property
+    def point(self) -> NDArray[np.float32]:
+        """float32 (n, 3): the hit point on the triangle; NaN on a miss."""
+    def __getitem__(self, key: str) -> NDArray[np.generic]:
+        """The array named ``key``: one of ``keys()``."""
+    def keys(self) -> List[str]:
+        """The names of the arrays: t, prim, u, v, normal, point."""
+    def __contains__(self, key: str) -> bool:
+        """Whether ``key`` names one of the arrays."""
+    def __len__(self) -> int:
+        """The number of rays."""
+
+class ClosestPoints:
+    """The nearest surface point to each query point (``Mesh.closest_point``), as attributes or keys."""
+
+    @property
+    def point(self) -> NDArray[np.float32]:
+        """float32 (n, 3): the nearest point on the surface; NaN where none lies within max_distance."""
+    @property
+    def distance(self) -> NDArray[np.float32]:
+        """float32 (n,): its distance (negative inside with ``signed=True``); inf where none."""
+    @property
+    def prim(self) -> NDArray[np.int64]:
+        """int64 (n,): the triangle (face index) it lies on; -1 where none."""
+    def __getitem__(self, key: str) -> NDArray[np.generic]:
+        """The array named ``key``: one of ``keys()``."""
+    def keys(self) -> List[str]:
+        """The names of the arrays: point, distance, prim."""
+    def __contains__(self, key: str) -> bool:
+        """Whether ``key`` names one of the arrays."""
+    def __len__(self) -> int:
+        """The number of query points."""
+
+_TMax = Union[float, ArrayLike, None]
+
+class Mesh:
+    """A triangle mesh and its BVH, built once (on every core) and asked any number of queries.
+
+    Queries take (n, 3) origins and directions (any float dtype; ``t`` is in
+    direction lengths) and ``t_max`` (a number or one per ray); each
+    releases the GIL and runs on every core, or on ``threads`` threads.
+    """
+
+    def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
+        """Build the mesh and its BVH from vertices ((n, 3) floats) and faces ((m, 3) integer indices)."""
+    @staticmethod
+    def load(path: Union[str, os.PathLike[str]]) -> "Mesh":
+        """Load an OBJ, PLY, glTF or GLB file with strata's loaders; triangle i of the file is face i."""
+    @property
+    def triangle_count(self) -> int:
+        """The number of triangles (faces)."""
+    def __len__(self) -> int:
+        """The number of triangles (faces)."""
+    @property
+    def bounds(self) -> NDArray[np.float32]:
+        """float32 (2, 3): the [min, max] corners of the bounding box."""
+    @property
+    def triangles(self) -> NDArray[np.float32]:
+        """float32 (m, 3, 3): each face's three vertices, in face order."""
+    def intersect(
+        self,
+        origins: ArrayLike,
+        directions: ArrayLike,
+        t_max: _TMax = None,
+        threads: Optional[int] = None,
+    ) -> Hits:
+        """The first hit of each ray in (0, t_max]: t, prim, u, v, normal, point."""
+    def occluded(
+        self,
+        origins: ArrayLike,
+        directions: ArrayLike,
+        t_max: _TMax = None,
+        threads: Optional[int] = None,
+    ) -> NDArray[np.bool_]:
+        """Whether anything blocks each ray in (0, t_max]: bool (n,)."""
+    def all_hits(
+        self,
+        origins: ArrayLike,
+        directions: ArrayLike,
+        t_max: _TMax = None,
+        threads: Optional[int] = None,
+    ) -> Tuple[NDArray[np.int64], NDArray[np.float32], NDArray[np.int64]]:
+        """Every surface crossing along each ray, nearest first: (splits (n+1,), t, prim)."""
+    def count_hits(
+        self,
+        origins: ArrayLike,
+        directions: ArrayLike,
+        t_max: _TMax = None,
+        threads: Optional[int] = None,
+    ) -> NDArray[np.int64]:
+        """The number of surface crossings along each ray in (0, t_max]: int64 (n,)."""
+    def contains(self, points: ArrayLike, threads: Optional[int] = None) -> NDArray[np.bool_]:
+        """Whether each point is inside the (closed) mesh, by crossing parity: bool (n,)."""
+    def closest_point(
+        self,
+        points: ArrayLike,
+        max_distance: Optional[float] = None,
+        signed: bool = False,
+        threads: Optional[int] = None,
+    ) -> ClosestPoints:
+        """The nearest surface point to each point: point (n, 3), distance (n,), prim (n,)."""
+
+_Aovs = Union[bool, Sequence[Literal["albedo", "normal", "depth"]], None]
+_Set = Union[Mapping[str, object], Sequence[str], str, None]
+
+@overload
+def render(
+    scene: Union[str, os.PathLike[str]],
+    *,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    spp: Optional[int] = None,
+    shadow_samples: Optional[int] = None,
+    reflection_samples: Optional[int] = None,
+    max_depth: Optional[int] = None,
+    sampler: Optional[Literal["stratified", "random"]] = None,
+    seed: Optional[int] = None,
+    background: Optional[Sequence[float]] = None,
+    light_sampling: Optional[Literal["solid_angle", "area"]] = None,
+    glossy_sampling: Optional[Literal["lobe", "uniform"]] = None,
+    set: _Set = None,
+    threads: Optional[int] = None,
+    passes: Optional[int] = None,
+    packets: Optional[Literal["auto", "on", "off"]] = None,
+    schedule: Optional[Literal["slices", "regions"]] = None,
+    bvh_quality: Optional[Literal["fastest", "fast", "auto", "medium", "high"]] = None,
+    crop: Union[Tuple[int, int, int, int], str, None] = None,
+    aovs: Literal[False, None] = None,
+) -> NDArray[np.float32]:
+    """Render a scene file as ``strata render`` does: float32 (height, width, 3), the CLI's EXR pixels bit for bit."""
+@overload
+def render(
+    scene: Union[str, os.PathLike[str]],
+    *,
+    width: Optional[int] = None,
+    height: Optional[int] = None,
+    spp: Optional[int] = None,
+    shadow_samples: Optional[int] = None,
+    reflection_samples: Optional[int] = None,
+    max_depth: Optional[int] = None,
+    sampler: Optional[Literal["stratified", "random"]] = None,
+    seed: Optional[int] = None,
+    background: Optional[Sequence[float]] = None,
+    light_sampling: Optional[Literal["solid_angle", "area"]] = None,
+    glossy_sampling: Optional[Literal["lobe", "uniform"]] = None,
+    set: _Set = None,
+    threads: Optional[int] = None,
+    passes: Optional[int] = None,
+    packets: Optional[Literal["auto", "on", "off"]] = None,
+    schedule: Optional[Literal["slices", "regions"]] = None,
+    bvh_quality: Optional[Literal["fastest", "fast", "auto", "medium", "high"]] = None,
+    crop: Union[Tuple[int, int, int, int], str, None] = None,
+    aovs: Union[Literal[True], Sequence[Literal["albedo", "normal", "depth"]]] = ...,
+) -> Tuple[NDArray[np.float32], Dict[str, NDArray[np.float32]]]:
+    """Render a scene file as ``strata render`` does, with its AOVs as a dict of arrays."""

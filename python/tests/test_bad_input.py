@@ -1,0 +1,187 @@
+"""Every bad input raises a Python exception whose message names what was
+wrong; nothing crashes the interpreter; Ctrl-C stops a long query."""
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import helpers
+import strata_rt
+
+V, F = helpers.cube()
+MESH = strata_rt.Mesh(V, F)
+O = np.array([[0.0, 0.0, 5.0], [0.5, 0.5, 5.0]])
+D = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0]])
+
+
+def raises(call, *words, kind=ValueError):
+    """`call()` raises `kind` with every one of `words` in its message."""
+    with pytest.raises(kind) as info:
+        call()
+    message = str(info.value)
+    for word in words:
+        assert word in message, f"{word!r} not in {message!r}"
+    return message
+
+
+MESH_CASES = {
+    "vertices of 2 columns": (lambda: strata_rt.Mesh(np.zeros((4, 2)), F[:1] % 4), ["vertices", "(n, 3)", "(4, 2)"]),
+    "vertices of 1 dimension": (lambda: strata_rt.Mesh(np.zeros(9), F[:1]), ["vertices", "(n, 3)", "(9,)"]),
+    "vertices of strings": (lambda: strata_rt.Mesh([["a", "b", "c"]], [[0, 0, 0]]), ["vertices", "dtype"]),
+    "ragged vertices": (lambda: strata_rt.Mesh([[0, 0, 0], [1, 2]], [[0, 1, 0]]), ["vertices"]),
+    "a NaN vertex": (lambda: strata_rt.Mesh(np.where(np.arange(24).reshape(8, 3) == 4, np.nan, V), F), ["vertices[1]", "not finite"]),
+    "an infinite vertex": (lambda: strata_rt.Mesh(np.where(np.arange(24).reshape(8, 3) == 23, np.inf, V), F), ["vertices[7]", "not finite"]),
+    "a vertex beyond float32": (lambda: strata_rt.Mesh(V * np.array([1, 1, 1e39]), F), ["vertices[0]", "not finite"]),
+    "float faces": (lambda: strata_rt.Mesh(V, F.astype(np.float64)), ["faces", "integers", "float64"]),
+    "faces of 4 columns": (lambda: strata_rt.Mesh(V, np.zeros((2, 4), dtype=np.int64)), ["faces", "(n, 3)", "(2, 4)"]),
+    "an index past the end": (lambda: strata_rt.Mesh(V, np.vstack([F, [[0, 1, 8]]])), ["faces[12][2] = 8", "8 vertices"]),
+    "a negative index": (lambda: strata_rt.Mesh(V, np.vstack([F[:3], [[-1, 1, 2]]]).astype(np.int32)), ["faces[3][0] = -1"]),
+    "a huge unsigned index": (lambda: strata_rt.Mesh(V, np.array([[0, 1, 2**40]], dtype=np.uint64)), ["faces[0][2]", "out of range"]),
+}
+
+
+@pytest.mark.parametrize("name", list(MESH_CASES))
+def test_bad_meshes_are_refused_by_name(name):
+    call, words = MESH_CASES[name]
+    raises(call, *words)
+
+
+RAY_QUERIES = ["intersect", "occluded", "all_hits", "count_hits"]
+
+RAY_CASES = {
+    "origins of 2 columns": (dict(origins=np.zeros((2, 2))), ["origins", "(n, 3)", "(2, 2)"]),
+    "directions of 1 dimension": (dict(directions=np.ones(6)), ["directions", "(n, 3)", "(6,)"]),
+    "lengths that differ": (dict(directions=D[:1]), ["origins and directions", "same length", "2 and 1"]),
+    "a NaN origin": (dict(origins=np.array([[0, 0, 5], [np.nan, 0, 5]])), ["origins[1]", "not finite"]),
+    "an infinite origin": (dict(origins=np.array([[0, 0, np.inf], [0, 0, 5]])), ["origins[0]", "not finite"]),
+    "a NaN direction": (dict(directions=np.array([[0, 0, -1], [0, np.nan, -1]])), ["directions[1]", "not finite"]),
+    "a zero direction": (dict(directions=np.array([[0, 0, -1], [0, 0, 0]])), ["directions[1]", "is zero"]),
+    "complex origins": (dict(origins=O.astype(np.complex64)), ["origins", "dtype"]),
+    "a negative t_max": (dict(t_max=-1.0), ["t_max", ">= 0", "-1"]),
+    "a NaN t_max": (dict(t_max=float("nan")), ["t_max", ">= 0"]),
+    "a negative t_max of one ray": (dict(t_max=np.array([1.0, -2.0])), ["t_max[1]", ">= 0"]),
+    "t_max of another length": (dict(t_max=np.ones(3)), ["t_max", "3 values for 2 rays"]),
+    "t_max of 2 dimensions": (dict(t_max=np.ones((2, 1))), ["t_max", "(n,)", "(2, 1)"]),
+    "t_max as text": (dict(t_max="far"), ["t_max", "number"]),
+    "no threads": (dict(threads=0), ["threads", "got 0"]),
+    "negative threads": (dict(threads=-2), ["threads", "got -2"]),
+}
+
+
+@pytest.mark.parametrize("query", RAY_QUERIES)
+@pytest.mark.parametrize("name", list(RAY_CASES))
+def test_bad_rays_are_refused_by_name(query, name):
+    change, words = RAY_CASES[name]
+    args = {"origins": O, "directions": D}
+    args.update({k: v for k, v in change.items() if k in ("origins", "directions")})
+    options = {k: v for k, v in change.items() if k not in ("origins", "directions")}
+    raises(lambda: getattr(MESH, query)(args["origins"], args["directions"], **options), *words)
+
+
+POINT_CASES = {
+    "points of 2 columns": (dict(points=np.zeros((3, 2))), ["points", "(n, 3)", "(3, 2)"]),
+    "a NaN point": (dict(points=np.array([[0, 0, 0], [0, 0, np.nan]])), ["points[1]", "not finite"]),
+    "no threads": (dict(points=O, threads=0), ["threads"]),
+}
+
+
+@pytest.mark.parametrize("query", ["contains", "closest_point"])
+@pytest.mark.parametrize("name", list(POINT_CASES))
+def test_bad_points_are_refused_by_name(query, name):
+    kwargs, words = POINT_CASES[name]
+    raises(lambda: getattr(MESH, query)(**kwargs), *words)
+
+
+def test_a_negative_max_distance_is_refused():
+    raises(lambda: MESH.closest_point(O, max_distance=-1.0), "max_distance", ">= 0")
+
+
+def test_bad_files_give_strata_s_one_line_message(tmp_path):
+    missing = tmp_path / "nothing.obj"
+    message = raises(lambda: strata_rt.Mesh.load(missing), str(missing), kind=FileNotFoundError)
+    assert "\n" not in message
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")
+    message = raises(lambda: strata_rt.Mesh.load(bad), str(bad), kind=strata_rt.InputError)
+    assert "\n" not in message
+    assert issubclass(strata_rt.InputError, ValueError)
+    odd = tmp_path / "mesh.xyz"
+    odd.write_text("")
+    raises(lambda: strata_rt.Mesh.load(odd), str(odd), kind=strata_rt.InputError)
+
+
+SCENE = helpers.REPO / "scenes" / "seed.toml"
+
+RENDER_CASES = {
+    "spp 0": (dict(spp=0), ["spp"]),
+    "a negative width": (dict(width=-5), ["width", "-5"]),
+    "a huge height": (dict(height=100_000), ["height", "larger than"]),
+    "an unknown sampler": (dict(sampler="sobol"), ["sampler", "sobol"]),
+    "an unknown schedule": (dict(schedule="later"), ["schedule", "later"]),
+    "a short background": (dict(background=[1, 2]), ["background"]),
+    "a negative background": (dict(background=[1, -2, 0]), ["background"]),
+    "a crop outside": (dict(width=32, height=24, crop=(0, 0, 64, 8)), ["crop"]),
+    "a crop of 3 numbers": (dict(crop=(0, 0, 4)), ["crop"]),
+    "an unknown AOV": (dict(aovs=["albedo", "shadow"]), ["aovs", "shadow"]),
+    "a set without =": (dict(set=["render.spp"]), ["set", "KEY=VALUE"]),
+    "a set of an object": (dict(set={"camera.fov": object()}), ["camera.fov"]),
+    "no threads": (dict(threads=0), ["threads"]),
+}
+
+
+@pytest.mark.parametrize("name", list(RENDER_CASES))
+def test_bad_render_settings_are_refused_by_name(name):
+    settings, words = RENDER_CASES[name]
+    raises(lambda: strata_rt.render(SCENE, **settings), *words)
+
+
+def test_bad_scenes_give_strata_s_one_line_message(tmp_path):
+    raises(lambda: strata_rt.render(tmp_path / "none.toml"), "none.toml", kind=FileNotFoundError)
+    message = raises(
+        lambda: strata_rt.render(SCENE, width=8, height=8, set={"camera.nope": 1}),
+        "camera.nope",
+        kind=strata_rt.InputError,
+    )
+    assert "\n" not in message
+    broken = tmp_path / "broken.toml"
+    broken.write_text("[render]\nspp = -3\n")
+    raises(lambda: strata_rt.render(broken), "broken.toml", "spp", kind=strata_rt.InputError)
+    with pytest.raises(TypeError):
+        strata_rt.render(SCENE, spps=4)  # a misspelt setting
+
+
+def test_ctrl_c_stops_a_long_query(bumpy):
+    """SIGINT, sent again and again while a query of 4M rays runs, stops
+    it with KeyboardInterrupt; the mesh answers correctly afterwards."""
+    mesh = strata_rt.Mesh(*bumpy)
+    rng = np.random.default_rng(3)
+    o, d = helpers.random_rays(rng, bumpy[0], 4_000_000)
+    o, d = o.astype(np.float32), d.astype(np.float32)
+    stop = threading.Event()
+
+    def on_sigint(signum, frame):
+        if not stop.is_set():
+            stop.set()
+            raise KeyboardInterrupt
+
+    def send():
+        while not stop.is_set():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.002)
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    sender = threading.Thread(target=send)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sender.start()
+            mesh.intersect(o, d)
+    finally:
+        stop.set()
+        sender.join()
+        signal.signal(signal.SIGINT, previous)
+    small = mesh.intersect(o[:1000], d[:1000])
+    np.testing.assert_array_equal(small.prim, mesh.intersect(o[:1000], d[:1000], threads=1).prim)

@@ -1,0 +1,164 @@
+"""intersect and occluded against float64 brute force and Embree (robust
+mode, through embreex), on the bunny and a generated mesh; the same
+answers for any thread count and any input dtype or layout."""
+
+import numpy as np
+import pytest
+
+import helpers
+import strata_rt
+
+MESHES = ["bumpy", "bunny"]
+
+
+@pytest.fixture(params=MESHES, scope="module")
+def case(request):
+    """(vertices as stored, faces, mesh, origins, directions, brute force)."""
+    rng = np.random.default_rng(2024)
+    vertices, faces = request.getfixturevalue(request.param)
+    vertices = helpers.as_stored(vertices)
+    mesh = strata_rt.Mesh(vertices, faces)
+    origins, directions = helpers.random_rays(rng, vertices, 1000)
+    brute = helpers.BruteHits(vertices[faces], origins, directions)
+    return vertices, faces, mesh, origins, directions, brute
+
+
+def scale(vertices):
+    return float(np.abs(vertices).max())
+
+
+def test_first_hits_match_brute_force_away_from_edges(case):
+    vertices, faces, mesh, origins, directions, brute = case
+    hits = mesh.intersect(origins, directions)
+    clear = brute.clear
+    assert clear.mean() > 0.8, f"only {clear.sum()} rays clear of edges"
+    assert (brute.first_prim[clear] >= 0).sum() > 300, "too few hits to compare"
+    np.testing.assert_array_equal(hits.prim[clear], brute.first_prim[clear])
+    hit = clear & (brute.first_prim >= 0)
+    np.testing.assert_allclose(hits.t[hit], brute.first_t[hit], rtol=1e-5, atol=1e-6 * scale(vertices))
+    np.testing.assert_allclose(hits.u[hit], brute.first_u[hit], atol=1e-3)
+    np.testing.assert_allclose(hits.v[hit], brute.first_v[hit], atol=1e-3)
+    # The geometric normal: the face's, by the right-hand rule.
+    tri = vertices[faces[hits.prim[hit]]]
+    normal = helpers.unit(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+    np.testing.assert_allclose(hits.normal[hit], normal, atol=1e-5)
+    point = origins[hit] + directions[hit] * brute.first_t[hit][:, None]
+    np.testing.assert_allclose(hits.point[hit], point, atol=1e-5 * scale(vertices))
+    # Misses: inf, -1, NaN.
+    miss = hits.prim < 0
+    assert np.isinf(hits.t[miss]).all()
+    assert np.isnan(hits.u[miss]).all() and np.isnan(hits.normal[miss]).all()
+    assert hits.t.dtype == np.float32 and hits.prim.dtype == np.int64
+    assert hits.normal.shape == (len(origins), 3) and hits.point.shape == (len(origins), 3)
+    assert set(hits.keys()) == {"t", "prim", "u", "v", "normal", "point"}
+    np.testing.assert_array_equal(hits["prim"], hits.prim)
+
+
+def test_occlusion_matches_brute_force_and_t_max_cuts_rays(case):
+    vertices, faces, mesh, origins, directions, brute = case
+    clear = brute.clear
+    blocked = mesh.occluded(origins, directions)
+    assert blocked.dtype == np.bool_
+    np.testing.assert_array_equal(blocked[clear], brute.first_prim[clear] >= 0)
+    # A per-ray t_max just short of the first hit, and just past it.
+    hit = clear & (brute.first_prim >= 0)
+    o, d, t = origins[hit], directions[hit], brute.first_t[hit]
+    assert not mesh.occluded(o, d, t_max=t * (1 - 1e-4)).any()
+    assert (mesh.intersect(o, d, t_max=t * (1 - 1e-4)).prim == -1).all()
+    assert mesh.occluded(o, d, t_max=t * (1 + 1e-4)).all()
+    np.testing.assert_array_equal(mesh.intersect(o, d, t_max=t * (1 + 1e-4)).prim, brute.first_prim[hit])
+    # A scalar t_max: hits beyond it are gone.
+    limit = float(np.median(t))
+    near = mesh.intersect(o, d, t_max=limit)
+    sure = np.abs(t - limit) > 1e-4 * limit
+    np.testing.assert_array_equal((near.prim >= 0)[sure], (t < limit)[sure])
+
+
+def test_first_hits_match_embree_robust(case):
+    embree = pytest.importorskip("embreex.rtcore_scene", reason="embreex is in tools/requirements.txt")
+    vertices, faces, mesh, origins, directions, brute = case
+    scene = embree.EmbreeScene(robust=True)
+    from embreex.mesh_construction import TriangleMesh
+
+    TriangleMesh(scene, vertices.astype(np.float32), faces.astype(np.int32))
+    o, d = origins.astype(np.float32), directions.astype(np.float32)
+    answer = scene.run(o, d, output=1)
+    embree_prim = answer["primID"].astype(np.int64)
+    hits = mesh.intersect(o, d)
+    clear = brute.clear
+    np.testing.assert_array_equal(hits.prim[clear], embree_prim[clear])
+    hit = clear & (embree_prim >= 0)
+    np.testing.assert_allclose(hits.t[hit], answer["tfar"][hit], rtol=1e-5, atol=1e-6 * scale(vertices))
+    np.testing.assert_allclose(hits.u[hit], answer["u"][hit], atol=1e-3)
+    np.testing.assert_allclose(hits.v[hit], answer["v"][hit], atol=1e-3)
+    occluded = scene.run(o, d, query="OCCLUDED") == 0
+    np.testing.assert_array_equal(mesh.occluded(o, d)[clear], occluded[clear])
+
+
+def test_answers_are_the_same_for_any_thread_count(bumpy, rng):
+    mesh = strata_rt.Mesh(*bumpy)
+    o, d = helpers.random_rays(rng, bumpy[0], 20_000)
+    a, b = mesh.intersect(o, d), mesh.intersect(o, d, threads=1)
+    for key in a.keys():
+        np.testing.assert_array_equal(a[key], b[key])
+    np.testing.assert_array_equal(mesh.occluded(o, d, threads=3), mesh.occluded(o, d, threads=1))
+
+
+def test_any_dtype_and_layout_gives_the_same_answers(bumpy, rng):
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices.astype(np.float32), faces.astype(np.int32))
+    o, d = helpers.random_rays(rng, vertices, 500)
+    o32, d32 = o.astype(np.float32), d.astype(np.float32)
+    want = mesh.intersect(o32, d32)
+    wide = np.hstack([o32, d32]).astype(np.float64)  # columns of one array: strided views
+    for origins, directions in [
+        (o32.astype(np.float64), d32.astype(np.float64)),
+        (o32.tolist(), d32.tolist()),
+        (wide[:, :3], wide[:, 3:]),
+        (np.asfortranarray(o32), np.asfortranarray(d32)),
+        (o32[::-1][::-1], d32[::-1][::-1]),
+        (o32.astype(np.longdouble), d32.astype(np.longdouble)),
+    ]:
+        got = mesh.intersect(origins, directions)
+        np.testing.assert_array_equal(got.prim, want.prim)
+        np.testing.assert_array_equal(got.t, want.t)
+    # Every integer dtype of faces, any float dtype of vertices: the same mesh.
+    for vdtype, fdtype in [(np.float64, np.int64), (np.float16, np.uint16), (np.float32, np.uint64), (np.float64, np.int16)]:
+        v = vertices.astype(np.float32).astype(vdtype)
+        other = strata_rt.Mesh(v, faces.astype(fdtype))
+        if vdtype is np.float16:
+            continue  # a different (coarser) mesh; it only has to build
+        np.testing.assert_array_equal(other.intersect(o32, d32).prim, want.prim)
+    # Lists of faces and vertices.
+    listed = strata_rt.Mesh(vertices.astype(np.float32).tolist(), faces.tolist())
+    np.testing.assert_array_equal(listed.intersect(o32, d32).t, want.t)
+
+
+def test_empty_input_gives_empty_answers(bumpy):
+    mesh = strata_rt.Mesh(*bumpy)
+    for empty in (np.zeros((0, 3)), [], np.zeros((0, 3), dtype=np.float32)):
+        hits = mesh.intersect(empty, empty)
+        assert hits.t.shape == (0,) and hits.normal.shape == (0, 3) and hits.prim.dtype == np.int64
+        assert mesh.occluded(empty, empty).shape == (0,)
+    empty_mesh = strata_rt.Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+    assert empty_mesh.triangle_count == 0
+    assert (empty_mesh.intersect([[0, 0, 0]], [[0, 0, 1]]).prim == -1).all()
+
+
+def test_mesh_properties_and_load(bunny, tmp_path):
+    vertices, faces = bunny
+    mesh = strata_rt.Mesh(vertices, faces)
+    assert mesh.triangle_count == len(faces) == len(mesh)
+    np.testing.assert_array_equal(mesh.bounds, [vertices.astype(np.float32).min(0), vertices.astype(np.float32).max(0)])
+    np.testing.assert_array_equal(mesh.triangles, vertices.astype(np.float32)[faces])
+    # Mesh.load: strata's own OBJ loader, face i of the file is triangle i.
+    loaded = strata_rt.Mesh.load(helpers.bunny_path())
+    np.testing.assert_array_equal(loaded.triangles, mesh.triangles)
+    # A PLY written here loads the same triangles.
+    ply = tmp_path / "bunny.ply"
+    with open(ply, "w") as f:
+        f.write(f"ply\nformat ascii 1.0\nelement vertex {len(vertices)}\nproperty float x\nproperty float y\nproperty float z\n")
+        f.write(f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+        np.savetxt(f, vertices.astype(np.float32), fmt="%.9g")
+        np.savetxt(f, np.hstack([np.full((len(faces), 1), 3), faces]), fmt="%d")
+    np.testing.assert_array_equal(strata_rt.Mesh.load(str(ply)).triangles, mesh.triangles)

@@ -1,0 +1,137 @@
+"""strata_rt.trimesh.RayMeshIntersector against trimesh's own engine
+(trimesh.ray.ray_triangle) on the same meshes and rays, and as a drop-in
+``mesh.ray``."""
+
+import numpy as np
+import pytest
+
+import helpers
+from strata_rt.trimesh import RayMeshIntersector
+
+trimesh = pytest.importorskip("trimesh", reason="trimesh is in tools/requirements.txt")
+pytest.importorskip("rtree", reason="trimesh's own engine needs rtree (tools/requirements.txt)")
+from trimesh.ray.ray_triangle import RayMeshIntersector as TrimeshEngine  # noqa: E402
+
+
+@pytest.fixture(params=["bumpy", "bunny"], scope="module")
+def case(request):
+    vertices, faces = request.getfixturevalue(request.param)
+    vertices = helpers.as_stored(vertices)
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    rng = np.random.default_rng(21)
+    n = 300 if request.param == "bumpy" else 120
+    origins, directions = helpers.random_rays(rng, vertices, n)
+    brute = helpers.BruteHits(vertices[faces], origins, directions)
+    return mesh, origins, directions, brute
+
+
+def pairs(index_tri, index_ray, rays):
+    keep = np.isin(index_ray, rays)
+    return sorted(zip(index_ray[keep].tolist(), index_tri[keep].tolist()))
+
+
+def test_every_hit_matches_trimesh_s_engine(case):
+    mesh, origins, directions, brute = case
+    ours, theirs = RayMeshIntersector(mesh), TrimeshEngine(mesh)
+    clear = np.flatnonzero(brute.clear)
+    tri, ray, loc = ours.intersects_id(origins, directions, return_locations=True)
+    t_tri, t_ray, t_loc = theirs.intersects_id(origins, directions, return_locations=True)
+    assert tri.dtype == t_tri.dtype == np.int64 and ray.dtype == t_ray.dtype == np.int64
+    assert loc.dtype == t_loc.dtype == np.float64 and loc.shape == (len(tri), 3)
+    assert pairs(tri, ray, clear) == pairs(t_tri, t_ray, clear)
+    assert len(pairs(tri, ray, clear)) > 100
+    # Locations: the same points, pair for pair.
+    for r, f in pairs(tri, ray, clear)[:200]:
+        a = loc[(ray == r) & (tri == f)][0]
+        b = t_loc[(t_ray == r) & (t_tri == f)][0]
+        np.testing.assert_allclose(a, b, atol=1e-5 * mesh.scale)
+    # Grouped by ray, ascending; each ray's hits nearest first.
+    assert (np.diff(ray) >= 0).all()
+    along = ((loc - origins[ray]) * directions[ray]).sum(axis=1)
+    same = np.diff(ray) == 0
+    assert (np.diff(along)[same] >= 0).all()
+    # intersects_location is intersects_id's answer, reordered.
+    locations, index_ray, index_tri = ours.intersects_location(origins, directions)
+    np.testing.assert_array_equal(locations, loc)
+    np.testing.assert_array_equal(index_ray, ray)
+    np.testing.assert_array_equal(index_tri, tri)
+
+
+def test_first_and_any_hits_match_trimesh_s_engine(case):
+    mesh, origins, directions, brute = case
+    ours, theirs = RayMeshIntersector(mesh), TrimeshEngine(mesh)
+    clear = brute.clear
+    first, t_first = ours.intersects_first(origins, directions), theirs.intersects_first(origins, directions)
+    assert first.dtype == np.int64 and first.shape == (len(origins),)
+    np.testing.assert_array_equal(first[clear], t_first[clear])
+    assert (first[clear] >= 0).sum() > 50
+    hit_any = ours.intersects_any(origins, directions)
+    assert hit_any.dtype == np.bool_
+    np.testing.assert_array_equal(hit_any[clear], theirs.intersects_any(origins, directions)[clear])
+    # multiple_hits=False: the first hits alone.
+    tri, ray = ours.intersects_id(origins, directions, multiple_hits=False)
+    np.testing.assert_array_equal(ray, np.flatnonzero(first >= 0))
+    np.testing.assert_array_equal(tri, first[first >= 0])
+    t_tri, t_ray = theirs.intersects_id(origins, directions, multiple_hits=False)
+    c = np.flatnonzero(clear)
+    assert pairs(tri, ray, c) == pairs(t_tri, t_ray, c)
+
+
+def test_contains_points_matches_trimesh_s_engine_away_from_the_surface(bumpy):
+    vertices, faces = bumpy
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    rng = np.random.default_rng(9)
+    points = rng.uniform(-1.4, 1.4, size=(400, 3))
+    ours = RayMeshIntersector(mesh)
+    away = ours.strata_mesh.closest_point(points).distance > 1e-3
+    np.testing.assert_array_equal(
+        ours.contains_points(points)[away], TrimeshEngine(mesh).contains_points(points)[away]
+    )
+
+
+def test_a_drop_in_for_mesh_ray(bumpy):
+    vertices, faces = bumpy
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    reference = trimesh.Trimesh(vertices, faces, process=False)
+    reference.ray = TrimeshEngine(reference)
+    mesh.ray = RayMeshIntersector(mesh)
+    rng = np.random.default_rng(10)
+    points = rng.uniform(-1.4, 1.4, size=(300, 3))
+    away = mesh.ray.strata_mesh.closest_point(points).distance > 1e-3
+    np.testing.assert_array_equal(mesh.contains(points)[away], reference.contains(points)[away])
+    # trimesh's own code asks mesh.ray: the longest free rays from inside.
+    inside = np.zeros((20, 3))
+    directions = helpers.random_directions(rng, 20)
+    np.testing.assert_allclose(
+        trimesh.proximity.longest_ray(mesh, inside, directions),
+        trimesh.proximity.longest_ray(reference, inside, directions),
+        rtol=1e-5,
+    )
+
+
+def test_conventions_kept_from_trimesh(bumpy):
+    vertices, faces = bumpy
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    ray = RayMeshIntersector(mesh)
+    # A zero direction hits nothing (trimesh unitizes it to zero); the
+    # others answer as they would alone.
+    o = np.array([[0.0131, 0.0217, 3.0]] * 3)
+    d = np.array([[0, 0, -1.0], [0, 0, 0.0], [0, 0, -2.0]])
+    np.testing.assert_array_equal(ray.intersects_first(o, d)[1], -1)
+    assert ray.intersects_first(o, d)[0] == ray.intersects_first(o, d)[2] >= 0
+    np.testing.assert_array_equal(ray.intersects_any(o, d), [True, False, True])
+    tri, idx = ray.intersects_id(o, d)
+    assert 1 not in idx and (np.bincount(idx, minlength=3) == [2, 0, 2]).all()
+    # max_hits caps each ray's hits, nearest first.
+    tri1, idx1 = ray.intersects_id(o, d, max_hits=1)
+    np.testing.assert_array_equal(idx1, [0, 2])
+    np.testing.assert_array_equal(tri1, ray.intersects_first(o, d)[[0, 2]])
+    # Mismatched shapes raise, as trimesh does; empty input gives empty answers.
+    with pytest.raises(ValueError):
+        ray.intersects_id(o, d[:2])
+    tri, idx, loc = ray.intersects_id(np.zeros((0, 3)), np.zeros((0, 3)), return_locations=True)
+    assert tri.shape == (0,) and loc.shape == (0, 3)
+    # The BVH follows the mesh: moved vertices, new answers.
+    mesh.vertices = mesh.vertices * 0.1
+    locations, _, _ = ray.intersects_location(o[:1], d[:1], multiple_hits=False)
+    assert abs(locations[0, 2]) < 0.2, "the intersector kept the old mesh"
