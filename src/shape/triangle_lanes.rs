@@ -194,6 +194,17 @@ fn finish(
     if hit == 0 {
         return (0, [0.0; LANES], [0.0; LANES], [0.0; LANES]);
     }
+    // Lanes whose triangle is wholly ahead need no bound
+    // (`super::triangle::ahead`).
+    let near = hit & !ahead_lanes(az, bz, cz);
+    if near == 0 {
+        return (
+            hit,
+            t.to_array(),
+            (e1 * inv_det).to_array(),
+            (e2 * inv_det).to_array(),
+        );
+    }
     // The pbrt-v4 bound on t's rounding error (see the scalar test's
     // `origin_error_bound` for why z appears in two units).
     // Plain `vmaxps`: a NaN here would have made t NaN and the lane a miss
@@ -214,7 +225,7 @@ fn finish(
     let bound = f32x8::splat(3.0)
         * (f32x8::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
         * inv_det.abs();
-    hit &= !t.simd_le(bound).to_bitmask();
+    hit &= !(t.simd_le(bound).to_bitmask() & near);
     (
         hit,
         t.to_array(),
@@ -288,7 +299,12 @@ pub fn crossings(
     if hit == 0 {
         return (0, [0.0; LANES]);
     }
-    // The scalar test's `origin_error_bound`, as `finish` computes it.
+    // The scalar test's `origin_error_bound`, as `finish` computes it,
+    // for the lanes not wholly ahead.
+    let near = hit & !ahead_lanes(az, bz, cz);
+    if near == 0 {
+        return (hit, t.to_array());
+    }
     let max3 = |a: f32x8, b: f32x8, c: f32x8| a.abs().fast_max(b.abs()).fast_max(c.abs());
     let max_z = max3(az, bz, cz);
     let delta_z = f32x8::splat(gamma(3)) * max_z;
@@ -304,8 +320,16 @@ pub fn crossings(
     let bound = f32x8::splat(3.0)
         * (f32x8::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
         * inv_det.abs();
-    hit &= !t.simd_le(bound).to_bitmask();
+    hit &= !(t.simd_le(bound).to_bitmask() & near);
     (hit, t.to_array())
+}
+
+/// The lanes whose triangle lies wholly ahead of the ray's origin:
+/// [`super::triangle::ahead`] lane by lane.
+#[inline(always)]
+fn ahead_lanes(az: f32x8, bz: f32x8, cz: f32x8) -> u32 {
+    let zero = f32x8::ZERO;
+    (az.simd_gt(zero) & bz.simd_gt(zero) & cz.simd_gt(zero)).to_bitmask()
 }
 
 /// Up to eight rays in lanes, sheared as [`ShearedRay`] does for each:
