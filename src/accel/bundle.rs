@@ -26,7 +26,7 @@
 //! [`Bvh8::closest`]'s, bit for bit.
 
 use super::build::Bvh8;
-use super::descend::{box_origin, nearest_last, WIDEN};
+use super::descend::{nearest_last, WIDEN};
 use super::node::{is_leaf, leaf_range};
 use super::packet::{lanes_missing_box, reciprocals, PACKET_SIZE};
 use super::query::Query;
@@ -122,7 +122,7 @@ impl Bundle {
                     continue;
                 }
                 bundle.rays[i] = BundleRay {
-                    origin: box_origin(ray),
+                    origin: [soa[0][k], soa[1][k], soa[2][k]],
                     neg_inv: [neg_inv[0][k], neg_inv[1][k], neg_inv[2][k]],
                     tmin: soa[6][k],
                     tmax: soa[7][k],

@@ -6,8 +6,7 @@
 //! 1 + 2γ(3) (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2)), so a ray
 //! that grazes a box corner is never culled before its triangle test.
 //! Zero direction components are replaced by ±f32::MAX reciprocals so no
-//! slab computes 0·∞ = NaN ([`box_origin`] says which plane a ray lying
-//! on a box's face then enters).
+//! slab computes 0·∞ = NaN.
 
 use super::build::Bvh8;
 use super::node::{is_leaf, leaf_range};
@@ -52,14 +51,8 @@ impl RayBoxes {
         let near = [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)];
         let far = near.map(|row| row ^ 1);
         let c = c.to_array();
-        // Rare: the exact test only for a direction with a zero component.
-        let origin = if zero_d.to_bitmask() & 0b11_1000 == 0 {
-            [c[0], c[1], c[2]]
-        } else {
-            box_origin(ray)
-        };
         Self {
-            origin: origin.map(f32x8::splat),
+            origin: [c[0], c[1], c[2]].map(f32x8::splat),
             neg_inv: [-inv[3], -inv[4], -inv[5]].map(f32x8::splat),
             near,
             far,
@@ -101,31 +94,6 @@ impl RayBoxes {
         let g = f32x8::splat(2.0 * gamma(3));
         (tn - g * tn.abs()).simd_le(tf + g * tf.abs()).to_bitmask()
     }
-}
-
-/// The origin box tests read: the ray's, but one ulp lower on an axis the
-/// direction does not move along with +0.
-///
-/// On such an axis a slab is (origin − plane)·(±f32::MAX), and a ray lying
-/// in a box's face plane gets 0 there: it enters the box on one side of the
-/// plane and not on the other. Which side must agree with the triangle
-/// test's tie-break, which moves the ray's point by an infinitesimal step
-/// down every sheared axis (`shape::triangle::owned_edge`; a zero-direction
-/// axis is a world axis there): the triangle owning a crossing in that
-/// plane then lies in a box the ray enters. With −0 (reciprocal +f32::MAX)
-/// the box is entered for min < origin ≤ max, as that step wants; with +0
-/// it was min ≤ origin < max, so the origin moves one ulp down.
-#[inline(always)]
-pub(crate) fn box_origin(ray: &Ray) -> [f32; 3] {
-    let down = |o: f32, d: f32| {
-        if d == 0.0 && d.is_sign_positive() {
-            o.next_down()
-        } else {
-            o
-        }
-    };
-    let (o, d) = (ray.origin, ray.direction);
-    [down(o.x, d.x), down(o.y, d.y), down(o.z, d.z)]
 }
 
 /// `t` as a key whose unsigned order is the order of t (negative values
@@ -310,36 +278,6 @@ mod tests {
                 slots.sort();
                 let expected: Vec<usize> = (0..8).filter(|i| mask >> i & 1 == 1).collect();
                 assert_eq!(slots, expected, "each child exactly once");
-            }
-        }
-    }
-
-    /// A ray lying in a box's face plane (a zero direction component, +0
-    /// or −0) enters the box exactly when min < origin ≤ max on that axis,
-    /// as the triangle test's tie-break moves the ray's point: down.
-    #[test]
-    fn a_ray_in_a_face_plane_enters_as_the_tie_break_moves_it() {
-        use glam::Vec3;
-        let (min, max) = (-1.0f32, 2.0f32);
-        let mut bounds = [[f32::INFINITY; 8]; 6];
-        // Child 0: x, y in [min, max], z in [0, 1] (rows min x, max x, ...).
-        for (row, value) in [min, max, min, max, 0.0, 1.0].into_iter().enumerate() {
-            bounds[row][0] = value;
-        }
-        for zero in [0.0f32, -0.0] {
-            for x in [
-                min.next_down(),
-                min,
-                min.next_up(),
-                0.5,
-                max.next_down(),
-                max,
-                max.next_up(),
-            ] {
-                let ray = Ray::new(Vec3::new(x, 0.5, -3.0), Vec3::new(zero, 0.0, 1.0));
-                let (_, mask) = RayBoxes::new(&ray).test(&bounds, ray.tmin, ray.tmax);
-                let inside = min < x && x <= max;
-                assert_eq!(mask & 1 == 1, inside, "x = {x}, direction x = {zero:?}");
             }
         }
     }
