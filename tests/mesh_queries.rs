@@ -542,3 +542,37 @@ fn empty_meshes_and_bad_points_answer_nothing() {
     };
     assert_eq!(g.count_crossings(&clipped), 1);
 }
+
+/// A closed pyramid: apex (0, 0, 1) over a regular `sides`-gon of radius 1
+/// at z = 0, the base a fan from a centre vertex at the origin.
+fn pyramid(sides: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut v = vec![Vec3::Z];
+    for i in 0..sides {
+        let a = std::f64::consts::TAU * i as f64 / sides as f64;
+        v.push(Vec3::new(a.cos() as f32, a.sin() as f32, 0.0));
+    }
+    v.push(Vec3::ZERO);
+    let (centre, ring) = (sides + 1, |i: u32| 1 + i % sides);
+    let mut f: Vec<[u32; 3]> = (0..sides).map(|i| [0, ring(i), ring(i + 1)]).collect();
+    f.extend((0..sides).map(|i| [centre, ring(i + 1), ring(i)]));
+    (v, f)
+}
+
+/// Axis-aligned rays through a vertex of any valence, with +0 and −0 in
+/// their directions: the triangle that owns the crossing (by the tie-break's
+/// step down every axis) lies in a box whose face plane holds the ray, and
+/// the box test must let the ray in on that side.
+#[test]
+fn axis_aligned_rays_through_a_pyramids_apex_cross_it_twice() {
+    for sides in [3, 5, 8, 9, 16, 17, 24, 40, 80] {
+        let g = build(pyramid(sides));
+        for zero in [0.0f32, -0.0] {
+            for (origin, dz) in [(5.0f32, -1.0f32), (-5.0, 1.0)] {
+                let ray = Ray::new(Vec3::new(0.0, 0.0, origin), Vec3::new(zero, zero, dz));
+                let found = crossings(&g, &ray);
+                assert_eq!(found.len(), 2, "{sides} sides, ray {ray:?}: {found:?}");
+                assert_eq!(found, brute_crossings(&g.file_order_triangles(), &ray));
+            }
+        }
+    }
+}

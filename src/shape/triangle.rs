@@ -43,6 +43,26 @@ impl ShearedRay {
     }
 }
 
+impl ShearedRay {
+    /// The signs of the step [`owned_edge`]'s tie-break moves the ray's
+    /// point by, along the sheared x and y axes: −1, but on a world axis
+    /// the direction does not move along (±0, where the sheared axis is
+    /// that world axis), the zero's sign. The box tests (`accel::descend`)
+    /// let such a ray in for min ≤ origin < max with +0 (its ±f32::MAX
+    /// reciprocal makes the max face's slab 0) and min < origin ≤ max with
+    /// −0: where the step puts it, so the triangle owning a crossing in a
+    /// box's face plane lies in a box the ray enters.
+    #[inline(always)]
+    pub fn tie_step(&self, ray: &Ray) -> [f32; 2] {
+        let d = ray.direction;
+        let step = |axis: usize| match d[axis] {
+            0.0 => 1f32.copysign(d[axis]),
+            _ => -1.0,
+        };
+        [step(self.kx), step(self.ky)]
+    }
+}
+
 /// Intersect one triangle. Returns `(t, u, v)` with `u`, `v` the barycentric
 /// weights of `v1` and `v2`, for `t` strictly inside `(tmin, tmax)`.
 #[inline(always)]
@@ -133,12 +153,15 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
 ///   but edge by edge, so an edge's value depends on that edge alone).
 /// - a sign still zero (the ray's sheared point exactly on the edge's
 ///   line) is the sign the edge function takes when that point moves by
-///   (−ε², −ε) for an infinitesimal ε: Edelsbrunner and Mücke 1990,
+///   (σx·ε², σy·ε) for an infinitesimal ε: Edelsbrunner and Mücke 1990,
 ///   "Simulation of Simplicity" (ACM TOG 9(1)), as a rasteriser's fill
 ///   rule. For the edge p → q, whose function at the ray's point is
-///   `q.x·p.y − q.y·p.x`, the move adds `ε·d.x − ε²·d.y` with `d = q − p`:
-///   the sign of `d.x`, or of `−d.y` where `d.x` is zero. Reversing the
-///   edge negates `d`, so its other triangle gets the other sign.
+///   `q.x·p.y − q.y·p.x`, the move adds `−σy·ε·d.x + σx·ε²·d.y` with
+///   `d = q − p`: the sign of `−σy·d.x`, or of `σx·d.y` where `d.x` is
+///   zero. Reversing the edge negates `d`, so its other triangle gets the
+///   other sign. The step's signs σ ([`ShearedRay::tie_step`]) are −1 but
+///   on an axis the ray does not move along, where they follow the box
+///   tests.
 ///
 /// The signs then come from one exact predicate on the sheared vertices
 /// (each vertex sheared once per ray, whatever triangle reads it), for one
@@ -169,9 +192,10 @@ pub fn crossing(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<f32> {
     let cx = c[s.kx] - s.sx * c[s.kz];
     let cy = c[s.ky] - s.sy * c[s.kz];
     // The edges b → c, c → a, a → b: [`intersect`]'s e0, e1, e2.
-    let (e0, s0) = owned_edge(bx, by, cx, cy);
-    let (e1, s1) = owned_edge(cx, cy, ax, ay);
-    let (e2, s2) = owned_edge(ax, ay, bx, by);
+    let step = s.tie_step(ray);
+    let (e0, s0) = owned_edge(bx, by, cx, cy, step);
+    let (e1, s1) = owned_edge(cx, cy, ax, ay, step);
+    let (e2, s2) = owned_edge(ax, ay, bx, by, step);
     if !((s0 > 0.0 && s1 > 0.0 && s2 > 0.0) || (s0 < 0.0 && s1 < 0.0 && s2 < 0.0)) {
         return None;
     }
@@ -214,8 +238,9 @@ pub fn crossing(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<f32> {
 /// `q.x·p.y − q.y·p.x`, and its exact sign, never zero but for an edge
 /// with no length (see [`crossing`]): `(value, sign)`, the sign as a
 /// number of that sign (NaN for NaN input, which no test accepts).
+/// `step` is the tie-break's [`ShearedRay::tie_step`].
 #[inline(always)]
-pub fn owned_edge(px: f32, py: f32, qx: f32, qy: f32) -> (f32, f32) {
+pub fn owned_edge(px: f32, py: f32, qx: f32, qy: f32, step: [f32; 2]) -> (f32, f32) {
     let e = qx * py - qy * px;
     // Not zero: the exact sign. NaN (∞ − ∞ from products that overflow)
     // is recomputed too, and stays NaN only for NaN input.
@@ -228,9 +253,9 @@ pub fn owned_edge(px: f32, py: f32, qx: f32, qy: f32) -> (f32, f32) {
     }
     let (dx, dy) = (qx - px, qy - py);
     let sign = if dx != 0.0 {
-        dx.signum()
+        -step[1] * dx.signum()
     } else if dy != 0.0 {
-        -dy.signum()
+        step[0] * dy.signum()
     } else {
         0.0
     };
@@ -482,15 +507,20 @@ mod tests {
                 (_, 0) => (p, Vec3::new(q.x, p.y, 0.0)),
                 _ => (p, q),
             };
-            let (e, s) = owned_edge(p.x, p.y, q.x, q.y);
-            let (e_back, s_back) = owned_edge(q.x, q.y, p.x, p.y);
+            let step = [[-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [1.0, 1.0]][i % 4];
+            let (e, s) = owned_edge(p.x, p.y, q.x, q.y, step);
+            let (e_back, s_back) = owned_edge(q.x, q.y, p.x, p.y, step);
             assert_eq!((e, s), (-e_back, -s_back), "{p} {q}");
             assert!(s != 0.0, "{p} {q}: no sign");
             if e != 0.0 {
                 assert_eq!(e.signum(), s.signum(), "{p} {q}");
             }
         }
-        assert_eq!(owned_edge(0.5, 0.5, 0.5, 0.5).1, 0.0, "no length, no sign");
+        assert_eq!(
+            owned_edge(0.5, 0.5, 0.5, 0.5, [-1.0; 2]).1,
+            0.0,
+            "no length, no sign"
+        );
     }
 
     #[test]
@@ -509,7 +539,7 @@ mod tests {
             if rounded != 0.0 {
                 assert_eq!((rounded as f64).signum(), exact.signum(), "{p} {q}");
             }
-            let (e, s) = owned_edge(p.x, p.y, q.x, q.y);
+            let (e, s) = owned_edge(p.x, p.y, q.x, q.y, [-1.0; 2]);
             if exact != 0.0 {
                 assert_eq!(s.signum() as f64, exact.signum(), "{p} {q}: {e}");
                 zeros += (rounded == 0.0) as u32;

@@ -269,6 +269,7 @@ pub fn crossings(
         let [ax, ay, bx, by, cx, cy] = [ax, ay, bx, by, cx, cy].map(|x| x.to_array());
         let mut e = [e0.to_array(), e1.to_array(), e2.to_array()];
         let mut sign = e;
+        let step = s.tie_step(ray);
         for i in crate::math::lanes::mask_lanes(unsure) {
             let edges = [
                 (bx[i], by[i], cx[i], cy[i]),
@@ -276,7 +277,7 @@ pub fn crossings(
                 (ax[i], ay[i], bx[i], by[i]),
             ];
             for (k, (px, py, qx, qy)) in edges.into_iter().enumerate() {
-                (e[k][i], sign[k][i]) = super::triangle::owned_edge(px, py, qx, qy);
+                (e[k][i], sign[k][i]) = super::triangle::owned_edge(px, py, qx, qy, step);
             }
         }
         (e0, e1, e2) = (e[0].into(), e[1].into(), e[2].into());
