@@ -162,3 +162,16 @@ def test_mesh_properties_and_load(bunny, tmp_path):
         np.savetxt(f, vertices.astype(np.float32), fmt="%.9g")
         np.savetxt(f, np.hstack([np.full((len(faces), 1), 3), faces]), fmt="%d")
     np.testing.assert_array_equal(strata_rt.Mesh.load(str(ply)).triangles, mesh.triangles)
+
+
+def test_every_query_answers_for_t_in_0_to_t_max_inclusive():
+    """A hit at exactly t_max counts, for every query alike (as Embree's
+    tfar); one just short of it does not."""
+    quad = strata_rt.Mesh([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    o, d = np.array([[0.25, -0.5, 1.0]]), np.array([[0.0, 0.0, -1.0]])
+    for t_max, expected in [(1.0, 1), (np.nextafter(np.float32(1), np.float32(0)), 0), (np.inf, 1)]:
+        hits = quad.intersect(o, d, t_max=t_max)
+        assert (hits.prim[0] >= 0) == bool(expected), t_max
+        assert quad.occluded(o, d, t_max=t_max)[0] == bool(expected), t_max
+        assert quad.count_hits(o, d, t_max=t_max)[0] == expected, t_max
+        assert np.diff(quad.all_hits(o, d, t_max=t_max)[0])[0] == expected, t_max

@@ -604,8 +604,7 @@ mod tests {
     /// (the bunny closed by fans lost a crossing so).
     #[test]
     fn grazing_hits_on_small_far_triangles_are_kept() {
-        use crate::sampling::stream::{seeded, Draw};
-        let mut rng = seeded(44);
+        let mut rng = Draws::new(44);
         let mut lost = 0;
         for _ in 0..2000 {
             let origin = rng.cube(10.0);
