@@ -194,38 +194,15 @@ fn finish(
     if hit == 0 {
         return (0, [0.0; LANES], [0.0; LANES], [0.0; LANES]);
     }
-    // Lanes whose triangle is wholly ahead need no bound
-    // (`super::triangle::ahead`).
-    let near = hit & !ahead_lanes(az, bz, cz);
-    if near == 0 {
-        return (
-            hit,
-            t.to_array(),
-            (e1 * inv_det).to_array(),
-            (e2 * inv_det).to_array(),
-        );
-    }
-    // The pbrt-v4 bound on t's rounding error (see the scalar test's
-    // `origin_error_bound` for why z appears in two units).
-    // Plain `vmaxps`: a NaN here would have made t NaN and the lane a miss
-    // already, so the NaN handling of `f32x8::max` (a compare and a blend
-    // per call) cannot change a reported lane.
-    let max3 = |a: f32x8, b: f32x8, c: f32x8| a.abs().fast_max(b.abs()).fast_max(c.abs());
-    let max_z = max3(az, bz, cz);
-    let delta_z = f32x8::splat(gamma(3)) * max_z;
-    let max_world_z = max3(az_w, bz_w, cz_w);
-    let max_x = max3(ax, bx, cx);
-    let max_y = max3(ay, by, cy);
-    let g5 = f32x8::splat(gamma(5));
-    let delta_x = g5 * (max_x + max_world_z);
-    let delta_y = g5 * (max_y + max_world_z);
-    let delta_e = f32x8::splat(2.0)
-        * (f32x8::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let max_e = max3(e0, e1, e2);
-    let bound = f32x8::splat(3.0)
-        * (f32x8::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
-        * inv_det.abs();
-    hit &= !(t.simd_le(bound).to_bitmask() & near);
+    hit &= !at_origin(
+        hit,
+        t,
+        [ax, ay, bx, by, cx, cy],
+        [az_w, bz_w, cz_w],
+        [az, bz, cz],
+        [e0, e1, e2],
+        inv_det,
+    );
     (
         hit,
         t.to_array(),
@@ -300,16 +277,45 @@ pub fn crossings(
     if hit == 0 {
         return (0, [0.0; LANES]);
     }
-    // The scalar test's `origin_error_bound`, as `finish` computes it,
-    // for the lanes not wholly ahead.
-    let near = hit & !ahead_lanes(az, bz, cz);
+    hit &= !at_origin(
+        hit,
+        t,
+        [ax, ay, bx, by, cx, cy],
+        [az_w, bz_w, cz_w],
+        [az, bz, cz],
+        [e0, e1, e2],
+        inv_det,
+    );
+    (hit, t.to_array())
+}
+
+/// The lanes of `hit` whose t lies within its rounding error of the
+/// origin, the pbrt-v4 bound of the scalar test's `origin_error_bound`
+/// (see it for why z appears in two units): hits on the ray's own origin
+/// surface. Lanes whose triangle is wholly ahead need no bound
+/// (`super::triangle::ahead`), and when all are, none is computed.
+#[inline(always)]
+fn at_origin(
+    hit: u32,
+    t: f32x8,
+    xy: [f32x8; 6],
+    world_z: [f32x8; 3],
+    z: [f32x8; 3],
+    e: [f32x8; 3],
+    inv_det: f32x8,
+) -> u32 {
+    let near = hit & !ahead_lanes(z[0], z[1], z[2]);
     if near == 0 {
-        return (hit, t.to_array());
+        return 0;
     }
+    let [ax, ay, bx, by, cx, cy] = xy;
+    // Plain `vmaxps`: a NaN here would have made t NaN and the lane a miss
+    // already, so the NaN handling of `f32x8::max` (a compare and a blend
+    // per call) cannot change a reported lane.
     let max3 = |a: f32x8, b: f32x8, c: f32x8| a.abs().fast_max(b.abs()).fast_max(c.abs());
-    let max_z = max3(az, bz, cz);
+    let max_z = max3(z[0], z[1], z[2]);
     let delta_z = f32x8::splat(gamma(3)) * max_z;
-    let max_world_z = max3(az_w, bz_w, cz_w);
+    let max_world_z = max3(world_z[0], world_z[1], world_z[2]);
     let max_x = max3(ax, bx, cx);
     let max_y = max3(ay, by, cy);
     let g5 = f32x8::splat(gamma(5));
@@ -317,12 +323,11 @@ pub fn crossings(
     let delta_y = g5 * (max_y + max_world_z);
     let delta_e = f32x8::splat(2.0)
         * (f32x8::splat(gamma(2)) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let max_e = max3(e0, e1, e2);
+    let max_e = max3(e[0], e[1], e[2]);
     let bound = f32x8::splat(3.0)
         * (f32x8::splat(gamma(3)) * max_e * max_z + delta_e * max_z + delta_z * max_e)
         * inv_det.abs();
-    hit &= !(t.simd_le(bound).to_bitmask() & near);
-    (hit, t.to_array())
+    t.simd_le(bound).to_bitmask() & near
 }
 
 /// The lanes whose triangle lies wholly ahead of the ray's origin:
