@@ -67,17 +67,7 @@ impl ShearedRay {
 /// weights of `v1` and `v2`, for `t` strictly inside `(tmin, tmax)`.
 #[inline(always)]
 pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
-    // Vertices relative to the ray origin.
-    let a = v[0] - ray.origin;
-    let b = v[1] - ray.origin;
-    let c = v[2] - ray.origin;
-    // Shear and scale into ray space.
-    let ax = a[s.kx] - s.sx * a[s.kz];
-    let ay = a[s.ky] - s.sy * a[s.kz];
-    let bx = b[s.kx] - s.sx * b[s.kz];
-    let by = b[s.ky] - s.sy * b[s.kz];
-    let cx = c[s.kx] - s.sx * c[s.kz];
-    let cy = c[s.ky] - s.sy * c[s.kz];
+    let (world_z, [ax, ay, bx, by, cx, cy]) = shear(ray, s, v);
     // Scaled barycentric edge functions.
     let mut e0 = cx * by - cy * bx;
     let mut e1 = ax * cy - ay * cx;
@@ -98,37 +88,18 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
     if det == 0.0 {
         return None;
     }
-    // Scaled hit distance.
-    let az = s.sz * a[s.kz];
-    let bz = s.sz * b[s.kz];
-    let cz = s.sz * c[s.kz];
-    let t_scaled = e0 * az + e1 * bz + e2 * cz;
-    let inv_det = 1.0 / det;
-    let t = t_scaled * inv_det;
+    let (t, inv_det, z) = scaled_t(s, world_z, [e0, e1, e2], det);
     if !(t > ray.tmin && t < ray.tmax) {
         return None;
     }
-    // A hit within the rounding error of t = 0 is the ray's own origin
-    // surface: reject it, with the bound of pbrt-v4 (section 6.8.4,
-    // "Conservative Ray–Triangle t Values"). Without it, a ray spawned
-    // from a point exactly on the triangle's plane (zero error bound) can
-    // re-hit the plane at t = 1e-9. A triangle wholly ahead needs no bound
-    // ([`ahead`]), and must not get it: at a grazing angle it exceeds t.
-    let world_z = [a[s.kz], b[s.kz], c[s.kz]];
-    if !ahead(az, bz, cz)
-        && t <= origin_error_bound(
-            ax,
-            ay,
-            bx,
-            by,
-            cx,
-            cy,
-            world_z,
-            [az, bz, cz],
-            [e0, e1, e2],
-            inv_det,
-        )
-    {
+    if at_origin(
+        t,
+        [ax, ay, bx, by, cx, cy],
+        world_z,
+        z,
+        [e0, e1, e2],
+        inv_det,
+    ) {
         return None;
     }
     Some((t, e1 * inv_det, e2 * inv_det))
@@ -182,15 +153,7 @@ pub fn intersect(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<(f32, f32, 
 /// never crossed.
 #[inline(always)]
 pub fn crossing(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<f32> {
-    let a = v[0] - ray.origin;
-    let b = v[1] - ray.origin;
-    let c = v[2] - ray.origin;
-    let ax = a[s.kx] - s.sx * a[s.kz];
-    let ay = a[s.ky] - s.sy * a[s.kz];
-    let bx = b[s.kx] - s.sx * b[s.kz];
-    let by = b[s.ky] - s.sy * b[s.kz];
-    let cx = c[s.kx] - s.sx * c[s.kz];
-    let cy = c[s.ky] - s.sy * c[s.kz];
+    let (world_z, [ax, ay, bx, by, cx, cy]) = shear(ray, s, v);
     // The edges b → c, c → a, a → b: [`intersect`]'s e0, e1, e2.
     let step = s.tie_step(ray);
     let (e0, s0) = owned_edge(bx, by, cx, cy, step);
@@ -205,33 +168,70 @@ pub fn crossing(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> Option<f32> {
     if det == 0.0 {
         return None;
     }
-    let az = s.sz * a[s.kz];
-    let bz = s.sz * b[s.kz];
-    let cz = s.sz * c[s.kz];
-    let t_scaled = e0 * az + e1 * bz + e2 * cz;
-    let inv_det = 1.0 / det;
-    let t = t_scaled * inv_det;
+    let (t, inv_det, z) = scaled_t(s, world_z, [e0, e1, e2], det);
     if !(t > ray.tmin && t <= ray.tmax) {
         return None;
     }
-    let world_z = [a[s.kz], b[s.kz], c[s.kz]];
-    if !ahead(az, bz, cz)
-        && t <= origin_error_bound(
-            ax,
-            ay,
-            bx,
-            by,
-            cx,
-            cy,
-            world_z,
-            [az, bz, cz],
-            [e0, e1, e2],
-            inv_det,
-        )
-    {
+    if at_origin(
+        t,
+        [ax, ay, bx, by, cx, cy],
+        world_z,
+        z,
+        [e0, e1, e2],
+        inv_det,
+    ) {
         return None;
     }
     Some(t)
+}
+
+/// The triangle's vertices in ray space: each vertex's world coordinate
+/// along the ray's dominant axis, relative to the origin, and its sheared
+/// `[ax, ay, bx, by, cx, cy]`. Each vertex is sheared alone, so two
+/// triangles sharing it read the same numbers (what makes the tests
+/// watertight).
+#[inline(always)]
+fn shear(ray: &Ray, s: &ShearedRay, v: &[Vec3; 3]) -> ([f32; 3], [f32; 6]) {
+    let [a, b, c] = v.map(|p| p - ray.origin);
+    let xy = [
+        a[s.kx] - s.sx * a[s.kz],
+        a[s.ky] - s.sy * a[s.kz],
+        b[s.kx] - s.sx * b[s.kz],
+        b[s.ky] - s.sy * b[s.kz],
+        c[s.kx] - s.sx * c[s.kz],
+        c[s.ky] - s.sy * c[s.kz],
+    ];
+    ([a[s.kz], b[s.kz], c[s.kz]], xy)
+}
+
+/// The hit distance of edge functions `e` (of one sign, `det` their sum,
+/// not zero): `(t, 1/det, z)` with `z` the vertices' scaled distances.
+#[inline(always)]
+fn scaled_t(s: &ShearedRay, world_z: [f32; 3], e: [f32; 3], det: f32) -> (f32, f32, [f32; 3]) {
+    let z = world_z.map(|w| s.sz * w);
+    let t_scaled = e[0] * z[0] + e[1] * z[1] + e[2] * z[2];
+    let inv_det = 1.0 / det;
+    (t_scaled * inv_det, inv_det, z)
+}
+
+/// Whether a hit at `t` may be the ray's own origin surface, to reject:
+/// t within its rounding error of 0, with the bound of pbrt-v4 (section
+/// 6.8.4, "Conservative Ray–Triangle t Values"). Without it, a ray spawned
+/// from a point exactly on the triangle's plane (zero error bound) can
+/// re-hit the plane at t = 1e-9. A triangle wholly ahead needs no bound
+/// ([`ahead`]), and must not get it: at a grazing angle it exceeds t.
+#[inline(always)]
+fn at_origin(
+    t: f32,
+    xy: [f32; 6],
+    world_z: [f32; 3],
+    z: [f32; 3],
+    e: [f32; 3],
+    inv_det: f32,
+) -> bool {
+    let [ax, ay, bx, by, cx, cy] = xy;
+    !ahead(z[0], z[1], z[2])
+        && t <= origin_error_bound(ax, ay, bx, by, cx, cy, world_z, z, e, inv_det)
 }
 
 /// The edge function of the sheared edge p → q at the ray's point,
