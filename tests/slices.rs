@@ -380,6 +380,8 @@ fn bad_slices_and_outputs_are_refused_on_one_line() {
         (vec!["--slice", "1/3", "-o", "part.png"], "--slice"),
         (vec!["-o", "out.jpg"], "--output"),
         (vec!["--checkpoint", "ck.png"], "--checkpoint"),
+        (vec!["--timeline", "trace.txt"], "--timeline"),
+        (vec!["--timeline", "no/such/dir/trace.json"], "--timeline"),
     ] {
         let o = strata_bin(&[&["render", s(&t.scene), "-q"], args.as_slice()].concat());
         let err = String::from_utf8_lossy(&o.stderr);
@@ -392,6 +394,136 @@ fn bad_slices_and_outputs_are_refused_on_one_line() {
         assert!(err.contains(mention), "{args:?}: {err}");
     }
     assert!(!Path::new("part.png").exists());
+    std::fs::remove_dir_all(&t.dir).ok();
+}
+
+/// Recording a timeline changes no bit of the film, and it holds every
+/// work item once: each pass's items cover every pixel exactly once, and
+/// their rays add up to the render's.
+#[test]
+fn a_timeline_holds_every_work_item_and_changes_no_bit() {
+    use strata::render::timeline::Timeline;
+    use strata::render::Schedule;
+    let scene = scene(BUSY);
+    let pixels = scene.settings.width * scene.settings.height;
+    for schedule in [Schedule::Slices, Schedule::Regions] {
+        for threads in [1, 3] {
+            let opts = |timeline| RenderOptions {
+                threads,
+                schedule,
+                passes: Some(3),
+                timeline,
+                ..RenderOptions::default()
+            };
+            let plain = render(&scene, &opts(None), None, |_, _| {});
+            let timeline = std::sync::Arc::new(Timeline::new(Instant::now()));
+            let traced = render(&scene, &opts(Some(timeline.clone())), None, |_, _| {});
+            let case = format!("{schedule:?}, {threads} threads");
+            assert!(plain.film == traced.film, "{case}: the film changed");
+            let items = timeline.items();
+            let rays: u64 = items.iter().map(|i| i.rays).sum();
+            assert_eq!(rays, traced.counts.total(), "{case}");
+            for pass in 0..3 {
+                let mut covered: Vec<_> = items
+                    .iter()
+                    .filter(|i| i.pass == pass)
+                    .map(|i| i.pixels.clone())
+                    .collect();
+                covered.sort_by_key(|r| r.start);
+                let joined = covered.windows(2).all(|w| w[0].end == w[1].start);
+                assert!(joined && covered[0].start == 0, "{case}: {covered:?}");
+                assert_eq!(covered.last().unwrap().end, pixels, "{case}");
+            }
+            assert!(items
+                .iter()
+                .all(|i| i.thread < threads && i.end_ns >= i.start_ns));
+        }
+    }
+}
+
+/// `strata render --timeline`: Chrome's trace event format with the six
+/// fields on every event, a track per thread used, spans that never
+/// overlap on a track, and work items whose rays are the render's.
+#[test]
+fn the_timeline_is_a_trace_perfetto_opens() {
+    let t = Parts::new("timeline");
+    let (trace, stats) = (t.dir.join("trace.json"), t.dir.join("stats.json"));
+    let out = t.dir.join("out.png");
+    let o = strata_bin(&[
+        "render",
+        s(&t.scene),
+        "-q",
+        "--threads",
+        "3",
+        "--passes",
+        "2",
+        "--timeline",
+        s(&trace),
+        "--stats",
+        s(&stats),
+        "-o",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();
+    let events = json["traceEvents"].as_array().unwrap();
+    for e in events {
+        for field in ["ph", "ts", "dur", "pid", "tid", "name"] {
+            assert!(e.get(field).is_some(), "no {field}: {e}");
+        }
+    }
+    let spans: Vec<&serde_json::Value> = events.iter().filter(|e| e["ph"] == "X").collect();
+    let tracks: std::collections::BTreeSet<u64> =
+        spans.iter().map(|e| e["tid"].as_u64().unwrap()).collect();
+    let workers: std::collections::BTreeSet<u64> = spans
+        .iter()
+        .filter(|e| e["name"] == "work item")
+        .map(|e| e["tid"].as_u64().unwrap())
+        .collect();
+    assert!(!workers.contains(&0) && workers.len() <= 3 && !workers.is_empty());
+    assert!(tracks.contains(&0), "the main track");
+    let named: std::collections::BTreeSet<u64> = events
+        .iter()
+        .filter(|e| e["name"] == "thread_name")
+        .map(|e| e["tid"].as_u64().unwrap())
+        .collect();
+    assert!(workers.is_subset(&named), "every track used is named");
+    for tid in &tracks {
+        let mut on_track: Vec<(f64, f64)> = spans
+            .iter()
+            .filter(|e| e["tid"].as_u64() == Some(*tid))
+            .map(|e| {
+                let ts = e["ts"].as_f64().unwrap();
+                (ts, ts + e["dur"].as_f64().unwrap())
+            })
+            .collect();
+        on_track.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for w in on_track.windows(2) {
+            // Times are printed in µs to the nanosecond.
+            assert!(w[0].1 <= w[1].0 + 1e-3, "track {tid}: {w:?} overlap");
+        }
+    }
+    let names: Vec<&str> = spans.iter().filter_map(|e| e["name"].as_str()).collect();
+    for phase in ["load", "BVH build", "pass 1", "pass 2", "output"] {
+        assert!(names.contains(&phase), "no {phase} span");
+    }
+    let rays: u64 = spans
+        .iter()
+        .filter(|e| e["name"] == "work item")
+        .map(|e| e["args"]["rays"].as_u64().unwrap())
+        .sum();
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(rays, stats["rays_total"].as_u64().unwrap());
+    let summary = &stats["timeline"];
+    let busy: f64 = summary["threads"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["busy_s"].as_f64().unwrap())
+        .sum();
+    assert!(busy > 0.0 && summary["longest_item_s"].as_f64() >= summary["mean_item_s"].as_f64());
     std::fs::remove_dir_all(&t.dir).ok();
 }
 

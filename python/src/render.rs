@@ -276,6 +276,7 @@ pub fn render(
         packets,
         window: window.clone(),
         aovs: !aovs.is_empty(),
+        timeline: None,
     };
     let outcome = py.detach(|| render_scene(&scene, &opts, None, |_, _| {}));
     if let Some(bad) = outcome.film.first_invalid {

@@ -3,6 +3,7 @@
 use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
+use std::sync::Arc;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::output::exr::{Attribute, ExrImage};
@@ -10,6 +11,7 @@ use strata::output::image::{write_image, ImageFormat};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::aov::{self, Aov, AovSum};
 use strata::render::stats::RenderStats;
+use strata::render::timeline::{Phase, Timeline};
 use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec, Window};
 use strata::scene::edit::Edit;
 use strata::scene::{compile, load_edited_scene, parse, LoadTimings, RenderOverrides, Scene};
@@ -74,6 +76,12 @@ pub struct RenderArgs {
     /// Write statistics (rays by kind, Mrays/s, phase times, peak RSS) as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Write a trace of the run (.json, Chrome's trace event format, which
+    /// Perfetto and chrome://tracing open): a track per thread with a span
+    /// per work item, the load, build, passes and output on the main track,
+    /// and rays per second. Its summary goes into --stats. See docs/scaling.md.
+    #[arg(long, value_name = "FILE.json")]
+    pub timeline: Option<PathBuf>,
     /// Render only the window X0,Y0,X1,Y1 (pixels, half-open) and write an
     /// image of that size. Each pixel gets the samples it gets in the whole
     /// image, so the crop equals that window of a full render bit for bit
@@ -114,7 +122,14 @@ const SEED_SCENE_NAME: &str = "scenes/seed.toml (built in)";
 
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let (slice, partial_output) = check_outputs(&args)?;
+    let epoch = std::time::Instant::now();
     let (scene, timings) = load(&args)?;
+    // Recorded for the trace, and for the summary in the statistics.
+    let timeline = (args.timeline.is_some() || args.stats.is_some()).then(|| {
+        let t = Timeline::new(epoch);
+        t.load_and_build(timings.load, timings.bvh_build);
+        Arc::new(t)
+    });
     let scene_name = scene_name(args.scene.as_deref());
     if let Some(id) = args.debug_sample {
         let (value, events) = strata::render::replay::replay(&scene, id)
@@ -166,6 +181,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         packets: args.packets,
         window,
         aovs: !args.aov.is_empty(),
+        timeline: timeline.clone(),
     };
     let mut failed = (false, false);
     let outcome = render(&scene, &opts, initial, |film, done| {
@@ -184,6 +200,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
         }
     });
+    let output_start = timeline.as_deref().map(Timeline::now);
     if let (true, Some(header)) = (partial_output, &header) {
         write_partial(&args.output, header, &outcome.film)
             .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
@@ -198,13 +215,25 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             outcome.film.invalid, bad.x, bad.y, bad.sample, bad.x, bad.y, bad.sample
         );
     }
-    let stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
+    let mut stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
+    if let (Some(t), Some(start)) = (&timeline, output_start) {
+        t.phase(Phase::Output, start, t.now());
+        stats.timeline = t.summary();
+    }
+    if let (Some(path), Some(t)) = (&args.timeline, &timeline) {
+        let name = format!("strata render {scene_name}");
+        strata::output::atomic::write_bytes_atomic(path, t.to_chrome_json(&name).as_bytes())
+            .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
+    }
     if let Some(path) = &args.stats {
         strata::output::atomic::write_bytes_atomic(path, stats.to_json().as_bytes())
             .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
     }
     if !args.quiet {
         println!("{}", stats.summary(&args.output));
+        if let (Some(path), Some(summary)) = (&args.timeline, &stats.timeline) {
+            print!("timeline -> {}\n{}", path.display(), summary.text());
+        }
     }
     Ok(())
 }
@@ -293,6 +322,9 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
     }
     if let Some(path) = &args.stats {
         super::writable(path, "--stats", &["json"])?;
+    }
+    if let Some(path) = &args.timeline {
+        super::writable(path, "--timeline", &["json"])?;
     }
     if partial_output || args.checkpoint.is_some() {
         // A part or a checkpoint holds whole images' sums, to be merged.

@@ -4,15 +4,22 @@ use super::CliError;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
+use std::sync::Arc;
+use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
+use strata::experiment::predict::{PartCosts, RunCosts};
 use strata::experiment::scaling::{
-    chart_panels, csv, rows, table, thread_counts, time_processes, time_threads, Mode, ScratchDir,
-    SliceJob, Timing,
+    chart_panels, csv, predict_rows, predicted_scaling_rows, prediction_table, rows, table,
+    thread_counts, time_processes, time_threads, time_threads_with, Mode, ScratchDir, SliceJob,
+    Timing,
 };
 use strata::output::chart::write_svg;
+use strata::render::timeline::Timeline;
 use strata::render::Schedule;
+use strata::render::{Film, SliceSpec};
 use strata::scene::RenderOverrides;
+use strata::scene::{LoadTimings, Scene};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ScheduleChoice {
@@ -56,6 +63,15 @@ pub struct ScalingArgs {
     /// Where to write the SVG chart (speedup and efficiency).
     #[arg(long, default_value = "scaling.svg")]
     pub chart: PathBuf,
+    /// Also predict the speedup at 1, 2, 4, … up to --predict-max threads
+    /// (and processes) from the work items of the measured 1-thread run,
+    /// drawn beside the measured speedup; prints the busiest run's timeline
+    /// at a glance. See docs/scaling.md, "Past this machine's cores".
+    #[arg(long)]
+    pub predict: bool,
+    /// Largest thread count --predict simulates.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub predict_max: u32,
     /// Print only the table.
     #[arg(short, long)]
     pub quiet: bool,
@@ -71,7 +87,7 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         height: args.height,
         ..RenderOverrides::default()
     };
-    let (scene, _) =
+    let (scene, load_timings) =
         super::render::load_or_seed(args.scene.as_deref(), &[], &overrides, BuildQuality::Auto)?;
     let max = match args.max_threads {
         Some(0) => {
@@ -139,10 +155,26 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
 
     // Interleave repeats so that drifting machine load hits every configuration alike.
     let mut timings: Vec<Vec<Vec<Timing>>> = vec![vec![Vec::new(); counts.len()]; modes.len()];
+    // With --predict, the slices runs at 1 and at the most threads keep
+    // their timelines (two clock reads per work item).
+    let mut recorded: Vec<Recorded> = Vec::new();
     for rep in 0..args.repeats {
         for (m, mode) in modes.iter().enumerate() {
             for (i, &n) in counts.iter().enumerate() {
+                let record = args.predict && *mode == Mode::Threads(Schedule::Slices);
                 let t = match mode {
+                    Mode::Threads(schedule) if record && (n == 1 || n == max) => {
+                        let timeline = Arc::new(Timeline::new(Instant::now()));
+                        let (t, film) =
+                            time_threads_with(&scene, *schedule, n, Some(timeline.clone()));
+                        recorded.push(Recorded {
+                            threads: n,
+                            seconds: t.seconds,
+                            timeline,
+                            film,
+                        });
+                        t
+                    }
                     Mode::Threads(schedule) => time_threads(&scene, *schedule, n),
                     Mode::Processes => {
                         let dir = scratch.as_ref().expect("scratch dir").path();
@@ -164,12 +196,16 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
             }
         }
     }
-    let all: Vec<_> = modes
+    let mut all: Vec<_> = modes
         .iter()
         .zip(&timings)
         .flat_map(|(mode, t)| rows(*mode, &counts, t))
         .collect();
     print!("{}", table(&all));
+    if args.predict {
+        let predictions = predict(&scene, &load_timings, &recorded, &all, &counts, &args)?;
+        all.extend(predicted_scaling_rows(&predictions));
+    }
     strata::output::atomic::write_bytes_atomic(&args.csv, csv(&all).as_bytes())
         .map_err(|e| InputError::file(&args.csv, format!("cannot write: {e}")))?;
     let short_name = args.scene.as_deref().and_then(|p| p.file_name());
@@ -186,4 +222,88 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         eprintln!("wrote {} and {}", args.csv.display(), args.chart.display());
     }
     Ok(())
+}
+
+/// One slices run with its timeline (`--predict`).
+struct Recorded {
+    threads: usize,
+    seconds: f64,
+    timeline: Arc<Timeline>,
+    film: Film,
+}
+
+/// The run of `recorded` at `threads` with the median time.
+fn median_run(recorded: &[Recorded], threads: usize) -> Option<&Recorded> {
+    let mut runs: Vec<&Recorded> = recorded.iter().filter(|r| r.threads == threads).collect();
+    runs.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+    runs.get(runs.len() / 2).copied()
+}
+
+/// `--predict`: the costs of the median 1-thread run, the serial phases
+/// around it (the scene's load and build as this run timed them, an image
+/// and with `--processes` a part written and read back, timed here), every
+/// count up to `--predict-max` simulated, printed beside what was measured.
+fn predict(
+    scene: &Scene,
+    load: &LoadTimings,
+    recorded: &[Recorded],
+    measured: &[strata::experiment::scaling::ScalingRow],
+    counts: &[usize],
+    args: &ScalingArgs,
+) -> Result<Vec<strata::experiment::scaling::PredictionRow>, CliError> {
+    let internal = |e: String| CliError::Internal(e);
+    let base = median_run(recorded, 1).ok_or_else(|| internal("no 1-thread run".into()))?;
+    let s = &scene.settings;
+    let mut costs = RunCosts::from_timeline(&base.timeline, s.width * s.height);
+    costs.load_s = load.load.as_secs_f64();
+    costs.build_s = load.bvh_build.as_secs_f64();
+    let scratch = ScratchDir::new("predict").map_err(|e| internal(e.to_string()))?;
+    let timed = |work: &mut dyn FnMut() -> Result<(), String>| -> Result<f64, CliError> {
+        let start = Instant::now();
+        work().map_err(internal)?;
+        Ok(start.elapsed().as_secs_f64())
+    };
+    let png = scratch.path().join("image.png");
+    let pixels = base.film.to_rgb();
+    costs.output_s =
+        timed(&mut || strata::output::image::write_image(&png, &pixels, s.width, s.height))?;
+    let parts = match args.processes {
+        false => None,
+        true => {
+            use strata::partial::format::{read_partial, write_partial, PartialHeader};
+            let part = scratch.path().join("part.strata");
+            let spp = s.spp;
+            let write_s = timed(&mut || {
+                let header = PartialHeader::for_scene(scene, SliceSpec::WHOLE, 0..spp);
+                write_partial(&part, &header, &base.film).map_err(|e| e.to_string())
+            })?;
+            let read_s = timed(&mut || read_partial(&part).map(|_| ()).map_err(|e| e.to_string()))?;
+            Some(PartCosts { write_s, read_s })
+        }
+    };
+    let mut predicted_counts = thread_counts(args.predict_max as usize);
+    predicted_counts.extend_from_slice(counts);
+    predicted_counts.sort_unstable();
+    predicted_counts.dedup();
+    let predictions = predict_rows(&costs, &predicted_counts, measured, parts);
+    if !args.quiet {
+        let items: usize = costs.passes.iter().map(|p| p.items.len()).sum();
+        println!(
+            "\npredicted from the median 1-thread run's {items} work items ({:.3} s of work; load {:.3} s, build {:.3} s, setup {:.3} s, output {:.3} s):",
+            costs.work_s(),
+            costs.load_s,
+            costs.build_s,
+            costs.setup_s,
+            costs.output_s
+        );
+    }
+    print!("{}", prediction_table(&predictions));
+    let max = counts.last().copied().unwrap_or(1);
+    if let Some(summary) = median_run(recorded, max).and_then(|r| r.timeline.summary()) {
+        if !args.quiet {
+            println!("\nthe median {max}-thread run at a glance:");
+            print!("{}", summary.text());
+        }
+    }
+    Ok(predictions)
 }

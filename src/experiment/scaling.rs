@@ -23,14 +23,17 @@
 //! start, scene load, BVH build and part write: the real cost of splitting a
 //! render across processes.
 
+use super::predict::{predict_processes, predict_threads, PartCosts, RunCosts, Split};
 use crate::output::chart::{Panel, Series};
 use crate::partial::merge::{merge_partials, MergeRules};
 use crate::partial::read_partial;
-use crate::render::{render, RenderOptions, Schedule, SliceSpec};
+use crate::render::timeline::Timeline;
+use crate::render::{render, Film, RenderOptions, Schedule, SliceSpec};
 use crate::scene::Scene;
 use crate::system::cputime::{thread_cpu_ns, waited_children_cpu_seconds};
 use std::path::{Path, PathBuf};
 use std::process::Child;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// 1, 2, 4, … up to `max`, and `max` itself.
@@ -85,18 +88,31 @@ pub struct Timing {
 
 /// Render `scene` once in this process.
 pub fn time_threads(scene: &Scene, schedule: Schedule, threads: usize) -> Timing {
+    time_threads_with(scene, schedule, threads, None).0
+}
+
+/// [`time_threads`], recording its work items into `timeline`; also
+/// returns the film.
+pub fn time_threads_with(
+    scene: &Scene,
+    schedule: Schedule,
+    threads: usize,
+    timeline: Option<Arc<Timeline>>,
+) -> (Timing, Film) {
     let opts = RenderOptions {
         threads,
         schedule,
         quiet: true,
+        timeline,
         ..RenderOptions::default()
     };
     let outcome = render(scene, &opts, None, |_, _| {});
-    Timing {
+    let timing = Timing {
         seconds: outcome.seconds,
         rays: outcome.counts.total(),
         cpu: outcome.cpu.map(|c| (c.total, c.critical_path)),
-    }
+    };
+    (timing, outcome.film)
 }
 
 /// One child render of [`time_processes`]: the slice it renders, on one
@@ -245,6 +261,137 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
         .collect()
 }
 
+/// One thread (or process) count of a prediction (`strata scaling --predict`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PredictionRow {
+    pub threads: usize,
+    /// Predicted speedups of the in-process render over one thread.
+    pub slices: f64,
+    pub regions: f64,
+    /// P processes against one, start to merged film (with `--processes`).
+    pub processes: Option<f64>,
+    /// The slices render with the load, build, setup and output around
+    /// it: the whole run's speedup, which those serial phases bound (Amdahl).
+    pub end_to_end: f64,
+    /// Of the threads' time in passes under slices, the share left idle.
+    pub imbalance: f64,
+    /// Of the whole run at this count, the share of the serial phases.
+    pub serial_share: f64,
+    /// The measured slices speedup at this count, where it was measured,
+    /// and the prediction's error against it (predicted / measured − 1).
+    pub measured: Option<f64>,
+    pub error: Option<f64>,
+}
+
+/// Predict every count of `counts` from `costs` (one run's work items),
+/// against the measured `rows` where they have the count; processes too
+/// with the costs of their parts (`--processes`).
+pub fn predict_rows(
+    costs: &RunCosts,
+    counts: &[usize],
+    rows: &[ScalingRow],
+    parts: Option<PartCosts>,
+) -> Vec<PredictionRow> {
+    let threads = |split, t| predict_threads(costs, split, t);
+    let (slices_1, regions_1) = (threads(Split::Slices, 1), threads(Split::Regions, 1));
+    let processes_1 = parts.map(|p| predict_processes(costs, 1, p).seconds);
+    counts
+        .iter()
+        .map(|&t| {
+            let slices = threads(Split::Slices, t);
+            let measured = rows
+                .iter()
+                .find(|r| r.mode == Mode::Threads(Schedule::Slices).name() && r.threads == t)
+                .map(|r| r.speedup);
+            let predicted = slices_1.seconds / slices.seconds;
+            PredictionRow {
+                threads: t,
+                slices: predicted,
+                regions: regions_1.seconds / threads(Split::Regions, t).seconds,
+                processes: processes_1
+                    .zip(parts)
+                    .map(|(one, p)| one / predict_processes(costs, t, p).seconds),
+                end_to_end: slices_1.end_to_end_s / slices.end_to_end_s,
+                imbalance: slices.imbalance,
+                serial_share: costs.around_s() / slices.end_to_end_s,
+                measured,
+                error: measured.map(|m| predicted / m - 1.0),
+            }
+        })
+        .collect()
+}
+
+/// The predictions as rows of the scaling table's CSV and chart, each
+/// mode named `... (predicted)`.
+pub fn predicted_scaling_rows(predictions: &[PredictionRow]) -> Vec<ScalingRow> {
+    let row = |mode: &str, threads: usize, speedup: f64| ScalingRow {
+        mode: format!("{mode} (predicted)"),
+        threads,
+        seconds: f64::NAN,
+        speedup,
+        efficiency: speedup / threads as f64,
+        mrays_per_s: f64::NAN,
+        cpu_path_s: None,
+        cpu_speedup: None,
+        runs: Vec::new(),
+    };
+    let mut out: Vec<ScalingRow> = Vec::new();
+    out.extend(
+        predictions
+            .iter()
+            .map(|p| row("slices", p.threads, p.slices)),
+    );
+    out.extend(
+        predictions
+            .iter()
+            .map(|p| row("regions", p.threads, p.regions)),
+    );
+    out.extend(
+        predictions
+            .iter()
+            .filter_map(|p| Some(row("processes", p.threads, p.processes?))),
+    );
+    out.extend(
+        predictions
+            .iter()
+            .map(|p| row("slices end to end", p.threads, p.end_to_end)),
+    );
+    out
+}
+
+/// The prediction table `strata scaling --predict` prints.
+pub fn prediction_table(predictions: &[PredictionRow]) -> String {
+    let mut s = format!(
+        "{:>7} {:>8} {:>8} {:>9} {:>10} {:>9} {:>7} {:>8} {:>7}\n",
+        "threads",
+        "slices",
+        "regions",
+        "processes",
+        "end-to-end",
+        "imbalance",
+        "serial",
+        "measured",
+        "error"
+    );
+    let x = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.2}x"));
+    for p in predictions {
+        s += &format!(
+            "{:>7} {:>7.2}x {:>7.2}x {:>9} {:>9.2}x {:>8.1}% {:>6.1}% {:>8} {:>7}\n",
+            p.threads,
+            p.slices,
+            p.regions,
+            x(p.processes),
+            p.end_to_end,
+            100.0 * p.imbalance,
+            100.0 * p.serial_share,
+            x(p.measured),
+            p.error
+                .map_or("-".into(), |e| format!("{:+.1}%", 100.0 * e)),
+        );
+    }
+    s
+}
+
 /// The chart `strata scaling` draws: speedup and efficiency against
 /// threads, each with the ideal as a reference line, a line per schedule
 /// from wall time and, where measured, one from the CPU critical path.
@@ -274,6 +421,10 @@ pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
                     .filter_map(|r| Some((r.threads as f64, value(r, pick(r)?))))
                     .collect()
             };
+            if mode.ends_with("(predicted)") {
+                series.push(Series::new(mode.to_string(), of(&|r| Some(r.speedup))));
+                continue;
+            }
             series.push(Series::new(
                 format!("{mode} (wall)"),
                 of(&|r| Some(r.speedup)),
@@ -293,7 +444,8 @@ pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
         title,
         x_label: "threads (or processes)".into(),
         y_label: y_label.into(),
-        log_x: false,
+        // Predictions reach 64 threads: doublings spaced alike.
+        log_x: counts.last().is_some_and(|&t| t > 16),
         log_y: false,
         integer_x: true,
         series,

@@ -1,6 +1,7 @@
 //! The render core: scheduling samples onto threads ([`schedule`]),
 //! accumulating them exactly ([`film`]), reporting progress ([`progress`]),
-//! replaying one sample ([`replay`]) and the statistics of a run ([`stats`]).
+//! replaying one sample ([`replay`]), the statistics of a run ([`stats`])
+//! and its timeline ([`timeline`]).
 
 pub mod aov;
 pub mod film;
@@ -8,6 +9,7 @@ pub mod progress;
 pub mod replay;
 pub mod schedule;
 pub mod stats;
+pub mod timeline;
 pub mod window;
 
 pub use film::Film;

@@ -12,6 +12,7 @@
 use super::aov::AovSum;
 use super::film::{Film, PixelSum};
 use super::progress;
+use super::timeline::{ItemLists, ItemSpan, Phase, Timeline};
 use super::window::Window;
 use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler};
@@ -20,6 +21,7 @@ use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, Sa
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Pixels per work item: small enough that 64 threads stay busy on small images.
@@ -118,6 +120,9 @@ pub struct RenderOptions {
     pub window: Option<Window>,
     /// Also accumulate what each camera ray hit first (`--aov`).
     pub aovs: bool,
+    /// Record every work item and pass here (`--timeline`); the image does
+    /// not depend on it.
+    pub timeline: Option<Arc<Timeline>>,
 }
 
 impl Default for RenderOptions {
@@ -132,6 +137,7 @@ impl Default for RenderOptions {
             packets: PacketMode::Auto,
             window: None,
             aovs: false,
+            timeline: None,
         }
     }
 }
@@ -172,6 +178,7 @@ pub fn render(
     initial: Option<Film>,
     mut on_pass: impl FnMut(&Film, u32),
 ) -> RenderOutcome {
+    let setup_start = opts.timeline.as_deref().map(Timeline::now);
     let s = &scene.settings;
     let threads = if opts.threads == 0 {
         rayon::current_num_threads().max(1)
@@ -211,7 +218,13 @@ pub fn render(
     // Rays and time at the end of the previous pass, for the current rate.
     let (mut last_rays, mut last_time) = (0u64, 0.0f64);
     let mut rate = String::new();
+    let timeline = opts.timeline.as_deref();
+    let item_lists = timeline.map(|_| ItemLists::new(threads));
+    if let (Some(t), Some(setup_start)) = (timeline, setup_start) {
+        t.phase(Phase::Setup, setup_start, t.at(start));
+    }
     for (pass_index, pass) in passes.iter().enumerate() {
+        let pass_start = timeline.map(Timeline::now);
         bar.set_message(format!(
             "pass {}/{} (samples {}..{} of {}){rate}",
             pass_index + 1,
@@ -234,6 +247,10 @@ pub fn render(
                 .zip(aov_chunks.into_par_iter())
                 .enumerate()
                 .map(|(b, (pixels, mut aov_pixels))| {
+                    // One clock read per work item: each starts where the
+                    // last one on this thread ended (its integrator's setup
+                    // counted in the first).
+                    let mut item_start = timeline.map(Timeline::now);
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
                     for (k, accs) in pixels.chunks_mut(WORK_ITEM_PIXELS).enumerate() {
                         accs.fill(PixelSum::default());
@@ -244,7 +261,23 @@ pub fn render(
                             window: &window,
                             first,
                         };
+                        let rays_before = integrator.counts.total();
                         render_pixels(&mut integrator, scene, pixels, accs, aov, pass.clone());
+                        if let (Some(t), Some(lists), Some(start_ns)) =
+                            (timeline, &item_lists, item_start)
+                        {
+                            let end_ns = t.now();
+                            lists.push(ItemSpan {
+                                thread: rayon::current_thread_index().unwrap_or(0),
+                                pass: pass_index,
+                                pixels: first as u32..(first + accs.len()) as u32,
+                                samples: pass.clone(),
+                                start_ns,
+                                end_ns,
+                                rays: integrator.counts.total() - rays_before,
+                            });
+                            item_start = Some(end_ns);
+                        }
                         if opts.schedule == Schedule::Regions && accs.len() == WORK_ITEM_PIXELS {
                             bar.inc(1);
                         }
@@ -256,6 +289,7 @@ pub fn render(
                 })
                 .reduce(RayCounts::default, |a, b| a + b)
         });
+        let film_start = timeline.map(Timeline::now);
         for (i, acc) in scratch.iter().enumerate() {
             film.add_pixel(i, acc);
         }
@@ -267,7 +301,19 @@ pub fn render(
         );
         (last_rays, last_time) = (total, elapsed);
         cpu.pass(&pool);
+        let after_start = timeline.map(Timeline::now);
         on_pass(&film, pass.end);
+        if let (Some(t), Some(pass_start), Some(film_start), Some(after_start)) =
+            (timeline, pass_start, film_start, after_start)
+        {
+            let of_pass = || Some((pass_index, pass.clone()));
+            t.phase_of_pass(Phase::Pass, of_pass(), pass_start, film_start);
+            t.phase_of_pass(Phase::Film, of_pass(), film_start, after_start);
+            t.phase_of_pass(Phase::AfterPass, of_pass(), after_start, t.now());
+        }
+    }
+    if let (Some(t), Some(lists)) = (timeline, item_lists) {
+        t.add_items(threads, lists.into_items());
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();

@@ -2,6 +2,7 @@
 //! JSON, and the summary line it prints.
 
 use super::film::BadSample;
+use super::timeline::TimelineSummary;
 use super::{RenderOptions, RenderOutcome};
 use crate::accel::BuildQuality;
 use crate::scene::{LoadTimings, Scene};
@@ -52,6 +53,9 @@ pub struct RenderStats {
     pub invalid_samples: u64,
     pub first_invalid_sample: Option<BadSample>,
     pub clamped_samples: u64,
+    /// The run at a glance: each thread's busy and idle time, the longest
+    /// work item against the mean, each phase's share of the wall time.
+    pub timeline: Option<TimelineSummary>,
 }
 
 /// Fewest triangles for which the summary gives memory per triangle: below
@@ -133,6 +137,7 @@ impl RenderStats {
             invalid_samples: outcome.film.invalid,
             first_invalid_sample: outcome.film.first_invalid,
             clamped_samples: outcome.film.clamped,
+            timeline: None,
         }
     }
 
