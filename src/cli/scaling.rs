@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
-use strata::experiment::predict::{PartCosts, RunCosts};
+use strata::experiment::predict::{ProcessCosts, RunCosts};
 use strata::experiment::scaling::{
     chart_panels, csv, predict_rows, predicted_scaling_rows, prediction_table, rows, table,
     thread_counts, time_processes, time_threads, time_threads_with, Mode, ScratchDir, SliceJob,
@@ -81,14 +81,12 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
     super::writable(&args.csv, "--csv", &["csv"])?;
     super::writable(&args.chart, "--chart", &["svg"])?;
     let scene_name = super::render::scene_name(args.scene.as_deref());
-    let overrides = RenderOverrides {
-        spp: args.spp,
-        width: args.width,
-        height: args.height,
-        ..RenderOverrides::default()
-    };
-    let (scene, load_timings) =
-        super::render::load_or_seed(args.scene.as_deref(), &[], &overrides, BuildQuality::Auto)?;
+    let (scene, load_timings) = super::render::load_or_seed(
+        args.scene.as_deref(),
+        &[],
+        &overrides(&args),
+        BuildQuality::Auto,
+    )?;
     let max = match args.max_threads {
         Some(0) => {
             return Err(
@@ -155,15 +153,15 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
 
     // Interleave repeats so that drifting machine load hits every configuration alike.
     let mut timings: Vec<Vec<Vec<Timing>>> = vec![vec![Vec::new(); counts.len()]; modes.len()];
-    // With --predict, the slices runs at 1 and at the most threads keep
-    // their timelines (two clock reads per work item).
+    // With --predict, the slices runs keep their timelines (one clock read
+    // per work item).
     let mut recorded: Vec<Recorded> = Vec::new();
     for rep in 0..args.repeats {
         for (m, mode) in modes.iter().enumerate() {
             for (i, &n) in counts.iter().enumerate() {
                 let record = args.predict && *mode == Mode::Threads(Schedule::Slices);
                 let t = match mode {
-                    Mode::Threads(schedule) if record && (n == 1 || n == max) => {
+                    Mode::Threads(schedule) if record => {
                         let timeline = Arc::new(Timeline::new(Instant::now()));
                         let (t, film) =
                             time_threads_with(&scene, *schedule, n, Some(timeline.clone()));
@@ -278,14 +276,47 @@ fn predict(
                 write_partial(&part, &header, &base.film).map_err(|e| e.to_string())
             })?;
             let read_s = timed(&mut || read_partial(&part).map(|_| ()).map_err(|e| e.to_string()))?;
-            Some(PartCosts { write_s, read_s })
+            // A child loads and builds on its one thread.
+            let one = super::thread_pool(1)?;
+            let (_, child) = one.install(|| {
+                super::render::load_or_seed(
+                    args.scene.as_deref(),
+                    &[],
+                    &overrides(args),
+                    BuildQuality::Auto,
+                )
+            })?;
+            let start_s = timed(&mut || {
+                let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+                let status = Command::new(exe)
+                    .arg("--version")
+                    .stdout(Stdio::null())
+                    .status();
+                status.map(|_| ()).map_err(|e| e.to_string())
+            })?;
+            Some(ProcessCosts {
+                start_s,
+                load_s: child.load.as_secs_f64(),
+                build_s: child.bvh_build.as_secs_f64(),
+                write_s,
+                read_s,
+            })
         }
     };
     let mut predicted_counts = thread_counts(args.predict_max as usize);
     predicted_counts.extend_from_slice(counts);
     predicted_counts.sort_unstable();
     predicted_counts.dedup();
-    let predictions = predict_rows(&costs, &predicted_counts, measured, parts);
+    // Each measured count's mean work item against the 1-thread run's.
+    let mean_item = |r: &Recorded| {
+        let items = r.timeline.items();
+        items.iter().map(|i| i.seconds()).sum::<f64>() / items.len().max(1) as f64
+    };
+    let slowdowns: Vec<(usize, f64)> = counts
+        .iter()
+        .filter_map(|&t| Some((t, mean_item(median_run(recorded, t)?) / mean_item(base))))
+        .collect();
+    let predictions = predict_rows(&costs, &predicted_counts, measured, &slowdowns, parts);
     if !args.quiet {
         let items: usize = costs.passes.iter().map(|p| p.items.len()).sum();
         println!(
@@ -306,4 +337,14 @@ fn predict(
         }
     }
     Ok(predictions)
+}
+
+/// The scene's settings as the command line overrides them.
+fn overrides(args: &ScalingArgs) -> RenderOverrides {
+    RenderOverrides {
+        spp: args.spp,
+        width: args.width,
+        height: args.height,
+        ..RenderOverrides::default()
+    }
 }

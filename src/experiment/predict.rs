@@ -206,17 +206,21 @@ pub fn predict_threads(costs: &RunCosts, split: Split, threads: usize) -> Predic
     }
 }
 
-/// What a process's part costs: writing it (its scene fingerprint
-/// included) in the child, reading it back in the merge.
+/// What a child process costs besides its samples, measured apart: its
+/// start, its load and build on its one thread, writing its part (the
+/// scene fingerprint included), and reading the part back in the merge.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct PartCosts {
+pub struct ProcessCosts {
+    pub start_s: f64,
+    pub load_s: f64,
+    pub build_s: f64,
     pub write_s: f64,
     pub read_s: f64,
 }
 
 /// `processes` single-threaded renders of one slice each, each writing its
 /// part instead of the run's output, then the merge reading the parts.
-pub fn predict_processes(costs: &RunCosts, processes: usize, part: PartCosts) -> Predicted {
+pub fn predict_processes(costs: &RunCosts, processes: usize, child: ProcessCosts) -> Predicted {
     let all = costs.sample_range();
     let spp = all.end;
     let n = processes.max(1) as u32;
@@ -241,8 +245,8 @@ pub fn predict_processes(costs: &RunCosts, processes: usize, part: PartCosts) ->
             work + serial_per_pass * passes as f64
         })
         .fold(0.0, f64::max);
-    let child = costs.around_s() - costs.output_s + part.write_s;
-    let seconds = child + slowest + part.read_s * n as f64;
+    let serial = child.start_s + child.load_s + child.build_s + costs.setup_s + child.write_s;
+    let seconds = serial + slowest + child.read_s * n as f64;
     Predicted {
         seconds,
         imbalance: 0.0,
@@ -354,13 +358,16 @@ mod tests {
     #[test]
     fn processes_split_the_samples_and_pay_the_serial_phases_each() {
         let c = run(&[0.5; 8], 1.0);
-        let part = PartCosts {
+        let child = ProcessCosts {
+            start_s: 0.05,
+            load_s: 0.5,
+            build_s: 0.45,
             write_s: 0.2,
             read_s: 0.1,
         };
-        let one = predict_processes(&c, 1, part).seconds;
+        let one = predict_processes(&c, 1, child).seconds;
         assert!((one - 5.3).abs() < 1e-9, "{one}");
-        let four = predict_processes(&c, 4, part).seconds;
+        let four = predict_processes(&c, 4, child).seconds;
         assert!((four - (1.2 + 1.0 + 0.4)).abs() < 1e-9, "{four}");
     }
 }

@@ -23,7 +23,7 @@
 //! start, scene load, BVH build and part write: the real cost of splitting a
 //! render across processes.
 
-use super::predict::{predict_processes, predict_threads, PartCosts, RunCosts, Split};
+use super::predict::{predict_processes, predict_threads, ProcessCosts, RunCosts, Split};
 use crate::output::chart::{Panel, Series};
 use crate::partial::merge::{merge_partials, MergeRules};
 use crate::partial::read_partial;
@@ -281,16 +281,28 @@ pub struct PredictionRow {
     /// and the prediction's error against it (predicted / measured − 1).
     pub measured: Option<f64>,
     pub error: Option<f64>,
+    /// Where measured: the mean work item's time at this count over its
+    /// time on one thread. Above 1, each item ran slower with more threads
+    /// busy (shared caches and memory bandwidth, lower turbo clocks), which
+    /// the schedule's simulation leaves out.
+    pub item_slowdown: Option<f64>,
+    /// The simulated speedup over the measured item slowdown, and its
+    /// error against the measured speedup: what remains is the model of the
+    /// schedule itself.
+    pub adjusted: Option<f64>,
+    pub adjusted_error: Option<f64>,
 }
 
 /// Predict every count of `counts` from `costs` (one run's work items),
-/// against the measured `rows` where they have the count; processes too
-/// with the costs of their parts (`--processes`).
+/// against the measured `rows` where they have the count, with the item
+/// slowdown measured at each count in `slowdowns`; processes too with the
+/// costs of their parts (`--processes`).
 pub fn predict_rows(
     costs: &RunCosts,
     counts: &[usize],
     rows: &[ScalingRow],
-    parts: Option<PartCosts>,
+    slowdowns: &[(usize, f64)],
+    parts: Option<ProcessCosts>,
 ) -> Vec<PredictionRow> {
     let threads = |split, t| predict_threads(costs, split, t);
     let (slices_1, regions_1) = (threads(Split::Slices, 1), threads(Split::Regions, 1));
@@ -304,6 +316,8 @@ pub fn predict_rows(
                 .find(|r| r.mode == Mode::Threads(Schedule::Slices).name() && r.threads == t)
                 .map(|r| r.speedup);
             let predicted = slices_1.seconds / slices.seconds;
+            let item_slowdown = slowdowns.iter().find(|s| s.0 == t).map(|s| s.1);
+            let adjusted = item_slowdown.map(|k| predicted / k);
             PredictionRow {
                 threads: t,
                 slices: predicted,
@@ -316,6 +330,9 @@ pub fn predict_rows(
                 serial_share: costs.around_s() / slices.end_to_end_s,
                 measured,
                 error: measured.map(|m| predicted / m - 1.0),
+                item_slowdown,
+                adjusted,
+                adjusted_error: measured.zip(adjusted).map(|(m, a)| a / m - 1.0),
             }
         })
         .collect()
@@ -362,7 +379,7 @@ pub fn predicted_scaling_rows(predictions: &[PredictionRow]) -> Vec<ScalingRow> 
 /// The prediction table `strata scaling --predict` prints.
 pub fn prediction_table(predictions: &[PredictionRow]) -> String {
     let mut s = format!(
-        "{:>7} {:>8} {:>8} {:>9} {:>10} {:>9} {:>7} {:>8} {:>7}\n",
+        "{:>7} {:>8} {:>8} {:>9} {:>10} {:>9} {:>7} {:>8} {:>7} {:>9} {:>8} {:>7}\n",
         "threads",
         "slices",
         "regions",
@@ -371,12 +388,16 @@ pub fn prediction_table(predictions: &[PredictionRow]) -> String {
         "imbalance",
         "serial",
         "measured",
+        "error",
+        "item-cost",
+        "adjusted",
         "error"
     );
     let x = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.2}x"));
+    let pct = |v: Option<f64>| v.map_or("-".into(), |e| format!("{:+.1}%", 100.0 * e));
     for p in predictions {
         s += &format!(
-            "{:>7} {:>7.2}x {:>7.2}x {:>9} {:>9.2}x {:>8.1}% {:>6.1}% {:>8} {:>7}\n",
+            "{:>7} {:>7.2}x {:>7.2}x {:>9} {:>9.2}x {:>8.1}% {:>6.1}% {:>8} {:>7} {:>9} {:>8} {:>7}\n",
             p.threads,
             p.slices,
             p.regions,
@@ -385,8 +406,10 @@ pub fn prediction_table(predictions: &[PredictionRow]) -> String {
             100.0 * p.imbalance,
             100.0 * p.serial_share,
             x(p.measured),
-            p.error
-                .map_or("-".into(), |e| format!("{:+.1}%", 100.0 * e)),
+            pct(p.error),
+            x(p.item_slowdown),
+            x(p.adjusted),
+            pct(p.adjusted_error),
         );
     }
     s
