@@ -65,8 +65,8 @@ pub struct ScalingArgs {
     pub chart: PathBuf,
     /// Also predict the speedup at 1, 2, 4, … up to --predict-max threads
     /// (and processes) from the work items of the measured 1-thread run,
-    /// drawn beside the measured speedup; prints the busiest run's timeline
-    /// at a glance. See docs/scaling.md, "Past this machine's cores".
+    /// drawn beside the measured speedup. See docs/scaling.md, "Past this
+    /// machine's cores".
     #[arg(long)]
     pub predict: bool,
     /// Largest thread count --predict simulates.
@@ -153,13 +153,13 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
 
     // Interleave repeats so that drifting machine load hits every configuration alike.
     let mut timings: Vec<Vec<Vec<Timing>>> = vec![vec![Vec::new(); counts.len()]; modes.len()];
-    // With --predict, the slices runs keep their timelines (one clock read
-    // per work item).
+    // The slices runs keep their timelines (one clock read per work item),
+    // for the summary and for --predict.
     let mut recorded: Vec<Recorded> = Vec::new();
     for rep in 0..args.repeats {
         for (m, mode) in modes.iter().enumerate() {
             for (i, &n) in counts.iter().enumerate() {
-                let record = args.predict && *mode == Mode::Threads(Schedule::Slices);
+                let record = *mode == Mode::Threads(Schedule::Slices);
                 let t = match mode {
                     Mode::Threads(schedule) if record => {
                         let timeline = Arc::new(Timeline::new(Instant::now()));
@@ -203,6 +203,13 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
     if args.predict {
         let predictions = predict(&scene, &load_timings, &recorded, &all, &counts, &args)?;
         all.extend(predicted_scaling_rows(&predictions));
+    }
+    let most = counts.last().copied().unwrap_or(1);
+    if let Some(summary) = median_run(&recorded, most).and_then(|r| r.timeline.summary()) {
+        if !args.quiet {
+            println!("\nthe median {most}-thread slices run at a glance:");
+            print!("{}", summary.text());
+        }
     }
     strata::output::atomic::write_bytes_atomic(&args.csv, csv(&all).as_bytes())
         .map_err(|e| InputError::file(&args.csv, format!("cannot write: {e}")))?;
@@ -329,13 +336,6 @@ fn predict(
         );
     }
     print!("{}", prediction_table(&predictions));
-    let max = counts.last().copied().unwrap_or(1);
-    if let Some(summary) = median_run(recorded, max).and_then(|r| r.timeline.summary()) {
-        if !args.quiet {
-            println!("\nthe median {max}-thread run at a glance:");
-            print!("{}", summary.text());
-        }
-    }
     Ok(predictions)
 }
 
