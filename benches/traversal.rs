@@ -82,7 +82,7 @@ fn traversal(c: &mut Criterion) {
 }
 
 fn mesh_queries(c: &mut Criterion) {
-    let dragon = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/dragon.ply");
+    let dragon = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/dragon.ply");
     let (scene, name) = if dragon.exists() {
         let (scene, _) = load_mesh_scene(&dragon, BuildQuality::Auto).unwrap();
         (scene, "dragon".to_string())

@@ -2,7 +2,7 @@
 //!
 //! The data flow is describe → compile → accelerate → sample → shade →
 //! schedule → output. docs/ARCHITECTURE.md maps the modules onto it: each
-//! imports only modules of lower layers (checked by tests/architecture.rs).
+//! imports only modules of lower layers (checked by tests/suite/architecture.rs).
 
 // `!(x > 0.0)` is how this crate says "not positive, or NaN": rejecting NaN
 // is the point, so the partial-order lint would make the code wrong.

@@ -76,7 +76,7 @@ pub fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 /// a level-6 icosphere (81,920 triangles, about the bunny's size) written
 /// to Cargo's scratch directory for benches (under target/).
 pub fn mesh_file() -> (PathBuf, String) {
-    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.obj");
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/bunny.obj");
     if bunny.exists() {
         return (bunny, "bunny".to_string());
     }

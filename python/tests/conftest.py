@@ -2,7 +2,7 @@
 
 Run them with ``tools/.venv/bin/python -m pytest python/tests`` after
 ``maturin develop --release -m python/Cargo.toml`` (what ``cargo test
---release --test python`` does). A test that needs the Stanford bunny or
+--release --test suite python::`` does). A test that needs the Stanford bunny or
 the strata binary skips when it is missing, with a message saying how to
 get it, unless STRATA_RT_REQUIRE_ALL is set (as the cargo test sets it),
 which turns that skip into a failure.

@@ -2,7 +2,7 @@
 //! what traversal and the scene's leaf blocks take for granted. A debug
 //! build checks every tree it builds ([`Bvh8::debug_validated`]); in
 //! release builds the tests check the trees of every scene they load
-//! (`tests/common/checked.rs`), and the tests here every preset's trees
+//! (`tests/suite/common/checked.rs`), and the tests here every preset's trees
 //! over degenerate inputs (see docs/validation.md, "The BVH's invariants").
 //!
 //! A valid tree over primitives `0..n`:

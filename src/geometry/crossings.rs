@@ -113,7 +113,7 @@ impl Geometry {
     /// 8-wide test ([`triangle_lanes::crossings`], bit for bit the scalar
     /// [`crossing`](crate::shape::triangle::crossing) that brute force
     /// uses; faster than that one by one on the dragon, as
-    /// `cargo bench --bench traversal -- mesh_queries` measures).
+    /// `cargo bench -p strata-benches --bench traversal -- mesh_queries` measures).
     #[inline(always)]
     fn crossings_in_leaf(
         &self,

@@ -3,9 +3,7 @@
 //! headers carry the camera and the render's settings, and a killed
 //! `--progressive` render leaves a readable image.
 
-mod common;
-
-use common::exr::read_exr;
+use crate::common::exr::read_exr;
 use exr::prelude::{AttributeValue, Text};
 use std::path::Path;
 use std::process::{Command, Output};
@@ -30,7 +28,7 @@ fn scene(name: &str) -> String {
 
 #[test]
 fn set_equals_editing_the_file_bit_for_bit() {
-    let dir = common::temp_dir("set");
+    let dir = crate::common::temp_dir("set");
     let text = std::fs::read_to_string(scene("soft-shadow.toml")).unwrap();
     let edited = text
         .replace("fov = 40.0", "fov = 30.0")
@@ -82,7 +80,7 @@ fn set_equals_editing_the_file_bit_for_bit() {
 
 #[test]
 fn a_crop_equals_its_window_of_the_full_render() {
-    let dir = common::temp_dir("crop");
+    let dir = crate::common::temp_dir("crop");
     let s = scene("seed-mc.toml");
     strata(&dir, &["render", &s, "-q", "-o", "full.exr"]);
     strata(
@@ -125,7 +123,7 @@ fn a_crop_equals_its_window_of_the_full_render() {
 
 #[test]
 fn exr_headers_carry_the_camera_and_the_settings() {
-    let dir = common::temp_dir("meta");
+    let dir = crate::common::temp_dir("meta");
     let s = scene("soft-shadow.toml");
     strata(
         &dir,
@@ -169,7 +167,7 @@ fn exr_headers_carry_the_camera_and_the_settings() {
 
 #[test]
 fn a_killed_progressive_render_leaves_a_readable_image() {
-    let dir = common::temp_dir("progressive");
+    let dir = crate::common::temp_dir("progressive");
     let out = dir.join("p.png");
     let mut child = Command::new(env!("CARGO_BIN_EXE_strata"))
         .current_dir(&dir)
@@ -239,7 +237,7 @@ group = [
 
 #[test]
 fn aovs_hold_the_first_hits_albedo_normal_and_depth() {
-    let dir = common::temp_dir("aov");
+    let dir = crate::common::temp_dir("aov");
     std::fs::write(dir.join("quad.toml"), QUAD).unwrap();
     let render = |threads: &str, out: &str| {
         strata(

@@ -2,8 +2,6 @@
 //! head-on directional light, where a diffuse surface's radiance is known
 //! exactly: L = ρ/π · E with ρ = Kd × texture (Lambert).
 
-mod common;
-
 use glam::Vec3;
 use std::path::Path;
 
@@ -82,7 +80,7 @@ fn write_quad_obj(dir: &Path, kd: [f32; 3], map_kd: &str) {
 
 #[test]
 fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() {
-    let dir = common::temp_dir("texture-render");
+    let dir = crate::common::temp_dir("texture-render");
     // A 2 × 1 texture: orange on the left, blue on the right. With the
     // texture clamped, u = x/2 < 1/4 (columns 0 and 1) sees only the left
     // texel and u > 3/4 (columns 6 and 7) only the right one; between,
@@ -91,8 +89,8 @@ fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() 
     write_png(&dir.join("two.png"), 2, 1, &[left, right]);
     let kd = [0.5, 0.8, 1.0];
     write_quad_obj(&dir, kd, "-clamp on two.png");
-    let scene = common::scene_at(&head_on_scene("quad.obj", None), &dir.join("s.toml"));
-    let rgb = common::render_rgb(&scene, 2);
+    let scene = crate::common::scene_at(&head_on_scene("quad.obj", None), &dir.join("s.toml"));
+    let rgb = crate::common::render_rgb(&scene, 2);
 
     // sRGB 128 is 0.2158 in linear units.
     assert!((srgb_to_linear(128) - 0.21586).abs() < 1e-4);
@@ -149,7 +147,7 @@ fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() 
         "[materials.grey]\ndiffuse = [0.5, 0.5, 0.5]\n{}",
         head_on_scene("quad.obj", Some("grey"))
     );
-    let plain = common::render_rgb(&common::scene_at(&text, &dir.join("s.toml")), 2);
+    let plain = crate::common::render_rgb(&crate::common::scene_at(&text, &dir.join("s.toml")), 2);
     assert!(plain.iter().all(|p| p.abs_diff_eq(Vec3::splat(0.5), 1e-5)));
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -157,7 +155,7 @@ fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() 
 /// Standard base64 with padding, for a glTF buffer's `data:` URI.
 /// The `albedo.R/G/B` channels of an EXR written with `--aov albedo`.
 fn read_albedo(path: &Path) -> Vec<Vec3> {
-    let exr = common::exr::read_exr(path);
+    let exr = crate::common::exr::read_exr(path);
     let (r, g, b) = (
         exr.channel("albedo.R"),
         exr.channel("albedo.G"),
@@ -226,7 +224,7 @@ fn write_quad_gltf(dir: &Path, kd: [f32; 3], image: &str) {
 
 #[test]
 fn obj_and_gltf_quads_with_one_texture_render_alike_and_the_right_way_up() {
-    let dir = common::temp_dir("texture-gltf");
+    let dir = crate::common::temp_dir("texture-gltf");
     // 2 × 2 texels, row by row from the top of the picture.
     let texels = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]];
     write_png(&dir.join("four.png"), 2, 2, &texels);
@@ -234,8 +232,8 @@ fn obj_and_gltf_quads_with_one_texture_render_alike_and_the_right_way_up() {
     write_quad_obj(&dir, kd, "-clamp on four.png");
     write_quad_gltf(&dir, kd, "four.png");
     let render = |mesh: &str| {
-        let scene = common::scene_at(&head_on_scene(mesh, None), &dir.join("s.toml"));
-        common::render_rgb(&scene, 2)
+        let scene = crate::common::scene_at(&head_on_scene(mesh, None), &dir.join("s.toml"));
+        crate::common::render_rgb(&scene, 2)
     };
     let (obj, gltf) = (render("quad.obj"), render("quad.gltf"));
     // glTF's dielectric adds a grey highlight, k_s = 0.04 with exponent 1

@@ -3,11 +3,11 @@
 //! pytest (python/tests): its answers against Embree (embreex, robust
 //! mode), float64 brute force and trimesh's own engine, crossings at
 //! shared edges and vertices, `render` against the CLI's EXR bit for bit,
-//! and every bad input. `cargo test --release --test python -- --nocapture`
+//! and every bad input. `cargo test --release --test suite python:: -- --nocapture`
 //! prints pytest's report.
 //!
 //! What it needs from outside the crate, as the Embree tests do
-//! (tests/embree/setup.rs): tools/.venv, created when missing and filled
+//! (tests/suite/embree/setup.rs): tools/.venv, created when missing and filled
 //! from tools/requirements.txt when it lacks a package, and the bunny
 //! (tools/fetch-assets). It fails, never skips, when either is impossible;
 //! the pytest run is told so (STRATA_RT_REQUIRE_ALL), so none of its tests
@@ -18,9 +18,7 @@
 //! go of target/'s lock (cargo holds it while it compiles, not while tests
 //! run).
 
-#[allow(dead_code)]
-#[path = "embree/setup.rs"]
-mod setup;
+use crate::embree::setup;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,8 +1,6 @@
 //! Renders checked by properties, never by image hashes.
 
-mod common;
-
-use common::{render_rgb, scene};
+use crate::common::{render_rgb, scene};
 use glam::Vec3;
 
 const EMITTER: &str = "[materials.glow]\ndiffuse = [0.0, 0.0, 0.0]\nemission = [1.0, 1.0, 1.0]\n";

@@ -6,10 +6,8 @@
 //! incoherent (random chords) and tie-heavy (aimed at shared vertices and
 //! edges) ray sets, for every BVH quality.
 
-mod common;
-
-use common::checked::compile;
-use common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
+use crate::common::checked::compile;
+use crate::common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
 use strata::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};

@@ -10,8 +10,6 @@
 //! - the README stays short, and the scene it asks a new user to type in
 //!   renders something lit.
 
-mod common;
-
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -296,7 +294,7 @@ fn toml_blocks(markdown: &str) -> Vec<(usize, String)> {
 /// saved in the repository's root: mesh paths are relative to it.
 fn compile_example(text: &str) -> Result<(), String> {
     let path = repo().join("example.toml");
-    common::checked::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
+    crate::common::checked::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
         .map(|_| ())
         .map_err(|e| e.to_string())
 }
@@ -324,8 +322,8 @@ fn the_first_scene_in_the_readme_renders_a_lit_image() {
         .replace("width = 640", "width = 32")
         .replace("height = 480", "height = 24")
         .replace("spp = 16 ", "spp = 1 ");
-    let scene = common::scene_at(&small, &repo().join("first.toml"));
-    let rgb = common::render_rgb(&scene, 2);
+    let scene = crate::common::scene_at(&small, &repo().join("first.toml"));
+    let rgb = crate::common::render_rgb(&scene, 2);
     let lit = rgb.iter().filter(|p| p.max_element() > 0.01).count();
     assert!(
         lit > rgb.len() / 4,
@@ -411,5 +409,165 @@ fn the_checkers_find_what_they_look_for() {
     assert!(
         typo.contains("line 2: render.ssp: unknown field `ssp`"),
         "{typo}"
+    );
+}
+
+/// The `strata` command lines in the shell blocks of `markdown`: the line
+/// number and the words after `strata`, one entry per command (a line
+/// may hold several, joined by `;`, `&&`, `|` or a loop's `do`).
+fn strata_commands(markdown: &str) -> Vec<(usize, Vec<String>)> {
+    let mut out = Vec::new();
+    let mut block: Option<bool> = None;
+    let mut joined = String::new();
+    for (i, line) in markdown.lines().enumerate() {
+        let t = line.trim_start();
+        if let Some(tag) = t.strip_prefix("```") {
+            block = match block {
+                Some(_) => None,
+                None => Some(matches!(tag.trim(), "sh" | "bash" | "shell")),
+            };
+            continue;
+        }
+        if block != Some(true) {
+            continue;
+        }
+        // A comment starts at a `#` that begins a word.
+        let code = match t.find(" #") {
+            Some(k) => &t[..k],
+            None if t.starts_with('#') => "",
+            None => t,
+        };
+        joined.push_str(code.trim_end_matches('\\'));
+        joined.push(' ');
+        if code.trim_end().ends_with('\\') {
+            continue;
+        }
+        let text = std::mem::take(&mut joined);
+        for part in text.split([';', '|', '&']) {
+            let words: Vec<String> = part
+                .split_whitespace()
+                .map(|w| w.trim_matches(|c| c == '\'' || c == '"').to_string())
+                .skip_while(|w| {
+                    w.contains('=') || ["do", "then", "time", "/usr/bin/time"].contains(&w.as_str())
+                })
+                .collect();
+            if words.first().map(String::as_str) == Some("strata") {
+                out.push((i + 1, words[1..].to_vec()));
+            }
+        }
+    }
+    out
+}
+
+/// Whether `input` is `output`, or one of the files a loop writes to
+/// `output` with one `$variable` in its name (`part_$k.strata`).
+fn names_the_same(output: &str, input: &str) -> bool {
+    match output.split_once('$') {
+        None => output == input,
+        Some((before, rest)) => {
+            let after = rest.trim_start_matches(|c: char| c.is_ascii_alphanumeric() || c == '_');
+            input.len() > before.len() + after.len()
+                && input.starts_with(before)
+                && input.ends_with(after)
+        }
+    }
+}
+
+/// Flags whose value is a file strata writes: a later command may read it.
+const WRITES: [&str; 10] = [
+    "-o",
+    "--output",
+    "--csv",
+    "--chart",
+    "--stats",
+    "--timeline",
+    "--checkpoint",
+    "--rays",
+    "--hits",
+    "--save-scene",
+];
+
+/// Every `strata` command in the README's and the docs' shell blocks names
+/// a subcommand that exists, flags that it takes, and input files that are
+/// in the repository (or in assets/, which tools/fetch-assets fills, or
+/// written by an earlier command on the same page), so that a reader can
+/// run it as written from the repository's root. A command too long for
+/// the test suite (a 4096-spp render, a benchmark) is checked this far and
+/// no further.
+#[test]
+fn every_strata_command_in_the_docs_is_one_strata_takes() {
+    let commands = subcommands(&help(&[]));
+    let mut flags_of: std::collections::HashMap<String, BTreeSet<String>> = Default::default();
+    let mut problems = Vec::new();
+    for path in markdown_files() {
+        let text = read(&path);
+        let name = path
+            .strip_prefix(repo())
+            .unwrap_or(&path)
+            .display()
+            .to_string();
+        let mut written: BTreeSet<String> = BTreeSet::new();
+        for (line, words) in strata_commands(&text) {
+            let at = format!("{name}:{line}: strata {}", words.join(" "));
+            let sub = words.first().filter(|w| !w.starts_with('-')).cloned();
+            let key = sub.clone().unwrap_or_default();
+            if let Some(s) = &sub {
+                if !commands.contains(s) {
+                    problems.push(format!("{at}: no subcommand {s}"));
+                    continue;
+                }
+            }
+            let known = flags_of.entry(key.clone()).or_insert_with(|| {
+                let args: Vec<&str> = sub.iter().map(String::as_str).collect();
+                long_flags(&help(&args))
+            });
+            known.insert("--help".into());
+            known.insert("--version".into());
+            for (k, w) in words.iter().enumerate() {
+                if w.starts_with("--") {
+                    let flag = w.split('=').next().unwrap_or(w);
+                    if !known.contains(flag) {
+                        problems.push(format!("{at}: {key} takes no {flag}"));
+                    }
+                }
+                let previous = k.checked_sub(1).map(|p| words[p].as_str());
+                if previous.is_some_and(|p| WRITES.contains(&p)) {
+                    written.insert(w.clone());
+                    continue;
+                }
+                let input = [".toml", ".obj", ".ply", ".glb", ".gltf", ".strata", ".bin"]
+                    .iter()
+                    .any(|e| w.ends_with(e))
+                    && !w.starts_with('-')
+                    && !w.contains(['$', '*', '{', '<']);
+                if input
+                    && !repo().join(w).exists()
+                    && !w.starts_with("assets/")
+                    && !written.iter().any(|o| names_the_same(o, w))
+                {
+                    problems.push(format!("{at}: {w} is not in the repository and no earlier command on the page writes it"));
+                }
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn the_command_reader_finds_commands_in_loops_chains_and_continuations() {
+    let md = "```sh\nfor k in 0 1; do strata render a.toml --slice $k/2 -o p_$k.strata; done\n\
+              strata merge p_*.strata -o x.png && strata render \\\n  --spp 4 b.toml # c\n```\n\
+              ```toml\nstrata = 1\n```\n";
+    assert!(names_the_same("p_$k.strata", "p_3.strata"));
+    assert!(!names_the_same("p_$k.strata", "q_3.strata") && !names_the_same("a.toml", "b.toml"));
+    let found = strata_commands(md);
+    let words: Vec<String> = found.iter().map(|(_, w)| w.join(" ")).collect();
+    assert_eq!(
+        words,
+        [
+            "render a.toml --slice $k/2 -o p_$k.strata",
+            "merge p_*.strata -o x.png",
+            "render --spp 4 b.toml"
+        ]
     );
 }

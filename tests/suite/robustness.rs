@@ -3,9 +3,7 @@
 //! rays spawned from a hit (reflection, shadow, refraction entering and
 //! leaving) never hit their own surface again at t ≈ 0.
 
-mod common;
-
-use common::{scene_at, seeded, Draw, StreamRng as Rng};
+use crate::common::{scene_at, seeded, Draw, StreamRng as Rng};
 use std::path::Path;
 use strata::math::offset::spawn_origin;
 use strata::math::Ray;
@@ -193,7 +191,7 @@ fn a_flat_floor_under_a_grazing_light_shows_no_acne() {
                 v = 4.0 * size,
             );
             let scene = scene_at(&text, Path::new("acne.toml"));
-            let img = common::render_rgb(&scene, 0);
+            let img = crate::common::render_rgb(&scene, 0);
             let speckles = img
                 .iter()
                 .filter(|p| (p.x - expected).abs() > 1e-3 * expected)

@@ -76,8 +76,16 @@ fn slurm_array_job_merges_to_the_single_process_image() {
     match out.status.code() {
         Some(0) => {}
         Some(SKIPPED) if std::env::var_os("CI").is_none() => {
-            eprintln!(
-                "skipped: install slurm-wlm and munge (and run as root) to run the Slurm recipe check"
+            crate::common::skipped(
+                "slurm::slurm_array_job_merges_to_the_single_process_image",
+                &format!(
+                    "{} (install slurm-wlm and munge, and run as root)",
+                    stdout
+                        .lines()
+                        .last()
+                        .unwrap_or("")
+                        .trim_start_matches("slurm check: SKIPPED: ")
+                ),
             );
         }
         Some(SKIPPED) => panic!(

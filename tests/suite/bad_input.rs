@@ -1,8 +1,6 @@
 //! Bad input through the real binary: one line naming the file and the key
 //! or line, exit code 2, no panic, and no output file left behind.
 
-mod common;
-
 use std::path::Path;
 use std::process::Command;
 
@@ -44,7 +42,7 @@ fn assert_rejected(
     files: &[(&str, &[u8])],
     must_mention: &[&str],
 ) {
-    let dir = common::temp_dir(&format!("bad-{name}"));
+    let dir = crate::common::temp_dir(&format!("bad-{name}"));
     let (code, stderr, leftovers) = run_render(&dir, scene, files);
     assert_eq!(code, 2, "{name}: exit code, stderr: {stderr}");
     assert_eq!(
@@ -295,7 +293,7 @@ fn unknown_materials_and_shapeless_objects_are_rejected() {
 
 #[test]
 fn a_bad_output_extension_writes_nothing() {
-    let dir = common::temp_dir("bad-ext");
+    let dir = crate::common::temp_dir("bad-ext");
     std::fs::write(dir.join("s.toml"), "").unwrap();
     let output = Command::new(env!("CARGO_BIN_EXE_strata"))
         .args([

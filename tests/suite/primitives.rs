@@ -2,9 +2,7 @@
 //! t, normal, facing, rays from inside, tangent and grazing rays, and every
 //! primitive under a non-uniform scale plus rotation.
 
-mod common;
-
-use common::{scene, seeded, Draw};
+use crate::common::{scene, seeded, Draw};
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 use strata::math::Ray;
 

@@ -132,7 +132,10 @@ fn build((v, f): (Vec<Vec3>, Vec<[u32; 3]>)) -> Geometry {
 fn bunny() -> Option<Geometry> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.obj");
     if !path.exists() {
-        println!("skipped: assets/bunny.obj is missing (tools/fetch-assets fetches it)");
+        crate::common::skipped(
+            "mesh_queries (the bunny)",
+            "assets/bunny.obj is missing (tools/fetch-assets fetches it)",
+        );
         return None;
     }
     let (scene, _) = load_mesh_scene(&path, BuildQuality::Auto).unwrap();

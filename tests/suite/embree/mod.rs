@@ -1,14 +1,12 @@
 //! strata against Intel Embree, through tools/validate_embree.py (embreex).
 //!
-//! `cargo test --release --test embree -- --nocapture` prints every
+//! `cargo test --release --test suite embree:: -- --nocapture` prints every
 //! validator table and a summary in Markdown (the README's results table).
 //! The Python environment and the bunny are set up on first use (see
 //! `setup`); the tests fail, never skip, if that is impossible.
 
-#[path = "../common/mod.rs"]
-mod common;
 mod meshes;
-mod setup;
+pub mod setup;
 
 use glam::{DVec3, Vec3};
 use serde_json::Value;
@@ -67,7 +65,7 @@ fn check_mesh(mesh: &Path, dir: &Path, name: &str, seed: u32) -> Value {
     // The trees `strata trace` may build over the mesh, checked here: the
     // binary, a release build, does not check them itself.
     for quality in BuildQuality::ALL {
-        common::load_mesh_scene(mesh, quality).unwrap_or_else(|e| panic!("{e}"));
+        crate::common::load_mesh_scene(mesh, quality).unwrap_or_else(|e| panic!("{e}"));
     }
     let rays = dir.join(format!("{name}.rays"));
     let hits = dir.join(format!("{name}.hits"));

@@ -1,9 +1,7 @@
 //! Degenerate geometry: none of it crashes; each case renders (with no NaN
 //! or infinite sample) or fails with a clear error.
 
-mod common;
-
-use common::{scene_at, temp_dir};
+use crate::common::{scene_at, temp_dir};
 use std::path::Path;
 use strata::render::{render, RenderOptions};
 
@@ -108,7 +106,7 @@ fn every_scene_in_scenes_renders_without_nan_or_infinity() {
             spp: Some(4),
             ..Default::default()
         };
-        let (scene, _) = common::load_scene(&path, &overrides, Default::default())
+        let (scene, _) = crate::common::load_scene(&path, &overrides, Default::default())
             .unwrap_or_else(|e| panic!("{e}"));
         let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
         assert_eq!(

@@ -2,8 +2,6 @@
 //! `strata bench` report, and that the compiler's indexed triangle sources
 //! expand to exactly the triangles the file and transforms give.
 
-mod common;
-
 use glam::Vec3;
 use std::path::Path;
 use std::process::Command;
@@ -60,7 +58,7 @@ fn peak_resettable() -> bool {
 
 #[test]
 fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
-    let dir = common::temp_dir("memory");
+    let dir = crate::common::temp_dir("memory");
     let mesh = dir.join("grid.ply");
     write_grid(&mesh, 300); // 180,000 triangles
     let scene = dir.join("grid.toml");
@@ -139,12 +137,12 @@ fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
 
 #[test]
 fn mesh_instances_and_loose_triangles_keep_their_vertices() {
-    let dir = common::temp_dir("memory-instances");
+    let dir = crate::common::temp_dir("memory-instances");
     let mesh = dir.join("grid.ply");
     write_grid(&mesh, 20);
     let scene = dir.join("two.toml");
     let text = "[[objects]]\ntriangle = { v = [[0, 0, 5], [1, 0, 5], [0, 1, 5]] }\n\n[[objects]]\nmesh = \"grid.ply\"\n\n[[objects]]\nmesh = \"grid.ply\"\ntransform = { translate = [3, 0, 0], scale = 2.0 }\n";
-    let compiled = common::scene_at(text, &scene);
+    let compiled = crate::common::scene_at(text, &scene);
     let file = load_mesh_file(&mesh).unwrap();
     let grid = &file.meshes[0];
     let corners = |f: &dyn Fn(Vec3) -> Vec3| -> Vec<[Vec3; 3]> {

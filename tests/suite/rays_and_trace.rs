@@ -1,9 +1,7 @@
 //! `strata rays` and `strata trace` through the real binary: reproducible
 //! files, the renderer's own answers, and one-line errors with exit code 2.
 
-mod common;
-
-use common::load_mesh_scene;
+use crate::common::load_mesh_scene;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use strata::accel::BuildQuality;
@@ -45,7 +43,7 @@ fn path(dir: &Path, name: &str) -> PathBuf {
 
 #[test]
 fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
-    let dir = common::temp_dir("rays-trace");
+    let dir = crate::common::temp_dir("rays-trace");
     let s = |p: &PathBuf| p.to_str().unwrap().to_string();
     let (a, b, c) = (
         path(&dir, "a.rays"),
@@ -183,7 +181,7 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
 
 #[test]
 fn bad_input_names_the_file_and_exits_with_2() {
-    let dir = common::temp_dir("rays-trace-bad");
+    let dir = crate::common::temp_dir("rays-trace-bad");
     let s = |p: &PathBuf| p.to_str().unwrap().to_string();
     let rays = path(&dir, "rays.bin");
     let hits = path(&dir, "hits.bin");

@@ -4,10 +4,9 @@
 //! touching surfaces, rays spawned from CSG hits, materials, bounds and bad
 //! operands.
 
-mod common;
-mod csg_reference;
+use crate::csg_reference;
 
-use common::{render_rgb, scene, scene_at, seeded, Draw, StreamRng};
+use crate::common::{render_rgb, scene, scene_at, seeded, Draw, StreamRng};
 use csg_reference::{op, sphere, Node, Op, Reference, Trs};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -309,7 +308,7 @@ fn every_operator_and_operand_agrees_with_point_membership_on_20k_rays() {
 }
 
 /// The stability count: 1M random rays per configuration.
-/// Run with `cargo test --release --test csg -- --ignored --nocapture`.
+/// Run with `cargo test --release --test suite csg:: -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn stability_over_a_million_rays_per_configuration() {
@@ -717,7 +716,7 @@ fn a_group_operand_is_the_union_of_its_members() {
 /// Render `scene_text` (plus files) with the real binary; expect exit code 2
 /// and one line naming every string in `must_mention`.
 fn assert_rejected(name: &str, scene_text: &str, files: &[(&str, &str)], must_mention: &[&str]) {
-    let dir = common::temp_dir(&format!("csg-bad-{name}"));
+    let dir = crate::common::temp_dir(&format!("csg-bad-{name}"));
     std::fs::write(dir.join("scene.toml"), scene_text).unwrap();
     for (file, text) in files {
         std::fs::write(dir.join(file), text).unwrap();

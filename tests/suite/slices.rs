@@ -2,9 +2,7 @@
 //! bit-identical however the work is split, bad parts are refused, and
 //! slicing keeps each pixel's one stratified set.
 
-mod common;
-
-use common::{scene, temp_dir};
+use crate::common::{scene, temp_dir};
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -233,7 +231,7 @@ fn a_killed_render_resumes_to_the_same_bits() {
 
 /// The parts of a 3-way split of a small scene, and the whole as EXR.
 struct Parts {
-    dir: common::TempDir,
+    dir: crate::common::TempDir,
     scene: PathBuf,
 }
 

@@ -13,6 +13,15 @@ use std::path::{Path, PathBuf};
 use strata::render::{render, RenderOptions};
 use strata::scene::{RenderOverrides, Scene};
 
+/// Say that `test` was skipped and why, where a user running `cargo test`
+/// sees it: written to the terminal's stderr directly, past libtest's
+/// capture (which takes `print!` and `eprint!` of passing tests).
+pub fn skipped(test: &str, why: &str) {
+    use std::io::Write;
+    let line = format!("\nSKIPPED {test}: {why}\n");
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+}
+
 /// The scene of `text`, its BVHs checked (as every loader here does).
 pub fn scene(text: &str) -> Scene {
     scene_at(text, Path::new("test.toml"))

@@ -8,9 +8,7 @@
 //! the pixel value is the integral under test and thousands of independent
 //! renders cost little.
 
-mod common;
-
-use common::scene;
+use crate::common::scene;
 use glam::Vec3;
 use strata::light::LightSampling;
 use strata::render::film::PixelSum;
@@ -326,8 +324,8 @@ fn infinite_glossiness_converges_to_the_mirror_and_zero_aperture_to_the_pinhole(
             "{body}[camera]\ntype = \"thin_lens\"\nposition = [0.5, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 30.0\naperture = {aperture}\nfocus_distance = 3.0\n"
         )
     };
-    let pinhole = common::render_rgb(&scene(&cam(0.0)), 1);
-    let tiny = common::render_rgb(&scene(&cam(1e-6)), 1);
+    let pinhole = crate::common::render_rgb(&scene(&cam(0.0)), 1);
+    let tiny = crate::common::render_rgb(&scene(&cam(1e-6)), 1);
     let diff: f32 = pinhole
         .iter()
         .zip(&tiny)

@@ -9,9 +9,7 @@
 //! them the test prints one line and passes, except under CI, where it
 //! fails.
 
-mod common;
-
-use common::load_mesh_scene;
+use crate::common::load_mesh_scene;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use strata::accel::BuildQuality;
@@ -32,15 +30,26 @@ fn harness() -> Option<PathBuf> {
     match made {
         Ok(o) if o.status.success() => Some(out.join("embree_trace")),
         other => {
+            // Name what is actually missing: make itself, or Embree's
+            // headers and library, or else say what the build said.
             let why = match other {
-                Ok(o) => String::from_utf8_lossy(&o.stderr).trim().to_string(),
-                Err(e) => e.to_string(),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    "make is not installed (apt-get install make)".to_string()
+                }
+                Err(e) => format!("make did not start: {e}"),
+                Ok(o) => {
+                    let said = String::from_utf8_lossy(&o.stderr).trim().to_string();
+                    if said.contains("embree")
+                        && (said.contains("No such file") || said.contains("cannot find"))
+                    {
+                        format!("libembree-dev is not installed (apt-get install libembree-dev): {said}")
+                    } else {
+                        format!("tools/embree does not build: {said}")
+                    }
+                }
             };
-            assert!(
-                std::env::var_os("CI").is_none(),
-                "CI: tools/embree does not build (apt-get install libembree-dev): {why}"
-            );
-            println!("skipped: tools/embree does not build (apt-get install libembree-dev): {why}");
+            assert!(std::env::var_os("CI").is_none(), "CI: {why}");
+            crate::common::skipped("embree_native", &why);
             None
         }
     }
@@ -62,9 +71,9 @@ fn hits(path: &Path) -> Vec<HitRecord> {
 #[test]
 fn the_native_harness_answers_as_strata_does() {
     let Some(exe) = harness() else { return };
-    let dir = common::temp_dir("embree-native");
+    let dir = crate::common::temp_dir("embree-native");
     let mesh = dir.join("sphere.obj");
-    std::fs::write(&mesh, common::bumpy_sphere_obj(48, 24, 1.0, 0.1)).unwrap();
+    std::fs::write(&mesh, crate::common::bumpy_sphere_obj(48, 24, 1.0, 0.1)).unwrap();
     // MESH.tris in strata's file order, unindexed, as `strata bench` writes it.
     let (scene, _) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
     let tris = scene.geometry.file_order_triangles();

@@ -3,9 +3,7 @@
 //! batch sizes, passes, threads and slices; and, ignored by default, the
 //! measurement behind the `auto` threshold.
 
-mod common;
-
-use common::{bumpy_sphere_obj, scene_at, temp_dir};
+use crate::common::{bumpy_sphere_obj, scene_at, temp_dir};
 use glam::Vec2;
 use strata::accel::{Packet, PACKET_SIZE};
 use strata::math::offset::spawn_origin;
@@ -18,7 +16,7 @@ use strata::shade::{PacketMode, CAMERA_PACKET_MIN};
 
 const MODES: [PacketMode; 3] = [PacketMode::Off, PacketMode::On, PacketMode::Auto];
 
-/// The bumpy sphere of `common::bumpy_sphere_obj` (radius 0.5) as a file.
+/// The bumpy sphere of `crate::common::bumpy_sphere_obj` (radius 0.5) as a file.
 fn write_bumpy(path: &std::path::Path, nu: u32, nv: u32) {
     std::fs::write(path, bumpy_sphere_obj(nu, nv, 0.5, 0.04)).unwrap();
 }
@@ -225,7 +223,7 @@ fn the_cli_renders_identical_images_with_packets_on_and_off() {
 // The measurement behind the `auto` thresholds (ignored: it takes a few
 // minutes and its numbers depend on the machine):
 //
-//   cargo test --release --test render_packets -- --ignored --nocapture
+//   cargo test --release --test suite render_packets:: -- --ignored --nocapture
 //
 // Batches are built as the renderer builds them: the camera rays of one
 // pixel (8 pixel and lens samples), and the batch's shadow rays to a rect
@@ -406,7 +404,7 @@ fn measure_packet_against_single_rays_by_batch_size() {
         ..Default::default()
     };
     let load = |path: &str| {
-        common::load_scene(std::path::Path::new(path), &overrides, Default::default())
+        crate::common::load_scene(std::path::Path::new(path), &overrides, Default::default())
             .unwrap()
             .0
     };

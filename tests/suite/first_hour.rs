@@ -4,9 +4,7 @@
 //! parts of different builds do not mix, and the figures printed say what
 //! was done.
 
-mod common;
-
-use common::load_scene;
+use crate::common::load_scene;
 use std::path::Path;
 use std::process::{Command, Output};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
@@ -46,7 +44,7 @@ plane = { normal = [0.0, 1.0, 0.0] }
 
 #[test]
 fn a_bare_strata_renders_the_built_in_scene_in_any_directory() {
-    let dir = common::temp_dir("bare");
+    let dir = crate::common::temp_dir("bare");
     let o = strata(&dir, &[]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(dir.join("render.png").is_file());
@@ -55,7 +53,7 @@ fn a_bare_strata_renders_the_built_in_scene_in_any_directory() {
 
 #[test]
 fn every_output_path_is_checked_before_the_scene_is_loaded() {
-    let dir = common::temp_dir("paths");
+    let dir = crate::common::temp_dir("paths");
     // A scene that does not exist: an output error must come first.
     for (args, flag) in [
         (
@@ -112,7 +110,7 @@ fn every_output_path_is_checked_before_the_scene_is_loaded() {
 
 #[test]
 fn an_existing_checkpoint_is_never_discarded_and_can_be_previewed() {
-    let dir = common::temp_dir("checkpoint");
+    let dir = crate::common::temp_dir("checkpoint");
     std::fs::write(dir.join("s.toml"), SMALL).unwrap();
     let run = |extra: &[&str]| {
         let mut args = vec![
@@ -184,7 +182,7 @@ fn an_existing_checkpoint_is_never_discarded_and_can_be_previewed() {
 
 #[test]
 fn parts_of_another_build_are_refused_unless_forced() {
-    let dir = common::temp_dir("builds");
+    let dir = crate::common::temp_dir("builds");
     std::fs::write(dir.join("s.toml"), SMALL).unwrap();
     for k in 0..2 {
         let (slice, out) = (format!("{k}/2"), format!("p{k}.strata"));
@@ -214,7 +212,7 @@ fn parts_of_another_build_are_refused_unless_forced() {
 
 #[test]
 fn mistyped_commands_and_misplaced_flags_get_a_suggestion() {
-    let dir = common::temp_dir("typos");
+    let dir = crate::common::temp_dir("typos");
     let o = strata(&dir, &["rendr", "scene.toml"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("'render'"), "{}", stderr(&o));
@@ -228,7 +226,7 @@ fn mistyped_commands_and_misplaced_flags_get_a_suggestion() {
 
 #[test]
 fn the_summary_says_what_was_rendered() {
-    let dir = common::temp_dir("summary");
+    let dir = crate::common::temp_dir("summary");
     std::fs::write(dir.join("s.toml"), SMALL).unwrap();
     let o = strata(
         &dir,
@@ -265,7 +263,7 @@ fn the_summary_says_what_was_rendered() {
 
 #[test]
 fn a_scene_without_light_is_warned_about() {
-    let dir = common::temp_dir("dark");
+    let dir = crate::common::temp_dir("dark");
     std::fs::write(
         dir.join("s.toml"),
         "[render]\nwidth = 8\nheight = 6\n[[objects]]\nsphere = { radius = 1.0 }\n",
