@@ -29,8 +29,71 @@ pub fn expected(names: &[&str]) -> String {
     }
 }
 
+/// The one name in `names` that `word` is most likely a typo of, if any:
+/// the unique nearest within an edit distance of a third of `word`'s
+/// length (at least 1, at most 2), or else the one name that `word` begins
+/// (`persp` for `perspective`). Case is ignored. Used for "did you mean"
+/// in messages about unknown keys and values.
+pub fn nearest<'a>(word: &str, names: &[&'a str]) -> Option<&'a str> {
+    let word = word.to_lowercase();
+    let limit = (word.chars().count() / 3).clamp(1, 2);
+    let mut best: Option<(usize, &'a str)> = None;
+    let mut tied = false;
+    for &name in names {
+        let d = edit_distance(&word, &name.to_lowercase());
+        match best {
+            Some((b, _)) if d > b => {}
+            Some((b, _)) if d == b => tied = true,
+            _ => (best, tied) = (Some((d, name)), false),
+        }
+    }
+    if let (Some((d, name)), false) = (best, tied) {
+        if d <= limit {
+            return Some(name);
+        }
+    }
+    let mut prefixed = names
+        .iter()
+        .filter(|name| word.chars().count() >= 3 && name.to_lowercase().starts_with(&word));
+    match (prefixed.next(), prefixed.next()) {
+        (Some(name), None) => Some(name),
+        _ => None,
+    }
+}
+
+/// Edits (insert, delete, substitute, swap two neighbours) that turn `a`
+/// into `b`: the optimal string alignment distance, over characters.
+pub fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    // Rows i−2, i−1 and i of the table d[i][j] = distance(a[..i], b[..j]).
+    let mut before: Vec<usize> = vec![0; b.len() + 1];
+    let mut last: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut row = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            row[j] = (last[j] + 1).min(row[j - 1] + 1).min(last[j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                row[j] = row[j].min(before[j - 2] + 1);
+            }
+        }
+        before = std::mem::replace(&mut last, row);
+    }
+    last[b.len()]
+}
+
+/// "unknown sampler 'x'; did you mean 'y'?" when one name is close, else
+/// "unknown sampler 'x' (expected a, b or c)".
+pub fn unknown(what: &str, word: &str, names: &[&str]) -> String {
+    match nearest(word, names) {
+        Some(name) => format!("unknown {what} '{word}'; did you mean '{name}'?"),
+        None => format!("unknown {what} '{word}' (expected {})", expected(names)),
+    }
+}
+
 /// Declares a closed enum of named modes. `$what` names the kind of mode
-/// in error messages ("unknown sampler 'x' (expected random or stratified)").
+/// in error messages ("unknown sampler 'x' (expected random or stratified)",
+/// or "unknown sampler 'stratifed'; did you mean 'stratified'?").
 /// Implements `ALL`, `name()`, `Display`, `FromStr`, serde's `Serialize` and
 /// `Deserialize` by name, and clap's `ValueEnum`.
 macro_rules! mode_enum {
@@ -77,13 +140,8 @@ macro_rules! mode_enum {
         impl std::str::FromStr for $name {
             type Err = String;
             fn from_str(s: &str) -> Result<Self, String> {
-                Self::from_name(s).ok_or_else(|| {
-                    format!(
-                        "unknown {} '{s}' (expected {})",
-                        $what,
-                        $crate::mode::expected(&[$($text),+])
-                    )
-                })
+                Self::from_name(s)
+                    .ok_or_else(|| $crate::mode::unknown($what, s, &[$($text),+]))
             }
         }
 
@@ -170,6 +228,31 @@ mod tests {
             Ok(Flavour::SolidAngle)
         );
         assert!(Flavour::from_str("sour", false).is_err());
+    }
+
+    #[test]
+    fn typos_suggest_the_one_nearest_name() {
+        use super::{edit_distance, nearest};
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("fvo", "fov"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        let names = ["width", "height", "spp", "shadow_samples", "seed"];
+        assert_eq!(nearest("shadow_sample", &names), Some("shadow_samples"));
+        assert_eq!(nearest("widht", &names), Some("width"));
+        assert_eq!(nearest("ssp", &names), Some("spp"));
+        assert_eq!(nearest("Height", &names), Some("height"));
+        assert_eq!(nearest("shadow", &names), Some("shadow_samples"));
+        assert_eq!(nearest("colour", &names), None);
+        // Two names equally near: no guess.
+        assert_eq!(nearest("sped", &["seed", "spud"]), None);
+        assert_eq!(
+            "stratifed".parse::<Flavour>().unwrap_err(),
+            "unknown flavour 'stratifed' (expected plain, solid_angle or last)"
+        );
+        assert_eq!(
+            "solid-angel".parse::<Flavour>().unwrap_err(),
+            "unknown flavour 'solid-angel'; did you mean 'solid_angle'?"
+        );
     }
 
     #[test]

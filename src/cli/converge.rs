@@ -17,11 +17,12 @@ pub struct ConvergeArgs {
     /// is rendered first with --reference-spp samples and saved beside the CSV.
     #[arg(long)]
     pub reference: Option<PathBuf>,
-    /// Samples per pixel of a rendered reference.
-    #[arg(long, default_value_t = 4096)]
+    /// Samples per pixel of a rendered reference (keep it 16 times --max-spp
+    /// or more, or the error curves flatten at the reference's own noise).
+    #[arg(long, default_value_t = converge::DEFAULT_REFERENCE_SPP)]
     pub reference_spp: u32,
     /// Largest spp measured (powers of two from 1).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = converge::DEFAULT_MAX_SPP)]
     pub max_spp: u32,
     /// Output CSV: method, spp, seconds, RMSE, relative MSE.
     #[arg(long, default_value = "converge.csv")]
@@ -134,8 +135,9 @@ fn write_outputs(args: &ConvergeArgs, points: &[Point]) -> Result<(), CliError> 
         .unwrap_or_default();
     let panels = converge::chart_panels(&title, points);
     write_svg(&args.chart, &panels, 560, 420).map_err(|e| InputError::file(&args.chart, e))?;
+    // Standard output holds only the table, for piping.
     if !args.quiet {
-        println!("wrote {} and {}", args.csv.display(), args.chart.display());
+        eprintln!("wrote {} and {}", args.csv.display(), args.chart.display());
     }
     Ok(())
 }

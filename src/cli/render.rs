@@ -162,6 +162,18 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         Some(header) => resume(&args, header)?,
         None => (None, None),
     };
+    if let Some(asked) = args.passes {
+        // A pass holds at least one sample per pixel.
+        let first = resume_from
+            .unwrap_or(full.start)
+            .clamp(full.start, full.end);
+        let left = full.end - first;
+        if left > 0 && asked > left {
+            eprintln!(
+                "warning: --passes {asked}: only {left} samples per pixel to render, and a pass holds at least one, so {left} passes"
+            );
+        }
+    }
     let image = Output {
         args: &args,
         scene: &scene,

@@ -49,6 +49,14 @@ pub const METHODS: [Method; 4] = [
     },
 ];
 
+/// `strata converge`'s default largest sample count and reference sample
+/// count: 16 times apart, so the reference's own noise stays below the
+/// curves, and small enough that the default run is a quick look (the
+/// timing is in docs/converge.md); pass
+/// larger ones for a chart to keep.
+pub const DEFAULT_MAX_SPP: u32 = 64;
+pub const DEFAULT_REFERENCE_SPP: u32 = 1024;
+
 /// The best method, used for references.
 pub const REFERENCE_METHOD: Method = METHODS[2];
 

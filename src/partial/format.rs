@@ -99,6 +99,13 @@ impl PartialHeader {
             return Err(m);
         }
         if let Some(m) = self.render_mismatch(expected) {
+            let same_but_spp = PartialHeader {
+                spp: expected.spp,
+                ..self.clone()
+            };
+            if same_but_spp.render_mismatch(expected).is_none() {
+                return Err(self.other_spp(expected.spp));
+            }
             return Err(format!(
                 "the checkpoint is of a different render: {m} (checkpoint vs now)"
             ));
@@ -111,6 +118,45 @@ impl PartialHeader {
             ));
         }
         Ok(self.samples.end)
+    }
+
+    /// Why a checkpoint of this render cannot be taken on to `spp`
+    /// samples per pixel, and what to do instead. A render's samples are
+    /// indices into each pixel's one stratified set of spp samples (see
+    /// [`SliceSpec`]), whose points all depend on spp, so the first 64
+    /// samples of a 128-spp render are not a 64-spp render: another spp is
+    /// a new render, which `--slice` can plan ahead for. (The random
+    /// sampler's numbers do not depend on spp, but parts record their spp
+    /// and merge only with their own.)
+    fn other_spp(&self, spp: u32) -> String {
+        let (have, want) = (self.spp, spp);
+        let now = if self.is_complete() {
+            format!("it is finished, and strata merge on it writes its {have}-spp image")
+        } else {
+            format!("pass --spp {have} to finish it")
+        };
+        // Slice 0 of P holds the first have samples of the larger set
+        // when want is a multiple of have.
+        let parts = if want % have == 0 { want / have } else { 2 };
+        let plan = if want > have && self.slice_count == 1 {
+            format!(
+                ". To be able to stop at {have} and add samples later, render the larger count in slices: --spp {want} --slice 0/{parts} -o part_0.strata first (strata merge --partial part_0.strata -o preview.png shows it), the other slices of {parts} later, then strata merge part_*.strata -o final.exr"
+            )
+        } else {
+            String::new()
+        };
+        let why = match self.sampler {
+            SamplerKind::Stratified => format!(
+                "each pixel's samples are one stratified set of spp samples, so the first {have} of a {want}-spp render are not this render's {have}"
+            ),
+            SamplerKind::Random => {
+                "a checkpoint continues, and a part merges with, renders of its own spp only"
+                    .to_string()
+            }
+        };
+        format!(
+            "the checkpoint is of a {have}-spp render and this one asks for {want}, which is a new render: {why}; {now}, and another --checkpoint file starts the {want}-spp render{plan}"
+        )
     }
 
     /// The samples that the slices `slices` of `slice_count` cover.
@@ -564,5 +610,26 @@ mod tests {
         let mut c = a.clone();
         c.scene_hash ^= 1;
         assert!(a.render_mismatch(&c).unwrap().starts_with("scene"));
+    }
+
+    #[test]
+    fn another_spp_alone_says_what_to_do_instead() {
+        let mut done = sample_partial().header;
+        (done.slices, done.slice_count, done.samples) = (0..1, 1, 0..done.spp);
+        let mut more = done.clone();
+        more.spp = done.spp * 2;
+        let e = done.resume_point(&more, false).unwrap_err();
+        assert!(e.contains("it is finished"), "{e}");
+        assert!(e.contains("--spp 32 --slice 0/2"), "{e}");
+        done.samples = 0..8;
+        let e = done.resume_point(&more, false).unwrap_err();
+        assert!(e.contains("pass --spp 16 to finish it"), "{e}");
+        // With another difference as well, that is the message.
+        more.seed += 1;
+        let e = done.resume_point(&more, false).unwrap_err();
+        assert!(
+            e.starts_with("the checkpoint is of a different render"),
+            "{e}"
+        );
     }
 }

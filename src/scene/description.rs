@@ -14,9 +14,77 @@
 //! docs/scene-format.md describes every key for users.
 
 use super::settings::RenderOverrides;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::Deserialize;
 
 pub type V3 = [f32; 3];
+
+/// A colour as the scene file writes it: three numbers `[r, g, b]`, or one
+/// number for a grey (`diffuse = 0.5` is `[0.5, 0.5, 0.5]`, as in MTL
+/// files). Every colour of the format is read through it ([`colour`],
+/// [`optional_colour`]), so they all accept the same and say the same.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Colour(pub V3);
+
+impl<'de> Deserialize<'de> for Colour {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let value = d.deserialize_any(OneOrThree("three numbers [r, g, b] or one"))?;
+        Ok(Colour(match value {
+            Numbers::One(x) => [x; 3],
+            Numbers::Three(v) => v,
+        }))
+    }
+}
+
+/// A colour field (`#[serde(deserialize_with = "colour")]`).
+pub fn colour<'de, D: Deserializer<'de>>(d: D) -> Result<V3, D::Error> {
+    Colour::deserialize(d).map(|c| c.0)
+}
+
+/// An optional colour field (with `#[serde(default)]`: absent is `None`).
+pub fn optional_colour<'de, D: Deserializer<'de>>(d: D) -> Result<Option<V3>, D::Error> {
+    colour(d).map(Some)
+}
+
+/// One number or three, as written.
+enum Numbers {
+    One(f32),
+    Three(V3),
+}
+
+/// Reads [`Numbers`]; its text is what the error says was expected.
+struct OneOrThree(&'static str);
+
+impl<'de> Visitor<'de> for OneOrThree {
+    type Value = Numbers;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(self.0)
+    }
+
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Numbers, E> {
+        Ok(Numbers::One(v as f32))
+    }
+
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Numbers, E> {
+        Ok(Numbers::One(v as f32))
+    }
+
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Numbers, E> {
+        Ok(Numbers::One(v as f32))
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Numbers, A::Error> {
+        let mut v = Vec::with_capacity(3);
+        while let Some(x) = seq.next_element::<f32>()? {
+            v.push(x);
+        }
+        match v[..] {
+            [x, y, z] => Ok(Numbers::Three([x, y, z])),
+            _ => Err(de::Error::invalid_length(v.len(), &self)),
+        }
+    }
+}
 
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -90,7 +158,9 @@ impl Default for CameraDesc {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialDesc {
+    #[serde(deserialize_with = "colour")]
     pub diffuse: V3,
+    #[serde(deserialize_with = "colour")]
     pub specular: V3,
     pub shininess: f32,
     pub reflectivity: f32,
@@ -98,6 +168,7 @@ pub struct MaterialDesc {
     pub transparency: f32,
     pub ior: f32,
     pub fresnel: bool,
+    #[serde(deserialize_with = "colour")]
     pub emission: V3,
 }
 
@@ -144,8 +215,10 @@ pub struct LightDesc {
     #[serde(rename = "type")]
     pub kind: LightType,
     pub position: Option<V3>,
+    #[serde(default, deserialize_with = "optional_colour")]
     pub intensity: Option<V3>,
     pub direction: Option<V3>,
+    #[serde(default, deserialize_with = "optional_colour")]
     pub irradiance: Option<V3>,
     pub corner: Option<V3>,
     pub edge_u: Option<V3>,
@@ -153,6 +226,7 @@ pub struct LightDesc {
     pub center: Option<V3>,
     pub normal: Option<V3>,
     pub radius: Option<f32>,
+    #[serde(default, deserialize_with = "optional_colour")]
     pub radiance: Option<V3>,
 }
 
@@ -215,12 +289,13 @@ pub struct TriangleDesc {
     pub v: [V3; 3],
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum CsgOp {
-    Union,
-    Intersection,
-    Difference,
+crate::mode::mode_enum! {
+    /// `csg.op`.
+    pub enum CsgOp("CSG operation") {
+        Union = "union",
+        Intersection = "intersection",
+        Difference = "difference",
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -244,9 +319,19 @@ pub struct TransformDesc {
     pub matrix: Option<[[f32; 4]; 4]>,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy)]
 pub enum ScaleDesc {
     Uniform(f32),
     PerAxis(V3),
+}
+
+impl<'de> Deserialize<'de> for ScaleDesc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(
+            match d.deserialize_any(OneOrThree("three numbers [x, y, z] or one"))? {
+                Numbers::One(s) => ScaleDesc::Uniform(s),
+                Numbers::Three(v) => ScaleDesc::PerAxis(v),
+            },
+        )
+    }
 }

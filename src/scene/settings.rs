@@ -68,8 +68,10 @@ pub struct RenderOverrides {
     /// Seed of every random number: same seed, same image [render.seed; default 0]
     #[arg(long)]
     pub seed: Option<u32>,
-    /// Radiance of rays that hit nothing, as R,G,B [render.background; default 0,0,0]
+    /// Radiance of rays that hit nothing, as R,G,B, or one number for a grey
+    /// [render.background; default 0,0,0]
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    #[serde(default, deserialize_with = "super::description::optional_colour")]
     pub background: Option<[f32; 3]>,
     /// solid_angle: spherical rectangles and sphere cones where possible;
     /// area: uniform over the light's surface [render.light_sampling; default
@@ -82,17 +84,18 @@ pub struct RenderOverrides {
     pub glossy_sampling: Option<GlossySampling>,
 }
 
-/// `r,g,b` as three numbers.
+/// `r,g,b` as three numbers, or one number for a grey, as in the scene file.
 fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    let [r, g, b] = parts[..] else {
-        return Err(format!("'{text}' is not three numbers R,G,B"));
-    };
     let number = |s: &str| {
         s.parse::<f32>()
             .map_err(|_| format!("'{s}' is not a number"))
     };
-    Ok([number(r)?, number(g)?, number(b)?])
+    match parts[..] {
+        [r, g, b] => Ok([number(r)?, number(g)?, number(b)?]),
+        [grey] => Ok([number(grey)?; 3]),
+        _ => Err(format!("'{text}' is not three numbers R,G,B or one")),
+    }
 }
 
 /// Render settings after the scene file and the command line are merged.
@@ -276,6 +279,7 @@ mod tests {
     #[test]
     fn colours_parse_from_the_command_line() {
         assert_eq!(parse_rgb("1, 0.5,0"), Ok([1.0, 0.5, 0.0]));
+        assert_eq!(parse_rgb("0.25"), Ok([0.25; 3]));
         assert!(parse_rgb("1,2").is_err());
         assert!(parse_rgb("a,b,c").is_err());
     }

@@ -180,7 +180,7 @@ radiance = [1.0, 1.0]
         "light-line",
         Some(scene),
         &[],
-        &["scene.toml: line 15: lights[1].radiance: invalid length 2"],
+        &["scene.toml: line 15: lights[1].radiance: expected three numbers [r, g, b] or one, found an array of 2"],
     );
     assert_rejected(
         "light-key",

@@ -407,7 +407,7 @@ fn the_checkers_find_what_they_look_for() {
     assert!(compile_example("[render]\nspp = 4\n").is_ok());
     let typo = compile_example("[render]\nssp = 4\n").unwrap_err();
     assert!(
-        typo.contains("line 2: render.ssp: unknown field `ssp`"),
+        typo.contains("line 2: render.ssp: unknown key 'ssp'"),
         "{typo}"
     );
 }

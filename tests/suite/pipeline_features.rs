@@ -63,7 +63,7 @@ fn set_equals_editing_the_file_bit_for_bit() {
     assert!(a == b, "--set and the edited file differ");
     // An unknown key, or an element the scene lacks, is named.
     for (set, needle) in [
-        ("render.spq=3", "--set render.spq: unknown field `spq`"),
+        ("render.spq=3", "--set render.spq: unknown key 'spq'"),
         ("lights[4].radiance=[1,1,1]", "lights has 1 entry"),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_strata"))

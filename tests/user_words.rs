@@ -1,0 +1,444 @@
+//! Messages in the user's words (issue 48): type errors say what the scene
+//! format expected and what it found, one number is a grey wherever a
+//! colour is read, unknown keys and values suggest the valid one they are a
+//! typo of, a checkpoint of another spp says what to do instead, `--passes`
+//! beyond the sample count warns, and `strata converge` is quick by default
+//! with only its table on standard output.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+use strata::scene::parse::parse_description;
+
+/// The one-line error strata gives for scene `text`.
+fn error(text: &str) -> String {
+    parse_description(Path::new("scene.toml"), text)
+        .expect_err(text)
+        .to_string()
+}
+
+fn strata(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// Lit, tiny and quick: renders in milliseconds.
+const SCENE: &str = r#"[render]
+width = 8
+height = 6
+spp = 4
+
+[[lights]]
+type = "point"
+position = [0.0, 4.0, 0.0]
+intensity = [10.0, 10.0, 10.0]
+
+[[objects]]
+sphere = { radius = 1.0 }
+"#;
+
+#[test]
+fn type_errors_say_what_was_expected_and_what_was_found() {
+    for (text, message) in [
+        (
+            "[render]\nspp = \"16\"\n",
+            "scene.toml: line 2: render.spp: expected a whole number, found the string \"16\" (write it without the quotes)",
+        ),
+        (
+            "[render]\nspp = \"many\"\n",
+            "render.spp: expected a whole number, found the string \"many\"",
+        ),
+        (
+            "[camera]\nfov = \"wide\"\n",
+            "camera.fov: expected a number, found the string \"wide\"",
+        ),
+        (
+            "[render]\nspp = -1\n",
+            "render.spp: expected a whole number of 0 or more, found -1",
+        ),
+        (
+            "[render]\nseed = 1.5\n",
+            "render.seed: expected a whole number, found 1.5",
+        ),
+        (
+            "[render]\nwidth = 99999999999\n",
+            "render.width: expected a whole number of at most 4294967295, found 99999999999",
+        ),
+        (
+            "[materials.m]\nfresnel = 1\n",
+            "materials.m.fresnel: expected true or false, found 1",
+        ),
+        (
+            "[materials.m]\ndiffuse = [0.5, 0.5]\n",
+            "line 2: materials.m.diffuse: expected three numbers [r, g, b] or one, found an array of 2",
+        ),
+        (
+            "[render]\nbackground = \"black\"\n",
+            "render.background: expected three numbers [r, g, b] or one, found the string \"black\"",
+        ),
+        (
+            "[camera]\nposition = [0.0, 1.0]\n",
+            "camera.position: expected three numbers [x, y, z], found an array of 2",
+        ),
+        (
+            "[[objects]]\nsphere = { radius = 1.0 }\ntransform = { scale = \"big\" }\n",
+            "objects[0].transform.scale: expected three numbers [x, y, z] or one, found the string \"big\"",
+        ),
+        (
+            "[[objects]]\nsphere = { center = [0.0, 0.0, 0.0] }\n",
+            "objects[0].sphere: missing key 'radius'",
+        ),
+    ] {
+        let e = error(text);
+        assert!(e.contains(message), "{text:?}: {e}");
+        for rust in ["invalid type", "invalid value", "u32", "f32", "`"] {
+            assert!(!e.contains(rust), "{text:?}: '{rust}' in {e}");
+        }
+    }
+}
+
+#[test]
+fn set_values_get_the_same_words_on_one_line_with_exit_code_2() {
+    let dir = common::temp_dir("words-set");
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    for (set, message) in [
+        (
+            "render.spp=\"16\"",
+            "error: <command line>: --set render.spp: expected a whole number, found the string \"16\"",
+        ),
+        (
+            "render.spp=1.5",
+            "--set render.spp: expected a whole number, found 1.5",
+        ),
+        (
+            "render.shadow_sample=2",
+            "--set render.shadow_sample: unknown key 'shadow_sample'; did you mean 'shadow_samples'?",
+        ),
+    ] {
+        let o = strata(&dir, &["render", "scene.toml", "-q", "-o", "x.png", "--set", set]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{set}: {e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{set}: {e}");
+        assert!(e.contains(message), "{set}: {e}");
+        assert!(!dir.join("x.png").exists());
+    }
+}
+
+#[test]
+fn one_number_is_a_grey_wherever_a_colour_is_read() {
+    let colours = |grey: &dyn Fn(f32) -> String| {
+        format!(
+            r#"[render]
+width = 8
+height = 6
+background = {}
+
+[materials.m]
+diffuse = {}
+specular = {}
+shininess = 20.0
+emission = {}
+
+[[lights]]
+type = "point"
+position = [0.0, 4.0, 0.0]
+intensity = {}
+
+[[lights]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+irradiance = {}
+
+[[lights]]
+type = "sphere"
+center = [2.0, 3.0, 0.0]
+radius = 0.5
+radiance = {}
+
+[[objects]]
+sphere = {{ radius = 1.0 }}
+material = "m"
+"#,
+            grey(0.25),
+            grey(0.5),
+            grey(0.125),
+            grey(0.0625),
+            grey(10.0),
+            grey(2.0),
+            grey(3.0)
+        )
+    };
+    let one = common::scene(&colours(&|x| format!("{x:?}")));
+    let three = common::scene(&colours(&|x| format!("[{x:?}, {x:?}, {x:?}]")));
+    assert_eq!(one.materials, three.materials);
+    assert_eq!(one.lights, three.lights);
+    assert_eq!(one.settings, three.settings);
+    assert_eq!(one.settings.background, glam::Vec3::splat(0.25));
+    assert!(one
+        .materials
+        .iter()
+        .any(|m| m.diffuse == glam::Vec3::splat(0.5)));
+    // A whole number is a grey too, and a colour stays checked after.
+    let whole = common::scene(
+        "[materials.m]\ndiffuse = 1\n[[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"m\"\n",
+    );
+    assert!(whole.materials.iter().any(|m| m.diffuse == glam::Vec3::ONE));
+    let e = error("[materials.m]\ndiffuse = [1.0, 1.0, 1.0, 1.0]\n");
+    assert!(
+        e.contains("expected three numbers [r, g, b] or one, found an array of 4"),
+        "{e}"
+    );
+
+    // The command line's --background takes one number as well.
+    let dir = common::temp_dir("words-grey");
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    let o = strata(
+        &dir,
+        &[
+            "render",
+            "scene.toml",
+            "-q",
+            "-o",
+            "x.png",
+            "--background",
+            "0.5",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+#[test]
+fn unknown_keys_and_values_suggest_the_nearest_valid_one() {
+    for (text, message) in [
+        (
+            "[render]\nshadow_sample = 2\n",
+            "line 2: render.shadow_sample: unknown key 'shadow_sample'; did you mean 'shadow_samples'?",
+        ),
+        (
+            "[render]\nssp = 4\n",
+            "render.ssp: unknown key 'ssp'; did you mean 'spp'?",
+        ),
+        (
+            "[[objects]]\nsphre = { radius = 1.0 }\n",
+            "objects[0].sphre: unknown key 'sphre'; did you mean 'sphere'?",
+        ),
+        (
+            "[render]\nsampler = \"stratifed\"\n",
+            "render.sampler: unknown sampler 'stratifed'; did you mean 'stratified'?",
+        ),
+        (
+            "[camera]\ntype = \"thin-lens\"\n",
+            "camera.type: unknown camera type 'thin-lens'; did you mean 'thin_lens'?",
+        ),
+        (
+            "[[lights]]\ntype = \"pont\"\n",
+            "lights[0].type: unknown light type 'pont'; did you mean 'point'?",
+        ),
+        (
+            "[[objects]]\ncsg = { op = \"unon\", a = { sphere = { radius = 1.0 } }, b = { sphere = { radius = 1.0 } } }\n",
+            "unknown CSG operation 'unon'; did you mean 'union'?",
+        ),
+    ] {
+        let e = error(text);
+        assert!(e.contains(message), "{text:?}: {e}");
+    }
+    // Nothing close: the valid keys and values, and no guess.
+    let e = error("[render]\ncolour = 1\n");
+    assert!(
+        e.contains(
+            "render.colour: unknown key 'colour' (expected width, height, spp, shadow_samples,"
+        ),
+        "{e}"
+    );
+    assert!(e.ends_with("light_sampling or glossy_sampling)"), "{e}");
+    let e = error("[render]\nsampler = \"sobol\"\n");
+    assert!(
+        e.contains("unknown sampler 'sobol' (expected random or stratified)"),
+        "{e}"
+    );
+    assert!(!e.contains("did you mean"), "{e}");
+}
+
+#[test]
+fn a_checkpoint_of_another_spp_says_what_to_do_instead() {
+    let dir = common::temp_dir("words-resume");
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "scene.toml", "-q", "-o", "x.png"];
+        args.extend_from_slice(extra);
+        strata(&dir, &args)
+    };
+    let o = render(&["--checkpoint", "ck.strata"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = render(&["--spp", "8", "--checkpoint", "ck.strata", "--resume"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    for needle in [
+        "ck.strata: the checkpoint is of a 4-spp render and this one asks for 8, which is a new render",
+        "stratified set",
+        "strata merge on it writes its 4-spp image",
+        "--spp 8 --slice 0/2 -o part_0.strata",
+    ] {
+        assert!(e.contains(needle), "'{needle}' missing from: {e}");
+    }
+    // The plan it gives runs: the first slice now, a preview of it, the
+    // rest later, and the merge is the 8-spp render.
+    for args in [
+        &[
+            "render",
+            "scene.toml",
+            "-q",
+            "--spp",
+            "8",
+            "--slice",
+            "0/2",
+            "-o",
+            "part_0.strata",
+        ][..],
+        &[
+            "merge",
+            "-q",
+            "--partial",
+            "part_0.strata",
+            "-o",
+            "preview.png",
+        ],
+        &[
+            "render",
+            "scene.toml",
+            "-q",
+            "--spp",
+            "8",
+            "--slice",
+            "1/2",
+            "-o",
+            "part_1.strata",
+        ],
+        &[
+            "merge",
+            "-q",
+            "part_0.strata",
+            "part_1.strata",
+            "-o",
+            "merged.strata",
+        ],
+        &[
+            "render",
+            "scene.toml",
+            "-q",
+            "--spp",
+            "8",
+            "-o",
+            "whole.strata",
+        ],
+        &["merge", "-q", "merged.strata", "-o", "merged.exr"],
+        &["merge", "-q", "whole.strata", "-o", "whole.exr"],
+    ] {
+        let o = strata(&dir, args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+    }
+    let (merged, whole) = (
+        common::exr::read_exr(&dir.join("merged.exr")),
+        common::exr::read_exr(&dir.join("whole.exr")),
+    );
+    for c in ["R", "G", "B"] {
+        assert_eq!(merged.channel(c), whole.channel(c), "{c}");
+    }
+}
+
+#[test]
+fn more_passes_than_samples_warn_and_say_how_many_ran() {
+    let dir = common::temp_dir("words-passes");
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    let o = strata(
+        &dir,
+        &[
+            "render",
+            "scene.toml",
+            "-q",
+            "-o",
+            "x.png",
+            "--passes",
+            "32",
+        ],
+    );
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.starts_with("warning: --passes 32:"), "{e}");
+    assert!(e.contains("so 4 passes"), "{e}");
+    let o = strata(
+        &dir,
+        &["render", "scene.toml", "-q", "-o", "x.png", "--passes", "4"],
+    );
+    assert_eq!(stderr(&o), "");
+}
+
+/// The default of `flag` that `strata converge --help` shows.
+fn converge_default(help: &str, flag: &str) -> u64 {
+    let at = help
+        .find(&format!("{flag} <"))
+        .unwrap_or_else(|| panic!("{flag} in {help}"));
+    let rest = &help[at..];
+    let value = rest[rest.find("[default: ").expect("a default") + 10..]
+        .split(']')
+        .next()
+        .unwrap();
+    value.parse().unwrap()
+}
+
+#[test]
+fn converge_is_quick_by_default_and_its_standard_output_is_the_table() {
+    let dir = common::temp_dir("words-converge");
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    let help = strata(&dir, &["converge", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    let (max, reference, repeats) = (
+        converge_default(&help, "--max-spp"),
+        converge_default(&help, "--reference-spp"),
+        converge_default(&help, "--repeats"),
+    );
+    // The reference keeps docs/converge.md's rule (16 times --max-spp), and
+    // the samples per pixel of a default run (4 methods at 1, 2, …, max,
+    // each repeated, and the reference) stay a quick look: the old
+    // defaults (256, 4096) traced 10 228.
+    assert!(reference >= 16 * max, "{reference} vs {max}");
+    let work = 4 * repeats * (2 * max - 1) + reference;
+    assert!(work <= 4096, "{work} samples per pixel");
+
+    let o = strata(
+        &dir,
+        &[
+            "converge",
+            "scene.toml",
+            "--max-spp",
+            "2",
+            "--reference-spp",
+            "8",
+            "--repeats",
+            "1",
+        ],
+    );
+    let (out, e) = (String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines[0].starts_with("method"), "{out}");
+    // A row per method and spp (1 and 2), and nothing else.
+    assert_eq!(lines.len(), 1 + 4 * 2, "{out}");
+    for row in &lines[1..] {
+        let fields: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!(fields.len(), 5, "{row}");
+        assert!(fields[1].parse::<u32>().is_ok(), "{row}");
+    }
+    assert!(e.contains("wrote converge.csv and converge.svg"), "{e}");
+    assert!(e.contains("no --reference given"), "{e}");
+}
