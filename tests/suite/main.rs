@@ -27,3 +27,4 @@ mod robustness;
 mod slices;
 mod slurm;
 mod textures;
+mod user_words;

@@ -5,8 +5,6 @@
 //! beyond the sample count warns, and `strata converge` is quick by default
 //! with only its table on standard output.
 
-mod common;
-
 use std::path::Path;
 use std::process::{Command, Output};
 use strata::scene::parse::parse_description;
@@ -107,7 +105,7 @@ fn type_errors_say_what_was_expected_and_what_was_found() {
 
 #[test]
 fn set_values_get_the_same_words_on_one_line_with_exit_code_2() {
-    let dir = common::temp_dir("words-set");
+    let dir = crate::common::temp_dir("words-set");
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     for (set, message) in [
         (
@@ -176,8 +174,8 @@ material = "m"
             grey(3.0)
         )
     };
-    let one = common::scene(&colours(&|x| format!("{x:?}")));
-    let three = common::scene(&colours(&|x| format!("[{x:?}, {x:?}, {x:?}]")));
+    let one = crate::common::scene(&colours(&|x| format!("{x:?}")));
+    let three = crate::common::scene(&colours(&|x| format!("[{x:?}, {x:?}, {x:?}]")));
     assert_eq!(one.materials, three.materials);
     assert_eq!(one.lights, three.lights);
     assert_eq!(one.settings, three.settings);
@@ -187,7 +185,7 @@ material = "m"
         .iter()
         .any(|m| m.diffuse == glam::Vec3::splat(0.5)));
     // A whole number is a grey too, and a colour stays checked after.
-    let whole = common::scene(
+    let whole = crate::common::scene(
         "[materials.m]\ndiffuse = 1\n[[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"m\"\n",
     );
     assert!(whole.materials.iter().any(|m| m.diffuse == glam::Vec3::ONE));
@@ -198,7 +196,7 @@ material = "m"
     );
 
     // The command line's --background takes one number as well.
-    let dir = common::temp_dir("words-grey");
+    let dir = crate::common::temp_dir("words-grey");
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     let o = strata(
         &dir,
@@ -269,7 +267,7 @@ fn unknown_keys_and_values_suggest_the_nearest_valid_one() {
 
 #[test]
 fn a_checkpoint_of_another_spp_says_what_to_do_instead() {
-    let dir = common::temp_dir("words-resume");
+    let dir = crate::common::temp_dir("words-resume");
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     let render = |extra: &[&str]| {
         let mut args = vec!["render", "scene.toml", "-q", "-o", "x.png"];
@@ -347,8 +345,8 @@ fn a_checkpoint_of_another_spp_says_what_to_do_instead() {
         assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
     }
     let (merged, whole) = (
-        common::exr::read_exr(&dir.join("merged.exr")),
-        common::exr::read_exr(&dir.join("whole.exr")),
+        crate::common::exr::read_exr(&dir.join("merged.exr")),
+        crate::common::exr::read_exr(&dir.join("whole.exr")),
     );
     for c in ["R", "G", "B"] {
         assert_eq!(merged.channel(c), whole.channel(c), "{c}");
@@ -357,7 +355,7 @@ fn a_checkpoint_of_another_spp_says_what_to_do_instead() {
 
 #[test]
 fn more_passes_than_samples_warn_and_say_how_many_ran() {
-    let dir = common::temp_dir("words-passes");
+    let dir = crate::common::temp_dir("words-passes");
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     let o = strata(
         &dir,
@@ -398,7 +396,7 @@ fn converge_default(help: &str, flag: &str) -> u64 {
 
 #[test]
 fn converge_is_quick_by_default_and_its_standard_output_is_the_table() {
-    let dir = common::temp_dir("words-converge");
+    let dir = crate::common::temp_dir("words-converge");
     std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
     let help = strata(&dir, &["converge", "--help"]);
     let help = String::from_utf8_lossy(&help.stdout);
