@@ -15,6 +15,7 @@ pub mod gltf;
 pub mod obj;
 pub mod ply;
 mod ply_ascii;
+mod ply_binary;
 
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::LoadedAsset;
