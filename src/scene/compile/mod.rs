@@ -33,7 +33,7 @@ use glam::Affine3A;
 use mesh::{leaf_blocks, TriangleSource};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
@@ -173,6 +173,9 @@ fn compile_for(
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
     // Every object holds what it needs from its mesh files by now.
     drop(std::mem::take(&mut c.assets));
+    for source in &mut c.sources {
+        source.release_file_positions();
+    }
     let load = start.elapsed();
     let load_peak_bytes = memory.next_phase();
 
@@ -252,7 +255,7 @@ struct Compiler<'d> {
     lights: Vec<Light>,
     loaded_cameras: Vec<LoadedCamera>,
     /// Mesh files already read, with the scene index of their first material.
-    assets: HashMap<PathBuf, (Rc<LoadedAsset>, u32)>,
+    assets: HashMap<PathBuf, (Arc<LoadedAsset>, u32)>,
 }
 
 impl<'d> Compiler<'d> {
