@@ -346,16 +346,33 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 /// The scene of the command line, loaded and its BVH built on `--threads`
 /// threads as the render runs: a one-thread job (a Slurm task given one
 /// CPU, a one-thread benchmark) stays on one core from start to end.
+///
+/// A load that takes more than a second shows what it is doing (reading,
+/// building) on stderr until it ends, unless `--quiet`.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
-    let load = || {
-        load_or_seed(
-            args.scene.as_deref(),
+    let progress = compile::LoadProgress::default();
+    let load = || match args.scene.as_deref() {
+        Some(path) => Ok(compile::load_edited_scene_with_progress(
+            path,
             &args.set,
             &args.settings,
             args.bvh_quality,
-        )
+            &progress,
+        )?),
+        None => load_or_seed(None, &args.set, &args.settings, args.bvh_quality),
     };
-    on_threads(args.threads, load)?
+    std::thread::scope(|scope| {
+        let shown =
+            (!args.quiet).then(|| scope.spawn(|| strata::render::progress::show_load(&progress)));
+        let loaded = on_threads(args.threads, load);
+        progress.finish();
+        if let Some(shown) = shown {
+            shown.thread().unpark();
+            // The display only draws: it cannot fail the load.
+            let _ = shown.join();
+        }
+        loaded?
+    })
 }
 
 /// `work` run on a pool of `threads` threads (0: the global pool, one
