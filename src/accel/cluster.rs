@@ -112,7 +112,7 @@ fn pair_round(
         .collect();
     let total = counts.iter().sum();
     let mut starts = vec![0u32; total];
-    let mut boxes = vec![Aabb::EMPTY; total];
+    let mut boxes: Vec<Aabb> = (0..total).into_par_iter().map(|_| Aabb::EMPTY).collect();
     let mut parts = Vec::with_capacity(blocks);
     let (mut s_rest, mut b_rest) = (&mut starts[..], &mut boxes[..]);
     for &n in &counts {
@@ -176,7 +176,10 @@ fn morton_code(q: UVec3) -> u32 {
 /// can write their keys into one array where they interleave.
 fn radix_sort_by_high_30_bits(keys: Vec<u64>) -> Vec<u64> {
     let mut keys: Vec<AtomicU64> = keys.into_iter().map(AtomicU64::new).collect();
-    let mut other: Vec<AtomicU64> = (0..keys.len()).map(|_| AtomicU64::new(0)).collect();
+    let mut other: Vec<AtomicU64> = (0..keys.len())
+        .into_par_iter()
+        .map(|_| AtomicU64::new(0))
+        .collect();
     let block = keys
         .len()
         .div_ceil(4 * rayon::current_num_threads())

@@ -123,9 +123,20 @@ impl<'a> CollapseCosts<'a> {
         let mut costs = Self {
             bvh2,
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
-            cost: (0..inner).map(|_| Default::default()).collect(),
-            counts: (0..inner).map(|_| AtomicU32::new(0)).collect(),
-            choices: (0..inner).map(|_| AtomicU32::new(0)).collect(),
+            // Made in parallel: the first touch of a fresh page is the
+            // cost of making a large array (see `super::build::ploc`).
+            cost: (0..inner)
+                .into_par_iter()
+                .map(|_| Default::default())
+                .collect(),
+            counts: (0..inner)
+                .into_par_iter()
+                .map(|_| AtomicU32::new(0))
+                .collect(),
+            choices: (0..inner)
+                .into_par_iter()
+                .map(|_| AtomicU32::new(0))
+                .collect(),
             ordered: Vec::new(),
         };
         costs.ordered = costs.fill_tables(0, 0).concat();
@@ -478,7 +489,7 @@ impl Part {
         let mut placed = Vec::new();
         let (mut nodes, mut slots) = (0, 0);
         let depth = self.place(&mut nodes, &mut slots, &mut placed);
-        let mut all_nodes = vec![Node8::EMPTY; nodes as usize];
+        let mut all_nodes: Vec<Node8> = (0..nodes).into_par_iter().map(|_| Node8::EMPTY).collect();
         let mut prim_ids = vec![0u32; slots as usize];
         let mut pieces = Vec::with_capacity(placed.len());
         let (mut node_rest, mut slot_rest) = (&mut all_nodes[..], &mut prim_ids[..]);
