@@ -20,6 +20,7 @@ use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header, PropertyType, ScalarType};
+use rayon::prelude::*;
 use std::io::Read;
 use std::path::Path;
 
@@ -97,9 +98,27 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     let bad = |e: &dyn std::fmt::Display| InputError::file(path, format!("invalid PLY: {e}"));
     // The whole file at once (one allocation of its size, one copy from
     // the page cache): the bodies are then plain byte slices, walked
-    // without a reader's per-value calls.
+    // without a reader's per-value calls. The buffer is made in parallel
+    // before the copy: the first touch of a fresh page, which the kernel
+    // clears, costs more than copying it, and in the copy it would be
+    // one page at a time.
     let size = file.metadata().map_or(0, |m| m.len());
-    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    let mut bytes: Vec<u8> = (0..usize::try_from(size).unwrap_or(0))
+        .into_par_iter()
+        .with_min_len(1 << 20)
+        .map(|_| 0)
+        .collect();
+    let mut filled = 0;
+    while filled < bytes.len() {
+        match file.read(&mut bytes[filled..]) {
+            Ok(0) => break,
+            Ok(k) => filled += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(bad(&e)),
+        }
+    }
+    bytes.truncate(filled);
+    // Whatever the file holds past the size it gave.
     file.read_to_end(&mut bytes).map_err(|e| bad(&e))?;
     let file_len = bytes.len() as u64;
     let mut reader = Reader::new(&bytes[..]);
