@@ -229,11 +229,9 @@ impl Compiler<'_> {
 /// Every vertex index of a loaded mesh is in range.
 fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
     let n_vertices = mesh.positions.len();
-    match mesh
-        .indices
-        .par_iter()
-        .position_first(|idx| idx.iter().any(|&i| i as usize >= n_vertices))
-    {
+    match loaders::first_where(&mesh.indices, |idx| {
+        idx.iter().any(|&i| i as usize >= n_vertices)
+    }) {
         Some(f) => Err(InputError::new(
             path,
             format!("face {f}"),

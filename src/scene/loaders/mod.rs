@@ -17,6 +17,8 @@ pub mod ply;
 mod ply_ascii;
 mod ply_binary;
 
+pub(crate) use ply_binary::first_where;
+
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::LoadedAsset;
 use std::path::Path;

@@ -315,7 +315,7 @@ fn read<const BIG: bool>(
         }
         line += element.count;
     }
-    if let Some(i) = positions.par_iter().position_first(|p| !p.is_finite()) {
+    if let Some(i) = first_where(&positions, |p| !p.is_finite()) {
         return Err(InputError::file(
             path,
             format!("vertex {i} is not finite: {}", positions[i]),
@@ -331,10 +331,9 @@ fn read<const BIG: bool>(
             at,
             item,
         } => {
-            let first_bad = triangles
-                .par_iter()
-                .with_min_len(MIN_TASK)
-                .position_first(|t| *t == NEGATIVE || t.iter().any(|&k| k as usize >= n));
+            let first_bad = first_where(&triangles, |t| {
+                *t == NEGATIVE || t.iter().any(|&k| k as usize >= n)
+            });
             if let Some(i) = first_bad {
                 let record = &records[i * size..(i + 1) * size];
                 let face =
@@ -350,6 +349,17 @@ fn read<const BIG: bool>(
         }
     };
     Ok((positions, triangles))
+}
+
+/// The index of the first item of `items` that is `bad`, searched in
+/// parallel a block at a time (an item at a time, the search's own
+/// bookkeeping cost more than the test).
+pub(crate) fn first_where<T: Sync>(items: &[T], bad: impl Fn(&T) -> bool + Sync) -> Option<usize> {
+    let block = items
+        .par_chunks(MIN_TASK)
+        .position_first(|block| block.iter().any(&bad))?;
+    let start = block * MIN_TASK;
+    items[start..].iter().position(bad).map(|i| start + i)
 }
 
 /// Whether every list of every record of `records` (fixed `size` bytes
