@@ -439,6 +439,34 @@ mod tests {
     use super::test_support::{compiled, rejected};
     use super::*;
 
+    /// A load says what it is doing: loading until its triangles are
+    /// counted, then building over all of them (both mesh files' and the
+    /// scene file's own), until the caller finishes it.
+    #[test]
+    fn a_load_reports_its_phases_and_triangles() {
+        use crate::scene::loaders::test_files::{temp_dir, write};
+        let dir = temp_dir("progress");
+        write(
+            &dir,
+            "quad.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+        );
+        let scene = write(
+            &dir,
+            "s.toml",
+            b"[[objects]]\nmesh = \"quad.obj\"\n[[objects]]\nmesh = \"quad.obj\"\n\
+              [[objects]]\ntriangle = { v = [[0, 0, 5], [1, 0, 5], [0, 1, 5]] }\n",
+        );
+        let progress = LoadProgress::default();
+        assert_eq!(progress.phase(), LoadPhase::Loading);
+        let overrides = RenderOverrides::default();
+        load_edited_scene_with_progress(&scene, &[], &overrides, BuildQuality::Auto, &progress)
+            .unwrap();
+        assert_eq!(progress.phase(), LoadPhase::Building { triangles: 5 });
+        progress.finish();
+        assert_eq!(progress.phase(), LoadPhase::Done);
+    }
+
     /// A mesh that its transform carries past f32's range is an error
     /// naming the mesh and its first triangle out of range.
     #[test]
