@@ -253,11 +253,15 @@ fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
         let mut bvh2 = ploc(&clusters.boxes, &params);
         // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
         // from starts[c] to starts[c + 1].
-        for node in bvh2.nodes.iter_mut().filter(|node| node.prim_count > 0) {
-            let c = node.first_index as usize;
-            node.first_index = clusters.starts[c];
-            node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
-        }
+        bvh2.nodes
+            .par_iter_mut()
+            .with_min_len(1 << 14)
+            .filter(|node| node.prim_count > 0)
+            .for_each(|node| {
+                let c = node.first_index as usize;
+                node.first_index = clusters.starts[c];
+                node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
+            });
         bvh2.primitive_indices = clusters.order;
         bvh2
     } else {

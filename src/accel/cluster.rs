@@ -155,7 +155,7 @@ fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
         })
         .collect();
     radix_sort_by_high_30_bits(keys)
-        .into_iter()
+        .into_par_iter()
         .map(|k| k as u32)
         .collect()
 }
