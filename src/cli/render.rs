@@ -364,8 +364,12 @@ fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
     std::thread::scope(|scope| {
         let shown =
             (!args.quiet).then(|| scope.spawn(|| strata::render::progress::show_load(&progress)));
-        let loaded = on_threads(args.threads, load);
-        progress.finish();
+        let loaded = {
+            // Finished however the load ends, a panic too: the display's
+            // thread, which the scope waits for, then ends.
+            let _finished = Finished(&progress);
+            on_threads(args.threads, load)
+        };
         if let Some(shown) = shown {
             shown.thread().unpark();
             // The display only draws: it cannot fail the load.
@@ -373,6 +377,15 @@ fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
         }
         loaded?
     })
+}
+
+/// Finishes a load's progress when dropped.
+struct Finished<'p>(&'p compile::LoadProgress);
+
+impl Drop for Finished<'_> {
+    fn drop(&mut self) {
+        self.0.finish();
+    }
 }
 
 /// `work` run on a pool of `threads` threads (0: the global pool, one
