@@ -7,10 +7,12 @@ use super::collapse::{LEAF_COST, NODE_COST};
 use super::node::{is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
 use crate::math::Aabb;
 use glam::Vec3A;
+use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
 use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
+use rayon::prelude::*;
 
 crate::mode::mode_enum! {
     /// Build effort. `auto` picks by primitive count, and for a render also
@@ -100,22 +102,20 @@ impl Bvh8 {
     /// Build over primitive boxes; primitive `i` is reported as id `i`.
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
-        match binary_tree_and_bounds(boxes, quality) {
+        match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality) {
             Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds),
             None => Self::empty(),
         }
     }
 
-    /// [`Bvh8::build`] that takes the boxes and frees them once the binary
-    /// tree is built, before the collapse: they are not needed after it,
-    /// and 24 bytes a primitive less at the collapse lowers the build's
-    /// peak where the collapse is the peak (small meshes).
+    /// [`Bvh8::build`] that takes the boxes and frees them as soon as the
+    /// build is done with them: before PLOC for the fastest preset (which
+    /// builds over clusters, and whose peak is PLOC's: 24 bytes a
+    /// primitive less there), else once the binary tree is built, before
+    /// the collapse.
     pub fn build_from(boxes: Vec<Aabb>, quality: BuildQuality) -> Self {
-        match binary_tree_and_bounds(&boxes, quality) {
-            Some((bvh2, bounds)) => {
-                drop(boxes);
-                Self::collapse(&bvh2, bounds)
-            }
+        match binary_tree_and_bounds(Boxes::Owned(boxes), quality) {
+            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds),
             None => Self::empty(),
         }
     }
@@ -204,9 +204,25 @@ impl obvhs::Boundable for Aabb {
     }
 }
 
+/// Primitive boxes a build reads, and frees when done if it owns them.
+enum Boxes<'a> {
+    Borrowed(&'a [Aabb]),
+    Owned(Vec<Aabb>),
+}
+
+impl std::ops::Deref for Boxes<'_> {
+    type Target = [Aabb];
+    fn deref(&self) -> &[Aabb] {
+        match self {
+            Boxes::Borrowed(b) => b,
+            Boxes::Owned(b) => b,
+        }
+    }
+}
+
 /// obvhs's binary tree over `boxes` and their union; `None` if there are
 /// no boxes.
-fn binary_tree_and_bounds(boxes: &[Aabb], quality: BuildQuality) -> Option<(Bvh2, Aabb)> {
+fn binary_tree_and_bounds(boxes: Boxes, quality: BuildQuality) -> Option<(Bvh2, Aabb)> {
     if boxes.is_empty() {
         return None;
     }
@@ -215,7 +231,12 @@ fn binary_tree_and_bounds(boxes: &[Aabb], quality: BuildQuality) -> Option<(Bvh2
         "too many primitives for one BVH: {}",
         boxes.len()
     );
-    let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+    // A union is exact, so any grouping gives the same box.
+    let bounds = boxes
+        .par_iter()
+        .with_min_len(1 << 14)
+        .copied()
+        .reduce(|| Aabb::EMPTY, Aabb::union);
     Some((binary_tree(boxes, bounds, quality), bounds))
 }
 
@@ -223,23 +244,30 @@ fn binary_tree_and_bounds(boxes: &[Aabb], quality: BuildQuality) -> Option<(Bvh2
 /// primitive a leaf, or for the fastest preset one cluster of up to
 /// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
 /// ([`super::cluster`]).
-fn binary_tree(boxes: &[Aabb], bounds: Aabb, quality: BuildQuality) -> Bvh2 {
+fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
     let preset = quality.preset(boxes.len());
     let params = quality.params(boxes.len());
     let mut bvh2 = if preset == BuildQuality::Fastest {
-        let clusters = Clusters::new(boxes, bounds);
+        let clusters = Clusters::new(&boxes, bounds);
+        drop(boxes);
         let mut bvh2 = ploc(&clusters.boxes, &params);
         // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
         // from starts[c] to starts[c + 1].
-        for node in bvh2.nodes.iter_mut().filter(|node| node.prim_count > 0) {
-            let c = node.first_index as usize;
-            node.first_index = clusters.starts[c];
-            node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
-        }
+        bvh2.nodes
+            .par_iter_mut()
+            .with_min_len(1 << 14)
+            .filter(|node| node.prim_count > 0)
+            .for_each(|node| {
+                let c = node.first_index as usize;
+                node.first_index = clusters.starts[c];
+                node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
+            });
         bvh2.primitive_indices = clusters.order;
         bvh2
     } else {
-        ploc(boxes, &params)
+        let bvh2 = ploc(&boxes, &params);
+        drop(boxes);
+        bvh2
     };
     if params.reinsertion_batch_ratio > 0.0 {
         ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
@@ -253,15 +281,30 @@ fn binary_tree(boxes: &[Aabb], bounds: Aabb, quality: BuildQuality) -> Bvh2 {
 
 /// obvhs's PLOC tree over `boxes`, one leaf each, leaf `i` holding id `i`.
 fn ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
+    // PLOC writes its tree's nodes (96 bytes a leaf) in one sequential
+    // merge loop, and the first write to each fresh page made the kernel
+    // clear it there, one page at a time: `perf record` put 80% of PLOC's
+    // time on the dragon in `clear_page_erms` under that loop. The nodes
+    // are made here in parallel instead (obvhs keeps an array of the
+    // right length as it is), and PLOC fills them as before: the same tree.
+    let mut bvh2 = Bvh2 {
+        nodes: (0..2 * boxes.len() - 1)
+            .into_par_iter()
+            .map(|_| Bvh2Node::default())
+            .collect(),
+        ..Bvh2::default()
+    };
     // obvhs reads our boxes through `Boundable`: no converted copy
     // (32 bytes a primitive) at the build's memory peak.
-    PlocBuilder::with_capacity(boxes.len()).build(
+    PlocBuilder::with_capacity(boxes.len()).build_with_bvh(
+        &mut bvh2,
         params.ploc_search_distance,
         boxes,
         (0..boxes.len() as u32).collect(),
         params.sort_precision,
         params.search_depth_threshold,
-    )
+    );
+    bvh2
 }
 
 #[cfg(test)]
@@ -293,7 +336,7 @@ mod tests {
             (BuildQuality::High, 3),
         ] {
             let boxes = random_boxes(3000, seed);
-            let (bvh2, bounds) = binary_tree_and_bounds(&boxes, quality).unwrap();
+            let (bvh2, bounds) = binary_tree_and_bounds(Boxes::Borrowed(&boxes), quality).unwrap();
             let costs = CollapseCosts::new(&bvh2);
             costs.assert_choices_match_tables();
             let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
@@ -403,7 +446,8 @@ mod tests {
     #[test]
     fn parallel_collapse_matches_the_sequential_walk_on_any_thread_count() {
         let boxes = random_boxes(200_000, 6);
-        let (bvh2, bounds) = binary_tree_and_bounds(&boxes, BuildQuality::Fastest).unwrap();
+        let (bvh2, bounds) =
+            binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Fastest).unwrap();
         let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds));
         let (one, three) = (on(1), on(3));
         let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
@@ -550,7 +594,8 @@ mod tests {
     #[test]
     fn collapse_does_not_depend_on_the_scale_of_the_scene() {
         let boxes = random_boxes(2000, 4);
-        let (bvh2, bounds) = binary_tree_and_bounds(&boxes, BuildQuality::Medium).unwrap();
+        let (bvh2, bounds) =
+            binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Medium).unwrap();
         let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
         let reference = Bvh8::collapse(&bvh2, bounds).stats();
         for scale in [2f32.powi(60), 2f32.powi(-60)] {

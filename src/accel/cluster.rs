@@ -21,6 +21,7 @@ use crate::math::Aabb;
 use glam::{UVec3, Vec3};
 use obvhs::ploc::morton::morton_encode_u32;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// Rounds of pairing: clusters hold up to 2^ROUNDS primitives; three
 /// built fastest for the same SAH cost (docs/embree.md, "Build and
@@ -63,34 +64,80 @@ impl Clusters {
 /// starting at `start(i)` with box `bounds(i)`: clusters i and i + 1 merge
 /// where each is the other's nearer neighbour by the surface area of their
 /// union, that is where `area[i]` is a local minimum (PLOC's merge with a
-/// window of one). Minima are never adjacent, so no cluster pairs twice.
+/// window of one). Minima are never adjacent, so no cluster pairs twice,
+/// and cluster `i` starts a merged one unless `i - 1` paired. Blocks of
+/// the curve find their pairs in parallel, then write their merged
+/// clusters, also in parallel, where the blocks before them end: no
+/// per-block buffers that would outlive the round in the allocator.
 /// Returns the merged clusters' starts (without the end) and boxes.
 fn pair_round(
     len: usize,
-    start: impl Fn(usize) -> u32,
+    start: impl Fn(usize) -> u32 + Sync,
     bounds: impl Fn(usize) -> Aabb + Sync,
 ) -> (Vec<u32>, Vec<Aabb>) {
-    let area: Vec<f32> = (1..len)
-        .into_par_iter()
-        .map(|i| bounds(i - 1).union(bounds(i)).half_area())
-        .collect();
-    let mut starts = Vec::with_capacity(len / 2 + len / 4 + 2);
-    let mut boxes = Vec::with_capacity(len / 2 + len / 4 + 1);
-    let mut i = 0;
-    while i < len {
-        starts.push(start(i));
-        let pair = i < area.len()
-            && (i == 0 || area[i] <= area[i - 1])
-            && (i + 1 == area.len() || area[i] < area[i + 1]);
-        boxes.push(if pair {
-            bounds(i).union(bounds(i + 1))
-        } else {
-            bounds(i)
+    // Whether each cluster pairs with the next.
+    let mut pairs = vec![false; len];
+    pairs
+        .par_chunks_mut(PAIR_BLOCK)
+        .enumerate()
+        .for_each(|(b, pairs)| {
+            let lo = b * PAIR_BLOCK;
+            let hi = lo + pairs.len();
+            // Whether i pairs reads the areas of i - 1, i and i + 1,
+            // whose boxes are i - 1 to i + 2: each read once here.
+            let first = lo.saturating_sub(1);
+            let boxes: Vec<Aabb> = (first..(hi + 2).min(len)).map(&bounds).collect();
+            let area: Vec<f32> = boxes
+                .windows(2)
+                .map(|w| w[0].union(w[1]).half_area())
+                .collect();
+            let area_of = |i: usize| area[i - first];
+            for (i, pair) in (lo..hi).zip(pairs.iter_mut()) {
+                *pair = i + 1 < len
+                    && (i == 0 || area_of(i) <= area_of(i - 1))
+                    && (i + 2 == len || area_of(i) < area_of(i + 1));
+            }
         });
-        i += 1 + pair as usize;
+    // Clusters start after no pair: each block's, in parallel, where the
+    // blocks before it end.
+    let heads = |b: usize| {
+        let lo = b * PAIR_BLOCK;
+        let hi = (lo + PAIR_BLOCK).min(len);
+        (lo..hi).filter(|&i| i == 0 || !pairs[i - 1])
+    };
+    let blocks = len.div_ceil(PAIR_BLOCK);
+    let counts: Vec<usize> = (0..blocks)
+        .into_par_iter()
+        .map(|b| heads(b).count())
+        .collect();
+    let total = counts.iter().sum();
+    let mut starts = vec![0u32; total];
+    let mut boxes: Vec<Aabb> = (0..total).into_par_iter().map(|_| Aabb::EMPTY).collect();
+    let mut parts = Vec::with_capacity(blocks);
+    let (mut s_rest, mut b_rest) = (&mut starts[..], &mut boxes[..]);
+    for &n in &counts {
+        let (s, s_tail) = std::mem::take(&mut s_rest).split_at_mut(n);
+        let (b, b_tail) = std::mem::take(&mut b_rest).split_at_mut(n);
+        parts.push((s, b));
+        (s_rest, b_rest) = (s_tail, b_tail);
     }
+    parts.into_par_iter().enumerate().for_each(|(b, (s, out))| {
+        for ((i, s), out) in heads(b).zip(s).zip(out) {
+            *s = start(i);
+            let own = bounds(i);
+            *out = if pairs[i] {
+                own.union(bounds(i + 1))
+            } else {
+                own
+            };
+        }
+    });
     (starts, boxes)
 }
+
+/// Clusters a pairing task takes: enough that a task's work (a fraction of
+/// a millisecond) dwarfs its hand-off.
+const PAIR_BLOCK: usize = 1 << 15;
 
 /// Primitive ids sorted by the Morton code of their boxes' centres, ties
 /// by id.
@@ -108,7 +155,7 @@ fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
         })
         .collect();
     radix_sort_by_high_30_bits(keys)
-        .into_iter()
+        .into_par_iter()
         .map(|k| k as u32)
         .collect()
 }
@@ -121,28 +168,58 @@ fn morton_code(q: UVec3) -> u32 {
 }
 
 /// `keys` sorted stably by bits 32..62 (the Morton code above the id): an
-/// LSD radix sort, three passes of ten bits.
-fn radix_sort_by_high_30_bits(mut keys: Vec<u64>) -> Vec<u64> {
-    let mut other = vec![0u64; keys.len()];
+/// LSD radix sort, three passes of ten bits, each in parallel: every
+/// block of the keys counts its digits, and then writes each key where
+/// the keys of smaller digits, and of its digit in earlier blocks, end.
+/// The order is that of one sequential pass whatever the blocks. The
+/// keys live in atomics (relaxed: plain loads and stores) so that blocks
+/// can write their keys into one array where they interleave.
+fn radix_sort_by_high_30_bits(keys: Vec<u64>) -> Vec<u64> {
+    let mut keys: Vec<AtomicU64> = keys.into_iter().map(AtomicU64::new).collect();
+    let mut other: Vec<AtomicU64> = (0..keys.len())
+        .into_par_iter()
+        .map(|_| AtomicU64::new(0))
+        .collect();
+    let block = keys
+        .len()
+        .div_ceil(4 * rayon::current_num_threads())
+        .max(1 << 14);
     for pass in 0..3 {
         let shift = 32 + 10 * pass;
         let digit = |k: u64| ((k >> shift) & 0x3ff) as usize;
-        let mut start = vec![0usize; 1024];
-        for &k in &keys {
-            start[digit(k)] += 1;
-        }
+        let counts: Vec<Vec<usize>> = keys
+            .par_chunks(block)
+            .map(|keys| {
+                let mut count = vec![0usize; 1024];
+                for k in keys {
+                    count[digit(k.load(Relaxed))] += 1;
+                }
+                count
+            })
+            .collect();
+        // Where each block's keys of each digit start: digit-major order.
+        let mut starts = vec![vec![0usize; 1024]; counts.len()];
         let mut sum = 0;
-        for s in &mut start {
-            (*s, sum) = (sum, sum + *s);
+        for d in 0..1024 {
+            for (start, count) in starts.iter_mut().zip(&counts) {
+                start[d] = sum;
+                sum += count[d];
+            }
         }
-        for &k in &keys {
-            let d = digit(k);
-            other[start[d]] = k;
-            start[d] += 1;
-        }
+        keys.par_chunks(block)
+            .zip(starts)
+            .for_each(|(keys, mut start)| {
+                for k in keys {
+                    let k = k.load(Relaxed);
+                    let d = digit(k);
+                    other[start[d]].store(k, Relaxed);
+                    start[d] += 1;
+                }
+            });
         std::mem::swap(&mut keys, &mut other);
     }
-    keys
+    drop(other);
+    keys.into_iter().map(AtomicU64::into_inner).collect()
 }
 
 #[cfg(test)]
@@ -207,6 +284,60 @@ mod tests {
                     "{} clusters",
                     clusters.boxes.len()
                 );
+            }
+        }
+    }
+
+    /// The parallel pairing makes the clusters of one walk along the curve
+    /// (the rule as first written: visit each cluster, merge it with the
+    /// next where its area is a local minimum, skip that one), over many
+    /// blocks and with ties among the areas, on 1 and 3 threads.
+    #[test]
+    fn parallel_pairing_pairs_as_one_walk() {
+        fn walk(boxes: &[Aabb]) -> (Vec<u32>, Vec<Aabb>) {
+            let len = boxes.len();
+            let area: Vec<f32> = (1..len)
+                .map(|i| boxes[i - 1].union(boxes[i]).half_area())
+                .collect();
+            let (mut starts, mut merged, mut i) = (Vec::new(), Vec::new(), 0);
+            while i < len {
+                starts.push(i as u32);
+                let pair = i < area.len()
+                    && (i == 0 || area[i] <= area[i - 1])
+                    && (i + 1 == area.len() || area[i] < area[i + 1]);
+                merged.push(if pair {
+                    boxes[i].union(boxes[i + 1])
+                } else {
+                    boxes[i]
+                });
+                i += 1 + pair as usize;
+            }
+            (starts, merged)
+        }
+        let mut rng = seeded(3);
+        for n in [
+            1usize,
+            2,
+            5,
+            PAIR_BLOCK - 1,
+            PAIR_BLOCK + 1,
+            3 * PAIR_BLOCK + 7,
+        ] {
+            // Corners on a coarse grid: many equal areas.
+            let boxes: Vec<Aabb> = (0..n)
+                .map(|_| {
+                    let c = (rng.cube(8.0) * 2.0).round();
+                    Aabb::new(c, c + Vec3::splat(1.0))
+                })
+                .collect();
+            let want = walk(&boxes);
+            for threads in [1, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let got = pool.install(|| pair_round(n, |i| i as u32, |i| boxes[i]));
+                assert_eq!(got, want, "{n} clusters, {threads} threads");
             }
         }
     }

@@ -123,9 +123,20 @@ impl<'a> CollapseCosts<'a> {
         let mut costs = Self {
             bvh2,
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
-            cost: (0..inner).map(|_| Default::default()).collect(),
-            counts: (0..inner).map(|_| AtomicU32::new(0)).collect(),
-            choices: (0..inner).map(|_| AtomicU32::new(0)).collect(),
+            // Made in parallel: the first touch of a fresh page is the
+            // cost of making a large array (see `super::build::ploc`).
+            cost: (0..inner)
+                .into_par_iter()
+                .map(|_| Default::default())
+                .collect(),
+            counts: (0..inner)
+                .into_par_iter()
+                .map(|_| AtomicU32::new(0))
+                .collect(),
+            choices: (0..inner)
+                .into_par_iter()
+                .map(|_| AtomicU32::new(0))
+                .collect(),
             ordered: Vec::new(),
         };
         costs.ordered = costs.fill_tables(0, 0).concat();
@@ -384,10 +395,11 @@ impl<'a> CollapseCosts<'a> {
             .par_iter()
             .map(|&(_, c, first)| self.emit(c, first, level + 1))
             .collect();
-        for (&(slot, _, _), sub) in inner.iter().zip(subtrees) {
-            part.nodes[0].child[slot] = part.nodes.len() as u32;
-            part.append(sub);
-        }
+        part.subs = inner
+            .iter()
+            .map(|&(slot, _, _)| slot)
+            .zip(subtrees)
+            .collect();
         part
     }
 
@@ -447,49 +459,98 @@ struct Scratch {
 }
 
 /// A subtree of the 8-wide tree: its nodes, the first its root, with
-/// child references local to it, and its leaves' slots.
+/// child references local to it, and its leaves' slots; and the subtrees
+/// made in parallel under its root's slots, each a part of its own.
 #[derive(Default)]
 struct Part {
     nodes: Vec<Node8>,
     prim_ids: Vec<u32>,
     depth: u32,
     packer: LanePacker,
+    subs: Vec<(usize, Part)>,
+}
+
+/// Where a part's nodes and slots start in the whole tree, and the root
+/// slots that refer to its subtrees' roots there.
+struct Placed<'p> {
+    part: &'p Part,
+    node_base: u32,
+    slot_base: u32,
+    links: Vec<(usize, u32)>,
 }
 
 impl Part {
-    /// The whole tree, whose root box is `bounds`.
+    /// The whole tree, whose root box is `bounds`: every part in the
+    /// order of nested appends (a part's nodes, then each of its subtrees
+    /// in slot order, likewise), its references moved by where its nodes
+    /// and slots start, each copied once and all in parallel. Slots move
+    /// by whole blocks: every part's `prim_ids` is a whole number of them.
     fn into_bvh(self, bounds: Aabb) -> Bvh8 {
+        let mut placed = Vec::new();
+        let (mut nodes, mut slots) = (0, 0);
+        let depth = self.place(&mut nodes, &mut slots, &mut placed);
+        let mut all_nodes: Vec<Node8> = (0..nodes).into_par_iter().map(|_| Node8::EMPTY).collect();
+        let mut prim_ids = vec![0u32; slots as usize];
+        let mut pieces = Vec::with_capacity(placed.len());
+        let (mut node_rest, mut slot_rest) = (&mut all_nodes[..], &mut prim_ids[..]);
+        for p in &placed {
+            let (n, tail) = std::mem::take(&mut node_rest).split_at_mut(p.part.nodes.len());
+            node_rest = tail;
+            let (s, tail) = std::mem::take(&mut slot_rest).split_at_mut(p.part.prim_ids.len());
+            slot_rest = tail;
+            pieces.push((n, s));
+        }
+        placed
+            .par_iter()
+            .zip(pieces)
+            .for_each(|(p, (nodes, slots))| {
+                for (out, node) in nodes.iter_mut().zip(&p.part.nodes) {
+                    *out = *node;
+                    for c in &mut out.child {
+                        if *c == EMPTY {
+                            continue;
+                        }
+                        *c = if is_leaf(*c) {
+                            let (start, count) = leaf_range(*c);
+                            encode_leaf(start + p.slot_base, count)
+                        } else {
+                            *c + p.node_base
+                        };
+                    }
+                }
+                for &(slot, root) in &p.links {
+                    nodes[0].child[slot] = root;
+                }
+                slots.copy_from_slice(&p.part.prim_ids);
+            });
         Bvh8 {
-            nodes: self.nodes,
-            prim_ids: self.prim_ids,
+            nodes: all_nodes,
+            prim_ids,
             bounds,
-            depth: self.depth,
+            depth,
             prefetch: true,
         }
     }
 
-    /// Appends `sub` (whose root becomes node `self.nodes.len()`), moving
-    /// its references by where its nodes and slots now start. Slots move
-    /// by whole blocks: every part's `prim_ids` is a whole number of them.
-    fn append(&mut self, sub: Part) {
-        let node_offset = self.nodes.len() as u32;
-        let slot_offset = self.prim_ids.len() as u32;
-        self.nodes.extend(sub.nodes.into_iter().map(|mut node| {
-            for c in &mut node.child {
-                if *c == EMPTY {
-                    continue;
-                }
-                *c = if is_leaf(*c) {
-                    let (start, count) = leaf_range(*c);
-                    encode_leaf(start + slot_offset, count)
-                } else {
-                    *c + node_offset
-                };
-            }
-            node
-        }));
-        self.prim_ids.extend_from_slice(&sub.prim_ids);
-        self.depth = self.depth.max(sub.depth + 1);
+    /// Lays this part out from node `nodes` and slot `slots` (moved past
+    /// it and its subtrees) into `placed`; returns its depth.
+    fn place<'p>(&'p self, nodes: &mut u32, slots: &mut u32, placed: &mut Vec<Placed<'p>>) -> u32 {
+        let at = placed.len();
+        placed.push(Placed {
+            part: self,
+            node_base: *nodes,
+            slot_base: *slots,
+            links: Vec::new(),
+        });
+        *nodes += self.nodes.len() as u32;
+        *slots += self.prim_ids.len() as u32;
+        let mut depth = self.depth;
+        for (slot, sub) in &self.subs {
+            let root = *nodes;
+            depth = depth.max(sub.place(nodes, slots, placed) + 1);
+            placed[at].links.push((*slot, root));
+        }
+        depth
     }
 }
 

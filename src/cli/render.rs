@@ -390,16 +390,46 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 /// The scene of the command line, loaded and its BVH built on `--threads`
 /// threads as the render runs: a one-thread job (a Slurm task given one
 /// CPU, a one-thread benchmark) stays on one core from start to end.
+///
+/// A load that takes more than a second shows what it is doing (reading,
+/// building) on stderr until it ends, unless `--quiet`.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
-    let load = || {
-        load_or_seed(
-            args.scene.as_deref(),
+    let progress = compile::LoadProgress::default();
+    let load = || match args.scene.as_deref() {
+        Some(path) => Ok(compile::load_edited_scene_with_progress(
+            path,
             &args.set,
             &args.settings,
             args.bvh_quality,
-        )
+            &progress,
+        )?),
+        None => load_or_seed(None, &args.set, &args.settings, args.bvh_quality),
     };
-    on_threads(args.threads, load)?
+    std::thread::scope(|scope| {
+        let shown =
+            (!args.quiet).then(|| scope.spawn(|| strata::render::progress::show_load(&progress)));
+        let loaded = {
+            // Finished however the load ends, a panic too: the display's
+            // thread, which the scope waits for, then ends.
+            let _finished = Finished(&progress);
+            on_threads(args.threads, load)
+        };
+        if let Some(shown) = shown {
+            shown.thread().unpark();
+            // The display only draws: it cannot fail the load.
+            let _ = shown.join();
+        }
+        loaded?
+    })
+}
+
+/// Finishes a load's progress when dropped.
+struct Finished<'p>(&'p compile::LoadProgress);
+
+impl Drop for Finished<'_> {
+    fn drop(&mut self) {
+        self.0.finish();
+    }
 }
 
 /// `work` run on a pool of `threads` threads (0: the global pool, one

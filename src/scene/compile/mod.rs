@@ -33,7 +33,8 @@ use glam::Affine3A;
 use mesh::{leaf_blocks, TriangleSource};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, AtomicU8, Ordering::Relaxed};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
@@ -83,11 +84,75 @@ pub fn load_edited_scene(
     overrides: &RenderOverrides,
     quality: BuildQuality,
 ) -> InputResult<(Scene, LoadTimings)> {
+    load_edited_scene_with_progress(path, edits, overrides, quality, &LoadProgress::default())
+}
+
+/// [`load_edited_scene`] that says in `progress` what it is doing, for a
+/// display on another thread.
+pub fn load_edited_scene_with_progress(
+    path: &Path,
+    edits: &[Edit],
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+    progress: &LoadProgress,
+) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
     let text = std::fs::read_to_string(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let desc = super::parse::parse_edited(path, &text, edits)?;
-    compile(&desc, path, overrides, quality, start)
+    compile_for(
+        &desc,
+        path,
+        overrides,
+        quality,
+        Purpose::Render,
+        start,
+        progress,
+    )
+}
+
+/// What a load is doing, set by the compiler as it goes and read by a
+/// progress display on another thread (relaxed atomics: a display needs
+/// no order).
+#[derive(Debug, Default)]
+pub struct LoadProgress {
+    /// 0: loading, 1: building, 2: done.
+    phase: AtomicU8,
+    triangles: AtomicU64,
+}
+
+/// A phase of a load.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoadPhase {
+    /// Reading the scene and its mesh files.
+    Loading,
+    /// Building the BVH over this many triangles.
+    Building {
+        triangles: u64,
+    },
+    Done,
+}
+
+impl LoadProgress {
+    pub fn phase(&self) -> LoadPhase {
+        match self.phase.load(Relaxed) {
+            0 => LoadPhase::Loading,
+            1 => LoadPhase::Building {
+                triangles: self.triangles.load(Relaxed),
+            },
+            _ => LoadPhase::Done,
+        }
+    }
+
+    /// The load is over (done or failed).
+    pub fn finish(&self) {
+        self.phase.store(2, Relaxed);
+    }
+
+    fn building(&self, triangles: u64) {
+        self.triangles.store(triangles, Relaxed);
+        self.phase.store(1, Relaxed);
+    }
 }
 
 /// Compile scene text as if read from `path` (meshes resolve relative to
@@ -122,6 +187,7 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
         quality,
         Purpose::Tracing,
         Instant::now(),
+        &LoadProgress::default(),
     )
 }
 
@@ -145,7 +211,15 @@ pub fn compile(
     quality: BuildQuality,
     start: Instant,
 ) -> InputResult<(Scene, LoadTimings)> {
-    compile_for(desc, path, overrides, quality, Purpose::Render, start)
+    compile_for(
+        desc,
+        path,
+        overrides,
+        quality,
+        Purpose::Render,
+        start,
+        &LoadProgress::default(),
+    )
 }
 
 fn compile_for(
@@ -155,6 +229,7 @@ fn compile_for(
     quality: BuildQuality,
     purpose: Purpose,
     start: Instant,
+    progress: &LoadProgress,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
@@ -173,6 +248,9 @@ fn compile_for(
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
     // Every object holds what it needs from its mesh files by now.
     drop(std::mem::take(&mut c.assets));
+    for source in &mut c.sources {
+        source.release_file_positions();
+    }
     let load = start.elapsed();
     let load_peak_bytes = memory.next_phase();
 
@@ -186,6 +264,7 @@ fn compile_for(
         }
     }
 
+    progress.building(u64::from(n_tris));
     let build_start = Instant::now();
     let boxes = c.primitive_boxes()?;
     let quality = match purpose {
@@ -252,7 +331,7 @@ struct Compiler<'d> {
     lights: Vec<Light>,
     loaded_cameras: Vec<LoadedCamera>,
     /// Mesh files already read, with the scene index of their first material.
-    assets: HashMap<PathBuf, (Rc<LoadedAsset>, u32)>,
+    assets: HashMap<PathBuf, (Arc<LoadedAsset>, u32)>,
 }
 
 impl<'d> Compiler<'d> {
@@ -359,6 +438,34 @@ pub(super) mod test_support {
 mod tests {
     use super::test_support::{compiled, rejected};
     use super::*;
+
+    /// A load says what it is doing: loading until its triangles are
+    /// counted, then building over all of them (both mesh files' and the
+    /// scene file's own), until the caller finishes it.
+    #[test]
+    fn a_load_reports_its_phases_and_triangles() {
+        use crate::scene::loaders::test_files::{temp_dir, write};
+        let dir = temp_dir("progress");
+        write(
+            &dir,
+            "quad.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+        );
+        let scene = write(
+            &dir,
+            "s.toml",
+            b"[[objects]]\nmesh = \"quad.obj\"\n[[objects]]\nmesh = \"quad.obj\"\n\
+              [[objects]]\ntriangle = { v = [[0, 0, 5], [1, 0, 5], [0, 1, 5]] }\n",
+        );
+        let progress = LoadProgress::default();
+        assert_eq!(progress.phase(), LoadPhase::Loading);
+        let overrides = RenderOverrides::default();
+        load_edited_scene_with_progress(&scene, &[], &overrides, BuildQuality::Auto, &progress)
+            .unwrap();
+        assert_eq!(progress.phase(), LoadPhase::Building { triangles: 5 });
+        progress.finish();
+        assert_eq!(progress.phase(), LoadPhase::Done);
+    }
 
     /// A mesh that its transform carries past f32's range is an error
     /// naming the mesh and its first triangle out of range.

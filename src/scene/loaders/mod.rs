@@ -15,6 +15,9 @@ pub mod gltf;
 pub mod obj;
 pub mod ply;
 mod ply_ascii;
+mod ply_binary;
+
+pub(crate) use ply_binary::first_where;
 
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::LoadedAsset;

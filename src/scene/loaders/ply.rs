@@ -1,58 +1,34 @@
-//! Stanford PLY, ASCII and binary (either endianness): the header and
-//! binary bodies through `ply-rs-bw`, ASCII bodies by `ply_ascii`.
+//! Stanford PLY, ASCII and binary (either endianness): the header through
+//! `ply-rs-bw`, ASCII bodies by `ply_ascii`, binary ones by `ply_binary`,
+//! both from the whole file read into memory once.
 //!
 //! `vertex` elements give `x y z` (float or double); `face` elements give a
 //! `vertex_indices` (or `vertex_index`) list, fan-triangulated like OBJ
 //! n-gons. Other elements and properties are read and ignored.
 //!
-//! Before anything is allocated, every element count in the header is
-//! checked against the bytes the file actually holds (an ASCII element
-//! takes at least two bytes per property, a binary one the size of its
-//! fixed fields), so a header claiming 1e12 vertices is an error naming the
-//! file, not an allocation. An index out of range is an error naming the face.
+//! Before anything is allocated for them, every element count in the
+//! header is checked against the bytes the file actually holds (an ASCII
+//! element takes at least two bytes per property, a binary one the size
+//! of its fixed fields), so a header claiming 1e12 vertices is an error
+//! naming the file, not an allocation. An index out of range is an error
+//! naming the face.
 
 use super::io_message;
-use super::ply_ascii;
+use super::{ply_ascii, ply_binary};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{Encoding, Header, PropertyAccess, PropertyType, ScalarType};
-use std::io::BufReader;
+use ply_rs_bw::ply::{DefaultElement, Encoding, Header, PropertyType, ScalarType};
+use rayon::prelude::*;
+use std::io::Read;
 use std::path::Path;
-
-#[derive(Default)]
-struct Vertex([f32; 3]);
-
-impl PropertyAccess for Vertex {
-    fn new() -> Self {
-        Self::default()
-    }
-    fn set_float(&mut self, name: &str, v: f32) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(name, v)
-    }
-    fn set_double(&mut self, name: &str, v: f64) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(name, v as f32)
-    }
-}
-
-impl Vertex {
-    fn set(&mut self, name: &str, v: f32) -> ply_rs_bw::ply::PropertyAccessResult {
-        match name {
-            "x" => self.0[0] = v,
-            "y" => self.0[1] = v,
-            "z" => self.0[2] = v,
-            _ => {}
-        }
-        ply_rs_bw::ply::PropertyAccessResult::Ignored
-    }
-}
 
 /// A face's vertex indices. Triangles, the bulk of big meshes, are stored
 /// inline (24 bytes a face and no allocation); longer polygons on the heap.
 /// An index that is no `u32` (a negative `int`) is kept, as i64, to be
 /// reported, not wrapped.
-#[derive(Default)]
+#[derive(Default, Debug, PartialEq)]
 pub(super) enum Face {
     #[default]
     Empty,
@@ -62,24 +38,6 @@ pub(super) enum Face {
 }
 
 impl Face {
-    fn set<T: Into<i64>>(&mut self, name: &str, v: Vec<T>) -> ply_rs_bw::ply::PropertyAccessResult {
-        if name == "vertex_indices" || name == "vertex_index" {
-            let mut idx = Vec::with_capacity(v.len());
-            for k in v {
-                let k: i64 = k.into();
-                match u32::try_from(k) {
-                    Ok(k) => idx.push(k),
-                    Err(_) => {
-                        *self = Face::Invalid(k);
-                        return ply_rs_bw::ply::PropertyAccessResult::Ignored;
-                    }
-                }
-            }
-            *self = Face::of(&idx);
-        }
-        ply_rs_bw::ply::PropertyAccessResult::Ignored
-    }
-
     /// The face of valid indices `idx`: inline if a triangle.
     pub(super) fn of(idx: &[u32]) -> Face {
         match <[u32; 3]>::try_from(idx) {
@@ -89,37 +47,13 @@ impl Face {
     }
 
     /// The first index outside `0..n`, if any.
-    fn bad_index(&self, n: usize) -> Option<i64> {
+    pub(super) fn bad_index(&self, n: usize) -> Option<i64> {
         match self {
             Face::Empty => None,
             Face::Triangle(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
             Face::Polygon(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
             Face::Invalid(k) => Some(*k),
         }
-    }
-}
-
-impl PropertyAccess for Face {
-    fn new() -> Self {
-        Self::default()
-    }
-    fn set_list_char(&mut self, n: &str, v: Vec<i8>) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(n, v)
-    }
-    fn set_list_uchar(&mut self, n: &str, v: Vec<u8>) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(n, v)
-    }
-    fn set_list_short(&mut self, n: &str, v: Vec<i16>) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(n, v)
-    }
-    fn set_list_ushort(&mut self, n: &str, v: Vec<u16>) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(n, v)
-    }
-    fn set_list_int(&mut self, n: &str, v: Vec<i32>) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(n, v)
-    }
-    fn set_list_uint(&mut self, n: &str, v: Vec<u32>) -> ply_rs_bw::ply::PropertyAccessResult {
-        self.set(n, v)
     }
 }
 
@@ -159,67 +93,69 @@ fn check_counts(path: &Path, header: &Header, file_len: u64) -> InputResult<()> 
 }
 
 pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
-    let file = std::fs::File::open(path)
+    let mut file = std::fs::File::open(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
-    let file_len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut reader = Reader::new(BufReader::new(file));
     let bad = |e: &dyn std::fmt::Display| InputError::file(path, format!("invalid PLY: {e}"));
-    let vparser = Parser::<Vertex>::new();
-    let fparser = Parser::<Face>::new();
-    let header = vparser.read_header(&mut reader).map_err(|e| bad(&e))?;
-    check_counts(path, &header, file_len)?;
-    if header.encoding == Encoding::Ascii {
-        // The reader's count has already moved past `end_header` (our
-        // line tests pin this).
-        let line = reader.line().saturating_sub(1);
-        let body = ply_ascii::read_body(path, &header, reader.into_inner(), line, file_len)?;
-        return mesh_asset(path, body.positions, &body.faces);
-    }
-    let mut positions: Vec<Vec3> = Vec::new();
-    let mut faces = Vec::new();
-    for (name, def) in &header.elements {
-        match name.as_str() {
-            "vertex" => {
-                positions = vparser
-                    .read_payload_for_element(&mut reader, def, &header)
-                    .map_err(|e| bad(&e))?
-                    .into_iter()
-                    .map(|v| Vec3::from(v.0))
-                    .collect();
-            }
-            "face" => {
-                faces = fparser
-                    .read_payload_for_element(&mut reader, def, &header)
-                    .map_err(|e| bad(&e))?;
-            }
-            _ => {
-                vparser
-                    .read_payload_for_element(&mut reader, def, &header)
-                    .map_err(|e| bad(&e))?;
-            }
+    // The whole file at once (one allocation of its size, one copy from
+    // the page cache): the bodies are then plain byte slices, walked
+    // without a reader's per-value calls. The buffer is made in parallel
+    // before the copy: the first touch of a fresh page, which the kernel
+    // clears, costs more than copying it, and in the copy it would be
+    // one page at a time.
+    let size = file.metadata().map_or(0, |m| m.len());
+    let mut bytes: Vec<u8> = (0..usize::try_from(size).unwrap_or(0))
+        .into_par_iter()
+        .with_min_len(1 << 20)
+        .map(|_| 0)
+        .collect();
+    let mut filled = 0;
+    while filled < bytes.len() {
+        match file.read(&mut bytes[filled..]) {
+            Ok(0) => break,
+            Ok(k) => filled += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(bad(&e)),
         }
     }
-    // The ASCII reader checks this as it reads, to name the line.
-    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(InputError::file(
-            path,
-            format!("vertex {i} is not finite: {}", positions[i]),
-        ));
+    bytes.truncate(filled);
+    // Whatever the file holds past the size it gave.
+    file.read_to_end(&mut bytes).map_err(|e| bad(&e))?;
+    let file_len = bytes.len() as u64;
+    let mut reader = Reader::new(&bytes[..]);
+    let header = Parser::<DefaultElement>::new()
+        .read_header(&mut reader)
+        .map_err(|e| bad(&e))?;
+    check_counts(path, &header, file_len)?;
+    // The reader's count has already moved past `end_header` (our line
+    // tests pin this): it is the number of the body's first line.
+    let line = reader.line();
+    let body = reader.into_inner();
+    if header.encoding == Encoding::Ascii {
+        let body = ply_ascii::read_body(path, &header, body, line.saturating_sub(1))?;
+        let n = body.positions.len();
+        let indices =
+            triangulate(&body.faces, n).map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
+        return Ok(mesh_asset(path, body.positions, indices));
     }
-    mesh_asset(path, positions, &faces)
+    let (positions, indices) = ply_binary::read_body(path, &header, body, line)?;
+    Ok(mesh_asset(path, positions, indices))
 }
 
-/// One mesh of finite `positions` and `faces` (fan-triangulated), every
-/// index checked against the vertex count.
-fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<LoadedAsset> {
-    let n = positions.len();
+/// The error of face `i`, whose index `bad` is not one of the `n` vertices.
+pub(super) fn out_of_range(path: &Path, i: usize, bad: i64, n: usize) -> InputError {
+    InputError::file(
+        path,
+        format!("face {i}: vertex index {bad} is out of range (the file has {n} vertices)"),
+    )
+}
+
+/// `faces` fan-triangulated, every index checked against the vertex count
+/// `n`; else the first bad face and its bad index.
+pub(super) fn triangulate(faces: &[Face], n: usize) -> Result<Vec<[u32; 3]>, (usize, i64)> {
     let mut indices = Vec::with_capacity(faces.len());
     for (i, f) in faces.iter().enumerate() {
         if let Some(bad) = f.bad_index(n) {
-            return Err(InputError::file(
-                path,
-                format!("face {i}: vertex index {bad} is out of range (the file has {n} vertices)"),
-            ));
+            return Err((i, bad));
         }
         match f {
             Face::Triangle(t) => indices.push(*t),
@@ -231,10 +167,15 @@ fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<
             Face::Empty | Face::Invalid(_) => {}
         }
     }
+    Ok(indices)
+}
+
+/// One mesh of `positions` and triangles `indices`, named after the file.
+fn mesh_asset(path: &Path, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> LoadedAsset {
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().to_string());
-    Ok(LoadedAsset {
+    LoadedAsset {
         meshes: vec![LoadedMesh {
             name,
             positions,
@@ -244,7 +185,7 @@ fn mesh_asset(path: &Path, positions: Vec<Vec3>, faces: &[Face]) -> InputResult<
             uvs: None,
         }],
         ..LoadedAsset::default()
-    })
+    }
 }
 
 #[cfg(test)]

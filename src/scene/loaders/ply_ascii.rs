@@ -16,7 +16,6 @@ use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
 use rayon::prelude::*;
-use std::io::BufRead;
 use std::path::Path;
 use wide::u8x32;
 
@@ -42,26 +41,20 @@ enum Use {
 /// (about a millisecond) dwarfs its hand-off.
 const CHUNK: usize = 1 << 14;
 
-/// Read the body that follows the header; `line` is the number of the
-/// header's last line (`end_header`), `file_len` the file's size.
+/// Read the body that follows the header, `bytes`; `line` is the number
+/// of the header's last line (`end_header`).
 ///
-/// The body is read whole, then each element's lines are cut into chunks
+/// Each element's lines are cut into chunks
 /// of [`CHUNK`] elements by one scan for line ends (which also counts
 /// lines, for messages), and the chunks are parsed in parallel. Errors
 /// are those of a line-by-line reader: the first bad line in file order.
 pub(super) fn read_body(
     path: &Path,
     header: &Header,
-    mut reader: impl BufRead,
+    bytes: &[u8],
     mut line: usize,
-    file_len: u64,
 ) -> InputResult<AsciiBody> {
-    // The file's length bounds the body's: one allocation, no regrowth.
-    let mut bytes = Vec::with_capacity(usize::try_from(file_len).unwrap_or(0));
-    reader
-        .read_to_end(&mut bytes)
-        .map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
         let before = &bytes[..e.valid_up_to()];
         let at = line + 1 + before.iter().filter(|&&b| b == b'\n').count();
         InputError::file(path, "cannot read: not ASCII text".to_string()).on_line(Some(at))
