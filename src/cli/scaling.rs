@@ -153,8 +153,8 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
 
     // Interleave repeats so that drifting machine load hits every configuration alike.
     let mut timings: Vec<Vec<Vec<Timing>>> = vec![vec![Vec::new(); counts.len()]; modes.len()];
-    // The slices runs keep their timelines (one clock read per work item),
-    // for the summary and for --predict.
+    // The slices runs keep their timelines (two clock reads per work
+    // item), for the summary and for --predict.
     let mut recorded: Vec<Recorded> = Vec::new();
     for rep in 0..args.repeats {
         for (m, mode) in modes.iter().enumerate() {
@@ -169,7 +169,8 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
                             threads: n,
                             seconds: t.seconds,
                             timeline,
-                            film,
+                            // Only --predict's 1-thread run writes its image.
+                            film: (n == 1 && args.predict).then_some(film),
                         });
                         t
                     }
@@ -234,7 +235,7 @@ struct Recorded {
     threads: usize,
     seconds: f64,
     timeline: Arc<Timeline>,
-    film: Film,
+    film: Option<Film>,
 }
 
 /// The run of `recorded` at `threads` with the median time.
@@ -269,7 +270,11 @@ fn predict(
         Ok(start.elapsed().as_secs_f64())
     };
     let png = scratch.path().join("image.png");
-    let pixels = base.film.to_rgb();
+    let film = base
+        .film
+        .as_ref()
+        .ok_or_else(|| internal("no 1-thread film".into()))?;
+    let pixels = film.to_rgb();
     costs.output_s =
         timed(&mut || strata::output::image::write_image(&png, &pixels, s.width, s.height))?;
     let parts = match args.processes {
@@ -280,7 +285,7 @@ fn predict(
             let spp = s.spp;
             let write_s = timed(&mut || {
                 let header = PartialHeader::for_scene(scene, SliceSpec::WHOLE, 0..spp);
-                write_partial(&part, &header, &base.film).map_err(|e| e.to_string())
+                write_partial(&part, &header, film).map_err(|e| e.to_string())
             })?;
             let read_s = timed(&mut || read_partial(&part).map(|_| ()).map_err(|e| e.to_string()))?;
             // A child loads and builds on its one thread.

@@ -247,9 +247,9 @@ pub fn render(
                 .zip(aov_chunks.into_par_iter())
                 .enumerate()
                 .map(|(b, (pixels, mut aov_pixels))| {
-                    // One clock read per work item: each starts where the
-                    // last one on this thread ended (its integrator's setup
-                    // counted in the first).
+                    // A clock read where the chunk starts (its integrator's
+                    // setup counted in its first work item) and one where
+                    // each work item ends, the next one's start.
                     let mut item_start = timeline.map(Timeline::now);
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
                     for (k, accs) in pixels.chunks_mut(WORK_ITEM_PIXELS).enumerate() {
