@@ -14,6 +14,7 @@
 //! naming the face.
 
 use super::io_message;
+use super::ply_binary::Scalar;
 use super::{ply_ascii, ply_binary};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
@@ -58,12 +59,7 @@ impl Face {
 }
 
 fn scalar_size(t: &ScalarType) -> u64 {
-    match t {
-        ScalarType::Char | ScalarType::UChar => 1,
-        ScalarType::Short | ScalarType::UShort => 2,
-        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
-        ScalarType::Double => 8,
-    }
+    Scalar::of(t).size() as u64
 }
 
 /// Refuse element counts the file cannot hold, before any allocation.

@@ -26,7 +26,7 @@ use std::path::Path;
 
 /// A PLY scalar type, as a plain copyable value.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Scalar {
+pub(super) enum Scalar {
     I8,
     U8,
     I16,
@@ -38,7 +38,7 @@ enum Scalar {
 }
 
 impl Scalar {
-    fn of(t: &ScalarType) -> Self {
+    pub(super) fn of(t: &ScalarType) -> Self {
         match t {
             ScalarType::Char => Self::I8,
             ScalarType::UChar => Self::U8,
@@ -51,7 +51,7 @@ impl Scalar {
         }
     }
 
-    fn size(self) -> usize {
+    pub(super) fn size(self) -> usize {
         match self {
             Self::I8 | Self::U8 => 1,
             Self::I16 | Self::U16 => 2,
