@@ -320,13 +320,10 @@ fn predict(
     predicted_counts.sort_unstable();
     predicted_counts.dedup();
     // Each measured count's mean work item against the 1-thread run's.
-    let mean_item = |r: &Recorded| {
-        let items = r.timeline.items();
-        items.iter().map(|i| i.seconds()).sum::<f64>() / items.len().max(1) as f64
-    };
+    let mean_item = |r: &Recorded| r.timeline.summary().map(|s| s.mean_item_s);
     let slowdowns: Vec<(usize, f64)> = counts
         .iter()
-        .filter_map(|&t| Some((t, mean_item(median_run(recorded, t)?) / mean_item(base))))
+        .filter_map(|&t| Some((t, mean_item(median_run(recorded, t)?)? / mean_item(base)?)))
         .collect();
     let predictions = predict_rows(&costs, &predicted_counts, measured, &slowdowns, parts);
     if !args.quiet {

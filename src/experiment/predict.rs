@@ -22,7 +22,7 @@
 //! build's own scaling (it is counted at its measured time). How far off it
 //! is where real cores exist is measured in docs/scaling.md.
 
-use crate::render::timeline::{Phase, Timeline};
+use crate::render::timeline::{seconds_in, Phase, Timeline};
 use crate::render::SliceSpec;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -60,13 +60,7 @@ impl RunCosts {
         let phases = timeline.phases();
         let items = timeline.items();
         let one_thread = timeline.threads() <= 1;
-        let sum = |phase: Phase| -> f64 {
-            phases
-                .iter()
-                .filter(|p| p.phase == phase)
-                .map(|p| p.seconds())
-                .sum()
-        };
+        let sum = |phase: Phase| seconds_in(&phases, phase);
         let mut passes: Vec<PassCost> = phases
             .iter()
             .filter(|p| p.phase == Phase::Pass)

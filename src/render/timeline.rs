@@ -264,13 +264,7 @@ impl Timeline {
         if items.is_empty() {
             return None;
         }
-        let sum = |phase: Phase| -> f64 {
-            phases
-                .iter()
-                .filter(|p| p.phase == phase)
-                .map(PhaseSpan::seconds)
-                .sum()
-        };
+        let sum = |phase: Phase| seconds_in(&phases, phase);
         let render_s = sum(Phase::Pass);
         let mut per_thread: Vec<ThreadTime> = (0..threads)
             .map(|t| ThreadTime {
@@ -335,6 +329,15 @@ impl Timeline {
             phases,
         })
     }
+}
+
+/// The seconds `phases` spent in `phase`, all its spans together.
+pub fn seconds_in(phases: &[PhaseSpan], phase: Phase) -> f64 {
+    phases
+        .iter()
+        .filter(|p| p.phase == phase)
+        .map(PhaseSpan::seconds)
+        .sum()
 }
 
 /// Rays per second over `buckets` equal stretches of the render: each work
