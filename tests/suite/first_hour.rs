@@ -4,27 +4,9 @@
 //! parts of different builds do not mix, and the figures printed say what
 //! was done.
 
-use crate::common::load_scene;
-use std::path::Path;
-use std::process::{Command, Output};
+use crate::common::{load_scene, stderr, stdout, strata};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::{render, RenderOptions, SliceSpec};
-
-fn strata(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).to_string()
-}
 
 /// A small scene with one light and one triangle-free sphere.
 const SMALL: &str = r#"

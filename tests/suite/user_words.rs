@@ -5,8 +5,8 @@
 //! beyond the sample count warns, and `strata converge` is quick by default
 //! with only its table on standard output.
 
+use crate::common::{stderr, strata};
 use std::path::Path;
-use std::process::{Command, Output};
 use strata::scene::parse::parse_description;
 
 /// The one-line error strata gives for scene `text`.
@@ -14,18 +14,6 @@ fn error(text: &str) -> String {
     parse_description(Path::new("scene.toml"), text)
         .expect_err(text)
         .to_string()
-}
-
-fn strata(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
 }
 
 /// Lit, tiny and quick: renders in milliseconds.

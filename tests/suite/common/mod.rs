@@ -13,6 +13,25 @@ use std::path::{Path, PathBuf};
 use strata::render::{render, RenderOptions};
 use strata::scene::{RenderOverrides, Scene};
 
+/// `strata ARGS` run in `dir`, its output kept.
+pub fn strata(dir: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A run's standard error, as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// A run's standard output, as text.
+pub fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
 /// Say that `test` was skipped and why, where a user running `cargo test`
 /// sees it: written to the terminal's stderr directly, past libtest's
 /// capture (which takes `print!` and `eprint!` of passing tests).
