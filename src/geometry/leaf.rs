@@ -39,7 +39,7 @@ impl Geometry {
             v: h.v,
             part: (b * LANES + h.lane) as u32,
         });
-        if !self.shapes.is_empty() {
+        if self.has_others() {
             let mut ray = Ray {
                 tmax: best.map_or(ray.tmax, |h| h.t.next_up()),
                 ..*ray
@@ -49,7 +49,7 @@ impl Geometry {
                 let id = block.id[m.trailing_zeros() as usize];
                 m &= m - 1;
                 if id >= self.triangle_count {
-                    if let Some(h) = self.hit_analytic(id, &ray) {
+                    if let Some(h) = self.hit_other(id, &ray) {
                         if closer(&h, best.as_ref()) {
                             ray.tmax = h.t.next_up();
                             best = Some(h);
@@ -82,13 +82,12 @@ impl Geometry {
                 return true;
             }
         }
-        if !self.shapes.is_empty() {
+        if self.has_others() {
             let mut m = lanes;
             while m != 0 {
                 let id = block.id[m.trailing_zeros() as usize];
                 m &= m - 1;
-                if id >= self.triangle_count && id != except && self.hit_analytic(id, ray).is_some()
-                {
+                if id >= self.triangle_count && id != except && self.other_blocks(id, ray) {
                     return true;
                 }
             }
@@ -184,7 +183,7 @@ impl Geometry {
                         tmax: tmax[i],
                         ..rays[i]
                     };
-                    if let Some(h) = self.hit_analytic(id, &ray) {
+                    if let Some(h) = self.hit_other(id, &ray) {
                         if closer(&h, out[i].as_ref()) {
                             out[i] = Some(h);
                             tmax[i] = h.t.next_up();
@@ -246,7 +245,7 @@ impl Geometry {
                 while r != 0 {
                     let i = r.trailing_zeros() as usize;
                     r &= r - 1;
-                    if self.hit_analytic(id, &rays[i]).is_some() {
+                    if self.other_blocks(id, &rays[i]) {
                         open &= !(1 << i);
                     }
                 }

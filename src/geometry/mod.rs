@@ -15,6 +15,7 @@
 pub mod bundles;
 pub mod crossings;
 pub mod csg;
+pub mod instance;
 pub mod leaf;
 pub mod nearest;
 pub mod primitive;
@@ -29,6 +30,7 @@ use crate::shape::triangle_lanes::TriangleBlock;
 pub use crossings::Crossing;
 use csg::Csg;
 use glam::Vec3;
+pub use instance::{Instance, NO_MATERIAL};
 pub use nearest::Nearest;
 pub use primitive::{
     AnalyticPrim, MeshAttribute, MeshNormals, MeshRange, MeshUvs, Shape, NO_TRANSFORM,
@@ -59,12 +61,23 @@ pub struct Geometry {
     pub csg: Csg,
     /// Unbounded, outside the BVH.
     pub planes: Vec<Plane>,
+    /// Primitives `first_instance()..`: placements of the prototypes.
+    pub instances: Vec<Instance>,
+    /// Meshes stored once in their own object space, each with its own
+    /// tree, that instances place ([`instance`]); triangles only.
+    pub prototypes: Vec<Geometry>,
     pub bvh: Bvh8,
 }
 
 impl Geometry {
     pub fn primitive_count(&self) -> usize {
-        self.triangle_count as usize + self.shapes.len()
+        self.triangle_count as usize + self.shapes.len() + self.instances.len()
+    }
+
+    /// Whether leaves may hold anything but world triangles.
+    #[inline(always)]
+    pub(crate) fn has_others(&self) -> bool {
+        !self.shapes.is_empty() || !self.instances.is_empty()
     }
 
     /// The vertices of a triangle hit (its `part` is the leaf slot).
@@ -90,8 +103,23 @@ impl Geometry {
 
     /// Bytes held by the per-triangle structures that tracing and shading
     /// read: BVH nodes, the leaf blocks (vertices and ids) and the shading
-    /// normals of meshes that have them (materials are per mesh).
+    /// normals of meshes that have them (materials are per mesh), the
+    /// prototypes' included once and each instance's record.
     pub fn accel_bytes(&self) -> usize {
+        self.own_accel_bytes() + self.prototype_bytes()
+    }
+
+    /// What the prototypes hold, each counted once, and the instances.
+    pub fn prototype_bytes(&self) -> usize {
+        self.prototypes
+            .iter()
+            .map(Geometry::accel_bytes)
+            .sum::<usize>()
+            + std::mem::size_of_val(self.instances.as_slice())
+    }
+
+    /// [`Geometry::accel_bytes`] of this tree alone, without prototypes.
+    pub fn own_accel_bytes(&self) -> usize {
         let normals: usize = self
             .meshes
             .iter()
@@ -154,6 +182,10 @@ impl Geometry {
                 prim - mesh.first,
                 mesh.name
             );
+        }
+        if prim >= self.first_instance() && prim < self.primitive_count() as u32 {
+            let k = prim - self.first_instance();
+            return format!("instance {k} (primitive {prim})");
         }
         match self.shapes.get((prim - self.triangle_count) as usize) {
             Some(s) => format!("{} (primitive {prim})", s.shape.kind()),

@@ -106,6 +106,11 @@ pub struct MeshRange {
     pub first: u32,
     pub count: u32,
     pub material: u32,
+    /// Baked under a map that reverses orientation (a mirror): the world
+    /// winding turns the other way than the file's, so the geometric
+    /// normal, taken from the winding, is flipped back to keep pointing
+    /// out of the solid (pbrt-v4's `transformSwapsHandedness`).
+    pub mirrored: bool,
     /// Shading normals, only when the file had them.
     pub normals: Option<MeshNormals>,
     /// Texture coordinates, only when the file had them and the mesh's

@@ -44,8 +44,11 @@ impl Geometry {
             let v = self.triangle(hit);
             let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
             let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-            let ng = triangle::geometric_normal(&v).normalize_or(Vec3::Z);
             let mesh = self.mesh_of(hit.prim);
+            let mut ng = triangle::geometric_normal(&v).normalize_or(Vec3::Z);
+            if mesh.mirrored {
+                ng = -ng;
+            }
             let tri = (hit.prim - mesh.first) as usize;
             let mut ns = ng;
             if let Some(normals) = &mesh.normals {
@@ -62,6 +65,10 @@ impl Geometry {
                 material: mesh.material,
                 uv: mesh.uvs.as_ref().map(|uvs| uvs.interpolate(tri, b)),
             };
+        }
+        if hit.prim >= self.first_instance() {
+            let (instance, prototype) = self.instance(hit.prim);
+            return instance.surface(prototype, ray, hit);
         }
         let prim = &self.shapes[(hit.prim - n_tris) as usize];
         let local = self.object_ray(prim, ray);

@@ -157,6 +157,8 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         transforms,
         csg,
         planes,
+        instances,
+        prototypes,
         bvh: _, // an acceleration structure: it changes speed, not hits
     } = geometry;
     let RenderSettings {
@@ -192,12 +194,14 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
             first,
             count,
             material,
+            mirrored,
             normals,
             uvs,
         } = mesh;
         h.write_u32(*first);
         h.write_u32(*count);
         h.write_u32(*material);
+        h.write_u32(u32::from(*mirrored));
         write_attribute(&mut h, normals.as_ref(), |v| v.to_array());
         write_attribute(&mut h, uvs.as_ref(), |v| v.to_array());
     }
@@ -243,6 +247,33 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     // Sampling strategies change the noise, so parts must agree on them.
     h.write_debug("light_sampling", light_sampling);
     h.write_debug("glossy_sampling", glossy_sampling);
+    // Instanced meshes, each once, and their placements.
+    h.write_u64(prototypes.len() as u64);
+    for p in prototypes {
+        h.write_u64(prototype_fingerprint(p));
+    }
+    h.write_debug("instances", instances);
+    h.finish()
+}
+
+/// A prototype's triangles in file order and its meshes' materials and
+/// attributes, as the scene's own are hashed above.
+fn prototype_fingerprint(p: &Geometry) -> u64 {
+    let mut h = Hasher64::new();
+    for tri in p.file_order_triangles() {
+        for v in tri {
+            for c in v.to_array() {
+                h.write_f32(c);
+            }
+        }
+    }
+    for mesh in &p.meshes {
+        h.write_u32(mesh.first);
+        h.write_u32(mesh.count);
+        h.write_u32(mesh.material);
+        write_attribute(&mut h, mesh.normals.as_ref(), |v| v.to_array());
+        write_attribute(&mut h, mesh.uvs.as_ref(), |v| v.to_array());
+    }
     h.finish()
 }
 

@@ -243,6 +243,9 @@ pub struct ObjectDesc {
     pub csg: Option<Box<CsgDesc>>,
     pub material: Option<String>,
     pub transform: Option<TransformDesc>,
+    /// A file of placements (one row-major 3×4 matrix per line), each
+    /// applied before `transform`: the object is placed once per line.
+    pub instances: Option<String>,
     pub name: Option<String>,
 }
 

@@ -13,6 +13,7 @@ mod docs;
 mod embree;
 mod embree_native;
 mod first_hour;
+mod instancing;
 mod memory;
 mod mesh_queries;
 mod monte_carlo;

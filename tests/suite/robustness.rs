@@ -11,7 +11,9 @@ use strata::scene::Scene;
 
 /// One object of each primitive type, in unit size around the origin (area
 /// light surfaces are placed by the caller, since lights take no transform).
-fn objects() -> Vec<(&'static str, String)> {
+/// `identity` is an instances file of one identity row: the instanced
+/// mesh is walked in object space under the object's random transform.
+fn objects(identity: &Path) -> Vec<(&'static str, String)> {
     let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
     vec![
         ("sphere", "sphere = { radius = 1.0 }".to_string()),
@@ -25,6 +27,10 @@ fn objects() -> Vec<(&'static str, String)> {
                 .to_string(),
         ),
         ("mesh", format!("mesh = \"{mesh}\"")),
+        (
+            "instanced mesh",
+            format!("mesh = \"{mesh}\"\ninstances = \"{}\"", identity.display()),
+        ),
         (
             "plane",
             "plane = { point = [0.0, 0.1, 0.0], normal = [0.1, 1.0, 0.2] }".to_string(),
@@ -79,7 +85,10 @@ fn self_hit(scene: &Scene, ray: &Ray, prim: u32, scale: f32) -> Option<f32> {
 fn spawned_rays_never_hit_their_own_surface_at_any_scale() {
     let mut rng = seeded(2024);
     let mut checked = 0usize;
-    for (name, shape) in objects() {
+    let dir = crate::common::temp_dir("robust-instance");
+    let identity = dir.join("identity.csv");
+    std::fs::write(&identity, "1,0,0,0,0,1,0,0,0,0,1,0\n").unwrap();
+    for (name, shape) in objects(&identity) {
         for scale in [1e-4f32, 1.0, 1e5] {
             for _ in 0..1000 {
                 // 1000 random transforms per (shape, scale), each probed by 2 rays.

@@ -66,6 +66,7 @@ pub fn mesh_geometry(
         first: 0,
         count,
         material: 0,
+        mirrored: false,
         normals: None,
         uvs: None,
     }];
@@ -93,6 +94,8 @@ pub fn mesh_geometry(
         transforms: Vec::new(),
         csg: Csg::default(),
         planes: Vec::new(),
+        instances: Vec::new(),
+        prototypes: Vec::new(),
         bvh,
     };
     geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());

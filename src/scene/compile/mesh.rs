@@ -109,6 +109,7 @@ impl Compiler<'_> {
         material: u32,
         normals: Option<MeshNormals>,
         uvs: Option<MeshUvs>,
+        mirrored: bool,
     ) {
         if tris.len() == 0 {
             return;
@@ -121,6 +122,7 @@ impl Compiler<'_> {
             first,
             count,
             material,
+            mirrored,
             normals,
             uvs,
         });
@@ -177,7 +179,19 @@ impl Compiler<'_> {
     ) -> InputResult<()> {
         let (asset, first_material, path) = self.asset(file, &format!("{key}.mesh"))?;
         let t = Transform::new(m).expect("checked by the caller");
-        for (k, mesh) in asset.meshes.iter().enumerate() {
+        let instanced = self.mesh_uses.get(&path).is_some_and(|&n| n > 1);
+        if instanced {
+            self.mesh_instance(
+                &asset,
+                first_material,
+                &path,
+                key,
+                m,
+                explicit_material,
+                inherited,
+            )?;
+        }
+        for (k, mesh) in asset.meshes.iter().enumerate().filter(|_| !instanced) {
             check_indices(mesh, &path)?;
             if let Some(normals) = &mesh.normals {
                 check_attribute(normals, mesh, &path, "normals")?;
@@ -206,7 +220,8 @@ impl Compiler<'_> {
             } else {
                 mesh.name.clone()
             };
-            self.push_mesh(name, tris, material, normals, uvs);
+            let mirrored = m.matrix3.determinant() < 0.0;
+            self.push_mesh(name, tris, material, normals, uvs, mirrored);
         }
         for light in &asset.point_lights {
             self.lights.push(Light::Point {
@@ -227,7 +242,7 @@ impl Compiler<'_> {
 }
 
 /// Every vertex index of a loaded mesh is in range.
-fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
+pub(super) fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
     let n_vertices = mesh.positions.len();
     match loaders::first_where(&mesh.indices, |idx| {
         idx.iter().any(|&i| i as usize >= n_vertices)
@@ -244,7 +259,7 @@ fn check_indices(mesh: &LoadedMesh, path: &Path) -> InputResult<()> {
 /// A per-corner attribute a loader handed over has one index triple per
 /// triangle, each in range (the loaders make them so; this keeps a
 /// mistake there from becoming a panic at a hit).
-fn check_attribute<T>(
+pub(super) fn check_attribute<T>(
     attribute: &MeshAttribute<T>,
     mesh: &LoadedMesh,
     path: &Path,

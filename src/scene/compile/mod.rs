@@ -22,7 +22,7 @@ use crate::accel::{BuildQuality, Bvh8};
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::csg::Csg;
-use crate::geometry::{AnalyticPrim, Geometry, MeshRange, NO_TRANSFORM};
+use crate::geometry::{AnalyticPrim, Geometry, Instance, MeshRange, NO_TRANSFORM};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Aabb, Transform};
@@ -38,10 +38,12 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
+pub use instance::read_instances;
 
 mod arrays;
 mod camera;
 mod csg;
+mod instance;
 mod light;
 mod material;
 mod mesh;
@@ -233,6 +235,7 @@ fn compile_for(
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
+    instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
         let material = c.material(m, &key)?;
@@ -248,7 +251,11 @@ fn compile_for(
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
     // Every object holds what it needs from its mesh files by now.
     drop(std::mem::take(&mut c.assets));
-    for source in &mut c.sources {
+    for source in c
+        .sources
+        .iter_mut()
+        .chain(c.prototypes.iter_mut().flat_map(|p| &mut p.sources))
+    {
         source.release_file_positions();
     }
     let load = start.elapsed();
@@ -264,13 +271,41 @@ fn compile_for(
         }
     }
 
-    progress.building(u64::from(n_tris));
+    let prototype_tris: u64 = c
+        .prototypes
+        .iter()
+        .map(|p| p.meshes.last().map_or(0, |m| u64::from(m.first + m.count)))
+        .sum();
+    progress.building(u64::from(n_tris) + prototype_tris);
     let build_start = Instant::now();
-    let boxes = c.primitive_boxes()?;
-    let quality = match purpose {
-        Purpose::Render => quality.for_render(boxes.len(), settings.first_hit_rays(&c.lights)),
+    let for_purpose = |quality: BuildQuality, prims: usize| match purpose {
+        Purpose::Render => quality.for_render(prims, settings.first_hit_rays(&c.lights)),
         Purpose::Tracing => quality,
     };
+    // Each prototype's tree first: an instance's box is its root's child
+    // boxes moved into world space.
+    let mut prototypes = Vec::with_capacity(c.prototypes.len());
+    let file = path.display().to_string();
+    for parts in std::mem::take(&mut c.prototypes) {
+        let n = parts
+            .meshes
+            .last()
+            .map_or(0, |m| (m.first + m.count) as usize);
+        prototypes.push(instance::build_prototype(
+            parts,
+            for_purpose(quality, n),
+            &file,
+        )?);
+    }
+    let mut boxes = c.primitive_boxes()?;
+    for (k, inst) in c.instances.iter().enumerate() {
+        let b = inst.bounds(&prototypes[inst.prototype as usize]);
+        if !b.is_finite() {
+            return Err(c.err("objects", format!("instance {k} has infinite bounds")));
+        }
+        boxes.push(b);
+    }
+    let quality = for_purpose(quality, boxes.len());
     let bvh_quality = quality.preset(boxes.len());
     let mut bvh = Bvh8::build_from(boxes, quality);
     // The builder reserves room for more nodes than the collapse makes.
@@ -296,6 +331,8 @@ fn compile_for(
         transforms: c.transforms,
         csg: c.csg,
         planes: c.planes,
+        instances: c.instances,
+        prototypes,
         bvh,
     };
     geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
@@ -332,6 +369,13 @@ struct Compiler<'d> {
     loaded_cameras: Vec<LoadedCamera>,
     /// Mesh files already read, with the scene index of their first material.
     assets: HashMap<PathBuf, (Arc<LoadedAsset>, u32)>,
+    /// How many times each mesh file is placed: those placed more than
+    /// once are stored once, as prototypes.
+    mesh_uses: HashMap<PathBuf, u32>,
+    /// Prototypes until their trees are built, and each one's file.
+    prototypes: Vec<instance::PrototypeParts>,
+    prototype_ids: HashMap<PathBuf, u32>,
+    instances: Vec<Instance>,
 }
 
 impl<'d> Compiler<'d> {
@@ -353,6 +397,10 @@ impl<'d> Compiler<'d> {
             lights: Vec::new(),
             loaded_cameras: Vec::new(),
             assets: HashMap::new(),
+            mesh_uses: HashMap::new(),
+            prototypes: Vec::new(),
+            prototype_ids: HashMap::new(),
+            instances: Vec::new(),
         };
         // Material 0: what objects get when nothing names one.
         c.materials.push(Material::default());
@@ -379,23 +427,9 @@ impl<'d> Compiler<'d> {
     }
 
     fn primitive_boxes(&self) -> InputResult<Vec<Aabb>> {
-        let n_tris = self
-            .meshes
-            .last()
-            .map_or(0, |m| (m.first + m.count) as usize);
-        let mut boxes = Vec::with_capacity(n_tris + self.shapes.len());
-        for (mesh, source) in self.meshes.iter().zip(&self.sources) {
-            use rayon::prelude::*;
-            let start = boxes.len();
-            boxes.par_extend(
-                (0..source.len())
-                    .into_par_iter()
-                    .map(|i| Aabb::from_points(&source.get(i))),
-            );
-            if let Some(i) = boxes[start..].iter().position(|b| !b.is_finite()) {
-                return Err(self.err(&mesh.name, format!("triangle {i} is not finite")));
-            }
-        }
+        let mut boxes = instance::triangle_boxes(&self.meshes, &self.sources)
+            .map_err(|(mesh, i)| self.err(&mesh, format!("triangle {i} is not finite")))?;
+        boxes.reserve(self.shapes.len() + self.instances.len());
         for (i, s) in self.shapes.iter().enumerate() {
             let local = s.shape.bounds(&self.csg);
             let b = if s.transform == NO_TRANSFORM {

@@ -165,7 +165,21 @@ impl Compiler<'_> {
             material,
             explicit_material,
         } = self.placement(obj, key, parent, inherited)?;
+        for m in self.placements(obj, key, m)? {
+            self.shape(obj, key, m, material, explicit_material)?;
+        }
+        Ok(())
+    }
 
+    /// The object's shape under one of its placements.
+    fn shape(
+        &mut self,
+        obj: &ObjectDesc,
+        key: &str,
+        m: Affine3A,
+        material: u32,
+        explicit_material: Option<u32>,
+    ) -> InputResult<()> {
         if let Some(s) = &obj.sphere {
             let sphere = self.sphere_desc(s, key)?;
             self.sphere(sphere, m, material, key)?;
@@ -197,9 +211,10 @@ impl Compiler<'_> {
                 material,
                 None,
                 None,
+                m.matrix3.determinant() < 0.0,
             );
         } else if let Some(file) = &obj.mesh {
-            self.mesh_file(file, key, m, explicit_material, inherited)?;
+            self.mesh_file(file, key, m, explicit_material, material)?;
         } else if let Some(children) = &obj.group {
             for (i, child) in children.iter().enumerate() {
                 self.object(child, &format!("{key}.group[{i}]"), m, material)?;

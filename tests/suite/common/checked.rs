@@ -7,6 +7,7 @@ use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputResult;
 use strata::geometry::csg::{ClosedMesh, Solid};
+use strata::geometry::Geometry;
 use strata::math::Aabb;
 use strata::scene::description::SceneDescription;
 use strata::scene::{LoadTimings, RenderOverrides, Scene};
@@ -15,7 +16,16 @@ use strata::scene::{LoadTimings, RenderOverrides, Scene};
 /// operands, is valid: every primitive in one leaf, each triangle inside
 /// its leaf's box, boxes nested, leaf blocks padded (see `Bvh8::validate`).
 pub fn check_bvhs(scene: &Scene) {
-    let g = &scene.geometry;
+    check_geometry(&scene.geometry);
+}
+
+/// [`check_bvhs`] for one tree and, recursively, its prototypes'; an
+/// instance's box must hold every triangle of its prototype moved to
+/// world space.
+fn check_geometry(g: &Geometry) {
+    for p in &g.prototypes {
+        check_geometry(p);
+    }
     // The scene keeps the tree's leaf slots in its leaf blocks, with the
     // triangles' vertices: their boxes are the boxes the tree was built on.
     let slots: Vec<u32> = g.leaf_blocks.iter().flat_map(|b| b.id).collect();
@@ -26,6 +36,15 @@ pub fn check_bvhs(scene: &Scene) {
                 boxes[id as usize] = Some(Aabb::from_points(&block.triangle(lane)));
             }
         }
+    }
+    for (k, inst) in g.instances.iter().enumerate() {
+        let m = inst.affine();
+        let placed = g.prototypes[inst.prototype as usize]
+            .file_order_triangles()
+            .iter()
+            .flatten()
+            .fold(Aabb::EMPTY, |b, &p| b.grow(m.transform_point3(p)));
+        boxes[g.first_instance() as usize + k] = Some(placed);
     }
     g.bvh
         .validate_leaves(&slots, g.primitive_count(), |id| boxes[id as usize])

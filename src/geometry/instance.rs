@@ -1,0 +1,248 @@
+//! Instances: a mesh stored once, in its own object space under its own
+//! tree (a *prototype*, itself a [`Geometry`] of triangles only), placed
+//! any number of times by an affine map each. The scene's tree holds one
+//! primitive per instance; a ray that reaches one enters the prototype's
+//! tree in object space, as Embree's instances, pbrt-v4's
+//! `ObjectInstance` and Mitsuba 3's `instance` of a `shapegroup` do.
+//!
+//! The object-space ray keeps its unnormalised direction, so its t is the
+//! world t and hits compare across instances and world triangles as they
+//! are. A hit's point is interpolated from the prototype's vertices and
+//! moved to world space with its error bound (pbrt-v4 section 6.8.6), to
+//! which [`Instance::surface`] adds what moving the spawned ray's origin
+//! back into object space may cost, so that a ray leaving an instanced
+//! surface starts on its side in object space too (no acne, no leaks).
+
+use super::{Geometry, Surface};
+use crate::accel::node::{decode, ChildRef};
+use crate::accel::PrimHit;
+use crate::math::lanes::LANES;
+use crate::math::offset::{gamma, transformed_error};
+use crate::math::{Aabb, Ray, Transform};
+use glam::{Affine3A, Mat3, Vec3};
+
+/// No material of its own: an instance takes its mesh's materials.
+pub const NO_MATERIAL: u32 = u32::MAX;
+
+/// One placement of a prototype: 104 bytes (two 3×4 maps, three indices).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Instance {
+    /// World to object: the linear part and the translation.
+    pub to_object: Mat3,
+    pub to_object_translation: Vec3,
+    /// Object to world.
+    pub to_world: Mat3,
+    pub to_world_translation: Vec3,
+    /// Index into [`Geometry::prototypes`].
+    pub prototype: u32,
+    /// The object's own `material`, which replaces all of its mesh's, or
+    /// [`NO_MATERIAL`].
+    pub material: u32,
+    /// The material of the mesh's triangles that have none of their own
+    /// (the one the object inherits from its group).
+    pub inherited: u32,
+}
+
+impl Instance {
+    /// `None` where `to_world` is singular or not finite (as
+    /// [`Transform::new`] decides: the inverse is computed in f64, so it
+    /// is the correctly rounded inverse of the f32 map).
+    pub fn new(to_world: Affine3A, prototype: u32, material: u32, inherited: u32) -> Option<Self> {
+        let t = Transform::new(to_world)?;
+        Some(Self {
+            to_object: Mat3::from(t.to_object.matrix3),
+            to_object_translation: t.to_object.translation.into(),
+            to_world: Mat3::from(t.to_world.matrix3),
+            to_world_translation: t.to_world.translation.into(),
+            prototype,
+            material,
+            inherited,
+        })
+    }
+
+    /// The object-to-world map.
+    pub fn affine(&self) -> Affine3A {
+        Affine3A::from_mat3_translation(self.to_world, self.to_world_translation)
+    }
+
+    /// The object-to-world map in f64, for checks.
+    pub fn affine_f64(&self) -> glam::DAffine3 {
+        glam::DAffine3::from_mat3_translation(
+            self.to_world.as_dmat3(),
+            self.to_world_translation.as_dvec3(),
+        )
+    }
+
+    /// `ray` in the prototype's object space, its direction not
+    /// renormalised so that its t is the world t.
+    #[inline(always)]
+    pub fn object_ray(&self, ray: &Ray) -> Ray {
+        Ray {
+            origin: self.to_object * ray.origin + self.to_object_translation,
+            direction: self.to_object * ray.direction,
+            tmin: ray.tmin,
+            tmax: ray.tmax,
+        }
+    }
+
+    /// The world-space box of `prototype` under this placement: the
+    /// prototype root's child boxes moved and joined (tighter than its
+    /// whole box's corners under a rotation), each grown by the rounding
+    /// of moving its corners.
+    pub fn bounds(&self, prototype: &Geometry) -> Aabb {
+        let m = self.affine();
+        // Each corner moved, its rounding (pbrt-v4 6.8.6) added around it.
+        let moved = |b: Aabb| {
+            b.corners().iter().fold(Aabb::EMPTY, |out, &c| {
+                let (w, e) = (m.transform_point3(c), transformed_error(&m, c, Vec3::ZERO));
+                out.grow(w - e).grow(w + e)
+            })
+        };
+        let Some(root) = prototype.bvh.nodes.first() else {
+            return Aabb::EMPTY;
+        };
+        let mut out = Aabb::EMPTY;
+        for (k, &c) in root.child.iter().enumerate() {
+            if decode(c) != ChildRef::Empty {
+                let b = &root.bounds;
+                let child = Aabb::new(
+                    Vec3::new(b[0][k], b[2][k], b[4][k]),
+                    Vec3::new(b[1][k], b[3][k], b[5][k]),
+                );
+                out = out.union(moved(child));
+            }
+        }
+        out
+    }
+
+    /// The world-space surface of a hit on this instance: `hit.part` is
+    /// the prototype's leaf slot, as a world triangle's is the scene's.
+    pub fn surface(&self, prototype: &Geometry, ray: &Ray, hit: &PrimHit) -> Surface {
+        let slot = hit.part as usize;
+        let inner = PrimHit {
+            prim: prototype.leaf_blocks[slot / LANES].id[slot % LANES],
+            ..*hit
+        };
+        let local = prototype.surface(&self.object_ray(ray), &inner);
+        let m = self.affine();
+        let p = m.transform_point3(local.p);
+        // Moving the point to world space rounds it (pbrt-v4 6.8.6); a ray
+        // spawned from it is moved back with `to_object`, which rounds
+        // again by up to γ(4)(|M⁻¹||p| + |t⁻¹|) in object space (three
+        // operations, and the f32 inverse's own half ulp). That error,
+        // moved to world space with |M|, joins the bound, so an offset
+        // along the normal past it is past it in object space too.
+        let abs = |a: Mat3| Mat3::from_cols(a.x_axis.abs(), a.y_axis.abs(), a.z_axis.abs());
+        let back = gamma(4) * (abs(self.to_object) * p.abs() + self.to_object_translation.abs());
+        let p_error = transformed_error(&m, local.p, local.p_error) + abs(self.to_world) * back;
+        let normal_to_world = self.to_object.transpose();
+        let ng = (normal_to_world * local.geometric_normal).normalize_or(Vec3::Z);
+        let ns = (normal_to_world * local.shading_normal).normalize_or(ng);
+        let mesh_material = local.material;
+        let material = if self.material != NO_MATERIAL {
+            self.material
+        } else if mesh_material != NO_MATERIAL {
+            mesh_material
+        } else {
+            self.inherited
+        };
+        Surface {
+            p,
+            p_error,
+            geometric_normal: ng,
+            shading_normal: ns,
+            material,
+            uv: local.uv,
+        }
+    }
+}
+
+impl Geometry {
+    /// The first primitive id of an instance: they follow the triangles
+    /// and the analytic shapes.
+    #[inline(always)]
+    pub fn first_instance(&self) -> u32 {
+        self.triangle_count + self.shapes.len() as u32
+    }
+
+    /// The instance a primitive id names, with its prototype.
+    #[inline(always)]
+    pub fn instance(&self, prim: u32) -> (&Instance, &Geometry) {
+        let instance = &self.instances[(prim - self.first_instance()) as usize];
+        (instance, &self.prototypes[instance.prototype as usize])
+    }
+
+    /// The closest hit of `ray` on instance primitive `id`: the walk of
+    /// its prototype's tree in object space, reported as the instance
+    /// (`prim`), with the prototype's leaf slot in `part`.
+    #[inline]
+    pub(crate) fn hit_instance(&self, id: u32, ray: &Ray) -> Option<PrimHit> {
+        let (instance, prototype) = self.instance(id);
+        let hit = prototype.intersect(&instance.object_ray(ray))?;
+        Some(PrimHit { prim: id, ..hit })
+    }
+
+    /// Whether anything of instance primitive `id` blocks `ray`.
+    #[inline]
+    pub(crate) fn instance_blocks(&self, id: u32, ray: &Ray) -> bool {
+        let (instance, prototype) = self.instance(id);
+        prototype.occluded(&instance.object_ray(ray))
+    }
+
+    /// The closest hit on a primitive that is not a world triangle.
+    #[inline]
+    pub(crate) fn hit_other(&self, id: u32, ray: &Ray) -> Option<PrimHit> {
+        if id < self.first_instance() {
+            self.hit_analytic(id, ray)
+        } else {
+            self.hit_instance(id, ray)
+        }
+    }
+
+    /// Whether a primitive that is not a world triangle blocks `ray`.
+    #[inline]
+    pub(crate) fn other_blocks(&self, id: u32, ray: &Ray) -> bool {
+        if id < self.first_instance() {
+            self.hit_analytic(id, ray).is_some()
+        } else {
+            self.instance_blocks(id, ray)
+        }
+    }
+
+    /// Triangles the instances place, counted once per instance.
+    pub fn instanced_triangles(&self) -> u64 {
+        self.instances
+            .iter()
+            .map(|i| u64::from(self.prototypes[i.prototype as usize].triangle_count))
+            .sum()
+    }
+
+    /// Where each instance's triangles start among the ids of
+    /// [`Geometry::flat_prim`]: one entry per instance, and the total.
+    pub fn flat_offsets(&self) -> Vec<u64> {
+        let mut next = u64::from(self.first_instance());
+        let mut out = Vec::with_capacity(self.instances.len() + 1);
+        out.push(next);
+        for i in &self.instances {
+            next += u64::from(self.prototypes[i.prototype as usize].triangle_count);
+            out.push(next);
+        }
+        out
+    }
+
+    /// A hit's primitive id as if every instance were a copy in world
+    /// space: the scene's own primitives keep theirs, and instance `k`'s
+    /// triangle `j` is `offsets[k] + j` ([`Geometry::flat_offsets`]), after
+    /// the triangles of the instances before it. What `strata trace`
+    /// writes, and what Embree's instances of one mesh of T triangles give
+    /// as `instID · T + primID`.
+    pub fn flat_prim(&self, hit: &PrimHit, offsets: &[u64]) -> u64 {
+        if hit.prim < self.first_instance() || self.plane_index(hit.prim).is_some() {
+            return u64::from(hit.prim);
+        }
+        let k = (hit.prim - self.first_instance()) as usize;
+        let prototype = &self.prototypes[self.instances[k].prototype as usize];
+        let slot = hit.part as usize;
+        offsets[k] + u64::from(prototype.leaf_blocks[slot / LANES].id[slot % LANES])
+    }
+}

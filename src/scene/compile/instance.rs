@@ -1,0 +1,266 @@
+//! Instancing in the scene file: a mesh file placed more than once is read
+//! and stored once, as a prototype with its own tree, and each placement
+//! becomes an [`Instance`]; `instances = "FILE.csv"` gives an object many
+//! placements at once, one row-major 3×4 object-to-world matrix per line.
+
+use super::mesh::{check_attribute, check_indices, leaf_blocks, TriangleSource};
+use super::Compiler;
+use crate::accel::prefetch::Prefetch;
+use crate::accel::{BuildQuality, Bvh8};
+use crate::error::{io_message, InputError, InputResult};
+use crate::geometry::csg::Csg;
+use crate::geometry::{Geometry, Instance, MeshRange, NO_MATERIAL};
+use crate::math::{Aabb, Transform};
+use crate::scene::asset::LoadedAsset;
+use crate::scene::description::ObjectDesc;
+use glam::{Affine3A, Mat3, Vec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A prototype's meshes until its tree is built, in file space.
+pub(super) struct PrototypeParts {
+    pub(super) meshes: Vec<MeshRange>,
+    pub(super) sources: Vec<TriangleSource>,
+}
+
+/// How many times each mesh file (by resolved path) is placed, counting
+/// an object with `instances` (or inside a group that has them) as many:
+/// the files placed more than once become prototypes.
+pub(super) fn count_mesh_uses(
+    base_dir: &Path,
+    objects: &[ObjectDesc],
+    times: u32,
+    uses: &mut HashMap<PathBuf, u32>,
+) {
+    for obj in objects {
+        let n = if obj.instances.is_some() {
+            times.saturating_mul(2)
+        } else {
+            times
+        };
+        if let Some(file) = &obj.mesh {
+            let count = uses.entry(base_dir.join(file)).or_insert(0);
+            *count = count.saturating_add(n);
+        }
+        if let Some(children) = &obj.group {
+            count_mesh_uses(base_dir, children, n, uses);
+        }
+    }
+}
+
+/// The placements of an instances file: one row-major 3×4 object-to-world
+/// matrix per line (twelve numbers separated by commas, spaces or tabs);
+/// blank lines and lines starting with `#` (numpy's `savetxt` header) are
+/// skipped. Each is finite and invertible, or the error names the line.
+pub fn read_instances(path: &Path) -> InputResult<Vec<Affine3A>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let at = |message: String| InputError::new(path, "", message).on_line(Some(i + 1));
+        let fields: Vec<&str> = line
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|f| !f.is_empty())
+            .collect();
+        if fields.len() != 12 {
+            return Err(at(format!(
+                "expected 12 numbers (a row-major 3x4 object-to-world matrix), found {}",
+                fields.len()
+            )));
+        }
+        let mut m = [0.0f32; 12];
+        for (k, f) in fields.iter().enumerate() {
+            m[k] = match f.parse::<f32>() {
+                Ok(x) if x.is_finite() => x,
+                Ok(_) => return Err(at(format!("number {} ('{f}') is not finite", k + 1))),
+                Err(_) => return Err(at(format!("number {} ('{f}') is not a number", k + 1))),
+            };
+        }
+        let affine = Affine3A::from_mat3_translation(
+            Mat3::from_cols(
+                Vec3::new(m[0], m[4], m[8]),
+                Vec3::new(m[1], m[5], m[9]),
+                Vec3::new(m[2], m[6], m[10]),
+            ),
+            Vec3::new(m[3], m[7], m[11]),
+        );
+        if Transform::new(affine).is_none() {
+            return Err(at("the matrix is singular (it has no inverse)".to_string()));
+        }
+        out.push(affine);
+    }
+    Ok(out)
+}
+
+impl Compiler<'_> {
+    /// The placements of an object: its own transform `m` alone, or `m`
+    /// after each matrix of its `instances` file.
+    pub(super) fn placements(
+        &self,
+        obj: &ObjectDesc,
+        key: &str,
+        m: Affine3A,
+    ) -> InputResult<Vec<Affine3A>> {
+        let Some(file) = &obj.instances else {
+            return Ok(vec![m]);
+        };
+        let path = self.base_dir.join(file);
+        if let Err(e) = std::fs::metadata(&path) {
+            let message = format!("cannot read '{}': {}", path.display(), io_message(&e));
+            return Err(self.err(&format!("{key}.instances"), message));
+        }
+        let rows = read_instances(&path)?;
+        let mut out = Vec::with_capacity(rows.len());
+        for a in rows {
+            let placed = m * a;
+            if Transform::new(placed).is_none() {
+                let message = format!(
+                    "an instance of '{}' is singular or not finite under the object's transform",
+                    path.display()
+                );
+                return Err(self.err(&format!("{key}.transform"), message));
+            }
+            out.push(placed);
+        }
+        Ok(out)
+    }
+
+    /// Mesh file `path` (already read as `asset`) placed by `m` as an
+    /// instance of its prototype, made on its first placement.
+    pub(super) fn mesh_instance(
+        &mut self,
+        asset: &Arc<LoadedAsset>,
+        first_material: u32,
+        path: &Path,
+        key: &str,
+        m: Affine3A,
+        explicit_material: Option<u32>,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let prototype = match self.prototype_ids.get(path) {
+            Some(&p) => p,
+            None => {
+                let parts = prototype_parts(asset, first_material, path, key)?;
+                self.prototypes.push(parts);
+                let p = self.prototypes.len() as u32 - 1;
+                self.prototype_ids.insert(path.to_path_buf(), p);
+                p
+            }
+        };
+        let material = explicit_material.unwrap_or(NO_MATERIAL);
+        let instance = Instance::new(m, prototype, material, inherited).ok_or_else(|| {
+            self.err(
+                &format!("{key}.transform"),
+                "transform is singular or not finite",
+            )
+        })?;
+        self.instances.push(instance);
+        Ok(())
+    }
+}
+
+/// A mesh file's meshes in file space, with the materials the file gives
+/// them ([`NO_MATERIAL`] where it gives none) and all their attributes.
+fn prototype_parts(
+    asset: &Arc<LoadedAsset>,
+    first_material: u32,
+    path: &Path,
+    key: &str,
+) -> InputResult<PrototypeParts> {
+    let mut parts = PrototypeParts {
+        meshes: Vec::new(),
+        sources: Vec::new(),
+    };
+    for (k, mesh) in asset.meshes.iter().enumerate() {
+        check_indices(mesh, path)?;
+        if let Some(normals) = &mesh.normals {
+            check_attribute(normals, mesh, path, "normals")?;
+        }
+        if let Some(uvs) = &mesh.uvs {
+            check_attribute(uvs, mesh, path, "texture coordinates")?;
+        }
+        if mesh.indices.is_empty() {
+            continue;
+        }
+        let first = parts.meshes.last().map_or(0, |m| m.first + m.count);
+        parts.sources.push(TriangleSource::File {
+            positions: mesh.positions.clone(),
+            asset: asset.clone(),
+            mesh: k,
+        });
+        parts.meshes.push(MeshRange {
+            name: if mesh.name.is_empty() {
+                key.to_string()
+            } else {
+                mesh.name.clone()
+            },
+            first,
+            count: mesh.indices.len() as u32,
+            material: mesh
+                .material
+                .map_or(NO_MATERIAL, |i| first_material + i as u32),
+            mirrored: false,
+            normals: mesh.normals.clone(),
+            uvs: mesh.uvs.clone(),
+        });
+    }
+    Ok(parts)
+}
+
+/// A prototype's tree over its triangles, and the prototype.
+pub(super) fn build_prototype(
+    parts: PrototypeParts,
+    quality: BuildQuality,
+    path: &str,
+) -> InputResult<Geometry> {
+    let PrototypeParts { meshes, sources } = parts;
+    let boxes = triangle_boxes(&meshes, &sources)
+        .map_err(|(mesh, i)| InputError::new(path, mesh, format!("triangle {i} is not finite")))?;
+    let mut bvh = Bvh8::build_from(boxes, quality);
+    bvh.nodes.shrink_to_fit();
+    let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
+    bvh.prim_ids = Vec::new();
+    let triangle_count = meshes.last().map_or(0, |m| m.first + m.count);
+    let mut geometry = Geometry {
+        leaf_blocks: blocks,
+        triangle_count,
+        meshes,
+        shapes: Vec::new(),
+        transforms: Vec::new(),
+        csg: Csg::default(),
+        planes: Vec::new(),
+        instances: Vec::new(),
+        prototypes: Vec::new(),
+        bvh,
+    };
+    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    Ok(geometry)
+}
+
+/// Every triangle's box, mesh by mesh; the first that is not finite is an
+/// error naming its mesh and its index there.
+pub(super) fn triangle_boxes(
+    meshes: &[MeshRange],
+    sources: &[TriangleSource],
+) -> Result<Vec<Aabb>, (String, usize)> {
+    let n = meshes.last().map_or(0, |m| (m.first + m.count) as usize);
+    let mut boxes = Vec::with_capacity(n);
+    for (mesh, source) in meshes.iter().zip(sources) {
+        let start = boxes.len();
+        boxes.par_extend(
+            (0..source.len())
+                .into_par_iter()
+                .map(|i| Aabb::from_points(&source.get(i))),
+        );
+        if let Some(i) = boxes[start..].iter().position(|b| !b.is_finite()) {
+            return Err((mesh.name.clone(), i));
+        }
+    }
+    Ok(boxes)
+}

@@ -1,0 +1,381 @@
+//! Instances against copies: a mesh placed by `instances = "FILE.csv"`
+//! (stored once, walked in object space) and the same mesh copied into
+//! world space once per placement give the same hits, surfaces and
+//! images within float rounding, under random affine maps with
+//! non-uniform scale, shear and mirroring; every way of tracing answers
+//! an instanced scene alike; bad placement files name their line; and a
+//! thousand instances cost the mesh once plus a fixed record each.
+
+use crate::common::{
+    bumpy_sphere_obj, render_rgb, scene_at, seeded, stderr, strata, temp_dir, Draw,
+    StreamRng as Rng,
+};
+use glam::{Affine3A, Mat3, Vec3};
+use strata::accel::PrimHit;
+use strata::math::Ray;
+use strata::scene::Scene;
+
+/// A random invertible affine map: rotation, non-uniform scale (mirrored
+/// on a random axis half the time), another rotation (so a shear), and a
+/// translation of up to `reach`.
+fn random_affine(rng: &mut Rng, reach: f32) -> Affine3A {
+    let rot = |rng: &mut Rng| Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, 6.28));
+    let mut s = Vec3::new(
+        rng.range(0.3, 2.0),
+        rng.range(0.3, 2.0),
+        rng.range(0.3, 2.0),
+    );
+    if rng.range(0.0, 1.0) < 0.5 {
+        s.y = -s.y;
+    }
+    let linear = rot(rng) * Mat3::from_diagonal(s) * rot(rng);
+    Affine3A::from_mat3_translation(linear, rng.unit_vector() * rng.range(0.0, reach))
+}
+
+/// A row-major 3×4 line of an instances file.
+fn csv_row(a: &Affine3A) -> String {
+    let m = Mat3::from(a.matrix3).transpose();
+    let t = a.translation;
+    let r = [m.x_axis, m.y_axis, m.z_axis];
+    (0..3)
+        .map(|i| format!("{},{},{},{}", r[i].x, r[i].y, r[i].z, t[i]))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The same map as a scene file's `transform = { matrix = ... }`.
+fn toml_matrix(a: &Affine3A) -> String {
+    let m = Mat3::from(a.matrix3).transpose();
+    let t = a.translation;
+    let r = [m.x_axis, m.y_axis, m.z_axis];
+    let rows: Vec<String> = (0..3)
+        .map(|i| format!("[{}, {}, {}, {}]", r[i].x, r[i].y, r[i].z, t[i]))
+        .collect();
+    format!("{}, [0.0, 0.0, 0.0, 1.0]", rows.join(", "))
+}
+
+/// An instanced scene and the same placements as world-space copies (one
+/// copy of the mesh file per placement, each placed once, so baked).
+struct Pair {
+    instanced: Scene,
+    copied: Scene,
+    placements: Vec<Affine3A>,
+    /// Triangles of the mesh.
+    triangles: u32,
+    _dir: crate::common::TempDir,
+}
+
+const LIGHTS: &str = "[[lights]]\ntype = \"point\"\nposition = [0.0, 30.0, 20.0]\nintensity = [3000.0, 3000.0, 3000.0]\n\
+[camera]\nposition = [0.0, 4.0, 22.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 40.0\n\
+[render]\nwidth = 48\nheight = 40\nspp = 4\n";
+
+fn pair(seed: u64, count: usize) -> Pair {
+    let dir = temp_dir("instancing");
+    let mut rng = seeded(seed);
+    let obj = bumpy_sphere_obj(18, 12, 1.0, 0.25);
+    std::fs::write(dir.join("m.obj"), &obj).unwrap();
+    let placements: Vec<Affine3A> = (0..count).map(|_| random_affine(&mut rng, 6.0)).collect();
+    let rows: Vec<String> = placements.iter().map(csv_row).collect();
+    std::fs::write(dir.join("places.csv"), rows.join("\n") + "\n").unwrap();
+    let instanced = scene_at(
+        &format!("{LIGHTS}[[objects]]\nmesh = \"m.obj\"\ninstances = \"places.csv\"\n"),
+        &dir.join("a.toml"),
+    );
+    let mut copies = LIGHTS.to_string();
+    for (k, a) in placements.iter().enumerate() {
+        std::fs::write(dir.join(format!("m{k}.obj")), &obj).unwrap();
+        copies += &format!(
+            "[[objects]]\nmesh = \"m{k}.obj\"\ntransform = {{ matrix = [{}] }}\n",
+            toml_matrix(a)
+        );
+    }
+    let copied = scene_at(&copies, &dir.join("b.toml"));
+    Pair {
+        instanced,
+        copied,
+        placements,
+        triangles: 2 * 18 * 12,
+        _dir: dir,
+    }
+}
+
+/// A hit as (placement, triangle of the mesh), whichever scene it is from.
+fn which(scene: &Scene, hit: &PrimHit, offsets: &[u64], triangles: u32) -> (u64, u64) {
+    let flat = if scene.geometry.instances.is_empty() {
+        u64::from(hit.prim)
+    } else {
+        scene.geometry.flat_prim(hit, offsets) - offsets[0]
+    };
+    (flat / u64::from(triangles), flat % u64::from(triangles))
+}
+
+/// Rays at points inside random triangles of random placements (which
+/// both scenes must hit), and rays through the placements' region in
+/// random directions.
+fn rays(p: &Pair, rng: &mut Rng, n: usize) -> Vec<Ray> {
+    let tris = p.copied.geometry.file_order_triangles();
+    (0..n)
+        .map(|i| {
+            let target = if i % 2 == 0 {
+                let t = tris[(rng.range(0.0, 1.0) * tris.len() as f32) as usize % tris.len()];
+                let (u, v) = (rng.range(0.05, 0.45), rng.range(0.05, 0.45));
+                (1.0 - u - v) * t[0] + u * t[1] + v * t[2]
+            } else {
+                rng.unit_vector() * rng.range(0.0, 7.0)
+            };
+            let origin = target + rng.unit_vector() * 25.0;
+            Ray::new(origin, (target - origin).normalize())
+        })
+        .collect()
+}
+
+#[test]
+fn instances_hit_what_world_space_copies_hit() {
+    let p = pair(45, 12);
+    assert_eq!(p.instanced.geometry.triangle_count, 0, "nothing baked");
+    assert_eq!(p.instanced.geometry.prototypes.len(), 1, "stored once");
+    assert_eq!(p.instanced.geometry.instances.len(), p.placements.len());
+    assert_eq!(
+        p.copied.geometry.triangle_count,
+        p.triangles * p.placements.len() as u32
+    );
+    let offsets = p.instanced.geometry.flat_offsets();
+    let mut rng = seeded(7);
+    let rays = rays(&p, &mut rng, 6000);
+    let (mut hits, mut other_triangle) = (0, 0);
+    for (i, ray) in rays.iter().enumerate() {
+        let a = p.instanced.geometry.intersect(ray);
+        let b = p.copied.geometry.intersect(ray);
+        match (a, b) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                hits += 1;
+                let tol = 2e-5 * a.t.max(1.0);
+                assert!(
+                    (a.t - b.t).abs() <= tol,
+                    "ray {i}: t {} against {}",
+                    a.t,
+                    b.t
+                );
+                let (wa, wb) = (
+                    which(&p.instanced, &a, &offsets, p.triangles),
+                    which(&p.copied, &b, &offsets, p.triangles),
+                );
+                if wa != wb {
+                    // Only a tie at a shared edge may pick the other triangle.
+                    other_triangle += 1;
+                    continue;
+                }
+                let sa = p.instanced.geometry.surface(ray, &a);
+                let sb = p.copied.geometry.surface(ray, &b);
+                // Rays start 25 away: their rounding there (in object space
+                // or in world space) moves the hit along the surface by that
+                // much over the cosine of incidence.
+                let cos = ray.direction.dot(sb.geometric_normal).abs().max(1e-3);
+                assert!(
+                    (sa.p - sb.p).length() <= 1e-5 * (25.0 + sb.p.length()) / cos,
+                    "ray {i}: point {:?} against {:?}",
+                    sa.p,
+                    sb.p
+                );
+                assert!(
+                    sa.geometric_normal.dot(sb.geometric_normal) > 0.9999,
+                    "ray {i}: normal {:?} against {:?} (inverse transpose under non-uniform scale)",
+                    sa.geometric_normal,
+                    sb.geometric_normal
+                );
+                assert!(sa.shading_normal.dot(sb.shading_normal) > 0.9999);
+                assert_eq!(sa.material, sb.material);
+                // The error bound covers the exact world point of the hit's
+                // barycentrics, computed in f64 from the object-space triangle.
+                let g = &p.instanced.geometry;
+                let (inst, proto) = (g.instances[wa.0 as usize], &g.prototypes[0]);
+                let slot = a.part as usize;
+                let v = proto.leaf_blocks[slot / 8]
+                    .triangle(slot % 8)
+                    .map(|x| x.as_dvec3());
+                let (u, w) = (f64::from(a.u), f64::from(a.v));
+                let exact = inst
+                    .affine_f64()
+                    .transform_point3((1.0 - u - w) * v[0] + u * v[1] + w * v[2]);
+                let off = (sa.p.as_dvec3() - exact).abs().as_vec3();
+                assert!(
+                    (off - sa.p_error).max_element() <= 0.0,
+                    "ray {i}: the point is {off:?} off, its bound {:?}",
+                    sa.p_error
+                );
+            }
+            (a, b) => panic!("ray {i}: instanced {a:?}, copied {b:?}"),
+        }
+    }
+    assert!(hits > 3000, "most rays hit ({hits})");
+    assert!(
+        other_triangle * 1000 <= hits,
+        "{other_triangle} of {hits} hits found another triangle"
+    );
+}
+
+#[test]
+fn packets_streams_and_occlusion_answer_an_instanced_scene_as_single_rays_do() {
+    let p = pair(46, 20);
+    let g = &p.instanced.geometry;
+    let mut rng = seeded(8);
+    let mut rays = rays(&p, &mut rng, 4096);
+    // Shorter rays for occlusion: some end before what they would hit.
+    for (i, r) in rays.iter_mut().enumerate() {
+        if i % 3 == 0 {
+            r.tmax = 25.0;
+        }
+    }
+    let single: Vec<Option<PrimHit>> = rays.iter().map(|r| g.intersect(r)).collect();
+    let mut stream = vec![None; rays.len()];
+    g.intersect_stream(&rays, &mut stream);
+    assert_eq!(stream, single, "a stream answers as single rays do");
+    for (chunk, expect) in rays.chunks(8).zip(single.chunks(8)) {
+        let mut out = [None; 8];
+        g.intersect_packet(chunk, &mut out);
+        assert_eq!(
+            &out[..chunk.len()],
+            expect,
+            "a packet answers as single rays do"
+        );
+    }
+    let blocked: Vec<bool> = rays.iter().map(|r| g.occluded(r)).collect();
+    let mut occluded = vec![false; rays.len()];
+    g.occluded_stream(&rays, u32::MAX, &mut occluded);
+    assert_eq!(occluded, blocked);
+    for (i, (r, s)) in rays.iter().zip(&single).enumerate() {
+        assert_eq!(blocked[i], s.is_some_and(|h| h.t < r.tmax), "ray {i}");
+    }
+    assert!(blocked.iter().any(|&b| b) && blocked.iter().any(|&b| !b));
+}
+
+#[test]
+fn an_instanced_mesh_renders_as_its_world_space_copies() {
+    let p = pair(47, 6);
+    let a = render_rgb(&p.instanced, 2);
+    let b = render_rgb(&p.copied, 2);
+    let total: f32 = b.iter().map(|c| c.element_sum()).sum();
+    assert!(total > 0.0, "the scene is lit");
+    let diff: f32 = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (*x - *y).abs().element_sum())
+        .sum();
+    assert!(diff <= 1e-4 * total, "images differ by {diff} of {total}");
+    let off = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| (**x - **y).abs().max_element() > 1e-3 * y.max_element().max(1e-3))
+        .count();
+    assert!(off * 200 <= a.len(), "{off} of {} pixels differ", a.len());
+}
+
+#[test]
+fn a_mesh_file_placed_twice_is_stored_once() {
+    let dir = temp_dir("instancing-twice");
+    std::fs::write(dir.join("m.obj"), bumpy_sphere_obj(8, 6, 1.0, 0.1)).unwrap();
+    let text = "[materials.red]\ndiffuse = [0.8, 0.1, 0.1]\n\
+        [[objects]]\nmesh = \"m.obj\"\n\
+        [[objects]]\nmesh = \"m.obj\"\nmaterial = \"red\"\ntransform = { translate = [3.0, 0.0, 0.0] }\n\
+        [[objects]]\ngroup = [{ mesh = \"other.obj\" }]\n";
+    std::fs::write(dir.join("other.obj"), bumpy_sphere_obj(4, 3, 1.0, 0.0)).unwrap();
+    let s = scene_at(text, &dir.join("s.toml"));
+    let g = &s.geometry;
+    assert_eq!(
+        (g.prototypes.len(), g.instances.len(), g.triangle_count),
+        (1, 2, 24),
+        "m.obj once, placed twice; other.obj, placed once, baked"
+    );
+    // Each placement keeps its own material.
+    let hit_material = |x: f32| {
+        let ray = Ray::new(Vec3::new(x, 0.0, 10.0), -Vec3::Z);
+        let hit = g.intersect(&ray).expect("hit");
+        s.materials[g.surface(&ray, &hit).material as usize].diffuse
+    };
+    assert_eq!(hit_material(0.0), s.materials[0].diffuse);
+    assert_eq!(hit_material(3.0), Vec3::new(0.8, 0.1, 0.1));
+}
+
+#[test]
+fn a_bad_instances_file_names_its_line_and_writes_nothing() {
+    let dir = temp_dir("instancing-bad");
+    std::fs::write(dir.join("m.obj"), bumpy_sphere_obj(6, 4, 1.0, 0.0)).unwrap();
+    let good = "1,0,0,0, 0,1,0,0, 0,0,1,0";
+    let cases = [
+        (format!("{good}\n1,2,3\n"), "line 2", "expected 12 numbers"),
+        (
+            format!("# header\n{good}\n\n0,0,0,0,0,0,0,0,0,0,0,0\n"),
+            "line 4",
+            "singular",
+        ),
+        (
+            format!("{good}\n1,0,0,NaN,0,1,0,0,0,0,1,0\n"),
+            "line 2",
+            "not finite",
+        ),
+        (
+            format!("{good}\n1,0,0,x,0,1,0,0,0,0,1,0\n"),
+            "line 2",
+            "not a number",
+        ),
+    ];
+    for (csv, line, what) in cases {
+        std::fs::write(dir.join("i.csv"), &csv).unwrap();
+        std::fs::write(
+            dir.join("s.toml"),
+            "[[objects]]\nmesh = \"m.obj\"\ninstances = \"i.csv\"\n[render]\nwidth = 8\nheight = 8\nspp = 1\n",
+        )
+        .unwrap();
+        let out = strata(&dir, &["render", "s.toml", "-o", "out.png", "--quiet"]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("i.csv") && err.contains(line) && err.contains(what),
+            "{csv:?}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!dir.join("out.png").exists());
+    }
+    let out = strata(
+        &dir,
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "out.png",
+            "--quiet",
+            "--set",
+            "objects[0].instances=\"none.csv\"",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("none.csv"), "{}", stderr(&out));
+}
+
+#[test]
+fn a_thousand_instances_cost_the_mesh_once_and_at_most_200_bytes_each() {
+    let dir = temp_dir("instancing-memory");
+    std::fs::write(dir.join("m.obj"), bumpy_sphere_obj(64, 48, 1.0, 0.2)).unwrap();
+    let mut rng = seeded(3);
+    let rows: Vec<String> = (0..1000)
+        .map(|_| csv_row(&random_affine(&mut rng, 100.0)))
+        .collect();
+    std::fs::write(dir.join("i.csv"), rows.join("\n")).unwrap();
+    std::fs::write(dir.join("one.csv"), "1,0,0,0,0,1,0,0,0,0,1,0\n").unwrap();
+    let bytes = |csv: &str| {
+        let text = format!("[[objects]]\nmesh = \"m.obj\"\ninstances = \"{csv}\"\n");
+        let s = scene_at(&text, &dir.join("s.toml"));
+        (s.geometry.accel_bytes(), s.geometry.instances.len())
+    };
+    let (one, n1) = bytes("one.csv");
+    let (thousand, n) = bytes("i.csv");
+    assert_eq!((n1, n), (1, 1000));
+    let per_instance = (thousand - one) as f64 / 999.0;
+    assert!(
+        per_instance <= 200.0,
+        "{per_instance:.0} bytes per instance (mesh {one} bytes)"
+    );
+    // And the mesh is not copied: a thousand copies would be 1000x.
+    assert!(thousand < 2 * one, "{thousand} against {one}");
+}
