@@ -24,9 +24,14 @@ use glam::{Affine3A, Mat3, Vec3};
 /// No material of its own: an instance takes its mesh's materials.
 pub const NO_MATERIAL: u32 = u32::MAX;
 
-/// One placement of a prototype: 104 bytes (two 3×4 maps, three indices).
+/// One placement of a prototype: 128 bytes (two 3×4 maps, its world box,
+/// three indices).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Instance {
+    /// The prototype's box in world space ([`Instance::bounds`]), which a
+    /// ray must meet before it is moved into object space: a leaf of the
+    /// scene's tree may hold eight instances, a ray rarely meets them all.
+    pub world_bounds: Aabb,
     /// World to object: the linear part and the translation.
     pub to_object: Mat3,
     pub to_object_translation: Vec3,
@@ -50,6 +55,7 @@ impl Instance {
     pub fn new(to_world: Affine3A, prototype: u32, material: u32, inherited: u32) -> Option<Self> {
         let t = Transform::new(to_world)?;
         Some(Self {
+            world_bounds: Aabb::EMPTY,
             to_object: Mat3::from(t.to_object.matrix3),
             to_object_translation: t.to_object.translation.into(),
             to_world: Mat3::from(t.to_world.matrix3),
@@ -71,6 +77,19 @@ impl Instance {
             self.to_world.as_dmat3(),
             self.to_world_translation.as_dvec3(),
         )
+    }
+
+    /// Whether `ray` may meet the instance's world box: the slab test with
+    /// the far distance widened by 2γ(3) (Ize 2013, as the walks do), and
+    /// true where it cannot tell (NaN), so that it never culls a hit.
+    #[inline(always)]
+    pub fn may_hit(&self, ray: &Ray) -> bool {
+        let inv = ray.direction.recip();
+        let t0 = (self.world_bounds.min - ray.origin) * inv;
+        let t1 = (self.world_bounds.max - ray.origin) * inv;
+        let near = t0.min(t1).max_element().max(ray.tmin);
+        let far = t0.max(t1).min_element().min(ray.tmax) * (1.0 + 2.0 * gamma(3));
+        !(near > far)
     }
 
     /// `ray` in the prototype's object space, its direction not
@@ -178,6 +197,9 @@ impl Geometry {
     #[inline]
     pub(crate) fn hit_instance(&self, id: u32, ray: &Ray) -> Option<PrimHit> {
         let (instance, prototype) = self.instance(id);
+        if !instance.may_hit(ray) {
+            return None;
+        }
         let hit = prototype.intersect(&instance.object_ray(ray))?;
         Some(PrimHit { prim: id, ..hit })
     }
@@ -186,7 +208,7 @@ impl Geometry {
     #[inline]
     pub(crate) fn instance_blocks(&self, id: u32, ray: &Ray) -> bool {
         let (instance, prototype) = self.instance(id);
-        prototype.occluded(&instance.object_ray(ray))
+        instance.may_hit(ray) && prototype.occluded(&instance.object_ray(ray))
     }
 
     /// The closest hit on a primitive that is not a world triangle.
@@ -207,6 +229,24 @@ impl Geometry {
         } else {
             self.instance_blocks(id, ray)
         }
+    }
+
+    /// Triangles stored: the scene's own and each prototype's once.
+    pub fn unique_triangles(&self) -> u64 {
+        u64::from(self.triangle_count)
+            + self
+                .prototypes
+                .iter()
+                .map(|p| u64::from(p.triangle_count))
+                .sum::<u64>()
+    }
+
+    /// Bytes the instances cost: their records and their share of the
+    /// scene's tree (its nodes and leaf slots, by primitive count).
+    pub fn instance_bytes(&self) -> usize {
+        let share = self.traversal_bytes() as f64 * self.instances.len() as f64
+            / self.primitive_count().max(1) as f64;
+        std::mem::size_of_val(self.instances.as_slice()) + share as usize
     }
 
     /// Triangles the instances place, counted once per instance.

@@ -32,7 +32,11 @@ impl Geometry {
     ) -> Option<PrimHit> {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
-        let mut best = triangle_lanes::closest(ray, sheared, block, lanes).map(|h| PrimHit {
+        // A scene of instances alone has no triangle in its own leaves.
+        let triangles = (self.triangle_count > 0)
+            .then(|| triangle_lanes::closest(ray, sheared, block, lanes))
+            .flatten();
+        let mut best = triangles.map(|h| PrimHit {
             t: h.t,
             prim: block.id[h.lane],
             u: h.u,
@@ -74,7 +78,11 @@ impl Geometry {
     ) -> bool {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
-        let mut hit = triangle_lanes::intersect(ray, sheared, block, lanes).0;
+        let mut hit = if self.triangle_count > 0 {
+            triangle_lanes::intersect(ray, sheared, block, lanes).0
+        } else {
+            0
+        };
         while hit != 0 {
             let lane = hit.trailing_zeros() as usize;
             hit &= hit - 1;

@@ -38,7 +38,12 @@ pub struct RenderStats {
     pub rays_total: u64,
     pub mrays_per_s: f64,
     pub time: PhaseTimes,
+    /// Triangles stored: the scene's own and each instanced mesh's once.
     pub triangles: usize,
+    /// Placements of instanced meshes, and the triangles they place
+    /// (each instance's mesh counted again).
+    pub instances: usize,
+    pub instanced_triangles: u64,
     pub analytic_shapes: usize,
     pub planes: usize,
     /// The BVH build preset used (`--bvh-quality`, with `auto` resolved).
@@ -68,6 +73,9 @@ pub struct BuildMemory {
     /// Bytes per triangle of the structures traversal reads
     /// ([`crate::geometry::Geometry::accel_bytes`]).
     pub final_bytes_per_triangle: Option<f64>,
+    /// Bytes per instance: its record and its share of the scene's tree
+    /// ([`crate::geometry::Geometry::instance_bytes`]).
+    pub final_bytes_per_instance: Option<f64>,
     /// Peak resident memory above the level before loading, while loading
     /// the meshes and while building the BVH (None where Linux's
     /// `/proc/self/clear_refs` cannot reset the peak and it did not rise).
@@ -90,8 +98,9 @@ impl RenderStats {
         let g = &scene.geometry;
         // Per triangle only where there are triangles: a figure per triangle
         // of a scene without meshes would be all overhead.
-        let per_triangle =
-            |bytes: u64| (g.triangle_count > 0).then(|| bytes as f64 / g.triangle_count as f64);
+        let unique = g.unique_triangles();
+        let per_triangle = |bytes: u64| (unique > 0).then(|| bytes as f64 / unique as f64);
+        let instances = g.instances.len();
         let rays_total = outcome.counts.total();
         Self {
             scene: scene_name.to_string(),
@@ -120,7 +129,9 @@ impl RenderStats {
                 bvh_build_s: timings.bvh_build.as_secs_f64(),
                 render_s: outcome.seconds,
             },
-            triangles: g.triangle_count as usize,
+            triangles: unique as usize,
+            instances,
+            instanced_triangles: g.instanced_triangles(),
             analytic_shapes: g.shapes.len(),
             planes: g.planes.len(),
             bvh_quality: timings.bvh_quality,
@@ -129,7 +140,11 @@ impl RenderStats {
             bvh_prefetch: g.bvh.prefetch,
             peak_rss_bytes: peak_rss_bytes(),
             memory: BuildMemory {
-                final_bytes_per_triangle: per_triangle(g.accel_bytes() as u64),
+                final_bytes_per_triangle: per_triangle(
+                    (g.accel_bytes() - g.instance_bytes()) as u64,
+                ),
+                final_bytes_per_instance: (instances > 0)
+                    .then(|| g.instance_bytes() as f64 / instances as f64),
                 load_peak_bytes: timings.load_peak_bytes,
                 build_peak_bytes: timings.build_peak_bytes,
                 peak_bytes_per_triangle: timings.peak_bytes().and_then(per_triangle),
@@ -162,6 +177,13 @@ impl RenderStats {
             (Some(b), _) => format!(", peak +{:.0} MB", b as f64 / 1e6),
             (None, _) => String::new(),
         };
+        let instanced = match self.instances {
+            0 => String::new(),
+            n => format!(
+                ", {n} instances placing {:.3} G triangles",
+                self.instanced_triangles as f64 / 1e9
+            ),
+        };
         let [start, end] = self.samples_rendered;
         let samples = if end - start == self.spp {
             format!("{} spp", self.spp)
@@ -180,7 +202,7 @@ impl RenderStats {
             None => format!("{}x{}", self.width, self.height),
         };
         format!(
-            "{size} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {:.2} s{peak}) -> {}",
+            "{size} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {:.2} s{peak}{instanced}) -> {}",
             self.rays_total as f64 / 1e6,
             r.camera as f64 / 1e6,
             r.shadow as f64 / 1e6,

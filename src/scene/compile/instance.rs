@@ -189,8 +189,7 @@ fn prototype_parts(
             continue;
         }
         let first = parts.meshes.last().map_or(0, |m| m.first + m.count);
-        parts.sources.push(TriangleSource::File {
-            positions: mesh.positions.clone(),
+        parts.sources.push(TriangleSource::FileSpace {
             asset: asset.clone(),
             mesh: k,
         });

@@ -38,6 +38,13 @@ pub(super) enum TriangleSource {
         asset: Arc<LoadedAsset>,
         mesh: usize,
     },
+    /// Mesh `mesh` of a mesh file as the file has it (a prototype's, in
+    /// its own object space): positions and indices read where the loaded
+    /// file holds them, nothing copied.
+    FileSpace {
+        asset: Arc<LoadedAsset>,
+        mesh: usize,
+    },
 }
 
 impl TriangleSource {
@@ -45,7 +52,9 @@ impl TriangleSource {
         match self {
             Self::Soup(t) => t.len(),
             Self::Indexed { indices, .. } => indices.len(),
-            Self::File { asset, mesh, .. } => asset.meshes[*mesh].indices.len(),
+            Self::File { asset, mesh, .. } | Self::FileSpace { asset, mesh } => {
+                asset.meshes[*mesh].indices.len()
+            }
         }
     }
 
@@ -59,6 +68,10 @@ impl TriangleSource {
                 asset,
                 mesh,
             } => asset.meshes[*mesh].indices[i].map(|k| positions[k as usize]),
+            Self::FileSpace { asset, mesh } => {
+                let m = &asset.meshes[*mesh];
+                m.indices[i].map(|k| m.positions[k as usize])
+            }
         }
     }
 

@@ -298,11 +298,13 @@ fn compile_for(
         )?);
     }
     let mut boxes = c.primitive_boxes()?;
-    for (k, inst) in c.instances.iter().enumerate() {
+    for (k, inst) in c.instances.iter_mut().enumerate() {
         let b = inst.bounds(&prototypes[inst.prototype as usize]);
         if !b.is_finite() {
-            return Err(c.err("objects", format!("instance {k} has infinite bounds")));
+            let message = format!("instance {k} has infinite bounds");
+            return Err(InputError::new(path, "objects", message));
         }
+        inst.world_bounds = b;
         boxes.push(b);
     }
     let quality = for_purpose(quality, boxes.len());
