@@ -15,11 +15,15 @@ use strata::accel::prefetch::Prefetch;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::rays::file::{encode_hits, read_rays, write_file, HitRecord};
-use strata::scene::{load_mesh_scene, Scene};
+use strata::scene::{load_mesh_scene, load_scene_for_tracing, Scene};
 
 #[derive(Debug, Args, Clone)]
 pub struct TraceArgs {
-    /// Mesh file (.obj, .ply, .gltf or .glb), used as it is: triangle i of the file is primitive i.
+    /// Mesh file (.obj, .ply, .gltf or .glb), used as it is: triangle i of
+    /// the file is primitive i. Or a scene file (.toml), with its
+    /// instances: instance k's triangle j is numbered as if every instance
+    /// were a copy, after the scene's own primitives and the earlier
+    /// instances' triangles (docs/scene-format.md, "Instances").
     pub mesh: PathBuf,
     /// Ray file: records of 8 little-endian f32 (ox oy oz dx dy dz tmin tmax).
     #[arg(long)]
@@ -82,6 +86,17 @@ pub fn trace(
     threads: usize,
 ) -> Result<(usize, f64), CliError> {
     assert_eq!(rays.len(), hits.len(), "one record per ray");
+    // An instance's hit is written as the triangle's id in the scene with
+    // every instance copied (`Geometry::flat_prim`).
+    let g = &scene.geometry;
+    let offsets = g.flat_offsets();
+    let record = |found: Option<strata::accel::PrimHit>| match found {
+        Some(h) if !g.instances.is_empty() => HitRecord::from_hit(Some(strata::accel::PrimHit {
+            prim: g.flat_prim(&h, &offsets) as u32,
+            ..h
+        })),
+        found => HitRecord::from_hit(found),
+    };
     let pool = super::thread_pool(threads)?;
     let seconds = pool.install(|| {
         let start = Instant::now();
@@ -92,7 +107,7 @@ pub fn trace(
                     *hit = if occlusion {
                         HitRecord::occluded(scene.geometry.occluded(ray))
                     } else {
-                        HitRecord::from_hit(scene.geometry.intersect(ray))
+                        record(scene.geometry.intersect(ray))
                     };
                 }
             } else if occlusion {
@@ -107,7 +122,7 @@ pub fn trace(
                 let out = &mut out[..rays.len()];
                 scene.geometry.intersect_stream(rays, out);
                 for (hit, &found) in hits.iter_mut().zip(out.iter()) {
-                    *hit = HitRecord::from_hit(found);
+                    *hit = record(found);
                 }
             }
         });
@@ -118,7 +133,26 @@ pub fn trace(
 
 pub fn run(args: TraceArgs) -> Result<(), CliError> {
     super::writable(&args.hits, "--hits", &[])?;
-    let (mut scene, timings) = load_mesh_scene(&args.mesh, args.bvh_quality)?;
+    let is_scene = args
+        .mesh
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    let (mut scene, timings) = if is_scene {
+        load_scene_for_tracing(&args.mesh, args.bvh_quality)?
+    } else {
+        load_mesh_scene(&args.mesh, args.bvh_quality)?
+    };
+    let ids = scene.geometry.flat_offsets();
+    let last = ids.last().copied().unwrap_or(0);
+    if last > u64::from(u32::MAX) - scene.geometry.planes.len() as u64 {
+        return Err(InputError::file(
+            &args.mesh,
+            format!(
+                "places {last} triangles: more than a hit file's 32-bit primitive ids can number"
+            ),
+        )
+        .into());
+    }
     scene.geometry.bvh.prefetch = args.prefetch.enabled(scene.geometry.traversal_bytes());
     let rays = read_rays(&args.rays)?;
     if args.hits == args.rays {

@@ -22,8 +22,8 @@ use crate::material::Material;
 use crate::texture::Textures;
 
 pub use compile::{
-    load_edited_scene, load_mesh_scene, load_scene, mesh_geometry, scene_from_str, LoadTimings,
-    MeshArraysError,
+    load_edited_scene, load_mesh_scene, load_scene, load_scene_for_tracing, mesh_geometry,
+    scene_from_str, LoadTimings, MeshArraysError,
 };
 pub use settings::{RenderOverrides, RenderSettings};
 

@@ -18,7 +18,7 @@ use strata::rays::file::{encode_triangles, parse_hits, read_rays, HitRecord};
 /// Rays of each kind.
 const PER_KIND: usize = 600;
 
-fn harness() -> Option<PathBuf> {
+pub fn harness() -> Option<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let out = root.join("target").join("embree");
     let made = Command::new("make")
@@ -55,7 +55,7 @@ fn harness() -> Option<PathBuf> {
     }
 }
 
-fn run(cmd: &mut Command) {
+pub fn run(cmd: &mut Command) {
     let out = cmd.output().unwrap();
     assert!(
         out.status.success(),
@@ -64,7 +64,7 @@ fn run(cmd: &mut Command) {
     );
 }
 
-fn hits(path: &Path) -> Vec<HitRecord> {
+pub fn hits(path: &Path) -> Vec<HitRecord> {
     parse_hits(path, &std::fs::read(path).unwrap()).unwrap()
 }
 

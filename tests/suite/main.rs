@@ -11,6 +11,7 @@ mod csg_reference;
 mod degenerate;
 mod docs;
 mod embree;
+mod embree_instances;
 mod embree_native;
 mod first_hour;
 mod instancing;

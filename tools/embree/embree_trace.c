@@ -5,6 +5,7 @@
  *                [--robust] [--quality low|medium|high] [--threads N] [--repeats R]
  *                [--first F --count C] [--isa ISA] [--verbose]
  *   embree_trace MESH.tris RAYS.bin --serve [--robust] [--quality Q] [--threads N]
+ *   ... [--instances PLACES.csv]
  *
  * MESH.tris (little-endian, no padding): u32 vertex count, u32 triangle
  * count, vertex count x 3 f32 positions, triangle count x 3 u32 indices;
@@ -14,6 +15,14 @@
  * 8 f32, ox oy oz dx dy dz tmin tmax. HITS.bin is `strata trace --hits`'s:
  * per ray t (f32, +inf on a miss), prim (u32, u32::MAX on a miss), u, v; with
  * --occlusion, t = 0, prim = 0 for an occluded ray, else the miss record.
+ *
+ * With --instances, MESH.tris is placed once per line of PLACES.csv (a
+ * row-major 3x4 object-to-world matrix, twelve numbers separated by commas
+ * or spaces; blank lines and lines starting with '#' skipped: strata's
+ * `instances =` file) as Embree instances of one scene holding the mesh,
+ * and a hit's prim is instID * T + primID for a mesh of T triangles:
+ * strata's id of that triangle were every instance a copy
+ * (`strata trace SCENE.toml`).
  *
  * The scene is one triangle geometry over the caller's buffers (shared, so
  * Embree's own memory is what the memory monitor counts), built at the
@@ -111,6 +120,15 @@ typedef struct {
     _Atomic size_t found;
 } Job;
 
+/* Triangles of the instanced mesh, or 0 without --instances. */
+static uint32_t instanced_tris;
+
+/* A hit's primitive as strata numbers it (see --instances). */
+static inline uint32_t hit_prim(unsigned inst, unsigned prim) {
+    if (!instanced_tris || inst == RTC_INVALID_GEOMETRY_ID) return prim;
+    return inst * instanced_tris + prim;
+}
+
 static inline void write_hit(float *out, float t, uint32_t prim, float u, float v) {
     out[0] = t;
     memcpy(out + 1, &prim, 4);
@@ -148,7 +166,7 @@ static void trace_single(Job *job, size_t lo, size_t hi, size_t *found) {
             *found += hit;
             if (out) {
                 if (hit)
-                    write_hit(out, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v);
+                    write_hit(out, rh.ray.tfar, hit_prim(rh.hit.instID[0], rh.hit.primID), rh.hit.u, rh.hit.v);
                 else
                     write_hit(out, INFINITY, 0xffffffffu, 0.0f, 0.0f);
             }
@@ -199,7 +217,8 @@ static void trace_packets(Job *job, size_t lo, size_t hi, size_t *found) {
                 *found += hit;
                 if (out) {
                     if (hit)
-                        write_hit(out, rh.ray.tfar[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k]);
+                        write_hit(out, rh.ray.tfar[k], hit_prim(rh.hit.instID[0][k], rh.hit.primID[k]), rh.hit.u[k],
+                                  rh.hit.v[k]);
                     else
                         write_hit(out, INFINITY, 0xffffffffu, 0.0f, 0.0f);
                 }
@@ -241,7 +260,8 @@ static void trace_stream(Job *job, size_t lo, size_t hi, size_t *found) {
             *found += hit;
             if (out) {
                 if (hit)
-                    write_hit(out, rh[k].ray.tfar, rh[k].hit.primID, rh[k].hit.u, rh[k].hit.v);
+                    write_hit(out, rh[k].ray.tfar, hit_prim(rh[k].hit.instID[0], rh[k].hit.primID), rh[k].hit.u,
+                              rh[k].hit.v);
                 else
                     write_hit(out, INFINITY, 0xffffffffu, 0.0f, 0.0f);
             }
@@ -321,6 +341,36 @@ static long long number(const char *text, long long lo, long long hi) {
     return n;
 }
 
+/* The placements of an instances file: 12 floats per matrix, *n of them. */
+static float *read_instances(const char *path, size_t *n) {
+    FILE *f = fopen(path, "r");
+    if (!f) die(path, strerror(errno));
+    size_t cap = 64, count = 0, line_no = 0;
+    float *out = malloc(cap * 12 * sizeof *out);
+    char line[4096];
+    while (fgets(line, sizeof line, f)) {
+        line_no++;
+        char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        if (*p == '#' || *p == '\n' || *p == '\r' || *p == 0) continue;
+        if (count == cap) out = realloc(out, (cap *= 2) * 12 * sizeof *out);
+        for (int k = 0; k < 12; k++) {
+            while (*p == ' ' || *p == '\t' || *p == ',') p++;
+            char *end;
+            out[count * 12 + k] = strtof(p, &end);
+            if (end == p) {
+                fprintf(stderr, "error: %s: line %zu: expected 12 numbers\n", path, line_no);
+                exit(2);
+            }
+            p = end;
+        }
+        count++;
+    }
+    fclose(f);
+    *n = count;
+    return out;
+}
+
 static int cmp_double(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
@@ -330,12 +380,12 @@ static void usage(void) {
     fprintf(stderr,
             "usage: embree_trace MESH.tris RAYS.bin [--hits HITS.bin] [--occlusion] [--packet | --stream] [--robust]\n"
             "                    [--quality low|medium|high] [--threads N] [--repeats R] [--first F --count C]\n"
-            "                    [--isa ISA] [--verbose] [--serve]\n");
+            "                    [--isa ISA] [--verbose] [--serve] [--instances PLACES.csv]\n");
     exit(2);
 }
 
 int main(int argc, char **argv) {
-    const char *mesh_path = NULL, *rays_path = NULL, *hits_path = NULL, *isa = NULL;
+    const char *mesh_path = NULL, *rays_path = NULL, *hits_path = NULL, *isa = NULL, *places = NULL;
     int occlusion = 0, packet = 0, stream = 0, robust = 0, serve = 0, verbose = 0;
     int threads = 1, repeats = 1;
     long long first = 0, count = -1;
@@ -344,6 +394,7 @@ int main(int argc, char **argv) {
         const char *a = argv[i];
         const char *next = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--hits") && next) hits_path = argv[++i];
+        else if (!strcmp(a, "--instances") && next) places = argv[++i];
         else if (!strcmp(a, "--occlusion")) occlusion = 1;
         else if (!strcmp(a, "--packet")) packet = 1;
         else if (!strcmp(a, "--stream")) stream = 1;
@@ -413,6 +464,28 @@ int main(int argc, char **argv) {
     rtcAttachGeometry(scene, geom);
     rtcReleaseGeometry(geom);
     rtcCommitScene(scene);
+    if (places) {
+        /* The mesh's scene, placed by one instance geometry per line. */
+        size_t n;
+        float *xfm = read_instances(places, &n);
+        RTCScene top = rtcNewScene(device);
+        rtcSetSceneFlags(top, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        rtcSetSceneBuildQuality(top, quality);
+        for (size_t k = 0; k < n; k++) {
+            RTCGeometry inst = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(inst, scene);
+            rtcSetGeometryTimeStepCount(inst, 1);
+            rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm + 12 * k);
+            rtcCommitGeometry(inst);
+            rtcAttachGeometryByID(top, inst, (unsigned)k);
+            rtcReleaseGeometry(inst);
+        }
+        free(xfm);
+        rtcCommitScene(top);
+        rtcReleaseScene(scene);
+        scene = top;
+        instanced_tris = nt;
+    }
     t_build = now() - t_build;
 
     Job job = {.scene = scene, .rays = rays};

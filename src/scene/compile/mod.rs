@@ -193,6 +193,29 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
     )
 }
 
+/// A scene file compiled for tracing ray files (`strata trace SCENE.toml`):
+/// `auto` BVH effort by primitive count, as for a mesh file.
+pub fn load_scene_for_tracing(
+    path: &Path,
+    quality: BuildQuality,
+) -> InputResult<(Scene, LoadTimings)> {
+    let start = Instant::now();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let desc = super::parse::parse_edited(path, &text, &[])?;
+    let overrides = RenderOverrides::default();
+    let progress = LoadProgress::default();
+    compile_for(
+        &desc,
+        path,
+        &overrides,
+        quality,
+        Purpose::Tracing,
+        start,
+        &progress,
+    )
+}
+
 /// What a scene is compiled for, which decides what `auto` BVH effort means.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Purpose {
