@@ -119,6 +119,7 @@ pub fn trace(
 pub fn run(args: TraceArgs) -> Result<(), CliError> {
     super::writable(&args.hits, "--hits", &[])?;
     let (mut scene, timings) = load_mesh_scene(&args.mesh, args.bvh_quality)?;
+    super::print_warnings(&scene);
     scene.geometry.bvh.prefetch = args.prefetch.enabled(scene.geometry.traversal_bytes());
     let rays = read_rays(&args.rays)?;
     if args.hits == args.rays {

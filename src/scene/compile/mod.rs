@@ -306,6 +306,7 @@ fn compile_for(
         lights: c.lights,
         camera,
         settings,
+        warnings: c.warnings,
     };
     Ok((scene, timings))
 }
@@ -332,6 +333,8 @@ struct Compiler<'d> {
     loaded_cameras: Vec<LoadedCamera>,
     /// Mesh files already read, with the scene index of their first material.
     assets: HashMap<PathBuf, (Arc<LoadedAsset>, u32)>,
+    /// The mesh files' warnings, in the order the files were read.
+    warnings: Vec<InputError>,
 }
 
 impl<'d> Compiler<'d> {
@@ -353,6 +356,7 @@ impl<'d> Compiler<'d> {
             lights: Vec::new(),
             loaded_cameras: Vec::new(),
             assets: HashMap::new(),
+            warnings: Vec::new(),
         };
         // Material 0: what objects get when nothing names one.
         c.materials.push(Material::default());
