@@ -293,7 +293,7 @@ pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
 #[cfg(test)]
 mod tests {
     use super::super::load_obj;
-    use super::super::test_helpers::{load_text, SQUARE};
+    use super::super::test_helpers::SQUARE;
     use crate::material::Material;
     use crate::scene::loaders::test_files::{temp_dir, write};
     use glam::Vec3;
