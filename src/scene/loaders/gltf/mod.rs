@@ -97,7 +97,11 @@
 //! accessors reaching outside their buffer, indices outside the vertex count,
 //! non-finite positions, normals and transforms, and primitives without
 //! `POSITION`. Custom vertex attributes and missing `POSITION` `min`/`max`
-//! are tolerated since the loader does not use them.
+//! are tolerated since the loader does not use them. glTF 1.0 and every
+//! `extensionsRequired` entry the loader does not read are refused by name
+//! (`container.rs`). A scene that lists no nodes (or has no `nodes` key)
+//! loads empty with a warning in [`LoadedAsset::warnings`], and so does a
+//! file whose scene holds no triangles.
 //!
 //! # Layout
 //!
