@@ -75,6 +75,13 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, CliError> {
         .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))
 }
 
+/// The mesh loaders' warnings, one `warning:` line each on stderr.
+pub fn print_warnings(scene: &strata::scene::Scene) {
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+}
+
 /// "1 part", "2 parts".
 pub fn count(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })

@@ -124,6 +124,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let (slice, partial_output) = check_outputs(&args)?;
     let epoch = std::time::Instant::now();
     let (scene, timings) = load(&args)?;
+    super::print_warnings(&scene);
     // Recorded for the trace, and for the summary in the statistics.
     let timeline = (args.timeline.is_some() || args.stats.is_some()).then(|| {
         let t = Timeline::new(epoch);

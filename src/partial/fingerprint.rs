@@ -146,6 +146,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         lights,
         camera,
         settings,
+        warnings: _, // what a loader said: the image does not depend on it
     } = scene;
     let Geometry {
         // Hashed in file order below, so the fingerprint does not depend on

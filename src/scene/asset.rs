@@ -1,6 +1,7 @@
 //! What a mesh loader hands to the scene compiler: plain arrays in file
 //! order, with optional data present only where the file has it.
 
+use crate::error::InputError;
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::material::Material;
 use crate::texture::Textures;
@@ -52,6 +53,10 @@ pub struct LoadedAsset {
     pub textures: Textures,
     pub cameras: Vec<LoadedCamera>,
     pub point_lights: Vec<LoadedPointLight>,
+    /// What the loader read leniently, as other tools do (a material no
+    /// library defines, a stray header line, no triangles at all), each
+    /// naming the file and, where one applies, the line.
+    pub warnings: Vec<InputError>,
 }
 
 impl LoadedAsset {

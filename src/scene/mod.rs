@@ -16,6 +16,7 @@ pub mod settings;
 pub mod source_map;
 
 use crate::camera::Camera;
+use crate::error::InputError;
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Material;
@@ -37,4 +38,7 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub settings: RenderSettings,
+    /// What the mesh loaders read leniently, as other tools do (see
+    /// [`loaders`]); the CLI prints each as a `warning:` line.
+    pub warnings: Vec<InputError>,
 }

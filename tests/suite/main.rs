@@ -23,6 +23,7 @@ mod pipeline_features;
 mod primitives;
 mod python;
 mod rays_and_trace;
+mod real_files;
 mod render_packets;
 mod render_properties;
 mod robustness;

@@ -162,6 +162,7 @@ impl Compiler<'_> {
                 return Err(self.err(at, message));
             }
             let mut asset = load_mesh_file(&path)?;
+            self.warnings.append(&mut asset.warnings);
             // The file's images move into the scene's (no copy); its
             // materials' texture indices move with them.
             let first_texture = self.textures.append(std::mem::take(&mut asset.textures));

@@ -368,6 +368,7 @@ fn compile_for(
         lights: c.lights,
         camera,
         settings,
+        warnings: c.warnings,
     };
     Ok((scene, timings))
 }
@@ -401,6 +402,8 @@ struct Compiler<'d> {
     prototypes: Vec<instance::PrototypeParts>,
     prototype_ids: HashMap<PathBuf, u32>,
     instances: Vec<Instance>,
+    /// The mesh files' warnings, in the order the files were read.
+    warnings: Vec<InputError>,
 }
 
 impl<'d> Compiler<'d> {
@@ -426,6 +429,7 @@ impl<'d> Compiler<'d> {
             prototypes: Vec::new(),
             prototype_ids: HashMap::new(),
             instances: Vec::new(),
+            warnings: Vec::new(),
         };
         // Material 0: what objects get when nothing names one.
         c.materials.push(Material::default());

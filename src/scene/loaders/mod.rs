@@ -9,13 +9,19 @@
 //! | `.ply`          | [`ply::load_ply`]   |
 //!
 //! Loaders never panic on bad input and never allocate more than the file
-//! actually holds.
+//! actually holds. What other tools read leniently (a material no library
+//! defines, a stray PLY header line, a file without triangles) loads, with
+//! a warning in [`LoadedAsset::warnings`] naming the file and line; what
+//! strata cannot read is an error naming the feature (glTF 1.0, a required
+//! glTF extension).
 
 pub mod gltf;
 pub mod obj;
 pub mod ply;
 mod ply_ascii;
 mod ply_binary;
+mod ply_header;
+mod text;
 
 pub(crate) use ply_binary::first_where;
 
@@ -65,6 +71,18 @@ pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
 }
 
 pub(crate) use crate::error::io_message;
+
+/// Warn, naming `path`, that a loaded file holds no triangles, so nothing
+/// of it renders (a points-only OBJ, a PLY without faces). `found` says
+/// what the file lacks, in its own format's words.
+pub(crate) fn warn_without_triangles(asset: &mut LoadedAsset, path: &Path, found: &str) {
+    if asset.triangle_count() == 0 {
+        asset.warnings.push(InputError::file(
+            path,
+            format!("{found}, so nothing of this file renders (points and lines are not drawn)"),
+        ));
+    }
+}
 
 /// Temporary files for the loaders' unit tests.
 #[cfg(test)]

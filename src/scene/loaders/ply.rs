@@ -12,10 +12,14 @@
 //! of its fixed fields), so a header claiming 1e12 vertices is an error
 //! naming the file, not an allocation. An index out of range is an error
 //! naming the face.
+//!
+//! As other tools do, a header line before the first `element` that starts
+//! with no keyword (old Blender exports) is skipped with a warning (see
+//! `ply_header`), and a file without faces loads with a warning.
 
 use super::io_message;
 use super::ply_binary::Scalar;
-use super::{ply_ascii, ply_binary};
+use super::{ply_ascii, ply_binary, ply_header};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::Vec3;
@@ -116,6 +120,10 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     bytes.truncate(filled);
     // Whatever the file holds past the size it gave.
     file.read_to_end(&mut bytes).map_err(|e| bad(&e))?;
+    let mut warnings = Vec::new();
+    if let Some(fixed) = ply_header::without_stray_lines(path, &bytes, &mut warnings) {
+        bytes = fixed;
+    }
     let file_len = bytes.len() as u64;
     let mut reader = Reader::new(&bytes[..]);
     let header = Parser::<DefaultElement>::new()
@@ -131,10 +139,10 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
         let n = body.positions.len();
         let indices =
             triangulate(&body.faces, n).map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
-        return Ok(mesh_asset(path, body.positions, indices));
+        return Ok(mesh_asset(path, body.positions, indices, warnings));
     }
     let (positions, indices) = ply_binary::read_body(path, &header, body, line)?;
-    Ok(mesh_asset(path, positions, indices))
+    Ok(mesh_asset(path, positions, indices, warnings))
 }
 
 /// The error of face `i`, whose index `bad` is not one of the `n` vertices.
@@ -166,12 +174,18 @@ pub(super) fn triangulate(faces: &[Face], n: usize) -> Result<Vec<[u32; 3]>, (us
     Ok(indices)
 }
 
-/// One mesh of `positions` and triangles `indices`, named after the file.
-fn mesh_asset(path: &Path, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> LoadedAsset {
+/// One mesh of `positions` and triangles `indices`, named after the file,
+/// with the header's `warnings` and one more if it has no triangles.
+fn mesh_asset(
+    path: &Path,
+    positions: Vec<Vec3>,
+    indices: Vec<[u32; 3]>,
+    warnings: Vec<InputError>,
+) -> LoadedAsset {
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().to_string());
-    LoadedAsset {
+    let mut asset = LoadedAsset {
         meshes: vec![LoadedMesh {
             name,
             positions,
@@ -180,8 +194,11 @@ fn mesh_asset(path: &Path, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Load
             material: None,
             uvs: None,
         }],
+        warnings,
         ..LoadedAsset::default()
-    }
+    };
+    super::warn_without_triangles(&mut asset, path, "no faces");
+    asset
 }
 
 #[cfg(test)]

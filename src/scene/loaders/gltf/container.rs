@@ -1,6 +1,13 @@
 //! The container layer: a GLB file split into its JSON and BIN chunks, and
 //! the JSON parsed and validated. Every length a GLB declares is checked
 //! against the bytes really there before it is sliced.
+//!
+//! What strata cannot read is refused by name before the `gltf` crate's
+//! own errors would hide it: glTF 1.0 (whose JSON the crate can only call
+//! "invalid type: map, expected a sequence"), and each `extensionsRequired`
+//! entry strata does not support (a Draco-compressed file would otherwise
+//! fail on the accessors the extension replaces). A scene without `nodes`
+//! reads as a scene of none, as other tools read it.
 
 use crate::error::{InputError, InputResult};
 use ::gltf::json;
@@ -26,6 +33,11 @@ pub(super) fn split_glb<'a>(
         )));
     }
     let version = u32_le(&bytes[4..]);
+    if version == 1 {
+        return Err(header(format!(
+            "binary glTF 1.0 (GLB version 1) is not supported; {CONVERT}"
+        )));
+    }
     if version != 2 {
         return Err(header(format!(
             "GLB version {version} is not supported (only version 2)"
@@ -76,13 +88,32 @@ pub(super) fn split_glb<'a>(
     Ok((json, bin))
 }
 
+/// How to get a file strata reads from one it refuses; the tool is the one
+/// whose test models these refusals were checked against.
+const CONVERT: &str = "convert it to glTF 2.0 first, e.g. with `assimp export FILE out.glb -fglb2`";
+
+/// What the extensions files most often require do, for the refusal.
+const EXTENSION_WORDS: &[(&str, &str)] = &[
+    ("KHR_draco_mesh_compression", "Draco-compressed meshes"),
+    ("EXT_meshopt_compression", "meshopt-compressed buffers"),
+    ("KHR_mesh_quantization", "quantized vertex attributes"),
+    ("KHR_texture_basisu", "Basis Universal textures"),
+];
+
 /// Parse and validate the JSON document.
 ///
 /// The `gltf` crate's validator indexes the POSITION accessor without a
 /// bounds check, so that reference is checked first.
 pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Root> {
-    let root: json::Root = json::deserialize::from_slice(json_bytes)
-        .map_err(|e| InputError::file(path, format!("invalid glTF JSON: {e}")))?;
+    let root: json::Root = match json::deserialize::from_slice(json_bytes) {
+        Ok(root) => root,
+        Err(e) => lenient_root(path, json_bytes)
+            .unwrap_or_else(|| Err(InputError::file(path, format!("invalid glTF JSON: {e}"))))?,
+    };
+    if version_1(&json::Value::String(root.asset.version.clone())) {
+        return Err(gltf_1_refusal(path));
+    }
+    check_required_extensions(path, &root)?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             if let Some(index) = primitive
@@ -136,6 +167,80 @@ pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Ro
     Ok(root)
 }
 
+/// After the `gltf` crate refused `json_bytes`: the refusal of a glTF 1.0
+/// file, or the document read with each scene that lacks `nodes` given
+/// none; `None` where neither applies (the crate's error stands).
+fn lenient_root(path: &Path, json_bytes: &[u8]) -> Option<InputResult<json::Root>> {
+    let mut value: json::Value = json::deserialize::from_slice(json_bytes).ok()?;
+    // glTF 1.0 named its objects in dictionaries where 2.0 has arrays.
+    let dictionaries = ["meshes", "nodes", "accessors", "buffers", "scenes"]
+        .iter()
+        .any(|key| value.get(key).is_some_and(json::Value::is_object));
+    let version = value.pointer("/asset/version").cloned();
+    if dictionaries || version.as_ref().is_some_and(version_1) {
+        return Some(Err(gltf_1_refusal(path)));
+    }
+    let mut patched = false;
+    if let Some(scenes) = value.get_mut("scenes").and_then(json::Value::as_array_mut) {
+        for scene in scenes.iter_mut().filter_map(json::Value::as_object_mut) {
+            if !scene.contains_key("nodes") {
+                scene.insert("nodes".to_string(), json::Value::Array(Vec::new()));
+                patched = true;
+            }
+        }
+    }
+    if !patched {
+        return None;
+    }
+    json::deserialize::from_value(value).ok().map(Ok)
+}
+
+/// An `asset.version` of 1.x (`"1.0"`, `"1.0.2"`, or the number `1`).
+fn version_1(version: &json::Value) -> bool {
+    match version {
+        json::Value::String(text) => text.split('.').next() == Some("1"),
+        json::Value::Number(n) => n.as_f64().is_some_and(|v| (1.0..2.0).contains(&v)),
+        _ => false,
+    }
+}
+
+fn gltf_1_refusal(path: &Path) -> InputError {
+    InputError::new(
+        path,
+        "asset.version",
+        format!("glTF 1.0 is not supported (only glTF 2.0); {CONVERT}"),
+    )
+}
+
+/// Each `extensionsRequired` entry the `gltf` crate is not built to read
+/// is refused by name, before validation reports what the extension
+/// stands in for (a Draco file's accessors have no `bufferView`).
+fn check_required_extensions(path: &Path, root: &json::Root) -> InputResult<()> {
+    let enabled = json::extensions::ENABLED_EXTENSIONS;
+    let Some((i, name)) = root
+        .extensions_required
+        .iter()
+        .enumerate()
+        .find(|(_, name)| !enabled.contains(&name.as_str()))
+    else {
+        return Ok(());
+    };
+    let what = EXTENSION_WORDS
+        .iter()
+        .find(|(n, _)| n == name)
+        .map_or(String::new(), |(_, words)| format!(" ({words})"));
+    Err(InputError::new(
+        path,
+        format!("extensionsRequired[{i}]"),
+        format!(
+            "glTF extension {name}{what} is not supported, and the file requires it; \
+             strata reads {}; {}",
+            enabled.join(", "),
+            CONVERT.replace("to glTF 2.0 ", "to plain glTF 2.0 ")
+        ),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::test_support::*;
@@ -172,9 +277,49 @@ mod tests {
                 r#""extensionsRequired":["KHR_draco_mesh_compression"],"extensionsUsed":["KHR_draco_mesh_compression"]"#,
             ),
             "scene.gltf",
-            "extensionsRequired[0] = \"KHR_draco_mesh_compression\"",
-            "Unsupported extension",
+            "extensionsRequired[0]",
+            "glTF extension KHR_draco_mesh_compression (Draco-compressed meshes) is not supported",
         );
+    }
+
+    #[test]
+    fn gltf_1_is_refused_by_name() {
+        let dir = temp_dir("gltf1");
+        // glTF 1.0 names its objects in dictionaries; some files give the
+        // version as a number, or deserialize as 2.0 would.
+        for (name, text) in [
+            (
+                "dict.gltf",
+                r#"{"asset":{"version":"1.0"},"meshes":{"m":{}}}"#,
+            ),
+            ("number.gltf", r#"{"asset":{"version":1},"nodes":{}}"#),
+            ("plain.gltf", r#"{"asset":{"version":"1.0.3"}}"#),
+        ] {
+            expect_error(
+                load_gltf(&write(&dir, name, text.as_bytes())),
+                name,
+                "asset.version",
+                "glTF 1.0 is not supported",
+            );
+        }
+    }
+
+    #[test]
+    fn a_scene_without_nodes_loads_empty_with_a_warning() {
+        let b = triangle_builder();
+        let rest = format!(r#"{TRIANGLE_MESH},"scene":0,"scenes":[{{}}],"nodes":[{{"mesh":0}}]"#);
+        let asset = load_json(&b, &rest).unwrap();
+        assert_eq!(asset.triangle_count(), 0);
+        let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(said[0].contains("scene.gltf: scenes[0]: the scene lists no nodes"));
+        // Lines only: no triangles, said once.
+        let mut b = Builder::default();
+        b.vec3(&TRIANGLE, false);
+        let lines = r#""meshes":[{"primitives":[{"attributes":{"POSITION":0},"mode":1}]}],"nodes":[{"mesh":0}]"#;
+        let asset = load_json(&b, lines).unwrap();
+        assert_eq!(asset.warnings.len(), 1);
+        assert!(asset.warnings[0].message.starts_with("no triangles"));
     }
 
     #[test]

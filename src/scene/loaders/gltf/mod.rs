@@ -97,7 +97,11 @@
 //! accessors reaching outside their buffer, indices outside the vertex count,
 //! non-finite positions, normals and transforms, and primitives without
 //! `POSITION`. Custom vertex attributes and missing `POSITION` `min`/`max`
-//! are tolerated since the loader does not use them.
+//! are tolerated since the loader does not use them. glTF 1.0 and every
+//! `extensionsRequired` entry the loader does not read are refused by name
+//! (`container.rs`). A scene that lists no nodes (or has no `nodes` key)
+//! loads empty with a warning in [`LoadedAsset::warnings`], and so does a
+//! file whose scene holds no triangles.
 //!
 //! # Layout
 //!
@@ -191,7 +195,14 @@ impl Loader<'_> {
             textures,
             ..Default::default()
         };
-        let root_nodes = self.root_nodes()?;
+        let (scene, root_nodes) = self.root_nodes()?;
+        let empty_scene = scene.is_some() && root_nodes.is_empty();
+        if let (Some(scene), true) = (scene, empty_scene) {
+            asset.warnings.push(self.error(
+                format!("scenes[{scene}]"),
+                "the scene lists no nodes, so nothing of this file renders",
+            ));
+        }
         let mut visited = vec![false; self.root.nodes.len()];
         for root_node in root_nodes {
             // Depth first, children in file order, without recursion.
@@ -220,20 +231,32 @@ impl Loader<'_> {
                 }
             }
         }
+        if !empty_scene {
+            super::warn_without_triangles(
+                &mut asset,
+                self.path,
+                "no triangles (no node of the scene has a mesh of triangles)",
+            );
+        }
         Ok(asset)
     }
 
-    /// The scene's root nodes: the default scene, else scene 0, else every
-    /// node that is nobody's child.
-    fn root_nodes(&self) -> InputResult<Vec<usize>> {
+    /// The scene walked (its index, if the file has scenes) and its root
+    /// nodes: the default scene, else scene 0, else every node that is
+    /// nobody's child.
+    fn root_nodes(&self) -> InputResult<(Option<usize>, Vec<usize>)> {
+        let index = self.root.scene.map_or(0, |i| i.value());
         let scene = match self.root.scene {
-            Some(index) => Some(self.root.scenes.get(index.value()).ok_or_else(|| {
-                self.error("scene", format!("scene {} does not exist", index.value()))
-            })?),
+            Some(_) => Some(
+                self.root
+                    .scenes
+                    .get(index)
+                    .ok_or_else(|| self.error("scene", format!("scene {index} does not exist")))?,
+            ),
             None => self.root.scenes.first(),
         };
         if let Some(scene) = scene {
-            return Ok(scene.nodes.iter().map(|n| n.value()).collect());
+            return Ok((Some(index), scene.nodes.iter().map(|n| n.value()).collect()));
         }
         let mut is_child = vec![false; self.root.nodes.len()];
         for node in &self.root.nodes {
@@ -243,9 +266,12 @@ impl Loader<'_> {
                 }
             }
         }
-        Ok((0..self.root.nodes.len())
-            .filter(|&i| !is_child[i])
-            .collect())
+        Ok((
+            None,
+            (0..self.root.nodes.len())
+                .filter(|&i| !is_child[i])
+                .collect(),
+        ))
     }
 
     /// Collect what one node carries: meshes, a camera, a point light.

@@ -25,12 +25,23 @@
 //!
 //! # Materials
 //!
-//! `mtllib` names a material library relative to the OBJ file (a missing one
-//! is an error). Each `newmtl` becomes one entry of
-//! [`LoadedAsset::materials`], in library order, and `usemtl` sets the
-//! mesh's material index. A `usemtl` naming a material that no earlier
-//! `mtllib` defines is an error; in a file with no `mtllib` at all, `usemtl`
-//! is ignored and the meshes get the scene's default material.
+//! `mtllib` names a material library relative to the OBJ file. Each
+//! `newmtl` becomes one entry of [`LoadedAsset::materials`], in library
+//! order, and `usemtl` sets the mesh's material index. As other tools do,
+//! what names no material gives the scene's default material and a warning
+//! at its line ([`LoadedAsset::warnings`]): a `usemtl` naming a material
+//! that no earlier `mtllib` defines (once per name), a `usemtl` without a
+//! name, an `mtllib` that cannot be read, a `newmtl` without a name (its
+//! statements are left out).
+//!
+//! # Text
+//!
+//! UTF-8 (a byte-order mark dropped), UTF-16 with a byte-order mark, and
+//! otherwise Latin-1, for OBJ and MTL files alike (see `loaders::text`). A
+//! `\` in a library's or texture's file name is a path separator where no
+//! file has the name as written (`map_Kd .\tex.jpg`). A file without
+//! faces loads with a warning: nothing of it renders. In a file with no
+//! `mtllib` at all, `usemtl` means the default material, without a word.
 //!
 //! | MTL statement             | [`Material`] field                                         |
 //! |---------------------------|------------------------------------------------------------|
@@ -83,6 +94,7 @@ mod mtl;
 mod scan;
 
 use super::io_message;
+use super::text::decode_text;
 use crate::error::{InputError, InputResult};
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
@@ -99,13 +111,13 @@ use std::path::Path;
 pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
-    let text = utf8_text(path, &bytes)?;
-    let mut scan = scan_obj(path, text)?;
+    let text = decode_text(path, &bytes)?;
+    let mut scan = scan_obj(path, &text)?;
 
     let source: Cow<str> = if scan.needs_rewrite {
-        Cow::Owned(rewrite_for_tobj(text, scan.strip_colours))
+        Cow::Owned(rewrite_for_tobj(&text, scan.strip_colours))
     } else {
-        Cow::Borrowed(text)
+        text
     };
     // tobj's `merging`/`reordering` features add fields; the update keeps
     // this compiling if someone enables them.
@@ -119,7 +131,11 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     };
     let libraries = &scan.libraries;
     let (models, materials) = tobj::load_obj_buf(&mut source.as_bytes(), &options, |lib| {
-        let materials = libraries.get(lib).ok_or(tobj::LoadError::OpenFileFailed)?;
+        // A library the scan could not read (it warned) defines nothing:
+        // an error here would make tobj drop every library's materials.
+        let Some(materials) = libraries.get(lib) else {
+            return Ok((Vec::new(), Default::default()));
+        };
         // Later definitions of a name win, as in tobj's own loader.
         let names = materials
             .iter()
@@ -129,8 +145,8 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
         Ok((materials.clone(), names))
     })
     .map_err(|e| InputError::file(path, tobj_message(e)))?;
-    // Every library was read and checked by the scan, so an error here can
-    // only mean the file had none; that is not a problem.
+    // Every library was read and checked by the scan (or is missing and
+    // defines nothing), so an error here can only mean the file had none.
     let materials = materials.unwrap_or_default();
 
     let mut asset = LoadedAsset {
@@ -139,6 +155,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             .map(|m| (m.name.clone(), mtl_to_material(m)))
             .collect(),
         textures: std::mem::take(&mut scan.textures.textures),
+        warnings: std::mem::take(&mut scan.warnings),
         ..Default::default()
     };
 
@@ -197,6 +214,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             uvs,
         });
     }
+    super::warn_without_triangles(&mut asset, path, "no faces");
     Ok(asset)
 }
 
@@ -234,24 +252,6 @@ pub(super) fn parse_finite(token: &str, what: &str) -> Result<f32, String> {
         Err(format!(
             "{what}: '{token}' is not a finite number (NaN, infinite or too large)"
         ))
-    }
-}
-
-/// The file as text (a leading byte-order mark dropped), or an error at the
-/// first line that is not UTF-8. `mtl.rs` reads material libraries through
-/// it too, so both kinds of file report bad bytes the same way.
-fn utf8_text<'a>(path: &Path, bytes: &'a [u8]) -> InputResult<&'a str> {
-    match std::str::from_utf8(bytes) {
-        Ok(text) => Ok(text.strip_prefix('\u{feff}').unwrap_or(text)),
-        Err(e) => {
-            let good = &bytes[..e.valid_up_to()];
-            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
-            Err(InputError::new(
-                path,
-                format!("line {line}"),
-                "not UTF-8 text (is this really an OBJ/MTL text file?)",
-            ))
-        }
     }
 }
 
@@ -378,13 +378,35 @@ mod tests {
     }
 
     #[test]
-    fn empty_and_faceless_files_load_without_triangles() {
+    fn empty_and_faceless_files_load_without_triangles_and_warn() {
         assert_eq!(load_text("").unwrap().triangle_count(), 0);
-        assert_eq!(
-            load_text("# nothing\nv 1 2 3\n").unwrap().triangle_count(),
-            0
-        );
+        let points = load_text("# nothing\nv 1 2 3\nv 0 0 0\nl 1 2\n").unwrap();
+        assert_eq!(points.triangle_count(), 0);
         assert!(load_text("").unwrap().meshes.is_empty());
+        assert_eq!(points.warnings.len(), 1);
+        let shown = points.warnings[0].to_string();
+        assert!(shown.contains("mesh.obj: no faces"), "{shown}");
+    }
+
+    #[test]
+    fn utf16_files_with_a_byte_order_mark_load_like_utf8() {
+        let text = format!("{SQUARE}f 1 2 3 4\r\n");
+        let plain = load_text(&text).unwrap();
+        for big_endian in [false, true] {
+            let mut bytes = if big_endian {
+                vec![0xfe, 0xff]
+            } else {
+                vec![0xff, 0xfe]
+            };
+            for unit in text.encode_utf16() {
+                bytes.extend(if big_endian {
+                    unit.to_be_bytes()
+                } else {
+                    unit.to_le_bytes()
+                });
+            }
+            assert_eq!(load_text_bytes(&bytes).unwrap(), plain);
+        }
     }
 
     #[test]
@@ -398,8 +420,8 @@ mod tests {
 
     #[test]
     fn garbage_never_panics() {
-        let err = load_text_bytes(&[0xff, 0xfe, 0x00, 0x80, b'\n']).unwrap_err();
-        assert_eq!(err.location, "line 1");
+        let err = load_text_bytes(&[b'\n', 0x80, 0x00, b'\n']).unwrap_err();
+        assert_eq!(err.location, "line 2");
         // Pseudo-random bytes and pseudo-random OBJ-ish text.
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut next = move || {

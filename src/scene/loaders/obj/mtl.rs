@@ -2,9 +2,14 @@
 //! line by line (errors name the library and the line) before `tobj` parses
 //! them, decoding the textures `map_Kd` names, and turning tobj's materials
 //! into ours.
+//!
+//! As other tools do, a library that cannot be read, and the statements of
+//! a `newmtl` without a name, are left out with a warning at their line;
+//! a `\` in a file name is a path separator where no file has that name.
 
 use super::super::io_message;
-use super::{parse_finite, utf8_text};
+use super::super::text::decode_text;
+use super::parse_finite;
 use crate::error::{InputError, InputResult};
 use crate::material::Material;
 use crate::texture::{Image, Texture, Textures, Wrap};
@@ -14,13 +19,6 @@ use std::path::{Path, PathBuf};
 
 /// The materials of one `mtllib` line, in library order.
 pub(super) type MtlLibrary = Vec<tobj::Material>;
-
-pub(super) enum LibraryError {
-    /// A problem inside a library, already naming the library file.
-    Input(InputError),
-    /// The library could not be read; to be reported at the `mtllib` line.
-    Read(String),
-}
 
 /// The textures of an OBJ file's material libraries, each image file
 /// decoded once however many `map_Kd` lines name it.
@@ -54,41 +52,78 @@ impl TextureFiles {
     }
 }
 
-/// Load the material libraries named after `mtllib`. tobj reads the whole
-/// rest of the line as one file name (names may contain spaces); if no such
-/// file exists and the text has several words, each word is a library.
+/// `name` (from an `mtllib` or `map_Kd` line) in `dir`. Windows exporters
+/// write `\` between folders (`.\tex.jpg`); where no file has the name
+/// as written, each `\` is read as a `/`.
+fn resolve(dir: &Path, name: &str) -> PathBuf {
+    let as_written = dir.join(name);
+    if name.contains('\\') && !as_written.exists() {
+        dir.join(name.replace('\\', "/"))
+    } else {
+        as_written
+    }
+}
+
+/// Load the material libraries named after `mtllib` on line `line` of the
+/// OBJ file. tobj reads the whole rest of the line as one file name (names
+/// may contain spaces); if no such file exists and the text has several
+/// words, each word is a library. A library that cannot be read is a
+/// warning at that line, and the second value is then `false`; a problem
+/// inside one is an error naming the library and its line.
 pub(super) fn load_library(
     obj_path: &Path,
+    line: usize,
     name: &str,
     textures: &mut TextureFiles,
-) -> Result<MtlLibrary, LibraryError> {
+    warnings: &mut Vec<InputError>,
+) -> InputResult<(MtlLibrary, bool)> {
     let dir = obj_path.parent().unwrap_or(Path::new(""));
-    let whole = dir.join(name);
+    let whole = resolve(dir, name);
     let files: Vec<PathBuf> = if whole.is_file() || !name.contains(char::is_whitespace) {
         vec![whole]
     } else {
-        name.split_whitespace().map(|n| dir.join(n)).collect()
+        name.split_whitespace().map(|n| resolve(dir, n)).collect()
     };
     let mut materials = Vec::new();
+    let mut all_read = true;
     for file in files {
-        let bytes = std::fs::read(&file).map_err(|e| {
-            LibraryError::Read(format!(
-                "cannot read material library {}: {}",
-                file.display(),
-                io_message(&e)
-            ))
-        })?;
-        materials.append(&mut parse_mtl(&file, &bytes, textures).map_err(LibraryError::Input)?);
+        match std::fs::read(&file) {
+            Ok(bytes) => {
+                materials.append(&mut parse_mtl(&file, &bytes, textures, warnings)?);
+            }
+            Err(e) => {
+                all_read = false;
+                warnings.push(InputError::new(
+                    obj_path,
+                    format!("line {line}"),
+                    format!(
+                        "cannot read material library {}: {}; the faces that name its \
+                         materials get the default material",
+                        file.display(),
+                        io_message(&e)
+                    ),
+                ));
+            }
+        }
     }
-    Ok(materials)
+    Ok((materials, all_read))
 }
 
 /// Validate an MTL file line by line (errors name it and the line), bring
 /// colours into the `r g b` form tobj needs, decode the textures, then let
 /// tobj parse it.
-fn parse_mtl(path: &Path, bytes: &[u8], textures: &mut TextureFiles) -> InputResult<MtlLibrary> {
-    let text = utf8_text(path, bytes)?;
+fn parse_mtl(
+    path: &Path,
+    bytes: &[u8],
+    textures: &mut TextureFiles,
+    warnings: &mut Vec<InputError>,
+) -> InputResult<MtlLibrary> {
+    let text = decode_text(path, bytes)?;
     let mut normalized = String::with_capacity(text.len());
+    // Inside a `newmtl` without a name, whose statements no `usemtl` can
+    // reach: they are left out (an empty line each, so lines keep their
+    // numbers).
+    let mut unnamed = false;
     for (number, raw) in text.split('\n').enumerate() {
         let at = |message: String| InputError::new(path, format!("line {}", number + 1), message);
         let line = raw.trim();
@@ -96,13 +131,22 @@ fn parse_mtl(path: &Path, bytes: &[u8], textures: &mut TextureFiles) -> InputRes
         let keyword = words.next().unwrap_or("");
         let tokens: Vec<&str> = words.collect();
         let after_keyword = line.get(keyword.len()..).unwrap_or("").trim();
-        match keyword {
-            "newmtl" => {
-                if after_keyword.is_empty() {
-                    return Err(at("newmtl needs a material name".to_string()));
-                }
-                normalized.push_str(line);
+        if keyword == "newmtl" {
+            unnamed = after_keyword.is_empty();
+            if unnamed {
+                warnings.push(at(
+                    "newmtl without a material name: its statements are left out, \
+                     and a usemtl without a name gets the default material"
+                        .to_string(),
+                ));
             }
+        }
+        if unnamed {
+            normalized.push('\n');
+            continue;
+        }
+        match keyword {
+            "newmtl" => normalized.push_str(line),
             "Ka" | "Kd" | "Ks" | "Ke" => {
                 let rgb = parse_colour(keyword, &tokens).map_err(&at)?;
                 normalized.push_str(&format!("{keyword} {} {} {}", rgb[0], rgb[1], rgb[2]));
@@ -127,7 +171,7 @@ fn parse_mtl(path: &Path, bytes: &[u8], textures: &mut TextureFiles) -> InputRes
             "map_Kd" => {
                 let (wrap, file) = parse_map_kd(after_keyword).map_err(&at)?;
                 let dir = path.parent().unwrap_or(Path::new(""));
-                let texture = textures.load(&dir.join(file), wrap).map_err(&at)?;
+                let texture = textures.load(&resolve(dir, file), wrap).map_err(&at)?;
                 // tobj keeps the rest of the line as the texture's name: hand
                 // it the index of the decoded texture, which
                 // `mtl_to_material` reads back.
@@ -249,7 +293,7 @@ pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
 #[cfg(test)]
 mod tests {
     use super::super::load_obj;
-    use super::super::test_helpers::{load_text, SQUARE};
+    use super::super::test_helpers::SQUARE;
     use crate::material::Material;
     use crate::scene::loaders::test_files::{temp_dir, write};
     use glam::Vec3;
@@ -403,12 +447,75 @@ mod tests {
     }
 
     #[test]
-    fn missing_mtl_is_an_error_naming_it() {
-        let err = load_text(&format!("{SQUARE}mtllib nowhere.mtl\nf 1 2 3\n")).unwrap_err();
-        let shown = err.to_string();
+    fn a_missing_mtl_is_one_warning_and_other_libraries_still_count() {
+        let dir = temp_dir("missing_mtl");
+        write(&dir, "here.mtl", b"newmtl red\nKd 1 0 0\n");
+        let obj = format!(
+            "{SQUARE}mtllib nowhere.mtl\nmtllib here.mtl\nusemtl lost\nf 1 2 3\n\
+             usemtl red\nf 1 3 4\nusemtl lost2\nf 2 3 4\n"
+        );
+        let asset = load_obj(&write(&dir, "m.obj", obj.as_bytes())).unwrap();
+        assert_eq!(asset.warnings.len(), 1, "{:?}", asset.warnings);
+        let shown = asset.warnings[0].to_string();
+        assert!(shown.contains("m.obj: line 5:"), "{shown}");
         assert!(shown.contains("nowhere.mtl"), "{shown}");
         assert!(shown.contains("No such file or directory"), "{shown}");
-        assert_eq!(err.location, "line 5");
+        let materials: Vec<_> = asset.meshes.iter().map(|m| m.material).collect();
+        assert_eq!(materials, [None, Some(0), None]);
+        assert_eq!(asset.materials[0].1.diffuse, Vec3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn an_unnamed_newmtl_is_left_out_with_a_warning() {
+        let dir = temp_dir("unnamed_mtl");
+        write(
+            &dir,
+            "e.mtl",
+            b"newmtl a\nKd 0 1 0\nnewmtl  \nKd 1 0 0\nmap_Kd gone.png\nnewmtl b\nKd 0 0 1\n",
+        );
+        let obj = format!("mtllib e.mtl\n{SQUARE}usemtl \nf 1 2 3\nusemtl b\nf 1 3 4\n");
+        let asset = load_obj(&write(&dir, "e.obj", obj.as_bytes())).unwrap();
+        let names: Vec<&str> = asset.materials.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["a", "b"]);
+        // The unnamed material's Kd went nowhere: a keeps its own.
+        assert_eq!(asset.materials[0].1.diffuse, Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!(asset.meshes[0].material, None);
+        assert_eq!(asset.meshes[1].material, Some(1));
+        let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(said.len(), 2, "{said:?}");
+        assert!(said[0].contains("e.mtl: line 3: newmtl without a material name"));
+        assert!(said[1].contains("e.obj: line 6: usemtl without a material name"));
+    }
+
+    #[test]
+    fn backslashes_in_file_names_are_folders_where_no_file_has_the_name() {
+        use crate::scene::loaders::test_files::png;
+        let dir = temp_dir("backslash");
+        std::fs::create_dir(dir.join("tex")).unwrap();
+        write(&dir.join("tex"), "spider.png", &png(1, 1, &[[9, 8, 7]]));
+        std::fs::create_dir(dir.join("lib")).unwrap();
+        write(
+            &dir.join("lib"),
+            "s.mtl",
+            b"newmtl skin\nmap_Kd ..\\tex\\spider.png\n",
+        );
+        let obj = format!("mtllib .\\lib\\s.mtl\n{SQUARE}usemtl skin\nf 1 2 3\n");
+        let asset = load_obj(&write(&dir, "s.obj", obj.as_bytes())).unwrap();
+        assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
+        assert_eq!(asset.materials[0].1.diffuse_texture, Some(0));
+        assert_eq!(asset.textures.images[0].texels(), [[9, 8, 7]]);
+    }
+
+    #[test]
+    fn latin1_and_utf16_libraries_are_read() {
+        let dir = temp_dir("latin1_mtl");
+        // "newmtl grün" in Latin-1 (ü is one byte, 0xfc), after a comment.
+        write(&dir, "l.mtl", b"# \xa9 1999\nnewmtl gr\xfcn\nKd 0 0.5 0\n");
+        let obj = format!("mtllib l.mtl\n{SQUARE}usemtl grün\nf 1 2 3\n");
+        let asset = load_obj(&write(&dir, "l.obj", obj.as_bytes())).unwrap();
+        assert_eq!(asset.materials[0].0, "grün");
+        assert_eq!(asset.meshes[0].material, Some(0));
+        assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
     }
 
     #[test]

@@ -6,8 +6,14 @@
 //! material libraries that `mtllib` lines name (see `mtl.rs`), because a
 //! `usemtl` is checked against the materials defined before it.
 //! [`rewrite_for_tobj`] then adjusts the few valid lines tobj would misread.
+//!
+//! What other tools read with a default material is read here too, with a
+//! warning at its line (collected in [`ObjScan::warnings`]): a `usemtl`
+//! naming no material (each name once; in a file without `mtllib`, where
+//! `usemtl` means the default material, none), a `usemtl` without a name,
+//! an `mtllib` that cannot be read (its `usemtl`s then say nothing more).
 
-use super::mtl::{load_library, LibraryError, MtlLibrary, TextureFiles};
+use super::mtl::{load_library, MtlLibrary, TextureFiles};
 use super::{parse_finite, parse_number};
 use crate::error::{InputError, InputResult};
 use std::collections::{HashMap, HashSet};
@@ -32,7 +38,13 @@ pub(super) struct ObjScan {
     pub(super) needs_rewrite: bool,
     /// Some `v` lines have colours and others not: drop the colours.
     pub(super) strip_colours: bool,
+    /// What was read leniently, each naming its file and line.
+    pub(super) warnings: Vec<InputError>,
 }
+
+/// What a `usemtl` without a name becomes for tobj: a name no library
+/// defines, so the faces after it get the default material.
+pub(super) const NO_MATERIAL: &str = "\u{0}";
 
 /// How many `v`, `vt` and `vn` lines a file has, for absolute indices.
 #[derive(Default, Clone, Copy)]
@@ -146,9 +158,14 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
         textures: TextureFiles::default(),
         needs_rewrite: false,
         strip_colours: false,
+        warnings: Vec::new(),
     };
     let mut coloured_vertices = 0usize;
     let mut material_names: HashSet<String> = HashSet::new();
+    // Undefined names already warned about, and whether a library could not
+    // be read (whose materials then go unnamed without more warnings).
+    let mut warned_names: HashSet<String> = HashSet::new();
+    let mut library_missing = false;
 
     for (number, line) in text.split('\n').enumerate() {
         let at = |message: String| InputError::new(path, format!("line {}", number + 1), message);
@@ -240,28 +257,40 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
             "usemtl" => {
                 let name = after_first_space(line);
                 if name.is_empty() {
-                    return Err(at(
-                        "usemtl needs a material name, separated by a space".to_string()
-                    ));
-                }
-                if !material_names.contains(name) && total.mtllib {
-                    return Err(at(format!(
-                        "material '{name}' is not defined by any mtllib before this line"
+                    scan.needs_rewrite = true;
+                    scan.warnings
+                        .push(at("usemtl without a material name (after a space): \
+                         the faces after it get the default material"
+                            .to_string()));
+                } else if total.mtllib
+                    && !material_names.contains(name)
+                    && !library_missing
+                    && warned_names.insert(name.to_string())
+                {
+                    // (A file without any mtllib, as many exporters write
+                    // `usemtl Default`, means the default material: no word.)
+                    scan.warnings.push(at(format!(
+                        "material '{name}' is not defined by any mtllib before this \
+                         line: its faces get the default material"
                     )));
                 }
             }
             "mtllib" => {
                 let name = after_first_space(line);
                 if name.is_empty() {
-                    return Err(at(
-                        "mtllib needs a file name, separated by a space".to_string()
+                    scan.warnings.push(at(
+                        "mtllib without a file name (after a space) is ignored".to_string()
                     ));
+                    continue;
                 }
-                let library =
-                    load_library(path, name, &mut scan.textures).map_err(|e| match e {
-                        LibraryError::Input(e) => e,
-                        LibraryError::Read(message) => at(message),
-                    })?;
+                let (library, all_read) = load_library(
+                    path,
+                    number + 1,
+                    name,
+                    &mut scan.textures,
+                    &mut scan.warnings,
+                )?;
+                library_missing |= !all_read;
                 material_names.extend(library.iter().map(|m| m.name.clone()));
                 scan.libraries.insert(PathBuf::from(name), library);
             }
@@ -285,6 +314,10 @@ pub(super) fn rewrite_for_tobj(text: &str, strip_colours: bool) -> String {
         let mut words = line.split_whitespace();
         match words.next() {
             Some("l") => {}
+            Some("usemtl") if after_first_space(line).is_empty() => {
+                out.push_str("usemtl ");
+                out.push_str(NO_MATERIAL);
+            }
             Some("v") if strip_colours => {
                 let tokens: Vec<&str> = words.collect();
                 if tokens.len() == 6 {
@@ -331,16 +364,30 @@ mod tests {
     }
 
     #[test]
-    fn unknown_usemtl_is_an_error_only_with_a_library() {
+    fn unknown_or_unnamed_usemtl_gets_the_default_material_and_one_warning() {
         let dir = temp_dir("usemtl");
         write(&dir, "lib.mtl", b"newmtl known\n");
-        let obj = format!("mtllib lib.mtl\n{SQUARE}usemtl unknown\nf 1 2 3\n");
-        let err = load_obj(&write(&dir, "a.obj", obj.as_bytes())).unwrap_err();
-        assert_eq!(err.location, "line 6", "{err}");
-        assert!(err.to_string().contains("unknown"), "{err}");
+        let obj = format!(
+            "mtllib lib.mtl\n{SQUARE}usemtl unknown\nf 1 2 3\nusemtl known\nf 1 3 4\n\
+             usemtl unknown\nf 2 3 4\nusemtl\nf 1 2 4\n"
+        );
+        let asset = load_obj(&write(&dir, "a.obj", obj.as_bytes())).unwrap();
+        let materials: Vec<_> = asset.meshes.iter().map(|m| m.material).collect();
+        // The last two faces both have the default material: one mesh.
+        assert_eq!(materials, [None, Some(0), None]);
+        assert_eq!(asset.meshes[2].indices.len(), 2);
+        let said: Vec<_> = asset.warnings.iter().map(|w| w.location.as_str()).collect();
+        assert_eq!(said, ["line 6", "line 12"], "{:?}", asset.warnings);
+        assert!(asset.warnings[0].file.ends_with("a.obj"));
+        assert!(asset.warnings[0].message.contains("'unknown'"));
+        assert!(asset.warnings[1]
+            .message
+            .contains("without a material name"));
+        // Without any mtllib, usemtl means the default material: no word.
         let asset = load_text(&format!("{SQUARE}usemtl whatever\nf 1 2 3\n")).unwrap();
         assert_eq!(asset.meshes[0].material, None);
         assert!(asset.materials.is_empty());
+        assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
     }
 
     #[test]
