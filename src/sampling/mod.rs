@@ -11,6 +11,7 @@
 
 pub mod cmj;
 pub mod cmj_lanes;
+pub mod distribution;
 pub mod hash;
 pub mod sampler;
 pub mod spherical_rect;
