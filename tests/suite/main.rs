@@ -12,6 +12,7 @@ mod degenerate;
 mod docs;
 mod embree;
 mod embree_native;
+mod environment;
 mod first_hour;
 mod memory;
 mod mesh_queries;

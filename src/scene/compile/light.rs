@@ -20,7 +20,12 @@ impl Compiler<'_> {
     /// one-sided emitting primitives.
     pub(super) fn light(&mut self, l: &LightDesc, key: &str) -> InputResult<()> {
         let k = |field: &str| format!("{key}.{field}");
-        let what = format!("a {} light", l.kind);
+        let article = if l.kind == LightType::Environment {
+            "an"
+        } else {
+            "a"
+        };
+        let what = format!("{article} {} light", l.kind);
         let given = [
             ("position", l.position.is_some()),
             ("intensity", l.intensity.is_some()),
