@@ -5,12 +5,17 @@
         [--strata target/release/strata] [--threads 1] [--runs 5]
         [--spp N] [--ref-spp 1024] [--variant llvm_ad_rgb]
 
-Without scenes: scenes/large/dragon-rect.toml, scenes/seed-mc.toml and
-scenes/soft-shadow.toml. Each strata scene is translated into a Mitsuba
+Without scenes: scenes/large/dragon-rect.toml, scenes/seed-mc.toml,
+scenes/soft-shadow.toml, scenes/env-constant.toml and scenes/env-sky.toml.
+Each strata scene is translated into a Mitsuba
 scene dict: perspective camera (strata's fov is vertical: fov_axis "y"),
 box pixel filter, two-sided diffuse BSDFs, a rect light as a `rectangle`
 with a one-sided `area` emitter facing edge_u x edge_v, point and
-directional lights, a plane as a large rectangle, spheres, PLY/OBJ meshes
+directional lights, an environment light as a `constant` emitter or an
+`envmap` (its lat-long layout is Mitsuba's; strata looks texels up
+nearest, Mitsuba bilinearly, so Mitsuba gets the map repeated 8x along
+each axis, on which its bilinear lookup is strata's nearest one but for a
+sixteenth of a texel at each edge), a plane as a large rectangle, spheres, PLY/OBJ meshes
 (flat-shaded, as strata shades meshes without normals), and the `direct`
 integrator (emitter_samples = strata's shadow_samples, bsdf_samples = 1) with the `independent`
 sampler. strata's direct light has the same expectation (one light sample
@@ -55,7 +60,12 @@ import tomllib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-DEFAULT_SCENES = ["scenes/large/dragon-rect.toml", "scenes/seed-mc.toml", "scenes/soft-shadow.toml"]
+DEFAULT_SCENES = ["scenes/large/dragon-rect.toml", "scenes/seed-mc.toml", "scenes/soft-shadow.toml",
+                  "scenes/env-constant.toml", "scenes/env-sky.toml"]
+# How many times each texel of an environment map is repeated along each
+# axis for Mitsuba: its bilinear lookup on the repeated map is strata's
+# nearest lookup on the original but within 1/16 texel of each edge.
+ENVMAP_REPEAT = 8
 LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
 # Seeds whose mean RMSE decides whether strata has reached Mitsuba's error.
 RMSE_SEEDS = 3
@@ -88,7 +98,11 @@ def frame_matrix(x, y, z, o):
 
 
 def translate(path, mi):
-    """strata scene file -> (Mitsuba dict, render settings). Raises Unsupported."""
+    """strata scene file -> (Mitsuba dict, render settings). Raises Unsupported.
+    settings["inputs"] lists the files the dict holds as data, not names
+    (environment maps), for the reference's cache key."""
+    import numpy as np
+
     with open(path, "rb") as f:
         doc = tomllib.load(f)
     base = os.path.dirname(os.path.abspath(path))
@@ -101,7 +115,8 @@ def translate(path, mi):
             problems.append(f"render.{key}")
     if any(c != 0 for c in r.get("background", [0, 0, 0])):
         problems.append("a background radiance (Mitsuba's constant emitter would also light the scene)")
-    settings = {"width": r.get("width", 640), "height": r.get("height", 480), "spp": r.get("spp", 1)}
+    settings = {"width": r.get("width", 640), "height": r.get("height", 480), "spp": r.get("spp", 1),
+                "inputs": []}
 
     cam = doc.get("camera", {})
     kind = cam.get("type", "perspective")
@@ -161,6 +176,23 @@ def translate(path, mi):
                 # Its back: black, as strata's rect light shows nothing from behind.
                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}},
             }
+        elif kind == "environment":
+            scale = light.get("scale", 1.0)
+            scale = v3([scale] * 3 if isinstance(scale, (int, float)) else scale)
+            rotate = light.get("rotate")
+            to_world = T().rotate(v3(rotate[:3]), float(rotate[3])) if rotate else T()
+            if "map" in light:
+                file = os.path.normpath(os.path.join(base, light["map"]))
+                settings["inputs"].append(file)
+                texels = np.array(mi.Bitmap(file), copy=True)[:, :, :3].astype(np.float32)
+                texels *= np.array(scale, dtype=np.float32)
+                texels = np.repeat(np.repeat(texels, ENVMAP_REPEAT, 0), ENVMAP_REPEAT, 1)
+                scene[f"light{i}"] = {"type": "envmap", "bitmap": mi.Bitmap(texels), "to_world": to_world}
+            else:
+                radiance = light["radiance"]
+                radiance = v3([radiance] * 3 if isinstance(radiance, (int, float)) else radiance)
+                scene[f"light{i}"] = {"type": "constant", "radiance": {
+                    "type": "rgb", "value": [radiance[k] * scale[k] for k in range(3)]}}
         else:
             problems.append(f"a {kind} light")
 
@@ -264,8 +296,9 @@ def bench_scene(args, mi, dr, np, path, tmp):
         return img, t
 
     # 1. The reference, cached by the scene file, its meshes' sizes and the spp.
-    key = hashlib.sha256(open(path, "rb").read() + json.dumps(
-        [args.ref_spp, mi.__version__, sorted(str(v.get("filename", "")) + str(
+    inputs = b"".join(open(f, "rb").read() for f in settings["inputs"])
+    key = hashlib.sha256(open(path, "rb").read() + inputs + json.dumps(
+        [args.ref_spp, mi.__version__, ENVMAP_REPEAT, sorted(str(v.get("filename", "")) + str(
             os.path.getsize(v["filename"]) if "filename" in v else "") for v in desc.values()
             if isinstance(v, dict))]).encode()).hexdigest()[:16]
     cache = os.path.join(HERE, ".cache", f"mitsuba-{name}-{args.ref_spp}spp-{key}.npy")

@@ -32,6 +32,10 @@
 //! center = [0.0, 3.0, 0.0]
 //! radius = 0.25
 //! radiance = [5.0, 5.0, 5.0]
+//!
+//! [[lights]]
+//! type = "environment"             # from every direction at infinity
+//! radiance = [0.5, 0.6, 0.8]       # or map = "sky.exr" (lat-long), scale, rotate
 //! ```
 //!
 //! Sampling by solid angle (`light_sampling = "solid_angle"`, the default)
@@ -40,10 +44,13 @@
 //! Zimmerman 1996, "Monte Carlo Techniques for Direct Lighting
 //! Calculations"); disks, parallelograms and points inside a sphere light
 //! fall back to sampling by area, which `light_sampling = "area"` forces.
+//! The environment light ([`environment`]) has its own sampling.
 
+pub mod environment;
 mod lanes;
 mod sample;
 
+pub use environment::Environment;
 pub use lanes::LightLanes;
 pub use sample::{LightFrom, LightSample, LightSampling};
 
@@ -52,7 +59,8 @@ use crate::shape::rect::Rect;
 use glam::Vec3;
 use std::f32::consts::PI;
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+// Not `Copy`: an environment map's texels are shared, not copied.
+#[derive(Debug, Clone, PartialEq)]
 pub enum Light {
     Point {
         position: Vec3,
@@ -80,10 +88,28 @@ pub enum Light {
         radiance: Vec3,
         prim: u32,
     },
+    /// Radiance from every direction at infinity: sampled `shadow_samples`
+    /// times per hit, and seen by rays that hit nothing.
+    Environment(Environment),
 }
 
 impl Light {
-    /// True for lights with a surface, which take `shadow_samples` samples.
+    /// A constant environment light of `radiance` (W/(m² sr)) from every
+    /// direction: a neutral default light for a scene that has none.
+    pub fn constant_environment(radiance: Vec3) -> Light {
+        Light::Environment(Environment::constant(radiance))
+    }
+
+    /// The environment, if this light is one.
+    pub fn environment(&self) -> Option<&Environment> {
+        match self {
+            Light::Environment(e) => Some(e),
+            _ => None,
+        }
+    }
+
+    /// True for lights with a surface (or the environment), which take
+    /// `shadow_samples` samples.
     pub fn is_area(&self) -> bool {
         !matches!(self, Light::Point { .. } | Light::Directional { .. })
     }
@@ -102,7 +128,7 @@ impl Light {
     pub fn power(&self) -> Vec3 {
         match *self {
             Light::Point { intensity, .. } => 4.0 * PI * intensity,
-            Light::Directional { .. } => Vec3::splat(f32::INFINITY),
+            Light::Directional { .. } | Light::Environment(_) => Vec3::splat(f32::INFINITY),
             Light::Rect { rect, radiance, .. } => PI * rect.area() * radiance,
             Light::Disk { disk, radiance, .. } => PI * disk.area() * radiance,
             Light::Sphere {

@@ -198,6 +198,9 @@ impl Light {
                 let q = center + radius * n;
                 towards(p, q, n, radiance, Some(4.0 * PI * radius * radius))
             }
+            // Without the surface's normal: over the whole sphere (direct
+            // light passes the normal, `Environment::light_sample`).
+            Light::Environment(ref env) => env.light_sample(None, u, method),
         }
     }
 }

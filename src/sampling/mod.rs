@@ -11,7 +11,9 @@
 
 pub mod cmj;
 pub mod cmj_lanes;
+pub mod distribution;
 pub mod hash;
+pub mod mis;
 pub mod sampler;
 pub mod spherical_rect;
 pub mod spherical_rect_lanes;

@@ -46,6 +46,12 @@ impl Dim {
     pub fn choice(depth: u32) -> Dim {
         Dim(0x3000 + depth * 0x1_0000)
     }
+
+    /// The environment light's draw beside a glossy reflection's, for
+    /// multiple importance sampling, at path depth `depth`.
+    pub fn glossy_environment(depth: u32) -> Dim {
+        Dim(0x4000 + depth * 0x1_0000)
+    }
 }
 
 /// The sampler for one pixel.

@@ -203,6 +203,10 @@ crate::mode::mode_enum! {
         Disk = "disk",
         /// Sphere emitting `radiance` outwards.
         Sphere = "sphere",
+        /// Radiance from every direction at infinity: constant `radiance`,
+        /// or a lat-long `map` (EXR or Radiance HDR), times `scale`,
+        /// turned by `rotate`.
+        Environment = "environment",
     }
 }
 
@@ -228,6 +232,46 @@ pub struct LightDesc {
     pub radius: Option<f32>,
     #[serde(default, deserialize_with = "optional_colour")]
     pub radiance: Option<V3>,
+    /// An environment light's lat-long map, relative to the scene file.
+    pub map: Option<String>,
+    /// An environment light's multiplier: one number or a colour.
+    #[serde(default, deserialize_with = "optional_colour")]
+    pub scale: Option<V3>,
+    /// An environment light's rotation, axis-angle as transforms write it:
+    /// [x, y, z, degrees].
+    pub rotate: Option<[f32; 4]>,
+}
+
+impl LightDesc {
+    /// A `[[lights]]` entry of type `type` with no keys set yet.
+    pub fn of_type(kind: LightType) -> Self {
+        Self {
+            kind,
+            position: None,
+            intensity: None,
+            direction: None,
+            irradiance: None,
+            corner: None,
+            edge_u: None,
+            edge_v: None,
+            center: None,
+            normal: None,
+            radius: None,
+            radiance: None,
+            map: None,
+            scale: None,
+            rotate: None,
+        }
+    }
+
+    /// A constant environment light of `radiance`: what a scene without
+    /// lights can be given as a neutral default.
+    pub fn constant_environment(radiance: V3) -> Self {
+        Self {
+            radiance: Some(radiance),
+            ..Self::of_type(LightType::Environment)
+        }
+    }
 }
 
 /// An object: exactly one shape key, plus optional material and transform.

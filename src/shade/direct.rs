@@ -16,6 +16,10 @@
 //! whole process"), and each lane still adds its contributions in sample
 //! order.
 //!
+//! An environment light is drawn lane by lane with each hit's normal
+//! ([`crate::light::Environment::light_sample`]); its shadow rays are
+//! occlusion rays to infinity.
+//!
 //! A single hit lit with several samples of an area light (a reflected
 //! or refracted ray's hit) would leave seven lanes idle, so its
 //! samples fill the lanes instead, eight per round (docs/mitsuba.md,
@@ -129,7 +133,20 @@ impl Integrator<'_> {
                     };
                     u = draw_2d_lanes(slots, |k| lanes[hit[k]].ctx, dim, at);
                 }
-                let samples = seen.sample(slots, &u);
+                let samples = match light.environment() {
+                    // An environment is drawn with each hit's normal (a
+                    // constant one by the cosine about it), lane by lane:
+                    // the same numbers alone or in a batch.
+                    Some(env) => {
+                        let mut out = [None; LANES];
+                        for k in mask_lanes(slots) {
+                            let ng = shading(hit[k]).ng;
+                            out[k] = env.light_sample(Some(ng), u[k], method);
+                        }
+                        out
+                    }
+                    None => seen.sample(slots, &u),
+                };
                 shadow.len = 0;
                 for k in mask_lanes(slots) {
                     let Some(ls) = samples[k] else {

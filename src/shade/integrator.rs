@@ -6,6 +6,7 @@ use super::sample::draw_2d_lanes;
 use super::{CameraSample, FirstHit, PacketMode, PathEvent, RayCounts, SampleContext};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::geometry::Surface;
+use crate::light::Environment;
 use crate::material::Material;
 use crate::math::Ray;
 use crate::sampling::Dim;
@@ -68,6 +69,9 @@ pub struct Integrator<'a> {
     pub packets: PacketMode,
     /// When set, every path vertex is recorded (slow; for debugging one sample).
     pub trace: Option<Vec<PathEvent>>,
+    /// The scene's environment light, if it has one: what rays that hit
+    /// nothing see instead of the background.
+    pub(super) environment: Option<&'a Environment>,
 }
 
 /// One ray to shade, with its closest hit: a lane of [`Integrator::shade`].
@@ -78,6 +82,9 @@ pub(super) struct ShadeLane<'c> {
     hit: Option<PrimHit>,
     /// The path's weight so far.
     weight: f32,
+    /// What the environment's radiance counts for if the ray hits nothing:
+    /// 1, or a glossy ray's multiple importance sampling weight.
+    escape: f32,
     /// Where [`Integrator::begin_record`] put this ray's event.
     slot: usize,
 }
@@ -89,6 +96,7 @@ impl<'a> Integrator<'a> {
             counts: RayCounts::default(),
             packets: PacketMode::Auto,
             trace: None,
+            environment: scene.lights.iter().find_map(|l| l.environment()),
         }
     }
 
@@ -149,7 +157,7 @@ impl Integrator<'_> {
             // One sample: shaded as one lane, without a batch's arrays.
             let ray = self.camera_ray(&batch[0].ctx, batch[0].film);
             self.counts.camera += 1;
-            out[0] = self.trace_and_shade(&batch[0].ctx, &ray, 0, 1.0, "camera", first);
+            out[0] = self.trace_and_shade(&batch[0].ctx, &ray, 0, 1.0, 1.0, "camera", first);
             return;
         }
         // The lens samples as `camera_ray` draws them, eight at a time.
@@ -180,6 +188,7 @@ impl Integrator<'_> {
                 ray: rays[i],
                 hit: hits[i],
                 weight: 1.0,
+                escape: 1.0,
                 slot: usize::MAX,
             }
         });
@@ -198,17 +207,33 @@ impl Integrator<'_> {
         weight: f32,
         kind: &'static str,
     ) -> Vec3 {
-        self.trace_and_shade(ctx, ray, depth, weight, kind, None)
+        self.trace_and_shade(ctx, ray, depth, weight, 1.0, kind, None)
+    }
+
+    /// [`Integrator::radiance`] with the environment seen through weight
+    /// `escape` if the ray hits nothing (a glossy ray's multiple importance
+    /// sampling weight).
+    pub(super) fn radiance_escaping(
+        &mut self,
+        ctx: &SampleContext,
+        ray: &Ray,
+        depth: u32,
+        weight: f32,
+        escape: f32,
+    ) -> Vec3 {
+        self.trace_and_shade(ctx, ray, depth, weight, escape, "glossy", None)
     }
 
     /// [`Integrator::radiance`], and at depth 0, with `first`, what the
     /// ray hit into `first[0]`.
+    #[allow(clippy::too_many_arguments)]
     fn trace_and_shade(
         &mut self,
         ctx: &SampleContext,
         ray: &Ray,
         depth: u32,
         weight: f32,
+        escape: f32,
         kind: &'static str,
         first: Option<&mut [FirstHit]>,
     ) -> Vec3 {
@@ -219,6 +244,7 @@ impl Integrator<'_> {
             ray: *ray,
             hit,
             weight,
+            escape,
             slot,
         };
         let mut out = [Vec3::ZERO];
@@ -271,8 +297,12 @@ impl Integrator<'_> {
         let direct = self.direct_light(depth, lanes, &shadings);
         for (i, lane) in lanes.iter().enumerate() {
             let (Some(sh), Some(hit)) = (&shadings[i], lane.hit) else {
-                self.finish_record(lane.slot, None, scene.settings.background);
-                out[i] = scene.settings.background;
+                let l = match self.environment {
+                    Some(env) => env.radiance(lane.ray.direction) * lane.escape,
+                    None => scene.settings.background,
+                };
+                self.finish_record(lane.slot, None, l);
+                out[i] = l;
                 continue;
             };
             let material = sh.material;

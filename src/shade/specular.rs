@@ -5,8 +5,10 @@ use super::bsdf::{refract, schlick};
 use super::integrator::{Shading, MIN_PATH_WEIGHT};
 use super::{Integrator, SampleContext};
 use crate::geometry::Surface;
+use crate::light::Environment;
 use crate::math::offset::spawn_origin;
 use crate::math::{Frame, Ray};
+use crate::sampling::mis::power_heuristic;
 use crate::sampling::warp::{phong_lobe, phong_lobe_pdf, uniform_hemisphere};
 use crate::sampling::Dim;
 use crate::scene::settings::GlossySampling;
@@ -67,6 +69,19 @@ impl Integrator<'_> {
 
     /// Lobe-weighted average of incoming radiance around `mirror`, with K
     /// branches at the first glossy hit of the path and one ray after that.
+    ///
+    /// Under an environment map, each branch also draws one direction from
+    /// the map, and the two strategies' estimates of the environment's
+    /// share are combined by multiple importance sampling with the power
+    /// heuristic (Veach and Guibas 1995, "Optimally Combining Sampling
+    /// Techniques for Monte Carlo Rendering"): the lobe's ray counts what
+    /// it sees of the environment with weight p_lobe² / (p_lobe² + p_env²),
+    /// the map's direction (one occlusion ray to infinity) with
+    /// p_env² / (p_lobe² + p_env²). The lobe alone finds a small bright sun
+    /// rarely, the map alone a sharp lobe rarely. Light that the lobe's
+    /// ray finds on a surface is the lobe's alone. A constant environment
+    /// is sampled by the lobe alone: there the lobe's density is
+    /// proportional to the integrand already.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn glossy(
         &mut self,
@@ -85,6 +100,14 @@ impl Integrator<'_> {
         };
         let lobe = Frame::from_z(mirror);
         let hemisphere = Frame::from_z(ng);
+        let settings = &self.scene.settings;
+        let (glossy_sampling, light_sampling) = (settings.glossy_sampling, settings.light_sampling);
+        let map = self.environment.filter(|e| e.has_map());
+        // The density of the lobe's strategy for direction `d`.
+        let lobe_pdf = |d: Vec3| match glossy_sampling {
+            GlossySampling::Lobe => phong_lobe_pdf(d.dot(mirror), exponent),
+            GlossySampling::Uniform => 0.5 / PI,
+        };
         let mut sum = Vec3::ZERO;
         for b in 0..k {
             let child = if k > 1 {
@@ -99,7 +122,17 @@ impl Integrator<'_> {
             let u = ctx
                 .sampler
                 .get_2d(Dim::glossy(depth), child.index(), child.count());
-            let (dir, w) = match self.scene.settings.glossy_sampling {
+            if let Some(env) = map {
+                sum += self.glossy_environment(
+                    &child,
+                    env,
+                    s,
+                    (exponent, mirror, ng),
+                    depth,
+                    &lobe_pdf,
+                );
+            }
+            let (dir, w) = match glossy_sampling {
                 GlossySampling::Lobe => (lobe.to_world(phong_lobe(u, exponent)), 1.0),
                 GlossySampling::Uniform => {
                     let d = hemisphere.to_world(uniform_hemisphere(u));
@@ -116,8 +149,50 @@ impl Integrator<'_> {
             }
             self.counts.reflection += 1;
             let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, dir), dir);
-            sum += w * self.radiance(&child, &ray, depth + 1, weight, "glossy");
+            let escape = match map {
+                Some(env) => power_heuristic(lobe_pdf(dir), env.pdf(None, dir, light_sampling)),
+                None => 1.0,
+            };
+            sum += w * self.radiance_escaping(&child, &ray, depth + 1, weight, escape);
         }
         sum / k as f32
+    }
+
+    /// One branch's draw from the environment map `env` for the glossy
+    /// lobe (`exponent` around `mirror`, above `ng`) at `s`: the lobe's
+    /// density times the radiance over the map's density, times the map's
+    /// power-heuristic weight against `lobe_pdf`, if nothing blocks the
+    /// direction.
+    fn glossy_environment(
+        &mut self,
+        ctx: &SampleContext,
+        env: &Environment,
+        s: &Surface,
+        (exponent, mirror, ng): (f32, Vec3, Vec3),
+        depth: u32,
+        lobe_pdf: &impl Fn(Vec3) -> f32,
+    ) -> Vec3 {
+        let method = self.scene.settings.light_sampling;
+        let u = ctx
+            .sampler
+            .get_2d(Dim::glossy_environment(depth), ctx.index(), ctx.count());
+        let Some(e) = env.sample(None, u, method) else {
+            return Vec3::ZERO;
+        };
+        let lobe = phong_lobe_pdf(e.wi.dot(mirror), exponent);
+        if e.wi.dot(ng) <= 0.0 || !(lobe > 0.0) || e.radiance.max_element() <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let l = e.radiance * (lobe / e.pdf * power_heuristic(e.pdf, lobe_pdf(e.wi)));
+        if !l.is_finite() {
+            return Vec3::ZERO;
+        }
+        self.counts.shadow += 1;
+        let ray = Ray::new(spawn_origin(s.p, s.p_error, ng, e.wi), e.wi);
+        if self.scene.geometry.occluded(&ray) {
+            Vec3::ZERO
+        } else {
+            l
+        }
     }
 }

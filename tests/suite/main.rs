@@ -13,6 +13,7 @@ mod docs;
 mod embree;
 mod embree_instances;
 mod embree_native;
+mod environment;
 mod first_hour;
 mod instancing;
 mod memory;

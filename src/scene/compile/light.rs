@@ -2,22 +2,30 @@
 //! visible, one-sided emitting primitives that their own shadow rays skip.
 
 use super::Compiler;
-use crate::error::InputResult;
+use crate::error::{io_message, InputResult};
 use crate::geometry::{AnalyticPrim, Shape, NO_TRANSFORM};
+use crate::light::environment::{Emission, EnvMap, Environment};
 use crate::light::Light;
 use crate::material::Material;
 use crate::scene::description::{LightDesc, LightType, V3};
+use crate::scene::RenderSettings;
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
-use glam::Vec3;
+use glam::{Mat3, Vec3};
+use std::sync::Arc;
 
 impl Compiler<'_> {
     /// Validate a light and add it; area lights also become visible,
     /// one-sided emitting primitives.
     pub(super) fn light(&mut self, l: &LightDesc, key: &str) -> InputResult<()> {
         let k = |field: &str| format!("{key}.{field}");
-        let what = format!("a {} light", l.kind);
+        let article = if l.kind == LightType::Environment {
+            "an"
+        } else {
+            "a"
+        };
+        let what = format!("{article} {} light", l.kind);
         let given = [
             ("position", l.position.is_some()),
             ("intensity", l.intensity.is_some()),
@@ -30,6 +38,9 @@ impl Compiler<'_> {
             ("normal", l.normal.is_some()),
             ("radius", l.radius.is_some()),
             ("radiance", l.radiance.is_some()),
+            ("map", l.map.is_some()),
+            ("scale", l.scale.is_some()),
+            ("rotate", l.rotate.is_some()),
         ];
         let takes: &[&str] = match l.kind {
             LightType::Point => &["position", "intensity"],
@@ -39,6 +50,7 @@ impl Compiler<'_> {
             LightType::Rect => &["corner", "edge_u", "edge_v", "radiance"],
             LightType::Disk => &["center", "normal", "radius", "radiance"],
             LightType::Sphere => &["center", "radius", "radiance"],
+            LightType::Environment => &["radiance", "map", "scale", "rotate"],
         };
         self.only(key, &what, &given, takes)?;
         let need = |value: Option<V3>, name: &str| self.need(value, key, name, &what);
@@ -102,8 +114,62 @@ impl Compiler<'_> {
                     prim,
                 }
             }
+            LightType::Environment => Light::Environment(self.environment(l, key)?),
         };
         self.lights.push(light);
+        Ok(())
+    }
+
+    /// An environment light's emission and rotation; its map, if it has
+    /// one, read relative to the scene file. A scene has at most one.
+    fn environment(&self, l: &LightDesc, key: &str) -> InputResult<Environment> {
+        let k = |field: &str| format!("{key}.{field}");
+        if self.lights.iter().any(|l| l.environment().is_some()) {
+            return Err(self.err(key, "a scene takes one environment light; this is a second"));
+        }
+        let scale = match l.scale {
+            Some(s) => self.colour(s, &k("scale"))?,
+            None => Vec3::ONE,
+        };
+        let to_world = match l.rotate {
+            Some([x, y, z, deg]) => {
+                let axis = self.direction([x, y, z], &k("rotate"))?;
+                Mat3::from_axis_angle(axis, self.finite(deg, &k("rotate"))?.to_radians())
+            }
+            None => Mat3::IDENTITY,
+        };
+        let emission = match (l.radiance, &l.map) {
+            (Some(_), Some(_)) => return Err(self.err(key, "give radiance or map, not both")),
+            (None, None) => {
+                return Err(self.err(key, "an environment light needs `radiance` or `map`"))
+            }
+            (Some(radiance), None) => {
+                Emission::Constant(self.colour(radiance, &k("radiance"))? * scale)
+            }
+            (None, Some(file)) => {
+                let path = self.base_dir.join(file);
+                let bytes = std::fs::read(&path).map_err(|e| {
+                    let message = format!("cannot read '{}': {}", path.display(), io_message(&e));
+                    self.err(&k("map"), message)
+                })?;
+                let map = EnvMap::decode(&bytes, scale)
+                    .map_err(|e| self.err(&k("map"), format!("'{}': {e}", path.display())))?;
+                Emission::Map(Arc::new(map))
+            }
+        };
+        Ok(Environment { emission, to_world })
+    }
+
+    /// What rays that hit nothing see is said once: by an environment
+    /// light, or by `render.background`, not both.
+    pub(super) fn check_background(&self, settings: &RenderSettings) -> InputResult<()> {
+        let environment = self.lights.iter().any(|l| l.environment().is_some());
+        if environment && settings.background != Vec3::ZERO {
+            return Err(self.err(
+                "render.background",
+                "rays that hit nothing see the environment light; drop the background or the light",
+            ));
+        }
         Ok(())
     }
 

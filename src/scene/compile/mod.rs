@@ -271,6 +271,7 @@ fn compile_for(
         c.object(obj, &format!("objects[{i}]"), Affine3A::IDENTITY, 0)?;
     }
     let settings = c.settings(&desc.render, overrides)?;
+    c.check_background(&settings)?;
     let camera = c.camera(desc.camera.as_ref(), &settings)?;
     // Every object holds what it needs from its mesh files by now.
     drop(std::mem::take(&mut c.assets));
