@@ -198,7 +198,7 @@ def translate(path, mi):
 
     for i, obj in enumerate(doc.get("objects", [])):
         for key in obj:
-            if key not in ("sphere", "plane", "mesh", "material", "name"):
+            if key not in ("sphere", "plane", "mesh", "material", "name", "instances"):
                 problems.append(f"objects[{i}].{key}")
         mat = obj.get("material")
         if mat not in bsdfs:
@@ -227,7 +227,22 @@ def translate(path, mi):
             ext = os.path.splitext(mesh)[1].lower()
             if ext not in (".ply", ".obj"):
                 problems.append(f"mesh {mesh}")
-            scene[f"obj{i}"] = {"type": ext[1:], "filename": mesh, "face_normals": True, "bsdf": bsdf}
+            shape = {"type": ext[1:], "filename": mesh, "face_normals": True, "bsdf": bsdf}
+            if "instances" in obj:
+                # One shapegroup holding the mesh, one instance per line of
+                # the instances file (row-major 3x4 object-to-world).
+                scene[f"group{i}"] = {"type": "shapegroup", "mesh": shape}
+                with open(os.path.join(base, obj["instances"])) as f:
+                    rows = [line for line in f if line.strip() and not line.lstrip().startswith("#")]
+                for k, line in enumerate(rows):
+                    m = [float(x) for x in line.replace(",", " ").split()]
+                    matrix = [m[0:4], m[4:8], m[8:12], [0.0, 0.0, 0.0, 1.0]]
+                    scene[f"obj{i}-{k}"] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"group{i}"},
+                                            "to_world": T(matrix)}
+            else:
+                scene[f"obj{i}"] = shape
+        elif "instances" in obj:
+            problems.append(f"objects[{i}].instances on a shape other than a mesh")
         else:
             problems.append(f"objects[{i}] has no sphere, plane or mesh")
     if problems:

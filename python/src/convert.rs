@@ -6,7 +6,7 @@
 //! wanted.
 
 use glam::Vec3;
-use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
@@ -450,4 +450,58 @@ pub fn rays(
         "directions[{i}] {what}: {:?}; a direction must be a finite, non-zero vector",
         r.direction.to_array()
     )))
+}
+
+/// An (n, 3, 4) or (n, 4, 4) array of row-major object-to-world matrices
+/// (any float or integer dtype, or nested lists) as affine maps; a 4x4's
+/// last row must be [0, 0, 0, 1]. A value that is not finite names its
+/// entry; whether a map is invertible is the caller's check.
+pub fn affine_maps(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<glam::Affine3A>> {
+    let np = obj.py().import("numpy")?;
+    let array = np
+        .call_method1("asarray", (obj, "float64"))
+        .map_err(|_| error(format!("{name} must be an array of numbers")))?;
+    let a: PyReadonlyArray3<f64> = array.extract().map_err(|_| {
+        let shape: Vec<usize> = array
+            .getattr("shape")
+            .and_then(|s| s.extract())
+            .unwrap_or_default();
+        error(format!(
+            "{name} must have shape (n, 3, 4) or (n, 4, 4), got {}",
+            shape_text(&shape)
+        ))
+    })?;
+    let a = a.as_array();
+    let [n, rows, cols] = [a.shape()[0], a.shape()[1], a.shape()[2]];
+    if !(cols == 4 && (rows == 3 || rows == 4)) {
+        return Err(error(format!(
+            "{name} must have shape (n, 3, 4) or (n, 4, 4), got {}",
+            shape_text(&[n, rows, cols])
+        )));
+    }
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        let m = |i: usize, j: usize| a[[k, i, j]];
+        for i in 0..rows {
+            for j in 0..4 {
+                if !m(i, j).is_finite() {
+                    return Err(error(format!(
+                        "{name}[{k}][{i}][{j}] = {} is not finite",
+                        m(i, j)
+                    )));
+                }
+            }
+        }
+        if rows == 4 && [m(3, 0), m(3, 1), m(3, 2), m(3, 3)] != [0.0, 0.0, 0.0, 1.0] {
+            return Err(error(format!(
+                "{name}[{k}]'s last row must be [0, 0, 0, 1] (affine maps only)"
+            )));
+        }
+        let col = |j: usize| glam::Vec3::new(m(0, j) as f32, m(1, j) as f32, m(2, j) as f32);
+        out.push(glam::Affine3A::from_mat3_translation(
+            glam::Mat3::from_cols(col(0), col(1), col(2)),
+            col(3),
+        ));
+    }
+    Ok(out)
 }

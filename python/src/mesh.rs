@@ -4,7 +4,7 @@ use crate::convert;
 use crate::run::{self, Threads, CHUNK, TASK};
 use glam::Vec3;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
-use pyo3::exceptions::{PyFileNotFoundError, PyKeyError, PyValueError};
+use pyo3::exceptions::{PyFileNotFoundError, PyKeyError, PyNotImplementedError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -30,6 +30,9 @@ use strata::math::lanes::LANES;
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Mesh {
     geometry: Geometry,
+    /// Where each instance's triangles start among the ids a placed mesh
+    /// answers with ([`Geometry::flat_offsets`]).
+    flat: Vec<u64>,
     /// [min, max] corners of the triangles' bounding box.
     bounds: [Vec3; 2],
 }
@@ -166,6 +169,34 @@ struct HitColumns<'a> {
 
 impl Mesh {
     fn new_from(geometry: Geometry) -> Self {
+        if !geometry.instances.is_empty() {
+            // Tight, as a mesh of the copies would have them: every
+            // vertex of every instance moved (the tree's box is looser).
+            let (lo, hi) = geometry
+                .instances
+                .par_iter()
+                .map(|instance| {
+                    let m = instance.affine();
+                    let own =
+                        geometry.prototypes[instance.prototype as usize].file_order_triangles();
+                    own.iter().flatten().fold(
+                        (Vec3::INFINITY, Vec3::NEG_INFINITY),
+                        |(lo, hi), &p| {
+                            let q = m.transform_point3(p);
+                            (lo.min(q), hi.max(q))
+                        },
+                    )
+                })
+                .reduce(
+                    || (Vec3::INFINITY, Vec3::NEG_INFINITY),
+                    |a, b| (a.0.min(b.0), a.1.max(b.1)),
+                );
+            return Self {
+                bounds: [lo, hi],
+                flat: geometry.flat_offsets(),
+                geometry,
+            };
+        }
         let mut lo = Vec3::INFINITY;
         let mut hi = Vec3::NEG_INFINITY;
         for block in &geometry.leaf_blocks {
@@ -179,9 +210,37 @@ impl Mesh {
             }
         }
         Self {
+            flat: geometry.flat_offsets(),
             geometry,
             bounds: [lo, hi],
         }
+    }
+
+    /// The queries that follow every crossing or the nearest point do not
+    /// walk instances yet: a clear error, not a wrong answer.
+    fn not_placed(&self, query: &str) -> PyResult<()> {
+        if self.geometry.instances.is_empty() {
+            return Ok(());
+        }
+        Err(PyNotImplementedError::new_err(format!(
+            "Mesh.{query} does not walk instances yet: call it on the mesh itself, or on \
+             Mesh(copies) built from the placed triangles (Mesh.triangles)"
+        )))
+    }
+
+    /// The triangle a hit names, in world space: a placed mesh's triangle
+    /// moved by its instance's map, as a copy would hold it.
+    fn hit_triangle(&self, hit: &strata::accel::PrimHit) -> [Vec3; 3] {
+        let g = &self.geometry;
+        if hit.prim < g.first_instance() {
+            return g.triangle(hit);
+        }
+        let (instance, prototype) = g.instance(hit.prim);
+        let slot = hit.part as usize;
+        let m = instance.affine();
+        prototype.leaf_blocks[slot / LANES]
+            .triangle(slot % LANES)
+            .map(|p| m.transform_point3(p))
     }
 
     /// Fill `out` with the first hits of `rays`.
@@ -199,9 +258,9 @@ impl Mesh {
                 out.point[3 * i..3 * i + 3].fill(f32::NAN);
                 continue;
             };
-            let [a, b, c] = self.geometry.triangle(hit);
+            let [a, b, c] = self.hit_triangle(hit);
             out.t[i] = hit.t;
-            out.prim[i] = hit.prim as i64;
+            out.prim[i] = self.geometry.flat_prim(hit, &self.flat) as i64;
             out.u[i] = hit.u;
             out.v[i] = hit.v;
             let normal = (b - a).cross(c - a).normalize();
@@ -274,15 +333,40 @@ impl Mesh {
         }
     }
 
-    /// The number of triangles (faces).
+    /// The number of triangles (faces); of a placed mesh, every copy's.
     #[getter]
     fn triangle_count(&self) -> usize {
-        self.geometry.triangle_count as usize
+        self.flat.last().map_or(0, |&n| n as usize)
     }
 
-    /// The number of triangles (faces).
+    /// The number of triangles (faces); of a placed mesh, every copy's.
     fn __len__(&self) -> usize {
-        self.geometry.triangle_count as usize
+        self.triangle_count()
+    }
+
+    /// This mesh placed once by each of ``transforms``: an (n, 3, 4) or
+    /// (n, 4, 4) array of object-to-world matrices (row-major; a 4x4's last
+    /// row must be [0, 0, 0, 1]). The mesh is stored once, each placement
+    /// costs about 160 bytes, and rays enter it in its own space, as
+    /// Embree's instances do. ``intersect`` and ``occluded`` answer as a
+    /// mesh of every copy would, face ``k * triangle_count + j`` being face
+    /// ``j`` of copy ``k``; ``all_hits``, ``count_hits``, ``contains`` and
+    /// ``closest_point`` raise NotImplementedError on a placed mesh.
+    ///
+    /// Raises ValueError naming ``transforms[i]`` for a matrix that is not
+    /// finite or not invertible.
+    fn place(&self, py: Python<'_>, transforms: &Bound<'_, PyAny>) -> PyResult<Self> {
+        self.not_placed("place")?;
+        let maps = convert::affine_maps(transforms, "transforms")?;
+        let prototype = self.geometry.clone();
+        let placed = py
+            .detach(|| strata::geometry::instance::placed(prototype, &maps, BuildQuality::Auto))
+            .map_err(|k| {
+                PyValueError::new_err(format!(
+                    "transforms[{k}] is not invertible, or places the mesh beyond float32's range"
+                ))
+            })?;
+        Ok(Self::new_from(placed))
     }
 
     /// float32 (2, 3): the [min, max] corners of the bounding box (inf and
@@ -296,7 +380,13 @@ impl Mesh {
     /// of what the BVH stores).
     #[getter]
     fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let tris = self.geometry.file_order_triangles();
+        let g = &self.geometry;
+        let mut tris = g.file_order_triangles();
+        for instance in &g.instances {
+            let m = instance.affine();
+            let own = g.prototypes[instance.prototype as usize].file_order_triangles();
+            tris.extend(own.iter().map(|t| t.map(|p| m.transform_point3(p))));
+        }
         let m = tris.len();
         let flat: Vec<f32> = tris
             .into_iter()
@@ -415,6 +505,7 @@ impl Mesh {
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
     ) -> PyResult<AllHits<'py>> {
+        self.not_placed("all_hits")?;
         let threads = Threads::new(threads)?;
         let rays = convert::rays(origins, directions, t_max, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
@@ -451,6 +542,7 @@ impl Mesh {
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        self.not_placed("count_hits")?;
         let threads = Threads::new(threads)?;
         let rays = convert::rays(origins, directions, t_max, &threads)?;
         let mut out = vec![0i64; rays.len()];
@@ -476,6 +568,7 @@ impl Mesh {
         points: &Bound<'_, PyAny>,
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        self.not_placed("contains")?;
         let threads = Threads::new(threads)?;
         let points = convert::points(points, "points", &threads)?;
         let mut out = vec![false; points.len()];
@@ -503,6 +596,7 @@ impl Mesh {
         signed: bool,
         threads: Option<i64>,
     ) -> PyResult<ClosestPoints> {
+        self.not_placed("closest_point")?;
         let threads = Threads::new(threads)?;
         let points = convert::points(points, "points", &threads)?;
         let max_distance = match max_distance {

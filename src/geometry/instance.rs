@@ -13,12 +13,14 @@
 //! back into object space may cost, so that a ray leaving an instanced
 //! surface starts on its side in object space too (no acne, no leaks).
 
+use super::csg::Csg;
 use super::{Geometry, Surface};
 use crate::accel::node::{decode, ChildRef};
-use crate::accel::PrimHit;
+use crate::accel::{BuildQuality, Bvh8, PrimHit};
 use crate::math::lanes::LANES;
 use crate::math::offset::{gamma, transformed_error};
 use crate::math::{Aabb, Ray, Transform};
+use crate::shape::triangle_lanes::TriangleBlock;
 use glam::{Affine3A, Mat3, Vec3};
 
 /// No material of its own: an instance takes its mesh's materials.
@@ -179,6 +181,55 @@ impl Instance {
             uv: local.uv,
         }
     }
+}
+
+/// A scene of `prototype` (a mesh's geometry, triangles only) placed once
+/// by each of `placements`, as the scene file's `instances =` places a
+/// mesh: instance `k` is primitive `k`. `Err(k)` names the first map that
+/// is singular or not finite, or that carries the mesh past f32's range.
+pub fn placed(
+    prototype: Geometry,
+    placements: &[Affine3A],
+    quality: BuildQuality,
+) -> Result<Geometry, usize> {
+    let mut instances = Vec::with_capacity(placements.len());
+    let mut boxes = Vec::with_capacity(placements.len());
+    for (k, &m) in placements.iter().enumerate() {
+        let mut instance = Instance::new(m, 0, NO_MATERIAL, 0).ok_or(k)?;
+        instance.world_bounds = instance.bounds(&prototype);
+        if !instance.world_bounds.is_finite() && prototype.triangle_count > 0 {
+            return Err(k);
+        }
+        boxes.push(instance.world_bounds);
+        instances.push(instance);
+    }
+    if prototype.triangle_count == 0 {
+        instances.clear();
+        boxes.clear();
+    }
+    let mut bvh = Bvh8::build_from(boxes, quality);
+    let leaf_blocks = bvh
+        .prim_ids
+        .chunks(LANES)
+        .map(|ids| {
+            let mut block = TriangleBlock::EMPTY;
+            block.id[..ids.len()].copy_from_slice(ids);
+            block
+        })
+        .collect();
+    bvh.prim_ids = Vec::new();
+    Ok(Geometry {
+        leaf_blocks,
+        triangle_count: 0,
+        meshes: Vec::new(),
+        shapes: Vec::new(),
+        transforms: Vec::new(),
+        csg: Csg::default(),
+        planes: Vec::new(),
+        instances,
+        prototypes: vec![prototype],
+        bvh,
+    })
 }
 
 impl Geometry {
