@@ -190,10 +190,17 @@ impl Default for MaterialDesc {
 }
 
 crate::mode::mode_enum! {
-    /// `[[lights]] type`.
+    /// `[[lights]] type`. The file must give one; the default only lets
+    /// code build a [`LightDesc`] with `..Default::default()`.
+    #[derive(Default)]
     pub enum LightType("light type") {
         /// Intensity I in W/sr: irradiance I cosθ / r².
+        #[default]
         Point = "point",
+        /// A point light shining into a cone along `direction` (or towards
+        /// `look_at`): full `intensity` within `inner_angle` of the axis,
+        /// none beyond `outer_angle`, glTF's falloff between (degrees).
+        Spot = "spot",
         /// Light travelling along `direction`, with `irradiance` (W/m²) on a
         /// surface facing it.
         Directional = "directional",
@@ -209,7 +216,7 @@ crate::mode::mode_enum! {
 /// A `[[lights]]` entry: its type and that type's keys. One flat table (not
 /// one serde variant per type) so that a bad value is reported at its own
 /// key and line; the compiler checks which keys the type takes.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
     #[serde(rename = "type")]
@@ -228,6 +235,11 @@ pub struct LightDesc {
     pub radius: Option<f32>,
     #[serde(default, deserialize_with = "optional_colour")]
     pub radiance: Option<V3>,
+    /// A spot light's target, instead of its `direction`.
+    pub look_at: Option<V3>,
+    /// A spot light's half-angles from its axis, in degrees.
+    pub inner_angle: Option<f32>,
+    pub outer_angle: Option<f32>,
 }
 
 /// An object: exactly one shape key, plus optional material and transform.
@@ -244,6 +256,11 @@ pub struct ObjectDesc {
     pub material: Option<String>,
     pub transform: Option<TransformDesc>,
     pub name: Option<String>,
+    /// With `mesh`: whether the file's own lights (glTF
+    /// `KHR_lights_punctual`) join the scene's; default true.
+    pub lights: Option<bool>,
+    /// With `mesh`: the file's camera of this index is the scene's camera.
+    pub camera: Option<usize>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
