@@ -327,6 +327,9 @@ fn line(out: &mut String, key: &str, value: &str) {
 /// decimal that is this f32, unless reading it as f64 first (as the TOML
 /// reader does) rounds it elsewhere, then the f64's.
 fn number(x: f32) -> String {
+    // −0 + 0 is +0: a direction's −0.0 reads as 0.0 to a user, and the
+    // text is what is rendered, so nothing differs from what is saved.
+    let x = x + 0.0;
     let short = format!("{x:?}");
     if short.parse::<f64>().map(|v| v as f32) == Ok(x) {
         short
@@ -493,7 +496,7 @@ mod tests {
             let text = format!("x = {}", number(x));
             let back: toml::Table = text.parse().unwrap();
             let read = back["x"].as_float().unwrap() as f32;
-            assert_eq!(read.to_bits(), x.to_bits(), "{text}");
+            assert_eq!(read.to_bits(), (x + 0.0).to_bits(), "{text}");
         }
     }
 

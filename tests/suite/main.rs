@@ -15,6 +15,7 @@ mod embree_native;
 mod first_hour;
 mod memory;
 mod mesh_queries;
+mod model_render;
 mod monte_carlo;
 mod packets;
 mod pipeline_features;
