@@ -131,13 +131,16 @@ pub fn model_scene(
         }
         size = edited;
     }
-    if chosen.is_none() {
-        let (lo, hi) = bounds.unwrap_or((Vec3::ZERO, Vec3::ZERO));
-        notes.push(format!(
+    match (chosen, bounds) {
+        (Some(_), _) => {}
+        (None, Some((lo, hi))) => notes.push(format!(
             "{name} has no camera: framed its bounds {} to {} from a three-quarter view",
             words(lo.into()),
             words(hi.into())
-        ));
+        )),
+        (None, None) => notes.push(format!(
+            "{name} has no camera and no triangles to frame: looking at the box from -1 to 1"
+        )),
     }
     Ok(ModelScene {
         asset,
