@@ -29,9 +29,13 @@ pub struct Cli {
     pub command: Option<Command>,
 }
 
+// Parsed once per run, then moved into its command: the size of the
+// largest arguments costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Render a scene file to PNG or EXR (or to a .strata part with --slice).
+    /// Render a scene file, or a model file as it comes, to PNG or EXR (or
+    /// to a .strata part with --slice).
     Render(render::RenderArgs),
     /// Combine the .strata parts of a sliced render into the image one process would make.
     Merge(merge::MergeArgs),

@@ -14,13 +14,26 @@ use strata::render::stats::RenderStats;
 use strata::render::timeline::{Phase, Timeline};
 use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec, Window};
 use strata::scene::edit::Edit;
-use strata::scene::{compile, load_edited_scene, parse, LoadTimings, RenderOverrides, Scene};
+use strata::scene::{
+    compile, load_edited_scene, model, parse, LoadTimings, RenderOverrides, Scene,
+};
 
 #[derive(Debug, Args, Clone)]
 pub struct RenderArgs {
-    /// Scene file (TOML). Without one, the built-in seed scene (the same as
-    /// the repository's scenes/seed.toml).
+    /// Scene file (TOML), or a model file (.glb, .gltf, .obj, .ply) to
+    /// render as it comes: with its own camera and lights where it has
+    /// them, else framed from a three-quarter view under default lights.
+    /// Without one, the built-in seed scene (the same as the repository's
+    /// scenes/seed.toml).
     pub scene: Option<PathBuf>,
+    /// With a model file: render from its camera N (0-based) instead of
+    /// the first.
+    #[arg(long, value_name = "N")]
+    pub camera: Option<usize>,
+    /// With a model file: write the scene made for it to FILE (.toml,
+    /// atomically), to edit and render again with `strata render FILE`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub save_scene: Option<PathBuf>,
     /// Output: .png (sRGB, 8-bit), .exr (linear float), or .strata (the
     /// film's exact sums, for `strata merge`; required with --slice k/P, P > 1).
     #[arg(short, long, default_value = "render.png")]
@@ -336,6 +349,21 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
     if let Some(path) = &args.stats {
         super::writable(path, "--stats", &["json"])?;
     }
+    let model = args.scene.as_deref().is_some_and(is_model_path);
+    for (given, name) in [
+        (args.camera.is_some(), "--camera"),
+        (args.save_scene.is_some(), "--save-scene"),
+    ] {
+        if given && !model {
+            return Err(flag(name)(
+                "applies to a model file (.glb, .gltf, .obj, .ply), not to a scene file; a scene file has its own [camera] and can name a glTF camera with `camera = N` on its mesh object".into(),
+            )
+            .into());
+        }
+    }
+    if let Some(path) = &args.save_scene {
+        super::writable(path, "--save-scene", &["toml"])?;
+    }
     if let Some(path) = &args.timeline {
         super::writable(path, "--timeline", &["json"])?;
     }
@@ -397,6 +425,7 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
     let progress = compile::LoadProgress::default();
     let load = || match args.scene.as_deref() {
+        Some(path) if is_model_path(path) => load_model(path, args, &progress),
         Some(path) => Ok(compile::load_edited_scene_with_progress(
             path,
             &args.set,
@@ -422,6 +451,46 @@ fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
         }
         loaded?
     })
+}
+
+/// Whether `path` names a model file rather than a scene file: one of the
+/// mesh formats, by its extension.
+fn is_model_path(path: &std::path::Path) -> bool {
+    strata::scene::loaders::check_extension(path).is_ok()
+}
+
+/// The scene made around a model file (see `strata::scene::model`): its
+/// notes said on stderr unless `--quiet`, saved first with `--save-scene`,
+/// then compiled.
+fn load_model(
+    path: &std::path::Path,
+    args: &RenderArgs,
+    progress: &compile::LoadProgress,
+) -> Result<(Scene, LoadTimings), CliError> {
+    let start = std::time::Instant::now();
+    let made = model::model_scene(path, &args.settings, &args.set, args.camera)?;
+    if !args.quiet {
+        for note in &made.notes {
+            eprintln!("note: {note}");
+        }
+    }
+    if let Some(save) = &args.save_scene {
+        let text = made.save_text(save)?;
+        strata::output::atomic::write_bytes_atomic(save, text.as_bytes()).map_err(|e| {
+            InputError::new(
+                "<command line>",
+                "--save-scene",
+                format!("cannot write {}: {e}", save.display()),
+            )
+        })?;
+    }
+    Ok(compile::compile_model(
+        made,
+        &args.settings,
+        args.bvh_quality,
+        start,
+        progress,
+    )?)
 }
 
 /// Finishes a load's progress when dropped.
@@ -450,6 +519,12 @@ pub fn load_or_seed(
     quality: BuildQuality,
 ) -> Result<(Scene, LoadTimings), CliError> {
     Ok(match path {
+        Some(path) if is_model_path(path) => {
+            let start = std::time::Instant::now();
+            let made = model::model_scene(path, settings, edits, None)?;
+            let progress = compile::LoadProgress::default();
+            compile::compile_model(made, settings, quality, start, &progress)?
+        }
         Some(path) => load_edited_scene(path, edits, settings, quality)?,
         None => {
             let start = std::time::Instant::now();

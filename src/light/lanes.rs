@@ -160,6 +160,13 @@ mod tests {
                 position: Vec3::Y,
                 intensity: Vec3::ONE,
             },
+            Light::Spot {
+                position: Vec3::Y * 2.0,
+                direction: Vec3::new(0.0, -0.8, 0.6),
+                intensity: Vec3::ONE,
+                cos_inner: 0.9,
+                cos_outer: 0.5,
+            },
         ];
         let bits = |s: Option<LightSample>| {
             s.map(|s| {

@@ -14,6 +14,14 @@
 //! irradiance = [1.0, 1.0, 1.0]     # W/m² on a surface facing the light
 //!
 //! [[lights]]
+//! type = "spot"                    # a point light limited to a cone
+//! position = [0.0, 4.0, 0.0]
+//! direction = [0.0, -1.0, 0.0]     # the cone's axis (or look_at = a point)
+//! intensity = [10.0, 10.0, 10.0]   # W/sr on the axis
+//! inner_angle = 20.0               # degrees from the axis: full intensity
+//! outer_angle = 30.0               # beyond it: none; between: glTF's falloff
+//!
+//! [[lights]]
 //! type = "rect"                    # one-sided, emits towards edge_u × edge_v
 //! corner = [-0.5, 3.0, -0.5]
 //! edge_u = [1.0, 0.0, 0.0]
@@ -49,10 +57,12 @@
 pub mod environment;
 mod lanes;
 mod sample;
+mod spot;
 
 pub use environment::Environment;
 pub use lanes::LightLanes;
 pub use sample::{LightFrom, LightSample, LightSampling};
+pub use spot::{spot_falloff, spot_power};
 
 use crate::shape::disk::Disk;
 use crate::shape::rect::Rect;
@@ -65,6 +75,17 @@ pub enum Light {
     Point {
         position: Vec3,
         intensity: Vec3,
+    },
+    /// A point light limited to a cone around the unit `direction` it
+    /// shines along: `intensity` (W/sr) on the axis, scaled by
+    /// [`spot_falloff`] between the cosines of its inner and outer
+    /// half-angles (`cos_inner ≥ cos_outer`).
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Vec3,
+        cos_inner: f32,
+        cos_outer: f32,
     },
     /// `direction` is the unit direction the light travels.
     Directional {
@@ -111,7 +132,10 @@ impl Light {
     /// True for lights with a surface (or the environment), which take
     /// `shadow_samples` samples.
     pub fn is_area(&self) -> bool {
-        !matches!(self, Light::Point { .. } | Light::Directional { .. })
+        !matches!(
+            self,
+            Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. }
+        )
     }
 
     /// The primitive that is this light's visible surface, if any.
@@ -128,6 +152,12 @@ impl Light {
     pub fn power(&self) -> Vec3 {
         match *self {
             Light::Point { intensity, .. } => 4.0 * PI * intensity,
+            Light::Spot {
+                intensity,
+                cos_inner,
+                cos_outer,
+                ..
+            } => spot_power(intensity, cos_inner, cos_outer),
             Light::Directional { .. } | Light::Environment(_) => Vec3::splat(f32::INFINITY),
             Light::Rect { rect, radiance, .. } => PI * rect.area() * radiance,
             Light::Disk { disk, radiance, .. } => PI * disk.area() * radiance,

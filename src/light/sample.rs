@@ -145,6 +145,13 @@ impl Light {
                     weight: intensity / d2,
                 })
             }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => super::spot::sample(p, position, direction, intensity, (cos_inner, cos_outer)),
             Light::Directional {
                 direction,
                 irradiance,

@@ -190,10 +190,17 @@ impl Default for MaterialDesc {
 }
 
 crate::mode::mode_enum! {
-    /// `[[lights]] type`.
+    /// `[[lights]] type`. The file must give one; the default only lets
+    /// code build a [`LightDesc`] with `..Default::default()`.
+    #[derive(Default)]
     pub enum LightType("light type") {
         /// Intensity I in W/sr: irradiance I cosθ / r².
+        #[default]
         Point = "point",
+        /// A point light shining into a cone along `direction` (or towards
+        /// `look_at`): full `intensity` within `inner_angle` of the axis,
+        /// none beyond `outer_angle`, glTF's falloff between (degrees).
+        Spot = "spot",
         /// Light travelling along `direction`, with `irradiance` (W/m²) on a
         /// surface facing it.
         Directional = "directional",
@@ -213,7 +220,7 @@ crate::mode::mode_enum! {
 /// A `[[lights]]` entry: its type and that type's keys. One flat table (not
 /// one serde variant per type) so that a bad value is reported at its own
 /// key and line; the compiler checks which keys the type takes.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
     #[serde(rename = "type")]
@@ -232,6 +239,11 @@ pub struct LightDesc {
     pub radius: Option<f32>,
     #[serde(default, deserialize_with = "optional_colour")]
     pub radiance: Option<V3>,
+    /// A spot light's target, instead of its `direction`.
+    pub look_at: Option<V3>,
+    /// A spot light's half-angles from its axis, in degrees.
+    pub inner_angle: Option<f32>,
+    pub outer_angle: Option<f32>,
     /// An environment light's lat-long map, relative to the scene file.
     pub map: Option<String>,
     /// An environment light's multiplier: one number or a colour.
@@ -247,20 +259,7 @@ impl LightDesc {
     pub fn of_type(kind: LightType) -> Self {
         Self {
             kind,
-            position: None,
-            intensity: None,
-            direction: None,
-            irradiance: None,
-            corner: None,
-            edge_u: None,
-            edge_v: None,
-            center: None,
-            normal: None,
-            radius: None,
-            radiance: None,
-            map: None,
-            scale: None,
-            rotate: None,
+            ..Self::default()
         }
     }
 
@@ -291,6 +290,11 @@ pub struct ObjectDesc {
     /// applied before `transform`: the object is placed once per line.
     pub instances: Option<String>,
     pub name: Option<String>,
+    /// With `mesh`: whether the file's own lights (glTF
+    /// `KHR_lights_punctual`) join the scene's; default true.
+    pub lights: Option<bool>,
+    /// With `mesh`: the file's camera of this index is the scene's camera.
+    pub camera: Option<usize>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -4,13 +4,15 @@
 //! materials, textures and lights that shading reads, the camera and the
 //! render settings. [`description`] is the scene file as serde types, [`parse`]
 //! reads it, [`loaders`] read mesh files, and [`compile`] turns all of
-//! that into a [`Scene`], validating every number on the way.
+//! that into a [`Scene`], validating every number on the way. [`model`]
+//! makes a scene around one model file (`strata render model.glb`).
 
 pub mod asset;
 pub mod compile;
 pub mod description;
 pub mod edit;
 pub mod loaders;
+pub mod model;
 pub mod parse;
 pub mod settings;
 pub mod source_map;

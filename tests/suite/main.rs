@@ -18,6 +18,7 @@ mod first_hour;
 mod instancing;
 mod memory;
 mod mesh_queries;
+mod model_render;
 mod monte_carlo;
 mod packets;
 mod pipeline_features;

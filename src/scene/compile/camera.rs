@@ -1,5 +1,5 @@
-//! `[camera]`, or the first camera of a glTF file when the scene file has
-//! none, or the default view.
+//! `[camera]`, or the camera a glTF file gives (see `import`), or the
+//! default view.
 
 use super::Compiler;
 use crate::camera::{Camera, Orthographic, Perspective, ThinLens, View};
@@ -20,21 +20,6 @@ impl Compiler<'_> {
     ) -> InputResult<Camera> {
         let (w, h) = (s.width, s.height);
         let Some(d) = desc else {
-            if let Some(cam) = self.loaded_cameras.first() {
-                let view =
-                    View::looking(cam.position, cam.forward, cam.up, w, h).ok_or_else(|| {
-                        self.err(
-                            "camera",
-                            "the mesh file's camera has a degenerate orientation",
-                        )
-                    })?;
-                return Ok(match (cam.yfov_degrees, cam.ortho_height) {
-                    (_, Some(height)) => Camera::Orthographic(Orthographic::new(view, height)),
-                    (fov, None) => {
-                        Camera::Perspective(Perspective::new(view, fov.unwrap_or(DEFAULT_FOV)))
-                    }
-                });
-            }
             return self.camera(Some(&CameraDesc::default()), s);
         };
         let what = match d.kind {

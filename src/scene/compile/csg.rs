@@ -83,6 +83,7 @@ impl Compiler<'_> {
             material,
             explicit_material,
         } = self.placement(obj, key, parent, inherited)?;
+        self.no_imports(obj, key, "a CSG operand")?;
         let leaf_material = forced.unwrap_or(material);
         if let Some(s) = &obj.sphere {
             let sphere = self.sphere_desc(s, key)?;

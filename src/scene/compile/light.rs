@@ -41,9 +41,20 @@ impl Compiler<'_> {
             ("map", l.map.is_some()),
             ("scale", l.scale.is_some()),
             ("rotate", l.rotate.is_some()),
+            ("look_at", l.look_at.is_some()),
+            ("inner_angle", l.inner_angle.is_some()),
+            ("outer_angle", l.outer_angle.is_some()),
         ];
         let takes: &[&str] = match l.kind {
             LightType::Point => &["position", "intensity"],
+            LightType::Spot => &[
+                "position",
+                "direction",
+                "look_at",
+                "intensity",
+                "inner_angle",
+                "outer_angle",
+            ],
             // `intensity` is accepted as another name for a directional
             // light's irradiance.
             LightType::Directional => &["direction", "irradiance", "intensity"],
@@ -59,6 +70,7 @@ impl Compiler<'_> {
                 position: self.v3(need(l.position, "position")?, &k("position"))?,
                 intensity: self.colour(need(l.intensity, "intensity")?, &k("intensity"))?,
             },
+            LightType::Spot => self.spot(l, key)?,
             LightType::Directional => {
                 let (value, name) = match (l.irradiance, l.intensity) {
                     (Some(_), Some(_)) => {
@@ -173,6 +185,58 @@ impl Compiler<'_> {
         Ok(())
     }
 
+    /// A `spot` light: its axis from `direction` or `look_at` (one of
+    /// them), its half-angles in degrees (glTF's defaults, 0 and 45), with
+    /// 0 ≤ inner ≤ outer ≤ 180 and outer > 0.
+    fn spot(&self, l: &LightDesc, key: &str) -> InputResult<Light> {
+        let k = |field: &str| format!("{key}.{field}");
+        let what = "a spot light";
+        let position = self.v3(
+            self.need(l.position, key, "position", what)?,
+            &k("position"),
+        )?;
+        let direction = match (l.direction, l.look_at) {
+            (Some(_), Some(_)) => return Err(self.err(key, "give direction or look_at, not both")),
+            (Some(d), None) => self.direction(d, &k("direction"))?,
+            (None, Some(target)) => {
+                let to = self.v3(target, &k("look_at"))? - position;
+                let d = to.normalize_or_zero();
+                if d == Vec3::ZERO || !d.is_finite() {
+                    return Err(self.err(&k("look_at"), "equals the light's position"));
+                }
+                d
+            }
+            (None, None) => {
+                return Err(self.err(key, "a spot light needs `direction` or `look_at`"))
+            }
+        };
+        let intensity = self.colour(
+            self.need(l.intensity, key, "intensity", what)?,
+            &k("intensity"),
+        )?;
+        let inner = self.finite(l.inner_angle.unwrap_or(0.0), &k("inner_angle"))?;
+        let outer = self.finite(l.outer_angle.unwrap_or(45.0), &k("outer_angle"))?;
+        if !(outer > 0.0 && outer <= 180.0) {
+            return Err(self.err(
+                &k("outer_angle"),
+                format!("must be more than 0 and at most 180 degrees, got {outer}"),
+            ));
+        }
+        if !(0.0..=outer).contains(&inner) {
+            return Err(self.err(
+                &k("inner_angle"),
+                format!("must be between 0 and outer_angle ({outer}) degrees, got {inner}"),
+            ));
+        }
+        Ok(Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_inner: inner.to_radians().cos(),
+            cos_outer: outer.to_radians().cos(),
+        })
+    }
+
     /// Add the visible surface of an area light: an emitting primitive that
     /// reflects nothing. Returns its index among the analytic shapes; the
     /// global primitive id is fixed up once the triangle count is known.
@@ -242,6 +306,71 @@ triangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }
         );
         assert_eq!(e.location, "lights[0]");
         assert!(e.message.contains("parallel"), "{e}");
+    }
+
+    #[test]
+    fn a_spot_light_aims_by_direction_or_target_and_checks_its_angles() {
+        let s = "[[lights]]\ntype = \"spot\"\nposition = [0.0, 4.0, 0.0]\nintensity = 3.0\n";
+        let aimed = compiled(&format!(
+            "{s}look_at = [0.0, 0.0, 0.0]\ninner_angle = 10\nouter_angle = 20\n"
+        ));
+        let Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_inner,
+            cos_outer,
+        } = aimed.lights[0]
+        else {
+            panic!("{:?}", aimed.lights[0]);
+        };
+        assert_eq!((position, direction), (glam::Vec3::Y * 4.0, -glam::Vec3::Y));
+        assert_eq!(intensity, glam::Vec3::splat(3.0));
+        assert_eq!(cos_inner, 10f32.to_radians().cos());
+        assert_eq!(cos_outer, 20f32.to_radians().cos());
+        // glTF's defaults: inner 0, outer 45 degrees.
+        let default = compiled(&format!("{s}direction = [0.0, -2.0, 0.0]\n"));
+        assert!(
+            matches!(default.lights[0], Light::Spot { direction, cos_inner, cos_outer, .. }
+            if direction == -glam::Vec3::Y && cos_inner == 1.0 && cos_outer == 45f32.to_radians().cos())
+        );
+        for (extra, at, needle) in [
+            ("", "lights[0]", "needs `direction` or `look_at`"),
+            (
+                "direction = [0.0, -1.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\n",
+                "lights[0]",
+                "not both",
+            ),
+            (
+                "look_at = [0.0, 4.0, 0.0]\n",
+                "lights[0].look_at",
+                "equals the light's position",
+            ),
+            (
+                "direction = [0.0, -1.0, 0.0]\nouter_angle = 0\n",
+                "lights[0].outer_angle",
+                "more than 0",
+            ),
+            (
+                "direction = [0.0, -1.0, 0.0]\nouter_angle = 181\n",
+                "lights[0].outer_angle",
+                "at most 180",
+            ),
+            (
+                "direction = [0.0, -1.0, 0.0]\ninner_angle = 50\n",
+                "lights[0].inner_angle",
+                "outer_angle (45)",
+            ),
+            (
+                "direction = [0.0, -1.0, 0.0]\nradius = 1\n",
+                "lights[0].radius",
+                "does not apply to a spot light",
+            ),
+        ] {
+            let e = rejected(&format!("{s}{extra}"));
+            assert_eq!(e.location, at, "{extra}: {e}");
+            assert!(e.message.contains(needle), "{extra}: {e}");
+        }
     }
 
     #[test]

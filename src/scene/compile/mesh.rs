@@ -6,11 +6,10 @@ use super::Compiler;
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshUvs};
-use crate::light::Light;
 use crate::material::Material;
 use crate::math::lanes::LANES;
 use crate::math::Transform;
-use crate::scene::asset::{LoadedAsset, LoadedCamera, LoadedMesh};
+use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
 use crate::shape::triangle_lanes::TriangleBlock;
 use glam::{Affine3A, Vec3};
@@ -161,7 +160,10 @@ impl Compiler<'_> {
             if let Err(message) = loaders::check_extension(&path) {
                 return Err(self.err(at, message));
             }
-            let mut asset = load_mesh_file(&path)?;
+            let mut asset = match self.preloaded.take_if(|(p, _)| *p == path) {
+                Some((_, asset)) => asset,
+                None => load_mesh_file(&path)?,
+            };
             self.warnings.append(&mut asset.warnings);
             // The file's images move into the scene's (no copy); its
             // materials' texture indices move with them.
@@ -236,20 +238,6 @@ impl Compiler<'_> {
             };
             let mirrored = m.matrix3.determinant() < 0.0;
             self.push_mesh(name, tris, material, normals, uvs, mirrored);
-        }
-        for light in &asset.point_lights {
-            self.lights.push(Light::Point {
-                position: t.point(light.position),
-                intensity: light.intensity,
-            });
-        }
-        for cam in &asset.cameras {
-            self.loaded_cameras.push(LoadedCamera {
-                position: t.point(cam.position),
-                forward: t.vector(cam.forward),
-                up: t.vector(cam.up),
-                ..cam.clone()
-            });
         }
         Ok(())
     }

@@ -8,11 +8,11 @@
 //! One `Compiler` walks the description; each part of a scene file has
 //! its own file of `impl Compiler`: `material`, `light`, `object`
 //! (placement, shapes, groups), `mesh` (mesh files and the leaf blocks),
-//! `csg`, `camera`; `validate` holds the number checks they share.
+//! `import` (a mesh file's lights and cameras), `csg`, `camera`; `validate` holds the number checks they share.
 //! This file holds the entry points and the order of the steps.
 
 use super::asset::{LoadedAsset, LoadedCamera};
-use super::description::{ObjectDesc, SceneDescription};
+use super::description::{CameraDesc, ObjectDesc, SceneDescription};
 use super::edit::Edit;
 use super::settings::RenderOverrides;
 use super::source_map::SourceMap;
@@ -43,6 +43,7 @@ pub use instance::read_instances;
 mod arrays;
 mod camera;
 mod csg;
+mod import;
 mod instance;
 mod light;
 mod material;
@@ -110,6 +111,7 @@ pub fn load_edited_scene_with_progress(
         Purpose::Render,
         start,
         progress,
+        None,
     )
 }
 
@@ -190,6 +192,7 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
         Purpose::Tracing,
         Instant::now(),
         &LoadProgress::default(),
+        None,
     )
 }
 
@@ -213,6 +216,7 @@ pub fn load_scene_for_tracing(
         Purpose::Tracing,
         start,
         &progress,
+        None,
     )
 }
 
@@ -244,9 +248,37 @@ pub fn compile(
         Purpose::Render,
         start,
         &LoadProgress::default(),
+        None,
     )
 }
 
+/// Compile the scene made around a model file (see [`super::model`]),
+/// with the model as already read instead of reading it again. `start` is
+/// when reading the model began, so the load's time includes it.
+pub fn compile_model(
+    model: super::model::ModelScene,
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+    start: Instant,
+    progress: &LoadProgress,
+) -> InputResult<(Scene, LoadTimings)> {
+    let path = model.path().to_path_buf();
+    let (desc, asset) = (model.description, model.asset);
+    compile_for(
+        &desc,
+        &path,
+        overrides,
+        quality,
+        Purpose::Render,
+        start,
+        progress,
+        Some((path.clone(), asset)),
+    )
+}
+
+// One argument a step of the load: what, from where, for what, since
+// when, told to whom, and what is read already.
+#[allow(clippy::too_many_arguments)]
 fn compile_for(
     desc: &SceneDescription,
     path: &Path,
@@ -255,10 +287,12 @@ fn compile_for(
     purpose: Purpose,
     start: Instant,
     progress: &LoadProgress,
+    preloaded: Option<(PathBuf, LoadedAsset)>,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
+    c.preloaded = preloaded;
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
         let material = c.material(m, &key)?;
@@ -272,7 +306,7 @@ fn compile_for(
     }
     let settings = c.settings(&desc.render, overrides)?;
     c.check_background(&settings)?;
-    let camera = c.camera(desc.camera.as_ref(), &settings)?;
+    let camera = c.scene_camera(desc.camera.as_ref(), &settings)?;
     // Every object holds what it needs from its mesh files by now.
     drop(std::mem::take(&mut c.assets));
     for source in c
@@ -394,6 +428,8 @@ struct Compiler<'d> {
     textures: Textures,
     lights: Vec<Light>,
     loaded_cameras: Vec<LoadedCamera>,
+    /// The mesh file camera an object's `camera` key chose, and that key.
+    chosen_camera: Option<(CameraDesc, String)>,
     /// Mesh files already read, with the scene index of their first material.
     assets: HashMap<PathBuf, (Arc<LoadedAsset>, u32)>,
     /// How many times each mesh file is placed: those placed more than
@@ -405,6 +441,9 @@ struct Compiler<'d> {
     instances: Vec<Instance>,
     /// The mesh files' warnings, in the order the files were read.
     warnings: Vec<InputError>,
+    /// A mesh file read before the compile began, taken instead of reading
+    /// it (the model of `strata render model.glb`).
+    preloaded: Option<(PathBuf, LoadedAsset)>,
 }
 
 impl<'d> Compiler<'d> {
@@ -425,12 +464,14 @@ impl<'d> Compiler<'d> {
             textures: Textures::default(),
             lights: Vec::new(),
             loaded_cameras: Vec::new(),
+            chosen_camera: None,
             assets: HashMap::new(),
             mesh_uses: HashMap::new(),
             prototypes: Vec::new(),
             prototype_ids: HashMap::new(),
             instances: Vec::new(),
             warnings: Vec::new(),
+            preloaded: None,
         };
         // Material 0: what objects get when nothing names one.
         c.materials.push(Material::default());

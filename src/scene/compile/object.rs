@@ -16,6 +16,25 @@ use crate::shape::sphere::Sphere;
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3};
 use std::path::Path;
 
+/// The word for an object's shape, for messages.
+fn shape_word(obj: &ObjectDesc) -> &'static str {
+    match obj {
+        ObjectDesc {
+            sphere: Some(_), ..
+        } => "sphere",
+        ObjectDesc { plane: Some(_), .. } => "plane",
+        ObjectDesc {
+            cylinder: Some(_), ..
+        } => "cylinder",
+        ObjectDesc {
+            triangle: Some(_), ..
+        } => "triangle",
+        ObjectDesc { group: Some(_), .. } => "group",
+        ObjectDesc { csg: Some(_), .. } => "csg object",
+        _ => "mesh",
+    }
+}
+
 /// An object's transform and material, after [`Compiler::placement`].
 pub(super) struct Placement {
     /// Object to world, including every enclosing transform.
@@ -165,6 +184,9 @@ impl Compiler<'_> {
             material,
             explicit_material,
         } = self.placement(obj, key, parent, inherited)?;
+        if obj.mesh.is_none() {
+            self.no_imports(obj, key, &format!("a {}", shape_word(obj)))?;
+        }
         for m in self.placements(obj, key, m)? {
             self.shape(obj, key, m, material, explicit_material)?;
         }
@@ -215,6 +237,7 @@ impl Compiler<'_> {
             );
         } else if let Some(file) = &obj.mesh {
             self.mesh_file(file, key, m, explicit_material, material)?;
+            self.mesh_imports(obj, file, key, m)?;
         } else if let Some(children) = &obj.group {
             for (i, child) in children.iter().enumerate() {
                 self.object(child, &format!("{key}.group[{i}]"), m, material)?;

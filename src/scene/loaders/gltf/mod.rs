@@ -65,9 +65,9 @@
 //! (repeat without a sampler); its filters are ignored, lookups are always
 //! bilinear (see [`crate::texture`]). Each image is decoded once however
 //! many textures use it, and only images a base colour texture uses are
-//! read. `KHR_texture_transform` is not supported: in `extensionsRequired`
-//! the file is refused, otherwise it is ignored and the UVs are used as
-//! stored. A missing or undecodable image is an error at `images[j]` that
+//! read. `KHR_texture_transform` on the base colour texture moves its UVs
+//! as they are read (scale, rotation, offset; its `texCoord` picks the
+//! set); on other textures it does nothing, as they are not read. A missing or undecodable image is an error at `images[j]` that
 //! names the file and the texture using it: `cannot read texture
 //! dir/crate.png: No such file or directory (used by textures[0])`.
 //!
@@ -76,15 +76,20 @@
 //! Every node with a camera gives a [`LoadedCamera`] at the node's world
 //! origin, looking along its world −Z with world +Y (made orthogonal to the
 //! view direction) as up; a perspective camera's `yfov` is converted to
-//! degrees, an orthographic camera's `ymag` doubled into `ortho_height`.
+//! degrees, an orthographic camera's `ymag` doubled into `ortho_height`,
+//! and the aspect ratio (`aspectRatio`, or `xmag / ymag`) kept for a
+//! caller that sizes the image by it. `znear` and `zfar` are ignored: a ray
+//! tracer needs no depth buffer to divide the depth range of, and clipping
+//! the scene would only hide what is there.
 //!
-//! Every node with a `KHR_lights_punctual` point light gives a
-//! [`LoadedPointLight`] at the node's world origin. glTF gives a point light's
-//! intensity in candela (lm/sr); we convert it to radiant intensity in W/sr
-//! with the photometric constant, `intensity = color · intensity / 683`, so
-//! the radiometric renderer sees W/sr. A light's `range` is ignored (the
-//! falloff stays physical, 1/d²). Spot and directional lights are skipped
-//! without error.
+//! Every node with a `KHR_lights_punctual` light gives a [`LoadedLight`] at
+//! the node's world origin; spot and directional lights shine along its
+//! world −Z. glTF gives point and spot intensities in candela (lm/sr) and
+//! directional ones in lux (lm/m²); we convert them to W/sr and W/m² with
+//! the photometric constant, `color · intensity / 683`, as Blender's
+//! exporter assumes. A spot light keeps its cone angles (glTF's falloff
+//! between them is [`crate::light::spot_falloff`]). A light's `range` is
+//! ignored (the falloff stays physical, 1/d²).
 //!
 //! # Validation
 //!
@@ -112,13 +117,13 @@
 //! | `buffer.rs`    | buffers from the BIN chunk, base64 `data:` URIs or files beside |
 //! | `accessor.rs`  | accessors and buffer views, bounds-checked against the buffers  |
 //! | `primitive.rs` | one mesh primitive: attributes, indices, mode → triangles       |
-//! | `node.rs`      | node transforms, world-space normals, cameras and point lights  |
+//! | `node.rs`      | node transforms, world-space normals, cameras and lights        |
 //! | `material.rs`  | metallic-roughness → [`Material`]                               |
 //! | `texture.rs`   | base colour textures: samplers and images (file, URI or view)   |
 //!
 //! [`LoadedMesh`]: crate::scene::asset::LoadedMesh
 //! [`LoadedCamera`]: crate::scene::asset::LoadedCamera
-//! [`LoadedPointLight`]: crate::scene::asset::LoadedPointLight
+//! [`LoadedLight`]: crate::scene::asset::LoadedLight
 //! [`Material`]: crate::material::Material
 //! [`Material::default`]: crate::material::Material::default
 
@@ -316,9 +321,7 @@ impl Loader<'_> {
             .and_then(|e| e.khr_lights_punctual.as_ref())
             .map(|l| l.light.value());
         if let Some(light) = light {
-            if let Some(light) = self.point_light(index, light, world)? {
-                asset.point_lights.push(light);
-            }
+            asset.lights.push(self.light(index, light, world)?);
         }
         Ok(())
     }

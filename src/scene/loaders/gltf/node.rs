@@ -1,10 +1,10 @@
 //! What a node contributes in world space: its local transform, its meshes
 //! with the world transform baked in (normals by the normal matrix), and its
-//! camera and `KHR_lights_punctual` point light.
+//! camera and `KHR_lights_punctual` light.
 
 use super::{Loader, LUMENS_PER_WATT};
 use crate::error::InputResult;
-use crate::scene::asset::{LoadedCamera, LoadedMesh, LoadedPointLight};
+use crate::scene::asset::{LoadedCamera, LoadedLight, LoadedMesh};
 use ::gltf::json;
 use glam::{Mat3, Mat4, Quat, Vec3};
 use json::validation::Checked;
@@ -83,7 +83,7 @@ impl Loader<'_> {
                 format!("{location} does not exist"),
             )
         })?;
-        let (yfov_degrees, ortho_height) = match camera.type_ {
+        let (yfov_degrees, ortho_height, aspect_ratio) = match camera.type_ {
             Checked::Valid(Type::Perspective) => {
                 let p = camera.perspective.as_ref().ok_or_else(|| {
                     self.error(
@@ -97,7 +97,9 @@ impl Loader<'_> {
                         format!("yfov must be between 0 and π radians, found {}", p.yfov),
                     ));
                 }
-                (Some(p.yfov.to_degrees()), None)
+                // An unusable aspect ratio is left to the image size.
+                let aspect = p.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0);
+                (Some(p.yfov.to_degrees()), None, aspect)
             }
             Checked::Valid(Type::Orthographic) => {
                 let o = camera.orthographic.as_ref().ok_or_else(|| {
@@ -112,7 +114,8 @@ impl Loader<'_> {
                         format!("ymag must be a positive number, found {}", o.ymag),
                     ));
                 }
-                (None, Some(2.0 * o.ymag))
+                let aspect = Some(o.xmag / o.ymag).filter(|a| a.is_finite() && *a > 0.0);
+                (None, Some(2.0 * o.ymag), aspect)
             }
             Checked::Invalid => return Err(self.error(location, "invalid camera type")),
         };
@@ -131,15 +134,20 @@ impl Loader<'_> {
             up,
             yfov_degrees,
             ortho_height,
+            aspect_ratio,
         })
     }
 
-    pub(super) fn point_light(
+    /// A node's `KHR_lights_punctual` light at the node's world origin,
+    /// spot and directional lights shining along its world −Z. Candela
+    /// (point, spot) become W/sr and lux (directional) W/m², both by the
+    /// photometric constant: `color · intensity / 683`.
+    pub(super) fn light(
         &self,
         node: usize,
         index: usize,
         world: &Mat4,
-    ) -> InputResult<Option<LoadedPointLight>> {
+    ) -> InputResult<LoadedLight> {
         use json::extensions::scene::khr_lights_punctual::Type;
         let location = format!("extensions.KHR_lights_punctual.lights[{index}]");
         let light = self
@@ -154,11 +162,10 @@ impl Loader<'_> {
                     format!("{location} does not exist"),
                 )
             })?;
-        match light.type_ {
-            Checked::Valid(Type::Point) => {}
-            Checked::Valid(Type::Spot | Type::Directional) => return Ok(None),
+        let kind = match light.type_ {
+            Checked::Valid(kind) => kind,
             Checked::Invalid => return Err(self.error(location, "invalid light type")),
-        }
+        };
         let intensity = Vec3::from(light.color) * light.intensity / LUMENS_PER_WATT;
         if !intensity.is_finite() || intensity.min_element() < 0.0 {
             return Err(self.error(
@@ -166,10 +173,48 @@ impl Loader<'_> {
                 "color and intensity must be finite and not negative",
             ));
         }
-        Ok(Some(LoadedPointLight {
-            position: world.transform_point3(Vec3::ZERO),
-            intensity,
-        }))
+        let position = world.transform_point3(Vec3::ZERO);
+        let direction = world.transform_vector3(-Vec3::Z).normalize_or_zero();
+        if kind != Type::Point && direction == Vec3::ZERO {
+            return Err(self.error(
+                format!("nodes[{node}]"),
+                "the light's world transform is degenerate (zero scale?)",
+            ));
+        }
+        Ok(match kind {
+            Type::Point => LoadedLight::Point {
+                position,
+                intensity,
+            },
+            Type::Directional => LoadedLight::Directional {
+                direction,
+                irradiance: intensity,
+            },
+            Type::Spot => {
+                use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
+                // The validator insists on `spot`; glTF's defaults else.
+                let (inner, outer) = light.spot.as_ref().map_or((0.0, FRAC_PI_4), |s| {
+                    (s.inner_cone_angle, s.outer_cone_angle)
+                });
+                let right = FRAC_PI_2;
+                if !(outer > 0.0 && outer <= right && inner >= 0.0 && inner <= outer) {
+                    return Err(self.error(
+                        format!("{location}.spot"),
+                        format!(
+                            "cone angles must satisfy 0 ≤ innerConeAngle ≤ outerConeAngle ≤ π/2 \
+                             and outerConeAngle > 0, found {inner} and {outer}"
+                        ),
+                    ));
+                }
+                LoadedLight::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    inner_angle: inner,
+                    outer_angle: outer,
+                }
+            }
+        })
     }
 }
 
@@ -193,6 +238,7 @@ fn normal_matrix(world: &Mat4) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::super::test_support::*;
+    use crate::scene::asset::LoadedLight;
 
     #[test]
     fn node_transforms_are_baked_into_positions() {
@@ -227,7 +273,7 @@ mod tests {
     }
 
     #[test]
-    fn cameras_and_point_lights_are_placed_in_world_space() {
+    fn cameras_and_lights_are_placed_in_world_space() {
         let b = triangle_builder();
         let s = std::f32::consts::FRAC_1_SQRT_2;
         let rest = format!(
@@ -262,13 +308,93 @@ mod tests {
         assert_eq!(ortho.ortho_height, Some(6.0));
         assert_eq!(ortho.yfov_degrees, None);
 
+        assert_eq!(perspective.aspect_ratio, None);
+        assert_eq!(ortho.aspect_ratio, Some(4.0 / 3.0));
+
+        let [LoadedLight::Point {
+            position,
+            intensity,
+        }, LoadedLight::Spot {
+            position: spot_at,
+            direction: spot_axis,
+            intensity: spot_intensity,
+            inner_angle,
+            outer_angle,
+        }, LoadedLight::Directional {
+            direction,
+            irradiance,
+        }] = asset.lights[..]
+        else {
+            panic!("{:?}", asset.lights);
+        };
+        assert_close(position, Vec3::new(3., 4., 5.));
+        assert_close(intensity, Vec3::new(1.0, 0.5, 0.25));
+        // Spot and directional lights shine along their node's −Z; glTF's
+        // defaults: intensity 1 (candela or lux), cone angles 0 and π/4.
+        assert_close(spot_at, Vec3::ZERO);
+        assert_close(spot_axis, -Vec3::Z);
+        assert_close(spot_intensity, Vec3::splat(1.0 / 683.0));
         assert_eq!(
-            asset.point_lights.len(),
-            1,
-            "spot and directional are skipped"
+            (inner_angle, outer_angle),
+            (0.0, std::f32::consts::FRAC_PI_4)
         );
-        assert_close(asset.point_lights[0].position, Vec3::new(3., 4., 5.));
-        assert_close(asset.point_lights[0].intensity, Vec3::new(1.0, 0.5, 0.25));
+        assert_close(direction, -Vec3::Z);
+        assert_close(irradiance, Vec3::splat(1.0 / 683.0));
+    }
+
+    #[test]
+    fn spot_and_directional_lights_turn_with_their_node_and_check_their_cones() {
+        let b = triangle_builder();
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        let lights = r#""extensions":{"KHR_lights_punctual":{"lights":[
+                {"type":"spot","color":[1,1,1],"intensity":1366,"spot":{"innerConeAngle":0.25,"outerConeAngle":0.5}},
+                {"type":"directional","color":[0,1,0],"intensity":683}]}}"#;
+        let rest = format!(
+            r#"{TRIANGLE_MESH},{lights},"nodes":[
+                {{"rotation":[-{s},0,0,{s}],"translation":[0,5,0],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}},
+                {{"rotation":[0,{s},0,{s}],"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}}]"#
+        );
+        let asset = load_json(&b, &rest).unwrap();
+        let LoadedLight::Spot {
+            position,
+            direction,
+            intensity,
+            inner_angle,
+            outer_angle,
+        } = asset.lights[0]
+        else {
+            panic!("{:?}", asset.lights);
+        };
+        // A quarter turn about −X takes −Z to −Y: the spot points down.
+        assert_close(position, Vec3::new(0., 5., 0.));
+        assert_close(direction, -Vec3::Y);
+        assert_close(intensity, Vec3::splat(2.0));
+        assert_eq!((inner_angle, outer_angle), (0.25, 0.5));
+        let LoadedLight::Directional {
+            direction,
+            irradiance,
+        } = asset.lights[1]
+        else {
+            panic!("{:?}", asset.lights);
+        };
+        assert_close(direction, -Vec3::X);
+        assert_close(irradiance, Vec3::Y);
+        for spot in [
+            r#"{"innerConeAngle":0.6,"outerConeAngle":0.5}"#,
+            r#"{"outerConeAngle":2}"#,
+            r#"{"outerConeAngle":0}"#,
+        ] {
+            let rest = format!(
+                r#"{TRIANGLE_MESH},"extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"spot","spot":{spot}}}]}}}},
+                "nodes":[{{"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}]"#
+            );
+            expect_error(
+                load_json(&b, &rest),
+                "scene.gltf",
+                "extensions.KHR_lights_punctual.lights[0].spot",
+                "cone angles",
+            );
+        }
     }
 
     #[test]

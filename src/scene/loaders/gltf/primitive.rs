@@ -7,6 +7,7 @@ use crate::error::InputResult;
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use ::gltf::json;
+use glam::{Affine2, Mat2, Vec2};
 use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 
@@ -90,11 +91,15 @@ impl Loader<'_> {
         };
         // UVs only for a textured material, from the set its texture names;
         // a primitive without that set gets none.
-        let uv_set = material
+        let info = material
             .filter(|&m| asset.materials[m].1.diffuse_texture.is_some())
             .and_then(|m| self.root.materials.get(m))
-            .and_then(|m| m.pbr_metallic_roughness.base_color_texture.as_ref())
-            .map(|info| info.tex_coord);
+            .and_then(|m| m.pbr_metallic_roughness.base_color_texture.as_ref());
+        let transform = info
+            .and_then(|i| i.extensions.as_ref())
+            .and_then(|e| e.texture_transform.as_ref());
+        // KHR_texture_transform's texCoord overrides the texture's own.
+        let uv_set = info.map(|i| transform.and_then(|t| t.tex_coord).unwrap_or(i.tex_coord));
         let uv_accessor = uv_set.and_then(|set| {
             primitive
                 .attributes
@@ -103,7 +108,20 @@ impl Loader<'_> {
         });
         let uvs = match uv_accessor {
             Some((set, accessor)) => {
-                let values = self.read_uvs(accessor, &format!("TEXCOORD_{set}"))?;
+                let mut values = self.read_uvs(accessor, &format!("TEXCOORD_{set}"))?;
+                if let Some(t) = transform {
+                    let m = material.unwrap_or_default();
+                    let at = format!(
+                        "materials[{m}].pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform"
+                    );
+                    let uv = uv_transform(t.offset.0, t.rotation.0, t.scale.0);
+                    for v in &mut values {
+                        *v = uv.transform_point2(*v);
+                    }
+                    if !(uv.is_finite() && values.iter().all(|v| v.is_finite())) {
+                        return Err(self.error(at, "takes texture coordinates to infinity"));
+                    }
+                }
                 if values.len() != vertex_count {
                     return Err(self.error(
                         location,
@@ -132,6 +150,18 @@ impl Loader<'_> {
             uvs,
         }))
     }
+}
+
+/// `KHR_texture_transform`'s affine map of texture coordinates: scale,
+/// then rotate by `rotation` radians, then offset. Its sense is that of the
+/// extension's example (offset [0, 1], rotation π/2, scale ½ maps the unit
+/// square onto the image's lower-left quadrant, turned clockwise):
+/// u' = cos·sₓu + sin·s_y v + oₓ, v' = −sin·sₓu + cos·s_y v + o_y.
+fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
+    let (sin, cos) = rotation.sin_cos();
+    let linear = Mat2::from_cols(Vec2::new(cos, -sin), Vec2::new(sin, cos))
+        * Mat2::from_diagonal(Vec2::from(scale));
+    Affine2::from_mat2_translation(linear, Vec2::from(offset))
 }
 
 /// Turn a primitive's vertex order into triangles as its mode says.
@@ -191,6 +221,51 @@ mod tests {
         assert_eq!(asset.meshes[0].indices, vec![[0, 1, 2], [3, 4, 5]]);
         assert_eq!(asset.meshes[1].indices, vec![[0, 1, 2], [1, 3, 2]]);
         assert_eq!(asset.meshes[2].indices, vec![[1, 2, 0], [2, 3, 0]]);
+    }
+
+    /// The extension's own example maps the unit square's corners onto the
+    /// image's lower-left quadrant turned a quarter clockwise, and its
+    /// texCoord picks the UV set.
+    #[test]
+    fn texture_transform_follows_the_extensions_example() {
+        use crate::scene::loaders::test_files::png;
+        let m = super::uv_transform([0.0, 1.0], std::f32::consts::FRAC_PI_2, [0.5, 0.5]);
+        for (uv, expected) in [
+            ([0.0, 0.0], [0.0, 1.0]),
+            ([1.0, 0.0], [0.0, 0.5]),
+            ([1.0, 1.0], [0.5, 0.5]),
+            ([0.0, 1.0], [0.5, 1.0]),
+        ] {
+            let got = m.transform_point2(uv.into());
+            assert!(got.abs_diff_eq(expected.into(), 1e-6), "{uv:?} -> {got}");
+        }
+        let mut b = Builder::default();
+        b.positions(&TRIANGLE);
+        b.vec2(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+        b.vec2(&[[0.25, 0.25]; 3]);
+        let dir = temp_dir("uv-transform");
+        write(&dir, "t.png", &png(1, 1, &[[255, 255, 255]]));
+        let with = |extension: &str| {
+            let rest = format!(
+                r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}],
+                "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0{extension}}}}}}}],
+                "textures":[{{"source":0}}],"images":[{{"uri":"t.png"}}],"nodes":[{{"mesh":0}}]"#
+            );
+            let asset = load_gltf(&b.write_gltf(&dir, "uv", &rest)).unwrap();
+            asset.meshes[0].uvs.clone().unwrap().values
+        };
+        let plain = with("");
+        assert_eq!(plain[1], glam::Vec2::new(1.0, 0.0));
+        let moved = with(
+            r#","extensions":{"KHR_texture_transform":{"offset":[0,1],"rotation":1.5707964,"scale":[0.5,0.5]}}"#,
+        );
+        assert!(
+            moved[1].abs_diff_eq(glam::Vec2::new(0.0, 0.5), 1e-6),
+            "{moved:?}"
+        );
+        let other_set =
+            with(r#","extensions":{"KHR_texture_transform":{"texCoord":1,"scale":[2,2]}}"#);
+        assert_eq!(other_set[0], glam::Vec2::splat(0.5));
     }
 
     #[test]
