@@ -179,10 +179,15 @@ impl RenderStats {
         };
         let instanced = match self.instances {
             0 => String::new(),
-            n => format!(
-                ", {n} instances placing {:.3} G triangles",
-                self.instanced_triangles as f64 / 1e9
-            ),
+            n => {
+                let t = self.instanced_triangles as f64;
+                let placed = match t {
+                    t if t >= 1e9 => format!("{:.2} G", t / 1e9),
+                    t if t >= 1e6 => format!("{:.2} M", t / 1e6),
+                    t => format!("{t}"),
+                };
+                format!(", {n} instances placing {placed} triangles")
+            }
         };
         let [start, end] = self.samples_rendered;
         let samples = if end - start == self.spp {

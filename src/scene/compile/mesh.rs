@@ -305,26 +305,31 @@ mod tests {
     fn mesh_files_are_baked_read_once_and_stored_in_leaf_order() {
         let dir = temp_dir("compile-mesh");
         write(&dir, "two.obj", TWO_QUADS.as_bytes());
+        write(&dir, "other.obj", TWO_QUADS.as_bytes());
         write(&dir, "two.mtl", b"newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 0 1\n");
         let text = r#"
 [[objects]]
 mesh = "two.obj"
 transform = { translate = [0.0, 0.0, 5.0] }
 [[objects]]
-mesh = "two.obj"
+mesh = "other.obj"
 "#;
         let s = scene_from_str(text, &dir.join("s.toml"), &RenderOverrides::default()).unwrap();
         let g = &s.geometry;
-        assert_eq!(g.triangle_count, 6, "a quad and a triangle, twice");
-        // One file, read once: its two materials are registered once.
-        assert_eq!(s.materials.len(), 3);
+        assert_eq!(g.triangle_count, 6, "a quad and a triangle, in each file");
+        assert!(g.instances.is_empty(), "each file placed once: baked");
         let tris = g.file_order_triangles();
-        assert_eq!(
-            tris[0][0],
-            Vec3::new(0.0, 0.0, 5.0),
-            "the first use is moved"
-        );
+        assert_eq!(tris[0][0], Vec3::new(0.0, 0.0, 5.0), "the first is moved");
         assert_eq!(tris[3][0], Vec3::ZERO, "the second is not");
+        // A file placed twice is read once: its two materials registered
+        // once, its triangles stored once.
+        let twice = "[[objects]]\nmesh = \"two.obj\"\n[[objects]]\nmesh = \"two.obj\"\n";
+        let t = scene_from_str(twice, &dir.join("t.toml"), &RenderOverrides::default()).unwrap();
+        assert_eq!(t.materials.len(), 3);
+        assert_eq!(
+            (t.geometry.prototypes.len(), t.geometry.instances.len()),
+            (1, 2)
+        );
         // Every leaf slot of a triangle holds that triangle's vertices.
         for block in &g.leaf_blocks {
             for (lane, &id) in block.id.iter().enumerate() {
@@ -345,7 +350,14 @@ mesh = "two.obj"
         write(&dir, "red.png", &png(1, 1, &[[255, 0, 0]]));
         write(&dir, "blue.png", &png(1, 1, &[[0, 0, 255]]));
         let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
-        for (name, texture) in [("first", "red.png"), ("second", "blue.png")] {
+        // Three files: a file placed twice would be instanced, keeping its
+        // UVs for either placement.
+        let files = [
+            ("first", "red.png"),
+            ("second", "blue.png"),
+            ("third", "blue.png"),
+        ];
+        for (name, texture) in files {
             let mtl = format!("newmtl wood\nmap_Kd {texture}\nnewmtl paint\nKd 0.5 0.5 0.5\n");
             write(&dir, &format!("{name}.mtl"), mtl.as_bytes());
             let obj = format!(
@@ -362,7 +374,7 @@ mesh = "first.obj"
 [[objects]]
 mesh = "second.obj"
 [[objects]]
-mesh = "second.obj"
+mesh = "third.obj"
 material = "grey"
 "#;
         let s = scene_from_str(text, &dir.join("s.toml"), &RenderOverrides::default()).unwrap();
@@ -383,7 +395,11 @@ material = "grey"
                 ("paint", false),
             ]
         );
-        assert_eq!(s.textures.images.len(), 2, "one image per file, read once");
+        assert_eq!(
+            s.textures.images.len(),
+            3,
+            "one image per file, each read once"
+        );
         let texture_of = |mesh: usize| {
             let m = &s.materials[s.geometry.meshes[mesh].material as usize];
             m.diffuse_texture.map(|t| {
