@@ -16,6 +16,7 @@ on every core::
     counts = mesh.count_hits(origins, directions)
     inside = mesh.contains(points)
     near = mesh.closest_point(points, signed=True)
+    placed = mesh.place(transforms)               # stored once, placed n times: instances
 
     image = strata_rt.render("scenes/seed.toml", spp=16)   # float32 (height, width, 3)
 

@@ -24,7 +24,7 @@ fn embree_instances_answer_as_strata_instances_do() {
     let mut rows = Vec::new();
     for _ in 0..24 {
         let rot = |rng: &mut crate::common::StreamRng| {
-            Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, 6.28))
+            Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, std::f32::consts::TAU))
         };
         let mut s = Vec3::new(
             rng.range(0.4, 2.0),

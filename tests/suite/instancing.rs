@@ -19,7 +19,9 @@ use strata::scene::Scene;
 /// on a random axis half the time), another rotation (so a shear), and a
 /// translation of up to `reach`.
 fn random_affine(rng: &mut Rng, reach: f32) -> Affine3A {
-    let rot = |rng: &mut Rng| Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, 6.28));
+    let rot = |rng: &mut Rng| {
+        Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, std::f32::consts::TAU))
+    };
     let mut s = Vec3::new(
         rng.range(0.3, 2.0),
         rng.range(0.3, 2.0),

@@ -164,23 +164,33 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
         Vec3::new(3.0, 0.0, 0.0),
     );
     let placed = corners(&|p| m.transform_point3(p));
-    let got = compiled.geometry.file_order_triangles();
-    assert_eq!(got.len(), 1 + 2 * grid.indices.len());
-    assert_eq!(&got[..1 + grid.indices.len()], &expected[..]);
-    for (g, e) in got[1 + grid.indices.len()..].iter().zip(&placed) {
-        for (a, b) in g.iter().zip(e) {
-            assert!((*a - *b).length() < 1e-6, "{a} vs {b}");
-        }
-    }
-    // Every triangle sits in exactly one leaf slot.
-    let mut seen = vec![0; got.len()];
-    for block in &compiled.geometry.leaf_blocks {
-        for &id in &block.id {
-            if (id as usize) < seen.len() {
-                seen[id as usize] += 1;
+    // The grid, placed twice, is stored once in its own space (a
+    // prototype); the loose triangle is the scene's own.
+    let g = &compiled.geometry;
+    assert_eq!(g.file_order_triangles(), &expected[..1]);
+    assert_eq!((g.prototypes.len(), g.instances.len()), (1, 2));
+    let own = g.prototypes[0].file_order_triangles();
+    assert_eq!(&own[..], &expected[1..]);
+    for (instance, want) in g.instances.iter().zip([&expected[1..], &placed[..]]) {
+        let a = instance.affine();
+        for (t, e) in own.iter().zip(want) {
+            for (p, q) in t.iter().zip(e) {
+                let moved = a.transform_point3(*p);
+                assert!((moved - *q).length() < 1e-6, "{moved} vs {q}");
             }
         }
     }
-    assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+    // Every triangle sits in exactly one leaf slot, in each tree.
+    for tree in [g, &g.prototypes[0]] {
+        let mut seen = vec![0; tree.triangle_count as usize];
+        for block in &tree.leaf_blocks {
+            for &id in &block.id {
+                if (id as usize) < seen.len() {
+                    seen[id as usize] += 1;
+                }
+            }
+        }
+        assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

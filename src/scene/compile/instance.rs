@@ -131,18 +131,19 @@ impl Compiler<'_> {
         Ok(out)
     }
 
-    /// Mesh file `path` (already read as `asset`) placed by `m` as an
+    /// A mesh file, as [`Compiler::asset`] gives it (its contents, the
+    /// scene index of its first material, its path), placed by `m` as an
     /// instance of its prototype, made on its first placement.
     pub(super) fn mesh_instance(
         &mut self,
-        asset: &Arc<LoadedAsset>,
-        first_material: u32,
-        path: &Path,
+        file: &(Arc<LoadedAsset>, u32, PathBuf),
         key: &str,
         m: Affine3A,
         explicit_material: Option<u32>,
         inherited: u32,
     ) -> InputResult<()> {
+        let (asset, first_material, path) = file;
+        let (first_material, path) = (*first_material, path.as_path());
         let prototype = match self.prototype_ids.get(path) {
             Some(&p) => p,
             None => {

@@ -197,15 +197,8 @@ impl Compiler<'_> {
         let t = Transform::new(m).expect("checked by the caller");
         let instanced = self.mesh_uses.get(&path).is_some_and(|&n| n > 1);
         if instanced {
-            self.mesh_instance(
-                &asset,
-                first_material,
-                &path,
-                key,
-                m,
-                explicit_material,
-                inherited,
-            )?;
+            let file = (asset.clone(), first_material, path.clone());
+            self.mesh_instance(&file, key, m, explicit_material, inherited)?;
         }
         for (k, mesh) in asset.meshes.iter().enumerate().filter(|_| !instanced) {
             check_indices(mesh, &path)?;
