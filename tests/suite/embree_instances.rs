@@ -238,7 +238,7 @@ fn closest_exact(
 
 /// Where the line o + t·d crosses the triangle's plane, and the least of
 /// the crossing's barycentric weights (negative: outside).
-fn barycentric(tri: &[DVec3; 3], o: DVec3, d: DVec3) -> (f64, f64) {
+pub fn barycentric(tri: &[DVec3; 3], o: DVec3, d: DVec3) -> (f64, f64) {
     let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
     let p = d.cross(e2);
     let det = e1.dot(p);
