@@ -2,7 +2,7 @@
 """Write a field of N instances of one mesh: a scene file and its instances file.
 
     tools/instance_field.py [--count 10000] [--mesh assets/dragon.ply]
-        [--out target/field] [--seed 1] [--tumble] [--single]
+        [--out assets/field] [--seed 1] [--tumble] [--single]
 
 The instances stand on a square grid on the floor, spaced by the mesh's
 largest horizontal extent x 1.25, each turned about the vertical axis by
@@ -138,7 +138,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--count", type=int, default=10000)
     ap.add_argument("--mesh", default="assets/dragon.ply")
-    ap.add_argument("--out", default="target/field")
+    ap.add_argument("--out", default="assets/field")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--tumble", action="store_true")
     ap.add_argument("--single", action="store_true")
