@@ -3,12 +3,9 @@
 //! mesh file is: indexed until the BVH is built, then written once in leaf
 //! order. Face `i` is primitive `i`.
 
-use super::mesh::{leaf_blocks, TriangleSource};
-use crate::accel::prefetch::Prefetch;
-use crate::accel::{BuildQuality, Bvh8};
-use crate::geometry::csg::Csg;
+use super::mesh::{triangle_geometry, TriangleSource};
+use crate::accel::BuildQuality;
 use crate::geometry::{Geometry, MeshRange};
-use crate::math::Aabb;
 use glam::Vec3;
 
 /// What is wrong with a mesh's arrays, in the names of the arguments
@@ -74,32 +71,8 @@ pub fn mesh_geometry(
         positions: vertices,
         indices: faces,
     };
-    let boxes: Vec<Aabb> = {
-        use rayon::prelude::*;
-        (0..source.len())
-            .into_par_iter()
-            .map(|i| Aabb::from_points(&source.get(i)))
-            .collect()
-    };
-    let mut bvh = Bvh8::build_from(boxes, quality);
-    bvh.nodes.shrink_to_fit();
-    let sources = [source];
-    let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
-    bvh.prim_ids = Vec::new();
-    let mut geometry = Geometry {
-        leaf_blocks: blocks,
-        triangle_count: count,
-        meshes,
-        shapes: Vec::new(),
-        transforms: Vec::new(),
-        csg: Csg::default(),
-        planes: Vec::new(),
-        instances: Vec::new(),
-        prototypes: Vec::new(),
-        bvh,
-    };
-    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
-    Ok(geometry)
+    let geometry = triangle_geometry(meshes, vec![source], quality);
+    Ok(geometry.expect("every vertex was checked finite above"))
 }
 
 #[cfg(test)]

@@ -3,18 +3,15 @@
 //! becomes an [`Instance`]; `instances = "FILE.csv"` gives an object many
 //! placements at once, one row-major 3×4 object-to-world matrix per line.
 
-use super::mesh::{check_attribute, check_indices, leaf_blocks, TriangleSource};
+use super::mesh::{check_attribute, check_indices, triangle_geometry, TriangleSource};
 use super::Compiler;
-use crate::accel::prefetch::Prefetch;
-use crate::accel::{BuildQuality, Bvh8};
+use crate::accel::BuildQuality;
 use crate::error::{io_message, InputError, InputResult};
-use crate::geometry::csg::Csg;
 use crate::geometry::{Geometry, Instance, MeshRange, NO_MATERIAL};
-use crate::math::{Aabb, Transform};
+use crate::math::Transform;
 use crate::scene::asset::LoadedAsset;
 use crate::scene::description::ObjectDesc;
 use glam::{Affine3A, Mat3, Vec3};
-use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -220,47 +217,6 @@ pub(super) fn build_prototype(
     path: &str,
 ) -> InputResult<Geometry> {
     let PrototypeParts { meshes, sources } = parts;
-    let boxes = triangle_boxes(&meshes, &sources)
-        .map_err(|(mesh, i)| InputError::new(path, mesh, format!("triangle {i} is not finite")))?;
-    let mut bvh = Bvh8::build_from(boxes, quality);
-    bvh.nodes.shrink_to_fit();
-    let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
-    bvh.prim_ids = Vec::new();
-    let triangle_count = meshes.last().map_or(0, |m| m.first + m.count);
-    let mut geometry = Geometry {
-        leaf_blocks: blocks,
-        triangle_count,
-        meshes,
-        shapes: Vec::new(),
-        transforms: Vec::new(),
-        csg: Csg::default(),
-        planes: Vec::new(),
-        instances: Vec::new(),
-        prototypes: Vec::new(),
-        bvh,
-    };
-    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
-    Ok(geometry)
-}
-
-/// Every triangle's box, mesh by mesh; the first that is not finite is an
-/// error naming its mesh and its index there.
-pub(super) fn triangle_boxes(
-    meshes: &[MeshRange],
-    sources: &[TriangleSource],
-) -> Result<Vec<Aabb>, (String, usize)> {
-    let n = meshes.last().map_or(0, |m| (m.first + m.count) as usize);
-    let mut boxes = Vec::with_capacity(n);
-    for (mesh, source) in meshes.iter().zip(sources) {
-        let start = boxes.len();
-        boxes.par_extend(
-            (0..source.len())
-                .into_par_iter()
-                .map(|i| Aabb::from_points(&source.get(i))),
-        );
-        if let Some(i) = boxes[start..].iter().position(|b| !b.is_finite()) {
-            return Err((mesh.name.clone(), i));
-        }
-    }
-    Ok(boxes)
+    triangle_geometry(meshes, sources, quality)
+        .map_err(|(mesh, i)| InputError::new(path, mesh, format!("triangle {i} is not finite")))
 }

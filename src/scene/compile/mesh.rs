@@ -3,11 +3,16 @@
 //! written once, in leaf order, into the scene's leaf blocks.
 
 use super::Compiler;
+use crate::accel::prefetch::Prefetch;
+use crate::accel::{BuildQuality, Bvh8};
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
+use crate::geometry::csg::Csg;
+use crate::geometry::Geometry;
 use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshUvs};
 use crate::material::Material;
 use crate::math::lanes::LANES;
+use crate::math::Aabb;
 use crate::math::Transform;
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
@@ -285,6 +290,60 @@ pub(super) fn mesh_triangles(mesh: &LoadedMesh, path: &Path) -> InputResult<Vec<
         .map(|idx| idx.map(|i| mesh.positions[i as usize]))
         .collect())
 }
+
+/// A tree over triangles alone (a prototype, or a mesh given as arrays):
+/// the BVH over their boxes, the leaf blocks read from the sources in leaf
+/// order, nothing else. `Err((mesh, i))` names the first triangle that is
+/// not finite.
+pub(super) fn triangle_geometry(
+    meshes: Vec<MeshRange>,
+    sources: Vec<TriangleSource>,
+    quality: BuildQuality,
+) -> Result<Geometry, (String, usize)> {
+    let boxes = triangle_boxes(&meshes, &sources)?;
+    let mut bvh = Bvh8::build_from(boxes, quality);
+    bvh.nodes.shrink_to_fit();
+    let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
+    bvh.prim_ids = Vec::new();
+    let triangle_count = meshes.last().map_or(0, |m| m.first + m.count);
+    let mut geometry = Geometry {
+        leaf_blocks: blocks,
+        triangle_count,
+        meshes,
+        shapes: Vec::new(),
+        transforms: Vec::new(),
+        csg: Csg::default(),
+        planes: Vec::new(),
+        instances: Vec::new(),
+        prototypes: Vec::new(),
+        bvh,
+    };
+    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    Ok(geometry)
+}
+
+/// Every triangle's box, mesh by mesh; the first that is not finite is an
+/// error naming its mesh and its index there.
+pub(super) fn triangle_boxes(
+    meshes: &[MeshRange],
+    sources: &[TriangleSource],
+) -> Result<Vec<Aabb>, (String, usize)> {
+    let n = meshes.last().map_or(0, |m| (m.first + m.count) as usize);
+    let mut boxes = Vec::with_capacity(n);
+    for (mesh, source) in meshes.iter().zip(sources) {
+        let start = boxes.len();
+        boxes.par_extend(
+            (0..source.len())
+                .into_par_iter()
+                .map(|i| Aabb::from_points(&source.get(i))),
+        );
+        if let Some(i) = boxes[start..].iter().position(|b| !b.is_finite()) {
+            return Err((mesh.name.clone(), i));
+        }
+    }
+    Ok(boxes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::test_support::compiled;

@@ -498,7 +498,7 @@ impl<'d> Compiler<'d> {
     }
 
     fn primitive_boxes(&self) -> InputResult<Vec<Aabb>> {
-        let mut boxes = instance::triangle_boxes(&self.meshes, &self.sources)
+        let mut boxes = mesh::triangle_boxes(&self.meshes, &self.sources)
             .map_err(|(mesh, i)| self.err(&mesh, format!("triangle {i} is not finite")))?;
         boxes.reserve(self.shapes.len() + self.instances.len());
         for (i, s) in self.shapes.iter().enumerate() {
