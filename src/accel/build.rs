@@ -3,7 +3,7 @@
 //! (Ylitie, Karras and Laine 2017), see [`super::collapse`].
 
 use super::cluster::Clusters;
-use super::collapse::{LEAF_COST, NODE_COST};
+use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
 use crate::math::Aabb;
 use glam::Vec3A;
@@ -103,7 +103,7 @@ impl Bvh8 {
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
         match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality) {
-            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds),
+            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, u32::MAX),
             None => Self::empty(),
         }
     }
@@ -114,15 +114,28 @@ impl Bvh8 {
     /// primitive less there), else once the binary tree is built, before
     /// the collapse.
     pub fn build_from(boxes: Vec<Aabb>, quality: BuildQuality) -> Self {
+        Self::build_from_with_others(boxes, quality, u32::MAX)
+    }
+
+    /// [`Bvh8::build_from`] over triangles `..first_other` and, from
+    /// `first_other` on, primitives a leaf tests one by one (analytic
+    /// shapes, instances): the collapse charges a leaf for each of those,
+    /// so that it prefers to test their boxes in 8-wide nodes.
+    pub fn build_from_with_others(
+        boxes: Vec<Aabb>,
+        quality: BuildQuality,
+        first_other: u32,
+    ) -> Self {
         match binary_tree_and_bounds(Boxes::Owned(boxes), quality) {
-            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds),
+            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, first_other),
             None => Self::empty(),
         }
     }
 
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
-    fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Self {
-        super::collapse::collapse(bvh2, bounds).debug_validated(bvh2.primitive_indices.len())
+    fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Self {
+        super::collapse::collapse(bvh2, bounds, first_other)
+            .debug_validated(bvh2.primitive_indices.len())
     }
 
     /// Bytes held by the final structure.
@@ -132,6 +145,12 @@ impl Bvh8 {
 
     /// Counts and the expected traversal cost of the tree, for reports.
     pub fn stats(&self) -> TreeStats {
+        self.stats_charging(u32::MAX)
+    }
+
+    /// [`Bvh8::stats`] with each leaf charged as the collapse charges it
+    /// for primitives `first_other..` ([`Bvh8::build_from_with_others`]).
+    pub(super) fn stats_charging(&self, first_other: u32) -> TreeStats {
         let mut stats = TreeStats {
             nodes: self.nodes.len(),
             ..TreeStats::default()
@@ -149,10 +168,18 @@ impl Bvh8 {
                 let (dx, dy, dz) = (b(1) - b(0), b(3) - b(2), b(5) - b(4));
                 let area = dx * dy + dy * dz + dz * dx;
                 if is_leaf(child) {
-                    let count = leaf_range(child).1;
+                    let (start, count) = leaf_range(child);
                     stats.leaves += 1;
                     stats.leaf_prims += count as usize;
-                    cost += LEAF_COST as f64 * area;
+                    // A scene's tree has handed its ids to its leaf blocks.
+                    let others = match first_other {
+                        u32::MAX => 0,
+                        _ => self.prim_ids[start as usize..(start + count) as usize]
+                            .iter()
+                            .filter(|&&id| id >= first_other)
+                            .count(),
+                    };
+                    cost += (LEAF_COST + OTHER_COST * others as f32) as f64 * area;
                 } else {
                     cost += NODE_COST as f64 * area;
                 }
@@ -327,7 +354,8 @@ mod tests {
 
     /// The tree the collapse writes has exactly the cost its tables
     /// promised for the root: the reconstruction follows the choices the
-    /// dynamic programme made, for every preset.
+    /// dynamic programme made, for every preset, and whether it charges
+    /// no primitive, some or all as tested one by one.
     #[test]
     fn collapse_builds_the_tree_its_cost_tables_chose() {
         for (quality, seed) in [
@@ -337,17 +365,38 @@ mod tests {
         ] {
             let boxes = random_boxes(3000, seed);
             let (bvh2, bounds) = binary_tree_and_bounds(Boxes::Borrowed(&boxes), quality).unwrap();
-            let costs = CollapseCosts::new(&bvh2);
-            costs.assert_choices_match_tables();
-            let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
-            let stats = Bvh8::collapse(&bvh2, bounds).stats();
-            assert!(
-                (stats.sah_cost - promised).abs() < 1e-4 * promised,
-                "{quality:?}: built {} promised {promised}",
-                stats.sah_cost
-            );
-            assert_eq!(stats.leaf_prims, 3000);
+            for first_other in [u32::MAX, 1500, 0] {
+                let costs = CollapseCosts::new(&bvh2, first_other);
+                costs.assert_choices_match_tables();
+                let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
+                let stats = Bvh8::collapse(&bvh2, bounds, first_other).stats_charging(first_other);
+                assert!(
+                    (stats.sah_cost - promised).abs() < 1e-4 * promised,
+                    "{quality:?}, others from {first_other}: built {} promised {promised}",
+                    stats.sah_cost
+                );
+                assert_eq!(stats.leaf_prims, 3000);
+            }
         }
+    }
+
+    /// Charged for each primitive it tests one by one, a leaf of instances
+    /// or shapes holds fewer than a leaf of triangles (which one 8-wide
+    /// test covers whatever their number), on the same boxes.
+    #[test]
+    fn primitives_tested_one_by_one_make_smaller_leaves() {
+        let boxes = random_boxes(3000, 4);
+        let (bvh2, bounds) =
+            binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Medium).unwrap();
+        let per_leaf = |first_other| {
+            let s = Bvh8::collapse(&bvh2, bounds, first_other).stats();
+            s.leaf_prims as f64 / s.leaves as f64
+        };
+        let (triangles, others) = (per_leaf(u32::MAX), per_leaf(0));
+        assert!(
+            others < 0.9 * triangles,
+            "{others} others a leaf against {triangles} triangles"
+        );
     }
 
     /// `work` on a pool of exactly `threads` threads.
@@ -448,9 +497,11 @@ mod tests {
         let boxes = random_boxes(200_000, 6);
         let (bvh2, bounds) =
             binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Fastest).unwrap();
-        let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds));
+        // The second half charged as primitives tested one by one.
+        let others = 100_000;
+        let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds, others));
         let (one, three) = (on(1), on(3));
-        let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
+        let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds, others);
         let (p, s) = (one.stats(), sequential.stats());
         assert_eq!(
             (p.nodes, p.children, p.leaves, p.leaf_prims),
@@ -529,8 +580,9 @@ mod tests {
         let tree = std::thread::Builder::new()
             .stack_size(1 << 20)
             .spawn(move || {
-                let parallel = Bvh8::collapse(&bvh2, bounds);
-                let sequential = super::super::collapse::collapse_sequential(&bvh2, bounds);
+                let parallel = Bvh8::collapse(&bvh2, bounds, u32::MAX);
+                let sequential =
+                    super::super::collapse::collapse_sequential(&bvh2, bounds, u32::MAX);
                 (parallel, sequential)
             })
             .unwrap()
@@ -597,7 +649,7 @@ mod tests {
         let (bvh2, bounds) =
             binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Medium).unwrap();
         let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
-        let reference = Bvh8::collapse(&bvh2, bounds).stats();
+        let reference = Bvh8::collapse(&bvh2, bounds, u32::MAX).stats();
         for scale in [2f32.powi(60), 2f32.powi(-60)] {
             let mut scaled = bvh2.clone();
             for node in &mut scaled.nodes {
@@ -605,7 +657,7 @@ mod tests {
                 node.aabb.max *= scale;
             }
             let bounds = Aabb::new(bounds.min * scale, bounds.max * scale);
-            let stats = Bvh8::collapse(&scaled, bounds).stats();
+            let stats = Bvh8::collapse(&scaled, bounds, u32::MAX).stats();
             assert_eq!(shape(&stats), shape(&reference), "scale {scale}");
         }
     }

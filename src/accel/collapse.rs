@@ -29,6 +29,15 @@ use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 pub(super) const NODE_COST: f32 = 1.0;
 pub(super) const LEAF_COST: f32 = 1.5;
 
+/// What a leaf pays on top of [`LEAF_COST`] for each primitive it tests
+/// one by one rather than in the 8-wide triangle test: an analytic shape,
+/// or an instance, whose world box is tested before its prototype's walk
+/// (`geometry::instance`). About a node test each (the scalar box or
+/// shape test and the loop around it), so that a tree over instances
+/// makes the 8-wide node test their boxes together rather than a leaf
+/// test them one by one (docs/performance.md, "Instancing").
+pub(super) const OTHER_COST: f32 = 1.0;
+
 /// The id of a slot that holds no primitive (padding at the end of a block).
 pub const NO_PRIM: u32 = u32::MAX;
 
@@ -56,15 +65,19 @@ const PARALLEL_LEVELS: u32 = 16;
 const PARALLEL_DEPTH: u32 = 10;
 
 /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
-pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
-    CollapseCosts::new(bvh2).emit(0, 0, 0).into_bvh(bounds)
+/// Primitives from `first_other` on are tested one by one in a leaf
+/// ([`OTHER_COST`]); those before it are triangles.
+pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
+    CollapseCosts::new(bvh2, first_other)
+        .emit(0, 0, 0)
+        .into_bvh(bounds)
 }
 
 /// [`collapse`] by one sequential walk from the root, for tests of the
 /// parallel emission.
 #[cfg(test)]
-pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb) -> Bvh8 {
-    CollapseCosts::new(bvh2)
+pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
+    CollapseCosts::new(bvh2, first_other)
         .emit_sequential(0, 0)
         .into_bvh(bounds)
 }
@@ -103,6 +116,11 @@ pub(super) struct CollapseCosts<'a> {
     /// orders a parent's read after its children's writes.
     cost: Vec<[AtomicU32; 8]>,
     counts: Vec<AtomicU32>,
+    /// The first primitive id tested one by one ([`OTHER_COST`]).
+    first_other: u32,
+    /// Per inner node, how many of its primitives are tested one by one;
+    /// empty where the tree holds none (a mesh's), which costs nothing.
+    others: Vec<AtomicU32>,
     /// Per inner node, the choices its table made ([`Choices`]), so that
     /// the emission follows them without recomputing any split.
     choices: Vec<AtomicU32>,
@@ -116,8 +134,9 @@ pub(super) struct CollapseCosts<'a> {
 }
 
 impl<'a> CollapseCosts<'a> {
-    pub(super) fn new(bvh2: &'a Bvh2) -> Self {
+    pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> Self {
         let inner = bvh2.nodes.len() / 2;
+        let any_other = (first_other as usize) < bvh2.primitive_indices.len();
         let root = &bvh2.nodes[0].aabb;
         let largest = root.min.abs().max(root.max.abs()).max_element();
         let mut costs = Self {
@@ -133,6 +152,15 @@ impl<'a> CollapseCosts<'a> {
                 .into_par_iter()
                 .map(|_| AtomicU32::new(0))
                 .collect(),
+            first_other,
+            others: if any_other {
+                (0..inner)
+                    .into_par_iter()
+                    .map(|_| AtomicU32::new(0))
+                    .collect()
+            } else {
+                Vec::new()
+            },
             choices: (0..inner)
                 .into_par_iter()
                 .map(|_| AtomicU32::new(0))
@@ -188,8 +216,13 @@ impl<'a> CollapseCosts<'a> {
 
     /// Computes and stores inner node `i`'s table from its children's.
     fn store_table(&self, i: usize) {
-        let (table, count, choices) = self.node_table(i);
         let slot = Self::slot(&self.bvh2.nodes[i]);
+        if !self.others.is_empty() {
+            let (l, r) = children(&self.bvh2.nodes[i]);
+            let others = self.others(l) + self.others(r);
+            self.others[slot].store(others, Relaxed);
+        }
+        let (table, count, choices) = self.node_table(i);
         for (entry, c) in self.cost[slot].iter().zip(table) {
             entry.store(c.to_bits(), Relaxed);
         }
@@ -207,7 +240,7 @@ impl<'a> CollapseCosts<'a> {
         let splits = split_costs(&left, &right);
         let mut choices = Choices::default();
         let as_node = NODE_COST * area + splits[8].0;
-        let leaf = leaf_cost(area);
+        let leaf = leaf_cost(area, self.others(i));
         let mut c = [0.0f32; 8];
         // `leaf <= as_node` is what `as_node.min(leaf) == leaf` tests: a
         // tie goes to the leaf.
@@ -254,6 +287,23 @@ impl<'a> CollapseCosts<'a> {
         }
     }
 
+    /// How many of BVH2 node `i`'s primitives are tested one by one.
+    fn others(&self, i: usize) -> u32 {
+        if self.others.is_empty() {
+            return 0;
+        }
+        let node = &self.bvh2.nodes[i];
+        if node.prim_count > 0 {
+            let first = self.first_other;
+            self.leaf_prims(node)
+                .iter()
+                .filter(|&&p| p >= first)
+                .count() as u32
+        } else {
+            self.others[Self::slot(node)].load(Relaxed)
+        }
+    }
+
     /// The choices of inner BVH2 node `node`'s table.
     fn choices(&self, node: &Bvh2Node) -> Choices {
         Choices(self.choices[Self::slot(node)].load(Relaxed))
@@ -262,7 +312,7 @@ impl<'a> CollapseCosts<'a> {
     fn table(&self, i: usize) -> [f32; 8] {
         let node = &self.bvh2.nodes[i];
         if node.prim_count > 0 {
-            [leaf_cost(self.area(i)); 8]
+            [leaf_cost(self.area(i), self.others(i)); 8]
         } else {
             self.cost[Self::slot(node)]
                 .each_ref()
@@ -290,7 +340,8 @@ impl<'a> CollapseCosts<'a> {
                 continue;
             }
             let (table, choices) = (self.table(i), self.choices(node));
-            let leaf = self.count(i) <= LEAF_PRIMS && table[0] == leaf_cost(self.area(i));
+            let leaf_cost = leaf_cost(self.area(i), self.others(i));
+            let leaf = self.count(i) <= LEAF_PRIMS && table[0] == leaf_cost;
             assert_eq!(choices.leaf(), leaf, "node {i}");
             assert_eq!(choices.open_split(), self.split(i, 8).1, "node {i}");
             for slots in 2..=8 {
@@ -327,7 +378,7 @@ impl<'a> CollapseCosts<'a> {
         if self.count(i) <= LEAF_PRIMS {
             let (l, r) = children(node);
             let split = split_costs(&self.table(l), &self.table(r))[8].0;
-            if leaf_cost(self.area(i)) <= split {
+            if leaf_cost(self.area(i), self.others(i)) <= split {
                 out.push((i, first));
                 return;
             }
@@ -585,8 +636,8 @@ fn children(node: &Bvh2Node) -> (usize, usize) {
 }
 
 #[inline]
-fn leaf_cost(area: f32) -> f32 {
-    area * LEAF_COST
+fn leaf_cost(area: f32, others: u32) -> f32 {
+    area * (LEAF_COST + OTHER_COST * others as f32)
 }
 
 /// For each slot count `j` in 2..=8 (entry `j`; 0 and 1 unused), the

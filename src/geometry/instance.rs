@@ -211,7 +211,7 @@ pub fn placed(
         instances.clear();
         boxes.clear();
     }
-    let mut bvh = Bvh8::build_from(boxes, quality);
+    let mut bvh = Bvh8::build_from_with_others(boxes, quality, 0);
     let leaf_blocks = bvh
         .prim_ids
         .chunks(LANES)

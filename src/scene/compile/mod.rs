@@ -367,7 +367,7 @@ fn compile_for(
     }
     let quality = for_purpose(quality, boxes.len());
     let bvh_quality = quality.preset(boxes.len());
-    let mut bvh = Bvh8::build_from(boxes, quality);
+    let mut bvh = Bvh8::build_from_with_others(boxes, quality, n_tris);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.nodes.shrink_to_fit();
     // Store the vertices once, in the order the leaves read them, straight
