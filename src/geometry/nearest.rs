@@ -200,6 +200,7 @@ impl Geometry {
         let reach = self.reach(point);
         let instances = self.first_instance()..self.primitive_count() as u32;
         let mut best: Option<Best> = None;
+        let mut queue = placed::Queue::new();
         self.bvh.nearest(
             point,
             reach(max_distance),
@@ -236,6 +237,7 @@ impl Geometry {
                                 &reach,
                                 max_distance,
                                 &mut best,
+                                &mut queue,
                             );
                         }
                     }

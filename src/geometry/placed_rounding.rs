@@ -19,6 +19,10 @@ pub(crate) struct PlacedRounding {
     /// world-to-object one (the condition number times ε), with the
     /// rounding of box distances in object space, 16 ε of each magnitude.
     pub vertex: f32,
+    /// How far, per axis in world space, a copy's triangle or the world
+    /// box of a prototype's box may lie from the exact image under the
+    /// object-to-world map: 16 ε of the largest world coordinate's terms.
+    pub world: f32,
 }
 
 /// 16 ε: each bound here takes a few ε (γ(3) and the like) four times over.
@@ -37,10 +41,17 @@ impl PlacedRounding {
         let object = extent.length();
         let world = (abs(to_world) * extent + Vec3::from(map.translation).abs()).length();
         let stretch = spectral_norm(instance.to_object);
-        let cond = stretch * spectral_norm(to_world);
+        // The condition number only sizes the slack: the Frobenius norm
+        // (≥ the spectral one) spares a second closed form per instance.
+        let frobenius = (to_world.x_axis.length_squared()
+            + to_world.y_axis.length_squared()
+            + to_world.z_axis.length_squared())
+        .sqrt();
+        let cond = stretch * frobenius * (1.0 + 4.0 * f32::EPSILON);
         Self {
             stretch,
             vertex: WIDE * (stretch * world + cond * object + object),
+            world: 2.0 * WIDE * world,
         }
     }
 
