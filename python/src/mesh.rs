@@ -216,16 +216,17 @@ impl Mesh {
         }
     }
 
-    /// The queries that follow every crossing or the nearest point do not
-    /// walk instances yet: a clear error, not a wrong answer.
-    fn not_placed(&self, query: &str) -> PyResult<()> {
-        if self.geometry.instances.is_empty() {
-            return Ok(());
-        }
-        Err(PyNotImplementedError::new_err(format!(
-            "Mesh.{query} does not walk instances yet: call it on the mesh itself, or on \
-             Mesh(copies) built from the placed triangles (Mesh.triangles)"
-        )))
+    /// A triangle a crossing or a nearest point names (`prim`, and `part`
+    /// its leaf slot), as a mesh of the copies numbers it.
+    fn flat_id(&self, prim: u32, part: u32) -> i64 {
+        let hit = strata::accel::PrimHit {
+            t: 0.0,
+            prim,
+            u: 0.0,
+            v: 0.0,
+            part,
+        };
+        self.geometry.flat_prim(&hit, &self.flat) as i64
     }
 
     /// The triangle a hit names, in world space: a placed mesh's triangle
@@ -348,15 +349,23 @@ impl Mesh {
     /// (n, 4, 4) array of object-to-world matrices (row-major; a 4x4's last
     /// row must be [0, 0, 0, 1]). The mesh is stored once, each placement
     /// costs about 160 bytes, and rays enter it in its own space, as
-    /// Embree's instances do. ``intersect`` and ``occluded`` answer as a
-    /// mesh of every copy would, face ``k * triangle_count + j`` being face
-    /// ``j`` of copy ``k``; ``all_hits``, ``count_hits``, ``contains`` and
-    /// ``closest_point`` raise NotImplementedError on a placed mesh.
+    /// Embree's instances do. Every query answers as a mesh of every copy
+    /// would (``Mesh(placed.triangles.reshape(-1, 3), ...)``), face
+    /// ``k * triangle_count + j`` being face ``j`` of copy ``k``: each
+    /// candidate triangle is moved to world space as that mesh holds it, so
+    /// crossings (their t, ties at shared edges, counts, ``contains``) and
+    /// nearest points and distances (world distances, under any map) are
+    /// the copies', bit for bit. A placed mesh cannot be placed again.
     ///
     /// Raises ValueError naming ``transforms[i]`` for a matrix that is not
     /// finite or not invertible.
     fn place(&self, py: Python<'_>, transforms: &Bound<'_, PyAny>) -> PyResult<Self> {
-        self.not_placed("place")?;
+        if !self.geometry.instances.is_empty() {
+            return Err(PyNotImplementedError::new_err(
+                "Mesh.place of a placed mesh: place the mesh itself, with each map \
+                 composed with its placement",
+            ));
+        }
         let maps = convert::affine_maps(transforms, "transforms")?;
         let prototype = self.geometry.clone();
         let placed = py
@@ -399,7 +408,7 @@ impl Mesh {
         let [lo, hi] = self.bounds;
         format!(
             "Mesh({} triangles, bounds {:?} to {:?})",
-            self.geometry.triangle_count,
+            self.triangle_count(),
             lo.to_array(),
             hi.to_array()
         )
@@ -505,7 +514,6 @@ impl Mesh {
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
     ) -> PyResult<AllHits<'py>> {
-        self.not_placed("all_hits")?;
         let threads = Threads::new(threads)?;
         let rays = convert::rays(origins, directions, t_max, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
@@ -523,7 +531,7 @@ impl Mesh {
             splits.push(total);
         }
         let t: Vec<f32> = found.iter().map(|c| c.t).collect();
-        let prim: Vec<i64> = found.iter().map(|c| c.prim as i64).collect();
+        let prim: Vec<i64> = found.iter().map(|c| self.flat_id(c.prim, c.part)).collect();
         Ok((
             PyArray1::from_vec(py, splits),
             PyArray1::from_vec(py, t),
@@ -542,7 +550,6 @@ impl Mesh {
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        self.not_placed("count_hits")?;
         let threads = Threads::new(threads)?;
         let rays = convert::rays(origins, directions, t_max, &threads)?;
         let mut out = vec![0i64; rays.len()];
@@ -568,7 +575,6 @@ impl Mesh {
         points: &Bound<'_, PyAny>,
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        self.not_placed("contains")?;
         let threads = Threads::new(threads)?;
         let points = convert::points(points, "points", &threads)?;
         let mut out = vec![false; points.len()];
@@ -596,7 +602,6 @@ impl Mesh {
         signed: bool,
         threads: Option<i64>,
     ) -> PyResult<ClosestPoints> {
-        self.not_placed("closest_point")?;
         let threads = Threads::new(threads)?;
         let points = convert::points(points, "points", &threads)?;
         let max_distance = match max_distance {
@@ -614,7 +619,7 @@ impl Mesh {
                 if let Some(n) = self.geometry.nearest(p, max_distance) {
                     let inside = signed && self.geometry.contains(p);
                     let d = if inside { -n.distance } else { n.distance };
-                    *o = (n.point.to_array(), d, n.prim as i64);
+                    *o = (n.point.to_array(), d, self.flat_id(n.prim, n.part));
                 }
             }
         })?;

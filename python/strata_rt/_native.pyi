@@ -92,11 +92,12 @@ class Mesh:
     def place(self, transforms: ArrayLike) -> "Mesh":
         """This mesh placed once by each (3, 4) or (4, 4) row-major object-to-world
         matrix of ``transforms`` (n of them): stored once, each placement about
-        160 bytes. ``intersect`` and ``occluded`` answer as a mesh of every copy
-        would (face ``k * triangle_count + j`` is face ``j`` of copy ``k``);
-        ``all_hits``, ``count_hits``, ``contains`` and ``closest_point`` raise
-        NotImplementedError on a placed mesh. ValueError names ``transforms[i]``
-        for a matrix that is not finite or not invertible."""
+        160 bytes. Every query answers as a mesh of every copy would (face
+        ``k * triangle_count + j`` is face ``j`` of copy ``k``): crossings,
+        counts, ``contains`` and nearest points (world distances under any
+        map) are the copies' bit for bit. ValueError names ``transforms[i]``
+        for a matrix that is not finite or not invertible; a placed mesh
+        cannot be placed again (NotImplementedError)."""
         ...
     def intersect(
         self,

@@ -9,10 +9,23 @@
 //! triangles share crosses one of them where it crosses the surface:
 //! never none and never two. These are mesh queries: analytic shapes and
 //! planes are not crossings.
+//!
+//! An instance's crossings are its prototype's triangles moved to world
+//! space as a copy would hold them (the map applied as
+//! [`Instance::affine`](super::Instance::affine)'s `transform_point3`
+//! does, lane by lane) and tested with the world ray: the prototype's
+//! tree is walked in object space, but each leaf's test is the one a mesh
+//! of the copies would make, bit for bit, so t, the triangles crossed and
+//! the ties at edges shared within a copy or between copies are the
+//! copies' own. Testing in object space instead would round the ray once
+//! more per copy and break ties at an edge two copies share differently
+//! on each side.
+
+mod placed;
 
 use super::Geometry;
 use crate::accel::Query;
-use crate::math::lanes::mask_lanes;
+use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle_lanes;
@@ -20,11 +33,16 @@ use glam::Vec3;
 
 /// One crossing of a ray with a triangle: its t along the ray and the
 /// triangle's primitive id (triangle `i` of the scene's meshes, in file
-/// order, is primitive `i`).
+/// order, is primitive `i`; a triangle of an instance is reported as the
+/// instance, as a closest hit is).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Crossing {
     pub t: f32,
     pub prim: u32,
+    /// The triangle's leaf slot, as [`PrimHit::part`](crate::accel::PrimHit::part):
+    /// in the scene's leaves for a world triangle, in its prototype's for
+    /// an instance's ([`Geometry::flat_prim`] turns it into a copy's id).
+    pub part: u32,
 }
 
 /// The direction of [`Geometry::contains`]'s ray: no axis, no diagonal and
@@ -63,19 +81,33 @@ impl<F: FnMut(Crossing)> Query for EveryCrossing<'_, F> {
 
 impl Geometry {
     /// Appends every crossing of the ray with the triangles in
-    /// `(ray.tmin, ray.tmax]` to `out`, sorted by t, then by primitive id.
+    /// `(ray.tmin, ray.tmax]` to `out`, sorted by t, then by primitive id
+    /// (an instance's by its prototype's triangle id after that: the order
+    /// of [`Geometry::flat_prim`], a mesh of the copies' order).
     ///
     /// A ray through an edge or a vertex shared by triangles of a closed
     /// mesh, where it crosses the surface, is reported once (by the
     /// triangle that owns it, see
     /// [`crossing`](crate::shape::triangle::crossing)); where it only
     /// touches the surface (a silhouette edge or vertex) it is reported
-    /// twice or not at all. Triangles only: analytic shapes and planes are
-    /// not counted.
+    /// twice or not at all. Triangles only (the world's and the
+    /// instances'): analytic shapes and planes are not counted.
     pub fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
         let first = out.len();
         self.walk_crossings(ray, |c| out.push(c));
-        out[first..].sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+        let within = |c: &Crossing| {
+            if c.prim < self.first_instance() {
+                return 0;
+            }
+            let (_, prototype) = self.instance(c.prim);
+            let slot = c.part as usize;
+            prototype.leaf_blocks[slot / LANES].id[slot % LANES]
+        };
+        out[first..].sort_unstable_by(|a, b| {
+            a.t.total_cmp(&b.t)
+                .then(a.prim.cmp(&b.prim))
+                .then_with(|| within(a).cmp(&within(b)))
+        });
     }
 
     /// How many crossings [`Geometry::crossings`] would append, without
@@ -125,11 +157,27 @@ impl Geometry {
     ) {
         let (b, lanes) = Self::leaf_lanes(start, count);
         let block = &self.leaf_blocks[b];
-        let (hit, t) = triangle_lanes::crossings(ray, s, block, lanes);
-        for lane in mask_lanes(hit) {
-            let prim = block.id[lane];
-            if prim < self.triangle_count {
-                found(Crossing { t: t[lane], prim });
+        // A scene of instances alone has no triangle in its own leaves.
+        if self.triangle_count > 0 {
+            let (hit, t) = triangle_lanes::crossings(ray, s, block, lanes);
+            for lane in mask_lanes(hit) {
+                let prim = block.id[lane];
+                if prim < self.triangle_count {
+                    let part = (b * LANES + lane) as u32;
+                    found(Crossing {
+                        t: t[lane],
+                        prim,
+                        part,
+                    });
+                }
+            }
+        }
+        if !self.instances.is_empty() {
+            let instances = self.first_instance()..self.primitive_count() as u32;
+            for lane in mask_lanes(lanes) {
+                if instances.contains(&block.id[lane]) {
+                    self.instance_crossings(block.id[lane], ray, s, found);
+                }
             }
         }
     }

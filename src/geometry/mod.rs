@@ -18,6 +18,7 @@ pub mod csg;
 pub mod instance;
 pub mod leaf;
 pub mod nearest;
+mod placed_rounding;
 pub mod primitive;
 pub mod query;
 pub mod surface;

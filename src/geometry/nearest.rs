@@ -3,9 +3,18 @@
 //! BVH, whose leaf test finds each triangle's nearest point
 //! ([`closest_point_on_triangle`]). A mesh query: analytic shapes and
 //! planes are not candidates.
+//!
+//! Through an instance the distances are world distances, which an
+//! object-space distance is not under a non-uniform or sheared map: each
+//! candidate triangle is moved to world space as a copy would hold it
+//! and measured there (`placed`), so the answer is the copies' bit for
+//! bit; only the pruning is done in object space, with a bound that no
+//! world distance can beat (`placed::ObjectBound`).
+
+mod placed;
 
 use super::Geometry;
-use crate::math::lanes::mask_lanes;
+use crate::math::lanes::{mask_lanes, LANES};
 use crate::shape::triangle_lanes::TriangleBlock;
 use glam::Vec3;
 use wide::f32x8;
@@ -17,6 +26,36 @@ pub struct Nearest {
     pub point: Vec3,
     pub distance: f32,
     pub prim: u32,
+    /// The triangle's leaf slot, as [`super::Crossing::part`]: an
+    /// instance's triangle is in its prototype's leaves.
+    pub part: u32,
+}
+
+/// The best candidate so far: the least (squared distance, primitive id,
+/// triangle id within an instance's prototype), the order of the ids of a
+/// mesh of the copies ([`Geometry::flat_prim`]).
+#[derive(Debug, Clone, Copy)]
+struct Best {
+    d2: f32,
+    prim: u32,
+    within: u32,
+    part: u32,
+    point: Vec3,
+}
+
+impl Best {
+    /// Keeps the candidate at `point` (squared distance `d2`) if it is
+    /// nearer, or the first within `max_distance`.
+    #[inline(always)]
+    fn offer(best: &mut Option<Best>, candidate: Best, max_distance: f32) {
+        let nearer = match best {
+            Some(b) => (candidate.d2, candidate.prim, candidate.within) < (b.d2, b.prim, b.within),
+            None => candidate.d2.sqrt() <= max_distance,
+        };
+        if nearer {
+            *best = Some(candidate);
+        }
+    }
 }
 
 /// Below this ratio |ab × ac|² / (|ab|²·|ac|²), the squared sine of the
@@ -124,7 +163,7 @@ fn closest_point_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
 /// not test, as the walk skips boxes. (Padding lanes answer anything;
 /// the caller masks them.)
 #[inline(always)]
-fn boxes_within(block: &TriangleBlock, p: Vec3, bound: f32) -> u32 {
+pub(super) fn boxes_within(block: &TriangleBlock, p: Vec3, bound: f32) -> u32 {
     let mut d2 = f32x8::ZERO;
     for axis in 0..3 {
         let [a, b, c] = [0, 1, 2].map(|k| f32x8::from(block.v[3 * k + axis]));
@@ -141,8 +180,11 @@ impl Geometry {
     /// The point of any triangle nearest to `point`, if one is no farther
     /// than `max_distance` (`f32::INFINITY`: no limit); `None` for an
     /// empty mesh, nothing that close, or a point or limit that is not a
-    /// number. Equally near triangles go to the smallest primitive id.
-    /// Triangles only: analytic shapes and planes are not candidates.
+    /// number. Equally near triangles go to the smallest primitive id
+    /// (of an instance's, the smallest of its prototype's ids: the order
+    /// of [`Geometry::flat_prim`]). Triangles only, the world's and the
+    /// instances' (in world distances): analytic shapes and planes are
+    /// not candidates.
     ///
     /// A best-first walk of the BVH ([`crate::accel::Bvh8::nearest`]),
     /// each triangle's point by [`closest_point_on_triangle`] where its
@@ -151,11 +193,14 @@ impl Geometry {
     /// is the least (squared distance, primitive id) that a test of every
     /// triangle would find, bit for bit.
     pub fn nearest(&self, point: Vec3, max_distance: f32) -> Option<Nearest> {
-        if self.triangle_count == 0 || !point.is_finite() || !(max_distance >= 0.0) {
+        let empty = self.triangle_count == 0 && self.instances.is_empty();
+        if empty || !point.is_finite() || !(max_distance >= 0.0) {
             return None;
         }
         let reach = self.reach(point);
-        let mut best: Option<(f32, u32, Vec3)> = None;
+        let instances = self.first_instance()..self.primitive_count() as u32;
+        let mut best: Option<Best> = None;
+        let mut queue = placed::Queue::new();
         self.bvh.nearest(
             point,
             reach(max_distance),
@@ -163,28 +208,48 @@ impl Geometry {
             |start, count, bound| {
                 let (b, lanes) = Self::leaf_lanes(start, count);
                 let block = &self.leaf_blocks[b];
-                for lane in mask_lanes(boxes_within(block, point, bound) & lanes) {
-                    let prim = block.id[lane];
-                    if prim >= self.triangle_count {
-                        continue;
-                    }
-                    let q = closest_point_on_triangle(point, &block.triangle(lane));
-                    let d2 = (point - q).length_squared();
-                    let nearer = match best {
-                        Some((best_d2, best_prim, _)) => (d2, prim) < (best_d2, best_prim),
-                        None => d2.sqrt() <= max_distance,
-                    };
-                    if nearer {
-                        best = Some((d2, prim, q));
+                if self.triangle_count > 0 {
+                    for lane in mask_lanes(boxes_within(block, point, bound) & lanes) {
+                        let prim = block.id[lane];
+                        if prim >= self.triangle_count {
+                            continue;
+                        }
+                        let q = closest_point_on_triangle(point, &block.triangle(lane));
+                        let candidate = Best {
+                            d2: (point - q).length_squared(),
+                            prim,
+                            within: 0,
+                            part: (b * LANES + lane) as u32,
+                            point: q,
+                        };
+                        Best::offer(&mut best, candidate, max_distance);
                     }
                 }
-                best.map_or(bound, |(d2, _, _)| reach(d2.sqrt()))
+                if !self.instances.is_empty() {
+                    for lane in mask_lanes(lanes) {
+                        let id = block.id[lane];
+                        if instances.contains(&id) {
+                            let bound = best.map_or(bound, |c| reach(c.d2.sqrt()));
+                            self.instance_nearest(
+                                id,
+                                point,
+                                bound,
+                                &reach,
+                                max_distance,
+                                &mut best,
+                                &mut queue,
+                            );
+                        }
+                    }
+                }
+                best.map_or(bound, |c| reach(c.d2.sqrt()))
             },
         );
-        best.map(|(d2, prim, point)| Nearest {
-            point,
-            distance: d2.sqrt(),
-            prim,
+        best.map(|c| Nearest {
+            point: c.point,
+            distance: c.d2.sqrt(),
+            prim: c.prim,
+            part: c.part,
         })
     }
 

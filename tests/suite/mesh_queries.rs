@@ -148,7 +148,13 @@ fn brute_crossings(tris: &[[Vec3; 3]], ray: &Ray) -> Vec<Crossing> {
     let mut out: Vec<Crossing> = tris
         .iter()
         .enumerate()
-        .filter_map(|(i, tri)| crossing(ray, &s, tri).map(|t| Crossing { t, prim: i as u32 }))
+        .filter_map(|(i, tri)| {
+            crossing(ray, &s, tri).map(|t| Crossing {
+                t,
+                prim: i as u32,
+                part: 0,
+            })
+        })
         .collect();
     out.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
     out
@@ -168,13 +174,20 @@ fn brute_nearest(tris: &[[Vec3; 3]], p: Vec3, max_distance: f32) -> Option<Neare
             point,
             distance: d2.sqrt(),
             prim,
+            part: 0,
         })
 }
 
+/// The crossings, their leaf slots left out (brute force has none).
 fn crossings(g: &Geometry, ray: &Ray) -> Vec<Crossing> {
     let mut out = Vec::new();
     g.crossings(ray, &mut out);
-    out
+    out.iter().map(|&c| Crossing { part: 0, ..c }).collect()
+}
+
+/// The nearest point, its leaf slot left out (brute force has none).
+fn nearest(g: &Geometry, p: Vec3, max_distance: f32) -> Option<Nearest> {
+    g.nearest(p, max_distance).map(|n| Nearest { part: 0, ..n })
 }
 
 /// A random unit direction.
@@ -445,16 +458,16 @@ fn check_nearest(g: &Geometry, points: usize, seed: u64) {
         let p = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit()) * (1.0 + 2.0 * grow)
             - (hi - lo) * grow;
         let want = brute_nearest(&tris, p, f32::INFINITY).unwrap();
-        assert_eq!(g.nearest(p, f32::INFINITY), Some(want), "point {i}: {p}");
+        assert_eq!(nearest(g, p, f32::INFINITY), Some(want), "point {i}: {p}");
         let d = want.distance;
         assert_eq!(
-            g.nearest(p, d),
+            nearest(g, p, d),
             Some(want),
             "point {i}: the limit holds its end"
         );
         for limit in [d * 0.999, d * 1.001, d * rng.unit(), d * 2.0 * rng.unit()] {
             assert_eq!(
-                g.nearest(p, limit),
+                nearest(g, p, limit),
                 brute_nearest(&tris, p, limit),
                 "point {i}: {p} within {limit}"
             );
@@ -533,7 +546,11 @@ fn empty_meshes_and_bad_points_answer_nothing() {
     assert_eq!(g.nearest(Vec3::ZERO, -1.0), None);
     assert_eq!(g.nearest(Vec3::ZERO, f32::NAN), None);
     // Appended after what the vector held, in order.
-    let mut out = vec![Crossing { t: -1.0, prim: 99 }];
+    let mut out = vec![Crossing {
+        t: -1.0,
+        prim: 99,
+        part: 0,
+    }];
     g.crossings(&Ray::new(Vec3::new(0.2, 0.3, -5.0), Vec3::Z), &mut out);
     let t: Vec<f32> = out.iter().map(|c| c.t).collect();
     assert_eq!(t, [-1.0, 4.0, 6.0]);
