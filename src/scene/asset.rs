@@ -1,5 +1,8 @@
 //! What a mesh loader hands to the scene compiler: plain arrays in file
-//! order, with optional data present only where the file has it.
+//! order, with optional data present only where the file has it. A mesh
+//! the file places more than once (a glTF mesh that several nodes use) is
+//! kept once, in its own space, with its placements ([`SharedMesh`]);
+//! [`LoadedAsset::baked_meshes`] gives the file as copies in file order.
 
 use super::description::{CameraDesc, CameraType, LightDesc, LightType};
 use crate::error::InputError;
@@ -7,7 +10,9 @@ use crate::geometry::{MeshNormals, MeshUvs};
 use crate::material::Material;
 use crate::math::Transform;
 use crate::texture::Textures;
-use glam::Vec3;
+use glam::{Affine3A, Mat3, Vec3};
+use std::borrow::Cow;
+use std::rc::Rc;
 
 /// One triangle mesh read from a file. Triangles keep the file's order, so a
 /// triangle's index in `indices` is the primitive id that `strata trace`
@@ -24,6 +29,82 @@ pub struct LoadedMesh {
     pub uvs: Option<MeshUvs>,
     /// Index into [`LoadedAsset::materials`], if the file assigns one.
     pub material: Option<usize>,
+    /// The file's placement of the mesh mirrors it (a glTF node whose
+    /// world transform has a negative determinant), so its triangles face
+    /// the other way from their stored winding (glTF 2.0, "Meshes": the
+    /// determinant sets the winding).
+    pub mirrored: bool,
+}
+
+impl LoadedMesh {
+    /// The mesh moved by `m`: positions as points, normals by the inverse
+    /// transpose (renormalised), its winding's sense flipped if `m`
+    /// mirrors. Indices and texture coordinates stay as they are.
+    pub fn placed(mut self, m: &Affine3A) -> Self {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        if let Some(normals) = &mut self.normals {
+            let normal_matrix = normal_matrix(m);
+            for n in &mut normals.values {
+                *n = (normal_matrix * *n).normalize_or_zero();
+            }
+        }
+        self.mirrored ^= m.matrix3.determinant() < 0.0;
+        self
+    }
+
+    /// Every vertex a triangle uses, once each.
+    fn used_vertices(&self) -> impl Iterator<Item = Vec3> + '_ {
+        let mut used = vec![false; self.positions.len()];
+        for &i in self.indices.iter().flatten() {
+            if let Some(u) = used.get_mut(i as usize) {
+                *u = true;
+            }
+        }
+        self.positions
+            .iter()
+            .zip(used)
+            .filter_map(|(&p, u)| u.then_some(p))
+    }
+}
+
+/// A matrix proportional to the inverse transpose of `m`'s linear part
+/// (its cofactor matrix, sign-corrected), so normals stay on the side they
+/// were on. Defined even for singular maps.
+fn normal_matrix(m: &Affine3A) -> Mat3 {
+    let m = Mat3::from(m.matrix3);
+    let cofactor = Mat3::from_cols(
+        m.y_axis.cross(m.z_axis),
+        m.z_axis.cross(m.x_axis),
+        m.x_axis.cross(m.y_axis),
+    );
+    if m.determinant() < 0.0 {
+        -cofactor
+    } else {
+        cofactor
+    }
+}
+
+/// A mesh the file places more than once (a glTF mesh that several nodes
+/// use), kept once in its own space: the scene compiler makes it one
+/// prototype and each placement an instance of it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SharedMesh {
+    /// Its parts (a glTF mesh's primitives), in the mesh's own space.
+    pub parts: Vec<LoadedMesh>,
+    /// Its placements, in file (node traversal) order.
+    pub placements: Vec<SharedPlacement>,
+}
+
+/// One placement of a [`SharedMesh`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SharedPlacement {
+    /// Mesh space to file space: finite and invertible.
+    pub to_file: Affine3A,
+    /// Where its first part falls among [`LoadedAsset::baked_meshes`]: its
+    /// parts follow one another from there.
+    pub at: usize,
 }
 
 /// A camera found in a glTF file, already placed in world space.
@@ -188,7 +269,10 @@ impl LoadedCamera {
 /// Everything one mesh file contributes to a scene.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoadedAsset {
+    /// The meshes placed once, in file space, in file order.
     pub meshes: Vec<LoadedMesh>,
+    /// The meshes placed more than once, each kept once in its own space.
+    pub shared: Vec<SharedMesh>,
     pub materials: Vec<(String, Material)>,
     /// The images and textures the materials' `diffuse_texture` indices name.
     pub textures: Textures,
@@ -201,19 +285,85 @@ pub struct LoadedAsset {
 }
 
 impl LoadedAsset {
+    /// Triangles the file places: a shared mesh's once per placement.
     pub fn triangle_count(&self) -> usize {
-        self.meshes.iter().map(|m| m.indices.len()).sum()
+        let shared: usize = self
+            .shared
+            .iter()
+            .map(|s| s.parts.iter().map(|m| m.indices.len()).sum::<usize>() * s.placements.len())
+            .sum();
+        self.meshes.iter().map(|m| m.indices.len()).sum::<usize>() + shared
     }
 
-    /// Every vertex a triangle uses, mesh by mesh (a vertex of several
-    /// triangles once per use): what bounds and frames the model, leaving
-    /// out points and lines that draw nothing.
+    /// Every vertex a triangle uses, in file space (a mesh's placed once
+    /// once per use, a shared mesh's once per placement): what bounds and
+    /// frames the model, leaving out points and lines that draw nothing.
     pub fn used_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
-        self.meshes.iter().flat_map(|m| {
+        let own = self.meshes.iter().flat_map(|m| {
             m.indices
                 .iter()
                 .flatten()
                 .filter_map(|&i| m.positions.get(i as usize).copied())
-        })
+        });
+        let shared = self.shared.iter().flat_map(|s| {
+            s.parts.iter().flat_map(move |part| {
+                // Found once per part, moved by each placement.
+                let used: Rc<[Vec3]> = part.used_vertices().collect();
+                s.placements.iter().flat_map(move |p| {
+                    let used = used.clone();
+                    (0..used.len()).map(move |i| p.to_file.transform_point3(used[i]))
+                })
+            })
+        });
+        own.chain(shared)
     }
+
+    /// The file's meshes as copies in file space, in file order: each
+    /// shared mesh's parts copied and moved by each placement (as
+    /// [`LoadedMesh::placed`]), between the meshes placed once where the
+    /// file places them. What a consumer of plain triangles reads (a CSG
+    /// operand, `strata trace` of a model file), numbered as the file's.
+    pub fn baked_meshes(&self) -> Cow<'_, [LoadedMesh]> {
+        if self.shared.is_empty() {
+            return Cow::Borrowed(&self.meshes);
+        }
+        Cow::Owned(bake(self.meshes.iter().cloned(), &self.shared))
+    }
+
+    /// The asset with every shared mesh baked ([`LoadedAsset::baked_meshes`]),
+    /// the meshes placed once moved, not copied.
+    pub fn into_baked(mut self) -> Self {
+        if !self.shared.is_empty() {
+            let shared = std::mem::take(&mut self.shared);
+            self.meshes = bake(std::mem::take(&mut self.meshes).into_iter(), &shared);
+        }
+        self
+    }
+}
+
+/// The meshes placed once (`own`, in order) with the copies of each
+/// shared mesh's placements put where they fall.
+fn bake(own: impl Iterator<Item = LoadedMesh>, shared: &[SharedMesh]) -> Vec<LoadedMesh> {
+    let mut slots: Vec<Option<LoadedMesh>> = Vec::new();
+    for s in shared {
+        for p in &s.placements {
+            for (k, part) in s.parts.iter().enumerate() {
+                let at = p.at + k;
+                if slots.len() <= at {
+                    slots.resize(at + 1, None);
+                }
+                slots[at] = Some(part.clone().placed(&p.to_file));
+            }
+        }
+    }
+    let mut own = own.peekable();
+    let mut out = Vec::with_capacity(slots.len());
+    for slot in slots {
+        match slot {
+            Some(m) => out.push(m),
+            None => out.extend(own.next()),
+        }
+    }
+    out.extend(own);
+    out
 }
