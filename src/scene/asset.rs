@@ -8,7 +8,7 @@ use super::description::{CameraDesc, CameraType, LightDesc, LightType};
 use crate::error::InputError;
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::material::Material;
-use crate::math::Transform;
+use crate::math::{Aabb, Transform};
 use crate::texture::Textures;
 use glam::{Affine3A, Mat3, Vec3};
 use std::borrow::Cow;
@@ -299,13 +299,54 @@ impl LoadedAsset {
     /// once per use, a shared mesh's once per placement): what bounds and
     /// frames the model, leaving out points and lines that draw nothing.
     pub fn used_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
-        let own = self.meshes.iter().flat_map(|m| {
+        self.own_positions().chain(self.shared_positions(true))
+    }
+
+    /// Points that bound every triangle: [`LoadedAsset::used_positions`]
+    /// while the shared meshes' placed vertices number at most `budget`,
+    /// else, for each placement of a shared mesh, the corners of its
+    /// parts' boxes moved (every vertex lies inside them, so a camera that
+    /// frames the corners frames the vertices): framing a file of many
+    /// nodes costs a few points per node, not a mesh per node.
+    pub fn framing_positions(&self, budget: usize) -> impl Iterator<Item = Vec3> + '_ {
+        let placed: usize = self
+            .shared
+            .iter()
+            .map(|s| s.parts.iter().map(|m| m.positions.len()).sum::<usize>() * s.placements.len())
+            .sum();
+        let exact = placed <= budget;
+        let boxes = self.shared.iter().filter(move |_| !exact).flat_map(|s| {
+            s.parts.iter().flat_map(move |part| {
+                let b = part.used_vertices().fold(Aabb::EMPTY, Aabb::grow);
+                let corners = b.corners();
+                let placements = if b.is_finite() {
+                    &s.placements[..]
+                } else {
+                    &[]
+                };
+                placements
+                    .iter()
+                    .flat_map(move |p| corners.map(|c| p.to_file.transform_point3(c)))
+            })
+        });
+        self.own_positions()
+            .chain(self.shared_positions(exact))
+            .chain(boxes)
+    }
+
+    fn own_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.meshes.iter().flat_map(|m| {
             m.indices
                 .iter()
                 .flatten()
                 .filter_map(|&i| m.positions.get(i as usize).copied())
-        });
-        let shared = self.shared.iter().flat_map(|s| {
+        })
+    }
+
+    /// Each shared mesh's used vertices under each placement (none unless
+    /// `all`).
+    fn shared_positions(&self, all: bool) -> impl Iterator<Item = Vec3> + '_ {
+        self.shared.iter().filter(move |_| all).flat_map(|s| {
             s.parts.iter().flat_map(move |part| {
                 // Found once per part, moved by each placement.
                 let used: Rc<[Vec3]> = part.used_vertices().collect();
@@ -314,8 +355,7 @@ impl LoadedAsset {
                     (0..used.len()).map(move |i| p.to_file.transform_point3(used[i]))
                 })
             })
-        });
-        own.chain(shared)
+        })
     }
 
     /// The file's meshes as copies in file space, in file order: each
@@ -366,4 +406,78 @@ fn bake(own: impl Iterator<Item = LoadedMesh>, shared: &[SharedMesh]) -> Vec<Loa
     }
     out.extend(own);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle mesh shared by three placements (one mirroring),
+    /// beside a mesh placed once.
+    fn asset() -> LoadedAsset {
+        let tri = LoadedMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::splat(9.0)],
+            indices: vec![[0, 1, 2]],
+            ..LoadedMesh::default()
+        };
+        let placements = [
+            Affine3A::from_translation(Vec3::Z),
+            Affine3A::from_scale(Vec3::new(-2.0, 1.0, 1.0)),
+            Affine3A::from_rotation_y(0.7) * Affine3A::from_translation(Vec3::X * 5.0),
+        ];
+        LoadedAsset {
+            meshes: vec![tri
+                .clone()
+                .placed(&Affine3A::from_translation(Vec3::Y * 3.0))],
+            shared: vec![SharedMesh {
+                parts: vec![tri],
+                placements: placements
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &to_file)| SharedPlacement {
+                        to_file,
+                        at: [0, 2, 3][k],
+                    })
+                    .collect(),
+            }],
+            ..LoadedAsset::default()
+        }
+    }
+
+    #[test]
+    fn framing_points_bound_every_placed_vertex_within_any_budget() {
+        let a = asset();
+        assert_eq!(a.triangle_count(), 4);
+        let baked = a.baked_meshes();
+        let baked_order: Vec<Vec3> = baked.iter().map(|m| m.positions[1]).collect();
+        assert_eq!(baked_order[0], Vec3::new(1.0, 0.0, 1.0));
+        assert_eq!(
+            baked_order[1],
+            Vec3::new(1.0, 3.0, 0.0),
+            "placed once, between"
+        );
+        assert_eq!(baked_order[2], Vec3::new(-2.0, 0.0, 0.0));
+        assert!(baked[2].mirrored && !baked[0].mirrored);
+        let every: Vec<Vec3> = baked
+            .iter()
+            .flat_map(|m| m.indices.iter().flatten().map(|&i| m.positions[i as usize]))
+            .collect();
+        let exact: Vec<Vec3> = a.framing_positions(usize::MAX).collect();
+        assert_eq!(exact, a.used_positions().collect::<Vec<_>>());
+        assert!(every
+            .iter()
+            .all(|p| exact.iter().any(|q| (*p - *q).length() < 1e-6)));
+        assert!(
+            !exact.contains(&Vec3::splat(9.0)),
+            "an unused vertex frames nothing"
+        );
+        // By boxes: every vertex inside the hull of a placement's corners,
+        // so inside their box.
+        let boxes: Vec<Vec3> = a.framing_positions(0).collect();
+        assert_eq!(boxes.len(), 3 + 3 * 8);
+        let b = boxes.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p));
+        assert!(every
+            .iter()
+            .all(|&p| p.cmpge(b.min).all() && p.cmple(b.max).all()));
+    }
 }
