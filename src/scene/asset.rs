@@ -1,13 +1,18 @@
 //! What a mesh loader hands to the scene compiler: plain arrays in file
-//! order, with optional data present only where the file has it.
+//! order, with optional data present only where the file has it. A mesh
+//! the file places more than once (a glTF mesh that several nodes use) is
+//! kept once, in its own space, with its placements ([`SharedMesh`]);
+//! [`LoadedAsset::baked_meshes`] gives the file as copies in file order.
 
 use super::description::{CameraDesc, CameraType, LightDesc, LightType};
 use crate::error::InputError;
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::material::Material;
-use crate::math::Transform;
+use crate::math::{Aabb, Transform};
 use crate::texture::Textures;
-use glam::Vec3;
+use glam::{Affine3A, Mat3, Vec3};
+use std::borrow::Cow;
+use std::rc::Rc;
 
 /// One triangle mesh read from a file. Triangles keep the file's order, so a
 /// triangle's index in `indices` is the primitive id that `strata trace`
@@ -24,6 +29,82 @@ pub struct LoadedMesh {
     pub uvs: Option<MeshUvs>,
     /// Index into [`LoadedAsset::materials`], if the file assigns one.
     pub material: Option<usize>,
+    /// The file's placement of the mesh mirrors it (a glTF node whose
+    /// world transform has a negative determinant), so its triangles face
+    /// the other way from their stored winding (glTF 2.0, "Meshes": the
+    /// determinant sets the winding).
+    pub mirrored: bool,
+}
+
+impl LoadedMesh {
+    /// The mesh moved by `m`: positions as points, normals by the inverse
+    /// transpose (renormalised), its winding's sense flipped if `m`
+    /// mirrors. Indices and texture coordinates stay as they are.
+    pub fn placed(mut self, m: &Affine3A) -> Self {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        if let Some(normals) = &mut self.normals {
+            let normal_matrix = normal_matrix(m);
+            for n in &mut normals.values {
+                *n = (normal_matrix * *n).normalize_or_zero();
+            }
+        }
+        self.mirrored ^= m.matrix3.determinant() < 0.0;
+        self
+    }
+
+    /// Every vertex a triangle uses, once each.
+    fn used_vertices(&self) -> impl Iterator<Item = Vec3> + '_ {
+        let mut used = vec![false; self.positions.len()];
+        for &i in self.indices.iter().flatten() {
+            if let Some(u) = used.get_mut(i as usize) {
+                *u = true;
+            }
+        }
+        self.positions
+            .iter()
+            .zip(used)
+            .filter_map(|(&p, u)| u.then_some(p))
+    }
+}
+
+/// A matrix proportional to the inverse transpose of `m`'s linear part
+/// (its cofactor matrix, sign-corrected), so normals stay on the side they
+/// were on. Defined even for singular maps.
+fn normal_matrix(m: &Affine3A) -> Mat3 {
+    let m = Mat3::from(m.matrix3);
+    let cofactor = Mat3::from_cols(
+        m.y_axis.cross(m.z_axis),
+        m.z_axis.cross(m.x_axis),
+        m.x_axis.cross(m.y_axis),
+    );
+    if m.determinant() < 0.0 {
+        -cofactor
+    } else {
+        cofactor
+    }
+}
+
+/// A mesh the file places more than once (a glTF mesh that several nodes
+/// use), kept once in its own space: the scene compiler makes it one
+/// prototype and each placement an instance of it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SharedMesh {
+    /// Its parts (a glTF mesh's primitives), in the mesh's own space.
+    pub parts: Vec<LoadedMesh>,
+    /// Its placements, in file (node traversal) order.
+    pub placements: Vec<SharedPlacement>,
+}
+
+/// One placement of a [`SharedMesh`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SharedPlacement {
+    /// Mesh space to file space: finite and invertible.
+    pub to_file: Affine3A,
+    /// Where its first part falls among [`LoadedAsset::baked_meshes`]: its
+    /// parts follow one another from there.
+    pub at: usize,
 }
 
 /// A camera found in a glTF file, already placed in world space.
@@ -188,7 +269,10 @@ impl LoadedCamera {
 /// Everything one mesh file contributes to a scene.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoadedAsset {
+    /// The meshes placed once, in file space, in file order.
     pub meshes: Vec<LoadedMesh>,
+    /// The meshes placed more than once, each kept once in its own space.
+    pub shared: Vec<SharedMesh>,
     pub materials: Vec<(String, Material)>,
     /// The images and textures the materials' `diffuse_texture` indices name.
     pub textures: Textures,
@@ -201,19 +285,199 @@ pub struct LoadedAsset {
 }
 
 impl LoadedAsset {
+    /// Triangles the file places: a shared mesh's once per placement.
     pub fn triangle_count(&self) -> usize {
-        self.meshes.iter().map(|m| m.indices.len()).sum()
+        let shared: usize = self
+            .shared
+            .iter()
+            .map(|s| s.parts.iter().map(|m| m.indices.len()).sum::<usize>() * s.placements.len())
+            .sum();
+        self.meshes.iter().map(|m| m.indices.len()).sum::<usize>() + shared
     }
 
-    /// Every vertex a triangle uses, mesh by mesh (a vertex of several
-    /// triangles once per use): what bounds and frames the model, leaving
-    /// out points and lines that draw nothing.
+    /// Every vertex a triangle uses, in file space (a mesh's placed once
+    /// once per use, a shared mesh's once per placement): what bounds and
+    /// frames the model, leaving out points and lines that draw nothing.
     pub fn used_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.own_positions().chain(self.shared_positions(true))
+    }
+
+    /// Points that bound every triangle: [`LoadedAsset::used_positions`]
+    /// while the shared meshes' placed vertices number at most `budget`,
+    /// else, for each placement of a shared mesh, the corners of its
+    /// parts' boxes moved (every vertex lies inside them, so a camera that
+    /// frames the corners frames the vertices): framing a file of many
+    /// nodes costs a few points per node, not a mesh per node.
+    pub fn framing_positions(&self, budget: usize) -> impl Iterator<Item = Vec3> + '_ {
+        let placed: usize = self
+            .shared
+            .iter()
+            .map(|s| s.parts.iter().map(|m| m.positions.len()).sum::<usize>() * s.placements.len())
+            .sum();
+        let exact = placed <= budget;
+        let boxes = self.shared.iter().filter(move |_| !exact).flat_map(|s| {
+            s.parts.iter().flat_map(move |part| {
+                let b = part.used_vertices().fold(Aabb::EMPTY, Aabb::grow);
+                let corners = b.corners();
+                let placements = if b.is_finite() {
+                    &s.placements[..]
+                } else {
+                    &[]
+                };
+                placements
+                    .iter()
+                    .flat_map(move |p| corners.map(|c| p.to_file.transform_point3(c)))
+            })
+        });
+        self.own_positions()
+            .chain(self.shared_positions(exact))
+            .chain(boxes)
+    }
+
+    fn own_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
         self.meshes.iter().flat_map(|m| {
             m.indices
                 .iter()
                 .flatten()
                 .filter_map(|&i| m.positions.get(i as usize).copied())
         })
+    }
+
+    /// Each shared mesh's used vertices under each placement (none unless
+    /// `all`).
+    fn shared_positions(&self, all: bool) -> impl Iterator<Item = Vec3> + '_ {
+        self.shared.iter().filter(move |_| all).flat_map(|s| {
+            s.parts.iter().flat_map(move |part| {
+                // Found once per part, moved by each placement.
+                let used: Rc<[Vec3]> = part.used_vertices().collect();
+                s.placements.iter().flat_map(move |p| {
+                    let used = used.clone();
+                    (0..used.len()).map(move |i| p.to_file.transform_point3(used[i]))
+                })
+            })
+        })
+    }
+
+    /// The file's meshes as copies in file space, in file order: each
+    /// shared mesh's parts copied and moved by each placement (as
+    /// [`LoadedMesh::placed`]), between the meshes placed once where the
+    /// file places them. What a consumer of plain triangles reads (a CSG
+    /// operand, `strata trace` of a model file), numbered as the file's.
+    pub fn baked_meshes(&self) -> Cow<'_, [LoadedMesh]> {
+        if self.shared.is_empty() {
+            return Cow::Borrowed(&self.meshes);
+        }
+        Cow::Owned(bake(self.meshes.iter().cloned(), &self.shared))
+    }
+
+    /// The asset with every shared mesh baked ([`LoadedAsset::baked_meshes`]),
+    /// the meshes placed once moved, not copied.
+    pub fn into_baked(mut self) -> Self {
+        if !self.shared.is_empty() {
+            let shared = std::mem::take(&mut self.shared);
+            self.meshes = bake(std::mem::take(&mut self.meshes).into_iter(), &shared);
+        }
+        self
+    }
+}
+
+/// The meshes placed once (`own`, in order) with the copies of each
+/// shared mesh's placements put where they fall.
+fn bake(own: impl Iterator<Item = LoadedMesh>, shared: &[SharedMesh]) -> Vec<LoadedMesh> {
+    let mut slots: Vec<Option<LoadedMesh>> = Vec::new();
+    for s in shared {
+        for p in &s.placements {
+            for (k, part) in s.parts.iter().enumerate() {
+                let at = p.at + k;
+                if slots.len() <= at {
+                    slots.resize(at + 1, None);
+                }
+                slots[at] = Some(part.clone().placed(&p.to_file));
+            }
+        }
+    }
+    let mut own = own.peekable();
+    let mut out = Vec::with_capacity(slots.len());
+    for slot in slots {
+        match slot {
+            Some(m) => out.push(m),
+            None => out.extend(own.next()),
+        }
+    }
+    out.extend(own);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle mesh shared by three placements (one mirroring),
+    /// beside a mesh placed once.
+    fn asset() -> LoadedAsset {
+        let tri = LoadedMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::splat(9.0)],
+            indices: vec![[0, 1, 2]],
+            ..LoadedMesh::default()
+        };
+        let placements = [
+            Affine3A::from_translation(Vec3::Z),
+            Affine3A::from_scale(Vec3::new(-2.0, 1.0, 1.0)),
+            Affine3A::from_rotation_y(0.7) * Affine3A::from_translation(Vec3::X * 5.0),
+        ];
+        LoadedAsset {
+            meshes: vec![tri
+                .clone()
+                .placed(&Affine3A::from_translation(Vec3::Y * 3.0))],
+            shared: vec![SharedMesh {
+                parts: vec![tri],
+                placements: placements
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &to_file)| SharedPlacement {
+                        to_file,
+                        at: [0, 2, 3][k],
+                    })
+                    .collect(),
+            }],
+            ..LoadedAsset::default()
+        }
+    }
+
+    #[test]
+    fn framing_points_bound_every_placed_vertex_within_any_budget() {
+        let a = asset();
+        assert_eq!(a.triangle_count(), 4);
+        let baked = a.baked_meshes();
+        let baked_order: Vec<Vec3> = baked.iter().map(|m| m.positions[1]).collect();
+        assert_eq!(baked_order[0], Vec3::new(1.0, 0.0, 1.0));
+        assert_eq!(
+            baked_order[1],
+            Vec3::new(1.0, 3.0, 0.0),
+            "placed once, between"
+        );
+        assert_eq!(baked_order[2], Vec3::new(-2.0, 0.0, 0.0));
+        assert!(baked[2].mirrored && !baked[0].mirrored);
+        let every: Vec<Vec3> = baked
+            .iter()
+            .flat_map(|m| m.indices.iter().flatten().map(|&i| m.positions[i as usize]))
+            .collect();
+        let exact: Vec<Vec3> = a.framing_positions(usize::MAX).collect();
+        assert_eq!(exact, a.used_positions().collect::<Vec<_>>());
+        assert!(every
+            .iter()
+            .all(|p| exact.iter().any(|q| (*p - *q).length() < 1e-6)));
+        assert!(
+            !exact.contains(&Vec3::splat(9.0)),
+            "an unused vertex frames nothing"
+        );
+        // By boxes: every vertex inside the hull of a placement's corners,
+        // so inside their box.
+        let boxes: Vec<Vec3> = a.framing_positions(0).collect();
+        assert_eq!(boxes.len(), 3 + 3 * 8);
+        let b = boxes.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p));
+        assert!(every
+            .iter()
+            .all(|&p| p.cmpge(b.min).all() && p.cmple(b.max).all()));
     }
 }

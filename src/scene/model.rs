@@ -32,6 +32,9 @@ pub const FRAMING_FOV: f32 = 40.0;
 /// How much of the half-width (or half-height) the framed model reaches
 /// at most: a margin of a tenth, so no edge of the model meets the image's.
 pub const FRAMING_FILL: f32 = 0.9;
+/// The most placed vertices of shared meshes framing reads one by one;
+/// past it, each placement's box ([`LoadedAsset::framing_positions`]).
+pub const FRAMING_POINTS: usize = 1 << 24;
 
 /// A model file and the scene made around it.
 pub struct ModelScene {
@@ -107,7 +110,12 @@ pub fn model_scene(
     loop {
         let camera = match chosen {
             Some(c) => c.to_desc(),
-            None => frame(asset.used_positions(), bounds, size.0, size.1),
+            None => frame(
+                asset.framing_positions(FRAMING_POINTS),
+                bounds,
+                size.0,
+                size.1,
+            ),
         };
         parts = Parts {
             render: RenderOverrides {
@@ -196,12 +204,15 @@ fn image_size(cli: &RenderOverrides, file: &RenderOverrides, aspect: Option<f32>
     }
 }
 
-/// The box around every vertex a triangle uses, if there is one.
+/// The box around every vertex a triangle uses (or, for a file of many
+/// shared placements, around their boxes), if there is one.
 fn bounds(asset: &LoadedAsset) -> Option<(Vec3, Vec3)> {
-    asset.used_positions().fold(None, |b, p| match b {
-        None => Some((p, p)),
-        Some((lo, hi)) => Some((lo.min(p), hi.max(p))),
-    })
+    asset
+        .framing_positions(FRAMING_POINTS)
+        .fold(None, |b, p| match b {
+            None => Some((p, p)),
+            Some((lo, hi)) => Some((lo.min(p), hi.max(p))),
+        })
 }
 
 /// A perspective camera looking at the centre of `bounds` from a

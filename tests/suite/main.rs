@@ -15,6 +15,7 @@ mod embree_instances;
 mod embree_native;
 mod environment;
 mod first_hour;
+mod gltf_instances;
 mod instance_queries;
 mod instancing;
 mod memory;

@@ -168,7 +168,7 @@ impl Compiler<'_> {
         let (asset, first_material, path) = self.asset(file, &format!("{key}.mesh"))?;
         let mut tris = Vec::new();
         let mut materials = Vec::new();
-        for mesh in &asset.meshes {
+        for mesh in asset.baked_meshes().iter() {
             let material = explicit
                 .or(mesh.material.map(|i| first_material + i as u32))
                 .unwrap_or(inherited);

@@ -9,7 +9,7 @@ use crate::accel::BuildQuality;
 use crate::error::{io_message, InputError, InputResult};
 use crate::geometry::{Geometry, Instance, MeshRange, NO_MATERIAL};
 use crate::math::Transform;
-use crate::scene::asset::LoadedAsset;
+use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use crate::scene::description::ObjectDesc;
 use glam::{Affine3A, Mat3, Vec3};
 use std::collections::HashMap;
@@ -141,13 +141,21 @@ impl Compiler<'_> {
     ) -> InputResult<()> {
         let (asset, first_material, path) = file;
         let (first_material, path) = (*first_material, path.as_path());
-        let prototype = match self.prototype_ids.get(path) {
+        let id = (path.to_path_buf(), None);
+        let prototype = match self.prototype_ids.get(&id) {
             Some(&p) => p,
             None => {
-                let parts = prototype_parts(asset, first_material, path, key)?;
+                let sources = asset.meshes.iter().enumerate().map(|(k, mesh)| {
+                    let source = TriangleSource::FileSpace {
+                        asset: asset.clone(),
+                        mesh: k,
+                    };
+                    (source, mesh)
+                });
+                let parts = prototype_parts(sources, first_material, path, key)?;
                 self.prototypes.push(parts);
                 let p = self.prototypes.len() as u32 - 1;
-                self.prototype_ids.insert(path.to_path_buf(), p);
+                self.prototype_ids.insert(id, p);
                 p
             }
         };
@@ -161,12 +169,66 @@ impl Compiler<'_> {
         self.instances.push(instance);
         Ok(())
     }
+
+    /// The meshes mesh file `file` itself places more than once (a glTF
+    /// mesh several nodes use), each stored once as a prototype (made on
+    /// the first placement of the file) and placed by one instance per
+    /// placement in the file, after the object's placement `m`: one level
+    /// of instances, the file's placements and the mesh's flattened.
+    pub(super) fn shared_instances(
+        &mut self,
+        file: &(Arc<LoadedAsset>, u32, PathBuf),
+        key: &str,
+        m: Affine3A,
+        explicit_material: Option<u32>,
+        inherited: u32,
+    ) -> InputResult<()> {
+        let (asset, first_material, path) = file;
+        for (s, shared) in asset.shared.iter().enumerate() {
+            let id = (path.clone(), Some(s));
+            let prototype = match self.prototype_ids.get(&id) {
+                Some(&p) => p,
+                None => {
+                    let sources = shared.parts.iter().enumerate().map(|(k, part)| {
+                        let source = TriangleSource::Shared {
+                            asset: asset.clone(),
+                            shared: s,
+                            part: k,
+                        };
+                        (source, part)
+                    });
+                    let parts = prototype_parts(sources, *first_material, path, key)?;
+                    self.prototypes.push(parts);
+                    let p = self.prototypes.len() as u32 - 1;
+                    self.prototype_ids.insert(id, p);
+                    p
+                }
+            };
+            let material = explicit_material.unwrap_or(NO_MATERIAL);
+            for placement in &shared.placements {
+                let to_world = m * placement.to_file;
+                let instance = Instance::new(to_world, prototype, material, inherited);
+                let instance = instance.ok_or_else(|| {
+                    let message = format!(
+                        "a placement of mesh '{}' in '{}' is singular or not finite \
+                         under the object's transform",
+                        shared.parts.first().map_or("", |p| p.name.as_str()),
+                        path.display()
+                    );
+                    self.err(&format!("{key}.transform"), message)
+                })?;
+                self.instances.push(instance);
+            }
+        }
+        Ok(())
+    }
 }
 
-/// A mesh file's meshes in file space, with the materials the file gives
-/// them ([`NO_MATERIAL`] where it gives none) and all their attributes.
-fn prototype_parts(
-    asset: &Arc<LoadedAsset>,
+/// Meshes of a mesh file in the space a prototype keeps them in, each with
+/// its triangles' source, with the materials the file gives them
+/// ([`NO_MATERIAL`] where it gives none) and all their attributes.
+fn prototype_parts<'a>(
+    meshes: impl Iterator<Item = (TriangleSource, &'a LoadedMesh)>,
     first_material: u32,
     path: &Path,
     key: &str,
@@ -175,7 +237,7 @@ fn prototype_parts(
         meshes: Vec::new(),
         sources: Vec::new(),
     };
-    for (k, mesh) in asset.meshes.iter().enumerate() {
+    for (source, mesh) in meshes {
         check_indices(mesh, path)?;
         if let Some(normals) = &mesh.normals {
             check_attribute(normals, mesh, path, "normals")?;
@@ -187,10 +249,7 @@ fn prototype_parts(
             continue;
         }
         let first = parts.meshes.last().map_or(0, |m| m.first + m.count);
-        parts.sources.push(TriangleSource::FileSpace {
-            asset: asset.clone(),
-            mesh: k,
-        });
+        parts.sources.push(source);
         parts.meshes.push(MeshRange {
             name: if mesh.name.is_empty() {
                 key.to_string()
@@ -202,7 +261,7 @@ fn prototype_parts(
             material: mesh
                 .material
                 .map_or(NO_MATERIAL, |i| first_material + i as u32),
-            mirrored: false,
+            mirrored: mesh.mirrored,
             normals: mesh.normals.clone(),
             uvs: mesh.uvs.clone(),
         });

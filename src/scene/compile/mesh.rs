@@ -49,6 +49,13 @@ pub(super) enum TriangleSource {
         asset: Arc<LoadedAsset>,
         mesh: usize,
     },
+    /// Part `part` of shared mesh `shared` of a mesh file, in the mesh's
+    /// own space (its prototype's), read where the loaded file holds it.
+    Shared {
+        asset: Arc<LoadedAsset>,
+        shared: usize,
+        part: usize,
+    },
 }
 
 impl TriangleSource {
@@ -59,6 +66,11 @@ impl TriangleSource {
             Self::File { asset, mesh, .. } | Self::FileSpace { asset, mesh } => {
                 asset.meshes[*mesh].indices.len()
             }
+            Self::Shared {
+                asset,
+                shared,
+                part,
+            } => asset.shared[*shared].parts[*part].indices.len(),
         }
     }
 
@@ -74,6 +86,14 @@ impl TriangleSource {
             } => asset.meshes[*mesh].indices[i].map(|k| positions[k as usize]),
             Self::FileSpace { asset, mesh } => {
                 let m = &asset.meshes[*mesh];
+                m.indices[i].map(|k| m.positions[k as usize])
+            }
+            Self::Shared {
+                asset,
+                shared,
+                part,
+            } => {
+                let m = &asset.shared[*shared].parts[*part];
                 m.indices[i].map(|k| m.positions[k as usize])
             }
         }
@@ -169,6 +189,9 @@ impl Compiler<'_> {
                 Some((_, asset)) => asset,
                 None => load_mesh_file(&path)?,
             };
+            if self.bake_shared {
+                asset = asset.into_baked();
+            }
             self.warnings.append(&mut asset.warnings);
             // The file's images move into the scene's (no copy); its
             // materials' texture indices move with them.
@@ -201,8 +224,12 @@ impl Compiler<'_> {
         let (asset, first_material, path) = self.asset(file, &format!("{key}.mesh"))?;
         let t = Transform::new(m).expect("checked by the caller");
         let instanced = self.mesh_uses.get(&path).is_some_and(|&n| n > 1);
-        if instanced {
-            let file = (asset.clone(), first_material, path.clone());
+        let file = (asset.clone(), first_material, path.clone());
+        // The meshes the file itself places more than once are instances
+        // wherever the file is placed; the rest is one prototype if the
+        // file is placed more than once, else baked.
+        self.shared_instances(&file, key, m, explicit_material, inherited)?;
+        if instanced && asset.meshes.iter().any(|mesh| !mesh.indices.is_empty()) {
             self.mesh_instance(&file, key, m, explicit_material, inherited)?;
         }
         for (k, mesh) in asset.meshes.iter().enumerate().filter(|_| !instanced) {
@@ -234,7 +261,7 @@ impl Compiler<'_> {
             } else {
                 mesh.name.clone()
             };
-            let mirrored = m.matrix3.determinant() < 0.0;
+            let mirrored = (m.matrix3.determinant() < 0.0) != mesh.mirrored;
             self.push_mesh(name, tris, material, normals, uvs, mirrored);
         }
         Ok(())

@@ -168,8 +168,9 @@ pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> I
 
 /// A scene of one mesh file used as it is (no transform, default camera and
 /// materials), compiled exactly as a scene file holding only
-/// `[[objects]] mesh = "PATH"` would be. Triangle `i` of the file is
-/// primitive `i`. This is what `strata trace` and `strata rays` intersect,
+/// `[[objects]] mesh = "PATH"` would be, but with the meshes a glTF's
+/// nodes share baked ([`LoadedAsset::into_baked`]): triangle `i` of the
+/// file is primitive `i`. This is what `strata trace` and `strata rays` intersect,
 /// so they exercise the renderer's own code path.
 pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene, LoadTimings)> {
     let file_name = path
@@ -189,7 +190,7 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
         path,
         &RenderOverrides::default(),
         quality,
-        Purpose::Tracing,
+        Purpose::MeshFile,
         Instant::now(),
         &LoadProgress::default(),
         None,
@@ -229,6 +230,10 @@ enum Purpose {
     /// Tracing ray files and benchmarks: `auto` by primitive count alone,
     /// the same tree however many rays are timed.
     Tracing,
+    /// Tracing one mesh file as it is: as `Tracing`, with the meshes the
+    /// file shares among nodes baked, so triangle `i` of the file is
+    /// primitive `i`.
+    MeshFile,
 }
 
 /// Compile a parsed description for rendering; `path` is the scene file
@@ -292,6 +297,7 @@ fn compile_for(
     let mut memory = PeakMeter::start();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
+    c.bake_shared = purpose == Purpose::MeshFile;
     c.preloaded = preloaded;
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
@@ -338,7 +344,7 @@ fn compile_for(
     let build_start = Instant::now();
     let for_purpose = |quality: BuildQuality, prims: usize| match purpose {
         Purpose::Render => quality.for_render(prims, settings.first_hit_rays(&c.lights)),
-        Purpose::Tracing => quality,
+        Purpose::Tracing | Purpose::MeshFile => quality,
     };
     // Each prototype's tree first: an instance's box is its root's child
     // boxes moved into world space.
@@ -435,9 +441,14 @@ struct Compiler<'d> {
     /// How many times each mesh file is placed: those placed more than
     /// once are stored once, as prototypes.
     mesh_uses: HashMap<PathBuf, u32>,
-    /// Prototypes until their trees are built, and each one's file.
+    /// Prototypes until their trees are built, and each one's file and
+    /// shared mesh (`None`: the meshes the file places once).
     prototypes: Vec<instance::PrototypeParts>,
-    prototype_ids: HashMap<PathBuf, u32>,
+    prototype_ids: HashMap<(PathBuf, Option<usize>), u32>,
+    /// Bake the meshes a file shares among its placements instead of
+    /// instancing them: a mesh file traced as it is numbers its
+    /// triangles as the file's copies.
+    bake_shared: bool,
     instances: Vec<Instance>,
     /// The mesh files' warnings, in the order the files were read.
     warnings: Vec<InputError>,
@@ -469,6 +480,7 @@ impl<'d> Compiler<'d> {
             mesh_uses: HashMap::new(),
             prototypes: Vec::new(),
             prototype_ids: HashMap::new(),
+            bake_shared: false,
             instances: Vec::new(),
             warnings: Vec::new(),
             preloaded: None,

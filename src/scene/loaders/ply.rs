@@ -193,6 +193,7 @@ fn mesh_asset(
             normals: None,
             material: None,
             uvs: None,
+            mirrored: false,
         }],
         warnings,
         ..LoadedAsset::default()

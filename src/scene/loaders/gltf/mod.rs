@@ -5,11 +5,16 @@
 //! scenes, every node that is no other node's child) depth first, children in
 //! file order, composing each node's local transform (`matrix`, or
 //! `translation` · `rotation` · `scale`) with its parent's. Each primitive of
-//! each mesh node becomes one [`LoadedMesh`] with the world transform baked
-//! in: positions by the matrix, normals by its inverse transpose and then
-//! renormalised. Triangle order is node order, then primitive order, then the
-//! file's index order; index order is kept as stored even where a mirroring
-//! transform (negative determinant) reverses the apparent winding.
+//! a mesh that one node uses becomes one [`LoadedMesh`] with the world
+//! transform baked in: positions by the matrix, normals by its inverse
+//! transpose and then renormalised. A mesh that two or more nodes use is
+//! read once, in its own space, and kept with one placement per node as a
+//! [`SharedMesh`], which the scene compiler makes instances of (a use under
+//! a singular transform, which no instance can place, is baked). Triangle
+//! order, as [`LoadedAsset::baked_meshes`] gives it, is node order, then
+//! primitive order, then the file's index order; index order is kept as
+//! stored even where a mirroring transform (negative determinant) reverses
+//! the apparent winding, and the mesh is marked `mirrored` instead.
 //!
 //! | Primitive mode                   | Result                                          |
 //! |----------------------------------|-------------------------------------------------|
@@ -118,10 +123,13 @@
 //! | `accessor.rs`  | accessors and buffer views, bounds-checked against the buffers  |
 //! | `primitive.rs` | one mesh primitive: attributes, indices, mode → triangles       |
 //! | `node.rs`      | node transforms, world-space normals, cameras and lights        |
+//! | `shared.rs`    | which meshes several nodes share: kept once, with placements    |
 //! | `material.rs`  | metallic-roughness → [`Material`]                               |
 //! | `texture.rs`   | base colour textures: samplers and images (file, URI or view)   |
 //!
 //! [`LoadedMesh`]: crate::scene::asset::LoadedMesh
+//! [`SharedMesh`]: crate::scene::asset::SharedMesh
+//! [`LoadedAsset::baked_meshes`]: crate::scene::asset::LoadedAsset::baked_meshes
 //! [`LoadedCamera`]: crate::scene::asset::LoadedCamera
 //! [`LoadedLight`]: crate::scene::asset::LoadedLight
 //! [`Material`]: crate::material::Material
@@ -133,6 +141,7 @@ mod container;
 mod material;
 mod node;
 mod primitive;
+mod shared;
 #[cfg(test)]
 mod test_support;
 mod texture;
@@ -144,6 +153,7 @@ use ::gltf::json;
 use buffer::load_buffers;
 use container::{parse_root, split_glb};
 use glam::Mat4;
+use shared::MeshUse;
 use std::borrow::Cow;
 use std::path::Path;
 
@@ -209,6 +219,7 @@ impl Loader<'_> {
             ));
         }
         let mut visited = vec![false; self.root.nodes.len()];
+        let mut uses = Vec::new();
         for root_node in root_nodes {
             // Depth first, children in file order, without recursion.
             let mut stack = vec![(root_node, Mat4::IDENTITY)];
@@ -230,12 +241,13 @@ impl Loader<'_> {
                         "the world transform is not finite",
                     ));
                 }
-                self.visit(index, node, &world, &mut asset)?;
+                self.visit(index, node, &world, &mut asset, &mut uses)?;
                 for child in node.children.iter().flatten().rev() {
                     stack.push((child.value(), world));
                 }
             }
         }
+        self.place_meshes(&uses, &mut asset)?;
         if !empty_scene {
             super::warn_without_triangles(
                 &mut asset,
@@ -279,37 +291,28 @@ impl Loader<'_> {
         ))
     }
 
-    /// Collect what one node carries: meshes, a camera, a point light.
+    /// Collect what one node carries: the use of a mesh (read after the
+    /// walk, when every use is known), a camera, a point light.
     fn visit(
         &self,
         index: usize,
         node: &json::Node,
         world: &Mat4,
         asset: &mut LoadedAsset,
+        uses: &mut Vec<MeshUse>,
     ) -> InputResult<()> {
         if let Some(mesh_index) = node.mesh.map(|m| m.value()) {
-            let mesh = self.root.meshes.get(mesh_index).ok_or_else(|| {
-                self.error(
+            if mesh_index >= self.root.meshes.len() {
+                return Err(self.error(
                     format!("nodes[{index}].mesh"),
                     format!("meshes[{mesh_index}] does not exist"),
-                )
-            })?;
-            let base_name = mesh
-                .name
-                .clone()
-                .or_else(|| node.name.clone())
-                .unwrap_or_else(|| format!("mesh{mesh_index}"));
-            for (p, primitive) in mesh.primitives.iter().enumerate() {
-                let name = if mesh.primitives.len() > 1 {
-                    format!("{base_name}[{p}]")
-                } else {
-                    base_name.clone()
-                };
-                let location = format!("meshes[{mesh_index}].primitives[{p}]");
-                if let Some(loaded) = self.primitive(&location, primitive, name, asset)? {
-                    asset.meshes.push(self.place(index, loaded, world)?);
-                }
+                ));
             }
+            uses.push(MeshUse {
+                node: index,
+                mesh: mesh_index,
+                world: *world,
+            });
         }
         if let Some(camera) = node.camera.map(|c| c.value()) {
             let camera = self.camera(index, camera, world)?;
@@ -343,7 +346,7 @@ mod tests {
                 {{"mesh":0,"translation":[0,0,7]}}
             ]"#
         );
-        let asset = load_json(&b, &rest).unwrap();
+        let asset = load_baked(&b, &rest);
         let xs: Vec<Vec3> = asset.meshes.iter().map(|m| m.positions[0]).collect();
         assert_eq!(
             xs,
@@ -362,7 +365,7 @@ mod tests {
         let rest = format!(
             r#"{TRIANGLE_MESH},"nodes":[{{"children":[1]}},{{"mesh":0,"translation":[0,1,0]}},{{"mesh":0}}]"#
         );
-        let asset = load_json(&b, &rest).unwrap();
+        let asset = load_baked(&b, &rest);
         assert_eq!(asset.meshes.len(), 2);
         assert_eq!(asset.meshes[0].positions[0], Vec3::Y);
         assert_eq!(asset.meshes[1].positions[0], Vec3::ZERO);

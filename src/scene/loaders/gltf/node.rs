@@ -1,12 +1,12 @@
-//! What a node contributes in world space: its local transform, its meshes
-//! with the world transform baked in (normals by the normal matrix), and its
-//! camera and `KHR_lights_punctual` light.
+//! What a node contributes in world space: its local transform, a mesh
+//! it alone uses with the world transform baked in (normals by the normal
+//! matrix), and its camera and `KHR_lights_punctual` light.
 
 use super::{Loader, LUMENS_PER_WATT};
 use crate::error::InputResult;
 use crate::scene::asset::{LoadedCamera, LoadedLight, LoadedMesh};
 use ::gltf::json;
-use glam::{Mat3, Mat4, Quat, Vec3};
+use glam::{Affine3A, Mat4, Quat, Vec3};
 use json::validation::Checked;
 
 impl Loader<'_> {
@@ -41,32 +41,26 @@ impl Loader<'_> {
         Ok(matrix)
     }
 
-    /// Bake a node's world transform into a mesh read in local space.
+    /// Bake a node's world transform into a mesh read in local space
+    /// ([`LoadedMesh::placed`]).
     pub(super) fn place(
         &self,
         node: usize,
-        mut mesh: LoadedMesh,
+        mesh: LoadedMesh,
         world: &Mat4,
     ) -> InputResult<LoadedMesh> {
-        for p in &mut mesh.positions {
-            *p = world.transform_point3(*p);
-            if !p.is_finite() {
-                return Err(self.error(
-                    format!("nodes[{node}]"),
-                    format!(
-                        "the node's transform takes positions of mesh '{}' to infinity",
-                        mesh.name
-                    ),
-                ));
-            }
-        }
-        if let Some(normals) = &mut mesh.normals {
-            let normal_matrix = normal_matrix(world);
-            for n in &mut normals.values {
-                *n = (normal_matrix * *n).normalize_or_zero();
-            }
+        let mesh = mesh.placed(&Affine3A::from_mat4(*world));
+        if mesh.positions.iter().any(|p| !p.is_finite()) {
+            return Err(self.to_infinity(node, &mesh.name));
         }
         Ok(mesh)
+    }
+
+    pub(super) fn to_infinity(&self, node: usize, mesh: &str) -> crate::error::InputError {
+        self.error(
+            format!("nodes[{node}]"),
+            format!("the node's transform takes positions of mesh '{mesh}' to infinity"),
+        )
     }
 
     pub(super) fn camera(
@@ -218,23 +212,6 @@ impl Loader<'_> {
     }
 }
 
-/// A matrix proportional to the inverse transpose of `world`'s upper 3×3
-/// (its cofactor matrix, sign-corrected), so normals stay on the side they
-/// were on. Defined even for singular transforms.
-fn normal_matrix(world: &Mat4) -> Mat3 {
-    let m = Mat3::from_mat4(*world);
-    let cofactor = Mat3::from_cols(
-        m.y_axis.cross(m.z_axis),
-        m.z_axis.cross(m.x_axis),
-        m.x_axis.cross(m.y_axis),
-    );
-    if m.determinant() < 0.0 {
-        -cofactor
-    } else {
-        cofactor
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::test_support::*;
@@ -254,7 +231,7 @@ mod tests {
                 {{"mesh":0,"translation":[1,0,0]}}
             ]"#
         );
-        let asset = load_json(&b, &rest).unwrap();
+        let asset = load_baked(&b, &rest);
         assert_eq!(asset.meshes.len(), 5);
         assert!(asset.meshes.iter().all(|m| m.name == "tri"));
         assert_corners(&asset.meshes[0], [[1., 2., 3.], [2., 2., 3.], [1., 3., 3.]]);
@@ -405,7 +382,7 @@ mod tests {
         b.vec3(&[[s, s, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], false);
         let rest = r#""meshes":[{"primitives":[{"attributes":{"POSITION":0,"NORMAL":1}}]}],
             "nodes":[{"mesh":0,"scale":[2,1,1]},{"mesh":0,"scale":[-1,1,1]},{"mesh":0}]"#;
-        let asset = load_json(&b, rest).unwrap();
+        let asset = load_baked(&b, rest);
         let normals = |m: usize| asset.meshes[m].normals.clone().expect("normals");
         let stretched = normals(0);
         assert_close(stretched.values[0], Vec3::new(0.5, 1.0, 0.0).normalize());
@@ -420,6 +397,12 @@ mod tests {
             "winding kept as stored"
         );
         assert_close(asset.meshes[1].positions[1], -Vec3::X);
+        let mirrored: Vec<bool> = asset.meshes.iter().map(|m| m.mirrored).collect();
+        assert_eq!(
+            mirrored,
+            [false, true, false],
+            "the mirroring node marks its copy"
+        );
         assert_close(normals(2).values[0], Vec3::new(s, s, 0.0));
     }
 

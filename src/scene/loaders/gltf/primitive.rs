@@ -148,6 +148,7 @@ impl Loader<'_> {
             indices,
             material,
             uvs,
+            mirrored: false,
         }))
     }
 }

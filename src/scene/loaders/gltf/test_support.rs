@@ -231,6 +231,11 @@ pub(super) fn load_json(b: &Builder, rest: &str) -> InputResult<LoadedAsset> {
     load_gltf(&b.write_gltf(&dir, "scene", rest))
 }
 
+/// [`load_json`] with the shared meshes baked: every mesh in file order.
+pub(super) fn load_baked(b: &Builder, rest: &str) -> LoadedAsset {
+    load_json(b, rest).unwrap().into_baked()
+}
+
 fn corners(mesh: &LoadedMesh) -> Vec<[Vec3; 3]> {
     mesh.indices
         .iter()

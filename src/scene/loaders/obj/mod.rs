@@ -212,6 +212,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             normals,
             material,
             uvs,
+            mirrored: false,
         });
     }
     super::warn_without_triangles(&mut asset, path, "no faces");
