@@ -52,24 +52,8 @@ fn bumpy_sphere(rings: u32, segments: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 
 /// The unit cube [0, 1]³, twelve triangles wound outwards.
 fn unit_cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let v = (0..8)
-        .map(|k| Vec3::new((k & 1) as f32, (k >> 1 & 1) as f32, (k >> 2 & 1) as f32))
-        .collect();
-    let f = vec![
-        [0, 2, 3],
-        [0, 3, 1],
-        [4, 5, 7],
-        [4, 7, 6],
-        [0, 1, 5],
-        [0, 5, 4],
-        [2, 6, 7],
-        [2, 7, 3],
-        [0, 4, 6],
-        [0, 6, 2],
-        [1, 3, 7],
-        [1, 7, 5],
-    ];
-    (v, f)
+    let (v, f) = crate::common::cube(1.0);
+    (v.into_iter().map(|p| p + 0.5).collect(), f)
 }
 
 /// `n` random invertible maps: rotation · scale (non-uniform, every other

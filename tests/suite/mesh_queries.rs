@@ -7,6 +7,7 @@
 //! edges and vertices of closed meshes must cross the surface once per
 //! surface crossing: never 0 and never 2.
 
+use crate::common::cube;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::Path;
@@ -91,29 +92,6 @@ fn edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
     e.sort_unstable();
     e.dedup();
     e
-}
-
-/// The cube of side `side` centred on the origin, two triangles a face,
-/// wound outwards.
-fn cube(side: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let v = (0..8)
-        .map(|i| (Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32) - 0.5) * side)
-        .collect();
-    let f = vec![
-        [0, 2, 3],
-        [0, 3, 1],
-        [4, 5, 7],
-        [4, 7, 6],
-        [0, 1, 5],
-        [0, 5, 4],
-        [2, 6, 7],
-        [2, 7, 3],
-        [0, 4, 6],
-        [0, 6, 2],
-        [1, 3, 7],
-        [1, 7, 5],
-    ];
-    (v, f)
 }
 
 /// The level-3 icosphere with each vertex moved along its radius by a

@@ -141,24 +141,16 @@ impl Compiler<'_> {
     ) -> InputResult<()> {
         let (asset, first_material, path) = file;
         let (first_material, path) = (*first_material, path.as_path());
-        let id = (path.to_path_buf(), None);
-        let prototype = match self.prototype_ids.get(&id) {
-            Some(&p) => p,
-            None => {
-                let sources = asset.meshes.iter().enumerate().map(|(k, mesh)| {
-                    let source = TriangleSource::FileSpace {
-                        asset: asset.clone(),
-                        mesh: k,
-                    };
-                    (source, mesh)
-                });
-                let parts = prototype_parts(sources, first_material, path, key)?;
-                self.prototypes.push(parts);
-                let p = self.prototypes.len() as u32 - 1;
-                self.prototype_ids.insert(id, p);
-                p
-            }
-        };
+        let prototype = self.prototype((path.to_path_buf(), None), || {
+            let sources = asset.meshes.iter().enumerate().map(|(k, mesh)| {
+                let source = TriangleSource::FileSpace {
+                    asset: asset.clone(),
+                    mesh: k,
+                };
+                (source, mesh)
+            });
+            prototype_parts(sources, first_material, path, key)
+        })?;
         let material = explicit_material.unwrap_or(NO_MATERIAL);
         let instance = Instance::new(m, prototype, material, inherited).ok_or_else(|| {
             self.err(
@@ -168,6 +160,23 @@ impl Compiler<'_> {
         })?;
         self.instances.push(instance);
         Ok(())
+    }
+
+    /// The index of the prototype of `id` (a mesh file, and which of its
+    /// shared meshes: `None` for the meshes it places once), made by
+    /// `parts` the first time.
+    fn prototype(
+        &mut self,
+        id: (PathBuf, Option<usize>),
+        parts: impl FnOnce() -> InputResult<PrototypeParts>,
+    ) -> InputResult<u32> {
+        if let Some(&p) = self.prototype_ids.get(&id) {
+            return Ok(p);
+        }
+        self.prototypes.push(parts()?);
+        let p = self.prototypes.len() as u32 - 1;
+        self.prototype_ids.insert(id, p);
+        Ok(p)
     }
 
     /// The meshes mesh file `file` itself places more than once (a glTF
@@ -185,25 +194,17 @@ impl Compiler<'_> {
     ) -> InputResult<()> {
         let (asset, first_material, path) = file;
         for (s, shared) in asset.shared.iter().enumerate() {
-            let id = (path.clone(), Some(s));
-            let prototype = match self.prototype_ids.get(&id) {
-                Some(&p) => p,
-                None => {
-                    let sources = shared.parts.iter().enumerate().map(|(k, part)| {
-                        let source = TriangleSource::Shared {
-                            asset: asset.clone(),
-                            shared: s,
-                            part: k,
-                        };
-                        (source, part)
-                    });
-                    let parts = prototype_parts(sources, *first_material, path, key)?;
-                    self.prototypes.push(parts);
-                    let p = self.prototypes.len() as u32 - 1;
-                    self.prototype_ids.insert(id, p);
-                    p
-                }
-            };
+            let prototype = self.prototype((path.clone(), Some(s)), || {
+                let sources = shared.parts.iter().enumerate().map(|(k, part)| {
+                    let source = TriangleSource::Shared {
+                        asset: asset.clone(),
+                        shared: s,
+                        part: k,
+                    };
+                    (source, part)
+                });
+                prototype_parts(sources, *first_material, path, key)
+            })?;
             let material = explicit_material.unwrap_or(NO_MATERIAL);
             for placement in &shared.placements {
                 let to_world = m * placement.to_file;

@@ -131,3 +131,26 @@ pub fn temp_dir(name: &str) -> TempDir {
 
 /// Tiny deterministic generator for test inputs.
 pub use strata::sampling::stream::{seeded, Draw, StreamRng};
+
+/// The cube of side `side` centred on the origin, two triangles a face,
+/// wound outwards.
+pub fn cube(side: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let v = (0..8)
+        .map(|i| (Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32) - 0.5) * side)
+        .collect();
+    let f = vec![
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+    ];
+    (v, f)
+}
