@@ -348,7 +348,7 @@ impl Mesh {
     /// This mesh placed once by each of ``transforms``: an (n, 3, 4) or
     /// (n, 4, 4) array of object-to-world matrices (row-major; a 4x4's last
     /// row must be [0, 0, 0, 1]). The mesh is stored once, each placement
-    /// costs about 160 bytes, and rays enter it in its own space, as
+    /// costs about 170 bytes, and rays enter it in its own space, as
     /// Embree's instances do. Every query answers as a mesh of every copy
     /// would (``Mesh(placed.triangles.reshape(-1, 3), ...)``), face
     /// ``k * triangle_count + j`` being face ``j`` of copy ``k``: each

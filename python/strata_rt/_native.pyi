@@ -92,7 +92,7 @@ class Mesh:
     def place(self, transforms: ArrayLike) -> "Mesh":
         """This mesh placed once by each (3, 4) or (4, 4) row-major object-to-world
         matrix of ``transforms`` (n of them): stored once, each placement about
-        160 bytes. Every query answers as a mesh of every copy would (face
+        170 bytes. Every query answers as a mesh of every copy would (face
         ``k * triangle_count + j`` is face ``j`` of copy ``k``): crossings,
         counts, ``contains`` and nearest points (world distances under any
         map) are the copies' bit for bit. ValueError names ``transforms[i]``
