@@ -31,14 +31,13 @@ import argparse
 import math
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import tomllib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import numpy as np  # noqa: E402
-from bench_embree import build_harness, write_tris  # noqa: E402
+from bench_embree import build_harness, strata_rate, write_tris  # noqa: E402
 from validate_embree import InputError, load_mesh  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -72,14 +71,6 @@ def camera_rays(scene, spp, seed):
     return rays
 
 
-def rate(args, what, threads):
-    """Mrays/s from a `strata trace` or embree_trace summary line."""
-    out = subprocess.run(args, capture_output=True, text=True, env=dict(os.environ, RAYON_NUM_THREADS=str(threads)))
-    if out.returncode != 0 or " Mrays/s" not in out.stdout:
-        raise InputError(what, f"{' '.join(args)} failed: {(out.stderr or out.stdout).strip()}")
-    return float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--field", default="assets/field", help="folder of instance_field.py's scenes")
@@ -90,21 +81,22 @@ def main(argv=None):
     ap.add_argument("--spp", type=int, default=4, help="rays a pixel")
     a = ap.parse_args(argv)
     try:
-        run(a)
+        # The rays and the mesh for Embree: tens of MB, removed after.
+        with tempfile.TemporaryDirectory(prefix="bench_instances.") as work:
+            run(a, work)
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0
 
 
-def run(a):
+def run(a, work):
     field_toml = os.path.join(a.field, f"field-{a.count}.toml")
     single_toml = os.path.join(a.field, "single.toml")
     for path in (field_toml, single_toml):
         if not os.path.exists(path):
             raise InputError(path, f"missing: run python3 tools/instance_field.py --count {a.count} --single --out {a.field}")
     embree = build_harness()
-    work = tempfile.mkdtemp(prefix="bench_instances.")
     runs = {}
     for name, path in (("single", single_toml), ("field", field_toml)):
         scene = tomllib.load(open(path, "rb"))
@@ -130,7 +122,8 @@ def run(a):
     figures = {k: [] for k in runs}
     for r in range(a.rounds):
         for k, args in runs.items():
-            figures[k].append(rate(args, k[0], a.threads))
+            # embree_trace prints its line in `strata trace`'s format: one parser.
+            figures[k].append(strata_rate(args, k[0], a.threads)[0])
         print(f"round {r + 1}: " + ", ".join(f"{k[0]} {k[1]} {v[-1]:.2f}" for k, v in figures.items()), flush=True)
     med = {k: statistics.median(v) for k, v in figures.items()}
     print(f"\nMrays/s, closest hit, {a.spp} camera rays a pixel, {a.threads} threads, medians of {a.rounds} rounds")
