@@ -18,12 +18,9 @@
 pub mod gltf;
 pub mod obj;
 pub mod ply;
-mod ply_ascii;
-mod ply_binary;
-mod ply_header;
 mod text;
 
-pub(crate) use ply_binary::first_where;
+pub(crate) use ply::first_where;
 
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::LoadedAsset;

@@ -11,7 +11,7 @@
 //! positions are the same bits as any exact reader gives; `double`
 //! properties round once, from the f64 value, to f32.
 
-use super::ply::Face;
+use super::face::Face;
 use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use ply_rs_bw::ply::{Header, PropertyType, ScalarType};

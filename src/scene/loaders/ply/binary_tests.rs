@@ -3,9 +3,9 @@
 //! same error message, on generated files of every shape the reader
 //! distinguishes, whole and cut short.
 
-use super::super::ply::load_ply;
 use super::super::test_files::{temp_dir, write};
-use super::Scalar;
+use super::binary::Scalar;
+use super::load_ply;
 use crate::sampling::stream::{seeded, StreamRng};
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};

@@ -1,6 +1,18 @@
 //! Stanford PLY, ASCII and binary (either endianness): the header through
-//! `ply-rs-bw`, ASCII bodies by `ply_ascii`, binary ones by `ply_binary`,
-//! both from the whole file read into memory once.
+//! `ply-rs-bw`, ASCII bodies by `ascii`, binary ones by `binary`, both
+//! from the whole file read into memory once.
+//!
+//! | File              | Holds                                                         |
+//! |-------------------|---------------------------------------------------------------|
+//! | `mod.rs`          | [`load_ply`]: the file read once, its header, the counts checked, one mesh |
+//! | `header.rs`       | header lines other tools skip (old Blender exports), made comments |
+//! | `ascii.rs`        | an ASCII body, line by line in parallel chunks                |
+//! | `binary.rs`       | a binary body, fixed-size records in parallel, others walked  |
+//! | `face.rs`         | a face's indices, and the fan triangulation both bodies share |
+//! | `binary_tests.rs` | the binary reader against `ply-rs-bw`'s, on generated files   |
+//!
+//! Imports point one way: this entry uses the header and the two body
+//! readers, and the body readers use `face`; nothing below names the entry.
 //!
 //! `vertex` elements give `x y z` (float or double); `face` elements give a
 //! `vertex_indices` (or `vertex_index`) list, fan-triangulated like OBJ
@@ -15,52 +27,28 @@
 //!
 //! As other tools do, a header line before the first `element` that starts
 //! with no keyword (old Blender exports) is skipped with a warning (see
-//! `ply_header`), and a file without faces loads with a warning.
+//! `header`), and a file without faces loads with a warning.
+
+mod ascii;
+mod binary;
+#[cfg(test)]
+mod binary_tests;
+mod face;
+mod header;
+
+pub(crate) use binary::first_where;
 
 use super::io_message;
-use super::ply_binary::Scalar;
-use super::{ply_ascii, ply_binary, ply_header};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
+use binary::Scalar;
+use face::{out_of_range, triangulate};
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header, PropertyType, ScalarType};
 use rayon::prelude::*;
 use std::io::Read;
 use std::path::Path;
-
-/// A face's vertex indices. Triangles, the bulk of big meshes, are stored
-/// inline (24 bytes a face and no allocation); longer polygons on the heap.
-/// An index that is no `u32` (a negative `int`) is kept, as i64, to be
-/// reported, not wrapped.
-#[derive(Default, Debug, PartialEq)]
-pub(super) enum Face {
-    #[default]
-    Empty,
-    Triangle([u32; 3]),
-    Polygon(Box<[u32]>),
-    Invalid(i64),
-}
-
-impl Face {
-    /// The face of valid indices `idx`: inline if a triangle.
-    pub(super) fn of(idx: &[u32]) -> Face {
-        match <[u32; 3]>::try_from(idx) {
-            Ok(tri) => Face::Triangle(tri),
-            Err(_) => Face::Polygon(idx.into()),
-        }
-    }
-
-    /// The first index outside `0..n`, if any.
-    pub(super) fn bad_index(&self, n: usize) -> Option<i64> {
-        match self {
-            Face::Empty => None,
-            Face::Triangle(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
-            Face::Polygon(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
-            Face::Invalid(k) => Some(*k),
-        }
-    }
-}
 
 fn scalar_size(t: &ScalarType) -> u64 {
     Scalar::of(t).size() as u64
@@ -121,7 +109,7 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     // Whatever the file holds past the size it gave.
     file.read_to_end(&mut bytes).map_err(|e| bad(&e))?;
     let mut warnings = Vec::new();
-    if let Some(fixed) = ply_header::without_stray_lines(path, &bytes, &mut warnings) {
+    if let Some(fixed) = header::without_stray_lines(path, &bytes, &mut warnings) {
         bytes = fixed;
     }
     let file_len = bytes.len() as u64;
@@ -135,43 +123,14 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     let line = reader.line();
     let body = reader.into_inner();
     if header.encoding == Encoding::Ascii {
-        let body = ply_ascii::read_body(path, &header, body, line.saturating_sub(1))?;
+        let body = ascii::read_body(path, &header, body, line.saturating_sub(1))?;
         let n = body.positions.len();
         let indices =
             triangulate(&body.faces, n).map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
         return Ok(mesh_asset(path, body.positions, indices, warnings));
     }
-    let (positions, indices) = ply_binary::read_body(path, &header, body, line)?;
+    let (positions, indices) = binary::read_body(path, &header, body, line)?;
     Ok(mesh_asset(path, positions, indices, warnings))
-}
-
-/// The error of face `i`, whose index `bad` is not one of the `n` vertices.
-pub(super) fn out_of_range(path: &Path, i: usize, bad: i64, n: usize) -> InputError {
-    InputError::file(
-        path,
-        format!("face {i}: vertex index {bad} is out of range (the file has {n} vertices)"),
-    )
-}
-
-/// `faces` fan-triangulated, every index checked against the vertex count
-/// `n`; else the first bad face and its bad index.
-pub(super) fn triangulate(faces: &[Face], n: usize) -> Result<Vec<[u32; 3]>, (usize, i64)> {
-    let mut indices = Vec::with_capacity(faces.len());
-    for (i, f) in faces.iter().enumerate() {
-        if let Some(bad) = f.bad_index(n) {
-            return Err((i, bad));
-        }
-        match f {
-            Face::Triangle(t) => indices.push(*t),
-            Face::Polygon(p) => {
-                for k in 1..p.len().saturating_sub(1) {
-                    indices.push([p[0], p[k], p[k + 1]]);
-                }
-            }
-            Face::Empty | Face::Invalid(_) => {}
-        }
-    }
-    Ok(indices)
 }
 
 /// One mesh of `positions` and triangles `indices`, named after the file,

@@ -17,7 +17,7 @@
 //! `vertex_indices` or `vertex_index` list of integers of `face` elements;
 //! a later `vertex` or `face` element replaces an earlier one.
 
-use super::ply::Face;
+use super::face::Face;
 use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use ply_rs_bw::ply::{Encoding, Header, PropertyType, ScalarType};
@@ -322,7 +322,7 @@ fn read<const BIG: bool>(
         ));
     }
     let n = positions.len();
-    let out_of_range = |i: usize, bad: i64| super::ply::out_of_range(path, i, bad, n);
+    let out_of_range = |i: usize, bad: i64| super::face::out_of_range(path, i, bad, n);
     let triangles = match faces {
         Faces::Triangles {
             triangles,
@@ -345,7 +345,7 @@ fn read<const BIG: bool>(
             triangles
         }
         Faces::Walked(faces) => {
-            super::ply::triangulate(&faces, n).map_err(|(i, bad)| out_of_range(i, bad))?
+            super::face::triangulate(&faces, n).map_err(|(i, bad)| out_of_range(i, bad))?
         }
     };
     Ok((positions, triangles))
@@ -552,7 +552,3 @@ impl<const BIG: bool> Walk<'_, BIG> {
         Ok(())
     }
 }
-
-#[cfg(test)]
-#[path = "ply_binary_tests.rs"]
-mod tests;
