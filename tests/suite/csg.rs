@@ -6,11 +6,11 @@
 
 use crate::csg_reference;
 
+use crate::common::process::{assert_rejected, repo};
 use crate::common::{render_rgb, scene, scene_at, seeded, Draw, StreamRng};
 use csg_reference::{op, sphere, Node, Op, Reference, Trs};
 use glam::Vec3;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 use strata::math::offset::spawn_origin;
 use strata::math::Ray;
 use strata::scene::Scene;
@@ -21,7 +21,7 @@ use strata::shade::bsdf::refract;
 const DELTA: f64 = 1e-4;
 
 fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+    repo().join("scenes")
 }
 
 /// A scene holding just `node`, read as if from scenes/ so that
@@ -713,35 +713,6 @@ fn a_group_operand_is_the_union_of_its_members() {
     assert!((h.t - 4.0).abs() < 1e-5, "flat between pits");
 }
 
-/// Render `scene_text` (plus files) with the real binary; expect exit code 2
-/// and one line naming every string in `must_mention`.
-fn assert_rejected(name: &str, scene_text: &str, files: &[(&str, &str)], must_mention: &[&str]) {
-    let dir = crate::common::temp_dir(&format!("csg-bad-{name}"));
-    std::fs::write(dir.join("scene.toml"), scene_text).unwrap();
-    for (file, text) in files {
-        std::fs::write(dir.join(file), text).unwrap();
-    }
-    let out = dir.join("out.png");
-    let output = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args([
-            "render",
-            dir.join("scene.toml").to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{name}: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{name}: {stderr}");
-    for m in must_mention {
-        assert!(stderr.contains(m), "{name}: '{m}' missing from: {stderr}");
-    }
-    assert!(!out.exists());
-    std::fs::remove_dir_all(&dir).ok();
-}
-
 #[test]
 fn operands_that_bound_no_solid_are_errors_naming_their_key() {
     let sphere = "{ sphere = { radius = 1.0 } }";
@@ -752,8 +723,8 @@ fn operands_that_bound_no_solid_are_errors_naming_their_key() {
     let open_box = open_box.trim_end().rsplit_once('\n').unwrap().0.to_string() + "\n";
     assert_rejected(
         "open-mesh",
-        &csg(sphere, "{ mesh = \"open.obj\" }"),
-        &[("open.obj", &open_box)],
+        Some(&csg(sphere, "{ mesh = \"open.obj\" }")),
+        &[("open.obj", open_box.as_bytes())],
         &[
             "objects[1].csg.b.mesh",
             "open.obj",
@@ -763,31 +734,31 @@ fn operands_that_bound_no_solid_are_errors_naming_their_key() {
     );
     assert_rejected(
         "uncapped",
-        &csg(
+        Some(&csg(
             "{ cylinder = { radius = 1.0, height = 1.0, caps = false } }",
             sphere,
-        ),
+        )),
         &[],
         &["objects[1].csg.a.cylinder.caps", "uncapped"],
     );
     assert_rejected(
         "plane",
-        &csg(sphere, "{ plane = { normal = [0.0, 1.0, 0.0] } }"),
+        Some(&csg(sphere, "{ plane = { normal = [0.0, 1.0, 0.0] } }")),
         &[],
         &["objects[1].csg.b.plane"],
     );
     assert_rejected(
         "triangle",
-        &csg(
+        Some(&csg(
             sphere,
             "{ triangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] } }",
-        ),
+        )),
         &[],
         &["objects[1].csg.b.triangle"],
     );
     assert_rejected(
         "empty-group",
-        &csg(sphere, "{ group = [] }"),
+        Some(&csg(sphere, "{ group = [] }")),
         &[],
         &["objects[1].csg.b.group"],
     );
@@ -797,26 +768,29 @@ fn operands_that_bound_no_solid_are_errors_naming_their_key() {
     );
     assert_rejected(
         "nested-radius",
-        &csg(sphere, &nested),
+        Some(&csg(sphere, &nested)),
         &[],
         &["objects[1].csg.b.csg.b.sphere.radius"],
     );
     let nested = format!("{{ group = [{sphere}, {{ sphere = {{ radius = nan }} }}] }}");
     assert_rejected(
         "group-nan",
-        &csg(&nested, sphere),
+        Some(&csg(&nested, sphere)),
         &[],
         &["objects[1].csg.a.group[1].sphere.radius"],
     );
     assert_rejected(
         "material",
-        &csg("{ sphere = { radius = 1.0 }, material = \"nope\" }", sphere),
+        Some(&csg(
+            "{ sphere = { radius = 1.0 }, material = \"nope\" }",
+            sphere,
+        )),
         &[],
         &["objects[1].csg.a.material", "nope"],
     );
     assert_rejected(
         "no-shape",
-        &csg(sphere, "{ material = \"x\" }"),
+        Some(&csg(sphere, "{ material = \"x\" }")),
         &[],
         &["objects[1].csg.b"],
     );
