@@ -7,7 +7,6 @@ mod architecture;
 mod bad_input;
 mod common;
 mod csg;
-mod csg_reference;
 mod degenerate;
 mod docs;
 mod embree;
