@@ -4,7 +4,7 @@
 //! |---|---|
 //! | `checked.rs` | the library's scene loaders, every BVH checked before a test sees it |
 //! | `process.rs` | the repository's root, the `strata` binary run (one runner), a run's output, a refused render |
-//! | `scenes.rs` | scenes from text, a render's linear RGB |
+//! | `scenes.rs` | scenes from text, small lit scenes, a render's linear RGB |
 //! | `meshes.rs` | generated meshes (a cube, a bumpy sphere as OBJ), random placements, base64 for glTF buffers |
 //! | `queries.rs` | brute-force answers of the mesh queries (crossings, nearest point) and the nearest-point check |
 //! | `exr.rs` | reading back the EXR files the binary writes |
