@@ -1,65 +1,7 @@
 //! Bad input through the real binary: one line naming the file and the key
 //! or line, exit code 2, no panic, and no output file left behind.
 
-use std::path::Path;
-use std::process::Command;
-
-fn run_render(
-    dir: &Path,
-    scene_text: Option<&str>,
-    extra_files: &[(&str, &[u8])],
-) -> (i32, String, bool) {
-    let scene = dir.join("scene.toml");
-    if let Some(text) = scene_text {
-        std::fs::write(&scene, text).unwrap();
-    }
-    for (name, bytes) in extra_files {
-        std::fs::write(dir.join(name), bytes).unwrap();
-    }
-    let out = dir.join("out.png");
-    let _ = std::fs::remove_file(&out);
-    let output = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args([
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr).to_string();
-    let leftovers = std::fs::read_dir(dir).unwrap().any(|e| {
-        let name = e.unwrap().file_name().to_string_lossy().to_string();
-        name.starts_with("out") || name.contains(".tmp-")
-    });
-    (output.status.code().unwrap_or(-1), stderr, leftovers)
-}
-
-fn assert_rejected(
-    name: &str,
-    scene: Option<&str>,
-    files: &[(&str, &[u8])],
-    must_mention: &[&str],
-) {
-    let dir = crate::common::temp_dir(&format!("bad-{name}"));
-    let (code, stderr, leftovers) = run_render(&dir, scene, files);
-    assert_eq!(code, 2, "{name}: exit code, stderr: {stderr}");
-    assert_eq!(
-        stderr.trim_end().lines().count(),
-        1,
-        "{name}: one line, got: {stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
-    for m in must_mention {
-        assert!(stderr.contains(m), "{name}: '{m}' missing from: {stderr}");
-    }
-    assert!(
-        !leftovers,
-        "{name}: an output or temporary file was left behind"
-    );
-    std::fs::remove_dir_all(&dir).ok();
-}
+use crate::common::process::{assert_rejected, strata};
 
 #[test]
 fn malformed_toml_names_the_line() {
@@ -295,15 +237,15 @@ fn unknown_materials_and_shapeless_objects_are_rejected() {
 fn a_bad_output_extension_writes_nothing() {
     let dir = crate::common::temp_dir("bad-ext");
     std::fs::write(dir.join("s.toml"), "").unwrap();
-    let output = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args([
+    let output = strata(
+        &dir,
+        &[
             "render",
             dir.join("s.toml").to_str().unwrap(),
             "-o",
             dir.join("out.jpg").to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+        ],
+    );
     assert_eq!(output.status.code(), Some(2));
     assert!(!dir.join("out.jpg").exists());
 }

@@ -10,13 +10,9 @@
 //! - the README stays short, and the scene it asks a new user to type in
 //!   renders something lit.
 
+use crate::common::process::{repo, run, strata_command};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -24,18 +20,10 @@ fn read(path: &Path) -> String {
 
 /// `strata ARGS --help`, which must succeed.
 fn help(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(args)
-        .arg("--help")
-        .output()
-        .expect("run strata");
-    assert!(
-        out.status.success(),
-        "strata {} --help failed: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
+    run(
+        strata_command(repo()).args(args).arg("--help"),
+        "strata --help",
+    )
 }
 
 fn is_flag_char(c: char) -> bool {

@@ -5,9 +5,12 @@
 //! instance (`strata trace SCENE.toml` numbers instance k's triangle j
 //! k·T + j, as the harness does from Embree's instID and primID).
 
-use super::embree_native::{harness, hits, run};
-use crate::common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
-use glam::{Affine3A, DVec3, Mat3, Vec3};
+use super::embree_native::{harness, hits};
+use crate::common::meshes::{placement_row, random_affine};
+use crate::common::process::{run, strata_command};
+use crate::common::queries::barycentric;
+use crate::common::{bumpy_sphere_obj, scene_at, seeded, temp_dir};
+use glam::DVec3;
 use std::process::Command;
 use strata::accel::BuildQuality;
 use strata::rays::file::{encode_triangles, read_rays, HitRecord};
@@ -23,30 +26,7 @@ fn embree_instances_answer_as_strata_instances_do() {
     let mut rng = seeded(45);
     let mut rows = Vec::new();
     for _ in 0..24 {
-        let rot = |rng: &mut crate::common::StreamRng| {
-            Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, std::f32::consts::TAU))
-        };
-        let mut s = Vec3::new(
-            rng.range(0.4, 2.0),
-            rng.range(0.4, 2.0),
-            rng.range(0.4, 2.0),
-        );
-        if rng.range(0.0, 1.0) < 0.5 {
-            s.z = -s.z;
-        }
-        let a = Affine3A::from_mat3_translation(
-            rot(&mut rng) * Mat3::from_diagonal(s) * rot(&mut rng),
-            rng.unit_vector() * rng.range(0.0, 8.0),
-        );
-        let m = Mat3::from(a.matrix3).transpose();
-        let r = [m.x_axis, m.y_axis, m.z_axis];
-        let t = a.translation;
-        rows.push(
-            (0..3)
-                .map(|i| format!("{},{},{},{}", r[i].x, r[i].y, r[i].z, t[i]))
-                .collect::<Vec<_>>()
-                .join(","),
-        );
+        rows.push(placement_row(&random_affine(&mut rng, 8.0)));
     }
     std::fs::write(dir.join("places.csv"), rows.join("\n") + "\n").unwrap();
     std::fs::write(
@@ -81,28 +61,34 @@ fn embree_instances_answer_as_strata_instances_do() {
     std::fs::write(dir.join("copies.obj"), copies).unwrap();
 
     let strata = |args: &[&str]| {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_strata"));
-        c.current_dir(&dir).args(args);
+        let mut c = strata_command(&dir);
+        c.args(args);
         c
     };
     let n = PER_KIND.to_string();
-    run(&mut strata(&[
-        "rays",
-        "all",
-        "copies.obj",
-        "-o",
-        "rays.bin",
-        "-n",
-        &n,
-        "--seed",
-        "5",
-        "--quiet",
-    ]));
+    run(
+        &mut strata(&[
+            "rays",
+            "all",
+            "copies.obj",
+            "-o",
+            "rays.bin",
+            "-n",
+            &n,
+            "--seed",
+            "5",
+            "--quiet",
+        ]),
+        "strata rays",
+    );
     let [ours, ours_occ] = [&[][..], &["--occlusion"]].map(|flags| {
-        run(strata(&[
-            "trace", "s.toml", "--rays", "rays.bin", "--hits", "s.hits", "-q",
-        ])
-        .args(flags));
+        run(
+            strata(&[
+                "trace", "s.toml", "--rays", "rays.bin", "--hits", "s.hits", "-q",
+            ])
+            .args(flags),
+            "strata trace",
+        );
         hits(&dir.join("s.hits"))
     });
     let total = ours.len();
@@ -153,15 +139,18 @@ fn embree_instances_answer_as_strata_instances_do() {
     for flags in [&["--robust"][..], &[], &["--robust", "--packet"]] {
         let [theirs, theirs_occ] = [&[][..], &["--occlusion"]].map(|query| {
             let out = dir.join("e.hits");
-            run(Command::new(&exe)
-                .arg(dir.join("m.tris"))
-                .arg(dir.join("rays.bin"))
-                .arg("--instances")
-                .arg(dir.join("places.csv"))
-                .arg("--hits")
-                .arg(&out)
-                .args(query)
-                .args(flags));
+            run(
+                Command::new(&exe)
+                    .arg(dir.join("m.tris"))
+                    .arg(dir.join("rays.bin"))
+                    .arg("--instances")
+                    .arg(dir.join("places.csv"))
+                    .arg("--hits")
+                    .arg(&out)
+                    .args(query)
+                    .args(flags),
+                "embree_trace",
+            );
             hits(&out)
         });
         // The same triangle of the same instance, or hits at the same t
@@ -234,21 +223,4 @@ fn closest_exact(
         }
     }
     best
-}
-
-/// Where the line o + t·d crosses the triangle's plane, and the least of
-/// the crossing's barycentric weights (negative: outside).
-pub fn barycentric(tri: &[DVec3; 3], o: DVec3, d: DVec3) -> (f64, f64) {
-    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 {
-        return (f64::NAN, -1.0);
-    }
-    let s = o - tri[0];
-    let u = s.dot(p) / det;
-    let q = s.cross(e1);
-    let v = d.dot(q) / det;
-    let t = e2.dot(q) / det;
-    (t, u.min(v).min(1.0 - u - v))
 }

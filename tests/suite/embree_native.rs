@@ -10,6 +10,7 @@
 //! fails.
 
 use crate::common::load_mesh_scene;
+use crate::common::process::{repo, run, strata_command};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use strata::accel::BuildQuality;
@@ -19,7 +20,7 @@ use strata::rays::file::{encode_triangles, parse_hits, read_rays, HitRecord};
 const PER_KIND: usize = 600;
 
 pub fn harness() -> Option<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = repo();
     let out = root.join("target").join("embree");
     let made = Command::new("make")
         .arg("-s")
@@ -55,15 +56,6 @@ pub fn harness() -> Option<PathBuf> {
     }
 }
 
-pub fn run(cmd: &mut Command) {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "{cmd:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 pub fn hits(path: &Path) -> Vec<HitRecord> {
     parse_hits(path, &std::fs::read(path).unwrap()).unwrap()
 }
@@ -82,31 +74,37 @@ fn the_native_harness_answers_as_strata_does() {
 
     let rays = dir.join("rays.bin");
     let strata = |args: &[&Path]| {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_strata"));
+        let mut c = strata_command(repo());
         c.args(args);
         c
     };
-    run(strata(&[
-        Path::new("rays"),
-        Path::new("all"),
-        &mesh,
-        Path::new("-o"),
-        &rays,
-    ])
-    .args(["-n", "600", "--seed", "3", "--quiet"]));
+    run(
+        strata(&[
+            Path::new("rays"),
+            Path::new("all"),
+            &mesh,
+            Path::new("-o"),
+            &rays,
+        ])
+        .args(["-n", "600", "--seed", "3", "--quiet"]),
+        "strata rays",
+    );
     // Closest hits, then occlusion, from `strata trace`.
     let [ours, ours_occ] = [&[][..], &["--occlusion"]].map(|flags| {
         let out = dir.join("strata.hits");
-        run(strata(&[
-            Path::new("trace"),
-            &mesh,
-            Path::new("--rays"),
-            &rays,
-            Path::new("--hits"),
-            &out,
-        ])
-        .arg("-q")
-        .args(flags));
+        run(
+            strata(&[
+                Path::new("trace"),
+                &mesh,
+                Path::new("--rays"),
+                &rays,
+                Path::new("--hits"),
+                &out,
+            ])
+            .arg("-q")
+            .args(flags),
+            "strata trace",
+        );
         hits(&out)
     });
     let ray_list = read_rays(&rays).unwrap();
@@ -123,13 +121,16 @@ fn the_native_harness_answers_as_strata_does() {
     ] {
         let [theirs, theirs_occ] = [&[][..], &["--occlusion"]].map(|query| {
             let out = dir.join("embree.hits");
-            run(Command::new(&exe)
-                .arg(&tris_path)
-                .arg(&rays)
-                .arg("--hits")
-                .arg(&out)
-                .args(query)
-                .args(flags));
+            run(
+                Command::new(&exe)
+                    .arg(&tris_path)
+                    .arg(&rays)
+                    .arg("--hits")
+                    .arg(&out)
+                    .args(query)
+                    .args(flags),
+                "embree_trace",
+            );
             hits(&out)
         });
         assert_eq!(theirs.len(), n);

@@ -8,15 +8,14 @@
 //! distances, under random affine maps with non-uniform scale, shear and
 //! mirroring, copies that overlap, and copies that share faces exactly.
 
+use crate::common::queries::{brute_crossings, check_nearest, Around};
 use glam::{Affine3A, Mat3, Quat, Vec3};
 use strata::accel::{BuildQuality, PrimHit};
 use strata::geometry::instance::placed;
-use strata::geometry::nearest::closest_point_on_triangle;
 use strata::geometry::Geometry;
 use strata::math::Ray;
 use strata::sampling::stream::{seeded, Draw, StreamRng};
 use strata::scene::mesh_geometry;
-use strata::shape::triangle::{crossing, ShearedRay};
 
 /// A closed, indexed, bumpy sphere of `rings` × `segments` quads (poles
 /// as fans), wound outwards.
@@ -122,18 +121,6 @@ fn crossings(scene: &Geometry, ray: &Ray) -> Vec<(f32, u64)> {
         .collect()
 }
 
-/// Every crossing by a test of every triangle, sorted by t, then id.
-fn brute_crossings(tris: &[[Vec3; 3]], ray: &Ray) -> Vec<(f32, u64)> {
-    let s = ShearedRay::new(ray);
-    let mut out: Vec<(f32, u64)> = tris
-        .iter()
-        .enumerate()
-        .filter_map(|(i, tri)| crossing(ray, &s, tri).map(|t| (t, i as u64)))
-        .collect();
-    out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    out
-}
-
 /// The rays the checks cast: random ones through the scene's box (some
 /// clipped), and ones aimed exactly at the copies' vertices and at points
 /// of their edges, where ties are broken.
@@ -175,7 +162,11 @@ fn check_crossings(scene: &Geometry, copies: &Geometry, n: usize, seed: u64) -> 
         assert_eq!(got, want, "ray {i}: {ray:?}");
         assert_eq!(scene.count_crossings(ray) as usize, want.len(), "ray {i}");
         if i % 10 == 0 {
-            assert_eq!(got, brute_crossings(&tris, ray), "ray {i}: {ray:?}");
+            let brute: Vec<(f32, u64)> = brute_crossings(&tris, ray)
+                .iter()
+                .map(|c| (c.t, u64::from(c.prim)))
+                .collect();
+            assert_eq!(got, brute, "ray {i}: {ray:?}");
         }
         total += want.len();
     }
@@ -192,39 +183,31 @@ fn check_contains(scene: &Geometry, copies: &Geometry, points: &[Vec3]) -> usize
     inside
 }
 
-/// The nearest point of `scene` equals the copies' and brute force over
-/// their triangles, with no limit and with limits around the answer.
-fn check_nearest(scene: &Geometry, copies: &Geometry, n: usize, seed: u64) {
-    let tris = copies.file_order_triangles();
-    let (lo, hi) = (copies.bvh.bounds.min, copies.bvh.bounds.max);
-    let mut rng = seeded(seed);
-    let answer = |limit: f32, p: Vec3| {
-        scene
-            .nearest(p, limit)
-            .map(|n| (n.point, n.distance, flat(scene, n.prim, n.part)))
+/// The nearest point of `scene` equals brute force over the copies'
+/// triangles with no limit, and the copies' own with limits around the
+/// answer.
+fn nearest_matches_copies(scene: &Geometry, copies: &Geometry, points: usize, seed: u64) {
+    let around = Around {
+        lo: copies.bvh.bounds.min,
+        hi: copies.bvh.bounds.max,
+        far: 2.0,
+        near: 0.1,
     };
-    for i in 0..n {
-        let grow = if i % 4 == 0 { 2.0 } else { 0.1 };
-        let p = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit()) * (1.0 + 2.0 * grow)
-            - (hi - lo) * grow;
-        let brute = tris
-            .iter()
-            .enumerate()
-            .map(|(k, tri)| {
-                let q = closest_point_on_triangle(p, tri);
-                ((p - q).length_squared(), k as u64, q)
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-            .map(|(d2, k, q)| (q, d2.sqrt(), k));
-        assert_eq!(answer(f32::INFINITY, p), brute, "point {i}: {p}");
-        let d = brute.unwrap().1;
-        for limit in [d, d * 0.999, d * 1.001, d * rng.unit()] {
-            let want = copies
+    check_nearest(
+        &copies.file_order_triangles(),
+        &around,
+        (points, seed),
+        |p, limit| {
+            scene
                 .nearest(p, limit)
-                .map(|n| (n.point, n.distance, u64::from(n.prim)));
-            assert_eq!(answer(limit, p), want, "point {i}: {p} within {limit}");
-        }
-    }
+                .map(|n| (n.point, n.distance, flat(scene, n.prim, n.part)))
+        },
+        |p, limit| {
+            copies
+                .nearest(p, limit)
+                .map(|n| (n.point, n.distance, u64::from(n.prim)))
+        },
+    );
 }
 
 #[test]
@@ -293,7 +276,7 @@ fn nearest_through_instances_is_the_copies_in_world_distances() {
     let mut rng = seeded(47);
     let maps = random_maps(&mut rng, 12, 3.0);
     let (scene, copies) = placed_and_copies(build(bumpy_sphere(12, 24)), &maps);
-    check_nearest(&scene, &copies, 1500, 3);
+    nearest_matches_copies(&scene, &copies, 1500, 3);
     // Strongly non-uniform: a copy squashed 50:1, so object distances
     // are far from world ones.
     let squash = [
@@ -308,7 +291,7 @@ fn nearest_through_instances_is_the_copies_in_world_distances() {
         ),
     ];
     let (scene, copies) = placed_and_copies(build(bumpy_sphere(12, 24)), &squash);
-    check_nearest(&scene, &copies, 1000, 4);
+    nearest_matches_copies(&scene, &copies, 1000, 4);
 }
 
 #[test]
@@ -319,7 +302,7 @@ fn nearest_through_instances_of_shared_faces_breaks_ties_as_the_copies() {
         .map(|k| Affine3A::from_translation(Vec3::new((k % 4) as f32, (k / 4) as f32, 0.0)))
         .collect();
     let (scene, copies) = placed_and_copies(build(unit_cube()), &maps);
-    check_nearest(&scene, &copies, 1500, 5);
+    nearest_matches_copies(&scene, &copies, 1500, 5);
 }
 
 #[test]

@@ -6,45 +6,16 @@
 //! an instanced scene alike; bad placement files name their line; and a
 //! thousand instances cost the mesh once plus a fixed record each.
 
+use crate::common::meshes::{placement_row, random_affine};
+use crate::common::queries::barycentric;
 use crate::common::{
     bumpy_sphere_obj, render_rgb, scene_at, seeded, stderr, strata, temp_dir, Draw,
     StreamRng as Rng,
 };
-use crate::embree_instances::barycentric;
 use glam::{Affine3A, Mat3, Vec3};
 use strata::accel::PrimHit;
 use strata::math::Ray;
 use strata::scene::Scene;
-
-/// A random invertible affine map: rotation, non-uniform scale (mirrored
-/// on a random axis half the time), another rotation (so a shear), and a
-/// translation of up to `reach`.
-fn random_affine(rng: &mut Rng, reach: f32) -> Affine3A {
-    let rot = |rng: &mut Rng| {
-        Mat3::from_axis_angle(rng.unit_vector(), rng.range(0.0, std::f32::consts::TAU))
-    };
-    let mut s = Vec3::new(
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-        rng.range(0.3, 2.0),
-    );
-    if rng.range(0.0, 1.0) < 0.5 {
-        s.y = -s.y;
-    }
-    let linear = rot(rng) * Mat3::from_diagonal(s) * rot(rng);
-    Affine3A::from_mat3_translation(linear, rng.unit_vector() * rng.range(0.0, reach))
-}
-
-/// A row-major 3×4 line of an instances file.
-fn csv_row(a: &Affine3A) -> String {
-    let m = Mat3::from(a.matrix3).transpose();
-    let t = a.translation;
-    let r = [m.x_axis, m.y_axis, m.z_axis];
-    (0..3)
-        .map(|i| format!("{},{},{},{}", r[i].x, r[i].y, r[i].z, t[i]))
-        .collect::<Vec<_>>()
-        .join(",")
-}
 
 /// The same map as a scene file's `transform = { matrix = ... }`.
 fn toml_matrix(a: &Affine3A) -> String {
@@ -78,7 +49,7 @@ fn pair(seed: u64, count: usize) -> Pair {
     let obj = bumpy_sphere_obj(18, 12, 1.0, 0.25);
     std::fs::write(dir.join("m.obj"), &obj).unwrap();
     let placements: Vec<Affine3A> = (0..count).map(|_| random_affine(&mut rng, 6.0)).collect();
-    let rows: Vec<String> = placements.iter().map(csv_row).collect();
+    let rows: Vec<String> = placements.iter().map(placement_row).collect();
     std::fs::write(dir.join("places.csv"), rows.join("\n") + "\n").unwrap();
     let instanced = scene_at(
         &format!("{LIGHTS}[[objects]]\nmesh = \"m.obj\"\ninstances = \"places.csv\"\n"),
@@ -388,7 +359,7 @@ fn a_thousand_instances_cost_the_mesh_once_and_at_most_200_bytes_each() {
     std::fs::write(dir.join("m.obj"), bumpy_sphere_obj(64, 48, 1.0, 0.2)).unwrap();
     let mut rng = seeded(3);
     let rows: Vec<String> = (0..1000)
-        .map(|_| csv_row(&random_affine(&mut rng, 100.0)))
+        .map(|_| placement_row(&random_affine(&mut rng, 100.0)))
         .collect();
     std::fs::write(dir.join("i.csv"), rows.join("\n")).unwrap();
     std::fs::write(dir.join("one.csv"), "1,0,0,0,0,1,0,0,0,0,1,0\n").unwrap();

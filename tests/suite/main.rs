@@ -2,36 +2,39 @@
 //! binary once, each linking the whole library; one binary links it once
 //! (issue 48: a cold `cargo test --release` in minutes). Run one module's
 //! tests with a filter: `cargo test --release --test suite slices::`.
+//! Modules are named for what they test; `common` holds the helpers they
+//! share (its `mod.rs` has a table of its files).
 
 mod architecture;
 mod bad_input;
+mod checkpoints_and_parts;
+mod cli_arguments;
+mod cli_reports;
 mod common;
 mod csg;
-mod csg_reference;
 mod degenerate;
 mod docs;
 mod embree;
 mod embree_instances;
 mod embree_native;
 mod environment;
-mod first_hour;
 mod gltf_instances;
 mod instance_queries;
 mod instancing;
 mod memory;
+mod mesh_file_quirks;
 mod mesh_queries;
 mod model_render;
 mod monte_carlo;
 mod packets;
-mod pipeline_features;
 mod primitives;
 mod python;
 mod rays_and_trace;
-mod real_files;
+mod render_flags;
 mod render_packets;
 mod render_properties;
-mod robustness;
+mod scene_parsing;
+mod self_intersection;
 mod slices;
 mod slurm;
 mod textures;
-mod user_words;

@@ -2,9 +2,9 @@
 //! `strata bench` report, and that the compiler's indexed triangle sources
 //! expand to exactly the triangles the file and transforms give.
 
+use crate::common::process::{repo, strata_ok};
 use glam::Vec3;
 use std::path::Path;
-use std::process::Command;
 use strata::scene::loaders::load_mesh_file;
 
 /// A binary PLY height field of `2 * n * n` triangles on [0, 1]².
@@ -38,19 +38,6 @@ fn write_grid(path: &Path, n: u32) {
     std::fs::write(path, bytes).unwrap();
 }
 
-fn run(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
 /// Where Linux lets a process reset its own peak RSS, the peaks must be known.
 fn peak_resettable() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
@@ -69,24 +56,27 @@ fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
     .unwrap();
     let s = |p: &Path| p.to_str().unwrap().to_string();
     let stats = dir.join("stats.json");
-    let summary = run(&[
-        "render",
-        &s(&scene),
-        "-o",
-        &s(&dir.join("grid.png")),
-        "--width",
-        "16",
-        "--height",
-        "12",
-        "--spp",
-        "1",
-        // One preset for render and bench, so that both report the same
-        // tree (`auto` builds a render this short with the fastest one).
-        "--bvh-quality",
-        "medium",
-        "--stats",
-        &s(&stats),
-    ]);
+    let summary = strata_ok(
+        repo(),
+        &[
+            "render",
+            &s(&scene),
+            "-o",
+            &s(&dir.join("grid.png")),
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--spp",
+            "1",
+            // One preset for render and bench, so that both report the same
+            // tree (`auto` builds a render this short with the fastest one).
+            "--bvh-quality",
+            "medium",
+            "--stats",
+            &s(&stats),
+        ],
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["triangles"], 180_000);
@@ -105,20 +95,23 @@ fn render_stats_and_bench_report_final_and_peak_bytes_per_triangle() {
     }
 
     let csv = dir.join("bench.csv");
-    run(&[
-        "bench",
-        &s(&mesh),
-        "--batches",
-        "16",
-        "--repeats",
-        "1",
-        "--threads",
-        "1",
-        "--bvh-quality",
-        "medium",
-        "--csv",
-        &s(&csv),
-    ]);
+    strata_ok(
+        repo(),
+        &[
+            "bench",
+            &s(&mesh),
+            "--batches",
+            "16",
+            "--repeats",
+            "1",
+            "--threads",
+            "1",
+            "--bvh-quality",
+            "medium",
+            "--csv",
+            &s(&csv),
+        ],
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

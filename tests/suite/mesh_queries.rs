@@ -8,16 +8,15 @@
 //! surface crossing: never 0 and never 2.
 
 use crate::common::cube;
+use crate::common::queries::{brute_crossings, brute_nearest, check_nearest, Around};
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::Path;
 use strata::accel::BuildQuality;
-use strata::geometry::nearest::closest_point_on_triangle;
-use strata::geometry::{Crossing, Geometry, Nearest};
+use strata::geometry::{Crossing, Geometry};
 use strata::math::Ray;
 use strata::sampling::stream::{seeded, Draw, StreamRng};
 use strata::scene::{load_mesh_scene, mesh_geometry};
-use strata::shape::triangle::{crossing, ShearedRay};
 
 /// An icosahedron subdivided `levels` times onto the unit sphere
 /// (level 3: 642 vertices, 1,920 edges, 1,280 triangles), wound outwards.
@@ -120,52 +119,11 @@ fn bunny() -> Option<Geometry> {
     Some(scene.geometry)
 }
 
-/// Every crossing by a test of every triangle, sorted as `crossings` sorts.
-fn brute_crossings(tris: &[[Vec3; 3]], ray: &Ray) -> Vec<Crossing> {
-    let s = ShearedRay::new(ray);
-    let mut out: Vec<Crossing> = tris
-        .iter()
-        .enumerate()
-        .filter_map(|(i, tri)| {
-            crossing(ray, &s, tri).map(|t| Crossing {
-                t,
-                prim: i as u32,
-                part: 0,
-            })
-        })
-        .collect();
-    out.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
-    out
-}
-
-/// The nearest point by a test of every triangle.
-fn brute_nearest(tris: &[[Vec3; 3]], p: Vec3, max_distance: f32) -> Option<Nearest> {
-    tris.iter()
-        .enumerate()
-        .map(|(i, tri)| {
-            let q = closest_point_on_triangle(p, tri);
-            ((p - q).length_squared(), i as u32, q)
-        })
-        .filter(|&(d2, _, _)| d2.sqrt() <= max_distance)
-        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-        .map(|(d2, prim, point)| Nearest {
-            point,
-            distance: d2.sqrt(),
-            prim,
-            part: 0,
-        })
-}
-
 /// The crossings, their leaf slots left out (brute force has none).
 fn crossings(g: &Geometry, ray: &Ray) -> Vec<Crossing> {
     let mut out = Vec::new();
     g.crossings(ray, &mut out);
     out.iter().map(|&c| Crossing { part: 0, ..c }).collect()
-}
-
-/// The nearest point, its leaf slot left out (brute force has none).
-fn nearest(g: &Geometry, p: Vec3, max_distance: f32) -> Option<Nearest> {
-    g.nearest(p, max_distance).map(|n| Nearest { part: 0, ..n })
 }
 
 /// A random unit direction.
@@ -427,38 +385,32 @@ fn contains_agrees_with_brute_force_parity_in_every_direction() {
 
 /// `nearest` equals brute force on random points near and far, with no
 /// limit and with limits around the answer.
-fn check_nearest(g: &Geometry, points: usize, seed: u64) {
+fn nearest_matches_brute_force(g: &Geometry, points: usize, seed: u64) {
     let tris = g.file_order_triangles();
-    let (lo, hi) = (g.bvh.bounds.min, g.bvh.bounds.max);
-    let mut rng = seeded(seed);
-    for i in 0..points {
-        let grow = if i % 4 == 0 { 3.0 } else { 0.2 };
-        let p = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit()) * (1.0 + 2.0 * grow)
-            - (hi - lo) * grow;
-        let want = brute_nearest(&tris, p, f32::INFINITY).unwrap();
-        assert_eq!(nearest(g, p, f32::INFINITY), Some(want), "point {i}: {p}");
-        let d = want.distance;
-        assert_eq!(
-            nearest(g, p, d),
-            Some(want),
-            "point {i}: the limit holds its end"
-        );
-        for limit in [d * 0.999, d * 1.001, d * rng.unit(), d * 2.0 * rng.unit()] {
-            assert_eq!(
-                nearest(g, p, limit),
-                brute_nearest(&tris, p, limit),
-                "point {i}: {p} within {limit}"
-            );
-        }
-    }
+    let around = Around {
+        lo: g.bvh.bounds.min,
+        hi: g.bvh.bounds.max,
+        far: 3.0,
+        near: 0.2,
+    };
+    check_nearest(
+        &tris,
+        &around,
+        (points, seed),
+        |p, limit| {
+            g.nearest(p, limit)
+                .map(|n| (n.point, n.distance, u64::from(n.prim)))
+        },
+        |p, limit| brute_nearest(&tris, p, limit),
+    );
 }
 
 #[test]
 fn nearest_equals_brute_force() {
-    check_nearest(&build(bumpy()), 3000, 10);
-    check_nearest(&build(cube(2.0)), 500, 11);
+    nearest_matches_brute_force(&build(bumpy()), 3000, 10);
+    nearest_matches_brute_force(&build(cube(2.0)), 500, 11);
     if let Some(g) = bunny() {
-        check_nearest(&g, 200, 12);
+        nearest_matches_brute_force(&g, 200, 12);
     }
 }
 

@@ -18,74 +18,24 @@
 //! go of target/'s lock (cargo holds it while it compiles, not while tests
 //! run).
 
+use crate::common::process::{repo, run};
 use crate::embree::setup;
 
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// What the tests import from tools/.venv (maturin is a program there).
 const IMPORTS: &str = "import numpy, embreex.rtcore_scene, pytest, trimesh, rtree, OpenEXR";
 
-fn venv() -> PathBuf {
-    setup::repo().join("tools/.venv")
-}
-
-fn venv_works(venv: &Path) -> bool {
-    let python = venv.join("bin/python");
-    python.exists()
-        && venv.join("bin/maturin").exists()
-        && Command::new(&python)
-            .args(["-c", IMPORTS])
-            .output()
-            .is_ok_and(|o| o.status.success())
-}
-
-/// The Python of tools/.venv with every package of
-/// tools/requirements.txt, creating the environment or installing the
-/// requirements when it lacks any.
-fn python() -> PathBuf {
-    let venv = venv();
-    let python = venv.join("bin/python");
-    if venv_works(&venv) {
-        return python;
-    }
-    if !python.exists() {
-        let _ = std::fs::remove_dir_all(&venv);
-        setup::run(
-            Command::new("python3").args(["-m", "venv"]).arg(&venv),
-            "creating tools/.venv (python3 -m venv; on Debian install python3-venv)",
-        );
-    }
-    setup::run(
-        Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-                "-r",
-            ])
-            .arg(setup::repo().join("tools/requirements.txt")),
-        "installing tools/requirements.txt into tools/.venv",
-    );
-    assert!(
-        venv_works(&venv),
-        "tools/.venv lacks a package of tools/requirements.txt after pip install ({IMPORTS}; maturin)"
-    );
-    python
-}
-
 #[test]
 fn the_python_package_builds_and_passes_its_tests() {
-    let python = python();
+    let python = setup::venv_python(IMPORTS, &["maturin"]);
     let bunny = setup::bunny();
-    let repo = setup::repo();
-    setup::run(
-        Command::new(venv().join("bin/maturin"))
+    let repo = repo();
+    run(
+        Command::new(setup::venv().join("bin/maturin"))
             .args(["develop", "--release", "--manifest-path"])
             .arg(repo.join("python/Cargo.toml"))
-            .env("VIRTUAL_ENV", venv())
+            .env("VIRTUAL_ENV", setup::venv())
             .current_dir(repo),
         "building strata_rt into tools/.venv (maturin develop --release)",
     );

@@ -2,32 +2,20 @@
 //! files, the renderer's own answers, and one-line errors with exit code 2.
 
 use crate::common::load_mesh_scene;
+use crate::common::process::{repo, strata, strata_ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use strata::accel::BuildQuality;
 use strata::rays::file::{encode_rays, parse_hits, read_rays, HitRecord};
 
 const ICOSPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/icosphere.obj");
 
-fn strata(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
 fn ok(args: &[&str]) {
-    let out = strata(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    strata_ok(repo(), args);
 }
 
 /// The command fails with exit code 2 and one line naming `names`.
 fn rejected(args: &[&str], names: &[&str]) {
-    let out = strata(args);
+    let out = strata(repo(), args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
     assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
@@ -110,16 +98,19 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
         path(&dir, "2.hits"),
         path(&dir, "occ.hits"),
     );
-    let one = strata(&[
-        "trace",
-        ICOSPHERE,
-        "--rays",
-        &s(&a),
-        "--hits",
-        &s(&h1),
-        "--threads",
-        "1",
-    ]);
+    let one = strata(
+        repo(),
+        &[
+            "trace",
+            ICOSPHERE,
+            "--rays",
+            &s(&a),
+            "--hits",
+            &s(&h1),
+            "--threads",
+            "1",
+        ],
+    );
     let summary = String::from_utf8_lossy(&one.stdout);
     assert!(
         one.status.success() && summary.contains("on 1 thread ("),
@@ -243,7 +234,7 @@ fn bad_input_names_the_file_and_exits_with_2() {
         &["rays", "edges", &s(&flat), "-o", &s(&path(&dir, "x.bin"))],
         &["flat.obj", "shared edges"],
     );
-    let out = strata(&["rays", "sideways", ICOSPHERE, "-o", &s(&rays)]);
+    let out = strata(repo(), &["rays", "sideways", ICOSPHERE, "-o", &s(&rays)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown ray kind 'sideways'"));
     std::fs::remove_dir_all(&dir).ok();

@@ -2,10 +2,11 @@
 //! bit-identical however the work is split, bad parts are refused, and
 //! slicing keeps each pixel's one stratified set.
 
+use crate::common::process::{repo, strata, strata_command};
 use crate::common::{scene, temp_dir};
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use std::time::{Duration, Instant};
 use strata::partial::format::{
     read_partial, read_partial_from, write_partial_to, Partial, PartialHeader,
@@ -89,13 +90,6 @@ fn slices_merged_equal_one_render_for_any_split_and_thread_count() {
     }
 }
 
-fn strata_bin(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -147,11 +141,14 @@ fn a_killed_render_resumes_to_the_same_bits() {
     let full = dir.join("full.exr");
     let out = dir.join("resumed.exr");
     let ck = dir.join("ck.strata");
-    let o = strata_bin(&["render", s(&scene_path), "-o", s(&full), "--quiet"]);
+    let o = strata(
+        repo(),
+        &["render", s(&scene_path), "-o", s(&full), "--quiet"],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 
     let start_render = || {
-        Command::new(env!("CARGO_BIN_EXE_strata"))
+        strata_command(repo())
             .args(["render", s(&scene_path), "-o", s(&out), "--quiet"])
             .args(["--threads", "1", "--passes", "96", "--checkpoint", s(&ck)])
             .arg("--resume")
@@ -191,18 +188,21 @@ fn a_killed_render_resumes_to_the_same_bits() {
     assert!(!out.exists(), "a killed render wrote no image");
 
     // Finish, on a different thread count.
-    let o = strata_bin(&[
-        "render",
-        s(&scene_path),
-        "-o",
-        s(&out),
-        "--quiet",
-        "--threads",
-        "2",
-        "--checkpoint",
-        s(&ck),
-        "--resume",
-    ]);
+    let o = strata(
+        repo(),
+        &[
+            "render",
+            s(&scene_path),
+            "-o",
+            s(&out),
+            "--quiet",
+            "--threads",
+            "2",
+            "--checkpoint",
+            s(&ck),
+            "--resume",
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(
         pixel_bits(&full),
@@ -212,17 +212,20 @@ fn a_killed_render_resumes_to_the_same_bits() {
     assert!(read_partial(&ck).unwrap().header.is_complete());
 
     // A checkpoint of other settings is refused, naming the file.
-    let o = strata_bin(&[
-        "render",
-        s(&scene_path),
-        "-o",
-        s(&out),
-        "--spp",
-        "7",
-        "--checkpoint",
-        s(&ck),
-        "--resume",
-    ]);
+    let o = strata(
+        repo(),
+        &[
+            "render",
+            s(&scene_path),
+            "-o",
+            s(&out),
+            "--spp",
+            "7",
+            "--checkpoint",
+            s(&ck),
+            "--resume",
+        ],
+    );
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("ck.strata") && err.contains("spp"), "{err}");
@@ -249,8 +252,10 @@ impl Parts {
 
     fn render(&self, name: &str, extra: &[&str]) -> PathBuf {
         let out = self.dir.join(name);
-        let o =
-            strata_bin(&[&["render", s(&self.scene), "-o", s(&out), "--quiet"], extra].concat());
+        let o = strata(
+            repo(),
+            &[&["render", s(&self.scene), "-o", s(&out), "--quiet"], extra].concat(),
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         out
     }
@@ -266,7 +271,7 @@ fn refused(dir: &Path, parts: &[&Path], blame: &Path, what: &str) {
     let mut args = vec!["merge"];
     args.extend(parts.iter().map(|p| s(p)));
     args.extend(["-o", s(&out)]);
-    let o = strata_bin(&args);
+    let o = strata(repo(), &args);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{what}: {err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{what}: one line: {err}");
@@ -291,21 +296,26 @@ fn merge_writes_the_one_process_image_and_refuses_bad_parts() {
 
     // The good case, parts in any order, and a staged merge through .strata.
     let merged = t.dir.join("good.exr");
-    let o = strata_bin(&["merge", s(&p2), s(&p0), s(&p1), "-o", s(&merged), "-q"]);
+    let o = strata(
+        repo(),
+        &["merge", s(&p2), s(&p0), s(&p1), "-o", s(&merged), "-q"],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(pixel_bits(&whole), pixel_bits(&merged));
     let first_two = t.dir.join("p01.strata");
-    assert!(
-        strata_bin(&["merge", s(&p0), s(&p1), "-o", s(&first_two), "-q"])
-            .status
-            .success()
-    );
+    assert!(strata(
+        repo(),
+        &["merge", s(&p0), s(&p1), "-o", s(&first_two), "-q"]
+    )
+    .status
+    .success());
     let staged = t.dir.join("staged.exr");
-    assert!(
-        strata_bin(&["merge", s(&first_two), s(&p2), "-o", s(&staged), "-q"])
-            .status
-            .success()
-    );
+    assert!(strata(
+        repo(),
+        &["merge", s(&first_two), s(&p2), "-o", s(&staged), "-q"]
+    )
+    .status
+    .success());
     assert_eq!(pixel_bits(&whole), pixel_bits(&staged));
 
     // Another scene: the glass sphere moved.
@@ -315,15 +325,18 @@ fn merge_writes_the_one_process_image_and_refuses_bad_parts() {
         .replace("[-0.8, 0.6, 0.0]", "[-0.8, 0.6, 0.1]");
     std::fs::write(&other_scene, text).unwrap();
     let other = t.dir.join("other_1.strata");
-    let o = strata_bin(&[
-        "render",
-        s(&other_scene),
-        "--slice",
-        "1/3",
-        "-o",
-        s(&other),
-        "-q",
-    ]);
+    let o = strata(
+        repo(),
+        &[
+            "render",
+            s(&other_scene),
+            "--slice",
+            "1/3",
+            "-o",
+            s(&other),
+            "-q",
+        ],
+    );
     assert!(o.status.success());
     refused(&t.dir, &[&p0, &other, &p2], &other, "different scene");
 
@@ -381,7 +394,10 @@ fn bad_slices_and_outputs_are_refused_on_one_line() {
         (vec!["--timeline", "trace.txt"], "--timeline"),
         (vec!["--timeline", "no/such/dir/trace.json"], "--timeline"),
     ] {
-        let o = strata_bin(&[&["render", s(&t.scene), "-q"], args.as_slice()].concat());
+        let o = strata(
+            repo(),
+            &[&["render", s(&t.scene), "-q"], args.as_slice()].concat(),
+        );
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert_eq!(
@@ -447,21 +463,24 @@ fn the_timeline_is_a_trace_perfetto_opens() {
     let t = Parts::new("timeline");
     let (trace, stats) = (t.dir.join("trace.json"), t.dir.join("stats.json"));
     let out = t.dir.join("out.png");
-    let o = strata_bin(&[
-        "render",
-        s(&t.scene),
-        "-q",
-        "--threads",
-        "3",
-        "--passes",
-        "2",
-        "--timeline",
-        s(&trace),
-        "--stats",
-        s(&stats),
-        "-o",
-        s(&out),
-    ]);
+    let o = strata(
+        repo(),
+        &[
+            "render",
+            s(&t.scene),
+            "-q",
+            "--threads",
+            "3",
+            "--passes",
+            "2",
+            "--timeline",
+            s(&trace),
+            "--stats",
+            s(&stats),
+            "-o",
+            s(&out),
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();

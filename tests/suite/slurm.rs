@@ -6,15 +6,12 @@
 //! installs Slurm and so must run it. The document must show the script
 //! exactly as it is.
 
-use std::path::{Path, PathBuf};
+use crate::common::process::repo;
+use std::path::Path;
 use std::process::Command;
 
 /// tools/slurm/check.sh's exit status when it cannot run here.
 const SKIPPED: i32 = 77;
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))

@@ -2,6 +2,8 @@
 //! head-on directional light, where a diffuse surface's radiance is known
 //! exactly: L = ρ/π · E with ρ = Kd × texture (Lambert).
 
+use crate::common::meshes::base64;
+use crate::common::process::strata_ok;
 use glam::Vec3;
 use std::path::Path;
 
@@ -124,15 +126,9 @@ fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() 
     // The albedo AOV is the textured albedo too, the same ρ in every pixel
     // since E = π makes the radiance equal to it.
     std::fs::write(dir.join("s.toml"), head_on_scene("quad.obj", None)).unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(&dir)
-        .args(["render", "s.toml", "-q", "--aov", "albedo", "-o", "a.exr"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    strata_ok(
+        &dir,
+        &["render", "s.toml", "-q", "--aov", "albedo", "-o", "a.exr"],
     );
     let albedo = read_albedo(&dir.join("a.exr"));
     for (i, (a, c)) in albedo.iter().zip(&rgb).enumerate() {
@@ -152,7 +148,6 @@ fn a_textured_obj_quad_shows_each_half_of_its_texture_at_the_lambert_radiance() 
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Standard base64 with padding, for a glTF buffer's `data:` URI.
 /// The `albedo.R/G/B` channels of an EXR written with `--aov albedo`.
 fn read_albedo(path: &Path) -> Vec<Vec3> {
     let exr = crate::common::exr::read_exr(path);
@@ -162,27 +157,6 @@ fn read_albedo(path: &Path) -> Vec<Vec3> {
         exr.channel("albedo.B"),
     );
     (0..r.len()).map(|i| Vec3::new(r[i], g[i], b[i])).collect()
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = u32::from_be_bytes([0, b[0], b[1], b[2]]);
-        for k in 0..4 {
-            out.push(if k <= chunk.len() {
-                ALPHABET[(n >> (18 - 6 * k)) as usize & 63] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 /// The quad of [`write_quad_obj`] as glTF: the same positions and

@@ -1,36 +1,30 @@
-//! Helpers shared by the integration tests (not every test binary uses
-//! every one, hence the allows).
-#![allow(dead_code, unused_imports)]
+//! Helpers shared by the suite's modules, one concept a file:
+//!
+//! | file | holds |
+//! |---|---|
+//! | `checked.rs` | the library's scene loaders, every BVH checked before a test sees it |
+//! | `process.rs` | the repository's root, the `strata` binary run (one runner), a run's output, a refused render |
+//! | `scenes.rs` | scenes from text, small lit scenes, a render's linear RGB |
+//! | `meshes.rs` | generated meshes (a cube, a bumpy sphere as OBJ), random placements, base64 for glTF buffers |
+//! | `queries.rs` | brute-force answers of the mesh queries (crossings, nearest point) and the nearest-point check |
+//! | `exr.rs` | reading back the EXR files the binary writes |
+//!
+//! Here too: temporary directories, and a skipped test said where the user
+//! sees it.
 
 pub mod checked;
 pub mod exr;
+pub mod meshes;
+pub mod process;
+pub mod queries;
+pub mod scenes;
 
-pub use checked::{check_bvhs, load_mesh_scene, load_scene};
+pub use checked::{load_mesh_scene, load_scene};
+pub use meshes::{bumpy_sphere_obj, cube};
+pub use process::{stderr, stdout, strata};
+pub use scenes::{render_rgb, scene, scene_at};
 
-use checked::scene_from_str;
-use glam::Vec3;
 use std::path::{Path, PathBuf};
-use strata::render::{render, RenderOptions};
-use strata::scene::{RenderOverrides, Scene};
-
-/// `strata ARGS` run in `dir`, its output kept.
-pub fn strata(dir: &Path, args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-/// A run's standard error, as text.
-pub fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
-
-/// A run's standard output, as text.
-pub fn stdout(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stdout).to_string()
-}
 
 /// Say that `test` was skipped and why, where a user running `cargo test`
 /// sees it: written to the terminal's stderr directly, past libtest's
@@ -39,52 +33,6 @@ pub fn skipped(test: &str, why: &str) {
     use std::io::Write;
     let line = format!("\nSKIPPED {test}: {why}\n");
     let _ = std::io::stderr().lock().write_all(line.as_bytes());
-}
-
-/// The scene of `text`, its BVHs checked (as every loader here does).
-pub fn scene(text: &str) -> Scene {
-    scene_at(text, Path::new("test.toml"))
-}
-
-pub fn scene_at(text: &str, path: &Path) -> Scene {
-    scene_from_str(text, path, &RenderOverrides::default()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Render with `threads` threads and return linear RGB.
-pub fn render_rgb(scene: &Scene, threads: usize) -> Vec<Vec3> {
-    let opts = RenderOptions {
-        threads,
-        ..RenderOptions::default()
-    };
-    render(scene, &opts, None, |_, _| {}).film.to_rgb()
-}
-
-/// OBJ text of a bumpy UV sphere of 2 × `nu` × `nv` triangles with shared
-/// edges everywhere: radius `radius`, bumps of amplitude `bump`.
-pub fn bumpy_sphere_obj(nu: u32, nv: u32, radius: f32, bump: f32) -> String {
-    let mut obj = String::new();
-    for j in 0..=nv {
-        for i in 0..nu {
-            let th = std::f32::consts::PI * j as f32 / nv as f32;
-            let ph = std::f32::consts::TAU * i as f32 / nu as f32;
-            let r = radius + bump * ((5.0 * ph).sin() * (3.0 * th).cos());
-            obj += &format!(
-                "v {} {} {}\n",
-                r * th.sin() * ph.cos(),
-                r * th.cos(),
-                r * th.sin() * ph.sin()
-            );
-        }
-    }
-    for j in 0..nv {
-        for i in 0..nu {
-            let a = j * nu + i + 1;
-            let b = j * nu + (i + 1) % nu + 1;
-            let (c, d) = (a + nu, b + nu);
-            obj += &format!("f {a} {b} {d}\nf {a} {d} {c}\n");
-        }
-    }
-    obj
 }
 
 /// A temporary directory that is removed, with everything in it, when
@@ -131,26 +79,3 @@ pub fn temp_dir(name: &str) -> TempDir {
 
 /// Tiny deterministic generator for test inputs.
 pub use strata::sampling::stream::{seeded, Draw, StreamRng};
-
-/// The cube of side `side` centred on the origin, two triangles a face,
-/// wound outwards.
-pub fn cube(side: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let v = (0..8)
-        .map(|i| (Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32) - 0.5) * side)
-        .collect();
-    let f = vec![
-        [0, 2, 3],
-        [0, 3, 1],
-        [4, 5, 7],
-        [4, 7, 6],
-        [0, 1, 5],
-        [0, 5, 4],
-        [2, 6, 7],
-        [2, 7, 3],
-        [0, 4, 6],
-        [0, 6, 2],
-        [1, 3, 7],
-        [1, 7, 5],
-    ];
-    (v, f)
-}

@@ -8,6 +8,7 @@
 mod meshes;
 pub mod setup;
 
+use crate::common::process::{repo, strata_ok};
 use glam::{DVec3, Vec3};
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -16,7 +17,6 @@ use std::process::Command;
 use std::time::Instant;
 use strata::accel::BuildQuality;
 
-const STRATA: &str = env!("CARGO_BIN_EXE_strata");
 const KINDS: [&str; 5] = ["random", "camera", "grazing", "edges", "inside"];
 /// Rays of each kind for each of the 9 meshes: 1,012,500 in all.
 const RAYS_PER_KIND: usize = 22_500;
@@ -28,15 +28,11 @@ fn work_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn strata(args: &[&str]) -> String {
-    setup::run(Command::new(STRATA).args(args), "strata")
-}
-
 /// Run the validator; returns its exit code, stdout and the JSON report.
 fn validate(mesh: &Path, rays: &Path, hits: &Path, occ: Option<&Path>) -> (i32, String, Value) {
     let report = hits.with_extension("report.json");
     let mut cmd = Command::new(setup::python());
-    cmd.arg(setup::repo().join("tools/validate_embree.py"))
+    cmd.arg(repo().join("tools/validate_embree.py"))
         .args([mesh, rays, hits])
         .arg("--json")
         .arg(&report);
@@ -78,20 +74,29 @@ fn check_mesh(mesh: &Path, dir: &Path, name: &str, seed: u32) -> Value {
     );
     let n = RAYS_PER_KIND.to_string();
     let seed = seed.to_string();
-    strata(&[
-        "rays", "all", m, "-n", &n, "--seed", &seed, "-o", r, "--quiet",
-    ]);
-    print!("{}", strata(&["trace", m, "--rays", r, "--hits", h]));
-    strata(&[
-        "trace",
-        m,
-        "--rays",
-        r,
-        "--hits",
-        o,
-        "--occlusion",
-        "--quiet",
-    ]);
+    strata_ok(
+        repo(),
+        &[
+            "rays", "all", m, "-n", &n, "--seed", &seed, "-o", r, "--quiet",
+        ],
+    );
+    print!(
+        "{}",
+        strata_ok(repo(), &["trace", m, "--rays", r, "--hits", h])
+    );
+    strata_ok(
+        repo(),
+        &[
+            "trace",
+            m,
+            "--rays",
+            r,
+            "--hits",
+            o,
+            "--occlusion",
+            "--quiet",
+        ],
+    );
     let (_, table, report) = validate(mesh, &rays, &hits, Some(&occ));
     print!("{table}");
     report
@@ -234,10 +239,13 @@ fn the_validator_catches_a_wrong_primitive_and_a_wrong_t() {
         rays.to_str().unwrap(),
         hits.to_str().unwrap(),
     );
-    strata(&[
-        "rays", "random", o, "-n", "5000", "--seed", "7", "-o", r, "--quiet",
-    ]);
-    strata(&["trace", o, "--rays", r, "--hits", h, "--quiet"]);
+    strata_ok(
+        repo(),
+        &[
+            "rays", "random", o, "-n", "5000", "--seed", "7", "-o", r, "--quiet",
+        ],
+    );
+    strata_ok(repo(), &["trace", o, "--rays", r, "--hits", h, "--quiet"]);
     let (code, table, _) = validate(&obj, &rays, &hits, None);
     assert_eq!(code, 0, "the untouched hits must pass:\n{table}");
 

@@ -3,67 +3,68 @@
 //! and the Stanford bunny (assets/bunny.obj, fetched by tools/fetch-assets
 //! when missing). Either one failing fails the tests: they are never skipped.
 
+use crate::common::process::{repo, run};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::{Mutex, OnceLock};
 
-pub fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+/// tools/.venv, the tests' Python environment.
+pub fn venv() -> PathBuf {
+    repo().join("tools/.venv")
 }
 
-/// Run a command; panic with its output if it cannot start or fails.
-pub fn run(cmd: &mut Command, what: &str) -> String {
-    let output = cmd
-        .output()
-        .unwrap_or_else(|e| panic!("{what}: cannot start {cmd:?}: {e}"));
-    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
-    if !output.status.success() {
-        panic!(
-            "{what} failed ({}): {cmd:?}\n--- stdout\n{stdout}\n--- stderr\n{}",
-            output.status,
-            String::from_utf8_lossy(&output.stderr)
+/// The Python of tools/.venv once it imports `imports` (a Python `import`
+/// statement) and holds each of `programs` in its `bin/`: the environment
+/// is created when missing and filled from tools/requirements.txt when it
+/// lacks any of them. One caller at a time: tests run in parallel, and two
+/// would install into one environment at once.
+pub fn venv_python(imports: &str, programs: &[&str]) -> PathBuf {
+    static LOCK: Mutex<()> = Mutex::new(());
+    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let venv = venv();
+    let python = venv.join("bin/python");
+    let works = || {
+        python.exists()
+            && programs.iter().all(|p| venv.join("bin").join(p).exists())
+            && Command::new(&python)
+                .args(["-c", imports])
+                .output()
+                .is_ok_and(|o| o.status.success())
+    };
+    if works() {
+        return python;
+    }
+    if !python.exists() {
+        let _ = std::fs::remove_dir_all(&venv);
+        run(
+            Command::new("python3").args(["-m", "venv"]).arg(&venv),
+            "creating tools/.venv (python3 -m venv; on Debian install python3-venv)",
         );
     }
-    stdout
+    run(
+        Command::new(&python)
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+                "-r",
+            ])
+            .arg(repo().join("tools/requirements.txt")),
+        "installing tools/requirements.txt into tools/.venv",
+    );
+    assert!(
+        works(),
+        "tools/.venv lacks a package of tools/requirements.txt after pip install ({imports}; {programs:?})"
+    );
+    python
 }
 
-fn venv_works(python: &Path) -> bool {
-    python.exists()
-        && Command::new(python)
-            .args(["-c", "import embreex.rtcore_scene, numpy"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-}
-
-/// The Python of tools/.venv, created and filled from
-/// tools/requirements.txt if it is missing or broken.
+/// The Python of tools/.venv with embreex and numpy (see [`venv_python`]).
 pub fn python() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
-    PYTHON.get_or_init(|| {
-        let venv = repo().join("tools/.venv");
-        let python = venv.join("bin/python");
-        if venv_works(&python) {
-            return python;
-        }
-        if !python.exists() {
-            let _ = std::fs::remove_dir_all(&venv);
-            run(
-                Command::new("python3").args(["-m", "venv"]).arg(&venv),
-                "creating tools/.venv (python3 -m venv; on Debian install python3-venv)",
-            );
-        }
-        run(
-            Command::new(venv.join("bin/pip"))
-                .args(["install", "--quiet", "--disable-pip-version-check", "-r"])
-                .arg(repo().join("tools/requirements.txt")),
-            "installing tools/requirements.txt into tools/.venv",
-        );
-        assert!(
-            venv_works(&python),
-            "tools/.venv cannot import embreex after pip install"
-        );
-        python
-    })
+    PYTHON.get_or_init(|| venv_python("import embreex.rtcore_scene, numpy", &[]))
 }
 
 /// assets/bunny.obj, through `tools/fetch-assets --only bunny` (which checks

@@ -1,10 +1,10 @@
-//! Messages in the user's words (issue 48): type errors say what the scene
-//! format expected and what it found, one number is a grey wherever a
-//! colour is read, unknown keys and values suggest the valid one they are a
-//! typo of, a checkpoint of another spp says what to do instead, `--passes`
-//! beyond the sample count warns, and `strata converge` is quick by default
-//! with only its table on standard output.
+//! The scene format as it is read, and its errors in the user's words
+//! (issue 48): type errors say what was expected and what was found (in
+//! the file and through `--set`, on one line with exit code 2), one number
+//! is a grey wherever a colour is read, and unknown keys and values
+//! suggest the valid one they are a typo of.
 
+use crate::common::scenes::LIT_SPHERE;
 use crate::common::{stderr, strata};
 use std::path::Path;
 use strata::scene::parse::parse_description;
@@ -15,21 +15,6 @@ fn error(text: &str) -> String {
         .expect_err(text)
         .to_string()
 }
-
-/// Lit, tiny and quick: renders in milliseconds.
-const SCENE: &str = r#"[render]
-width = 8
-height = 6
-spp = 4
-
-[[lights]]
-type = "point"
-position = [0.0, 4.0, 0.0]
-intensity = [10.0, 10.0, 10.0]
-
-[[objects]]
-sphere = { radius = 1.0 }
-"#;
 
 #[test]
 fn type_errors_say_what_was_expected_and_what_was_found() {
@@ -94,7 +79,7 @@ fn type_errors_say_what_was_expected_and_what_was_found() {
 #[test]
 fn set_values_get_the_same_words_on_one_line_with_exit_code_2() {
     let dir = crate::common::temp_dir("words-set");
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    std::fs::write(dir.join("scene.toml"), LIT_SPHERE).unwrap();
     for (set, message) in [
         (
             "render.spp=\"16\"",
@@ -185,7 +170,7 @@ material = "m"
 
     // The command line's --background takes one number as well.
     let dir = crate::common::temp_dir("words-grey");
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    std::fs::write(dir.join("scene.toml"), LIT_SPHERE).unwrap();
     let o = strata(
         &dir,
         &[
@@ -251,180 +236,4 @@ fn unknown_keys_and_values_suggest_the_nearest_valid_one() {
         "{e}"
     );
     assert!(!e.contains("did you mean"), "{e}");
-}
-
-#[test]
-fn a_checkpoint_of_another_spp_says_what_to_do_instead() {
-    let dir = crate::common::temp_dir("words-resume");
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
-    let render = |extra: &[&str]| {
-        let mut args = vec!["render", "scene.toml", "-q", "-o", "x.png"];
-        args.extend_from_slice(extra);
-        strata(&dir, &args)
-    };
-    let o = render(&["--checkpoint", "ck.strata"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let o = render(&["--spp", "8", "--checkpoint", "ck.strata", "--resume"]);
-    let e = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-    for needle in [
-        "ck.strata: the checkpoint is of a 4-spp render and this one asks for 8, which is a new render",
-        "stratified set",
-        "strata merge on it writes its 4-spp image",
-        "--spp 8 --slice 0/2 -o part_0.strata",
-    ] {
-        assert!(e.contains(needle), "'{needle}' missing from: {e}");
-    }
-    // The plan it gives runs: the first slice now, a preview of it, the
-    // rest later, and the merge is the 8-spp render.
-    for args in [
-        &[
-            "render",
-            "scene.toml",
-            "-q",
-            "--spp",
-            "8",
-            "--slice",
-            "0/2",
-            "-o",
-            "part_0.strata",
-        ][..],
-        &[
-            "merge",
-            "-q",
-            "--partial",
-            "part_0.strata",
-            "-o",
-            "preview.png",
-        ],
-        &[
-            "render",
-            "scene.toml",
-            "-q",
-            "--spp",
-            "8",
-            "--slice",
-            "1/2",
-            "-o",
-            "part_1.strata",
-        ],
-        &[
-            "merge",
-            "-q",
-            "part_0.strata",
-            "part_1.strata",
-            "-o",
-            "merged.strata",
-        ],
-        &[
-            "render",
-            "scene.toml",
-            "-q",
-            "--spp",
-            "8",
-            "-o",
-            "whole.strata",
-        ],
-        &["merge", "-q", "merged.strata", "-o", "merged.exr"],
-        &["merge", "-q", "whole.strata", "-o", "whole.exr"],
-    ] {
-        let o = strata(&dir, args);
-        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
-    }
-    let (merged, whole) = (
-        crate::common::exr::read_exr(&dir.join("merged.exr")),
-        crate::common::exr::read_exr(&dir.join("whole.exr")),
-    );
-    for c in ["R", "G", "B"] {
-        assert_eq!(merged.channel(c), whole.channel(c), "{c}");
-    }
-}
-
-#[test]
-fn more_passes_than_samples_warn_and_say_how_many_ran() {
-    let dir = crate::common::temp_dir("words-passes");
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
-    let o = strata(
-        &dir,
-        &[
-            "render",
-            "scene.toml",
-            "-q",
-            "-o",
-            "x.png",
-            "--passes",
-            "32",
-        ],
-    );
-    let e = stderr(&o);
-    assert_eq!(o.status.code(), Some(0), "{e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-    assert!(e.starts_with("warning: --passes 32:"), "{e}");
-    assert!(e.contains("so 4 passes"), "{e}");
-    let o = strata(
-        &dir,
-        &["render", "scene.toml", "-q", "-o", "x.png", "--passes", "4"],
-    );
-    assert_eq!(stderr(&o), "");
-}
-
-/// The default of `flag` that `strata converge --help` shows.
-fn converge_default(help: &str, flag: &str) -> u64 {
-    let at = help
-        .find(&format!("{flag} <"))
-        .unwrap_or_else(|| panic!("{flag} in {help}"));
-    let rest = &help[at..];
-    let value = rest[rest.find("[default: ").expect("a default") + 10..]
-        .split(']')
-        .next()
-        .unwrap();
-    value.parse().unwrap()
-}
-
-#[test]
-fn converge_is_quick_by_default_and_its_standard_output_is_the_table() {
-    let dir = crate::common::temp_dir("words-converge");
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
-    let help = strata(&dir, &["converge", "--help"]);
-    let help = String::from_utf8_lossy(&help.stdout);
-    let (max, reference, repeats) = (
-        converge_default(&help, "--max-spp"),
-        converge_default(&help, "--reference-spp"),
-        converge_default(&help, "--repeats"),
-    );
-    // The reference keeps docs/converge.md's rule (16 times --max-spp), and
-    // the samples per pixel of a default run (4 methods at 1, 2, …, max,
-    // each repeated, and the reference) stay a quick look: the old
-    // defaults (256, 4096) traced 10 228.
-    assert!(reference >= 16 * max, "{reference} vs {max}");
-    let work = 4 * repeats * (2 * max - 1) + reference;
-    assert!(work <= 4096, "{work} samples per pixel");
-
-    let o = strata(
-        &dir,
-        &[
-            "converge",
-            "scene.toml",
-            "--max-spp",
-            "2",
-            "--reference-spp",
-            "8",
-            "--repeats",
-            "1",
-        ],
-    );
-    let (out, e) = (String::from_utf8_lossy(&o.stdout), stderr(&o));
-    assert_eq!(o.status.code(), Some(0), "{e}");
-    let lines: Vec<&str> = out.lines().collect();
-    assert!(lines[0].starts_with("method"), "{out}");
-    // A row per method and spp (1 and 2), and nothing else.
-    assert_eq!(lines.len(), 1 + 4 * 2, "{out}");
-    for row in &lines[1..] {
-        let fields: Vec<&str> = row.split_whitespace().collect();
-        assert_eq!(fields.len(), 5, "{row}");
-        assert!(fields[1].parse::<u32>().is_ok(), "{row}");
-    }
-    assert!(e.contains("wrote converge.csv and converge.svg"), "{e}");
-    assert!(e.contains("no --reference given"), "{e}");
 }

@@ -1,29 +1,15 @@
-//! What pipelines reach for, through the real binary: `--set` equals
-//! editing the file, `--crop` equals the window of a full render, EXR
-//! headers carry the camera and the render's settings, and a killed
-//! `--progressive` render leaves a readable image.
+//! The flags of `strata render` that pipelines reach for, through the real
+//! binary: `--set` equals editing the file, `--crop` equals the window of
+//! a full render, EXR headers carry the camera and the render's settings,
+//! `--aov` adds the first hits' albedo, normal and depth as EXR channels,
+//! and a killed `--progressive` render leaves a readable image.
 
 use crate::common::exr::read_exr;
+use crate::common::process::{repo, strata, strata_command, strata_ok};
 use exr::prelude::{AttributeValue, Text};
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn strata(dir: &Path, args: &[&str]) -> Output {
-    let o = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
 
 fn scene(name: &str) -> String {
-    format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+    format!("{}/scenes/{name}", repo().display())
 }
 
 #[test]
@@ -37,11 +23,11 @@ fn set_equals_editing_the_file_bit_for_bit() {
     assert_ne!(edited, text);
     std::fs::write(dir.join("edited.toml"), edited).unwrap();
     std::fs::write(dir.join("original.toml"), &text).unwrap();
-    strata(
+    strata_ok(
         &dir,
         &["render", "edited.toml", "-q", "-o", "edited.strata"],
     );
-    strata(
+    strata_ok(
         &dir,
         &[
             "render",
@@ -66,11 +52,10 @@ fn set_equals_editing_the_file_bit_for_bit() {
         ("render.spq=3", "--set render.spq: unknown key 'spq'"),
         ("lights[4].radiance=[1,1,1]", "lights has 1 entry"),
     ] {
-        let o = Command::new(env!("CARGO_BIN_EXE_strata"))
-            .current_dir(&dir)
-            .args(["render", "original.toml", "-q", "-o", "x.png", "--set", set])
-            .output()
-            .unwrap();
+        let o = strata(
+            &dir,
+            &["render", "original.toml", "-q", "-o", "x.png", "--set", set],
+        );
         assert_eq!(o.status.code(), Some(2));
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(e.contains(needle), "{set}: {e}");
@@ -82,8 +67,8 @@ fn set_equals_editing_the_file_bit_for_bit() {
 fn a_crop_equals_its_window_of_the_full_render() {
     let dir = crate::common::temp_dir("crop");
     let s = scene("seed-mc.toml");
-    strata(&dir, &["render", &s, "-q", "-o", "full.exr"]);
-    strata(
+    strata_ok(&dir, &["render", &s, "-q", "-o", "full.exr"]);
+    strata_ok(
         &dir,
         &[
             "render",
@@ -113,7 +98,7 @@ fn a_crop_equals_its_window_of_the_full_render() {
         }
     }
     // The PNG of a crop is the window's size.
-    strata(
+    strata_ok(
         &dir,
         &["render", &s, "-q", "--crop", "0,0,10,5", "-o", "crop.png"],
     );
@@ -125,7 +110,7 @@ fn a_crop_equals_its_window_of_the_full_render() {
 fn exr_headers_carry_the_camera_and_the_settings() {
     let dir = crate::common::temp_dir("meta");
     let s = scene("soft-shadow.toml");
-    strata(
+    strata_ok(
         &dir,
         &[
             "render", &s, "-q", "--seed", "7", "--spp", "3", "-o", "m.exr",
@@ -169,8 +154,7 @@ fn exr_headers_carry_the_camera_and_the_settings() {
 fn a_killed_progressive_render_leaves_a_readable_image() {
     let dir = crate::common::temp_dir("progressive");
     let out = dir.join("p.png");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(&dir)
+    let mut child = strata_command(&dir)
         .args([
             "render",
             &scene("seed-mc.toml"),
@@ -240,7 +224,7 @@ fn aovs_hold_the_first_hits_albedo_normal_and_depth() {
     let dir = crate::common::temp_dir("aov");
     std::fs::write(dir.join("quad.toml"), QUAD).unwrap();
     let render = |threads: &str, out: &str| {
-        strata(
+        strata_ok(
             &dir,
             &[
                 "render",
@@ -294,7 +278,7 @@ fn aovs_hold_the_first_hits_albedo_normal_and_depth() {
         assert_eq!(bits(a), bits(b), "{name}");
     }
     // Without --aov, only the beauty pass.
-    strata(&dir, &["render", "quad.toml", "-q", "-o", "plain.exr"]);
+    strata_ok(&dir, &["render", "quad.toml", "-q", "-o", "plain.exr"]);
     let names: Vec<String> = read_exr(&dir.join("plain.exr"))
         .channels
         .into_iter()
@@ -302,11 +286,10 @@ fn aovs_hold_the_first_hits_albedo_normal_and_depth() {
         .collect();
     assert_eq!(names, ["B", "G", "R"]);
     // AOVs are EXR channels.
-    let o = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .current_dir(&dir)
-        .args(["render", "quad.toml", "-q", "--aov", "depth", "-o", "x.png"])
-        .output()
-        .unwrap();
+    let o = strata(
+        &dir,
+        &["render", "quad.toml", "-q", "--aov", "depth", "-o", "x.png"],
+    );
     assert_eq!(o.status.code(), Some(2));
     assert!(!dir.join("x.png").exists());
 }

@@ -1,4 +1,4 @@
-//! An independent f64 reference for CSG, for the integration tests: a
+//! An independent f64 reference for CSG, for the CSG tests: a
 //! description of a CSG tree that writes itself as scene TOML, plus
 //! brute-force point membership and the first boundary along a ray.
 //!
@@ -6,7 +6,6 @@
 //! t where the line crosses any leaf's surface, then test membership of the
 //! whole tree between consecutive candidates; the first candidate where
 //! membership changes is the answer.
-#![allow(dead_code)]
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 

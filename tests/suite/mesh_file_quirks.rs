@@ -4,6 +4,7 @@
 //! binary exits 0 printing it; refusals name the unsupported feature and
 //! exit 2.
 
+use super::common::meshes::base64;
 use super::common::{stderr, strata, temp_dir};
 use glam::Vec3;
 use std::path::Path;
@@ -240,19 +241,6 @@ fn gltf(extra: &str) -> String {
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
         "nodes":[{{"mesh":0}}]{extra}}}"#
     )
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let n = chunk.iter().fold(0u32, |n, &b| n << 8 | u32::from(b)) << (8 * (3 - chunk.len()));
-        for k in 0..=chunk.len() {
-            out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char);
-        }
-        out.push_str(&"=".repeat(3 - chunk.len()));
-    }
-    out
 }
 
 #[test]

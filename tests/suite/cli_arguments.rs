@@ -1,0 +1,87 @@
+//! How `strata` reads its command line, through the real binary: a bare
+//! `strata` renders the built-in scene in any directory, every output path
+//! is checked before the scene is loaded, and mistyped commands and
+//! misplaced flags get a suggestion.
+
+use crate::common::scenes::SPHERE_ON_PLANE;
+use crate::common::{stderr, stdout, strata};
+
+#[test]
+fn a_bare_strata_renders_the_built_in_scene_in_any_directory() {
+    let dir = crate::common::temp_dir("bare");
+    let o = strata(&dir, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(dir.join("render.png").is_file());
+    assert!(stdout(&o).contains("-> render.png"), "{}", stdout(&o));
+}
+
+#[test]
+fn every_output_path_is_checked_before_the_scene_is_loaded() {
+    let dir = crate::common::temp_dir("paths");
+    // A scene that does not exist: an output error must come first.
+    for (args, flag) in [
+        (
+            vec!["render", "missing.toml", "-o", "nodir/x.png"],
+            "--output",
+        ),
+        (
+            vec!["render", "missing.toml", "--stats", "nodir/s.json"],
+            "--stats",
+        ),
+        (
+            vec!["render", "missing.toml", "--checkpoint", "nodir/c.strata"],
+            "--checkpoint",
+        ),
+        (vec!["render", "missing.toml", "-o", "x.jpg"], "--output"),
+        (
+            vec!["converge", "missing.toml", "--csv", "nodir/c.csv"],
+            "--csv",
+        ),
+        (
+            vec!["scaling", "missing.toml", "--chart", "nodir/s.svg"],
+            "--chart",
+        ),
+        (
+            vec!["merge", "missing.strata", "-o", "nodir/m.exr"],
+            "--output",
+        ),
+    ] {
+        let o = strata(&dir, &args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(flag), "{args:?}: {}", stderr(&o));
+        assert!(
+            !stderr(&o).contains("missing"),
+            "{args:?}: the scene was read first"
+        );
+    }
+    // Nothing was written: not the image beside a bad --stats path either.
+    std::fs::write(dir.join("s.toml"), SPHERE_ON_PLANE).unwrap();
+    let o = strata(
+        &dir,
+        &[
+            "render",
+            "s.toml",
+            "-o",
+            "out.png",
+            "--stats",
+            "nodir/s.json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!dir.join("out.png").exists());
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "only s.toml");
+}
+
+#[test]
+fn mistyped_commands_and_misplaced_flags_get_a_suggestion() {
+    let dir = crate::common::temp_dir("typos");
+    let o = strata(&dir, &["rendr", "scene.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("'render'"), "{}", stderr(&o));
+    let o = strata(&dir, &["--threads", "1", "render", "scene.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("render --threads"), "{}", stderr(&o));
+    let help = stdout(&strata(&dir, &["render", "--help"]));
+    assert!(!help.contains("1000+"), "stale --packets help");
+    assert!(help.contains("[possible values: auto, on, off]"), "{help}");
+}
