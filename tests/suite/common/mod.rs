@@ -56,7 +56,7 @@ pub fn render_rgb(scene: &Scene, threads: usize) -> Vec<Vec3> {
         threads,
         ..RenderOptions::default()
     };
-    render(scene, &opts, None, |_, _| {}).film.to_rgb()
+    render(scene, &opts, None, ()).film.to_rgb()
 }
 
 /// OBJ text of a bumpy UV sphere of 2 × `nu` × `nv` triangles with shared
