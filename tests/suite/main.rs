@@ -26,6 +26,7 @@ mod packets;
 mod pipeline_features;
 mod primitives;
 mod python;
+mod python_settings;
 mod rays_and_trace;
 mod real_files;
 mod render_packets;
