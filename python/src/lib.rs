@@ -6,7 +6,8 @@
 //! argument; [`mesh`] holds the BVH and answers the ray and point queries;
 //! [`run`] runs a query's rays on rayon with the GIL released, in chunks
 //! between which Ctrl-C is checked; [`render`] is `strata render` returning
-//! arrays. The Python package (`python/strata_rt/`) re-exports all of it.
+//! arrays (its warnings raised as Python warnings, Ctrl-C checked between
+//! passes). The Python package (`python/strata_rt/`) re-exports all of it.
 
 mod convert;
 mod mesh;

@@ -11,10 +11,14 @@ use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeWarning, PyUserWarning, PyV
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::ffi::CString;
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use strata::accel::BuildQuality;
 use strata::render::aov::{self, Aov};
-use strata::render::{render as render_scene, RenderOptions, Schedule, SliceSpec, Window};
+use strata::render::progress::PassDone;
+use strata::render::{
+    render as render_scene, Film, Observer, RenderOptions, Schedule, SliceSpec, Warning, Window,
+};
 use strata::scene::edit::Edit;
 use strata::scene::settings::GlossySampling;
 use strata::scene::{load_edited_scene, RenderOverrides};
@@ -157,14 +161,43 @@ fn crop_text(crop: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     Ok(Some(format!("{},{},{},{}", c[0], c[1], c[2], c[3])))
 }
 
-fn warn(py: Python<'_>, user: bool, message: String) -> PyResult<()> {
-    let category = if user {
-        py.get_type::<PyUserWarning>()
-    } else {
-        py.get_type::<PyRuntimeWarning>()
-    };
-    let message = CString::new(message).unwrap_or_default();
-    PyErr::warn(py, &category, &message, 1)
+/// Raises each of the scene's and the render's warnings as a Python
+/// warning, in strata's words: the loaders' and those of the settings as
+/// `UserWarning`, samples the film dropped as `RuntimeWarning`.
+fn warn(py: Python<'_>, scene: &[strata::error::InputError], render: &[Warning]) -> PyResult<()> {
+    let said = scene.iter().map(|w| (w.to_string(), true));
+    let found = render.iter().map(|w| {
+        let user = !matches!(w, Warning::InvalidSamples { .. });
+        (w.to_string(), user)
+    });
+    for (message, user) in said.chain(found) {
+        let category = if user {
+            py.get_type::<PyUserWarning>()
+        } else {
+            py.get_type::<PyRuntimeWarning>()
+        };
+        let message = CString::new(message).unwrap_or_default();
+        PyErr::warn(py, &category, &message, 1)?;
+    }
+    Ok(())
+}
+
+/// Checks for Ctrl-C at each pass's end, with the GIL taken for the
+/// check, and ends the render there if one came, keeping its
+/// `KeyboardInterrupt` to raise.
+#[derive(Default)]
+struct Interrupt(Option<PyErr>);
+
+impl Observer for Interrupt {
+    fn pass_done(&mut self, _: &Film, _: &PassDone) -> ControlFlow<()> {
+        match Python::attach(|py| py.check_signals()) {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => {
+                self.0 = Some(e);
+                ControlFlow::Break(())
+            }
+        }
+    }
 }
 
 /// Render a scene file as ``strata render`` does, and return the image:
@@ -182,9 +215,13 @@ fn warn(py: Python<'_>, user: bool, message: String) -> PyResult<()> {
 /// ``threads``, ``passes``, ``packets``, ``schedule`` and ``bvh_quality``
 /// change the time, never a pixel.
 ///
-/// The GIL is released while it renders. A bad setting raises ValueError
-/// naming it; a scene strata cannot read raises ``strata_rt.InputError``
-/// with strata's one-line message.
+/// The GIL is released while it renders; Ctrl-C ends it at the end of a
+/// pass with ``KeyboardInterrupt``. What ``strata render`` warns of (a
+/// mesh read leniently, a scene without light, more passes than samples)
+/// is raised as a ``UserWarning``, and samples dropped as NaN or infinite
+/// as a ``RuntimeWarning``. A bad setting raises ValueError naming it; a
+/// scene strata cannot read raises ``strata_rt.InputError`` with strata's
+/// one-line message.
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, width=None, height=None, spp=None, shadow_samples=None,
@@ -258,19 +295,10 @@ pub fn render(
     let window = crop
         .map(|text| Window::crop(&text, s.width, s.height).map_err(|e| error(format!("crop: {e}"))))
         .transpose()?;
-    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
-        warn(
-            py,
-            true,
-            "no lights and no emissive materials, so everything but the background renders black"
-                .into(),
-        )?;
-    }
     let opts = RenderOptions {
         threads: pool.count(),
         slice: SliceSpec::WHOLE,
         schedule,
-        quiet: true,
         passes,
         resume_from: None,
         packets,
@@ -278,17 +306,12 @@ pub fn render(
         aovs: !aovs.is_empty(),
         timeline: None,
     };
-    let outcome = py.detach(|| render_scene(&scene, &opts, None, |_, _| {}));
-    if let Some(bad) = outcome.film.first_invalid {
-        warn(
-            py,
-            false,
-            format!(
-                "{} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {}",
-                outcome.film.invalid, bad.x, bad.y, bad.sample
-            ),
-        )?;
+    let mut interrupt = Interrupt::default();
+    let outcome = py.detach(|| render_scene(&scene, &opts, None, &mut interrupt));
+    if let Some(e) = interrupt.0 {
+        return Err(e);
     }
+    warn(py, &scene.warnings, &outcome.warnings)?;
     let window = window.unwrap_or_else(|| Window::whole(s.width, s.height));
     let (w, h) = (window.width() as usize, window.height() as usize);
     let pixels: Vec<[f32; 3]> = outcome.film.to_rgb().iter().map(|p| p.to_array()).collect();

@@ -82,7 +82,12 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
                 converge::REFERENCE_METHOD.name,
                 path.display()
             );
-            let pixels = converge::reference(&scene, args.reference_spp, args.threads, args.quiet);
+            let pixels = converge::reference(
+                &scene,
+                args.reference_spp,
+                args.threads,
+                super::progress::RenderBar::new(args.quiet),
+            );
             strata::output::image::write_image(&path, &pixels, w, h)
                 .map_err(|e| InputError::file(&path, e))?;
             pixels

@@ -9,6 +9,7 @@ use strata::output::atomic::check_target;
 use strata::output::image::write_image;
 use strata::partial::format::{read_partial, write_partial};
 use strata::partial::merge::{merge_partials, MergeRules};
+use strata::render::Warning;
 
 #[derive(Debug, Args, Clone)]
 pub struct MergeArgs {
@@ -62,12 +63,7 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
         write_image(&args.output, &merged.film.to_rgb(), h.width, h.height)
             .map_err(|e| InputError::file(&args.output, e))?;
     }
-    if let Some(bad) = merged.film.first_invalid {
-        eprintln!(
-            "warning: {} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {}",
-            merged.film.invalid, bad.x, bad.y, bad.sample
-        );
-    }
+    super::warn(Warning::dropped(&merged.film));
     if !args.quiet {
         let parts = super::count(n, "part", "parts");
         let what = if args.partial {

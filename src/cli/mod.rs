@@ -4,6 +4,7 @@ pub mod bench;
 pub mod converge;
 pub mod cpu;
 pub mod merge;
+pub mod progress;
 pub mod rays;
 pub mod render;
 pub mod scaling;
@@ -79,9 +80,10 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, CliError> {
         .map_err(|e| CliError::Internal(format!("cannot start threads: {e}")))
 }
 
-/// The mesh loaders' warnings, one `warning:` line each on stderr.
-pub fn print_warnings(scene: &strata::scene::Scene) {
-    for warning in &scene.warnings {
+/// Each of `warnings` (the mesh loaders', a render's, a merge's) as one
+/// `warning:` line on stderr: the one place the CLI words a warning.
+pub fn warn<W: std::fmt::Display>(warnings: impl IntoIterator<Item = W>) {
+    for warning in warnings {
         eprintln!("warning: {warning}");
     }
 }

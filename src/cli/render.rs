@@ -1,5 +1,6 @@
 //! `strata render`.
 
+use super::progress::RenderBar;
 use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
@@ -12,7 +13,7 @@ use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::aov::{self, Aov, AovSum};
 use strata::render::stats::RenderStats;
 use strata::render::timeline::{Phase, Timeline};
-use strata::render::{render, Film, RenderOptions, Schedule, SliceSpec, Window};
+use strata::render::{each_pass, render, Film, RenderOptions, Schedule, SliceSpec, Window};
 use strata::scene::edit::Edit;
 use strata::scene::{
     compile, load_edited_scene, model, parse, LoadTimings, RenderOverrides, Scene,
@@ -137,7 +138,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let (slice, partial_output) = check_outputs(&args)?;
     let epoch = std::time::Instant::now();
     let (scene, timings) = load(&args)?;
-    super::print_warnings(&scene);
+    super::warn(&scene.warnings);
     // Recorded for the trace, and for the summary in the statistics.
     let timeline = (args.timeline.is_some() || args.stats.is_some()).then(|| {
         let t = Timeline::new(epoch);
@@ -153,11 +154,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             strata::render::replay::describe(&scene, id, value, &events)
         );
         return Ok(());
-    }
-    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
-        eprintln!(
-            "warning: {scene_name}: no lights and no emissive materials, so everything but the background renders black"
-        );
     }
     let s = &scene.settings;
     let window = match &args.crop {
@@ -176,18 +172,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         Some(header) => resume(&args, header)?,
         None => (None, None),
     };
-    if let Some(asked) = args.passes {
-        // A pass holds at least one sample per pixel.
-        let first = resume_from
-            .unwrap_or(full.start)
-            .clamp(full.start, full.end);
-        let left = full.end - first;
-        if left > 0 && asked > left {
-            eprintln!(
-                "warning: --passes {asked}: only {left} samples per pixel to render, and a pass holds at least one, so {left} passes"
-            );
-        }
-    }
     let image = Output {
         args: &args,
         scene: &scene,
@@ -201,7 +185,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         threads: args.threads,
         slice,
         schedule: args.schedule,
-        quiet: args.quiet,
         passes: args.passes,
         resume_from,
         packets: args.packets,
@@ -210,7 +193,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         timeline: timeline.clone(),
     };
     let mut failed = (false, false);
-    let outcome = render(&scene, &opts, initial, |film, done| {
+    let checkpoints = each_pass(|film, done| {
         if let (Some(ck), Some(header)) = (&args.checkpoint, &header) {
             let h = PartialHeader {
                 samples: full.start..done,
@@ -226,6 +209,13 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
         }
     });
+    let outcome = render(
+        &scene,
+        &opts,
+        initial,
+        (RenderBar::new(args.quiet), checkpoints),
+    );
+    super::warn(&outcome.warnings);
     let output_start = timeline.as_deref().map(Timeline::now);
     if let (true, Some(header)) = (partial_output, &header) {
         write_partial(&args.output, header, &outcome.film)
@@ -234,12 +224,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         image
             .write(&outcome.film, outcome.aov.as_deref(), full.end - full.start)
             .map_err(|e| InputError::file(&args.output, e))?;
-    }
-    if let Some(bad) = outcome.film.first_invalid {
-        eprintln!(
-            "warning: {} samples were NaN, infinite or negative and were dropped; first at pixel ({}, {}) sample {} (replay it with --debug-sample {},{},{})",
-            outcome.film.invalid, bad.x, bad.y, bad.sample, bad.x, bad.y, bad.sample
-        );
     }
     let mut stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
     if let (Some(t), Some(start)) = (&timeline, output_start) {
@@ -264,10 +248,10 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Print a warning about `path` the first time only.
+/// Warn about `path` the first time only.
 fn warn_once(warned: &mut bool, path: &std::path::Path, message: &str) {
     if !*warned {
-        eprintln!("warning: {}: {message}", path.display());
+        super::warn([format_args!("{}: {message}", path.display())]);
         *warned = true;
     }
 }
@@ -436,8 +420,7 @@ fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
         None => load_or_seed(None, &args.set, &args.settings, args.bvh_quality),
     };
     std::thread::scope(|scope| {
-        let shown =
-            (!args.quiet).then(|| scope.spawn(|| strata::render::progress::show_load(&progress)));
+        let shown = (!args.quiet).then(|| scope.spawn(|| super::progress::show_load(&progress)));
         let loaded = {
             // Finished however the load ends, a panic too: the display's
             // thread, which the scope waits for, then ends.

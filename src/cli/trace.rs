@@ -153,7 +153,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
         )
         .into());
     }
-    super::print_warnings(&scene);
+    super::warn(&scene.warnings);
     scene.geometry.bvh.prefetch = args.prefetch.enabled(scene.geometry.traversal_bytes());
     let rays = read_rays(&args.rays)?;
     if args.hits == args.rays {

@@ -4,7 +4,7 @@
 
 use crate::light::LightSampling;
 use crate::output::chart::{log_log_slope, Panel, Series};
-use crate::render::{render, RenderOptions};
+use crate::render::{render, Observer, RenderOptions};
 use crate::sampling::SamplerKind;
 use crate::scene::settings::GlossySampling;
 use crate::scene::Scene;
@@ -95,15 +95,14 @@ pub fn configured(scene: &Scene, method: &Method, spp: u32) -> Scene {
     s
 }
 
-/// Render a reference image with the best method.
-pub fn reference(scene: &Scene, spp: u32, threads: usize, quiet: bool) -> Vec<Vec3> {
+/// Render a reference image with the best method, telling `observer` how it goes.
+pub fn reference(scene: &Scene, spp: u32, threads: usize, observer: impl Observer) -> Vec<Vec3> {
     let s = configured(scene, &REFERENCE_METHOD, spp);
     let opts = RenderOptions {
         threads,
-        quiet,
         ..RenderOptions::default()
     };
-    render(&s, &opts, None, |_, _| {}).film.to_rgb()
+    render(&s, &opts, None, observer).film.to_rgb()
 }
 
 /// Measure every method at spp 1, 2, 4, … `max_spp`, calling `on_point` as
@@ -131,7 +130,7 @@ pub fn measure(
             let mut times = Vec::new();
             let mut image = Vec::new();
             for _ in 0..repeats.max(1) {
-                let outcome = render(&s, &opts, None, |_, _| {});
+                let outcome = render(&s, &opts, None, ());
                 times.push(outcome.seconds);
                 image = outcome.film.to_rgb();
             }

@@ -102,11 +102,10 @@ pub fn time_threads_with(
     let opts = RenderOptions {
         threads,
         schedule,
-        quiet: true,
         timeline,
         ..RenderOptions::default()
     };
-    let outcome = render(scene, &opts, None, |_, _| {});
+    let outcome = render(scene, &opts, None, ());
     let timing = Timing {
         seconds: outcome.seconds,
         rays: outcome.counts.total(),

@@ -116,7 +116,7 @@ mod tests {
         scene.settings.width = 40;
         scene.settings.height = 30;
         scene.settings.spp = 3;
-        let film = super::super::render(&scene, &Default::default(), None, |_, _| {}).film;
+        let film = super::super::render(&scene, &Default::default(), None, ()).film;
         for (x, y) in [(20, 17), (5, 5), (33, 20)] {
             let index = y * 40 + x;
             let mut acc = PixelSum::default();

@@ -11,8 +11,9 @@
 
 use super::aov::AovSum;
 use super::film::{Film, PixelSum};
-use super::progress;
+use super::progress::{Observer, Pass, PassDone};
 use super::timeline::{ItemLists, ItemSpan, Phase, Timeline};
+use super::warning::Warning;
 use super::window::Window;
 use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler};
@@ -107,7 +108,6 @@ pub struct RenderOptions {
     pub threads: usize,
     pub slice: SliceSpec,
     pub schedule: Schedule,
-    pub quiet: bool,
     /// Passes to split this process's samples into (capped by the sample
     /// count); `None` for [`default_passes`].
     pub passes: Option<u32>,
@@ -131,7 +131,6 @@ impl Default for RenderOptions {
             threads: 0,
             slice: SliceSpec::WHOLE,
             schedule: Schedule::Slices,
-            quiet: true,
             passes: None,
             resume_from: None,
             packets: PacketMode::Auto,
@@ -154,6 +153,11 @@ pub struct RenderOutcome {
     /// Per pixel of the window, the sums of the first hits, with
     /// [`RenderOptions::aovs`].
     pub aov: Option<Vec<AovSum>>,
+    /// What the front end should say, in the order found.
+    pub warnings: Vec<Warning>,
+    /// The observer ended the render after a pass: the film holds fewer
+    /// samples than `samples`.
+    pub stopped: bool,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -170,13 +174,14 @@ pub fn pass_ranges(range: Range<u32>, passes: u32) -> Vec<Range<u32>> {
         .collect()
 }
 
-/// Render this process's slice. `on_pass(film, samples_done_end)` runs after
-/// each pass (for checkpoints); `film` starts from `initial` when resuming.
+/// Render this process's slice, telling `observer` how it goes (each
+/// pass's end is where checkpoints are written); `film` starts from
+/// `initial` when resuming.
 pub fn render(
     scene: &Scene,
     opts: &RenderOptions,
     initial: Option<Film>,
-    mut on_pass: impl FnMut(&Film, u32),
+    mut observer: impl Observer,
 ) -> RenderOutcome {
     let setup_start = opts.timeline.as_deref().map(Timeline::now);
     let s = &scene.settings;
@@ -199,13 +204,18 @@ pub fn render(
         .resume_from
         .unwrap_or(full.start)
         .clamp(full.start, full.end);
-    let passes = opts
+    let asked = opts
         .passes
         .unwrap_or_else(|| default_passes(full.end - full.start));
-    let passes = pass_ranges(start_sample..full.end, passes);
+    let passes = pass_ranges(start_sample..full.end, asked);
+    let mut warnings: Vec<Warning> = Warning::unlit(scene).into_iter().collect();
+    if opts.passes.is_some() && (passes.len() as u32) < asked && !passes.is_empty() {
+        warnings.push(Warning::FewerPasses {
+            asked,
+            made: passes.len() as u32,
+        });
+    }
     let n = film.pixel_count();
-    let work_items = n.div_ceil(WORK_ITEM_PIXELS) as u64;
-    let bar = progress::bar(work_items * passes.len() as u64, opts.quiet, "render");
     let mut counts = RayCounts::default();
     let mut scratch = vec![PixelSum::default(); n];
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
@@ -215,30 +225,34 @@ pub fn render(
         Schedule::Slices => WORK_ITEM_PIXELS,
         Schedule::Regions => n.div_ceil(threads),
     };
-    // Rays and time at the end of the previous pass, for the current rate.
-    let (mut last_rays, mut last_time) = (0u64, 0.0f64);
-    let mut rate = String::new();
+    // A chunk is cut into work items of WORK_ITEM_PIXELS, the last shorter.
+    let items_per_pass: u64 = (0..n)
+        .step_by(chunk.max(1))
+        .map(|first| (n - first).min(chunk).div_ceil(WORK_ITEM_PIXELS) as u64)
+        .sum();
+    observer.started(items_per_pass * passes.len() as u64);
     let timeline = opts.timeline.as_deref();
     let item_lists = timeline.map(|_| ItemLists::new(threads));
     if let (Some(t), Some(setup_start)) = (timeline, setup_start) {
         t.phase(Phase::Setup, setup_start, t.at(start));
     }
-    for (pass_index, pass) in passes.iter().enumerate() {
+    let mut stopped = false;
+    for (pass_index, samples) in passes.iter().enumerate() {
         let pass_start = timeline.map(Timeline::now);
-        bar.set_message(format!(
-            "pass {}/{} (samples {}..{} of {}){rate}",
-            pass_index + 1,
-            passes.len(),
-            pass.start,
-            pass.end,
-            s.spp
-        ));
+        let pass = Pass {
+            index: pass_index,
+            count: passes.len(),
+            samples: samples.clone(),
+            spp: s.spp,
+        };
+        observer.pass_started(&pass);
         // Each worker owns its chunk's AOV sums for the pass; they carry
         // over between passes, added to in sample order.
         let aov_chunks: Vec<Option<&mut [AovSum]>> = match &mut aov {
             Some(a) => a.chunks_mut(chunk).map(Some).collect(),
             None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
         };
+        let watching = &observer;
         // Each chunk's rays are counted by its own integrator and the
         // pass sums the counts.
         counts += pool.install(|| {
@@ -262,7 +276,7 @@ pub fn render(
                             first,
                         };
                         let rays_before = integrator.counts.total();
-                        render_pixels(&mut integrator, scene, pixels, accs, aov, pass.clone());
+                        render_pixels(&mut integrator, scene, pixels, accs, aov, samples.clone());
                         if let (Some(t), Some(lists), Some(start_ns)) =
                             (timeline, &item_lists, item_start)
                         {
@@ -271,19 +285,14 @@ pub fn render(
                                 thread: rayon::current_thread_index().unwrap_or(0),
                                 pass: pass_index,
                                 pixels: first as u32..(first + accs.len()) as u32,
-                                samples: pass.clone(),
+                                samples: samples.clone(),
                                 start_ns,
                                 end_ns,
                                 rays: integrator.counts.total() - rays_before,
                             });
                             item_start = Some(end_ns);
                         }
-                        if opts.schedule == Schedule::Regions && accs.len() == WORK_ITEM_PIXELS {
-                            bar.inc(1);
-                        }
-                    }
-                    if opts.schedule == Schedule::Slices {
-                        bar.inc(1);
+                        watching.item_done();
                     }
                     integrator.counts
                 })
@@ -293,30 +302,32 @@ pub fn render(
         for (i, acc) in scratch.iter().enumerate() {
             film.add_pixel(i, acc);
         }
-        let elapsed = start.elapsed().as_secs_f64();
-        let total = counts.total();
-        rate = format!(
-            " {:.2} Mrays/s",
-            (total - last_rays) as f64 / (elapsed - last_time).max(1e-9) / 1e6
-        );
-        (last_rays, last_time) = (total, elapsed);
         cpu.pass(&pool);
         let after_start = timeline.map(Timeline::now);
-        on_pass(&film, pass.end);
+        let done = PassDone {
+            pass,
+            rays: counts.total(),
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        stopped = observer.pass_done(&film, &done).is_break();
         if let (Some(t), Some(pass_start), Some(film_start), Some(after_start)) =
             (timeline, pass_start, film_start, after_start)
         {
-            let of_pass = || Some((pass_index, pass.clone()));
+            let of_pass = || Some((pass_index, samples.clone()));
             t.phase_of_pass(Phase::Pass, of_pass(), pass_start, film_start);
             t.phase_of_pass(Phase::Film, of_pass(), film_start, after_start);
             t.phase_of_pass(Phase::AfterPass, of_pass(), after_start, t.now());
+        }
+        if stopped {
+            break;
         }
     }
     if let (Some(t), Some(lists)) = (timeline, item_lists) {
         t.add_items(threads, lists.into_items());
     }
-    bar.finish_and_clear();
+    observer.finished();
     let seconds = start.elapsed().as_secs_f64();
+    warnings.extend(Warning::dropped(&film));
     RenderOutcome {
         film,
         counts,
@@ -325,6 +336,8 @@ pub fn render(
         samples: full,
         cpu: cpu.finish(),
         aov,
+        warnings,
+        stopped,
     }
 }
 

@@ -2,7 +2,9 @@
 //! them, every value optional: the scene file's `[render]` table is one
 //! layer, the command line another (its flags are these fields, and their
 //! `--help` is these doc comments). [`RenderSettings::merge`] lays them
-//! over the defaults, file first, so the command line wins.
+//! over the defaults, file first, so the command line wins. Python's
+//! `strata_rt.render` takes them as keywords of the same names, which
+//! tests/suite/python_settings.rs holds to these fields.
 //!
 //! ```toml
 //! [render]

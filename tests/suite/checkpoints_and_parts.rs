@@ -6,7 +6,7 @@
 use crate::common::scenes::{LIT_SPHERE, SPHERE_ON_PLANE};
 use crate::common::{load_scene, stderr, stdout, strata};
 use strata::partial::format::{read_partial, write_partial, PartialHeader};
-use strata::render::{render, RenderOptions, SliceSpec};
+use strata::render::{each_pass, render, RenderOptions, SliceSpec};
 
 #[test]
 fn an_existing_checkpoint_is_never_discarded_and_can_be_previewed() {
@@ -35,15 +35,20 @@ fn an_existing_checkpoint_is_never_discarded_and_can_be_previewed() {
         passes: Some(2),
         ..RenderOptions::default()
     };
-    render(&scene, &opts, None, |film, done| {
-        if done == 4 {
-            let h = PartialHeader {
-                samples: full.start..done,
-                ..header.clone()
-            };
-            write_partial(&ck, &h, film).unwrap();
-        }
-    });
+    render(
+        &scene,
+        &opts,
+        None,
+        each_pass(|film, done| {
+            if done == 4 {
+                let h = PartialHeader {
+                    samples: full.start..done,
+                    ..header.clone()
+                };
+                write_partial(&ck, &h, film).unwrap();
+            }
+        }),
+    );
     let before = std::fs::read(&ck).unwrap();
 
     let o = run(&[]);

@@ -8,7 +8,7 @@ use strata::render::{render, RenderOptions};
 /// Render a scene file's text (meshes resolved in `dir`) and return the film's invalid-sample count.
 fn render_invalid(text: &str, dir: &Path) -> u64 {
     let scene = scene_at(text, &dir.join("scene.toml"));
-    let outcome = render(&scene, &RenderOptions::default(), None, |_, _| {});
+    let outcome = render(&scene, &RenderOptions::default(), None, ());
     outcome.film.invalid
 }
 
@@ -57,7 +57,7 @@ fn a_camera_inside_an_object_and_a_light_inside_a_closed_mesh() {
         [[lights]]\ntype = \"point\"\nposition = [0.0, 0.5, 0.0]\nintensity = [1.0, 1.0, 1.0]\n\
         [[objects]]\nsphere = { radius = 2.0 }\n";
     let scene = scene_at(inside, &dir.join("s.toml"));
-    let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
+    let film = render(&scene, &RenderOptions::default(), None, ()).film;
     assert_eq!(film.invalid, 0);
     assert!(
         film.to_rgb().iter().all(|p| p.x > 0.0),
@@ -71,7 +71,7 @@ fn a_camera_inside_an_object_and_a_light_inside_a_closed_mesh() {
          [[objects]]\nplane = {{ normal = [0.0, 1.0, 0.0] }}\n"
     );
     let scene = scene_at(&enclosed, &dir.join("s.toml"));
-    let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
+    let film = render(&scene, &RenderOptions::default(), None, ()).film;
     assert_eq!(film.invalid, 0);
     assert!(
         film.to_rgb().iter().all(|p| p.x == 0.0),
@@ -108,7 +108,7 @@ fn every_scene_in_scenes_renders_without_nan_or_infinity() {
         };
         let (scene, _) = crate::common::load_scene(&path, &overrides, Default::default())
             .unwrap_or_else(|e| panic!("{e}"));
-        let film = render(&scene, &RenderOptions::default(), None, |_, _| {}).film;
+        let film = render(&scene, &RenderOptions::default(), None, ()).film;
         assert_eq!(
             film.invalid,
             0,

@@ -54,7 +54,7 @@ fn film(scene: &Scene, threads: usize, slice: SliceSpec, packets: PacketMode) ->
         packets,
         ..RenderOptions::default()
     };
-    render(scene, &opts, None, |_, _| {}).film
+    render(scene, &opts, None, ()).film
 }
 
 fn rgb(scene: &Scene) -> Vec<Vec3> {

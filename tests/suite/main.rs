@@ -29,6 +29,7 @@ mod monte_carlo;
 mod packets;
 mod primitives;
 mod python;
+mod python_settings;
 mod rays_and_trace;
 mod render_flags;
 mod render_packets;

@@ -115,7 +115,7 @@ fn film(scene: &Scene, packets: PacketMode, threads: usize, passes: u32, slice: 
         packets,
         ..RenderOptions::default()
     };
-    render(scene, &opts, None, |_, _| {}).film
+    render(scene, &opts, None, ()).film
 }
 
 #[test]

@@ -52,7 +52,7 @@ fn film_of(scene: &Scene, slice: SliceSpec, threads: usize) -> Film {
         slice,
         ..RenderOptions::default()
     };
-    render(scene, &opts, None, |_, _| {}).film
+    render(scene, &opts, None, ()).film
 }
 
 /// A slice rendered and sent through the partial format in memory.
@@ -429,9 +429,9 @@ fn a_timeline_holds_every_work_item_and_changes_no_bit() {
                 timeline,
                 ..RenderOptions::default()
             };
-            let plain = render(&scene, &opts(None), None, |_, _| {});
+            let plain = render(&scene, &opts(None), None, ());
             let timeline = std::sync::Arc::new(Timeline::new(Instant::now()));
-            let traced = render(&scene, &opts(Some(timeline.clone())), None, |_, _| {});
+            let traced = render(&scene, &opts(Some(timeline.clone())), None, ());
             let case = format!("{schedule:?}, {threads} threads");
             assert!(plain.film == traced.film, "{case}: the film changed");
             let items = timeline.items();

@@ -58,5 +58,5 @@ pub fn render_rgb(scene: &Scene, threads: usize) -> Vec<Vec3> {
         threads,
         ..RenderOptions::default()
     };
-    render(scene, &opts, None, |_, _| {}).film.to_rgb()
+    render(scene, &opts, None, ()).film.to_rgb()
 }

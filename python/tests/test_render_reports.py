@@ -1,0 +1,69 @@
+"""What ``strata_rt.render`` says besides the image: what ``strata render``
+prints as ``warning:`` lines, raised as Python warnings in the same words,
+and Ctrl-C, which ends a render at the end of a pass."""
+
+import _thread
+import threading
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+import helpers
+import strata_rt
+
+SEED = str(helpers.REPO / "scenes" / "seed.toml")
+LIGHT = '[[lights]]\ntype = "point"\nposition = [0.0, 0.0, 5.0]\nintensity = [1.0, 1.0, 1.0]\n'
+
+
+def quietly(*args, **kwargs):
+    """`render`, failing on any warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return strata_rt.render(*args, **kwargs)
+
+
+def test_a_scene_without_light_warns(tmp_path):
+    dark = tmp_path / "dark.toml"
+    dark.write_text("[render]\nwidth = 8\nheight = 6\n[[objects]]\nsphere = { radius = 1.0 }\n")
+    with pytest.warns(UserWarning, match="no lights and no emissive materials"):
+        image = strata_rt.render(str(dark))
+    assert image.shape == (6, 8, 3)
+    lit = tmp_path / "lit.toml"
+    lit.write_text(dark.read_text() + LIGHT)
+    quietly(str(lit))
+
+
+def test_more_passes_than_samples_warn_and_change_no_pixel():
+    small = {"width": 16, "height": 12, "spp": 4}
+    with pytest.warns(UserWarning, match=r"--passes 9: only 4 samples per pixel .* so 4 passes"):
+        image = strata_rt.render(SEED, passes=9, **small)
+    assert np.array_equal(image, quietly(SEED, passes=4, **small))
+
+
+def test_a_mesh_read_leniently_warns_naming_its_line(tmp_path):
+    (tmp_path / "tri.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n")
+    scene = tmp_path / "s.toml"
+    scene.write_text('[render]\nwidth = 8\nheight = 6\n[[objects]]\nmesh = "tri.obj"\n' + LIGHT)
+    with pytest.warns(UserWarning, match=r"tri\.obj: line 4: usemtl without a material name"):
+        strata_rt.render(str(scene))
+
+
+def test_ctrl_c_ends_a_render_at_a_pass_end():
+    # Many one-sample passes: the whole render takes many times longer
+    # than the moment Ctrl-C comes after its start.
+    settings = {"width": 48, "height": 32, "spp": 1600, "passes": 1600, "threads": 1}
+    start = time.perf_counter()
+    quietly(SEED, **settings)
+    whole = time.perf_counter() - start
+    timer = threading.Timer(whole / 20, _thread.interrupt_main)
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        strata_rt.render(SEED, **settings)
+    stopped = time.perf_counter() - start
+    timer.join()
+    # Where no pass's end checked, the interrupt would come only after
+    # the whole render, when Python next looks for signals.
+    assert stopped < whole / 2, f"stopped after {stopped:.2f} s of a {whole:.2f} s render"
