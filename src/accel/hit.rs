@@ -30,12 +30,16 @@ pub fn tie_end(tmax: f32, best: Option<&PrimHit>) -> f32 {
 }
 
 /// The ray a candidate is tested with once `best` is known: `ray` ending
-/// at [`tie_end`].
+/// at [`tie_end`]. A branch, not a select: a walk's first leaf has no
+/// best yet, and a select would compute `next_up` for it too.
 #[inline(always)]
 pub fn tie_ray(ray: &Ray, best: Option<&PrimHit>) -> Ray {
-    Ray {
-        tmax: tie_end(ray.tmax, best),
-        ..*ray
+    match best {
+        Some(_) => Ray {
+            tmax: tie_end(ray.tmax, best),
+            ..*ray
+        },
+        None => *ray,
     }
 }
 

@@ -4,8 +4,8 @@
 //! The walks (depth first, nearest first or in any order: `walk`; best
 //! first: `nearest`) are generic over their node test as over their
 //! query, and monomorphised, as obvhs's `traverse!` takes both: a ray's
-//! slab test ([`RayBoxes`]), a whole line's ([`LineBoxes`]) and the
-//! distance to a point ([`PointBoxes`]) here; geometry's slab grown by an
+//! slab test (`RayBoxes`), a whole line's (`LineBoxes`) and the
+//! distance to a point (`PointBoxes`) here; geometry's slab grown by an
 //! instance's rounding and its lower bound of world distance there. A
 //! test reads the children's boxes through [`ChildBoxes`] and nothing
 //! else of the node, so a test outside `accel` needs no node layout.

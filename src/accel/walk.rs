@@ -256,7 +256,7 @@ impl Bvh8 {
     /// `origin + t·direction` may meet for t in `[tmin, tmax]`, which may be
     /// infinite: CSG needs the crossings of the whole line, behind the
     /// origin too. [`Bvh8::walk_by`] in any order with the line's test
-    /// ([`LineBoxes`]); `visit` sees each candidate once.
+    /// (`LineBoxes`); `visit` sees each candidate once.
     pub fn visit_line<F>(&self, ray: &Ray, mut visit: F)
     where
         F: FnMut(u32),
