@@ -3,12 +3,12 @@
 //!
 //! `cargo bench --bench kernels` (add `-- --quick` for a fast look).
 //!
-//! The node test (`RayBoxes::test`, `Packet::test_node`/`test_lanes`) and
+//! The node test (`RayBoxes`, `Packet::test_node`/`test_lanes`) and
 //! the packet setup are crate-private, so the node test is measured
-//! through the nearest public API: `Bvh8::closest` / `Bvh8::any_hit` /
-//! `Bvh8::walk_packet` on a hand-built BVH of one node whose eight
-//! children are one-primitive leaves, with a primitive test that never
-//! hits. Per ray that is one 8-wide slab test, the child sort and a visit
+//! through the nearest public API: `Bvh8::closest_hit` / `Bvh8::occluded` /
+//! `Bvh8::walk_packet` on a BVH of one node whose eight children are
+//! one-primitive leaves (`Bvh8::one_node`), with a primitive test that
+//! never hits. Per ray that is one 8-wide slab test, the child sort and a visit
 //! of each entered leaf.
 //!
 //! Ray–triangle: the scalar watertight test; the 8-wide leaf test (one ray
@@ -31,9 +31,8 @@ use glam::Vec3;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
-use strata::accel::node::{encode_leaf, Node8};
-use strata::accel::{AnyHitPacket, ClosestPacket, PrimHit};
 use strata::accel::{BuildQuality, Bvh8, Packet, PACKET_SIZE};
+use strata::accel::{ClosestHitPacket, OcclusionPacket, PrimHit};
 use strata::math::lanes::LANES;
 use strata::math::{Aabb, Ray};
 use strata::sampling::{Dim, PixelSampler, SamplerKind};
@@ -42,9 +41,7 @@ use strata::shape::triangle::{intersect, ShearedRay};
 
 /// One node, eight leaf children with random boxes in [-1, 1]³.
 fn one_node_bvh(rng: &mut Rng) -> Bvh8 {
-    let mut node = Node8::EMPTY;
-    let mut bounds = Aabb::EMPTY;
-    for slot in 0..8 {
+    let boxes: [Aabb; 8] = std::array::from_fn(|_| {
         let c = Vec3::new(
             rng.range(-0.7, 0.7),
             rng.range(-0.7, 0.7),
@@ -55,22 +52,10 @@ fn one_node_bvh(rng: &mut Rng) -> Bvh8 {
             rng.range(0.1, 0.3),
             rng.range(0.1, 0.3),
         );
-        let b = Aabb::new(c - h, c + h);
-        for axis in 0..3 {
-            node.bounds[2 * axis][slot] = b.min[axis];
-            node.bounds[2 * axis + 1][slot] = b.max[axis];
-        }
-        node.child[slot] = encode_leaf(slot as u32, 1);
-        bounds = bounds.union(b);
-    }
-    Bvh8 {
-        nodes: vec![node],
-        prim_ids: (0..8).collect(),
-        bounds,
-        depth: 1,
-        // The node test alone: one node, nothing to fetch ahead.
-        prefetch: false,
-    }
+        Aabb::new(c - h, c + h)
+    });
+    // The node test alone: one node, nothing to fetch ahead.
+    Bvh8::one_node(&boxes)
 }
 
 /// `batches` batches of 8 rays: each batch from one point on a sphere of
@@ -112,18 +97,18 @@ fn ray_box(c: &mut Criterion) {
             let mut n = 0;
             for batch in &batches {
                 for r in batch {
-                    n += bvh.closest(r, &[] as &[()], |_, _, _| None).is_some() as u32;
+                    n += bvh.closest_hit(r, &[] as &[()], |_, _, _| None).is_some() as u32;
                 }
             }
             black_box(n)
         })
     });
-    g.bench_function("node8_any_hit_single", |b| {
+    g.bench_function("node8_occlusion_single", |b| {
         b.iter(|| {
             let mut n = 0;
             for batch in &batches {
                 for r in batch {
-                    n += bvh.any_hit(r, &[] as &[()], |_, _, _| false) as u32;
+                    n += bvh.occluded(r, &[] as &[()], |_, _, _| false) as u32;
                 }
             }
             black_box(n)
@@ -136,19 +121,19 @@ fn ray_box(c: &mut Criterion) {
             let mut out = [None::<PrimHit>; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                let mut query = ClosestPacket(|_, _, _, _: &mut [Option<PrimHit>]| false);
+                let mut query = ClosestHitPacket(|_, _, _, _: &mut [Option<PrimHit>]| false);
                 bvh.walk_packet(p, &mut out, &[] as &[()], &mut query);
                 n += out.iter().filter(|h| h.is_some()).count();
             }
             black_box(n)
         })
     });
-    g.bench_function("node8_any_hit_packet", |b| {
+    g.bench_function("node8_occlusion_packet", |b| {
         b.iter(|| {
             let mut out = [false; PACKET_SIZE];
             let mut n = 0;
             for p in &packets {
-                bvh.walk_packet(p, &mut out, &[] as &[()], &mut AnyHitPacket(|_, _, _| 0));
+                bvh.walk_packet(p, &mut out, &[] as &[()], &mut OcclusionPacket(|_, _, _| 0));
                 n += out.iter().filter(|&&o| o).count();
             }
             black_box(n)

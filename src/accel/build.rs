@@ -4,9 +4,9 @@
 
 use super::cluster::Clusters;
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
-use super::node::{is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
+use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
 use crate::math::Aabb;
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
@@ -77,7 +77,9 @@ impl BuildQuality {
 /// hold [`NO_PRIM`](super::NO_PRIM).
 #[derive(Debug, Clone)]
 pub struct Bvh8 {
-    pub nodes: Vec<Node8>,
+    /// The nodes, the root first; their layout is accel's own
+    /// ([`Bvh8::node_count`], [`Bvh8::root_boxes`] and the walks read them).
+    pub(super) nodes: Vec<Node8>,
     pub prim_ids: Vec<u32>,
     pub bounds: Aabb,
     /// Deepest node level, for sizing traversal stacks.
@@ -136,6 +138,61 @@ impl Bvh8 {
     fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Self {
         super::collapse::collapse(bvh2, bounds, first_other)
             .debug_validated(bvh2.primitive_indices.len())
+    }
+
+    /// True for a tree of no node (built over no primitive), which every
+    /// walk answers without a step.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// How many 8-wide nodes the tree has.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Frees the nodes' spare capacity, for a tree kept for the rest of a
+    /// run.
+    pub fn shrink_to_fit(&mut self) {
+        self.nodes.shrink_to_fit();
+    }
+
+    /// The boxes of the root's children (none for an empty tree): tighter
+    /// than the tree's own box once each is moved, as an instance's world
+    /// box is made.
+    pub fn root_boxes(&self) -> impl Iterator<Item = Aabb> + '_ {
+        self.nodes.first().into_iter().flat_map(|root| {
+            (0..8).filter(|&k| root.child[k] != EMPTY).map(|k| {
+                let b = &root.bounds;
+                Aabb::new(
+                    Vec3::new(b[0][k], b[2][k], b[4][k]),
+                    Vec3::new(b[1][k], b[3][k], b[5][k]),
+                )
+            })
+        })
+    }
+
+    /// A tree of one node whose eight children are leaves of one
+    /// primitive each, primitive `i` in `boxes[i]`, and that does not
+    /// prefetch: the node test alone, for the kernel benches.
+    pub fn one_node(boxes: &[Aabb; 8]) -> Self {
+        let mut node = Node8::EMPTY;
+        let mut bounds = Aabb::EMPTY;
+        for (slot, b) in boxes.iter().enumerate() {
+            for axis in 0..3 {
+                node.bounds[2 * axis][slot] = b.min[axis];
+                node.bounds[2 * axis + 1][slot] = b.max[axis];
+            }
+            node.child[slot] = encode_leaf(slot as u32, 1);
+            bounds = bounds.union(*b);
+        }
+        Self {
+            nodes: vec![node],
+            prim_ids: (0..8).collect(),
+            bounds,
+            depth: 1,
+            prefetch: false,
+        }
     }
 
     /// Bytes held by the final structure.

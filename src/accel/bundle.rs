@@ -22,12 +22,13 @@
 //! than its closest hit's. It is blocked if and only if one of those
 //! leaves blocks it, and its closest hit is the least of their hits in a
 //! total order (t, then primitive id; [`super::hit::closer`]), whatever
-//! the order of the leaves: its answers are [`Bvh8::any_hit`]'s and
-//! [`Bvh8::closest`]'s, bit for bit.
+//! the order of the leaves: its answers are [`Bvh8::occluded`]'s and
+//! [`Bvh8::closest_hit`]'s, bit for bit.
 
 use super::build::Bvh8;
-use super::descend::{nearest_last, WIDEN};
+use super::descend::nearest_last;
 use super::node::{is_leaf, leaf_range};
+use super::node_test::WIDEN;
 use super::packet::{lanes_missing_box, reciprocals, PACKET_SIZE};
 use super::query::Query;
 use super::stack::Stack;
@@ -75,7 +76,7 @@ pub fn octant(ray: &Ray) -> usize {
 }
 
 impl BundleRay {
-    /// The single-ray node test (`RayBoxes::test`) given a node's near and
+    /// The single-ray node test (`RayBoxes`'s `NodeTest::test`) given a node's near and
     /// far planes, in the same operations: the children's entry distances
     /// and the lanes of those the ray may enter.
     #[inline(always)]
@@ -349,7 +350,7 @@ impl Bvh8 {
 mod tests {
     use super::super::build::BuildQuality;
     use super::super::hit::PrimHit;
-    use super::super::query::{AnyHit, Closest};
+    use super::super::query::{ClosestHit, Occlusion};
     use super::super::walk::tests::{sphere_cloud, sphere_hit, spheres_block};
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
@@ -441,11 +442,11 @@ mod tests {
             let expected: Vec<bool> = rays
                 .iter()
                 .enumerate()
-                .map(|(i, r)| answered(i) || bvh.any_hit(r, NO_DATA, |s, c, r| blocks(s, c, r)))
+                .map(|(i, r)| answered(i) || bvh.occluded(r, NO_DATA, |s, c, r| blocks(s, c, r)))
                 .collect();
             let mut got: Vec<bool> = (0..n).map(answered).collect();
             let walked = RefCell::new(BTreeSet::new());
-            let mut query = AnyHit::new(|_: &mut (), s, c, r: &Ray| {
+            let mut query = Occlusion::new(|_: &mut (), s, c, r: &Ray| {
                 walked.borrow_mut().insert(key(r));
                 blocks(s, c, r)
             });
@@ -459,11 +460,11 @@ mod tests {
 
             let single: Leaves = Default::default();
             for r in &rays {
-                bvh.any_hit(r, NO_DATA, |s, _, r| reach(&single, r, s));
+                bvh.occluded(r, NO_DATA, |s, _, r| reach(&single, r, s));
             }
             let bundled: Leaves = Default::default();
             let mut none = vec![false; n];
-            let mut query = AnyHit::new(|_: &mut (), s, _, r: &Ray| reach(&bundled, r, s));
+            let mut query = Occlusion::new(|_: &mut (), s, _, r: &Ray| reach(&bundled, r, s));
             bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut none, |&b| b);
             assert_eq!(bundled, single, "eye {eye}, {n} rays: leaves reached");
             assert!(none.iter().all(|&b| !b));
@@ -485,10 +486,10 @@ mod tests {
             let n = rays.len();
             let expected: Vec<_> = rays
                 .iter()
-                .map(|r| bvh.closest(r, NO_DATA, |s, c, r| hit(s, c, r)))
+                .map(|r| bvh.closest_hit(r, NO_DATA, |s, c, r| hit(s, c, r)))
                 .collect();
             let mut got = vec![None; n];
-            let mut query = Closest::new(|_: &mut (), s, c, r: &Ray| hit(s, c, r));
+            let mut query = ClosestHit::new(|_: &mut (), s, c, r: &Ray| hit(s, c, r));
             bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut got, |_| false);
             assert_eq!(
                 got.iter().map(|&h| bits(h)).collect::<Vec<_>>(),
@@ -516,7 +517,7 @@ mod tests {
         let bvh = Bvh8::build(&[], BuildQuality::Medium);
         let rays = rays_from(Vec3::ZERO, 20, 1);
         let mut blocked: Vec<bool> = (0..20).map(|i| i % 2 == 0).collect();
-        let mut query = AnyHit::new(|_: &mut (), _, _, _: &Ray| unreachable!());
+        let mut query = Occlusion::new(|_: &mut (), _, _, _: &Ray| unreachable!());
         bvh.walk_bundle(&rays, NO_DATA, &mut query, &mut blocked, |&b| b);
         assert_eq!(blocked, (0..20).map(|i| i % 2 == 0).collect::<Vec<_>>());
     }

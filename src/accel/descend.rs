@@ -1,100 +1,14 @@
-//! How a single ray goes down one node of the 8-wide BVH: its slab
-//! constants ([`RayBoxes`]), the children it enters sorted nearest first,
-//! the others deferred on the stack.
-//!
-//! Box tests are made conservative by widening the far distance by
-//! 1 + 2γ(3) (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2)), so a ray
-//! that grazes a box corner is never culled before its triangle test.
-//! Zero direction components are replaced by ±f32::MAX reciprocals so no
-//! slab computes 0·∞ = NaN.
+//! How a depth-first walk goes down one node of the 8-wide BVH, once its
+//! node test ([`super::node_test`]) has said which children to enter: in
+//! order, the nearest one next and the others pushed farthest first
+//! ([`Bvh8::descend_nearest`]), or in any order ([`descend_any`]).
 
 use super::build::Bvh8;
 use super::node::{is_leaf, leaf_range};
 use super::prefetch::prefetch;
 use super::stack::Stack;
 use crate::math::lanes::LANES;
-use crate::math::offset::gamma;
-use crate::math::Ray;
 use wide::{f32x8, u32x8};
-
-/// The factor far distances are widened by, 1 + 2γ(3) (Ize 2013).
-pub(crate) const WIDEN: f32 = 1.0 + 2.0 * gamma(3);
-
-/// Per-ray values reused by every node test.
-pub(crate) struct RayBoxes {
-    origin: [f32x8; 3],
-    /// Minus the reciprocal direction. A slab is computed as
-    /// (origin − bound)·(−1/d): the value of (bound − origin)·(1/d), since
-    /// negation is exact (only a zero's sign may differ), with the bound as
-    /// the subtraction's second operand, which x86 reads straight from
-    /// memory (six fewer loads per node test).
-    neg_inv: [f32x8; 3],
-    near: [usize; 3],
-    far: [usize; 3],
-}
-
-impl RayBoxes {
-    #[inline(always)]
-    pub(crate) fn new(ray: &Ray) -> Self {
-        // The whole ray in one register: [o, d, tmin, tmax]. Lanes 3 to 5
-        // become the reciprocal direction, with zero components replaced
-        // by ±f32::MAX (the zero's sign) so no slab computes 0·∞ = NaN
-        // (the other lanes' quotients are unused).
-        let c = f32x8::from(ray.components());
-        let zero_d = c.simd_eq(f32x8::ZERO);
-        let signed_max = (c & f32x8::splat(-0.0)) | f32x8::splat(f32::MAX);
-        let inv = zero_d.select(signed_max, f32x8::splat(1.0) / c);
-        // Row 2·axis holds the minima and 2·axis + 1 the maxima: a negative
-        // direction (the reciprocal keeps its sign) enters through the maximum.
-        let neg = inv.to_bitmask() as usize >> 3;
-        let inv = inv.to_array();
-        let near = [neg & 1, 2 | (neg >> 1 & 1), 4 | (neg >> 2 & 1)];
-        let far = near.map(|row| row ^ 1);
-        let c = c.to_array();
-        Self {
-            origin: [c[0], c[1], c[2]].map(f32x8::splat),
-            neg_inv: [-inv[3], -inv[4], -inv[5]].map(f32x8::splat),
-            near,
-            far,
-        }
-    }
-
-    /// The eight children's entry and exit distances, clipped to [tmin, tmax].
-    #[inline(always)]
-    fn slabs(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, f32x8) {
-        let slab = |axis: usize, side: usize| {
-            (self.origin[axis] - f32x8::from(bounds[side])) * self.neg_inv[axis]
-        };
-        // No slab is NaN (finite bounds or ±∞ for empty slots, finite
-        // nonzero reciprocals), so the plain min/max instructions suffice;
-        // `f32x8::max` would add a NaN check and a blend to each.
-        let tn = slab(0, self.near[0])
-            .fast_max(slab(1, self.near[1]))
-            .fast_max(slab(2, self.near[2]).fast_max(f32x8::splat(tmin)));
-        let tf = slab(0, self.far[0])
-            .fast_min(slab(1, self.far[1]))
-            .fast_min(slab(2, self.far[2]).fast_min(f32x8::splat(tmax)));
-        (tn, tf)
-    }
-
-    /// Entry distances and the mask of children the ray may enter.
-    #[inline(always)]
-    pub(crate) fn test(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> (f32x8, u32) {
-        let (tn, tf) = self.slabs(bounds, tmin, tmax);
-        let tf = tf * f32x8::splat(WIDEN);
-        (tn, tn.simd_le(tf).to_bitmask())
-    }
-
-    /// Like [`RayBoxes::test`] for a line that may run through boxes at
-    /// negative t: both ends are widened by their own magnitude, so a
-    /// box behind the origin is not culled by rounding either.
-    #[inline(always)]
-    pub(super) fn test_line(&self, bounds: &[[f32; 8]; 6], tmin: f32, tmax: f32) -> u32 {
-        let (tn, tf) = self.slabs(bounds, tmin, tmax);
-        let g = f32x8::splat(2.0 * gamma(3));
-        (tn - g * tn.abs()).simd_le(tf + g * tf.abs()).to_bitmask()
-    }
-}
 
 /// `t` as a key whose unsigned order is the order of t (negative values
 /// flipped below the positive ones), for sorting distances as integers.
@@ -173,10 +87,23 @@ pub(super) fn nearest_last(tn: f32x8, mask: u32, child: &[u32; 8]) -> [u64; 8] {
     })
 }
 
+/// The first of the children in `mask` (not empty), with the others
+/// pushed onto `stack` in slot order and no key: a walk in any order
+/// neither sorts nor prunes what it deferred.
+#[inline(always)]
+pub(super) fn descend_any(stack: &mut Stack<u64>, child: &[u32; 8], mask: u32) -> u32 {
+    let mut rest = mask & (mask - 1);
+    while rest != 0 {
+        stack.push(child[rest.trailing_zeros() as usize % 8] as u64);
+        rest &= rest - 1;
+    }
+    child[mask.trailing_zeros() as usize % 8]
+}
+
 impl Bvh8 {
     /// The nearest of the children in `mask` (not empty), with the others
-    /// pushed onto `stack` farthest first: the step both traversals take at
-    /// a node. One child needs no sort; two need one comparison; three or
+    /// pushed onto `stack` farthest first: the step a nearest-first walk
+    /// takes at a node, alone or in flight. One child needs no sort; two need one comparison; three or
     /// more go through [`nearest_last`]. The two-child case costs an extra
     /// branch, which mispredicts on some nodes, but saves the network's
     /// six stages where two boxes are hit. Children hit are all prefetched

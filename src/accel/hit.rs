@@ -1,6 +1,7 @@
 //! What traversal reports for a hit, and the order that decides which of
 //! two hits is the closer.
 
+use crate::math::ray::hit_before;
 use crate::math::Ray;
 
 /// What traversal reports for the closest hit so far.
@@ -17,14 +18,25 @@ pub struct PrimHit {
     pub part: u32,
 }
 
-/// The ray a candidate is tested with once `best` is known: its interval
-/// includes `best.t` itself, so a candidate at exactly the same distance is
-/// seen and [`closer`] can break the tie.
+/// Where the interval a candidate is tested in ends once `best` is known:
+/// just past `best.t`, so that a candidate at exactly the same distance
+/// is seen and [`closer`] can break the tie; `tmax` while there is none.
+#[inline(always)]
+pub fn tie_end(tmax: f32, best: Option<&PrimHit>) -> f32 {
+    match best {
+        Some(b) => b.t.next_up(),
+        None => tmax,
+    }
+}
+
+/// The ray a candidate is tested with once `best` is known: `ray` ending
+/// at [`tie_end`]. A branch, not a select: a walk's first leaf has no
+/// best yet, and a select would compute `next_up` for it too.
 #[inline(always)]
 pub fn tie_ray(ray: &Ray, best: Option<&PrimHit>) -> Ray {
     match best {
-        Some(b) => Ray {
-            tmax: b.t.next_up(),
+        Some(_) => Ray {
+            tmax: tie_end(ray.tmax, best),
             ..*ray
         },
         None => *ray,
@@ -32,13 +44,28 @@ pub fn tie_ray(ray: &Ray, best: Option<&PrimHit>) -> Ray {
 }
 
 /// The closest-hit order: smaller t, and on equal t (a ray through an edge
-/// shared by two triangles) the smaller primitive id. A total order, so the
-/// answer does not depend on the order the traversal visits leaves in:
-/// single rays and packets return identical hits.
+/// shared by two triangles) the smaller primitive id
+/// ([`crate::math::ray::hit_before`], which the 8-wide triangle test
+/// decides by too). A total order, so the answer does not depend on the
+/// order the traversal visits leaves in: single rays and packets return
+/// identical hits.
 #[inline(always)]
 pub fn closer(h: &PrimHit, best: Option<&PrimHit>) -> bool {
     match best {
-        Some(b) => h.t < b.t || (h.t == b.t && h.prim < b.prim),
+        Some(b) => hit_before(h.t, h.prim, b.t, b.prim),
         None => true,
     }
+}
+
+/// Keeps `hit` in `best` if it is [`closer`], and then ends the interval
+/// later candidates are tested in, `end`, at its [`tie_end`]: the step of
+/// a leaf test that tries its candidates one by one. True if it kept it.
+#[inline(always)]
+pub fn keep_tied(best: &mut Option<PrimHit>, end: &mut f32, hit: PrimHit) -> bool {
+    let kept = closer(&hit, best.as_ref());
+    if kept {
+        *end = tie_end(*end, Some(&hit));
+        *best = Some(hit);
+    }
+    kept
 }

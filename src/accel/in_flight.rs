@@ -15,8 +15,9 @@
 //! only the order of memory accesses across rays changes.
 
 use super::build::Bvh8;
+use super::node_test::RayBoxes;
 use super::query::Query;
-use super::walk::Walk;
+use super::walk::{NearestFirst, Walk};
 use crate::math::Ray;
 
 /// Rays in flight at once: a batch's width; more would spend registers
@@ -56,19 +57,20 @@ impl Bvh8 {
         let mut next = 0;
         // Restarts `walk` for the next ray to walk; its index, or None
         // once every ray has been started.
-        let mut launch = |walk: &mut Walk<Q::State>, query: &mut Q, out: &[Q::Answer]| {
+        let mut launch = |walk: &mut Walk<RayBoxes, Q::State>, query: &mut Q, out: &[Q::Answer]| {
             while next < rays.len() {
                 let i = next;
                 next += 1;
                 if !done(&out[i]) {
-                    walk.restart(&rays[i], query.start(&rays[i]));
+                    walk.restart(&rays[i], RayBoxes::new(&rays[i]), query.start(&rays[i]));
                     return Some(i);
                 }
             }
             None
         };
-        let mut walks: [Walk<Q::State>; IN_FLIGHT] =
-            std::array::from_fn(|_| Walk::new(&rays[0], query.start(&rays[0])));
+        let boxes = RayBoxes::new(&rays[0]);
+        let mut walks: [Walk<RayBoxes, Q::State>; IN_FLIGHT] =
+            std::array::from_fn(|_| Walk::new(&rays[0], boxes, query.start(&rays[0])));
         let mut index = [0; IN_FLIGHT];
         let mut live = 0u32;
         for (k, (walk, i)) in walks.iter_mut().zip(&mut index).enumerate() {
@@ -82,7 +84,9 @@ impl Bvh8 {
             while m != 0 {
                 let k = m.trailing_zeros() as usize % IN_FLIGHT;
                 m &= m - 1;
-                if let Some(a) = walks[k].step(self, leaf_data, query, self.prefetch) {
+                let step =
+                    walks[k].step::<NearestFirst, Q, L>(self, leaf_data, query, self.prefetch);
+                if let Some(a) = step {
                     out[index[k]] = a;
                     match launch(&mut walks[k], query, out) {
                         Some(i) => index[k] = i,
@@ -98,7 +102,7 @@ impl Bvh8 {
 mod tests {
     use super::super::build::BuildQuality;
     use super::super::hit::PrimHit;
-    use super::super::query::{AnyHit, Closest};
+    use super::super::query::{ClosestHit, Occlusion};
     use super::super::walk::tests::{sphere_cloud, sphere_hit, spheres_block};
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
@@ -162,14 +166,14 @@ mod tests {
             let expected: Vec<Option<PrimHit>> = rays
                 .iter()
                 .map(|ray| {
-                    bvh.closest(ray, NO_DATA, |start, count, r| {
+                    bvh.closest_hit(ray, NO_DATA, |start, count, r| {
                         record(&single, r, start, count);
                         bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
                     })
                 })
                 .collect();
             let mut got = vec![None; n];
-            let mut query = Closest::new(|calls: &mut u32, start, count, r: &Ray| {
+            let mut query = ClosestHit::new(|calls: &mut u32, start, count, r: &Ray| {
                 *calls += 1;
                 assert_eq!(
                     *calls as usize,
@@ -189,7 +193,7 @@ mod tests {
     /// unwalked, and with walks that stop at a blocker while their stacks
     /// still hold entries, spilled ones included, before the next ray reuses them.
     #[test]
-    fn any_hit_walks_in_flight_answer_and_visit_what_single_rays_do() {
+    fn occlusion_walks_in_flight_answer_and_visit_what_single_rays_do() {
         let (spheres, bvh) = cloud();
         let blocks = |start, count, r: &Ray| spheres_block(&bvh, &spheres, start, count, r);
         for n in [0, 1, 5, 1001] {
@@ -201,14 +205,14 @@ mod tests {
                 .enumerate()
                 .map(|(i, ray)| {
                     skipped(i)
-                        || bvh.any_hit(ray, NO_DATA, |start, count, r| {
+                        || bvh.occluded(ray, NO_DATA, |start, count, r| {
                             record(&single, r, start, count);
                             blocks(start, count, r)
                         })
                 })
                 .collect();
             let mut got: Vec<bool> = (0..n).map(skipped).collect();
-            let mut query = AnyHit::new(|_: &mut (), start, count, r: &Ray| {
+            let mut query = Occlusion::new(|_: &mut (), start, count, r: &Ray| {
                 record(&in_flight, r, start, count);
                 blocks(start, count, r)
             });
@@ -240,11 +244,11 @@ mod tests {
             });
             20
         ];
-        let mut query = Closest::new(|_: &mut (), _, _, _: &Ray| unreachable!());
+        let mut query = ClosestHit::new(|_: &mut (), _, _, _: &Ray| unreachable!());
         bvh.walk_in_flight(&rays, NO_DATA, &mut query, &mut closest, |_| false);
         assert!(closest.iter().all(Option::is_none));
         let mut blocked: Vec<bool> = (0..20).map(|i| i % 2 == 0).collect();
-        let mut query = AnyHit::new(|_: &mut (), _, _, _: &Ray| unreachable!());
+        let mut query = Occlusion::new(|_: &mut (), _, _, _: &Ray| unreachable!());
         bvh.walk_in_flight(&rays, NO_DATA, &mut query, &mut blocked, |&b| b);
         assert_eq!(blocked, (0..20).map(|i| i % 2 == 0).collect::<Vec<_>>());
     }

@@ -10,13 +10,17 @@
 //! overflows. Ours honours `[tmin, tmax]`, uses the watertight test and
 //! spills to the heap instead of dropping work.
 //!
-//! Four traversal orders, each written once and generic over its
-//! [`Query`] (closest hit, any hit): one ray at a time (`walk`, going
-//! down a node as `descend` says, deferring children on a `stack`);
-//! several single-ray walks `in_flight` on one thread, so that their cache
-//! misses overlap; a `packet` of eight rays in lanes, for the eight
-//! consecutive rays of a stream `narrow` enough to share a walk; a
-//! `bundle` of up to 64 alike rays, node by node.
+//! The walks are generic over what they ask at a node (`node_test`: a
+//! ray's slab test, a whole line's, the distance to a point, or a
+//! caller's own, which reads a node's child boxes and nothing else of
+//! it) and at a leaf (`query`: closest hit, occlusion, every leaf), and
+//! each traversal order is written once: one ray depth first, nearest
+//! child first or in any order (`walk`, going down a node as `descend`
+//! says, deferring children on a `stack`); several single-ray walks
+//! `in_flight` on one thread, so that their cache misses overlap; best
+//! first by distance (`nearest`); a `packet` of eight rays in lanes, for
+//! the eight consecutive rays of a stream `narrow` enough to share a
+//! walk; a `bundle` of up to 64 alike rays, node by node.
 
 pub mod build;
 pub mod bundle;
@@ -27,7 +31,8 @@ pub mod hit;
 pub mod in_flight;
 pub mod narrow;
 mod nearest;
-pub mod node;
+mod node;
+pub mod node_test;
 pub mod packet;
 pub mod prefetch;
 pub mod query;
@@ -38,5 +43,10 @@ mod walk;
 pub use build::{BuildQuality, Bvh8, TreeStats};
 pub use collapse::NO_PRIM;
 pub use hit::PrimHit;
+pub use nearest::NearestQueue;
+pub use node_test::{ChildBoxes, NodeTest};
 pub use packet::{Packet, PACKET_SIZE};
-pub use query::{AnyHit, AnyHitPacket, Closest, ClosestPacket, PacketQuery, Query};
+pub use query::{
+    ClosestHit, ClosestHitPacket, EveryLeaf, Occlusion, OcclusionPacket, PacketQuery, Query,
+};
+pub use walk::{AnyOrder, NearestFirst, WalkOrder};

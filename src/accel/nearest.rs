@@ -1,50 +1,83 @@
-//! The nearest-point walk: leaves in the order of their boxes' distance
-//! from a point, best first, as far as a bound that the leaf test lowers
-//! as it finds nearer candidates (what a point query on the tree asks,
-//! whatever the leaves hold).
+//! The best-first walk: leaves in the order of their boxes' distance
+//! (what the walk's node test says it is), as far as a bound that the
+//! leaf test lowers as it finds nearer candidates. With the distance to
+//! a point ([`PointBoxes`]) it is the nearest-point walk, whatever the
+//! leaves hold; geometry walks an instance's prototype with a lower
+//! bound of world distance of its own.
 //!
-//! Best first (a binary heap keyed by squared box distance) rather than
-//! depth first: a leaf is tested only once every nearer box has been
-//! opened, so a walk tests no leaf whose box is farther than the answer.
-//! Squared distances of the eight children of a node come from one
-//! 8-wide computation over the node's boxes.
+//! Best first (a binary heap keyed by box distance) rather than depth
+//! first: a leaf is tested only once every nearer box has been opened,
+//! so a walk tests no leaf whose box is farther than the answer. The
+//! eight children of a node are measured in one 8-wide node test.
 
 use super::build::Bvh8;
-use super::node::{is_leaf, leaf_range, Node8, EMPTY};
+use super::node::{is_leaf, leaf_range, EMPTY};
+use super::node_test::{ChildBoxes, NodeTest, PointBoxes};
+use crate::math::lanes::mask_lanes;
 use glam::Vec3;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-use wide::f32x8;
+
+/// The queue of a best-first walk, which a caller that walks many trees
+/// (an instance's prototype per instance) may keep to reuse its memory.
+/// Entries are (distance bits << 32) | child reference: distances are
+/// never negative, so their bits order as they do, and each key is
+/// unique (child references are), so the walk's order is the same
+/// whatever the heap's own order of equal keys.
+#[derive(Debug, Clone, Default)]
+pub struct NearestQueue(BinaryHeap<Reverse<u64>>);
+
+impl NearestQueue {
+    pub fn new() -> Self {
+        Self(BinaryHeap::with_capacity(64))
+    }
+}
 
 impl Bvh8 {
     /// Visits the leaves whose boxes lie within squared distance `bound`
-    /// of `point`, nearest box first (equal distances in child order).
+    /// of `point`, nearest box first (equal distances in child order):
+    /// [`Bvh8::nearest_by`] with the boxes' squared distance to `point`.
     /// `leaf(start, count, bound)` tests the leaf holding slots
     /// `start..start + count` and returns the bound for the rest of the
     /// walk: `bound` itself, or less once it has found something nearer.
-    /// The walk ends when the nearest box left is beyond the bound.
     ///
     /// Box distances are computed in f32 and compared with `bound` as
     /// they are: a caller whose leaf distances carry rounding error of
     /// their own widens the bound it returns by that error.
+    pub fn nearest<L, F>(&self, point: Vec3, bound: f32, leaf_data: &[L], leaf: F)
+    where
+        F: FnMut(u32, u32, f32) -> f32,
+    {
+        let mut queue = NearestQueue::new();
+        self.nearest_by(PointBoxes::new(point), bound, leaf_data, &mut queue, leaf);
+    }
+
+    /// The best-first walk: visits the leaves whose distance by `test`
+    /// is within `bound`, nearest first, calling `leaf(start, count,
+    /// bound)`, which returns the bound for the rest of the walk. The
+    /// walk ends when the nearest entry left is beyond the bound.
     ///
     /// `leaf_data` is as for [`Bvh8::walk`]: what the leaf test reads for
     /// the leaf at `start` is `leaf_data[start / LANES]`. Children are
     /// prefetched as they are queued (where the tree prefetches), so the
-    /// misses of the nodes and leaves a walk will open overlap.
-    pub fn nearest<L, F>(&self, point: Vec3, mut bound: f32, leaf_data: &[L], mut leaf: F)
-    where
+    /// misses of the nodes and leaves a walk will open overlap. `queue`
+    /// is emptied first.
+    pub fn nearest_by<T, L, F>(
+        &self,
+        test: T,
+        mut bound: f32,
+        leaf_data: &[L],
+        queue: &mut NearestQueue,
+        mut leaf: F,
+    ) where
+        T: NodeTest,
         F: FnMut(u32, u32, f32) -> f32,
     {
         if self.nodes.is_empty() {
             return;
         }
-        let p = point.to_array().map(f32x8::splat);
-        // Entries are (squared distance bits << 32) | child reference:
-        // distances are never negative, so their bits order as they do.
-        // Each entry's key is unique (child references are), so the walk's
-        // order is the same whatever the heap's own order of equal keys.
-        let mut heap: BinaryHeap<Reverse<u64>> = BinaryHeap::with_capacity(64);
+        let heap = &mut queue.0;
+        heap.clear();
         // The entry to open next when it is known to be the nearest left
         // (a node's nearest child, if no queued entry is nearer): it skips
         // the heap, as a ray's walk enters its nearest child at once.
@@ -60,15 +93,16 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let d2 = box_distances(node, &p).to_array();
+            let (d2, within) = test.test(ChildBoxes::new(&node.bounds), bound);
+            let d2 = d2.to_array();
             let mut nearest = u64::MAX;
-            for (slot, &d2) in d2.iter().enumerate() {
+            for slot in mask_lanes(within) {
                 let c = node.child[slot];
-                if c != EMPTY && d2 <= bound {
+                if c != EMPTY {
                     if self.prefetch {
                         self.prefetch_child(c, leaf_data);
                     }
-                    let key = (d2.to_bits() as u64) << 32 | c as u64;
+                    let key = (d2[slot].to_bits() as u64) << 32 | c as u64;
                     if key < nearest {
                         if nearest != u64::MAX {
                             heap.push(Reverse(nearest));
@@ -87,20 +121,6 @@ impl Bvh8 {
             }
         }
     }
-}
-
-/// The squared distance from `p` to each of the node's eight boxes (0
-/// inside; +∞ for an empty slot, whose box is inverted and infinite).
-#[inline(always)]
-fn box_distances(node: &Node8, p: &[f32x8; 3]) -> f32x8 {
-    let mut d2 = f32x8::ZERO;
-    for (axis, &p) in p.iter().enumerate() {
-        let below = f32x8::from(node.bounds[2 * axis]) - p;
-        let above = p - f32x8::from(node.bounds[2 * axis + 1]);
-        let d = below.max(above).max(f32x8::ZERO);
-        d2 += d * d;
-    }
-    d2
 }
 
 #[cfg(test)]

@@ -24,8 +24,8 @@
 //! accepts, every lane tests a superset of the primitives its single ray
 //! would test, with the same leaf test, and the closest hit is the minimum
 //! of a total order (t, then primitive id; see [`super::hit::closer`]),
-//! so each lane's answer is bit-identical to [`Bvh8::closest`] /
-//! [`Bvh8::any_hit`] on that ray.
+//! so each lane's answer is bit-identical to [`Bvh8::closest_hit`] /
+//! [`Bvh8::occluded`] on that ray.
 //!
 //! The interval test needs every lane's direction to have the same sign on
 //! an axis. An axis where the signs differ (the lens samples of a pixel
@@ -39,8 +39,8 @@
 //! by one.
 
 use super::build::Bvh8;
-use super::descend::WIDEN;
 use super::node::{decode, ChildRef};
+use super::node_test::WIDEN;
 use super::query::PacketQuery;
 use super::stack::Stack;
 use crate::math::lanes::{mask_lanes, LANES};
@@ -381,7 +381,7 @@ impl Bvh8 {
             tmax_v = f32x8::from(tmax);
         }
         let mut packet_tmax = max_lane(&tmax);
-        // Rays still walking: an any-hit ray leaves at its first blocker.
+        // Rays still walking: an occlusion ray leaves at its first blocker.
         let mut open = packet.live;
         let mut stack: Stack<(u32, f32, u32)> = Stack::new();
         stack.push((0, f32::NEG_INFINITY, open));
@@ -469,8 +469,8 @@ impl Bvh8 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::descend::RayBoxes;
     use super::super::node::Node8;
+    use super::super::node_test::{ChildBoxes, NodeTest, RayBoxes};
     use super::*;
     use crate::sampling::stream::{seeded, Draw, StreamRng as Rng};
     use glam::Vec3;
@@ -606,7 +606,7 @@ mod tests {
             }
             missed += 1;
             for (i, ray) in rays.iter().enumerate() {
-                let (_, single) = RayBoxes::new(ray).test(&node.bounds, ray.tmin, ray.tmax);
+                let (_, single) = RayBoxes::new(ray).test(ChildBoxes::new(&node.bounds), ray.tmax);
                 assert_eq!(single, 0, "kind {kind}, lane {i}: {ray:?} enters {node:?}");
             }
         }
@@ -634,7 +634,8 @@ mod tests {
             let check = |node_mask: u32, lanes: &dyn Fn(usize) -> u32| {
                 let mut n = 0;
                 for (i, ray) in rays.iter().enumerate() {
-                    let (_, single) = RayBoxes::new(ray).test(&node.bounds, ray.tmin, ray.tmax);
+                    let (_, single) =
+                        RayBoxes::new(ray).test(ChildBoxes::new(&node.bounds), ray.tmax);
                     for slot in 0..8 {
                         if single >> slot & 1 == 1 {
                             n += 1;

@@ -2,7 +2,7 @@
 //!
 //! Each traversal order (one ray, rays in flight, a bundle, a packet) is
 //! written once, generic over its query and monomorphised, as obvhs's
-//! `traverse!` takes its leaf action: closest hit and any hit are two
+//! `traverse!` takes its leaf action: closest hit and occlusion are two
 //! queries of the same walks, not copies of them. A query is one value
 //! for a whole call (what the leaf test needs: a scene, the primitive to
 //! skip); what it keeps per ray between leaves (the closest hit so far, a
@@ -21,8 +21,8 @@ pub trait Query {
     /// What a finished walk answers.
     type Answer;
     /// True where a hit shortens the ray (closest hit): deferred children
-    /// beyond the ray's new end are then skipped. An any-hit query ends the
-    /// walk instead.
+    /// beyond the ray's new end are then skipped. An occlusion query ends
+    /// the walk instead.
     const SHORTENS: bool;
 
     /// The state of a walk that starts for `ray`.
@@ -48,12 +48,12 @@ pub trait Query {
 /// itself ([`tie_ray`]), so the answer is the least hit in a total order
 /// ([`closer`]) whatever order the walk visits leaves in: every traversal
 /// order returns the same hit, bit for bit.
-pub struct Closest<F, S = ()> {
+pub struct ClosestHit<F, S = ()> {
     hit_leaf: F,
     state: std::marker::PhantomData<S>,
 }
 
-impl<F, S> Closest<F, S>
+impl<F, S> ClosestHit<F, S>
 where
     F: FnMut(&mut S, u32, u32, &Ray) -> Option<PrimHit>,
 {
@@ -71,7 +71,7 @@ pub struct ClosestState<S> {
     pub leaf: S,
 }
 
-impl<F, S> Query for Closest<F, S>
+impl<F, S> Query for ClosestHit<F, S>
 where
     S: Default,
     F: FnMut(&mut S, u32, u32, &Ray) -> Option<PrimHit>,
@@ -116,14 +116,14 @@ pub fn keep_closer(best: &mut Option<PrimHit>, ray: &mut Ray, hit: Option<PrimHi
 }
 
 /// Whether anything blocks the ray in `(tmin, tmax)`, from a leaf test
-/// `blocks_leaf(state, start, count, ray)`; `S` as for [`Closest`]. The
+/// `blocks_leaf(state, start, count, ray)`; `S` as for [`ClosestHit`]. The
 /// first blocker ends the walk.
-pub struct AnyHit<F, S = ()> {
+pub struct Occlusion<F, S = ()> {
     blocks_leaf: F,
     state: std::marker::PhantomData<S>,
 }
 
-impl<F, S> AnyHit<F, S>
+impl<F, S> Occlusion<F, S>
 where
     F: FnMut(&mut S, u32, u32, &Ray) -> bool,
 {
@@ -135,7 +135,7 @@ where
     }
 }
 
-impl<F, S> Query for AnyHit<F, S>
+impl<F, S> Query for Occlusion<F, S>
 where
     S: Default,
     F: FnMut(&mut S, u32, u32, &Ray) -> bool,
@@ -160,6 +160,32 @@ where
     }
 }
 
+/// Every leaf a walk reaches: `visit(start, count)` at each, and nothing
+/// ends the walk or shortens the ray (every crossing of a line, every
+/// leaf near a ray; [`super::AnyOrder`] walks them unsorted).
+pub struct EveryLeaf<F>(pub F);
+
+impl<F> Query for EveryLeaf<F>
+where
+    F: FnMut(u32, u32),
+{
+    type State = ();
+    type Answer = ();
+    const SHORTENS: bool = false;
+
+    #[inline(always)]
+    fn start(&mut self, _: &Ray) {}
+
+    #[inline(always)]
+    fn leaf(&mut self, _: &mut (), start: u32, count: u32, _: &mut Ray) -> bool {
+        (self.0)(start, count);
+        false
+    }
+
+    #[inline(always)]
+    fn answer(&mut self, _: &(), _: bool) {}
+}
+
 /// A question asked of the leaves of a packet's walk, for the packet's
 /// rays in lanes.
 pub trait PacketQuery {
@@ -167,7 +193,7 @@ pub trait PacketQuery {
     type Answer: Copy + Default;
     /// As [`Query::SHORTENS`]: a closest-hit packet sorts the children it
     /// enters nearest first and skips those beyond every open ray's end;
-    /// an any-hit packet closes a ray at its first blocker.
+    /// an occlusion packet closes a ray at its first blocker.
     const SHORTENS: bool;
 
     /// Tests the leaf at `start..start + count` for the rays in the bits
@@ -182,9 +208,9 @@ pub trait PacketQuery {
 /// Closest hits of a packet: `hit_leaf(start, count, lanes, out)` replaces
 /// `out[lane]` by any hit [`closer`] than it within the ray's interval and
 /// returns whether any changed.
-pub struct ClosestPacket<F>(pub F);
+pub struct ClosestHitPacket<F>(pub F);
 
-impl<F> PacketQuery for ClosestPacket<F>
+impl<F> PacketQuery for ClosestHitPacket<F>
 where
     F: FnMut(u32, u32, u32, &mut [Option<PrimHit>]) -> bool,
 {
@@ -208,9 +234,9 @@ where
 
 /// Occlusion of a packet: `blocks_leaf(start, count, lanes)` returns the
 /// lanes the leaf blocks.
-pub struct AnyHitPacket<F>(pub F);
+pub struct OcclusionPacket<F>(pub F);
 
-impl<F> PacketQuery for AnyHitPacket<F>
+impl<F> PacketQuery for OcclusionPacket<F>
 where
     F: FnMut(u32, u32, u32) -> u32,
 {

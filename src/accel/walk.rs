@@ -1,43 +1,74 @@
-//! One ray's walk through the 8-wide BVH, one node or leaf per step,
-//! generic over its [`Query`]: the loop of [`Bvh8::walk`] (and so of
-//! [`Bvh8::closest`] and [`Bvh8::any_hit`]), and the unit that
+//! The depth-first walk: one ray through the 8-wide BVH, one node or leaf
+//! per step, generic over its node test ([`NodeTest`]), its order
+//! ([`WalkOrder`]) and its [`Query`], all monomorphised: the loop of
+//! [`Bvh8::walk_by`] (and so of [`Bvh8::walk`], [`Bvh8::closest_hit`],
+//! [`Bvh8::occluded`] and [`Bvh8::visit_line`]), and the unit that
 //! [`super::in_flight`] interleaves across several rays. Keeping a walk's
 //! state in a value rather than in a loop's locals is what lets both run
 //! the same steps, so a ray's answer does not depend on which of them
 //! traced it.
 //!
-//! Children are visited nearest first ([`super::descend`]). A closest-hit
-//! walk skips a deferred child beyond its nearest hit; an any-hit walk
+//! Nearest first ([`NearestFirst`], [`super::descend`]), a closest-hit
+//! walk skips a deferred child beyond its nearest hit; an occlusion walk
 //! ends at its first blocker, and sorting its children still pays: the
-//! nearest boxes hold the blocker a little more often
-//! (docs/embree.md, "Sorted occlusion").
+//! nearest boxes hold the blocker a little more often (docs/embree.md,
+//! "Sorted occlusion"). In any order ([`AnyOrder`]) nothing is sorted,
+//! for queries that visit every leaf they reach (every crossing of a
+//! line).
 
 use super::build::Bvh8;
-use super::descend::{order_key, RayBoxes, WIDEN};
+use super::descend::{descend_any, order_key};
 use super::hit::{tie_ray, PrimHit};
-use super::node::{decode, is_leaf, leaf_range, ChildRef};
-use super::query::{keep_closer, AnyHit, Closest, Query};
+use super::node::{is_leaf, leaf_range};
+use super::node_test::{ChildBoxes, LineBoxes, NodeTest, RayBoxes};
+use super::query::{keep_closer, ClosestHit, EveryLeaf, Occlusion, Query};
 use super::stack::Stack;
 use crate::math::Ray;
 
-/// Where a walk stands: its ray (whose `tmax` a closest hit lowers), the
-/// ray's slab constants, the children it deferred, the node or leaf its
-/// next step visits, and its query's state.
-pub(crate) struct Walk<S> {
+/// The order a depth-first walk visits the children it enters in.
+pub trait WalkOrder {
+    /// Nearest first, each deferred child keyed by its distance, so that
+    /// a walk whose ray a hit shortens skips those beyond its end; else
+    /// no order, and nothing sorted.
+    const NEAREST_FIRST: bool;
+}
+
+/// Nearest child first, the others deferred farthest first: closest hit
+/// and occlusion.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NearestFirst;
+
+/// In any order, nothing sorted: for a query that visits every leaf its
+/// walk reaches.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AnyOrder;
+
+impl WalkOrder for NearestFirst {
+    const NEAREST_FIRST: bool = true;
+}
+
+impl WalkOrder for AnyOrder {
+    const NEAREST_FIRST: bool = false;
+}
+
+/// Where a walk stands: its ray (whose `tmax` a closest hit lowers), its
+/// node test, the children it deferred, the node or leaf its next step
+/// visits, and its query's state.
+pub(crate) struct Walk<T, S> {
     ray: Ray,
-    boxes: RayBoxes,
+    test: T,
     stack: Stack<u64>,
     current: u32,
     state: S,
 }
 
-impl<S> Walk<S> {
+impl<T: NodeTest, S> Walk<T, S> {
     /// A walk that starts at the root of a tree with at least one node.
     #[inline(always)]
-    pub(crate) fn new(ray: &Ray, state: S) -> Self {
+    pub(crate) fn new(ray: &Ray, test: T, state: S) -> Self {
         Self {
             ray: *ray,
-            boxes: RayBoxes::new(ray),
+            test,
             stack: Stack::new(),
             current: 0,
             state,
@@ -46,9 +77,9 @@ impl<S> Walk<S> {
 
     /// Starts the walk over for `ray`, reusing the stack's memory.
     #[inline(always)]
-    pub(crate) fn restart(&mut self, ray: &Ray, state: S) {
+    pub(crate) fn restart(&mut self, ray: &Ray, test: T, state: S) {
         self.ray = *ray;
-        self.boxes = RayBoxes::new(ray);
+        self.test = test;
         self.stack.clear();
         self.current = 0;
         self.state = state;
@@ -59,7 +90,7 @@ impl<S> Walk<S> {
     /// `prefetch_next` the node or leaf picked is prefetched at once: worth
     /// it only when other rays' steps run before this walk's next one.
     #[inline(always)]
-    pub(crate) fn step<Q, L>(
+    pub(crate) fn step<O, Q, L>(
         &mut self,
         bvh: &Bvh8,
         leaf_data: &[L],
@@ -67,17 +98,21 @@ impl<S> Walk<S> {
         prefetch_next: bool,
     ) -> Option<Q::Answer>
     where
+        O: WalkOrder,
         Q: Query<State = S>,
     {
         if !is_leaf(self.current) {
-            // An inner node: into its nearest child the ray enters, the
-            // others pushed farthest first. A ray that enters one child
-            // per level never touches the stack.
+            // An inner node: into one child the ray enters (nearest
+            // first: the nearest), the others pushed (farthest first). A
+            // ray that enters one child per level never touches the stack.
             let node = &bvh.nodes[self.current as usize];
-            let (tn, mask) = self.boxes.test(&node.bounds, self.ray.tmin, self.ray.tmax);
+            let (tn, mask) = self.test.test(ChildBoxes::new(&node.bounds), self.ray.tmax);
             if mask != 0 {
-                self.current =
-                    bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask);
+                self.current = if O::NEAREST_FIRST {
+                    bvh.descend_nearest(&mut self.stack, leaf_data, &node.child, tn, mask)
+                } else {
+                    descend_any(&mut self.stack, &node.child, mask)
+                };
                 if prefetch_next {
                     bvh.prefetch_child(self.current, leaf_data);
                 }
@@ -95,13 +130,15 @@ impl<S> Walk<S> {
         // whose box holds a triangle at exactly the best t (a ray along
         // an edge shared across two leaves) must still be visited, or the
         // tie would go to whichever leaf came first. Keys carry a slot in
-        // their low bits (see `nearest_last`). An any-hit ray's end never
-        // moves, so every child it pushed is still in reach.
-        let reach = order_key(self.ray.tmax * WIDEN) | 7;
+        // their low bits (see `nearest_last`). An occlusion ray's end
+        // never moves, so every child it pushed is still in reach.
+        let reach = order_key(self.test.widened(self.ray.tmax)) | 7;
         loop {
             match self.stack.pop() {
                 None => return Some(query.answer(&self.state, false)),
-                Some(entry) if !Q::SHORTENS || (entry >> 32) as u32 <= reach => {
+                Some(entry)
+                    if !O::NEAREST_FIRST || !Q::SHORTENS || (entry >> 32) as u32 <= reach =>
+                {
                     self.current = entry as u32;
                     if prefetch_next {
                         bvh.prefetch_child(self.current, leaf_data);
@@ -115,54 +152,76 @@ impl<S> Walk<S> {
 }
 
 impl Bvh8 {
-    /// Walks `ray` through the tree asking `query` at every leaf it may
-    /// reach, nearest first, and returns the query's answer.
+    /// Walks `ray` through the tree depth first, entering the children
+    /// `test` accepts within the ray's end (as a closest hit lowers it)
+    /// in `order`, and asking `query` at every leaf it reaches; returns
+    /// the query's answer.
     ///
     /// `leaf_data[start / LANES]` is what the query reads for the leaf
     /// at `start` (a scene's triangle blocks), prefetched when the leaf is
-    /// deferred; a caller whose leaf tests read nothing block-shaped passes
-    /// an empty slice, and only nodes are prefetched.
+    /// deferred nearest first; a caller whose leaf tests read nothing
+    /// block-shaped passes an empty slice, and only nodes are prefetched.
     #[inline(always)]
-    pub fn walk<Q, L>(&self, ray: &Ray, leaf_data: &[L], query: &mut Q) -> Q::Answer
+    pub fn walk_by<T, O, Q, L>(
+        &self,
+        ray: &Ray,
+        test: T,
+        _order: O,
+        leaf_data: &[L],
+        query: &mut Q,
+    ) -> Q::Answer
     where
+        T: NodeTest,
+        O: WalkOrder,
         Q: Query,
     {
         let state = query.start(ray);
         if self.nodes.is_empty() {
             return query.answer(&state, false);
         }
-        let mut walk = Walk::new(ray, state);
+        let mut walk = Walk::new(ray, test, state);
         loop {
-            if let Some(answer) = walk.step(self, leaf_data, query, false) {
+            if let Some(answer) = walk.step::<O, Q, L>(self, leaf_data, query, false) {
                 return answer;
             }
         }
     }
 
-    /// Closest hit in `(ray.tmin, ray.tmax)`: [`Bvh8::walk`] with
-    /// [`Closest`], whose leaf test is `hit_leaf(start, count, ray)`.
+    /// The walk of a ray: [`Bvh8::walk_by`] with the ray's slab test,
+    /// nearest child first.
     #[inline(always)]
-    pub fn closest<L, F>(&self, ray: &Ray, leaf_data: &[L], mut hit_leaf: F) -> Option<PrimHit>
+    pub fn walk<Q, L>(&self, ray: &Ray, leaf_data: &[L], query: &mut Q) -> Q::Answer
+    where
+        Q: Query,
+    {
+        self.walk_by(ray, RayBoxes::new(ray), NearestFirst, leaf_data, query)
+    }
+
+    /// Closest hit in `(ray.tmin, ray.tmax)`: [`Bvh8::walk`] with
+    /// [`ClosestHit`], whose leaf test is `hit_leaf(start, count, ray)`.
+    #[inline(always)]
+    pub fn closest_hit<L, F>(&self, ray: &Ray, leaf_data: &[L], mut hit_leaf: F) -> Option<PrimHit>
     where
         F: FnMut(u32, u32, &Ray) -> Option<PrimHit>,
     {
-        let mut query = Closest::new(|_: &mut (), start, count, r: &Ray| hit_leaf(start, count, r));
+        let mut query =
+            ClosestHit::new(|_: &mut (), start, count, r: &Ray| hit_leaf(start, count, r));
         self.walk(ray, leaf_data, &mut query)
     }
 
     /// True if any leaf reports a blocker in `(tmin, tmax)`: [`Bvh8::walk`]
-    /// with [`AnyHit`], whose leaf test is `blocks_leaf(start, count, ray)`.
+    /// with [`Occlusion`], whose leaf test is `blocks_leaf(start, count, ray)`.
     #[inline(always)]
-    pub fn any_hit<L, F>(&self, ray: &Ray, leaf_data: &[L], mut blocks_leaf: F) -> bool
+    pub fn occluded<L, F>(&self, ray: &Ray, leaf_data: &[L], mut blocks_leaf: F) -> bool
     where
         F: FnMut(u32, u32, &Ray) -> bool,
     {
         let mut query =
-            AnyHit::new(|_: &mut (), start, count, r: &Ray| blocks_leaf(start, count, r));
+            Occlusion::new(|_: &mut (), start, count, r: &Ray| blocks_leaf(start, count, r));
         self.walk(ray, leaf_data, &mut query)
     }
 
-    /// A leaf test for [`Bvh8::closest`] from a per-primitive one:
+    /// A leaf test for [`Bvh8::closest_hit`] from a per-primitive one:
     /// `hit_prim(slot, id, ray)` must return a hit only if it is nearer
     /// than `ray.tmax`.
     #[inline(always)]
@@ -196,40 +255,21 @@ impl Bvh8 {
     /// Calls `visit` for every primitive whose box the line
     /// `origin + t·direction` may meet for t in `[tmin, tmax]`, which may be
     /// infinite: CSG needs the crossings of the whole line, behind the
-    /// origin too. No order; `visit` sees each candidate once.
+    /// origin too. [`Bvh8::walk_by`] in any order with the line's test
+    /// (`LineBoxes`); `visit` sees each candidate once.
     pub fn visit_line<F>(&self, ray: &Ray, mut visit: F)
     where
         F: FnMut(u32),
     {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let boxes = RayBoxes::new(ray);
-        let mut stack: Stack<u32> = Stack::new();
-        stack.push(0);
-        while let Some(child) = stack.pop() {
-            match decode(child) {
-                ChildRef::Node(n) => {
-                    let node = &self.nodes[n as usize];
-                    let mut mask = boxes.test_line(&node.bounds, ray.tmin, ray.tmax);
-                    while mask != 0 {
-                        let slot = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        stack.push(node.child[slot]);
-                    }
-                }
-                ChildRef::Leaf { start, count } => {
-                    for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
-                        visit(prim);
-                    }
-                }
-                ChildRef::Empty => {}
+        let mut query = EveryLeaf(|start: u32, count: u32| {
+            for &prim in &self.prim_ids[start as usize..(start + count) as usize] {
+                visit(prim);
             }
-        }
+        });
+        self.walk_by(ray, LineBoxes::new(ray), AnyOrder, &[] as &[()], &mut query);
     }
 }
 
-#[cfg(test)]
 #[cfg(test)]
 pub(super) mod tests {
     use super::super::build::BuildQuality;
@@ -244,7 +284,7 @@ pub(super) mod tests {
     const NO_DATA: &[()] = &[];
 
     /// Whether a sphere of leaf `start..start + count` of `bvh` blocks `r`:
-    /// the any-hit leaf test of the walk tests here and in `stream` and
+    /// the occlusion leaf test of the walk tests here and in `stream` and
     /// `bundle`.
     pub(in crate::accel) fn spheres_block(
         bvh: &Bvh8,
@@ -295,7 +335,7 @@ pub(super) mod tests {
 
     /// Random spheres, checked against brute force for every preset.
     #[test]
-    fn closest_and_any_hit_agree_with_brute_force_for_every_quality() {
+    fn closest_hit_and_occlusion_agree_with_brute_force_for_every_quality() {
         let mut spheres = Vec::new();
         let mut rng = seeded(1);
         let mut rnd = || rng.unit();
@@ -335,12 +375,12 @@ pub(super) mod tests {
                 let brute = (0..500u32)
                     .filter_map(|i| hit(i, &ray))
                     .min_by(|a, b| a.t.total_cmp(&b.t));
-                let got = bvh.closest(&ray, NO_DATA, |start, count, r| {
+                let got = bvh.closest_hit(&ray, NO_DATA, |start, count, r| {
                     bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
                 });
                 assert_eq!(got.map(|h| h.prim), brute.map(|h| h.prim), "{quality:?}");
                 assert_eq!(
-                    bvh.any_hit(&ray, NO_DATA, |start, count, r| {
+                    bvh.occluded(&ray, NO_DATA, |start, count, r| {
                         spheres_block(&bvh, &spheres, start, count, r)
                     }),
                     brute.is_some()
@@ -357,7 +397,7 @@ pub(super) mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Auto);
         // A ray along +x exactly in the box's bottom face plane.
         let ray = Ray::new(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
-        let hit = bvh.closest(&ray, NO_DATA, |start, _, _| {
+        let hit = bvh.closest_hit(&ray, NO_DATA, |start, _, _| {
             Some(PrimHit {
                 t: 1.0,
                 prim: bvh.prim_ids[start as usize],
@@ -368,8 +408,8 @@ pub(super) mod tests {
         });
         assert!(hit.is_some());
         let empty = Bvh8::build(&[], BuildQuality::Auto);
-        assert!(empty.closest(&ray, NO_DATA, |_, _, _| None).is_none());
-        assert!(!empty.any_hit(&ray, NO_DATA, |_, _, _| true));
+        assert!(empty.closest_hit(&ray, NO_DATA, |_, _, _| None).is_none());
+        assert!(!empty.occluded(&ray, NO_DATA, |_, _, _| true));
     }
 
     #[test]
@@ -402,7 +442,7 @@ pub(super) mod tests {
         let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
         let ray = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z);
         let mut visited = 0;
-        bvh.any_hit(&ray, NO_DATA, |_, count, _| {
+        bvh.occluded(&ray, NO_DATA, |_, count, _| {
             visited += count;
             false
         });

@@ -71,7 +71,7 @@ pub fn rays(scene: &Scene, kind: RayKind, packets: usize, seed: u32) -> Vec<[Ray
         .collect()
 }
 
-/// Closest hit or any hit.
+/// Closest hit or occlusion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Query {
     Closest,

@@ -99,7 +99,7 @@ impl Geometry {
     /// rays as bundles ([module docs](self)) where the tree is small
     /// enough for them to pay ([`BUNDLE_MAX_BYTES`]).
     pub fn split_stream(&self, rays: &[Ray], mut visit: impl FnMut(StreamPart)) {
-        if self.traversal_bytes() > BUNDLE_MAX_BYTES || self.bvh.nodes.is_empty() {
+        if self.traversal_bytes() > BUNDLE_MAX_BYTES || self.bvh.is_empty() {
             visit(StreamPart::Unlike(0..rays.len()));
             return;
         }

@@ -15,7 +15,6 @@
 
 use super::csg::Csg;
 use super::{Geometry, Surface};
-use crate::accel::node::{decode, ChildRef};
 use crate::accel::{BuildQuality, Bvh8, PrimHit};
 use crate::math::lanes::LANES;
 use crate::math::offset::{gamma, transformed_error};
@@ -127,21 +126,10 @@ impl Instance {
                 out.grow(w - e).grow(w + e)
             })
         };
-        let Some(root) = prototype.bvh.nodes.first() else {
-            return Aabb::EMPTY;
-        };
-        let mut out = Aabb::EMPTY;
-        for (k, &c) in root.child.iter().enumerate() {
-            if decode(c) != ChildRef::Empty {
-                let b = &root.bounds;
-                let child = Aabb::new(
-                    Vec3::new(b[0][k], b[2][k], b[4][k]),
-                    Vec3::new(b[1][k], b[3][k], b[5][k]),
-                );
-                out = out.union(moved(child));
-            }
-        }
-        out
+        prototype
+            .bvh
+            .root_boxes()
+            .fold(Aabb::EMPTY, |out, child| out.union(moved(child)))
     }
 
     /// The world-space surface of a hit on this instance: `hit.part` is

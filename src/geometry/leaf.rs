@@ -4,7 +4,7 @@
 //! analytic shapes the leaf holds one by one.
 
 use super::Geometry;
-use crate::accel::hit::closer;
+use crate::accel::hit::{closer, keep_tied, tie_end, tie_ray};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::math::lanes::LANES;
 use crate::math::Ray;
@@ -44,20 +44,14 @@ impl Geometry {
             part: (b * LANES + h.lane) as u32,
         });
         if self.has_others() {
-            let mut ray = Ray {
-                tmax: best.map_or(ray.tmax, |h| h.t.next_up()),
-                ..*ray
-            };
+            let mut ray = tie_ray(ray, best.as_ref());
             let mut m = lanes;
             while m != 0 {
                 let id = block.id[m.trailing_zeros() as usize];
                 m &= m - 1;
                 if id >= self.triangle_count {
                     if let Some(h) = self.hit_other(id, &ray) {
-                        if closer(&h, best.as_ref()) {
-                            ray.tmax = h.t.next_up();
-                            best = Some(h);
-                        }
+                        keep_tied(&mut best, &mut ray.tmax, h);
                     }
                 }
             }
@@ -138,10 +132,7 @@ impl Geometry {
                 let i = r.trailing_zeros() as usize;
                 r &= r - 1;
                 // Up to and including the best t, for ties, as below.
-                let ray = Ray {
-                    tmax: out[i].map_or(rays[i].tmax, |h| h.t.next_up()),
-                    ..rays[i]
-                };
+                let ray = tie_ray(&rays[i], out[i].as_ref());
                 if let Some(h) = self.hit_leaf(start, count, &ray, &ShearedRay::new(&ray)) {
                     if closer(&h, out[i].as_ref()) {
                         out[i] = Some(h);
@@ -156,7 +147,7 @@ impl Geometry {
         // Each ray's interval: up to and including its best t, for ties.
         let mut tmax = [f32::NEG_INFINITY; PACKET_SIZE];
         for (i, r) in rays.iter().enumerate() {
-            tmax[i] = out[i].map_or(r.tmax, |h| h.t.next_up());
+            tmax[i] = tie_end(r.tmax, out[i].as_ref());
         }
         let mut m = lanes;
         while m != 0 {
@@ -176,11 +167,7 @@ impl Geometry {
                         v: v[i],
                         part: (b * LANES + lane) as u32,
                     };
-                    if closer(&h, out[i].as_ref()) {
-                        out[i] = Some(h);
-                        tmax[i] = h.t.next_up();
-                        changed = true;
-                    }
+                    changed |= keep_tied(&mut out[i], &mut tmax[i], h);
                 }
             } else {
                 let mut r = rays_mask;
@@ -192,11 +179,7 @@ impl Geometry {
                         ..rays[i]
                     };
                     if let Some(h) = self.hit_other(id, &ray) {
-                        if closer(&h, out[i].as_ref()) {
-                            out[i] = Some(h);
-                            tmax[i] = h.t.next_up();
-                            changed = true;
-                        }
+                        changed |= keep_tied(&mut out[i], &mut tmax[i], h);
                     }
                 }
             }

@@ -14,6 +14,7 @@
 mod placed;
 
 use super::Geometry;
+use crate::accel::NearestQueue;
 use crate::math::lanes::{mask_lanes, LANES};
 use crate::shape::triangle_lanes::TriangleBlock;
 use glam::Vec3;
@@ -200,7 +201,7 @@ impl Geometry {
         let reach = self.reach(point);
         let instances = self.first_instance()..self.primitive_count() as u32;
         let mut best: Option<Best> = None;
-        let mut queue = placed::Queue::new();
+        let mut queue = NearestQueue::new();
         self.bvh.nearest(
             point,
             reach(max_distance),

@@ -33,6 +33,17 @@ pub fn ray_lanes(rays: &[Ray]) -> [f32x8; 8] {
     f32x8::transpose(rows)
 }
 
+/// The closest-hit order of two hits on one ray, (t, primitive id):
+/// true if the hit at `t` on primitive `id` comes before the one at
+/// `than_t` on `than_id`, by smaller t and on equal t (a ray through an
+/// edge two triangles share) by the smaller id. A total order, so a
+/// closest hit does not depend on the order its candidates are met in:
+/// the one rule of the triangle lanes and of traversal (`accel::hit`).
+#[inline(always)]
+pub fn hit_before(t: f32, id: u32, than_t: f32, than_id: u32) -> bool {
+    t < than_t || (t == than_t && id < than_id)
+}
+
 impl Ray {
     /// `[ox, oy, oz, dx, dy, dz, tmin, tmax]`: the order of ray files'
     /// records and of [`ray_lanes`].

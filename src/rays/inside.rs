@@ -12,7 +12,7 @@
 //! whether a crossing at t = 0 counts differs between intersectors.
 
 use super::{Generator, MeshInfo, Stream};
-use crate::accel::{BuildQuality, Bvh8};
+use crate::accel::{BuildQuality, Bvh8, EveryLeaf};
 use crate::math::{Aabb, Ray};
 use crate::shape::triangle::{geometric_normal, intersect, ShearedRay};
 use glam::{DVec3, Vec3};
@@ -48,19 +48,19 @@ impl<'a> Inside<'a> {
         let sheared = ShearedRay::new(ray);
         let mut winding = 0;
         // Triangles are read by id, not in leaf blocks: nodes are prefetched only.
-        self.bvh.any_hit(ray, &[] as &[()], |start, count, r| {
+        let mut every = EveryLeaf(|start, count| {
             for (_, id) in self.bvh.leaf_prims(start, count) {
                 let tri = &self.triangles[id as usize];
-                if intersect(r, &sheared, tri).is_some() {
-                    winding += if geometric_normal(tri).dot(r.direction) > 0.0 {
+                if intersect(ray, &sheared, tri).is_some() {
+                    winding += if geometric_normal(tri).dot(ray.direction) > 0.0 {
                         1
                     } else {
                         -1
                     };
                 }
             }
-            false
         });
+        self.bvh.walk(ray, &[] as &[()], &mut every);
         winding
     }
 
@@ -83,14 +83,14 @@ impl<'a> Inside<'a> {
     fn winding_crossings(&self, ray: &Ray) -> u32 {
         let sheared = ShearedRay::new(ray);
         let mut crossings = 0;
-        self.bvh.any_hit(ray, &[] as &[()], |start, count, r| {
+        let mut every = EveryLeaf(|start, count| {
             for (_, id) in self.bvh.leaf_prims(start, count) {
-                if intersect(r, &sheared, &self.triangles[id as usize]).is_some() {
+                if intersect(ray, &sheared, &self.triangles[id as usize]).is_some() {
                     crossings += 1;
                 }
             }
-            false
         });
+        self.bvh.walk(ray, &[] as &[()], &mut every);
         crossings
     }
 }

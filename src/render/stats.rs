@@ -135,7 +135,7 @@ impl RenderStats {
             analytic_shapes: g.shapes.len(),
             planes: g.planes.len(),
             bvh_quality: timings.bvh_quality,
-            bvh_nodes: g.bvh.nodes.len(),
+            bvh_nodes: g.bvh.node_count(),
             bvh_bytes: g.bvh.memory_bytes(),
             bvh_prefetch: g.bvh.prefetch,
             peak_rss_bytes: peak_rss_bytes(),

@@ -16,6 +16,7 @@
 use super::triangle::ShearedRay;
 use crate::math::lanes::LANES;
 use crate::math::offset::gamma;
+use crate::math::ray::hit_before;
 use crate::math::Ray;
 use glam::Vec3;
 use wide::f32x8;
@@ -103,8 +104,8 @@ pub fn intersect(
 }
 
 /// The closest hit among `lanes`: smallest t, then smallest primitive id
-/// (the traversal's total order, so the answer does not depend on which
-/// lane a triangle sits in).
+/// ([`hit_before`], the traversal's total order, so the answer does not
+/// depend on which lane a triangle sits in).
 #[inline(always)]
 pub fn closest(ray: &Ray, s: &ShearedRay, block: &TriangleBlock, lanes: u32) -> Option<LaneHit> {
     let (mut hit, t, u, v) = intersect(ray, s, block, lanes);
@@ -114,7 +115,7 @@ pub fn closest(ray: &Ray, s: &ShearedRay, block: &TriangleBlock, lanes: u32) -> 
         hit &= hit - 1;
         let better = match best {
             None => true,
-            Some(b) => t[lane] < b.t || (t[lane] == b.t && block.id[lane] < block.id[b.lane]),
+            Some(b) => hit_before(t[lane], block.id[lane], b.t, block.id[b.lane]),
         };
         if better {
             best = Some(LaneHit {

@@ -5,14 +5,14 @@
 //! The walk must not cull a box that holds a triangle the world test
 //! crosses, though the object-space ray is the world ray rounded: a ray
 //! aimed at a vertex meets it at a corner of the boxes around it, and the
-//! rounded ray may pass that corner on the outside. So the walk is its
-//! own: every child box grown by what rounding may move the ray and the
-//! triangles in object space ([`PlacedRounding`]), and no order (a
-//! crossing query needs none).
+//! rounded ray may pass that corner on the outside. So the walk has a
+//! node test of its own ([`GrownSlab`]): every child box grown by what
+//! rounding may move the ray and the triangles in object space
+//! ([`PlacedRounding`]); and it walks in any order (a crossing query
+//! needs none).
 
 use super::Crossing;
-use crate::accel::node::{decode, ChildRef};
-use crate::accel::Bvh8;
+use crate::accel::{AnyOrder, ChildBoxes, EveryLeaf, NodeTest};
 use crate::geometry::placed_rounding::PlacedRounding;
 use crate::geometry::Geometry;
 use crate::math::lanes::{mask_lanes, LANES};
@@ -60,93 +60,64 @@ impl Geometry {
             sheared: s,
             found,
         };
-        leaves_near(&prototype.bvh, &walk_ray, margin, |start, count| {
-            query.leaf(start, count)
-        });
+        prototype.bvh.walk_by(
+            &walk_ray,
+            GrownSlab::new(&walk_ray, margin),
+            AnyOrder,
+            &prototype.leaf_blocks,
+            &mut EveryLeaf(|start, count| query.leaf(start, count)),
+        );
     }
 }
 
-/// Calls `leaf(start, count)` for every leaf whose box, grown by `margin`
-/// on every side, the ray may meet in `[tmin, tmax]` (both ends widened by
-/// 2γ(3) of their magnitude, as the walks widen theirs: Ize 2013).
-fn leaves_near(bvh: &Bvh8, ray: &Ray, margin: f32, mut leaf: impl FnMut(u32, u32)) {
-    if bvh.nodes.is_empty() {
-        return;
-    }
-    // A zero component becomes the least normal one, so that a slab the
-    // ray lies in reads 0·∞ as 0, not NaN.
-    let inv = ray.direction.to_array().map(|d| {
-        1.0 / if d == 0.0 {
-            f32::MIN_POSITIVE.copysign(d)
-        } else {
-            d
-        }
-    });
-    let origin = ray.origin.to_array();
-    let m = f32x8::splat(margin);
-    let g = f32x8::splat(2.0 * gamma(3));
-    let mut pending = Pending::default();
-    pending.push(0);
-    while let Some(child) = pending.pop() {
-        match decode(child) {
-            ChildRef::Node(n) => {
-                let node = &bvh.nodes[n as usize];
-                let mut near = f32x8::splat(ray.tmin);
-                let mut far = f32x8::splat(ray.tmax);
-                for axis in 0..3 {
-                    let lo = f32x8::from(node.bounds[2 * axis]) - m;
-                    let hi = f32x8::from(node.bounds[2 * axis + 1]) + m;
-                    let (enter, leave) = if inv[axis] >= 0.0 { (lo, hi) } else { (hi, lo) };
-                    let (o, i) = (f32x8::splat(origin[axis]), f32x8::splat(inv[axis]));
-                    near = near.fast_max((enter - o) * i);
-                    far = far.fast_min((leave - o) * i);
-                }
-                let meets = (near - g * near.abs()).simd_le(far + g * far.abs());
-                for slot in mask_lanes(meets.to_bitmask()) {
-                    pending.push(node.child[slot]);
-                }
+/// The node test of an instance's walk: every child box grown by
+/// `margin` on every side, met by the ray somewhere in `[tmin, reach]`,
+/// both ends widened by 2γ(3) of their magnitude, as the walks widen
+/// theirs (Ize 2013).
+struct GrownSlab {
+    origin: [f32; 3],
+    /// The reciprocal direction, a zero component the least normal one
+    /// (so that a slab the ray lies in reads 0·∞ as 0, not NaN).
+    inv: [f32; 3],
+    margin: f32x8,
+    tmin: f32,
+}
+
+impl GrownSlab {
+    fn new(ray: &Ray, margin: f32) -> Self {
+        let inv = ray.direction.to_array().map(|d| {
+            1.0 / if d == 0.0 {
+                f32::MIN_POSITIVE.copysign(d)
+            } else {
+                d
             }
-            ChildRef::Leaf { start, count } => leaf(start, count),
-            ChildRef::Empty => {}
-        }
-    }
-}
-
-/// The walk's stack of children still to visit: on the stack itself up to
-/// a depth no tree of ours reaches, on the heap past it.
-struct Pending {
-    fixed: [u32; 128],
-    len: usize,
-    spill: Vec<u32>,
-}
-
-impl Default for Pending {
-    fn default() -> Self {
+        });
         Self {
-            fixed: [0; 128],
-            len: 0,
-            spill: Vec::new(),
+            origin: ray.origin.to_array(),
+            inv,
+            margin: f32x8::splat(margin),
+            tmin: ray.tmin,
         }
     }
 }
 
-impl Pending {
+impl NodeTest for GrownSlab {
     #[inline(always)]
-    fn push(&mut self, child: u32) {
-        if self.len < self.fixed.len() {
-            self.fixed[self.len] = child;
-            self.len += 1;
-        } else {
-            self.spill.push(child);
+    fn test(&self, boxes: ChildBoxes<'_>, reach: f32) -> (f32x8, u32) {
+        let g = f32x8::splat(2.0 * gamma(3));
+        let mut near = f32x8::splat(self.tmin);
+        let mut far = f32x8::splat(reach);
+        for axis in 0..3 {
+            let lo = boxes.lo(axis) - self.margin;
+            let hi = boxes.hi(axis) + self.margin;
+            let inv = self.inv[axis];
+            let (enter, leave) = if inv >= 0.0 { (lo, hi) } else { (hi, lo) };
+            let (o, i) = (f32x8::splat(self.origin[axis]), f32x8::splat(inv));
+            near = near.fast_max((enter - o) * i);
+            far = far.fast_min((leave - o) * i);
         }
-    }
-
-    #[inline(always)]
-    fn pop(&mut self) -> Option<u32> {
-        self.spill.pop().or_else(|| {
-            self.len = self.len.checked_sub(1)?;
-            Some(self.fixed[self.len])
-        })
+        let meets = (near - g * near.abs()).simd_le(far + g * far.abs());
+        (near, meets.to_bitmask())
     }
 }
 
@@ -201,4 +172,106 @@ fn moved_block(block: &TriangleBlock, map: &Affine3A) -> TriangleBlock {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{BuildQuality, Bvh8, NO_PRIM};
+    use crate::math::Aabb;
+    use crate::sampling::stream::{seeded, Draw};
+    use glam::Vec3;
+    use std::collections::BTreeSet;
+
+    /// The primitives in the leaves a walk of `ray` reaches: with `grown`
+    /// the instance walk's, else the ray's own ([`Bvh8::walk`]).
+    fn reached(bvh: &Bvh8, ray: &Ray, grown: Option<GrownSlab>) -> BTreeSet<u32> {
+        let mut prims = BTreeSet::new();
+        let mut every = EveryLeaf(|start, count| {
+            prims.extend(bvh.leaf_prims(start, count).map(|(_, id)| id));
+        });
+        match grown {
+            Some(test) => bvh.walk_by(ray, test, AnyOrder, &[] as &[()], &mut every),
+            None => bvh.walk(ray, &[] as &[()], &mut every),
+        }
+        prims.remove(&NO_PRIM);
+        prims
+    }
+
+    /// Whether `ray` meets `b` grown by `margin` in `[tmin, tmax]`, in f64.
+    fn meets_grown(ray: &Ray, b: &Aabb, margin: f32) -> bool {
+        let (mut near, mut far) = (ray.tmin as f64, ray.tmax as f64);
+        for axis in 0..3 {
+            let (o, d) = (ray.origin[axis] as f64, ray.direction[axis] as f64);
+            let lo = b.min[axis] as f64 - margin as f64;
+            let hi = b.max[axis] as f64 + margin as f64;
+            if d == 0.0 {
+                if o < lo || o > hi {
+                    return false;
+                }
+                continue;
+            }
+            let (a, c) = ((lo - o) / d, (hi - o) / d);
+            near = near.max(a.min(c));
+            far = far.min(a.max(c));
+        }
+        near <= far
+    }
+
+    /// The grown slab reaches every leaf the ray's own walk reaches and
+    /// every leaf holding a box that the ray meets once grown by the
+    /// margin (brute force in f64), rays through vertices of the boxes
+    /// and along their faces included; and it still prunes.
+    #[test]
+    fn the_grown_slab_reaches_a_superset_of_the_ray_s_leaves_and_every_grown_box() {
+        let mut rng = seeded(31);
+        let boxes: Vec<Aabb> = (0..2000)
+            .map(|_| {
+                let c = rng.cube(20.0);
+                let h = rng.cube(0.8).abs();
+                Aabb::new(c - h, c + h)
+            })
+            .collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        let (mut extra, mut total) = (0, 0);
+        for i in 0..600 {
+            let target = boxes[i % boxes.len()];
+            // Aimed at a corner of a box, or along one of its faces.
+            let aim = if i % 2 == 0 {
+                target.min
+            } else {
+                Vec3::new(target.min.x, target.max.y, rng.range(-10.0, 10.0))
+            };
+            let origin = rng.cube(50.0);
+            let mut ray = Ray::new(origin, aim - origin);
+            if i % 5 == 0 {
+                // Parallel to a face, through the box's vertical edge (a
+                // ray in a face's plane itself is entered or not by the
+                // sign of its zero, in either test).
+                ray.direction.z = 0.0;
+                ray.origin.z = (target.min.z + target.max.z) / 2.0;
+            }
+            ray.tmax = if i % 3 == 0 {
+                f32::INFINITY
+            } else {
+                rng.range(0.5, 2.0)
+            };
+            let margin = [0.0, 1e-4, 0.05, 0.5][i % 4];
+            let own = reached(&bvh, &ray, None);
+            let grown = reached(&bvh, &ray, Some(GrownSlab::new(&ray, margin)));
+            assert!(grown.is_superset(&own), "ray {i}, margin {margin}");
+            for (id, b) in boxes.iter().enumerate() {
+                if meets_grown(&ray, b, margin) {
+                    assert!(grown.contains(&(id as u32)), "ray {i}: box {id}");
+                }
+            }
+            extra += grown.len() - own.len();
+            total += grown.len();
+        }
+        assert!(extra > 0, "the margin reaches more boxes");
+        assert!(
+            total < 600 * boxes.len() / 10,
+            "and the walk prunes: {total}"
+        );
+    }
 }

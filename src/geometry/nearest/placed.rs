@@ -15,19 +15,13 @@
 //! ([`PlacedRounding`]), so no triangle the copies would answer is culled.
 
 use super::{boxes_within, closest_point_on_triangle, Best};
-use crate::accel::node::{is_leaf, leaf_range, Node8, EMPTY};
+use crate::accel::{ChildBoxes, NearestQueue, NodeTest};
 use crate::geometry::placed_rounding::PlacedRounding;
 use crate::geometry::{Geometry, Instance};
 use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::Aabb;
 use glam::{Affine3A, Vec3};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 use wide::f32x8;
-
-/// The best-first walk's queue: (squared distance bits << 32) | child, as
-/// [`crate::accel::Bvh8::nearest`] keys it; kept across instances.
-pub(super) type Queue = BinaryHeap<Reverse<u64>>;
 
 impl Geometry {
     /// Offers `best` the nearest point of instance primitive `id` to
@@ -38,14 +32,14 @@ impl Geometry {
         &self,
         id: u32,
         point: Vec3,
-        mut bound: f32,
+        bound: f32,
         reach: &impl Fn(f32) -> f32,
         max_distance: f32,
         best: &mut Option<Best>,
-        queue: &mut Queue,
+        queue: &mut NearestQueue,
     ) {
         let (instance, prototype) = self.instance(id);
-        if box_distance2(&instance.world_bounds, point) > bound || prototype.bvh.nodes.is_empty() {
+        if box_distance2(&instance.world_bounds, point) > bound || prototype.bvh.is_empty() {
             return;
         }
         let map = instance.affine();
@@ -53,45 +47,30 @@ impl Geometry {
         let object = ObjectBound::new(instance, &rounding, point);
         let lower = LowerBound::new(&map, &rounding, &object, point);
         let p = object.point;
-        queue.clear();
-        queue.push(Reverse(0));
-        while let Some(Reverse(entry)) = queue.pop() {
-            if f32::from_bits((entry >> 32) as u32) > bound {
-                break;
-            }
-            let child = entry as u32;
-            if !is_leaf(child) {
-                let node = &prototype.bvh.nodes[child as usize];
-                let d2 = lower.of(node).to_array();
-                for (slot, &d2) in d2.iter().enumerate() {
-                    let c = node.child[slot];
-                    if c != EMPTY && d2 <= bound {
-                        queue.push(Reverse((d2.to_bits() as u64) << 32 | c as u64));
+        let blocks = &prototype.leaf_blocks;
+        prototype
+            .bvh
+            .nearest_by(lower, bound, blocks, queue, |start, count, bound| {
+                let (b, lanes) = Geometry::leaf_lanes(start, count);
+                let block = &blocks[b];
+                for lane in mask_lanes(boxes_within(block, p, object.of(bound)) & lanes) {
+                    let within = block.id[lane];
+                    if within >= prototype.triangle_count {
+                        continue;
                     }
+                    let world = block.triangle(lane).map(|v| map.transform_point3(v));
+                    let q = closest_point_on_triangle(point, &world);
+                    let candidate = Best {
+                        d2: (point - q).length_squared(),
+                        prim: id,
+                        within,
+                        part: (b * LANES + lane) as u32,
+                        point: q,
+                    };
+                    Best::offer(best, candidate, max_distance);
                 }
-                continue;
-            }
-            let (start, count) = leaf_range(child);
-            let (b, lanes) = Geometry::leaf_lanes(start, count);
-            let block = &prototype.leaf_blocks[b];
-            for lane in mask_lanes(boxes_within(block, p, object.of(bound)) & lanes) {
-                let within = block.id[lane];
-                if within >= prototype.triangle_count {
-                    continue;
-                }
-                let world = block.triangle(lane).map(|v| map.transform_point3(v));
-                let q = closest_point_on_triangle(point, &world);
-                let candidate = Best {
-                    d2: (point - q).length_squared(),
-                    prim: id,
-                    within,
-                    part: (b * LANES + lane) as u32,
-                    point: q,
-                };
-                Best::offer(best, candidate, max_distance);
-            }
-            bound = best.map_or(bound, |c| reach(c.d2.sqrt())).min(bound);
-        }
+                best.map_or(bound, |c| reach(c.d2.sqrt())).min(bound)
+            });
     }
 }
 
@@ -131,11 +110,11 @@ impl LowerBound {
     /// (its centre moved, its half extent by |M|) and its object-space
     /// distance shrunk by ‖M⁻¹‖₂, less rounding; garbage for empty slots.
     #[inline(always)]
-    fn of(&self, node: &Node8) -> f32x8 {
+    fn of(&self, boxes: ChildBoxes<'_>) -> f32x8 {
         let zero = f32x8::ZERO;
         let half = f32x8::splat(0.5);
-        let lo = |axis: usize| f32x8::from(node.bounds[2 * axis]);
-        let hi = |axis: usize| f32x8::from(node.bounds[2 * axis + 1]);
+        let lo = |axis: usize| boxes.lo(axis);
+        let hi = |axis: usize| boxes.hi(axis);
         let centre = [0, 1, 2].map(|j| (lo(j) + hi(j)) * half);
         let extent = [0, 1, 2].map(|j| (hi(j) - lo(j)) * half);
         let mut world = zero;
@@ -161,6 +140,16 @@ impl LowerBound {
         let object = ((object.sqrt() - f32x8::splat(self.object_slack)).fast_max(zero))
             * f32x8::splat(self.shrink);
         world.fast_max(object * object)
+    }
+}
+
+impl NodeTest for LowerBound {
+    /// The squared lower bounds, and the children within `reach`, a
+    /// squared world distance.
+    #[inline(always)]
+    fn test(&self, boxes: ChildBoxes<'_>, reach: f32) -> (f32x8, u32) {
+        let d2 = self.of(boxes);
+        (d2, d2.simd_le(f32x8::splat(reach)).to_bitmask())
     }
 }
 
@@ -202,5 +191,112 @@ impl ObjectBound {
         let grow = 1.0 + 8.0 * f32::EPSILON;
         let r = bound.sqrt() * self.stretch * grow + self.slack;
         r * r * grow
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{BuildQuality, Bvh8, NO_PRIM};
+    use crate::geometry::instance::NO_MATERIAL;
+    use crate::geometry::placed_rounding::spectral_norm;
+    use crate::sampling::stream::{seeded, Draw};
+    use glam::Mat3;
+
+    /// The best-first walk of a tree of object-space points, ordered and
+    /// pruned by [`LowerBound`], finds the point nearest in world space
+    /// (each point moved as a copy holds it) that brute force finds, under
+    /// non-uniform scales, shears and mirrors, with and without a bound;
+    /// and it prunes. A bound that overestimated a box's world distance
+    /// (a map's rows for its columns, ‖M⁻¹‖ left out) would cull the
+    /// nearest point.
+    #[test]
+    fn the_lower_bound_walk_finds_the_nearest_world_point_of_brute_force() {
+        let mut rng = seeded(77);
+        let points: Vec<Vec3> = (0..2000).map(|_| rng.cube(4.0)).collect();
+        let boxes: Vec<Aabb> = points.iter().map(|&p| Aabb::new(p, p)).collect();
+        let bvh = Bvh8::build(&boxes, BuildQuality::Medium);
+        let mut queue = NearestQueue::new();
+        let (mut opened_all, mut walks) = (0, 0);
+        for i in 0..300 {
+            let scale = Vec3::new(
+                rng.range(0.2, 3.0),
+                rng.range(0.2, 3.0),
+                rng.range(0.2, 3.0),
+            );
+            let mirror = if i % 2 == 0 { -1.0 } else { 1.0 };
+            let shear = Mat3::from_cols(
+                Vec3::X,
+                Vec3::new(rng.range(-0.5, 0.5), 1.0, 0.0),
+                Vec3::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), mirror),
+            );
+            let m = Mat3::from_diagonal(scale) * shear;
+            let to_world = Affine3A::from_mat3_translation(m, rng.cube(20.0));
+            let instance = Instance::new(to_world, 0, NO_MATERIAL, 0).expect("invertible");
+            let map = instance.affine();
+            // The rounding as `PlacedRounding::new` sizes it for this box.
+            let extent = Vec3::splat(2.0);
+            let to_world = Mat3::from(map.matrix3);
+            let abs = Mat3::from_cols(
+                to_world.x_axis.abs(),
+                to_world.y_axis.abs(),
+                to_world.z_axis.abs(),
+            );
+            let world = (abs * extent + Vec3::from(map.translation).abs()).length();
+            let stretch = spectral_norm(instance.to_object);
+            let wide = 16.0 * f32::EPSILON;
+            let cond = stretch
+                * (abs.x_axis.length_squared()
+                    + abs.y_axis.length_squared()
+                    + abs.z_axis.length_squared())
+                .sqrt();
+            let rounding = PlacedRounding {
+                stretch,
+                vertex: wide * (stretch * world + (cond + 1.0) * extent.length()),
+                world: 2.0 * wide * world,
+            };
+            let q = rng.cube(60.0);
+            let limit = if i % 3 == 0 {
+                rng.range(1.0, 100.0)
+            } else {
+                f32::INFINITY
+            };
+            let moved: Vec<Vec3> = points.iter().map(|&p| map.transform_point3(p)).collect();
+            let brute = (0..moved.len())
+                .map(|k| ((moved[k] - q).length_squared(), k as u32))
+                .filter(|&(d2, _)| d2 <= limit)
+                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let object = ObjectBound::new(&instance, &rounding, q);
+            let lower = LowerBound::new(&map, &rounding, &object, q);
+            let mut best: Option<(f32, u32)> = None;
+            let mut opened = 0;
+            bvh.nearest_by(
+                lower,
+                limit,
+                &[] as &[()],
+                &mut queue,
+                |start, count, bound| {
+                    opened += 1;
+                    for (_, id) in bvh.leaf_prims(start, count) {
+                        if id == NO_PRIM {
+                            continue;
+                        }
+                        let d2 = (moved[id as usize] - q).length_squared();
+                        if d2 <= bound && best.is_none_or(|b| (d2, id) < b) {
+                            best = Some((d2, id));
+                        }
+                    }
+                    best.map_or(bound, |b| b.0)
+                },
+            );
+            assert_eq!(best, brute, "map {i}: {m}, limit {limit}");
+            opened_all += opened;
+            walks += 1;
+        }
+        let leaves = bvh.prim_ids.len() / 4;
+        assert!(
+            opened_all < walks * leaves / 10,
+            "{opened_all} leaves in {walks} walks: the bound prunes"
+        );
     }
 }

@@ -329,7 +329,7 @@ pub(super) fn triangle_geometry(
 ) -> Result<Geometry, (String, usize)> {
     let boxes = triangle_boxes(&meshes, &sources)?;
     let mut bvh = Bvh8::build_from(boxes, quality);
-    bvh.nodes.shrink_to_fit();
+    bvh.shrink_to_fit();
     let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
     bvh.prim_ids = Vec::new();
     let triangle_count = meshes.last().map_or(0, |m| m.first + m.count);

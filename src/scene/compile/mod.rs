@@ -375,7 +375,7 @@ fn compile_for(
     let bvh_quality = quality.preset(boxes.len());
     let mut bvh = Bvh8::build_from_with_others(boxes, quality, n_tris);
     // The builder reserves room for more nodes than the collapse makes.
-    bvh.nodes.shrink_to_fit();
+    bvh.shrink_to_fit();
     // Store the vertices once, in the order the leaves read them, straight
     // from the (indexed) sources, with the leaf ids beside them: never two
     // copies of the triangles, and the BVH's own ids become redundant.
