@@ -626,6 +626,58 @@ fn only_the_cli_starts_processes() {
     }
 }
 
+/// What of `code` prints to the terminal: the print macros, the standard
+/// streams and indicatif. Code from the first `#[cfg(test)]` on is a test
+/// module's (ours come last in their file) and may print.
+fn prints(code: &str) -> Vec<&'static str> {
+    let code = code.split("#[cfg(test)]").next().unwrap_or("");
+    [
+        "println!",
+        "eprintln!",
+        "print!",
+        "eprint!",
+        "stdout()",
+        "stderr()",
+        "indicatif",
+    ]
+    .into_iter()
+    .filter(|p| {
+        // A whole word: `println!` is not the tail of `eprintln!`.
+        code.match_indices(p)
+            .any(|(i, _)| !code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_'))
+    })
+    .collect()
+}
+
+#[test]
+fn the_print_check_sees_each_way_of_printing_outside_tests() {
+    assert_eq!(prints("fn f() { eprintln!(\"x\"); }"), ["eprintln!"]);
+    assert_eq!(prints("use indicatif::ProgressBar;"), ["indicatif"]);
+    assert_eq!(
+        prints("let _ = std::io::stderr().write_all(b);"),
+        ["stderr()"]
+    );
+    assert!(prints("fn f() {}\n#[cfg(test)]\nmod tests { fn g() { println!(); } }").is_empty());
+}
+
+#[test]
+fn only_the_cli_prints() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let printing: Vec<String> = files
+        .iter()
+        .filter(|f| module_of(f) != "cli" && module_of(f) != "main")
+        .filter_map(|f| {
+            let found = prints(&code(&std::fs::read_to_string(f).unwrap()));
+            (!found.is_empty()).then(|| format!("{} ({})", f.display(), found.join(", ")))
+        })
+        .collect();
+    assert!(
+        printing.is_empty(),
+        "only src/cli/ prints: report through render's Observer or return warnings instead: {printing:?}"
+    );
+}
+
 #[test]
 fn no_source_file_passes_800_lines() {
     let mut files = Vec::new();
