@@ -14,6 +14,7 @@ mod embree;
 mod embree_instances;
 mod embree_native;
 mod environment;
+mod first_contact;
 mod first_hour;
 mod gltf_instances;
 mod instance_queries;

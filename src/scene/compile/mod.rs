@@ -20,7 +20,6 @@ use super::source_map::SourceMap;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
-use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::csg::Csg;
 use crate::geometry::{AnalyticPrim, Geometry, Instance, MeshRange, NO_TRANSFORM};
@@ -101,8 +100,7 @@ pub fn load_edited_scene_with_progress(
     progress: &LoadProgress,
 ) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let text = super::loaders::read_scene_file(path)?;
     let desc = super::parse::parse_edited(path, &text, edits)?;
     compile_for(
         &desc,
@@ -206,8 +204,7 @@ pub fn load_scene_for_tracing(
     quality: BuildQuality,
 ) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let text = super::loaders::read_scene_file(path)?;
     let desc = super::parse::parse_edited(path, &text, &[])?;
     let overrides = RenderOverrides::default();
     let progress = LoadProgress::default();
