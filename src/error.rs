@@ -17,6 +17,10 @@ pub struct InputError {
     /// The line of a scene file that `location` names, where known.
     pub line: Option<usize>,
     pub message: String,
+    /// Further mistakes found in the same run (a scene file's, in file
+    /// order), each shown on a line of its own after this one, so that one
+    /// run names them all. Empty for almost every error.
+    pub more: Vec<InputError>,
 }
 
 impl InputError {
@@ -30,12 +34,30 @@ impl InputError {
             location: location.into(),
             line: None,
             message: message.into(),
+            more: Vec::new(),
         }
     }
 
     /// An error about the file as a whole (unreadable, wrong format).
     pub fn file(file: impl AsRef<Path>, message: impl Into<String>) -> Self {
         Self::new(file, "", message)
+    }
+
+    /// One error holding `errors` in the order given (the first shown
+    /// first, the others in [`InputError::more`]); `None` if there are none.
+    pub fn all(errors: Vec<InputError>) -> Option<InputError> {
+        let mut errors = errors.into_iter().flat_map(InputError::into_each);
+        let mut first = errors.next()?;
+        first.more = errors.collect();
+        Some(first)
+    }
+
+    /// This error and its [`more`](InputError::more), one by one.
+    pub fn into_each(mut self) -> Vec<InputError> {
+        let more = std::mem::take(&mut self.more);
+        let mut each = vec![self];
+        each.extend(more.into_iter().flat_map(InputError::into_each));
+        each
     }
 
     /// The same error, placed on `line` of its file.
@@ -60,7 +82,12 @@ impl fmt::Display for InputError {
         if !self.location.is_empty() {
             write!(f, "{}: ", self.location)?;
         }
-        f.write_str(&message)
+        f.write_str(&message)?;
+        // One line per mistake: the CLI prefixes each with `error: `.
+        for more in &self.more {
+            write!(f, "\n{more}")?;
+        }
+        Ok(())
     }
 }
 

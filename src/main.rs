@@ -11,7 +11,10 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(cli::CliError::Input(e)) => {
-            eprintln!("error: {e}");
+            // A scene's several mistakes: one `error:` line each.
+            for e in e.into_each() {
+                eprintln!("error: {e}");
+            }
             ExitCode::from(2)
         }
         Err(cli::CliError::Internal(e)) => {

@@ -1,6 +1,6 @@
-//! Diffuse textures: images decoded once from PNG or JPEG, kept as 8-bit
-//! sRGB texels, and looked up bilinearly in linear space with a wrap mode
-//! per axis.
+//! Diffuse textures: images decoded once from PNG, JPEG, BMP or TGA,
+//! kept as 8-bit sRGB texels, and looked up bilinearly in linear space
+//! with a wrap mode per axis.
 //!
 //! A texture multiplies a material's diffuse colour: the albedo at a hit
 //! is `diffuse × texture(u, v)`, looked up once per hit. Mesh files name
@@ -117,23 +117,50 @@ impl Image {
         })
     }
 
-    /// Decode a PNG or JPEG file's bytes (the format is told by its first
-    /// bytes, not its name). Anything else, and anything truncated or
-    /// corrupt, is an error message; the `image` crate's default limit
-    /// (512 MiB) keeps a lying header from allocating more.
+    /// Decode an image file's bytes: PNG, JPEG, BMP or TGA, told by its
+    /// first bytes (TGA, which has none of its own, only by
+    /// [`Image::decode_file`]'s name). Anything else is an error naming
+    /// what it is, and anything truncated or corrupt one too; the `image`
+    /// crate's default limit (512 MiB) keeps a lying header from
+    /// allocating more.
     pub fn decode(bytes: &[u8]) -> Result<Self, String> {
+        Self::decode_as(bytes, None)
+    }
+
+    /// [`Image::decode`] for the bytes of file `name`, which may be TGA if
+    /// its name ends in `.tga` and no other format claims its first bytes.
+    pub fn decode_file(bytes: &[u8], name: &std::path::Path) -> Result<Self, String> {
+        let tga = name
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("tga"));
+        Self::decode_as(bytes, tga.then_some(image::ImageFormat::Tga))
+    }
+
+    fn decode_as(bytes: &[u8], by_name: Option<image::ImageFormat>) -> Result<Self, String> {
         use image::ImageFormat;
-        let format =
-            image::guess_format(bytes).map_err(|_| "not a PNG or JPEG image".to_string())?;
-        if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
+        let format = match (image::guess_format(bytes), by_name) {
+            (Ok(format), _) => format,
+            (Err(_), Some(format)) => format,
+            (Err(_), None) => return Err(not_an_image(bytes)),
+        };
+        if !matches!(
+            format,
+            ImageFormat::Png | ImageFormat::Jpeg | ImageFormat::Bmp | ImageFormat::Tga
+        ) {
+            let hdr = matches!(format, ImageFormat::OpenExr | ImageFormat::Hdr);
             return Err(format!(
-                "{} images are not supported as textures; use PNG or JPEG",
-                format.extensions_str().first().unwrap_or(&"these")
+                "{} is not a texture format; textures are {TEXTURE_FORMATS} images{}",
+                format_name(format),
+                if hdr {
+                    " (EXR and Radiance HDR images light a scene as an environment map)"
+                } else {
+                    ""
+                }
             ));
         }
         let decoded = image::ImageReader::with_format(std::io::Cursor::new(bytes), format)
             .decode()
-            .map_err(|e| format!("cannot decode the image: {e}"))?
+            .map_err(|e| format!("cannot decode the {} image: {e}", format_name(format)))?
             .into_rgb8();
         let (width, height) = decoded.dimensions();
         let texels = decoded
@@ -174,6 +201,42 @@ impl Image {
         let bottom = self.linear(x0, y1) * (1.0 - fx) + self.linear(x1, y1) * fx;
         top * (1.0 - fy) + bottom * fy
     }
+}
+
+/// The image formats textures are read from, for messages.
+pub const TEXTURE_FORMATS: &str = "PNG, JPEG, BMP or TGA";
+
+/// A format's usual name ("OpenEXR", "WebP").
+fn format_name(format: image::ImageFormat) -> String {
+    use image::ImageFormat;
+    match format {
+        ImageFormat::Png => "PNG".into(),
+        ImageFormat::Jpeg => "JPEG".into(),
+        ImageFormat::Bmp => "BMP".into(),
+        ImageFormat::Tga => "TGA".into(),
+        ImageFormat::OpenExr => "OpenEXR".into(),
+        ImageFormat::Hdr => "Radiance HDR".into(),
+        ImageFormat::WebP => "WebP".into(),
+        other => other
+            .extensions_str()
+            .first()
+            .map_or_else(|| format!("{other:?}"), |e| e.to_ascii_uppercase()),
+    }
+}
+
+/// What bytes that no image format claims are, as far as can be told.
+fn not_an_image(bytes: &[u8]) -> String {
+    let head = &bytes[..bytes.len().min(512)];
+    // UTF-8 up to where the head may have cut a character.
+    let utf8 = std::str::from_utf8(head).map_or_else(|e| e.error_len().is_none(), |_| true);
+    let what = if bytes.is_empty() {
+        "an empty file"
+    } else if utf8 && !head.contains(&0) {
+        "a text file"
+    } else {
+        "data of no image format strata knows"
+    };
+    format!("{what}, not an image; textures are {TEXTURE_FORMATS} images (TGA named .tga)")
 }
 
 /// Along one axis of `n` texels: the two texels whose centres surround
@@ -401,8 +464,11 @@ mod tests {
             assert!(got.abs_diff(want) <= 3, "{:?}", image.texels()[27]);
         }
 
-        assert!(Image::decode(b"").is_err());
-        assert!(Image::decode(b"hello, not an image").is_err());
+        let err = Image::decode(b"").unwrap_err();
+        assert!(err.starts_with("an empty file, not an image"), "{err}");
+        let err = Image::decode(b"hello, not an image").unwrap_err();
+        assert!(err.starts_with("a text file, not an image"), "{err}");
+        assert!(err.contains("PNG, JPEG, BMP or TGA"), "{err}");
         // (A cut inside the final IEND chunk still decodes: the texels are whole.)
         for cut in [8, 20, 33, png.len() / 2] {
             assert!(Image::decode(&png[..cut]).is_err(), "truncated to {cut}");
@@ -412,7 +478,29 @@ mod tests {
             ImageFormat::OpenExr,
         );
         let err = Image::decode(&exr).unwrap_err();
-        assert!(err.contains("exr") && err.contains("PNG or JPEG"), "{err}");
+        assert!(err.starts_with("OpenEXR is not a texture format"), "{err}");
+        assert!(err.contains("environment map"), "{err}");
+    }
+
+    /// BMP is told by its bytes; TGA, which has no signature, by its
+    /// name; both come out as the same texels as the PNG of the image.
+    #[test]
+    fn bmp_and_tga_decode_like_png() {
+        use image::{DynamicImage, ImageBuffer, ImageFormat, Rgb};
+        let rgb = ImageBuffer::from_fn(3, 2, |x, y| Rgb([x as u8 * 100, y as u8 * 200, 7]));
+        let image = DynamicImage::ImageRgb8(rgb);
+        let png = Image::decode(&encode(image.clone(), ImageFormat::Png)).unwrap();
+        let bmp = Image::decode(&encode(image.clone(), ImageFormat::Bmp)).unwrap();
+        assert_eq!(bmp, png);
+        let tga_bytes = encode(image, ImageFormat::Tga);
+        let tga = Image::decode_file(&tga_bytes, std::path::Path::new("wood.TGA")).unwrap();
+        assert_eq!(tga, png);
+        // Not named .tga, the same bytes are no image strata can tell.
+        let err = Image::decode_file(&tga_bytes, std::path::Path::new("wood.img")).unwrap_err();
+        assert!(err.contains("not an image"), "{err}");
+        // A GIF is named as what it is.
+        let gif = Image::decode(b"GIF89a\x01\x00\x01\x00").unwrap_err();
+        assert!(gif.starts_with("GIF is not a texture format"), "{gif}");
     }
 
     #[test]

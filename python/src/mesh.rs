@@ -318,8 +318,8 @@ impl Mesh {
         Ok(Self::new_from(geometry))
     }
 
-    /// Load a mesh file (OBJ, PLY, glTF or GLB) with strata's own loaders,
-    /// used as it is: triangle i of the file is face i.
+    /// Load a mesh file (OBJ, PLY, glTF, GLB, OFF or STL) with strata's own
+    /// loaders, used as it is: triangle i of the file is face i.
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a
     /// ValueError; FileNotFoundError if it does not exist) with strata's

@@ -77,7 +77,7 @@ class Mesh:
         """Build the mesh and its BVH from vertices ((n, 3) floats) and faces ((m, 3) integer indices)."""
     @staticmethod
     def load(path: Union[str, os.PathLike[str]]) -> "Mesh":
-        """Load an OBJ, PLY, glTF or GLB file with strata's loaders; triangle i of the file is face i."""
+        """Load an OBJ, PLY, glTF, GLB, OFF or STL file with strata's loaders; triangle i of the file is face i."""
     @property
     def triangle_count(self) -> int:
         """The number of triangles (faces)."""

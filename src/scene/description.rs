@@ -106,6 +106,23 @@ pub struct SceneDescription {
     /// Key paths that `--set` changed: an error there is the command line's.
     #[serde(skip)]
     pub edited: Vec<String>,
+    /// The file's mistakes found while reading it, in file order; the
+    /// compiler reports them with its own (see [`super::parse`]). Empty in
+    /// every description [`super::parse::parse_description`] returns.
+    #[serde(skip)]
+    pub mistakes: Vec<crate::error::InputError>,
+    /// The parts that did not read whole (`camera`, `lights[1]`,
+    /// `objects[0]`), held as defaults so the others keep their indices:
+    /// the compiler skips them, so their mistakes are not reported twice.
+    #[serde(skip)]
+    pub unread: Vec<String>,
+}
+
+impl SceneDescription {
+    /// Whether the part at key path `key` was left out for its mistakes.
+    pub fn is_unread(&self, key: &str) -> bool {
+        self.unread.iter().any(|u| u == key)
+    }
 }
 
 crate::mode::mode_enum! {

@@ -1,28 +1,53 @@
 //! Reading a scene file into a [`SceneDescription`], with errors that name
-//! the file and the line.
+//! the file and the line: every mistake of the file in one run, in file
+//! order.
+//!
+//! serde stops at its first error, so the file is parsed as TOML once and
+//! then read part by part: the `[render]` table, `[camera]`, each material,
+//! each light, each object. A part that does not read is reported and left
+//! out, and the others are still read; inside a table, a key serde refuses
+//! is reported and dropped, and the table read again without it, so that
+//! two bad keys of one table are two errors. A TOML syntax error stops the
+//! reading (what follows it has no sure meaning), and is the only error.
 
-use super::description::SceneDescription;
+use super::description::{LightDesc, MaterialDesc, ObjectDesc, SceneDescription};
 use super::edit::{self, Edit};
 use super::source_map::SourceMap;
 use crate::error::{InputError, InputResult};
+use serde::de::IntoDeserializer;
+use serde::Deserialize;
+use std::collections::BTreeMap;
 use std::path::Path;
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
 
 /// Parse scene text with `--set` edits applied. The text as written is
 /// checked first, so its own mistakes are reported at its lines; what is
 /// wrong after that comes from an edit, and is reported as that `--set`.
+///
+/// Without edits, the description may hold [`SceneDescription::mistakes`]:
+/// the parts of the file that did not read are left out of it, and the
+/// compiler reports those mistakes together with its own, so that one run
+/// names every mistake of the file. (Every caller compiles what it gets.)
 pub fn parse_edited(path: &Path, text: &str, edits: &[Edit]) -> InputResult<SceneDescription> {
-    let as_written = parse_description(path, text)?;
+    let as_written = read_leniently(path, text)?;
     if edits.is_empty() {
         return Ok(as_written);
     }
+    if let Some(mistakes) = InputError::all(as_written.mistakes) {
+        return Err(mistakes);
+    }
     let edited = edit::apply(text, edits)?;
     let mut desc = parse_description(path, &edited).map_err(|e| {
-        let edit = edits
-            .iter()
-            .rev()
-            .find(|edit| within(&e.location, &edit.path) || within(&edit.path, &e.location))
-            .unwrap_or(&edits[edits.len() - 1]);
-        InputError::new("<command line>", edit.flag(), e.message)
+        let blamed = e.into_each().into_iter().map(|e| {
+            let edit = edits
+                .iter()
+                .rev()
+                .find(|edit| within(&e.location, &edit.path) || within(&edit.path, &e.location))
+                .unwrap_or(&edits[edits.len() - 1]);
+            InputError::new("<command line>", edit.flag(), e.message)
+        });
+        InputError::all(blamed.collect()).expect("an error holds one mistake at least")
     })?;
     desc.source = as_written.source;
     desc.edited = edits.iter().map(|e| e.path.clone()).collect();
@@ -37,24 +62,234 @@ pub fn within(inner: &str, outer: &str) -> bool {
 }
 
 /// Parse scene text read from `path`. A malformed value is reported at its
-/// line with its key path (`lights[1].radiance`), from the span serde gives.
+/// line with its key path (`lights[1].radiance`), from the span serde
+/// gives; every such mistake of the file is reported, in file order.
 pub fn parse_description(path: &Path, text: &str) -> InputResult<SceneDescription> {
+    let mut desc = read_leniently(path, text)?;
+    match InputError::all(std::mem::take(&mut desc.mistakes)) {
+        Some(mistakes) => Err(mistakes),
+        None => Ok(desc),
+    }
+}
+
+/// The top-level keys of a scene file.
+const SECTIONS: &[&str] = &["render", "camera", "materials", "lights", "objects"];
+
+/// What of `text` reads, with a mistake for each part that does not
+/// ([`SceneDescription::mistakes`], in file order) and the key path of each
+/// light, object or camera left out for it ([`SceneDescription::unread`]).
+/// Only a TOML syntax error is an `Err`.
+pub fn read_leniently(path: &Path, text: &str) -> InputResult<SceneDescription> {
     let source = SourceMap::new(text);
-    match toml::from_str::<SceneDescription>(text) {
-        Ok(mut desc) => {
-            desc.source = source;
-            Ok(desc)
-        }
-        Err(e) => {
-            let (line, key) = match e.span() {
-                Some(span) => {
-                    let at = span.start.min(text.len());
-                    (Some(source.line_at(at)), source.path_at(at).unwrap_or(""))
+    let root = DeTable::parse(text).map_err(|e| serde_error(path, &source, &e))?;
+    let mut reader = Reader {
+        path,
+        source: &source,
+        mistakes: Mistakes::new(path),
+    };
+    let mut desc = SceneDescription::default();
+    for (key, value) in root.get_ref() {
+        let name: &str = key.get_ref();
+        match name {
+            "render" => {
+                // Every key of [render] stands alone: keep those that read.
+                if let (Some(render), _) = reader.read(value) {
+                    desc.render = render;
                 }
-                None => (None, ""),
-            };
-            Err(InputError::new(path, key, in_user_words(e.message(), key)).on_line(line))
+            }
+            "camera" => match reader.read(value) {
+                (Some(camera), true) => desc.camera = Some(camera),
+                _ => desc.unread.push("camera".to_string()),
+            },
+            "materials" => match value.get_ref() {
+                DeValue::Table(table) => {
+                    for (name, value) in table {
+                        // Kept with the keys that read, so that objects
+                        // naming it are not blamed for its mistakes.
+                        let material = reader.read(value).0.unwrap_or_default();
+                        desc.materials.insert(name.get_ref().to_string(), material);
+                    }
+                }
+                _ => reader.refuse::<BTreeMap<String, MaterialDesc>>(value),
+            },
+            "lights" => match value.get_ref() {
+                DeValue::Array(array) => {
+                    desc.lights = reader.elements(array.iter(), "lights", &mut desc.unread);
+                }
+                _ => reader.refuse::<Vec<LightDesc>>(value),
+            },
+            "objects" => match value.get_ref() {
+                DeValue::Array(array) => {
+                    desc.objects = reader.elements(array.iter(), "objects", &mut desc.unread);
+                }
+                _ => reader.refuse::<Vec<ObjectDesc>>(value),
+            },
+            _ => {
+                let names = SECTIONS
+                    .iter()
+                    .map(|s| format!("`{s}`"))
+                    .collect::<Vec<_>>();
+                let message = format!(
+                    "unknown field `{name}`, expected one of {}",
+                    names.join(", ")
+                );
+                let line = source.line_at(key.span().start);
+                reader.mistakes.push(
+                    InputError::new(path, name, in_user_words(&message, name)).on_line(Some(line)),
+                    None,
+                );
+            }
         }
+    }
+    desc.mistakes = reader.mistakes.in_file_order();
+    desc.source = source;
+    Ok(desc)
+}
+
+/// Reads the parts of one scene file, noting their mistakes.
+struct Reader<'a> {
+    path: &'a Path,
+    source: &'a SourceMap,
+    mistakes: Mistakes,
+}
+
+impl<'i> Reader<'_> {
+    /// `T` from `value`, and whether it read whole. A key that serde
+    /// refuses is reported and dropped, and the table read again without
+    /// it, until the rest reads (then `T` holds the keys that read) or no
+    /// key is to blame (then `None`).
+    fn read<T: Deserialize<'i>>(&mut self, value: &Spanned<DeValue<'i>>) -> (Option<T>, bool) {
+        let mut value = value.clone();
+        let mut dropped: Vec<String> = Vec::new();
+        loop {
+            let e = match T::deserialize(value.clone().into_deserializer()) {
+                Ok(t) => return (Some(t), dropped.is_empty()),
+                Err(e) => e,
+            };
+            // A key dropped for its bad value is not missing as well.
+            let missing = e.message().strip_prefix("missing field `");
+            if missing.is_some_and(|m| dropped.iter().any(|d| m.trim_end_matches('`') == d)) {
+                return (None, false);
+            }
+            self.mistakes
+                .push(serde_error(self.path, self.source, &e), None);
+            let (span, DeValue::Table(table)) = (value.span(), value.get_ref()) else {
+                return (None, false);
+            };
+            let at = e.span().map_or(usize::MAX, |s| s.start);
+            let Some((culprit, _)) = table
+                .iter()
+                .find(|(k, v)| k.span().contains(&at) || v.span().contains(&at))
+            else {
+                return (None, false);
+            };
+            let culprit = culprit.get_ref().to_string();
+            let rest: DeTable<'i> = table
+                .iter()
+                .filter(|(k, _)| *k.get_ref() != culprit)
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect();
+            dropped.push(culprit);
+            value = Spanned::new(span, DeValue::Table(rest));
+        }
+    }
+
+    /// The elements of the array `section` (`lights`, `objects`), each read
+    /// alone: one that does not read whole is a default placeholder, so
+    /// the others keep their indices, and its key path goes to `unread`.
+    fn elements<'v, T: Deserialize<'i> + Default>(
+        &mut self,
+        array: impl Iterator<Item = &'v Spanned<DeValue<'i>>>,
+        section: &str,
+        unread: &mut Vec<String>,
+    ) -> Vec<T>
+    where
+        'i: 'v,
+    {
+        array
+            .enumerate()
+            .map(|(i, value)| match self.read(value) {
+                (Some(t), true) => t,
+                _ => {
+                    unread.push(format!("{section}[{i}]"));
+                    T::default()
+                }
+            })
+            .collect()
+    }
+
+    /// Report why `value` is not a `T` (a section of the wrong type).
+    fn refuse<T: Deserialize<'i>>(&mut self, value: &Spanned<DeValue<'i>>) {
+        if let Err(e) = T::deserialize(value.clone().into_deserializer()) {
+            self.mistakes
+                .push(serde_error(self.path, self.source, &e), None);
+        }
+    }
+}
+
+/// A serde or TOML error at its line and key path, in the scene format's words.
+fn serde_error(path: &Path, source: &SourceMap, e: &toml::de::Error) -> InputError {
+    let (line, key) = match e.span() {
+        Some(span) => {
+            let at = span.start;
+            (Some(source.line_at(at)), source.path_at(at).unwrap_or(""))
+        }
+        None => (None, ""),
+    };
+    InputError::new(path, key, in_user_words(e.message(), key)).on_line(line)
+}
+
+/// A scene file's mistakes as they are found, to be given in file order:
+/// each at its line in the scene file, or, where it names another file
+/// (a mesh file's own mistake), at the line of the part that read it;
+/// the command line's before the file's.
+#[derive(Debug)]
+pub struct Mistakes {
+    file: String,
+    found: Vec<(usize, InputError)>,
+}
+
+impl Mistakes {
+    /// No mistakes yet in the scene file `path`.
+    pub fn new(path: &Path) -> Self {
+        Self {
+            file: path.display().to_string(),
+            found: Vec::new(),
+        }
+    }
+
+    /// Note `e` (and any it holds); `part_line` is the line of the scene
+    /// file's part being read when it was found.
+    pub fn push(&mut self, e: InputError, part_line: Option<usize>) {
+        for e in e.into_each() {
+            let line = if e.file == "<command line>" {
+                0
+            } else if e.file == self.file && e.line.is_some() {
+                e.line.unwrap_or(0)
+            } else {
+                part_line.unwrap_or(usize::MAX)
+            };
+            // The same mistake found twice (a mesh file two objects name)
+            // is said once.
+            if !self.found.iter().any(|(_, seen)| *seen == e) {
+                self.found.push((line, e));
+            }
+        }
+    }
+
+    /// Note the error of `result`, if it is one, and give its value.
+    pub fn check<T>(&mut self, result: InputResult<T>, part_line: Option<usize>) -> Option<T> {
+        result.map_err(|e| self.push(e, part_line)).ok()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.found.is_empty()
+    }
+
+    /// The mistakes, in file order (found order among those of one line).
+    pub fn in_file_order(mut self) -> Vec<InputError> {
+        self.found.sort_by_key(|(line, _)| *line);
+        self.found.into_iter().map(|(_, e)| e).collect()
     }
 }
 
@@ -280,6 +515,65 @@ mod tests {
         assert_eq!(words("missing field `radius`"), "missing key 'radius'");
         let own = "must be between 0 and 180 degrees, got 300";
         assert_eq!(words(own), own);
+    }
+
+    #[test]
+    fn every_mistake_of_a_file_is_reported_in_file_order() {
+        let text = "[render]\nspp = \"many\"\nwidht = 10\nheight = 20\n\n\
+                    [[lights]]\ntype = \"pont\"\nposition = [0, 1, 0]\n\n\
+                    [[objects]]\nsphere = { radius = \"big\" }\n\
+                    [[objects]]\nsphere = { radius = 1 }\n\
+                    [[objects]]\nsphere = { radius = 1 }\nmaterial = 5\n\
+                    [camera]\nfov = \"wide\"\n[extra]\n";
+        let e = parse_description(Path::new("s.toml"), text).unwrap_err();
+        let each = e.clone().into_each();
+        let at: Vec<(Option<usize>, &str)> =
+            each.iter().map(|e| (e.line, e.location.as_str())).collect();
+        assert_eq!(
+            at,
+            [
+                (Some(2), "render.spp"),
+                (Some(3), "render.widht"),
+                (Some(7), "lights[0].type"),
+                (Some(11), "objects[0].sphere.radius"),
+                (Some(16), "objects[2].material"),
+                (Some(18), "camera.fov"),
+                (Some(19), "extra"),
+            ]
+        );
+        // One line each, as the CLI prints them.
+        assert_eq!(e.to_string().lines().count(), 7, "{e}");
+        assert!(each[6].message.contains("unknown key 'extra'"), "{e}");
+
+        // Read leniently, the parts that read are kept, those that do not
+        // are placeholders named in `unread`, and [render] keeps its good keys.
+        let desc = read_leniently(Path::new("s.toml"), text).unwrap();
+        assert_eq!(desc.mistakes.len(), 7);
+        // (The sections in TOML's key order.)
+        assert_eq!(
+            desc.unread,
+            ["camera", "lights[0]", "objects[0]", "objects[2]"]
+        );
+        assert_eq!((desc.lights.len(), desc.objects.len()), (1, 3));
+        assert!(desc.objects[1].sphere.is_some(), "objects[1] reads");
+        assert_eq!(desc.render.height, Some(20));
+    }
+
+    #[test]
+    fn a_key_dropped_for_its_value_is_not_missing_too() {
+        let p = Path::new("s.toml");
+        let e = parse_description(p, "[[lights]]\ntype = 5\n").unwrap_err();
+        assert!(e.more.is_empty(), "{e}");
+        assert_eq!(e.location, "lights[0].type");
+        // But a key that is missing is.
+        let e = parse_description(p, "[[objects]]\nsphere = { center = [0, 0, 0] }\n").unwrap_err();
+        assert_eq!(e.message, "missing key 'radius'");
+        // A section of the wrong type is one mistake.
+        let e = parse_description(p, "lights = 3\nobjects = {}\n").unwrap_err();
+        assert_eq!(e.clone().into_each().len(), 2, "{e}");
+        // A syntax error stops the reading: it alone is reported.
+        let e = parse_description(p, "[render]\nspp = \nwidth = \"x\"\n").unwrap_err();
+        assert!(e.more.is_empty() && e.line == Some(2), "{e}");
     }
 
     #[test]

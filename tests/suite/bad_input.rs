@@ -199,7 +199,12 @@ fn a_missing_or_broken_texture_names_the_file_and_the_mtl_line_or_gltf_image() {
             ("quad.mtl", b"newmtl wood\n\nmap_Kd -clamp on notes.jpg\n"),
             ("notes.jpg", b"shopping list"),
         ],
-        &["quad.mtl", "line 3", "notes.jpg", "not a PNG or JPEG"],
+        &[
+            "quad.mtl",
+            "line 3",
+            "notes.jpg",
+            "a text file, not an image",
+        ],
     );
     let gltf = br#"{"asset":{"version":"2.0"},"materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
         "textures":[{"source":1}],"images":[{"uri":"a.png"},{"uri":"gone.png"}]}"#;

@@ -7,8 +7,10 @@
 //! - every TOML example in the scene format reference (and the README and
 //!   the CLI reference) is a scene strata accepts, and every example marked
 //!   as an error is refused with the message the documentation shows;
-//! - the README stays short, and the scene it asks a new user to type in
-//!   renders something lit.
+//! - the README stays short, the scene it asks a new user to type in
+//!   renders something lit, and it counts the scenes `scenes/` holds;
+//! - every mesh format strata reads is documented, and the refusals the
+//!   scene format shows are what strata says.
 
 use crate::common::process::{repo, run, strata_command};
 use std::collections::BTreeSet;
@@ -285,6 +287,119 @@ fn compile_example(text: &str) -> Result<(), String> {
     crate::common::checked::scene_from_str(text, &path, &strata::scene::RenderOverrides::default())
         .map(|_| ())
         .map_err(|e| e.to_string())
+}
+
+/// The number a word or digits name ("twelve", "12"), up to twenty.
+fn number(word: &str) -> Option<usize> {
+    const WORDS: [&str; 21] = [
+        "zero",
+        "one",
+        "two",
+        "three",
+        "four",
+        "five",
+        "six",
+        "seven",
+        "eight",
+        "nine",
+        "ten",
+        "eleven",
+        "twelve",
+        "thirteen",
+        "fourteen",
+        "fifteen",
+        "sixteen",
+        "seventeen",
+        "eighteen",
+        "nineteen",
+        "twenty",
+    ];
+    word.parse()
+        .ok()
+        .or_else(|| WORDS.iter().position(|w| w.eq_ignore_ascii_case(word)))
+}
+
+/// The README says how many scenes `scenes/` holds: the number of its
+/// `.toml` files (it said nine when there were twelve).
+#[test]
+fn the_readme_counts_the_scenes_there_are() {
+    let readme = read(&repo().join("README.md"));
+    let said = readme
+        .split("`scenes/` has ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .expect("the README says how many scenes `scenes/` has");
+    let there = std::fs::read_dir(repo().join("scenes"))
+        .unwrap()
+        .filter(|e| {
+            let path = e.as_ref().unwrap().path();
+            path.is_file() && path.extension().is_some_and(|x| x == "toml")
+        })
+        .count();
+    assert_eq!(
+        number(said),
+        Some(there),
+        "README: `scenes/` has {said} ..."
+    );
+}
+
+/// Every mesh format strata reads is in the scene format's table of mesh
+/// files and in the README.
+#[test]
+fn every_mesh_format_strata_reads_is_documented() {
+    let format = read(&repo().join("docs/scene-format.md"));
+    let table = format
+        .split("## Mesh files")
+        .nth(1)
+        .and_then(|rest| rest.split("\n### ").next())
+        .expect("a Mesh files section");
+    let readme = read(&repo().join("README.md"));
+    for extension in strata::scene::loaders::SUPPORTED_EXTENSIONS {
+        let named = format!("`.{extension}`");
+        assert!(
+            table.contains(&named),
+            "scene-format.md's mesh table lacks {named}"
+        );
+        assert!(
+            readme.contains(&format!(".{extension}")),
+            "README.md lacks .{extension}"
+        );
+    }
+}
+
+/// The refusals the scene format shows are, word for word, what strata
+/// says of such files (it once listed fewer glTF extensions than strata
+/// reads, and called a file requiring one of them refused).
+#[test]
+fn the_refusals_the_docs_show_are_what_strata_says() {
+    use strata::scene::loaders::{load_mesh_file, read_scene_file};
+    let format = read(&repo().join("docs/scene-format.md"));
+    let dir = crate::common::temp_dir("docs-refusals");
+    let cases: [(&str, &[u8], bool); 4] = [
+        ("truck.gltf", br#"{"asset":{"version":"1.0"}}"#, true),
+        (
+            "engine.gltf",
+            br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"]}"#,
+            true,
+        ),
+        ("box.fbx", b"Kaydara FBX Binary  \x00\x1a\x00", false),
+        ("box.obj", b"glTF\x02\x00\x00\x00\x0c\x00\x00\x00", true),
+    ];
+    for (name, bytes, mesh) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let mut e = if mesh {
+            load_mesh_file(&path).map(|_| ()).unwrap_err()
+        } else {
+            read_scene_file(&path).map(|_| ()).unwrap_err()
+        };
+        e.file = name.to_string();
+        let line = format!("error: {e}");
+        assert!(
+            format.lines().any(|l| l == line),
+            "scene-format.md does not show what strata says:\n{line}"
+        );
+    }
 }
 
 #[test]

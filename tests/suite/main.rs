@@ -19,6 +19,7 @@ mod embree_instances;
 mod embree_native;
 mod environment;
 mod gltf_instances;
+mod input_files;
 mod instance_queries;
 mod instancing;
 mod memory;

@@ -14,12 +14,12 @@
 use super::asset::{LoadedAsset, LoadedCamera};
 use super::description::{CameraDesc, ObjectDesc, SceneDescription};
 use super::edit::Edit;
+use super::parse::Mistakes;
 use super::settings::RenderOverrides;
 use super::source_map::SourceMap;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
-use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::csg::Csg;
 use crate::geometry::{AnalyticPrim, Geometry, Instance, MeshRange, NO_TRANSFORM};
@@ -100,8 +100,7 @@ pub fn load_edited_scene_with_progress(
     progress: &LoadProgress,
 ) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let text = super::loaders::read_scene_file(path)?;
     let desc = super::parse::parse_edited(path, &text, edits)?;
     compile_for(
         &desc,
@@ -162,7 +161,8 @@ impl LoadProgress {
 /// Compile scene text as if read from `path` (meshes resolve relative to
 /// it), with the default BVH build effort.
 pub fn scene_from_str(text: &str, path: &Path, overrides: &RenderOverrides) -> InputResult<Scene> {
-    let desc = super::parse::parse_description(path, text)?;
+    // Read leniently: the compiler reports the reading's mistakes with its own.
+    let desc = super::parse::read_leniently(path, text)?;
     compile(&desc, path, overrides, BuildQuality::Auto, Instant::now()).map(|(scene, _)| scene)
 }
 
@@ -204,8 +204,7 @@ pub fn load_scene_for_tracing(
     quality: BuildQuality,
 ) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    let text = super::loaders::read_scene_file(path)?;
     let desc = super::parse::parse_edited(path, &text, &[])?;
     let overrides = RenderOverrides::default();
     let progress = LoadProgress::default();
@@ -299,20 +298,50 @@ fn compile_for(
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
     c.bake_shared = purpose == Purpose::MeshFile;
     c.preloaded = preloaded;
+    // Every mistake of the file in one run: each part is compiled after
+    // another's mistake too (parts the reading left out are skipped), and
+    // the mistakes are given in file order with the reading's.
+    let mut mistakes = Mistakes::new(path);
+    for e in &desc.mistakes {
+        mistakes.push(e.clone(), None);
+    }
     for (name, m) in &desc.materials {
         let key = format!("materials.{name}");
-        let material = c.material(m, &key)?;
-        c.add_material(name.clone(), material);
+        // Defined even with a mistake, so objects naming it are not blamed.
+        let material = mistakes.check(c.material(m, &key), desc.source.line_of(&key));
+        c.add_material(name.clone(), material.unwrap_or_default());
     }
     for (i, light) in desc.lights.iter().enumerate() {
-        c.light(light, &format!("lights[{i}]"))?;
+        let key = format!("lights[{i}]");
+        if !desc.is_unread(&key) {
+            mistakes.check(c.light(light, &key), desc.source.line_of(&key));
+        }
     }
     for (i, obj) in desc.objects.iter().enumerate() {
-        c.object(obj, &format!("objects[{i}]"), Affine3A::IDENTITY, 0)?;
+        let key = format!("objects[{i}]");
+        if !desc.is_unread(&key) {
+            let placed = c.object(obj, &key, Affine3A::IDENTITY, 0);
+            mistakes.check(placed, desc.source.line_of(&key));
+        }
     }
-    let settings = c.settings(&desc.render, overrides)?;
-    c.check_background(&settings)?;
-    let camera = c.scene_camera(desc.camera.as_ref(), &settings)?;
+    let settings = mistakes.check(c.settings(&desc.render, overrides), None);
+    if let Some(settings) = &settings {
+        mistakes.check(c.check_background(settings), None);
+    }
+    // The camera is checked even when the settings have a mistake: with
+    // the default ones, whose only part in it is the image's shape.
+    let camera = (!desc.is_unread("camera")).then(|| {
+        let defaults = RenderSettings::default();
+        let s = settings.as_ref().unwrap_or(&defaults);
+        mistakes.check(c.scene_camera(desc.camera.as_ref(), s), None)
+    });
+    if let Some(e) = InputError::all(mistakes.in_file_order()) {
+        return Err(e);
+    }
+    let (Some(settings), Some(Some(camera))) = (settings, camera) else {
+        // A part left unchecked always comes with its mistake.
+        return Err(InputError::file(path, "the scene could not be read"));
+    };
     // Every object holds what it needs from its mesh files by now.
     drop(std::mem::take(&mut c.assets));
     for source in c

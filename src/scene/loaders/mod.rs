@@ -7,6 +7,14 @@
 //! | `.obj`          | [`obj::load_obj`]   |
 //! | `.gltf`, `.glb` | [`gltf::load_gltf`] |
 //! | `.ply`          | [`ply::load_ply`]   |
+//! | `.off`          | [`off::load_off`]   |
+//! | `.stl`          | [`stl::load_stl`]   |
+//!
+//! Before a loader sees a file, its first bytes are checked against its
+//! name (`sniff`): a file that holds another format (a binary glTF named
+//! `.obj`) is refused saying what it holds, and a format strata does not
+//! read (`.fbx`) is named, with what strata reads instead. The same check
+//! tells a file given as a scene that is none ([`check_scene_file`]).
 //!
 //! Loaders never panic on bad input and never allocate more than the file
 //! actually holds. What other tools read leniently (a material no library
@@ -17,7 +25,10 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod off;
 pub mod ply;
+mod sniff;
+pub mod stl;
 mod text;
 
 pub(crate) use ply::first_where;
@@ -27,16 +38,13 @@ use crate::scene::asset::LoadedAsset;
 use std::path::Path;
 
 /// The extensions [`load_mesh_file`] understands, for error messages.
-pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "ply"];
+pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "ply", "off", "stl"];
 
 /// The lower-case extension of `path`, if it is one [`load_mesh_file`]
-/// reads; else a message listing the ones it does.
+/// reads; else a message naming the format (where strata knows it) and
+/// listing the ones it reads.
 pub fn check_extension(path: &Path) -> Result<String, String> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
+    let extension = sniff::extension_of(path);
     if SUPPORTED_EXTENSIONS.contains(&extension.as_str()) {
         return Ok(extension);
     }
@@ -45,26 +53,55 @@ pub fn check_extension(path: &Path) -> Result<String, String> {
         .map(|e| format!(".{e}"))
         .collect::<Vec<_>>()
         .join(", ");
-    let found = if extension.is_empty() {
-        "a file without an extension".to_string()
+    let found = match sniff::not_read(&extension) {
+        _ if extension.is_empty() => "a file without an extension".to_string(),
+        Some(name) => format!("{name} files ('.{extension}')"),
+        None => format!("'.{extension}' files"),
+    };
+    let convert = if sniff::not_read(&extension).is_some() {
+        "; convert it to glTF (.glb), for example by importing it into Blender and exporting glTF 2.0"
     } else {
-        format!("'.{extension}' files")
+        ""
     };
     Err(format!(
-        "cannot load {found} as a mesh; supported mesh formats are {supported}"
+        "cannot load {found} as a mesh; supported mesh formats are {supported}{convert}"
     ))
 }
 
 /// Load any supported mesh file, chosen by its extension (case-insensitive):
-/// `.obj`, `.gltf`, `.glb` or `.ply`. Any other extension is an
-/// [`InputError`] naming the file and listing the supported ones.
+/// `.obj`, `.gltf`, `.glb`, `.ply`, `.off` or `.stl`. Any other extension,
+/// or first bytes that say the file holds another format, is an
+/// [`InputError`] naming the file and what it is.
 pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
     let extension = check_extension(path).map_err(|e| InputError::file(path, e))?;
+    let (head, len) = sniff::read_head(path)?;
+    sniff::check_mesh_head(path, &extension, &head, len)?;
     match extension.as_str() {
         "obj" => obj::load_obj(path),
         "gltf" | "glb" => gltf::load_gltf(path),
+        "off" => off::load_off(path),
+        "stl" => stl::load_stl(path),
         _ => ply::load_ply(path),
     }
+}
+
+/// Check, by its name and first bytes, that `path` is a scene file (see
+/// `sniff`): a mesh, a format strata does not read, or binary data given
+/// as a scene is an error saying what it is. Then the file's text.
+pub fn read_scene_file(path: &Path) -> InputResult<String> {
+    let (head, len) = sniff::read_head(path)?;
+    sniff::check_scene_head(path, &head, len)?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        InputError::new(
+            path,
+            format!("line {line}"),
+            "not UTF-8 text; a scene file is TOML, which is UTF-8",
+        )
+    })
 }
 
 pub(crate) use crate::error::io_message;
@@ -156,12 +193,19 @@ mod tests {
 
     #[test]
     fn unknown_extension_lists_supported_ones() {
-        let dir = temp_dir("dispatch-stl");
-        let path = write(&dir, "bunny.stl", b"solid\n");
+        let dir = temp_dir("dispatch-fbx");
+        let path = write(&dir, "bunny.fbx", b"Kaydara FBX Binary  \x00");
         let err = load_mesh_file(&path).unwrap_err();
         let text = err.to_string();
-        assert!(text.contains("bunny.stl"), "{text}");
-        assert!(text.contains(".obj, .gltf, .glb, .ply"), "{text}");
+        assert!(
+            text.contains("bunny.fbx: cannot load FBX files ('.fbx')"),
+            "{text}"
+        );
+        assert!(text.contains("convert it to glTF"), "{text}");
+        assert!(
+            text.contains(".obj, .gltf, .glb, .ply, .off, .stl"),
+            "{text}"
+        );
         let err = load_mesh_file(Path::new("no_extension")).unwrap_err();
         assert!(err.to_string().contains("without an extension"), "{err}");
     }

@@ -1,4 +1,4 @@
-//! Text files as other tools read them: UTF-8 (a leading byte-order mark
+//! Text files (OBJ, MTL, OFF, ASCII STL) as other tools read them: UTF-8 (a leading byte-order mark
 //! dropped), UTF-16 with a byte-order mark, and otherwise Latin-1.
 //!
 //! OBJ and MTL files come from many exporters: Windows tools write UTF-16
@@ -39,7 +39,7 @@ pub(crate) fn decode_text<'a>(path: &Path, bytes: &'a [u8]) -> InputResult<Cow<'
         return Err(InputError::new(
             path,
             format!("line {line}"),
-            "not a text file (it holds a NUL byte); is this really an OBJ/MTL text file?",
+            "not a text file (it holds a NUL byte), so not the text format its name says",
         ));
     }
     Ok(Cow::Owned(bytes.iter().map(|&b| char::from(b)).collect()))

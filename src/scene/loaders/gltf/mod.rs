@@ -107,7 +107,9 @@
 //! accessors reaching outside their buffer, indices outside the vertex count,
 //! non-finite positions, normals and transforms, and primitives without
 //! `POSITION`. Custom vertex attributes and missing `POSITION` `min`/`max`
-//! are tolerated since the loader does not use them. glTF 1.0 and every
+//! are tolerated since the loader does not use them. Skins and morph
+//! targets are not applied: meshes render in their rest pose and base
+//! shape, with a warning for each kind. glTF 1.0 and every
 //! `extensionsRequired` entry the loader does not read are refused by name
 //! (`container.rs`). A scene that lists no nodes (or has no `nodes` key)
 //! loads empty with a warning in [`LoadedAsset::warnings`], and so does a
@@ -248,6 +250,7 @@ impl Loader<'_> {
             }
         }
         self.place_meshes(&uses, &mut asset)?;
+        self.warn_of_rest_poses(&uses, &mut asset);
         if !empty_scene {
             super::warn_without_triangles(
                 &mut asset,
@@ -256,6 +259,54 @@ impl Loader<'_> {
             );
         }
         Ok(asset)
+    }
+
+    /// Skins and morph targets are not applied: a warning for each kind,
+    /// naming the first node or mesh that has one and counting the others,
+    /// so that a posed character does not render in its rest pose unsaid.
+    fn warn_of_rest_poses(&self, uses: &[MeshUse], asset: &mut LoadedAsset) {
+        let others = |n: usize, what: &str| match n {
+            0 => String::new(),
+            1 => format!(" (and 1 more {what})"),
+            n => format!(" (and {n} more {what}s)"),
+        };
+        let skinned: Vec<usize> = uses
+            .iter()
+            .map(|u| u.node)
+            .filter(|&n| self.root.nodes[n].skin.is_some())
+            .collect();
+        if let Some(&first) = skinned.first() {
+            asset.warnings.push(self.error(
+                format!("nodes[{first}].skin"),
+                format!(
+                    "skins are not applied: this mesh{} renders in its rest pose, as \
+                     modelled, without its skeleton's pose or animation",
+                    others(skinned.len() - 1, "skinned node")
+                ),
+            ));
+        }
+        let mut morphed: Vec<usize> = uses
+            .iter()
+            .map(|u| u.mesh)
+            .filter(|&m| {
+                self.root.meshes[m]
+                    .primitives
+                    .iter()
+                    .any(|p| p.targets.as_ref().is_some_and(|t| !t.is_empty()))
+            })
+            .collect();
+        morphed.sort_unstable();
+        morphed.dedup();
+        if let Some(&first) = morphed.first() {
+            asset.warnings.push(self.error(
+                format!("meshes[{first}]"),
+                format!(
+                    "morph targets are not applied: this mesh{} renders in its base \
+                     shape, without its weights' blend of the targets",
+                    others(morphed.len() - 1, "mesh")
+                ),
+            ));
+        }
     }
 
     /// The scene walked (its index, if the file has scenes) and its root
@@ -369,6 +420,32 @@ mod tests {
         assert_eq!(asset.meshes.len(), 2);
         assert_eq!(asset.meshes[0].positions[0], Vec3::Y);
         assert_eq!(asset.meshes[1].positions[0], Vec3::ZERO);
+    }
+
+    /// Skins and morph targets render in the rest pose, each kind said
+    /// once with the number of the others; the mesh itself loads.
+    #[test]
+    fn skins_and_morph_targets_are_warned_of() {
+        let b = triangle_builder();
+        let rest = r#""meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,
+                "targets":[{"POSITION":0}]}],"weights":[0.5]},
+                {"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+            "skins":[{"joints":[3]}],
+            "nodes":[{"mesh":0,"skin":0},{"mesh":1,"skin":0},{"mesh":1,"skin":0},{}]"#;
+        let asset = load_json(&b, rest).unwrap();
+        assert_eq!(asset.triangle_count(), 3);
+        let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(said.len(), 2, "{said:?}");
+        assert!(
+            said[0].ends_with("nodes[0].skin: skins are not applied: this mesh (and 2 more skinned nodes) renders in its rest pose, as modelled, without its skeleton's pose or animation"),
+            "{said:?}"
+        );
+        assert!(
+            said[1].ends_with("meshes[0]: morph targets are not applied: this mesh renders in its base shape, without its weights' blend of the targets"),
+            "{said:?}"
+        );
+        let plain = load_json(&b, &format!(r#"{TRIANGLE_MESH},"nodes":[{{"mesh":0}}]"#)).unwrap();
+        assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
     }
 
     #[test]

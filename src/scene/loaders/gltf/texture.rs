@@ -88,36 +88,42 @@ impl Loader<'_> {
             .get(index)
             .ok_or_else(|| self.error(user, format!("{location} does not exist")))?;
         let bytes: Vec<u8>;
-        let (data, what): (&[u8], String) = match (&image.uri, image.buffer_view) {
-            (Some(uri), _) if uri.starts_with("data:") => {
-                let Some((header, payload)) = uri.split_once(',') else {
-                    return Err(at("data: URI has no ',' before its data".to_string()));
-                };
-                if !header.ends_with(";base64") {
-                    return Err(at("only base64 data: URIs are supported".to_string()));
+        let (data, what, file): (&[u8], String, Option<std::path::PathBuf>) =
+            match (&image.uri, image.buffer_view) {
+                (Some(uri), _) if uri.starts_with("data:") => {
+                    let Some((header, payload)) = uri.split_once(',') else {
+                        return Err(at("data: URI has no ',' before its data".to_string()));
+                    };
+                    if !header.ends_with(";base64") {
+                        return Err(at("only base64 data: URIs are supported".to_string()));
+                    }
+                    bytes = decode_base64(payload).map_err(at)?;
+                    (&bytes, "its data: URI".to_string(), None)
                 }
-                bytes = decode_base64(payload).map_err(at)?;
-                (&bytes, "its data: URI".to_string())
-            }
-            (Some(uri), _) => {
-                let file = uri_file(self.path, uri).map_err(at)?;
-                bytes = std::fs::read(&file).map_err(|e| {
-                    at(format!(
-                        "cannot read texture {}: {}",
-                        file.display(),
-                        io_message(&e)
-                    ))
-                })?;
-                (&bytes, format!("texture {}", file.display()))
-            }
-            (None, Some(view)) => {
-                let view = view.value();
-                let (_, data) = self.view(view, &location)?;
-                (data, format!("bufferViews[{view}]"))
-            }
-            (None, None) => return Err(at("has neither a uri nor a bufferView".to_string())),
-        };
-        Image::decode(data).map_err(|e| at(format!("{what}: {e}")))
+                (Some(uri), _) => {
+                    let file = uri_file(self.path, uri).map_err(at)?;
+                    bytes = std::fs::read(&file).map_err(|e| {
+                        at(format!(
+                            "cannot read texture {}: {}",
+                            file.display(),
+                            io_message(&e)
+                        ))
+                    })?;
+                    (&bytes, format!("texture {}", file.display()), Some(file))
+                }
+                (None, Some(view)) => {
+                    let view = view.value();
+                    let (_, data) = self.view(view, &location)?;
+                    (data, format!("bufferViews[{view}]"), None)
+                }
+                (None, None) => return Err(at("has neither a uri nor a bufferView".to_string())),
+            };
+        // A file's name can tell TGA, which has no signature of its own.
+        match file {
+            Some(file) => Image::decode_file(data, &file),
+            None => Image::decode(data),
+        }
+        .map_err(|e| at(format!("{what}: {e}")))
     }
 }
 
@@ -274,13 +280,13 @@ mod tests {
                 r#"{"uri":"gone.png"}"#,
                 "gone.png: No such file or directory",
             ),
-            (r#"{"uri":"notes.png"}"#, "not a PNG or JPEG"),
+            (r#"{"uri":"notes.png"}"#, "a text file, not an image"),
             (
                 r#"{"uri":"data:image/png;base64,iVBORw0KGgo="}"#,
                 "cannot decode",
             ),
             (r#"{"uri":"https://example.com/a.png"}"#, "scheme 'https:'"),
-            (r#"{"bufferView":0}"#, "not a PNG or JPEG"),
+            (r#"{"bufferView":0}"#, "not an image"),
             (r#"{"bufferView":0,"uri":"gone.png"}"#, "gone.png"),
         ];
         for (k, (image, needle)) in cases.into_iter().enumerate() {

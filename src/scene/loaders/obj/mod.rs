@@ -55,7 +55,8 @@
 //! | `illum 3`, `5` or `7`     | `reflectivity = max(Ks r, g, b)`, `glossiness = 0` (mirror) |
 //! | `illum 5` or `7`          | also `fresnel = true`                                      |
 //! | `map_Kd [-clamp on] file` | `diffuse_texture`: the image multiplies `Kd`                |
-//! | `Ka`, `Tf`, other `map_*`, `bump`, others | ignored                                    |
+//! | `Ka` (ambient)            | ignored: strata computes the light that arrives            |
+//! | `Tf`, other `map_*`, `bump`, `norm`, `disp`, others | ignored, with a warning (see `ignored.rs`) |
 //!
 //! A colour given as one number (`Kd 0.5`) is a grey. Every other field keeps
 //! its [`Material::default`] value.
@@ -65,15 +66,18 @@
 //! ```text
 //! newmtl crate
 //! Kd 1 1 1                     # the texture multiplies Kd: keep it white to see the image as is
-//! map_Kd textures/crate.png    # PNG or JPEG, relative to the .mtl file; the name may contain spaces
+//! map_Kd textures/crate.png    # PNG, JPEG, BMP or TGA, relative to the .mtl file; the name may contain spaces
 //! ```
 //!
 //! The image repeats outside [0, 1]; `-clamp on` clamps it to its edge
 //! texels instead (see [`crate::texture`] for filtering and colour). Other
-//! `map_Kd` options (`-o`, `-s`, `-mm`, ...) are refused, not ignored. Each
-//! image file is decoded once however many materials name it. A texture
-//! that is missing, unreadable or not a PNG or JPEG image is an error at
-//! its `map_Kd` line: `meshes/looks.mtl: line 3: cannot read texture
+//! `map_Kd` options (`-o`, `-s`, `-mm`, ...) are read past with their
+//! values, with a warning, and so is every statement strata does not map
+//! to its material (`map_Bump`, `norm`, `Tf`, ...): one warning per kind
+//! and library, at its first line. Each image file is decoded once however
+//! many materials name it. A texture that is missing, unreadable or not a
+//! PNG, JPEG, BMP or TGA image is an error at its `map_Kd` line:
+//! `meshes/looks.mtl: line 3: cannot read texture
 //! meshes/textures/crate.png: No such file or directory`.
 //!
 //! # Files
@@ -86,10 +90,13 @@
 //! - `mtl.rs`: material libraries: reading and checking `.mtl` files,
 //!   decoding their textures, and mapping their materials to ours as in the
 //!   table above.
+//! - `ignored.rs`: what of a library is read past, and the warnings that
+//!   say so.
 //!
 //! [`Material`]: crate::material::Material
 //! [`Material::default`]: crate::material::Material::default
 
+mod ignored;
 mod mtl;
 mod scan;
 

@@ -9,6 +9,7 @@
 
 use super::super::io_message;
 use super::super::text::decode_text;
+use super::ignored::{map_kd_option, why_statement_is_ignored, Ignored, Values};
 use super::parse_finite;
 use crate::error::{InputError, InputResult};
 use crate::material::Material;
@@ -38,7 +39,7 @@ impl TextureFiles {
                 let bytes = std::fs::read(file).map_err(|e| {
                     format!("cannot read texture {}: {}", file.display(), io_message(&e))
                 })?;
-                let image = Image::decode(&bytes)
+                let image = Image::decode_file(&bytes, file)
                     .map_err(|e| format!("texture {}: {e}", file.display()))?;
                 let image = self.textures.add_image(image);
                 self.images.insert(file.to_path_buf(), image);
@@ -124,6 +125,7 @@ fn parse_mtl(
     // reach: they are left out (an empty line each, so lines keep their
     // numbers).
     let mut unnamed = false;
+    let mut ignored = Ignored::new(path);
     for (number, raw) in text.split('\n').enumerate() {
         let at = |message: String| InputError::new(path, format!("line {}", number + 1), message);
         let line = raw.trim();
@@ -169,7 +171,14 @@ fn parse_mtl(
                 normalized.push_str(line);
             }
             "map_Kd" => {
-                let (wrap, file) = parse_map_kd(after_keyword).map_err(&at)?;
+                let MapKd {
+                    wrap,
+                    file,
+                    ignored: options,
+                } = parse_map_kd(after_keyword).map_err(&at)?;
+                for (option, why) in options {
+                    ignored.note(&format!("map_Kd option {option}"), why, number + 1);
+                }
                 let dir = path.parent().unwrap_or(Path::new(""));
                 let texture = textures.load(&resolve(dir, file), wrap).map_err(&at)?;
                 // tobj keeps the rest of the line as the texture's name: hand
@@ -179,6 +188,7 @@ fn parse_mtl(
             }
             "map_Ka" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" | "map_d" | "map_Bump"
             | "map_bump" | "bump" => {
+                // tobj reads these, and would misread one without a name.
                 if after_keyword.is_empty() {
                     return Err(at(format!("{keyword} needs a file name")));
                 }
@@ -186,39 +196,74 @@ fn parse_mtl(
             }
             _ => normalized.push_str(line),
         }
+        if let Some(why) = why_statement_is_ignored(keyword) {
+            ignored.note(keyword, why, number + 1);
+        }
         normalized.push('\n');
     }
+    ignored.warn(warnings);
     tobj::load_mtl_buf(&mut normalized.as_bytes())
         .map(|(materials, _)| materials)
         .map_err(|e| InputError::file(path, format!("cannot parse MTL: {e}")))
 }
 
 /// The wrap mode and file name of a `map_Kd` statement (the text after the
-/// keyword): `[-clamp on|off] file name`, the name being the rest of the
-/// line (it may contain spaces). Other options would change the lookup
-/// (`-o`, `-s`, `-mm`, ...) and are refused rather than ignored.
-fn parse_map_kd(text: &str) -> Result<(Wrap, &str), String> {
+/// keyword): `[options] file name`, the name being the rest of the line
+/// (it may contain spaces). `-clamp on|off` is read; the other options
+/// (`-o`, `-s`, `-mm`, ...) are read past with their values, and come back
+/// with why, to be warned about.
+fn parse_map_kd(text: &str) -> Result<MapKd<'_>, String> {
     let mut wrap = Wrap::Repeat;
+    let mut ignored = Vec::new();
     let mut rest = text.trim();
     while rest.starts_with('-') {
-        let (option, after) = first_word(rest);
-        if option != "-clamp" {
-            return Err(format!(
-                "map_Kd option '{option}' is not supported (only -clamp on|off is)"
-            ));
+        let (option, mut after) = first_word(rest);
+        if option == "-clamp" {
+            let (value, after) = first_word(after);
+            wrap = match value {
+                "on" => Wrap::ClampToEdge,
+                "off" => Wrap::Repeat,
+                _ => return Err(format!("map_Kd -clamp needs on or off, found '{value}'")),
+            };
+            rest = after;
+            continue;
         }
-        let (value, after) = first_word(after);
-        wrap = match value {
-            "on" => Wrap::ClampToEdge,
-            "off" => Wrap::Repeat,
-            _ => return Err(format!("map_Kd -clamp needs on or off, found '{value}'")),
-        };
+        let (values, why) = map_kd_option(option);
+        match values {
+            Values::Words(n) => {
+                for _ in 0..n {
+                    after = first_word(after).1;
+                }
+            }
+            Values::UpToThreeNumbers => {
+                for _ in 0..3 {
+                    let (word, next) = first_word(after);
+                    if word.parse::<f32>().is_err() {
+                        break;
+                    }
+                    after = next;
+                }
+            }
+        }
+        ignored.push((option, why));
         rest = after;
     }
     if rest.is_empty() {
         return Err("map_Kd needs a file name".to_string());
     }
-    Ok((wrap, rest))
+    Ok(MapKd {
+        wrap,
+        file: rest,
+        ignored,
+    })
+}
+
+/// A `map_Kd` statement as read: its wrap mode and file name, and the
+/// options read past with why.
+struct MapKd<'a> {
+    wrap: Wrap,
+    file: &'a str,
+    ignored: Vec<(&'a str, &'static str)>,
 }
 
 /// The first word of `text` and the rest after it, both trimmed.
@@ -420,11 +465,10 @@ mod tests {
         let png = crate::scene::loaders::test_files::png(2, 2, &[[1, 2, 3]; 4]);
         write(&dir, "cut.png", &png[..png.len() / 2]);
         write(&dir, "ok.png", &png);
-        let cases: [(&[u8], &str); 6] = [
+        let cases: [(&[u8], &str); 5] = [
             (b"map_Kd gone.png", "cannot read texture"),
-            (b"map_Kd text.png", "not a PNG or JPEG"),
+            (b"map_Kd text.png", "a text file, not an image"),
             (b"map_Kd cut.png", "cannot decode"),
-            (b"map_Kd -s 2 2 1 ok.png", "option '-s' is not supported"),
             (b"map_Kd -clamp maybe ok.png", "-clamp needs on or off"),
             (b"map_Kd -clamp on", "needs a file name"),
         ];
@@ -444,6 +488,49 @@ mod tests {
                 assert!(shown.contains(file), "{shown} should name {file}");
             }
         }
+    }
+
+    /// What a library holds that strata does not read is a warning at
+    /// its line, once per kind: `map_Kd` options, bump and normal maps,
+    /// other statements. The texture itself still loads.
+    #[test]
+    fn ignored_statements_and_options_are_one_warning_per_kind() {
+        let dir = temp_dir("mtl_ignored");
+        write(&dir, "q.obj", TEXTURED_QUADS.as_bytes());
+        write(
+            &dir,
+            "ok.png",
+            &crate::scene::loaders::test_files::png(1, 1, &[[9, 9, 9]]),
+        );
+        write(
+            &dir,
+            "looks.mtl",
+            b"newmtl a\nKa 0.1 0.1 0.1\nKd 1 1 1\nmap_Kd -s 2 2 1 -o 0.5 -clamp on ok.png\n\
+              map_Bump -bm 0.3 bump.png\nnorm n.png\nTf 1 1 1\n\
+              newmtl b\nmap_Kd -s 4 ok.png\nbump bump.png\nmap_Bump bump.png\nnewmtl c\n",
+        );
+        let asset = load_obj(&dir.join("q.obj")).unwrap();
+        let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
+        let mtl = dir.join("looks.mtl");
+        let at = |line: usize, rest: &str| format!("{}: line {line}: {rest}", mtl.display());
+        assert_eq!(
+            said,
+            [
+                at(4, "map_Kd option -s is ignored (and on 1 more line): the texture is looked up where the file's texture coordinates say, unmoved and unscaled"),
+                at(4, "map_Kd option -o is ignored: the texture is looked up where the file's texture coordinates say, unmoved and unscaled"),
+                at(5, "map_Bump is ignored (and on 1 more line): strata has no bump or normal mapping"),
+                at(6, "norm is ignored: strata has no bump or normal mapping"),
+                at(7, "Tf is ignored: strata's glass has no colour filter (only d or Tr)"),
+                at(10, "bump is ignored: strata has no bump or normal mapping"),
+            ]
+        );
+        // -clamp after the ignored options is still read; the image loads.
+        let a = asset.materials.iter().find(|(n, _)| n == "a").unwrap().1;
+        let texture = a.diffuse_texture.expect("map_Kd read past its options");
+        assert_eq!(
+            asset.textures.textures[texture as usize].wrap,
+            [crate::texture::Wrap::ClampToEdge; 2]
+        );
     }
 
     #[test]
