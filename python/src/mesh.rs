@@ -10,7 +10,6 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 use strata::accel::BuildQuality;
 use strata::geometry::Geometry;
-use strata::math::lanes::LANES;
 
 /// A triangle mesh and its BVH, built once (on every core) and asked any
 /// number of queries.
@@ -169,16 +168,16 @@ struct HitColumns<'a> {
 
 impl Mesh {
     fn new_from(geometry: Geometry) -> Self {
-        if !geometry.instances.is_empty() {
+        if !geometry.instances().is_empty() {
             // Tight, as a mesh of the copies would have them: every
             // vertex of every instance moved (the tree's box is looser).
             let (lo, hi) = geometry
-                .instances
+                .instances()
                 .par_iter()
                 .map(|instance| {
                     let m = instance.affine();
                     let own =
-                        geometry.prototypes[instance.prototype as usize].file_order_triangles();
+                        geometry.prototypes()[instance.prototype as usize].file_order_triangles();
                     own.iter().flatten().fold(
                         (Vec3::INFINITY, Vec3::NEG_INFINITY),
                         |(lo, hi), &p| {
@@ -199,13 +198,11 @@ impl Mesh {
         }
         let mut lo = Vec3::INFINITY;
         let mut hi = Vec3::NEG_INFINITY;
-        for block in &geometry.leaf_blocks {
-            for (lane, &id) in block.id.iter().enumerate().take(LANES) {
-                if id < geometry.triangle_count {
-                    for p in block.triangle(lane) {
-                        lo = lo.min(p);
-                        hi = hi.max(p);
-                    }
+        for (slot, id) in (0..).zip(geometry.leaf_slots()) {
+            if id < geometry.triangle_count() {
+                for p in geometry.slot_triangle(slot) {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
                 }
             }
         }
@@ -229,21 +226,6 @@ impl Mesh {
         self.geometry.flat_prim(&hit, &self.flat) as i64
     }
 
-    /// The triangle a hit names, in world space: a placed mesh's triangle
-    /// moved by its instance's map, as a copy would hold it.
-    fn hit_triangle(&self, hit: &strata::accel::PrimHit) -> [Vec3; 3] {
-        let g = &self.geometry;
-        if hit.prim < g.first_instance() {
-            return g.triangle(hit);
-        }
-        let (instance, prototype) = g.instance(hit.prim);
-        let slot = hit.part as usize;
-        let m = instance.affine();
-        prototype.leaf_blocks[slot / LANES]
-            .triangle(slot % LANES)
-            .map(|p| m.transform_point3(p))
-    }
-
     /// Fill `out` with the first hits of `rays`.
     fn first_hits(&self, rays: &[strata::math::Ray], out: HitColumns<'_>) {
         let mut found = [None; TASK];
@@ -259,7 +241,7 @@ impl Mesh {
                 out.point[3 * i..3 * i + 3].fill(f32::NAN);
                 continue;
             };
-            let [a, b, c] = self.hit_triangle(hit);
+            let [a, b, c] = self.geometry.world_triangle(hit);
             out.t[i] = hit.t;
             out.prim[i] = self.geometry.flat_prim(hit, &self.flat) as i64;
             out.u[i] = hit.u;
@@ -360,7 +342,7 @@ impl Mesh {
     /// Raises ValueError naming ``transforms[i]`` for a matrix that is not
     /// finite or not invertible.
     fn place(&self, py: Python<'_>, transforms: &Bound<'_, PyAny>) -> PyResult<Self> {
-        if !self.geometry.instances.is_empty() {
+        if !self.geometry.instances().is_empty() {
             return Err(PyNotImplementedError::new_err(
                 "Mesh.place of a placed mesh: place the mesh itself, with each map \
                  composed with its placement",
@@ -391,9 +373,9 @@ impl Mesh {
     fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let g = &self.geometry;
         let mut tris = g.file_order_triangles();
-        for instance in &g.instances {
+        for instance in g.instances() {
             let m = instance.affine();
-            let own = g.prototypes[instance.prototype as usize].file_order_triangles();
+            let own = g.prototypes()[instance.prototype as usize].file_order_triangles();
             tris.extend(own.iter().map(|t| t.map(|p| m.transform_point3(p))));
         }
         let m = tris.len();

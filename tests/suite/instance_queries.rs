@@ -89,9 +89,9 @@ fn build((v, f): (Vec<Vec3>, Vec<[u32; 3]>)) -> Geometry {
 /// triangle k·T + j, each vertex moved as `Instance::affine` moves it).
 fn placed_and_copies(prototype: Geometry, maps: &[Affine3A]) -> (Geometry, Geometry) {
     let scene = placed(prototype, maps, BuildQuality::Auto).unwrap();
-    let own = scene.prototypes[0].file_order_triangles();
+    let own = scene.prototypes()[0].file_order_triangles();
     let mut vertices = Vec::new();
-    for instance in &scene.instances {
+    for instance in scene.instances() {
         let m = instance.affine();
         vertices.extend(own.iter().flatten().map(|&p| m.transform_point3(p)));
     }
@@ -139,7 +139,7 @@ fn brute_crossings(tris: &[[Vec3; 3]], ray: &Ray) -> Vec<(f32, u64)> {
 /// of their edges, where ties are broken.
 fn rays(copies: &Geometry, n: usize, seed: u64) -> Vec<Ray> {
     let tris = copies.file_order_triangles();
-    let (lo, hi) = (copies.bvh.bounds.min, copies.bvh.bounds.max);
+    let (lo, hi) = (copies.bvh().bounds.min, copies.bvh().bounds.max);
     let size = (hi - lo).length();
     let mut rng = seeded(seed);
     (0..n)
@@ -196,7 +196,7 @@ fn check_contains(scene: &Geometry, copies: &Geometry, points: &[Vec3]) -> usize
 /// their triangles, with no limit and with limits around the answer.
 fn check_nearest(scene: &Geometry, copies: &Geometry, n: usize, seed: u64) {
     let tris = copies.file_order_triangles();
-    let (lo, hi) = (copies.bvh.bounds.min, copies.bvh.bounds.max);
+    let (lo, hi) = (copies.bvh().bounds.min, copies.bvh().bounds.max);
     let mut rng = seeded(seed);
     let answer = |limit: f32, p: Vec3| {
         scene
@@ -276,7 +276,7 @@ fn contains_through_instances_is_the_copies() {
         .iter()
         .map(|m| m.transform_point3(Vec3::ZERO))
         .collect();
-    let (lo, hi) = (copies.bvh.bounds.min, copies.bvh.bounds.max);
+    let (lo, hi) = (copies.bvh().bounds.min, copies.bvh().bounds.max);
     points
         .extend((0..4000).map(|_| lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit())));
     let inside = check_contains(&scene, &copies, &points);

@@ -182,7 +182,7 @@ fn direction(rng: &mut StreamRng) -> Vec3 {
 /// to a random interval.
 fn check_random_rays(g: &Geometry, rays: usize, seed: u64) -> usize {
     let tris = g.file_order_triangles();
-    let (lo, hi) = (g.bvh.bounds.min, g.bvh.bounds.max);
+    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
     let size = (hi - lo).length();
     let mut rng = seeded(seed);
     let mut total = 0;
@@ -429,7 +429,7 @@ fn contains_agrees_with_brute_force_parity_in_every_direction() {
 /// limit and with limits around the answer.
 fn check_nearest(g: &Geometry, points: usize, seed: u64) {
     let tris = g.file_order_triangles();
-    let (lo, hi) = (g.bvh.bounds.min, g.bvh.bounds.max);
+    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
     let mut rng = seeded(seed);
     for i in 0..points {
         let grow = if i % 4 == 0 { 3.0 } else { 0.2 };

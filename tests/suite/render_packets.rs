@@ -423,7 +423,7 @@ fn measure_packet_against_single_rays_by_batch_size() {
         println!(
             "{name}: {} primitives, {} BVH nodes",
             scene.geometry.primitive_count(),
-            scene.geometry.bvh.nodes.len()
+            scene.geometry.bvh().nodes.len()
         );
         let except = scene.lights[0].prim().unwrap_or(u32::MAX);
         let [pixel, row, shadow] = batches(scene);
