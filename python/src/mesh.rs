@@ -254,16 +254,6 @@ impl Mesh {
     }
 }
 
-/// Rays whose first-hit and occlusion tests (open at `tmax`, as the
-/// renderer's are) take in a hit at t_max itself, as the crossing queries
-/// do and as embreex and Open3D do: every query answers for (0, t_max].
-fn closed_at_t_max(mut rays: Vec<strata::math::Ray>) -> Vec<strata::math::Ray> {
-    for ray in &mut rays {
-        ray.tmax = ray.tmax.next_up();
-    }
-    rays
-}
-
 /// `all_hits`'s answer: splits, t, prim.
 type AllHits<'py> = (
     Bound<'py, PyArray1<i64>>,
@@ -412,7 +402,7 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
-        let rays = closed_at_t_max(convert::rays(origins, directions, t_max, &threads)?);
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
         let n = rays.len();
         let mut t = vec![0f32; n];
         let mut prim = vec![0i64; n];
@@ -471,7 +461,7 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let threads = Threads::new(threads)?;
-        let rays = closed_at_t_max(convert::rays(origins, directions, t_max, &threads)?);
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
         let mut out = vec![false; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             self.geometry.occluded_stream(rays, u32::MAX, out)

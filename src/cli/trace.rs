@@ -32,7 +32,7 @@ pub struct TraceArgs {
     #[arg(long)]
     pub hits: PathBuf,
     /// Answer occlusion queries instead: each record is t = 0, prim = 0 if
-    /// anything lies in (tmin, tmax), else the miss record.
+    /// anything lies in (tmin, tmax], else the miss record.
     #[arg(long)]
     pub occlusion: bool,
     /// Worker threads (default: all cores). The hits are identical for any count.

@@ -241,7 +241,7 @@ impl Geometry {
         if !instance.may_hit(ray) {
             return None;
         }
-        let hit = prototype.intersect(&instance.object_ray(ray))?;
+        let hit = prototype.intersect_open_end(&instance.object_ray(ray))?;
         Some(PrimHit { prim: id, ..hit })
     }
 
@@ -249,7 +249,7 @@ impl Geometry {
     #[inline]
     pub(crate) fn instance_blocks(&self, id: u32, ray: &Ray) -> bool {
         let (instance, prototype) = self.instance(id);
-        instance.may_hit(ray) && prototype.occluded(&instance.object_ray(ray))
+        instance.may_hit(ray) && prototype.occluded_open_end(&instance.object_ray(ray))
     }
 
     /// The closest hit on a primitive that is not a world triangle.

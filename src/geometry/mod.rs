@@ -35,6 +35,8 @@ pub mod bundles;
 pub mod crossings;
 pub mod csg;
 pub mod instance;
+#[cfg(test)]
+mod interval_tests;
 pub mod leaf;
 pub mod nearest;
 mod placed_rounding;
