@@ -120,7 +120,7 @@ fn mesh_queries(c: &mut Criterion) {
         b.iter(|| rays.iter().map(|r| g.count_crossings(r)).sum::<u32>())
     });
     // Points of the bounding box grown by a tenth on each side.
-    let (lo, hi) = (g.bvh.bounds.min, g.bvh.bounds.max);
+    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
     let mut rng = common::seeded(3);
     let points: Vec<Vec3> = (0..rays.len())
         .map(|_| {

@@ -26,6 +26,7 @@ pub mod math;
 pub mod mode;
 pub mod output;
 pub mod partial;
+pub mod raycast;
 pub mod rays;
 pub mod render;
 pub mod sampling;

@@ -2,15 +2,12 @@
 
 use crate::convert;
 use crate::run::{self, Threads, CHUNK, TASK};
-use glam::Vec3;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyKeyError, PyNotImplementedError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::path::PathBuf;
-use strata::accel::BuildQuality;
-use strata::geometry::Geometry;
-use strata::math::lanes::LANES;
+use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 
 /// A triangle mesh and its BVH, built once (on every core) and asked any
 /// number of queries.
@@ -28,14 +25,7 @@ use strata::math::lanes::LANES;
 /// core, or on ``threads`` threads; Ctrl-C stops it between chunks of
 /// 65,536 rays. Bad input raises ``ValueError`` naming the argument.
 #[pyclass(frozen, module = "strata_rt._native")]
-pub struct Mesh {
-    geometry: Geometry,
-    /// Where each instance's triangles start among the ids a placed mesh
-    /// answers with ([`Geometry::flat_offsets`]).
-    flat: Vec<u64>,
-    /// [min, max] corners of the triangles' bounding box.
-    bounds: [Vec3; 2],
-}
+pub struct Mesh(raycast::Mesh);
 
 /// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
 /// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
@@ -156,7 +146,7 @@ impl ClosestPoints {
     }
 }
 
-/// One ray's answer, written in place by the threads.
+/// Each ray's answer, written in place by the threads.
 struct HitColumns<'a> {
     t: &'a mut [f32],
     prim: &'a mut [i64],
@@ -167,119 +157,18 @@ struct HitColumns<'a> {
     point: &'a mut [f32],
 }
 
-impl Mesh {
-    fn new_from(geometry: Geometry) -> Self {
-        if !geometry.instances.is_empty() {
-            // Tight, as a mesh of the copies would have them: every
-            // vertex of every instance moved (the tree's box is looser).
-            let (lo, hi) = geometry
-                .instances
-                .par_iter()
-                .map(|instance| {
-                    let m = instance.affine();
-                    let own =
-                        geometry.prototypes[instance.prototype as usize].file_order_triangles();
-                    own.iter().flatten().fold(
-                        (Vec3::INFINITY, Vec3::NEG_INFINITY),
-                        |(lo, hi), &p| {
-                            let q = m.transform_point3(p);
-                            (lo.min(q), hi.max(q))
-                        },
-                    )
-                })
-                .reduce(
-                    || (Vec3::INFINITY, Vec3::NEG_INFINITY),
-                    |a, b| (a.0.min(b.0), a.1.max(b.1)),
-                );
-            return Self {
-                bounds: [lo, hi],
-                flat: geometry.flat_offsets(),
-                geometry,
-            };
-        }
-        let mut lo = Vec3::INFINITY;
-        let mut hi = Vec3::NEG_INFINITY;
-        for block in &geometry.leaf_blocks {
-            for (lane, &id) in block.id.iter().enumerate().take(LANES) {
-                if id < geometry.triangle_count {
-                    for p in block.triangle(lane) {
-                        lo = lo.min(p);
-                        hi = hi.max(p);
-                    }
-                }
-            }
-        }
-        Self {
-            flat: geometry.flat_offsets(),
-            geometry,
-            bounds: [lo, hi],
+impl HitColumns<'_> {
+    /// Copies `hits` in, one row each.
+    fn fill(self, hits: &[FirstHit]) {
+        for (i, h) in hits.iter().enumerate() {
+            self.t[i] = h.t;
+            self.prim[i] = h.face;
+            self.u[i] = h.u;
+            self.v[i] = h.v;
+            h.normal.write_to_slice(&mut self.normal[3 * i..3 * i + 3]);
+            h.point.write_to_slice(&mut self.point[3 * i..3 * i + 3]);
         }
     }
-
-    /// A triangle a crossing or a nearest point names (`prim`, and `part`
-    /// its leaf slot), as a mesh of the copies numbers it.
-    fn flat_id(&self, prim: u32, part: u32) -> i64 {
-        let hit = strata::accel::PrimHit {
-            t: 0.0,
-            prim,
-            u: 0.0,
-            v: 0.0,
-            part,
-        };
-        self.geometry.flat_prim(&hit, &self.flat) as i64
-    }
-
-    /// The triangle a hit names, in world space: a placed mesh's triangle
-    /// moved by its instance's map, as a copy would hold it.
-    fn hit_triangle(&self, hit: &strata::accel::PrimHit) -> [Vec3; 3] {
-        let g = &self.geometry;
-        if hit.prim < g.first_instance() {
-            return g.triangle(hit);
-        }
-        let (instance, prototype) = g.instance(hit.prim);
-        let slot = hit.part as usize;
-        let m = instance.affine();
-        prototype.leaf_blocks[slot / LANES]
-            .triangle(slot % LANES)
-            .map(|p| m.transform_point3(p))
-    }
-
-    /// Fill `out` with the first hits of `rays`.
-    fn first_hits(&self, rays: &[strata::math::Ray], out: HitColumns<'_>) {
-        let mut found = [None; TASK];
-        let found = &mut found[..rays.len()];
-        self.geometry.intersect_stream(rays, found);
-        for (i, hit) in found.iter().enumerate() {
-            let Some(hit) = hit else {
-                out.t[i] = f32::INFINITY;
-                out.prim[i] = -1;
-                out.u[i] = f32::NAN;
-                out.v[i] = f32::NAN;
-                out.normal[3 * i..3 * i + 3].fill(f32::NAN);
-                out.point[3 * i..3 * i + 3].fill(f32::NAN);
-                continue;
-            };
-            let [a, b, c] = self.hit_triangle(hit);
-            out.t[i] = hit.t;
-            out.prim[i] = self.geometry.flat_prim(hit, &self.flat) as i64;
-            out.u[i] = hit.u;
-            out.v[i] = hit.v;
-            let normal = (b - a).cross(c - a).normalize();
-            let point = (1.0 - hit.u - hit.v) * a + hit.u * b + hit.v * c;
-            normal.write_to_slice(&mut out.normal[3 * i..3 * i + 3]);
-            point.write_to_slice(&mut out.point[3 * i..3 * i + 3]);
-        }
-    }
-}
-
-/// Rays whose first-hit and occlusion tests (open at `tmax`, as the
-/// renderer's are) take in a hit at t_max itself, as the crossing queries
-/// do and as embreex and Open3D do: every query answers for (0, t_max].
-fn closed_at_t_max(mut rays: Vec<strata::math::Ray>) -> Vec<strata::math::Ray> {
-    for ray in &mut rays {
-        ray.tmax = ray.tmax.next_up();
-    }
-    rays
 }
 
 /// `all_hits`'s answer: splits, t, prim.
@@ -312,10 +201,10 @@ impl Mesh {
     ) -> PyResult<Self> {
         let vertices = convert::vec3s(vertices, "vertices")?;
         let faces = convert::faces(faces, vertices.len())?;
-        let geometry = py
-            .detach(|| strata::scene::mesh_geometry(vertices, faces, BuildQuality::Auto))
+        let mesh = py
+            .detach(|| raycast::Mesh::new(vertices, faces, BuildQuality::Auto))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Self::new_from(geometry))
+        Ok(Self(mesh))
     }
 
     /// Load a mesh file (OBJ, PLY, glTF, GLB, OFF or STL) with strata's own
@@ -326,9 +215,9 @@ impl Mesh {
     /// one-line message naming the file and the line or key.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let loaded = py.detach(|| strata::scene::load_mesh_scene(&path, BuildQuality::Auto));
+        let loaded = py.detach(|| raycast::Mesh::load(&path, BuildQuality::Auto));
         match loaded {
-            Ok((scene, _)) => Ok(Self::new_from(scene.geometry)),
+            Ok(mesh) => Ok(Self(mesh)),
             Err(e) if !path.exists() => Err(PyFileNotFoundError::new_err(e.to_string())),
             Err(e) => Err(crate::InputError::new_err(e.to_string())),
         }
@@ -337,7 +226,7 @@ impl Mesh {
     /// The number of triangles (faces); of a placed mesh, every copy's.
     #[getter]
     fn triangle_count(&self) -> usize {
-        self.flat.last().map_or(0, |&n| n as usize)
+        self.0.triangle_count() as usize
     }
 
     /// The number of triangles (faces); of a placed mesh, every copy's.
@@ -360,42 +249,36 @@ impl Mesh {
     /// Raises ValueError naming ``transforms[i]`` for a matrix that is not
     /// finite or not invertible.
     fn place(&self, py: Python<'_>, transforms: &Bound<'_, PyAny>) -> PyResult<Self> {
-        if !self.geometry.instances.is_empty() {
+        if self.0.is_placed() {
             return Err(PyNotImplementedError::new_err(
                 "Mesh.place of a placed mesh: place the mesh itself, with each map \
                  composed with its placement",
             ));
         }
         let maps = convert::affine_maps(transforms, "transforms")?;
-        let prototype = self.geometry.clone();
-        let placed = py
-            .detach(|| strata::geometry::instance::placed(prototype, &maps, BuildQuality::Auto))
-            .map_err(|k| {
-                PyValueError::new_err(format!(
-                    "transforms[{k}] is not invertible, or places the mesh beyond float32's range"
-                ))
-            })?;
-        Ok(Self::new_from(placed))
+        match py.detach(|| self.0.place(&maps, BuildQuality::Auto)) {
+            Ok(placed) => Ok(Self(placed)),
+            Err(PlaceError::Map(k)) => Err(PyValueError::new_err(format!(
+                "transforms[{k}] is not invertible, or places the mesh beyond float32's range"
+            ))),
+            Err(e @ PlaceError::AlreadyPlaced) => {
+                Err(PyNotImplementedError::new_err(e.to_string()))
+            }
+        }
     }
 
     /// float32 (2, 3): the [min, max] corners of the bounding box (inf and
     /// -inf for a mesh without triangles).
     #[getter]
     fn bounds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        rows(py, self.bounds.map(|p| p.to_array()).to_vec())
+        rows(py, self.0.bounds().map(|p| p.to_array()).to_vec())
     }
 
     /// float32 (m, 3, 3): each face's three vertices, in face order (a copy
     /// of what the BVH stores).
     #[getter]
     fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let g = &self.geometry;
-        let mut tris = g.file_order_triangles();
-        for instance in &g.instances {
-            let m = instance.affine();
-            let own = g.prototypes[instance.prototype as usize].file_order_triangles();
-            tris.extend(own.iter().map(|t| t.map(|p| m.transform_point3(p))));
-        }
+        let tris = self.0.triangles();
         let m = tris.len();
         let flat: Vec<f32> = tris
             .into_iter()
@@ -405,7 +288,7 @@ impl Mesh {
     }
 
     fn __repr__(&self) -> String {
-        let [lo, hi] = self.bounds;
+        let [lo, hi] = self.0.bounds();
         format!(
             "Mesh({} triangles, bounds {:?} to {:?})",
             self.triangle_count(),
@@ -430,7 +313,7 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
-        let rays = closed_at_t_max(convert::rays(origins, directions, t_max, &threads)?);
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
         let n = rays.len();
         let mut t = vec![0f32; n];
         let mut prim = vec![0i64; n];
@@ -454,6 +337,9 @@ impl Mesh {
                     columns
                         .into_par_iter()
                         .for_each(|(rays, t, prim, u, v, normal, point)| {
+                            let mut hits = [FirstHit::MISS; TASK];
+                            let hits = &mut hits[..rays.len()];
+                            self.0.first_hits(rays, hits);
                             let out = HitColumns {
                                 t,
                                 prim,
@@ -462,7 +348,7 @@ impl Mesh {
                                 normal,
                                 point,
                             };
-                            self.first_hits(rays, out)
+                            out.fill(hits)
                         })
                 })
             });
@@ -489,10 +375,10 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let threads = Threads::new(threads)?;
-        let rays = closed_at_t_max(convert::rays(origins, directions, t_max, &threads)?);
+        let rays = convert::rays(origins, directions, t_max, &threads)?;
         let mut out = vec![false; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
-            self.geometry.occluded_stream(rays, u32::MAX, out)
+            self.0.occluded(rays, out)
         })?;
         Ok(PyArray1::from_vec(py, out))
     }
@@ -517,11 +403,7 @@ impl Mesh {
         let threads = Threads::new(threads)?;
         let rays = convert::rays(origins, directions, t_max, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
-            for ray in rays {
-                let before = found.len();
-                self.geometry.crossings(ray, found);
-                counts.push((found.len() - before) as u32);
-            }
+            self.0.all_hits(rays, found, counts)
         })?;
         let mut splits = Vec::with_capacity(counts.len() + 1);
         let mut total = 0i64;
@@ -531,7 +413,7 @@ impl Mesh {
             splits.push(total);
         }
         let t: Vec<f32> = found.iter().map(|c| c.t).collect();
-        let prim: Vec<i64> = found.iter().map(|c| self.flat_id(c.prim, c.part)).collect();
+        let prim: Vec<i64> = found.iter().map(|c| c.face).collect();
         Ok((
             PyArray1::from_vec(py, splits),
             PyArray1::from_vec(py, t),
@@ -555,7 +437,7 @@ impl Mesh {
         let mut out = vec![0i64; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             for (o, ray) in out.iter_mut().zip(rays) {
-                *o = self.geometry.count_crossings(ray) as i64;
+                *o = i64::from(self.0.count_hits(ray));
             }
         })?;
         Ok(PyArray1::from_vec(py, out))
@@ -580,7 +462,7 @@ impl Mesh {
         let mut out = vec![false; points.len()];
         run::each(py, &threads, &points, &mut out, |points, out| {
             for (o, &p) in out.iter_mut().zip(points) {
-                *o = self.geometry.contains(p);
+                *o = self.0.contains(p);
             }
         })?;
         Ok(PyArray1::from_vec(py, out))
@@ -613,24 +495,20 @@ impl Mesh {
                 )))
             }
         };
-        let mut near = vec![([f32::NAN; 3], f32::INFINITY, -1i64); points.len()];
+        let mut near = vec![raycast::ClosestPoint::MISS; points.len()];
         run::each(py, &threads, &points, &mut near, |points, out| {
             for (o, &p) in out.iter_mut().zip(points) {
-                if let Some(n) = self.geometry.nearest(p, max_distance) {
-                    let inside = signed && self.geometry.contains(p);
-                    let d = if inside { -n.distance } else { n.distance };
-                    *o = (n.point.to_array(), d, self.flat_id(n.prim, n.part));
-                }
+                *o = self.0.closest_point(p, max_distance, signed);
             }
         })?;
         let n = near.len();
         let mut point = Vec::with_capacity(3 * n);
         let mut distance = Vec::with_capacity(n);
         let mut prim = Vec::with_capacity(n);
-        for (p, d, k) in near {
-            point.extend(p);
-            distance.push(d);
-            prim.push(k);
+        for c in near {
+            point.extend(c.point.to_array());
+            distance.push(c.distance);
+            prim.push(c.face);
         }
         Ok(ClosestPoints {
             point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),

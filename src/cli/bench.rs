@@ -257,7 +257,7 @@ fn bench_meshes(
             .map_err(|e| InputError::file(&mesh, format!("cannot open: {e}")))?;
         let (scene, timings) = load_mesh_scene(&abs, args.bvh_quality)?;
         let rss = peak_rss_bytes().unwrap_or(0) as f64 / (1 << 20) as f64;
-        let tris = scene.geometry.triangle_count as usize;
+        let tris = scene.geometry.triangle_count() as usize;
         let bpt = scene.geometry.accel_bytes() as f64 / tris.max(1) as f64;
         // Peak memory of load + build above the level before, per triangle.
         let peak = timings.peak_bytes().map(|b| b as f64 / tris.max(1) as f64);
@@ -278,8 +278,8 @@ fn bench_meshes(
         );
         println!(
             "# {name}: tree {}; prefetch {} ({:.1} MB of nodes and leaf blocks)",
-            scene.geometry.bvh.stats(),
-            if scene.geometry.bvh.prefetch {
+            scene.geometry.bvh().stats(),
+            if scene.geometry.bvh().prefetch {
                 "on"
             } else {
                 "off"

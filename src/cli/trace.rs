@@ -32,7 +32,7 @@ pub struct TraceArgs {
     #[arg(long)]
     pub hits: PathBuf,
     /// Answer occlusion queries instead: each record is t = 0, prim = 0 if
-    /// anything lies in (tmin, tmax), else the miss record.
+    /// anything lies in (tmin, tmax], else the miss record.
     #[arg(long)]
     pub occlusion: bool,
     /// Worker threads (default: all cores). The hits are identical for any count.
@@ -91,7 +91,7 @@ pub fn trace(
     let g = &scene.geometry;
     let offsets = g.flat_offsets();
     let record = |found: Option<strata::accel::PrimHit>| match found {
-        Some(h) if !g.instances.is_empty() => HitRecord::from_hit(Some(strata::accel::PrimHit {
+        Some(h) if !g.instances().is_empty() => HitRecord::from_hit(Some(strata::accel::PrimHit {
             prim: g.flat_prim(&h, &offsets) as u32,
             ..h
         })),
@@ -144,7 +144,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
     };
     let ids = scene.geometry.flat_offsets();
     let last = ids.last().copied().unwrap_or(0);
-    if last > u64::from(u32::MAX) - scene.geometry.planes.len() as u64 {
+    if last > u64::from(u32::MAX) - scene.geometry.planes().len() as u64 {
         return Err(InputError::file(
             &args.mesh,
             format!(
@@ -154,7 +154,8 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
         .into());
     }
     super::warn(&scene.warnings);
-    scene.geometry.bvh.prefetch = args.prefetch.enabled(scene.geometry.traversal_bytes());
+    let prefetch = args.prefetch.enabled(scene.geometry.traversal_bytes());
+    scene.geometry.set_prefetch(prefetch);
     let rays = read_rays(&args.rays)?;
     if args.hits == args.rays {
         return Err(InputError::new(
@@ -190,7 +191,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
             "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} (load {:.2} s, BVH {:.2} s) -> {}",
             rays.len(),
             if args.occlusion { "occlusion" } else { "closest hit" },
-            scene.geometry.triangle_count,
+            scene.geometry.triangle_count(),
             found,
             if args.occlusion { "occluded" } else { "hits" },
             seconds,

@@ -43,7 +43,7 @@ fn sphere_point(rng: &mut StreamRng) -> Vec3 {
 /// `packets` packets of 8 rays of `kind` around the scene's BVH bounds;
 /// packet `k` draws from its own seeded stream.
 pub fn rays(scene: &Scene, kind: RayKind, packets: usize, seed: u32) -> Vec<[Ray; PACKET_SIZE]> {
-    let b = scene.geometry.bvh.bounds;
+    let b = scene.geometry.bvh().bounds;
     let center = (b.min + b.max) * 0.5;
     let radius = ((b.max - b.min).length() * 0.5).max(1e-6);
     let side = (packets as f64).sqrt().ceil() as usize;

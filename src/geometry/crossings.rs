@@ -25,7 +25,7 @@ mod placed;
 
 use super::Geometry;
 use crate::accel::Query;
-use crate::math::lanes::{mask_lanes, LANES};
+use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle_lanes;
@@ -39,9 +39,10 @@ use glam::Vec3;
 pub struct Crossing {
     pub t: f32,
     pub prim: u32,
-    /// The triangle's leaf slot, as [`PrimHit::part`](crate::accel::PrimHit::part):
-    /// in the scene's leaves for a world triangle, in its prototype's for
-    /// an instance's ([`Geometry::flat_prim`] turns it into a copy's id).
+    /// The triangle's leaf slot, as a closest hit's `part` (see "What a
+    /// hit's `part` says" in [`super`]): read it through
+    /// [`Geometry::flat_prim`], [`Geometry::inner_prim`] or
+    /// [`Geometry::world_triangle`].
     pub part: u32,
 }
 
@@ -95,18 +96,10 @@ impl Geometry {
     pub fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
         let first = out.len();
         self.walk_crossings(ray, |c| out.push(c));
-        let within = |c: &Crossing| {
-            if c.prim < self.first_instance() {
-                return 0;
-            }
-            let (_, prototype) = self.instance(c.prim);
-            let slot = c.part as usize;
-            prototype.leaf_blocks[slot / LANES].id[slot % LANES]
-        };
         out[first..].sort_unstable_by(|a, b| {
             a.t.total_cmp(&b.t)
                 .then(a.prim.cmp(&b.prim))
-                .then_with(|| within(a).cmp(&within(b)))
+                .then_with(|| self.inner_prim(a).cmp(&self.inner_prim(b)))
         });
     }
 
@@ -163,11 +156,10 @@ impl Geometry {
             for lane in mask_lanes(hit) {
                 let prim = block.id[lane];
                 if prim < self.triangle_count {
-                    let part = (b * LANES + lane) as u32;
                     found(Crossing {
                         t: t[lane],
                         prim,
-                        part,
+                        part: Self::slot(b, lane),
                     });
                 }
             }

@@ -13,13 +13,10 @@
 //! back into object space may cost, so that a ray leaving an instanced
 //! surface starts on its side in object space too (no acne, no leaks).
 
-use super::csg::Csg;
-use super::{Geometry, Surface};
+use super::{Found, Geometry, GeometryParts, Surface};
 use crate::accel::{BuildQuality, Bvh8, PrimHit};
-use crate::math::lanes::LANES;
 use crate::math::offset::{gamma, transformed_error};
 use crate::math::{Aabb, Ray, Transform};
-use crate::shape::triangle_lanes::TriangleBlock;
 use glam::{Affine3A, Mat3, Vec3};
 
 /// No material of its own: an instance takes its mesh's materials.
@@ -135,9 +132,8 @@ impl Instance {
     /// The world-space surface of a hit on this instance: `hit.part` is
     /// the prototype's leaf slot, as a world triangle's is the scene's.
     pub fn surface(&self, prototype: &Geometry, ray: &Ray, hit: &PrimHit) -> Surface {
-        let slot = hit.part as usize;
         let inner = PrimHit {
-            prim: prototype.leaf_blocks[slot / LANES].id[slot % LANES],
+            prim: prototype.slot_prim(hit.part),
             ..*hit
         };
         let local = prototype.surface(&self.object_ray(ray), &inner);
@@ -199,29 +195,14 @@ pub fn placed(
         instances.clear();
         boxes.clear();
     }
-    let mut bvh = Bvh8::build_from_with_others(boxes, quality, 0);
-    let leaf_blocks = bvh
-        .prim_ids
-        .chunks(LANES)
-        .map(|ids| {
-            let mut block = TriangleBlock::EMPTY;
-            block.id[..ids.len()].copy_from_slice(ids);
-            block
-        })
-        .collect();
-    bvh.prim_ids = Vec::new();
-    Ok(Geometry {
-        leaf_blocks,
-        triangle_count: 0,
-        meshes: Vec::new(),
-        shapes: Vec::new(),
-        transforms: Vec::new(),
-        csg: Csg::default(),
-        planes: Vec::new(),
+    let bvh = Bvh8::build_from_with_others(boxes, quality, 0);
+    let parts = GeometryParts {
         instances,
         prototypes: vec![prototype],
-        bvh,
-    })
+        ..GeometryParts::default()
+    };
+    // No triangle of its own: every slot holds an instance.
+    Ok(Geometry::new(parts, bvh, |_| [Vec3::NAN; 3]))
 }
 
 impl Geometry {
@@ -248,7 +229,7 @@ impl Geometry {
         if !instance.may_hit(ray) {
             return None;
         }
-        let hit = prototype.intersect(&instance.object_ray(ray))?;
+        let hit = prototype.intersect_open_end(&instance.object_ray(ray))?;
         Some(PrimHit { prim: id, ..hit })
     }
 
@@ -256,7 +237,7 @@ impl Geometry {
     #[inline]
     pub(crate) fn instance_blocks(&self, id: u32, ray: &Ray) -> bool {
         let (instance, prototype) = self.instance(id);
-        instance.may_hit(ray) && prototype.occluded(&instance.object_ray(ray))
+        instance.may_hit(ray) && prototype.occluded_open_end(&instance.object_ray(ray))
     }
 
     /// The closest hit on a primitive that is not a world triangle.
@@ -318,19 +299,64 @@ impl Geometry {
         out
     }
 
-    /// A hit's primitive id as if every instance were a copy in world
+    /// A triangle's primitive id as if every instance were a copy in world
     /// space: the scene's own primitives keep theirs, and instance `k`'s
     /// triangle `j` is `offsets[k] + j` ([`Geometry::flat_offsets`]), after
     /// the triangles of the instances before it. What `strata trace`
     /// writes, and what Embree's instances of one mesh of T triangles give
     /// as `instID · T + primID`.
-    pub fn flat_prim(&self, hit: &PrimHit, offsets: &[u64]) -> u64 {
-        if hit.prim < self.first_instance() || self.plane_index(hit.prim).is_some() {
-            return u64::from(hit.prim);
+    pub fn flat_prim(&self, found: &impl Found, offsets: &[u64]) -> u64 {
+        match self.placed_in(found) {
+            Some(k) => offsets[k] + u64::from(self.inner_prim(found)),
+            None => u64::from(found.prim()),
         }
-        let k = (hit.prim - self.first_instance()) as usize;
-        let prototype = &self.prototypes[self.instances[k].prototype as usize];
-        let slot = hit.part as usize;
-        offsets[k] + u64::from(prototype.leaf_blocks[slot / LANES].id[slot % LANES])
+    }
+
+    /// The instance `found` lies on (its index), or `None` for anything
+    /// of the scene's own (a plane too).
+    #[inline(always)]
+    fn placed_in(&self, found: &impl Found) -> Option<usize> {
+        let prim = found.prim();
+        let own = prim < self.first_instance() || self.plane_index(prim).is_some();
+        (!own).then(|| (prim - self.first_instance()) as usize)
+    }
+
+    /// The triangle's id in the tree that stores it: its prototype's
+    /// triangle id for an instance's, the primitive itself otherwise.
+    #[inline]
+    pub fn inner_prim(&self, found: &impl Found) -> u32 {
+        match self.placed_in(found) {
+            Some(k) => {
+                let prototype = &self.prototypes[self.instances[k].prototype as usize];
+                prototype.slot_prim(Geometry::slot_of(found))
+            }
+            None => found.prim(),
+        }
+    }
+
+    /// The vertices of a triangle found, where it is stored: a world
+    /// triangle's in world space, an instance's in its prototype's space.
+    pub fn object_triangle(&self, found: &impl Found) -> [Vec3; 3] {
+        match self.placed_in(found) {
+            Some(k) => {
+                let prototype = &self.prototypes[self.instances[k].prototype as usize];
+                prototype.slot_triangle(Geometry::slot_of(found))
+            }
+            None => self.triangle(found),
+        }
+    }
+
+    /// The vertices of a triangle found, in world space: an instance's
+    /// moved by its map ([`Instance::affine`]'s `transform_point3`, vertex by
+    /// vertex), as a mesh of the copies would hold them.
+    pub fn world_triangle(&self, found: &impl Found) -> [Vec3; 3] {
+        let own = self.object_triangle(found);
+        match self.placed_in(found) {
+            Some(k) => {
+                let m = self.instances[k].affine();
+                own.map(|p| m.transform_point3(p))
+            }
+            None => own,
+        }
     }
 }

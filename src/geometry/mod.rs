@@ -4,18 +4,39 @@
 //! ([`Geometry::surface`]), each also for packets of up to eight rays.
 //!
 //! Triangles of every mesh are baked into world space and stored once, in
-//! the BVH's leaf order ([`Geometry::leaf_blocks`]); analytic shapes keep
-//! their object space ([`primitive::Shape`]); CSG trees ([`csg`]) are one
-//! BVH primitive each; infinite planes stay outside the BVH. A ray goes
-//! down one way: [`query`] asks the BVH ([`crate::accel`]) for leaves, the
-//! [`leaf`] kernels test what they hold with the leaf primitives of
-//! [`crate::shape`], and [`surface`] turns the closest hit into a
-//! [`Surface`].
+//! the BVH's leaf order, eight *slots* to a block (the leaf store, private
+//! to this module: [`Geometry::slot_prim`], [`Geometry::slot_triangle`]);
+//! analytic shapes keep their object space ([`primitive::Shape`]); CSG
+//! trees ([`csg`]) are one BVH primitive each; infinite planes stay
+//! outside the BVH. A ray goes down one way: [`query`] asks the BVH
+//! ([`crate::accel`]) for leaves, the [`leaf`] kernels test what they hold
+//! with the leaf primitives of [`crate::shape`], and [`surface`] turns the
+//! closest hit into a [`Surface`].
+//!
+//! # What a hit's `part` says
+//!
+//! [`PrimHit::part`], [`Crossing::part`] and [`Nearest::part`] say which
+//! part of primitive `prim` was found, by what `prim` is:
+//!
+//! | `prim` | `part` |
+//! |---|---|
+//! | a triangle (below [`Geometry::triangle_count`]) | its leaf slot here |
+//! | an instance ([`Geometry::first_instance`] on) | the leaf slot of its prototype's triangle |
+//! | a cylinder | 0 the side, 1 the bottom cap, 2 the top cap |
+//! | a CSG tree | the operand's code ([`csg::Csg`]) |
+//! | another shape or a plane | 0 |
+//!
+//! Outside this module a part is read only through [`Geometry::slot_of`],
+//! [`Geometry::triangle`], [`Geometry::world_triangle`],
+//! [`Geometry::object_triangle`], [`Geometry::inner_prim`] and
+//! [`Geometry::flat_prim`], never decoded by hand.
 
 pub mod bundles;
 pub mod crossings;
 pub mod csg;
 pub mod instance;
+#[cfg(test)]
+mod interval_tests;
 pub mod leaf;
 pub mod nearest;
 mod placed_rounding;
@@ -36,43 +57,198 @@ pub use nearest::Nearest;
 pub use primitive::{
     AnalyticPrim, MeshAttribute, MeshNormals, MeshRange, MeshUvs, Shape, NO_TRANSFORM,
 };
+use rayon::prelude::*;
 pub use surface::Surface;
 
 #[derive(Debug, Clone)]
 pub struct Geometry {
-    /// The BVH's leaves, eight slots to a block: slot `s` is lane `s % 8`
-    /// of block `s / 8` and holds primitive `id[lane]` with, for a
-    /// triangle (an id below `triangle_count`), its world-space vertices,
-    /// stored once, in the order traversal reads them. The slots of
-    /// analytic shapes and padding hold NaN vertices. These ids are the
-    /// BVH's leaf order (its own `prim_ids` is emptied once they are
-    /// here). Triangle ids stay in file order: triangle `i` of the scene's
-    /// meshes is primitive `i`. Use [`Geometry::triangle`] for a hit's
-    /// vertices and [`Geometry::file_order_triangles`] for a copy in file
-    /// order.
-    pub leaf_blocks: Vec<TriangleBlock>,
+    /// The leaf store: the BVH's leaves, eight slots to a block, slot `s`
+    /// being lane `s % 8` of block `s / 8` and holding primitive
+    /// `id[lane]` with, for a triangle (an id below `triangle_count`), its
+    /// world-space vertices, stored once, in the order traversal reads
+    /// them. The slots of analytic shapes and padding hold NaN vertices.
+    /// These ids are the BVH's leaf order (its own `prim_ids` is emptied
+    /// once they are here). Triangle ids stay in file order: triangle `i`
+    /// of the scene's meshes is primitive `i`. Private to this module: the
+    /// rest of the crate reads it through [`Geometry::slot_prim`],
+    /// [`Geometry::slot_triangle`] and [`Geometry::triangle`].
+    leaf_blocks: Vec<TriangleBlock>,
     /// Triangles in the scene: primitives `0..triangle_count`.
-    pub triangle_count: u32,
+    pub(crate) triangle_count: u32,
     /// Sorted by `first`; covers every triangle.
-    pub meshes: Vec<MeshRange>,
-    /// Primitive `triangles.len() + i`.
-    pub shapes: Vec<AnalyticPrim>,
-    pub transforms: Vec<Transform>,
+    pub(crate) meshes: Vec<MeshRange>,
+    /// Primitive `triangle_count + i`.
+    pub(crate) shapes: Vec<AnalyticPrim>,
+    pub(crate) transforms: Vec<Transform>,
     /// The CSG trees that [`Shape::Csg`] primitives name, with their operands.
-    pub csg: Csg,
+    pub(crate) csg: Csg,
     /// Unbounded, outside the BVH.
-    pub planes: Vec<Plane>,
+    pub(crate) planes: Vec<Plane>,
     /// Primitives `first_instance()..`: placements of the prototypes.
-    pub instances: Vec<Instance>,
+    pub(crate) instances: Vec<Instance>,
     /// Meshes stored once in their own object space, each with its own
     /// tree, that instances place ([`instance`]); triangles only.
+    pub(crate) prototypes: Vec<Geometry>,
+    pub(crate) bvh: Bvh8,
+}
+
+/// What a [`Geometry`] holds besides its tree and its leaf store, as the
+/// scene's compiler gathers it ([`Geometry::new`]).
+#[derive(Debug, Default)]
+pub struct GeometryParts {
+    /// Sorted by `first`, covering triangles `0..n` without a gap.
+    pub meshes: Vec<MeshRange>,
+    pub shapes: Vec<AnalyticPrim>,
+    pub transforms: Vec<Transform>,
+    pub csg: Csg,
+    pub planes: Vec<Plane>,
+    pub instances: Vec<Instance>,
     pub prototypes: Vec<Geometry>,
-    pub bvh: Bvh8,
+}
+
+/// Something found on a primitive: a closest hit ([`PrimHit`]), a
+/// [`Crossing`] or a [`Nearest`] point, named by its primitive and the
+/// part of it (module docs, "What a hit's `part` says").
+pub trait Found {
+    fn prim(&self) -> u32;
+    fn part(&self) -> u32;
+}
+
+impl Found for PrimHit {
+    #[inline(always)]
+    fn prim(&self) -> u32 {
+        self.prim
+    }
+    #[inline(always)]
+    fn part(&self) -> u32 {
+        self.part
+    }
+}
+
+impl Found for Crossing {
+    #[inline(always)]
+    fn prim(&self) -> u32 {
+        self.prim
+    }
+    #[inline(always)]
+    fn part(&self) -> u32 {
+        self.part
+    }
+}
+
+impl Found for Nearest {
+    #[inline(always)]
+    fn prim(&self) -> u32 {
+        self.prim
+    }
+    #[inline(always)]
+    fn part(&self) -> u32 {
+        self.part
+    }
 }
 
 impl Geometry {
+    /// A geometry over `bvh`, whose leaf order (`prim_ids`) becomes the
+    /// leaf store: a slot holding triangle `id` (below the meshes' count)
+    /// stores `vertices(id)`, read straight from the caller's sources, so
+    /// the triangles are never held twice; other slots keep their id alone.
+    /// The tree's own `prim_ids` is emptied.
+    pub fn new(
+        parts: GeometryParts,
+        mut bvh: Bvh8,
+        vertices: impl Fn(u32) -> [Vec3; 3] + Sync,
+    ) -> Self {
+        let triangle_count = parts.meshes.last().map_or(0, |m| m.first + m.count);
+        let leaf_blocks = bvh
+            .prim_ids
+            .par_chunks(LANES)
+            .map(|ids| {
+                let mut block = TriangleBlock::EMPTY;
+                for (lane, &id) in ids.iter().enumerate() {
+                    if id < triangle_count {
+                        block.set(lane, &vertices(id), id);
+                    } else {
+                        block.id[lane] = id;
+                    }
+                }
+                block
+            })
+            .collect();
+        bvh.prim_ids = Vec::new();
+        let GeometryParts {
+            meshes,
+            shapes,
+            transforms,
+            csg,
+            planes,
+            instances,
+            prototypes,
+        } = parts;
+        Self {
+            leaf_blocks,
+            triangle_count,
+            meshes,
+            shapes,
+            transforms,
+            csg,
+            planes,
+            instances,
+            prototypes,
+            bvh,
+        }
+    }
+
     pub fn primitive_count(&self) -> usize {
         self.triangle_count as usize + self.shapes.len() + self.instances.len()
+    }
+
+    /// Triangles in this tree's own leaves: primitives `0..triangle_count`
+    /// (a prototype's are counted in [`Geometry::unique_triangles`]).
+    #[inline(always)]
+    pub fn triangle_count(&self) -> u32 {
+        self.triangle_count
+    }
+
+    /// The meshes, sorted by their first triangle, covering every triangle.
+    pub fn meshes(&self) -> &[MeshRange] {
+        &self.meshes
+    }
+
+    /// The analytic shapes: shape `i` is primitive `triangle_count() + i`.
+    pub fn shapes(&self) -> &[AnalyticPrim] {
+        &self.shapes
+    }
+
+    /// The CSG trees that [`Shape::Csg`] primitives name.
+    pub fn csg(&self) -> &Csg {
+        &self.csg
+    }
+
+    /// The infinite planes, outside the BVH.
+    pub fn planes(&self) -> &[Plane] {
+        &self.planes
+    }
+
+    /// The placements of prototypes: instance `k` is primitive
+    /// `first_instance() + k`.
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// The meshes instances place, each a geometry of triangles alone.
+    pub fn prototypes(&self) -> &[Geometry] {
+        &self.prototypes
+    }
+
+    /// The tree over every bounded primitive.
+    pub fn bvh(&self) -> &Bvh8 {
+        &self.bvh
+    }
+
+    /// Whether walks prefetch deferred children and keep several rays in
+    /// flight ([`crate::accel::prefetch`]): it changes no answer, only time.
+    pub fn set_prefetch(&mut self, on: bool) {
+        self.bvh.prefetch = on;
     }
 
     /// Whether leaves may hold anything but world triangles.
@@ -81,12 +257,45 @@ impl Geometry {
         !self.shapes.is_empty() || !self.instances.is_empty()
     }
 
-    /// The vertices of a triangle hit (its `part` is the leaf slot).
+    /// The slot of lane `lane` of leaf block `block`: what a triangle's
+    /// `part` records.
+    #[inline(always)]
+    pub(crate) fn slot(block: usize, lane: usize) -> u32 {
+        (block * LANES + lane) as u32
+    }
+
+    /// Leaf slots in this tree's leaf order: the primitive each holds
+    /// ([`crate::accel::NO_PRIM`] for padding), slot `s` the `s`-th.
+    pub fn leaf_slots(&self) -> impl Iterator<Item = u32> + '_ {
+        self.leaf_blocks.iter().flat_map(|b| b.id)
+    }
+
+    /// The primitive leaf slot `slot` holds.
+    #[inline(always)]
+    pub fn slot_prim(&self, slot: u32) -> u32 {
+        let slot = slot as usize;
+        self.leaf_blocks[slot / LANES].id[slot % LANES]
+    }
+
+    /// The vertices leaf slot `slot` stores (NaN where it holds no triangle).
     #[inline]
-    pub fn triangle(&self, hit: &PrimHit) -> [Vec3; 3] {
-        let block = &self.leaf_blocks[hit.part as usize / LANES];
-        debug_assert_eq!(block.id[hit.part as usize % LANES], hit.prim);
-        block.triangle(hit.part as usize % LANES)
+    pub fn slot_triangle(&self, slot: u32) -> [Vec3; 3] {
+        let slot = slot as usize;
+        self.leaf_blocks[slot / LANES].triangle(slot % LANES)
+    }
+
+    /// The leaf slot of a triangle found: in this tree's leaves for a world
+    /// triangle, in its prototype's for an instance's (module docs).
+    #[inline(always)]
+    pub fn slot_of(found: &impl Found) -> u32 {
+        found.part()
+    }
+
+    /// The vertices of a world triangle found (its `part` is the leaf slot).
+    #[inline]
+    pub fn triangle(&self, found: &impl Found) -> [Vec3; 3] {
+        debug_assert_eq!(self.slot_prim(found.part()), found.prim());
+        self.slot_triangle(found.part())
     }
 
     /// Every triangle in file order (a copy; for tools, not the hot loop).

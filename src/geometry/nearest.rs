@@ -15,7 +15,7 @@ mod placed;
 
 use super::Geometry;
 use crate::accel::NearestQueue;
-use crate::math::lanes::{mask_lanes, LANES};
+use crate::math::lanes::mask_lanes;
 use crate::shape::triangle_lanes::TriangleBlock;
 use glam::Vec3;
 use wide::f32x8;
@@ -28,7 +28,8 @@ pub struct Nearest {
     pub distance: f32,
     pub prim: u32,
     /// The triangle's leaf slot, as [`super::Crossing::part`]: an
-    /// instance's triangle is in its prototype's leaves.
+    /// instance's triangle is in its prototype's leaves (read it through
+    /// [`Geometry::flat_prim`] or [`Geometry::world_triangle`]).
     pub part: u32,
 }
 
@@ -220,7 +221,7 @@ impl Geometry {
                             d2: (point - q).length_squared(),
                             prim,
                             within: 0,
-                            part: (b * LANES + lane) as u32,
+                            part: Self::slot(b, lane),
                             point: q,
                         };
                         Best::offer(&mut best, candidate, max_distance);

@@ -1,14 +1,37 @@
 //! The scene's queries, closest hit and occlusion, for one ray, a packet
-//! of up to [`PACKET_SIZE`] rays, or a stream of any number. Each way of
-//! tracing is written once, generic over a [`SceneQuery`]: the query's
-//! leaf tests ([`crate::accel::Query`] for single rays, in flight or in
-//! bundles; [`PacketQuery`] for packets) and what the planes outside the
-//! BVH add. Packets and streams return bit for bit the single-ray answers.
+//! of up to [`PACKET_SIZE`] rays, or a stream of any number. Each query is
+//! written once, generic over a [`SceneQuery`]: the query's leaf tests
+//! ([`crate::accel::Query`] for single rays, in flight or in bundles;
+//! [`PacketQuery`] for packets) and what the planes outside the BVH add.
+//! Packets and streams return bit for bit the single-ray answers.
+//!
+//! # The interval
+//!
+//! Every query of a ray answers for `(tmin, tmax]`: a hit at `tmin` itself
+//! does not count, a hit at `tmax` itself does. That holds for
+//! [`Geometry::intersect`] and [`Geometry::occluded`] (alone, in packets,
+//! in streams) as for [`Geometry::crossings`] and
+//! [`Geometry::count_crossings`], for triangles, analytic shapes, planes
+//! and instances alike, so that a caller who asks for `(0, t_max]` (the
+//! Python package, Embree, Open3D) asks every query the same way.
+//!
+//! The leaf kernels test an interval open at both ends (`t < tmax`), so the
+//! closest-hit and occlusion queries test each leaf with `tmax` moved one
+//! step up (`next_up`: no float lies between): before a hit, the ray's own
+//! end; after one, the best hit's t, so a tie is seen and [`closer`] breaks
+//! it. An instance's prototype is walked with the ray its leaf was tested
+//! with, whose end is already moved, so that walk takes `tmax` as it comes
+//! (`Geometry::intersect_open_end`). Every `scenes/*.toml` render and
+//! every `strata trace` hit file stayed the same when the end was closed:
+//! the ray sets end at infinity, where both rules agree, and a shadow ray
+//! ends at its light sample, where only the light lies, which it skips
+//! ([`Geometry::occluded_except`]).
+//!
+//! [`closer`]: crate::accel::hit::closer
 
 use super::bundles::StreamPart;
 use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
-use crate::accel::hit::tie_ray;
 use crate::accel::narrow::{split_narrow, Travel};
 use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
@@ -38,13 +61,41 @@ trait SceneQuery<'g>: Query<Answer: Copy + Default> + Copy {
     fn planes_last(self, ray: &Ray, answer: Self::Answer) -> Self::Answer;
 }
 
+/// `ray` with its interval's end closed: `(tmin, tmax]` tested as the
+/// kernels' open `(tmin, next_up(tmax))`, the same set of floats.
+#[inline(always)]
+fn closed_end(ray: &Ray) -> Ray {
+    Ray {
+        tmax: ray.tmax.next_up(),
+        ..*ray
+    }
+}
+
+/// The ray a closest-hit query tests a leaf with: up to and including the
+/// best hit's t once there is one (a tie is seen, [`crate::accel::hit::closer`]
+/// breaks it), else up to the ray's end, included where the interval is
+/// `CLOSED` (module docs).
+#[inline(always)]
+fn leaf_ray<const CLOSED: bool>(ray: &Ray, best: Option<&PrimHit>) -> Ray {
+    match best {
+        Some(b) => Ray {
+            tmax: b.t.next_up(),
+            ..*ray
+        },
+        None if CLOSED => closed_end(ray),
+        None => *ray,
+    }
+}
+
 /// The closest hit: the walk's leaf test is [`Geometry::hit_leaf`], with the
 /// ray's shear made at its first leaf (most rays of a sparse view miss every
-/// leaf box). Planes report prim ids `u32::MAX - plane index`.
+/// leaf box). Planes report prim ids `u32::MAX - plane index`. `CLOSED`:
+/// the ray's end is in its interval (every caller's query); else it is
+/// not (a prototype's walk, module docs).
 #[derive(Clone, Copy)]
-struct ClosestHit<'g>(&'g Geometry);
+struct ClosestHit<'g, const CLOSED: bool>(&'g Geometry);
 
-impl Query for ClosestHit<'_> {
+impl<const CLOSED: bool> Query for ClosestHit<'_, CLOSED> {
     type State = ClosestState<Option<ShearedRay>>;
     type Answer = Option<PrimHit>;
     const SHORTENS: bool = true;
@@ -59,7 +110,7 @@ impl Query for ClosestHit<'_> {
 
     #[inline(always)]
     fn leaf(&mut self, state: &mut Self::State, start: u32, count: u32, ray: &mut Ray) -> bool {
-        let test = tie_ray(ray, state.best.as_ref());
+        let test = leaf_ray::<CLOSED>(ray, state.best.as_ref());
         let s = state.leaf.get_or_insert_with(|| ShearedRay::new(&test));
         let hit = self.0.hit_leaf(start, count, &test, s);
         keep_closer(&mut state.best, ray, hit);
@@ -72,12 +123,29 @@ impl Query for ClosestHit<'_> {
     }
 }
 
-/// [`ClosestHit`] for a packet's rays, with their shears in lanes made at
-/// the first leaf.
+/// A packet's rays as its leaves test them: their shears in lanes and the
+/// rays with their ends closed, made at the packet's first leaf.
+struct LeafRays {
+    sheared: ShearedRays,
+    rays: [Ray; PACKET_SIZE],
+}
+
+impl LeafRays {
+    #[inline(always)]
+    fn new(packet: &Packet) -> Self {
+        let rays = packet.rays();
+        Self {
+            sheared: ShearedRays::from_lanes(packet.lanes()),
+            rays: std::array::from_fn(|i| closed_end(&rays[i.min(rays.len() - 1)])),
+        }
+    }
+}
+
+/// [`ClosestHit`] for a packet's rays.
 struct ClosestHitPacket<'p> {
     geometry: &'p Geometry,
     packet: &'p Packet<'p>,
-    sheared: Option<ShearedRays>,
+    leaf: Option<LeafRays>,
 }
 
 impl PacketQuery for ClosestHitPacket<'_> {
@@ -87,12 +155,11 @@ impl PacketQuery for ClosestHitPacket<'_> {
     #[inline(always)]
     fn leaf(&mut self, start: u32, count: u32, lanes: u32, out: &mut [Option<PrimHit>]) -> u32 {
         let packet = self.packet;
-        let s = self
-            .sheared
-            .get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
+        let leaf = self.leaf.get_or_insert_with(|| LeafRays::new(packet));
+        let rays = &leaf.rays[..packet.rays().len()];
         let changed = self
             .geometry
-            .hit_leaf_packet(packet.rays(), s, start, count, lanes, out);
+            .hit_leaf_packet(rays, &leaf.sheared, start, count, lanes, out);
         if changed {
             lanes
         } else {
@@ -106,7 +173,7 @@ impl PacketQuery for ClosestHitPacket<'_> {
     }
 }
 
-impl<'g> SceneQuery<'g> for ClosestHit<'g> {
+impl<'g> SceneQuery<'g> for ClosestHit<'g, true> {
     type Packet<'p>
         = ClosestHitPacket<'p>
     where
@@ -119,7 +186,7 @@ impl<'g> SceneQuery<'g> for ClosestHit<'g> {
         ClosestHitPacket {
             geometry: self.0,
             packet,
-            sheared: None,
+            leaf: None,
         }
     }
 
@@ -135,7 +202,7 @@ impl<'g> SceneQuery<'g> for ClosestHit<'g> {
 
     #[inline(always)]
     fn planes_last(self, ray: &Ray, best: Option<PrimHit>) -> Option<PrimHit> {
-        self.0.closest_plane(ray, best)
+        self.0.closest_plane(&closed_end(ray), best)
     }
 }
 
@@ -143,31 +210,49 @@ impl<'g> SceneQuery<'g> for ClosestHit<'g> {
 /// `u32::MAX`: none): skipping the light's own primitive is exact, where
 /// stopping the shadow ray a little short of it would need an epsilon. The
 /// ray's shear is made when its walk starts: a shadow ray nearly always
-/// reaches a leaf.
+/// reaches a leaf. `CLOSED` as for [`ClosestHit`].
 #[derive(Clone, Copy)]
-struct Occlusion<'g> {
+struct Occlusion<'g, const CLOSED: bool> {
     geometry: &'g Geometry,
     except: u32,
 }
 
-impl Query for Occlusion<'_> {
-    type State = ShearedRay;
+/// An occlusion walk's ray: its shear, and the end its leaves are tested
+/// up to (made once: the walk never moves it).
+struct OcclusionState {
+    sheared: ShearedRay,
+    tmax: f32,
+}
+
+impl<const CLOSED: bool> Query for Occlusion<'_, CLOSED> {
+    type State = OcclusionState;
     type Answer = bool;
     const SHORTENS: bool = false;
 
     #[inline(always)]
-    fn start(&mut self, ray: &Ray) -> ShearedRay {
-        ShearedRay::new(ray)
+    fn start(&mut self, ray: &Ray) -> OcclusionState {
+        OcclusionState {
+            sheared: ShearedRay::new(ray),
+            tmax: if CLOSED {
+                closed_end(ray).tmax
+            } else {
+                ray.tmax
+            },
+        }
     }
 
     #[inline]
-    fn leaf(&mut self, sheared: &mut ShearedRay, start: u32, count: u32, ray: &mut Ray) -> bool {
+    fn leaf(&mut self, state: &mut OcclusionState, start: u32, count: u32, ray: &mut Ray) -> bool {
+        let test = Ray {
+            tmax: state.tmax,
+            ..*ray
+        };
         self.geometry
-            .blocks_leaf(start, count, ray, sheared, self.except)
+            .blocks_leaf(start, count, &test, &state.sheared, self.except)
     }
 
     #[inline(always)]
-    fn answer(&mut self, _: &ShearedRay, ended: bool) -> bool {
+    fn answer(&mut self, _: &OcclusionState, ended: bool) -> bool {
         ended
     }
 }
@@ -176,7 +261,7 @@ impl Query for Occlusion<'_> {
 struct OcclusionPacket<'p> {
     geometry: &'p Geometry,
     packet: &'p Packet<'p>,
-    sheared: Option<ShearedRays>,
+    leaf: Option<LeafRays>,
     except: u32,
 }
 
@@ -187,12 +272,11 @@ impl PacketQuery for OcclusionPacket<'_> {
     #[inline(always)]
     fn leaf(&mut self, start: u32, count: u32, lanes: u32, out: &mut [bool]) -> u32 {
         let packet = self.packet;
-        let s = self
-            .sheared
-            .get_or_insert_with(|| ShearedRays::from_lanes(packet.lanes()));
+        let leaf = self.leaf.get_or_insert_with(|| LeafRays::new(packet));
+        let rays = &leaf.rays[..packet.rays().len()];
         let blocked =
             self.geometry
-                .blocks_leaf_packet(packet.rays(), s, start, count, lanes, self.except)
+                .blocks_leaf_packet(rays, &leaf.sheared, start, count, lanes, self.except)
                 & lanes;
         mask_lanes(blocked).for_each(|lane| out[lane] = true);
         blocked
@@ -204,7 +288,7 @@ impl PacketQuery for OcclusionPacket<'_> {
     }
 }
 
-impl<'g> SceneQuery<'g> for Occlusion<'g> {
+impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
     type Packet<'p>
         = OcclusionPacket<'p>
     where
@@ -217,7 +301,7 @@ impl<'g> SceneQuery<'g> for Occlusion<'g> {
         OcclusionPacket {
             geometry: self.geometry,
             packet,
-            sheared: None,
+            leaf: None,
             except: self.except,
         }
     }
@@ -227,7 +311,7 @@ impl<'g> SceneQuery<'g> for Occlusion<'g> {
         self.geometry
             .planes
             .iter()
-            .any(|p| p.intersect(ray).is_some())
+            .any(|p| p.intersect(&closed_end(ray)).is_some())
     }
 
     #[inline(always)]
@@ -242,20 +326,42 @@ impl<'g> SceneQuery<'g> for Occlusion<'g> {
 }
 
 impl Geometry {
-    /// The closest hit in `(ray.tmin, ray.tmax)`.
+    /// The closest hit in `(ray.tmin, ray.tmax]` (module docs).
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        self.one(ClosestHit(self), ray)
+        self.one(ClosestHit::<true>(self), ray)
     }
 
-    /// True if anything blocks the ray in `(ray.tmin, ray.tmax)`.
+    /// True if anything blocks the ray in `(ray.tmin, ray.tmax]`.
     pub fn occluded(&self, ray: &Ray) -> bool {
         // No primitive has id u32::MAX (planes count down from it, outside the BVH).
         self.occluded_except(ray, u32::MAX)
     }
 
-    /// True if anything other than primitive `except` blocks the ray.
+    /// True if anything other than primitive `except` blocks the ray in
+    /// `(ray.tmin, ray.tmax]`.
     pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
         self.one(self.occlusion(except), ray)
+    }
+
+    /// The closest hit in `(ray.tmin, ray.tmax)`, its end left out: the
+    /// walk of a prototype (no planes) with the ray an instance's leaf
+    /// was tested with, whose end that test already closed (module docs).
+    #[inline]
+    pub(super) fn intersect_open_end(&self, ray: &Ray) -> Option<PrimHit> {
+        debug_assert!(self.planes.is_empty());
+        self.bvh
+            .walk(ray, &self.leaf_blocks, &mut ClosestHit::<false>(self))
+    }
+
+    /// [`Geometry::intersect_open_end`] for occlusion.
+    #[inline]
+    pub(super) fn occluded_open_end(&self, ray: &Ray) -> bool {
+        debug_assert!(self.planes.is_empty());
+        let mut query = Occlusion::<false> {
+            geometry: self,
+            except: u32::MAX,
+        };
+        self.bvh.walk(ray, &self.leaf_blocks, &mut query)
     }
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
@@ -263,7 +369,7 @@ impl Geometry {
     /// they all miss the tree's box (then not at all) or [`Packet::new`]
     /// refuses them (directions differing in sign on every axis).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        self.packet(ClosestHit(self), rays, out);
+        self.packet(ClosestHit::<true>(self), rays, out);
     }
 
     /// Occlusion of up to [`PACKET_SIZE`] rays, ignoring primitive `except`
@@ -283,7 +389,7 @@ impl Geometry {
     /// flight at once where the BVH prefetches (a tree that outgrows the
     /// caches, [`crate::accel::prefetch`]; [`crate::accel::in_flight`]).
     pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        self.stream(ClosestHit(self), rays, out);
+        self.stream(ClosestHit::<true>(self), rays, out);
     }
 
     /// Occlusion of any number of rays, ignoring primitive `except`
@@ -294,14 +400,15 @@ impl Geometry {
         self.stream(self.occlusion(except), rays, out);
     }
 
-    fn occlusion(&self, except: u32) -> Occlusion<'_> {
+    fn occlusion(&self, except: u32) -> Occlusion<'_, true> {
         Occlusion {
             geometry: self,
             except,
         }
     }
 
-    /// `best`, or a plane hit nearer than it.
+    /// `best`, or a plane hit nearer than it (or, without one, in
+    /// `(ray.tmin, ray.tmax)`).
     #[inline]
     fn closest_plane(&self, ray: &Ray, mut best: Option<PrimHit>) -> Option<PrimHit> {
         let mut tmax = best.map_or(ray.tmax, |h| h.t);

@@ -148,10 +148,10 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         settings,
         warnings: _, // what a loader said: the image does not depend on it
     } = scene;
+    // Every field but the leaf store (private to `geometry`), whose
+    // triangles are hashed in file order below, so the fingerprint does
+    // not depend on the BVH's leaf order (which varies with --bvh-quality).
     let Geometry {
-        // Hashed in file order below, so the fingerprint does not depend on
-        // the BVH's leaf order (which varies with --bvh-quality).
-        leaf_blocks: _,
         triangle_count,
         meshes,
         shapes,
@@ -161,6 +161,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         instances,
         prototypes,
         bvh: _, // an acceleration structure: it changes speed, not hits
+        ..
     } = geometry;
     let RenderSettings {
         // In the partial header, compared field by field.

@@ -38,7 +38,7 @@ pub struct HitRecord {
 }
 
 impl HitRecord {
-    /// No hit in `(tmin, tmax)`.
+    /// No hit in `(tmin, tmax]`.
     pub const MISS: HitRecord = HitRecord {
         t: f32::INFINITY,
         prim: u32::MAX,
@@ -46,7 +46,7 @@ impl HitRecord {
         v: 0.0,
     };
 
-    /// An occlusion query that found something in `(tmin, tmax)`.
+    /// An occlusion query that found something in `(tmin, tmax]`.
     pub const OCCLUDED: HitRecord = HitRecord {
         t: 0.0,
         prim: 0,

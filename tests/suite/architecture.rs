@@ -20,7 +20,7 @@ const LAYERS: &[&[&str]] = &[
     &["geometry"],
     &["camera", "light", "material", "texture"],
     &["scene"],
-    &["shade"],
+    &["shade", "raycast"],
     &["render"],
     &["partial"],
     &["experiment", "rays"],

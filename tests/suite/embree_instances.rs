@@ -46,7 +46,7 @@ fn embree_instances_answer_as_strata_instances_do() {
     );
     let g = &scene.geometry;
     let mut copies = String::new();
-    for inst in &g.instances {
+    for inst in g.instances() {
         let m = inst.affine();
         for t in &tris {
             for v in t {
@@ -55,7 +55,7 @@ fn embree_instances_answer_as_strata_instances_do() {
             }
         }
     }
-    for f in 0..tris.len() * g.instances.len() {
+    for f in 0..tris.len() * g.instances().len() {
         copies += &format!("f {} {} {}\n", 3 * f + 1, 3 * f + 2, 3 * f + 3);
     }
     std::fs::write(dir.join("copies.obj"), copies).unwrap();
@@ -98,14 +98,14 @@ fn embree_instances_answer_as_strata_instances_do() {
     assert!(
         ours.iter()
             .filter(|h| h.is_hit())
-            .all(|h| (h.prim as usize) < tris.len() * g.instances.len()),
+            .all(|h| (h.prim as usize) < tris.len() * g.instances().len()),
         "every hit names an instanced triangle"
     );
 
     // The placed triangles in f64, each instance's map the exact inverse
     // of the world-to-object map strata walks with: the exact answer.
     let exact_tris: Vec<[DVec3; 3]> = g
-        .instances
+        .instances()
         .iter()
         .flat_map(|inst| {
             let m = inst.affine_f64();

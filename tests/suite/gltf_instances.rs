@@ -255,16 +255,16 @@ fn shared_meshes_are_stored_once_and_render_as_copies() {
     // The sphere (4 nodes) and the pair (2) once each; the single
     // tetrahedron, one node's, baked.
     let g = &shared.geometry;
-    assert_eq!((g.prototypes.len(), g.instances.len()), (2, 6));
-    assert_eq!(g.triangle_count as usize, single);
+    assert_eq!((g.prototypes().len(), g.instances().len()), (2, 6));
+    assert_eq!(g.triangle_count() as usize, single);
     assert_eq!(g.unique_triangles() as usize, sphere + pair + single);
     assert_eq!(
         g.instanced_triangles() as usize + single,
         4 * sphere + 2 * pair + single
     );
     let c = &copies.geometry;
-    assert!(c.instances.is_empty());
-    assert_eq!(c.triangle_count as usize, 4 * sphere + 2 * pair + single);
+    assert!(c.instances().is_empty());
+    assert_eq!(c.triangle_count() as usize, 4 * sphere + 2 * pair + single);
     assert_same_image(
         &render_rgb(&shared, 2),
         &render_rgb(&copies, 2),
@@ -311,7 +311,7 @@ fn shared_meshes_are_stored_once_and_render_as_copies() {
     let object = "instances = \"two.csv\"\ntransform = { rotate = [0.0, 1.0, 0.0, 30.0] }\n";
     let (shared, copies) = (load("shared.gltf", object), load("copies.gltf", object));
     let g = &shared.geometry;
-    assert_eq!((g.prototypes.len(), g.instances.len()), (3, 2 * 6 + 2));
+    assert_eq!((g.prototypes().len(), g.instances().len()), (3, 2 * 6 + 2));
     assert_eq!(g.unique_triangles() as usize, sphere + pair + single);
     assert_same_image(
         &render_rgb(&shared, 2),
@@ -342,7 +342,7 @@ fn a_model_with_shared_meshes_is_framed_and_rendered_as_its_copies() {
     };
     let (shared, shared_camera) = model("shared.gltf");
     let (copies, copies_camera) = model("copies.gltf");
-    assert_eq!(shared.geometry.instances.len(), 6);
+    assert_eq!(shared.geometry.instances().len(), 6);
     assert_eq!(shared_camera, copies_camera, "framed alike");
     assert_same_image(&render_rgb(&shared, 2), &render_rgb(&copies, 2), "model");
 }
@@ -355,9 +355,9 @@ fn trace_numbers_shared_meshes_as_the_files_copies() {
     let [sphere, pair, single] = files(&dir);
     let (shared, _) = load_mesh_scene(&dir.join("shared.gltf"), BuildQuality::Auto).unwrap();
     let (copies, _) = load_mesh_scene(&dir.join("copies.gltf"), BuildQuality::Auto).unwrap();
-    assert!(shared.geometry.instances.is_empty(), "traced as it is");
+    assert!(shared.geometry.instances().is_empty(), "traced as it is");
     assert_eq!(
-        shared.geometry.triangle_count as usize,
+        shared.geometry.triangle_count() as usize,
         4 * sphere + 2 * pair + single
     );
     assert_eq!(
@@ -419,7 +419,7 @@ fn a_thousand_nodes_sharing_a_mesh_cost_it_once_and_200_bytes_each() {
         write_gltf(&dir, name, &geometry, &nodes, &roots, true);
         let text = format!("[[objects]]\nmesh = \"{name}.gltf\"\n");
         let s: Scene = scene_at(&text, &dir.join("s.toml"));
-        assert_eq!(s.geometry.instances.len(), n);
+        assert_eq!(s.geometry.instances().len(), n);
         s.geometry.accel_bytes()
     };
     let two = bytes("two", 2, &mut rng);

@@ -88,9 +88,9 @@ fn build((v, f): (Vec<Vec3>, Vec<[u32; 3]>)) -> Geometry {
 /// triangle k·T + j, each vertex moved as `Instance::affine` moves it).
 fn placed_and_copies(prototype: Geometry, maps: &[Affine3A]) -> (Geometry, Geometry) {
     let scene = placed(prototype, maps, BuildQuality::Auto).unwrap();
-    let own = scene.prototypes[0].file_order_triangles();
+    let own = scene.prototypes()[0].file_order_triangles();
     let mut vertices = Vec::new();
-    for instance in &scene.instances {
+    for instance in scene.instances() {
         let m = instance.affine();
         vertices.extend(own.iter().flatten().map(|&p| m.transform_point3(p)));
     }
@@ -126,7 +126,7 @@ fn crossings(scene: &Geometry, ray: &Ray) -> Vec<(f32, u64)> {
 /// of their edges, where ties are broken.
 fn rays(copies: &Geometry, n: usize, seed: u64) -> Vec<Ray> {
     let tris = copies.file_order_triangles();
-    let (lo, hi) = (copies.bvh.bounds.min, copies.bvh.bounds.max);
+    let (lo, hi) = (copies.bvh().bounds.min, copies.bvh().bounds.max);
     let size = (hi - lo).length();
     let mut rng = seeded(seed);
     (0..n)
@@ -188,8 +188,8 @@ fn check_contains(scene: &Geometry, copies: &Geometry, points: &[Vec3]) -> usize
 /// answer.
 fn nearest_matches_copies(scene: &Geometry, copies: &Geometry, points: usize, seed: u64) {
     let around = Around {
-        lo: copies.bvh.bounds.min,
-        hi: copies.bvh.bounds.max,
+        lo: copies.bvh().bounds.min,
+        hi: copies.bvh().bounds.max,
         far: 2.0,
         near: 0.1,
     };
@@ -259,7 +259,7 @@ fn contains_through_instances_is_the_copies() {
         .iter()
         .map(|m| m.transform_point3(Vec3::ZERO))
         .collect();
-    let (lo, hi) = (copies.bvh.bounds.min, copies.bvh.bounds.max);
+    let (lo, hi) = (copies.bvh().bounds.min, copies.bvh().bounds.max);
     points
         .extend((0..4000).map(|_| lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit())));
     let inside = check_contains(&scene, &copies, &points);

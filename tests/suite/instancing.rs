@@ -75,7 +75,7 @@ fn pair(seed: u64, count: usize) -> Pair {
 
 /// A hit as (placement, triangle of the mesh), whichever scene it is from.
 fn which(scene: &Scene, hit: &PrimHit, offsets: &[u64], triangles: u32) -> (u64, u64) {
-    let flat = if scene.geometry.instances.is_empty() {
+    let flat = if scene.geometry.instances().is_empty() {
         u64::from(hit.prim)
     } else {
         scene.geometry.flat_prim(hit, offsets) - offsets[0]
@@ -106,11 +106,11 @@ fn rays(p: &Pair, rng: &mut Rng, n: usize) -> Vec<Ray> {
 #[test]
 fn instances_hit_what_world_space_copies_hit() {
     let p = pair(45, 12);
-    assert_eq!(p.instanced.geometry.triangle_count, 0, "nothing baked");
-    assert_eq!(p.instanced.geometry.prototypes.len(), 1, "stored once");
-    assert_eq!(p.instanced.geometry.instances.len(), p.placements.len());
+    assert_eq!(p.instanced.geometry.triangle_count(), 0, "nothing baked");
+    assert_eq!(p.instanced.geometry.prototypes().len(), 1, "stored once");
+    assert_eq!(p.instanced.geometry.instances().len(), p.placements.len());
     assert_eq!(
-        p.copied.geometry.triangle_count,
+        p.copied.geometry.triangle_count(),
         p.triangles * p.placements.len() as u32
     );
     let offsets = p.instanced.geometry.flat_offsets();
@@ -185,11 +185,8 @@ fn instances_hit_what_world_space_copies_hit() {
                 // The error bound covers the exact world point of the hit's
                 // barycentrics, computed in f64 from the object-space triangle.
                 let g = &p.instanced.geometry;
-                let (inst, proto) = (g.instances[wa.0 as usize], &g.prototypes[0]);
-                let slot = a.part as usize;
-                let v = proto.leaf_blocks[slot / 8]
-                    .triangle(slot % 8)
-                    .map(|x| x.as_dvec3());
+                let inst = g.instances()[wa.0 as usize];
+                let v = g.object_triangle(&a).map(|x| x.as_dvec3());
                 let (u, w) = (f64::from(a.u), f64::from(a.v));
                 let exact = inst
                     .affine_f64()
@@ -244,8 +241,9 @@ fn packets_streams_and_occlusion_answer_an_instanced_scene_as_single_rays_do() {
     let mut occluded = vec![false; rays.len()];
     g.occluded_stream(&rays, u32::MAX, &mut occluded);
     assert_eq!(occluded, blocked);
+    // Both answer for (tmin, tmax], a hit at tmax itself included.
     for (i, (r, s)) in rays.iter().zip(&single).enumerate() {
-        assert_eq!(blocked[i], s.is_some_and(|h| h.t < r.tmax), "ray {i}");
+        assert_eq!(blocked[i], s.is_some_and(|h| h.t <= r.tmax), "ray {i}");
     }
     assert!(blocked.iter().any(|&b| b) && blocked.iter().any(|&b| !b));
 }
@@ -283,7 +281,11 @@ fn a_mesh_file_placed_twice_is_stored_once() {
     let s = scene_at(text, &dir.join("s.toml"));
     let g = &s.geometry;
     assert_eq!(
-        (g.prototypes.len(), g.instances.len(), g.triangle_count),
+        (
+            g.prototypes().len(),
+            g.instances().len(),
+            g.triangle_count()
+        ),
         (1, 2, 24),
         "m.obj once, placed twice; other.obj, placed once, baked"
     );
@@ -366,7 +368,7 @@ fn a_thousand_instances_cost_the_mesh_once_and_at_most_200_bytes_each() {
     let bytes = |csv: &str| {
         let text = format!("[[objects]]\nmesh = \"m.obj\"\ninstances = \"{csv}\"\n");
         let s = scene_at(&text, &dir.join("s.toml"));
-        (s.geometry.accel_bytes(), s.geometry.instances.len())
+        (s.geometry.accel_bytes(), s.geometry.instances().len())
     };
     let (one, n1) = bytes("one.csv");
     let (thousand, n) = bytes("i.csv");

@@ -161,10 +161,10 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
     // prototype); the loose triangle is the scene's own.
     let g = &compiled.geometry;
     assert_eq!(g.file_order_triangles(), &expected[..1]);
-    assert_eq!((g.prototypes.len(), g.instances.len()), (1, 2));
-    let own = g.prototypes[0].file_order_triangles();
+    assert_eq!((g.prototypes().len(), g.instances().len()), (1, 2));
+    let own = g.prototypes()[0].file_order_triangles();
     assert_eq!(&own[..], &expected[1..]);
-    for (instance, want) in g.instances.iter().zip([&expected[1..], &placed[..]]) {
+    for (instance, want) in g.instances().iter().zip([&expected[1..], &placed[..]]) {
         let a = instance.affine();
         for (t, e) in own.iter().zip(want) {
             for (p, q) in t.iter().zip(e) {
@@ -174,13 +174,11 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
         }
     }
     // Every triangle sits in exactly one leaf slot, in each tree.
-    for tree in [g, &g.prototypes[0]] {
-        let mut seen = vec![0; tree.triangle_count as usize];
-        for block in &tree.leaf_blocks {
-            for &id in &block.id {
-                if (id as usize) < seen.len() {
-                    seen[id as usize] += 1;
-                }
+    for tree in [g, &g.prototypes()[0]] {
+        let mut seen = vec![0; tree.triangle_count() as usize];
+        for id in tree.leaf_slots() {
+            if (id as usize) < seen.len() {
+                seen[id as usize] += 1;
             }
         }
         assert!(seen.iter().all(|&n| n == 1), "{seen:?}");

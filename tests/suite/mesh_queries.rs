@@ -140,7 +140,7 @@ fn direction(rng: &mut StreamRng) -> Vec3 {
 /// to a random interval.
 fn check_random_rays(g: &Geometry, rays: usize, seed: u64) -> usize {
     let tris = g.file_order_triangles();
-    let (lo, hi) = (g.bvh.bounds.min, g.bvh.bounds.max);
+    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
     let size = (hi - lo).length();
     let mut rng = seeded(seed);
     let mut total = 0;
@@ -388,8 +388,8 @@ fn contains_agrees_with_brute_force_parity_in_every_direction() {
 fn nearest_matches_brute_force(g: &Geometry, points: usize, seed: u64) {
     let tris = g.file_order_triangles();
     let around = Around {
-        lo: g.bvh.bounds.min,
-        hi: g.bvh.bounds.max,
+        lo: g.bvh().bounds.min,
+        hi: g.bvh().bounds.max,
         far: 3.0,
         near: 0.2,
     };

@@ -189,7 +189,7 @@ fn assert_packet_matches_single_rays(
 fn packets_and_single_rays_return_identical_hits() {
     for (quality, scene) in scenes() {
         for (name, batches) in ray_sets(&scene) {
-            let except = scene.geometry.triangle_count; // the sphere
+            let except = scene.geometry.triangle_count(); // the sphere
             let label = format!("{quality:?} {name}");
             let hits: usize = batches
                 .iter()
@@ -261,7 +261,7 @@ fn streams_and_single_rays_return_identical_hits() {
         let (mut packets, mut outside) = (0, 0);
         split_narrow(
             &rays,
-            &scene.geometry.bvh.bounds,
+            &scene.geometry.bvh().bounds,
             |_, travel| match travel {
                 Travel::Packet(_) => packets += 1,
                 Travel::Outside => outside += 1,
@@ -303,9 +303,9 @@ fn streams_and_single_rays_return_identical_hits() {
              {scattered} of rays apart in the stream"
         );
         assert!(scene.geometry.traversal_bytes() <= BUNDLE_MAX_BYTES);
-        let except = scene.geometry.triangle_count; // the sphere
+        let except = scene.geometry.triangle_count(); // the sphere
         for prefetch in [true, false] {
-            scene.geometry.bvh.prefetch = prefetch;
+            scene.geometry.set_prefetch(prefetch);
             let mut hits = vec![None; rays.len()];
             scene.geometry.intersect_stream(&rays, &mut hits);
             let mut blocked = vec![true; rays.len()];
@@ -373,9 +373,9 @@ fn prefetching_changes_no_hit() {
             }
             answers
         };
-        scene.geometry.bvh.prefetch = true;
+        scene.geometry.set_prefetch(true);
         let with = trace(&scene);
-        scene.geometry.bvh.prefetch = false;
+        scene.geometry.set_prefetch(false);
         let without = trace(&scene);
         assert!(with.iter().filter(|a| a.0.is_some()).count() > 1000);
         assert_eq!(with, without, "{quality:?}");

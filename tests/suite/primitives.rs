@@ -42,7 +42,7 @@ fn sphere_under_non_uniform_scale_and_rotation_matches_the_f64_ellipsoid() {
     );
     let s = scene(&text);
     assert_eq!(
-        s.geometry.shapes.len(),
+        s.geometry.shapes().len(),
         1,
         "the sphere stays one analytic primitive"
     );
@@ -271,7 +271,7 @@ group = [
 ]
 "#;
     let s = scene(text);
-    assert_eq!(s.geometry.shapes.len(), 2);
+    assert_eq!(s.geometry.shapes().len(), 2);
     let ray = Ray::new(Vec3::new(10.0, 5.0, 10.0), -Vec3::Z);
     let h = s.geometry.intersect(&ray).unwrap();
     assert!((h.t - 9.0).abs() < 1e-5);

@@ -7,16 +7,13 @@ use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
-use crate::geometry::csg::Csg;
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, GeometryParts};
 use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshUvs};
 use crate::material::Material;
-use crate::math::lanes::LANES;
 use crate::math::Aabb;
 use crate::math::Transform;
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
-use crate::shape::triangle_lanes::TriangleBlock;
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -113,29 +110,18 @@ impl TriangleSource {
     }
 }
 
-/// The BVH's leaf slots as 8-wide triangle blocks (see
-/// [`Geometry::leaf_blocks`]), read from the indexed sources.
-pub(super) fn leaf_blocks(
+/// Triangle `id`'s vertices, read from its mesh's (indexed) source: what
+/// [`Geometry::new`] stores in the leaf slot that holds it.
+pub(super) fn triangle_at<'a>(
     meshes: &[MeshRange],
-    sources: &[TriangleSource],
-    prim_ids: &[u32],
-) -> Vec<TriangleBlock> {
-    prim_ids
-        .par_chunks(LANES)
-        .map(|ids| {
-            let mut block = TriangleBlock::EMPTY;
-            for (lane, &id) in ids.iter().enumerate() {
-                let k = meshes.partition_point(|m| m.first + m.count <= id);
-                match (meshes.get(k), sources.get(k)) {
-                    (Some(m), Some(src)) if id >= m.first => {
-                        block.set(lane, &src.get((id - m.first) as usize), id)
-                    }
-                    _ => block.id[lane] = id,
-                }
-            }
-            block
-        })
-        .collect()
+    sources: &'a [TriangleSource],
+) -> impl Fn(u32) -> [Vec3; 3] + Sync + 'a {
+    // Each mesh's first triangle, so the meshes themselves can move on.
+    let firsts: Vec<u32> = meshes.iter().map(|m| m.first).collect();
+    move |id| {
+        let k = firsts.partition_point(|&first| first <= id) - 1;
+        sources[k].get((id - firsts[k]) as usize)
+    }
 }
 
 impl Compiler<'_> {
@@ -330,22 +316,13 @@ pub(super) fn triangle_geometry(
     let boxes = triangle_boxes(&meshes, &sources)?;
     let mut bvh = Bvh8::build_from(boxes, quality);
     bvh.shrink_to_fit();
-    let blocks = leaf_blocks(&meshes, &sources, &bvh.prim_ids);
-    bvh.prim_ids = Vec::new();
-    let triangle_count = meshes.last().map_or(0, |m| m.first + m.count);
-    let mut geometry = Geometry {
-        leaf_blocks: blocks,
-        triangle_count,
+    let vertices = triangle_at(&meshes, &sources);
+    let parts = GeometryParts {
         meshes,
-        shapes: Vec::new(),
-        transforms: Vec::new(),
-        csg: Csg::default(),
-        planes: Vec::new(),
-        instances: Vec::new(),
-        prototypes: Vec::new(),
-        bvh,
+        ..GeometryParts::default()
     };
-    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    let mut geometry = Geometry::new(parts, bvh, vertices);
+    geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
     Ok(geometry)
 }
 
@@ -410,11 +387,9 @@ mesh = "other.obj"
             (1, 2)
         );
         // Every leaf slot of a triangle holds that triangle's vertices.
-        for block in &g.leaf_blocks {
-            for (lane, &id) in block.id.iter().enumerate() {
-                if id < g.triangle_count {
-                    assert_eq!(block.triangle(lane), tris[id as usize]);
-                }
+        for (slot, id) in (0..).zip(g.leaf_slots()) {
+            if id < g.triangle_count {
+                assert_eq!(g.slot_triangle(slot), tris[id as usize]);
             }
         }
         let colour = |tri: u32| s.materials[g.mesh_of(tri).material as usize].diffuse;

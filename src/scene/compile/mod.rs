@@ -22,7 +22,7 @@ use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
 use crate::error::{InputError, InputResult};
 use crate::geometry::csg::Csg;
-use crate::geometry::{AnalyticPrim, Geometry, Instance, MeshRange, NO_TRANSFORM};
+use crate::geometry::{AnalyticPrim, Geometry, GeometryParts, Instance, MeshRange, NO_TRANSFORM};
 use crate::light::Light;
 use crate::material::Material;
 use crate::math::{Aabb, Transform};
@@ -30,7 +30,7 @@ use crate::shape::plane::Plane;
 use crate::system::memory::PeakMeter;
 use crate::texture::Textures;
 use glam::Affine3A;
-use mesh::{leaf_blocks, TriangleSource};
+use mesh::{triangle_at, TriangleSource};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, AtomicU8, Ordering::Relaxed};
@@ -408,19 +408,9 @@ fn compile_for(
     // Store the vertices once, in the order the leaves read them, straight
     // from the (indexed) sources, with the leaf ids beside them: never two
     // copies of the triangles, and the BVH's own ids become redundant.
-    let leaf_blocks = leaf_blocks(&c.meshes, &c.sources, &bvh.prim_ids);
-    bvh.prim_ids = Vec::new();
-    drop(std::mem::take(&mut c.sources));
-    let timings = LoadTimings {
-        load,
-        bvh_build: build_start.elapsed(),
-        bvh_quality,
-        load_peak_bytes,
-        build_peak_bytes: memory.phase_peak(),
-    };
-    let mut geometry = Geometry {
-        leaf_blocks,
-        triangle_count: n_tris,
+    let sources = std::mem::take(&mut c.sources);
+    let vertices = triangle_at(&c.meshes, &sources);
+    let parts = GeometryParts {
         meshes: c.meshes,
         shapes: c.shapes,
         transforms: c.transforms,
@@ -428,9 +418,17 @@ fn compile_for(
         planes: c.planes,
         instances: c.instances,
         prototypes,
-        bvh,
     };
-    geometry.bvh.prefetch = Prefetch::Auto.enabled(geometry.traversal_bytes());
+    let mut geometry = Geometry::new(parts, bvh, vertices);
+    drop(sources);
+    let timings = LoadTimings {
+        load,
+        bvh_build: build_start.elapsed(),
+        bvh_quality,
+        load_peak_bytes,
+        build_peak_bytes: memory.phase_peak(),
+    };
+    geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
     let scene = Scene {
         geometry,
         materials: c.materials,
@@ -741,9 +739,7 @@ triangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }
         );
         assert_eq!(g.primitive_count(), 2, "the plane is not a BVH primitive");
         let mut ids: Vec<u32> = g
-            .leaf_blocks
-            .iter()
-            .flat_map(|b| b.id)
+            .leaf_slots()
             .filter(|&id| id != crate::accel::NO_PRIM)
             .collect();
         ids.sort();

@@ -23,42 +23,40 @@ pub fn check_bvhs(scene: &Scene) {
 /// instance's box must hold every triangle of its prototype moved to
 /// world space.
 fn check_geometry(g: &Geometry) {
-    for p in &g.prototypes {
+    for p in g.prototypes() {
         check_geometry(p);
     }
     // The scene keeps the tree's leaf slots in its leaf blocks, with the
     // triangles' vertices: their boxes are the boxes the tree was built on.
-    let slots: Vec<u32> = g.leaf_blocks.iter().flat_map(|b| b.id).collect();
+    let slots: Vec<u32> = g.leaf_slots().collect();
     let mut boxes = vec![None; g.primitive_count()];
-    for block in &g.leaf_blocks {
-        for (lane, &id) in block.id.iter().enumerate() {
-            if id < g.triangle_count {
-                boxes[id as usize] = Some(Aabb::from_points(&block.triangle(lane)));
-            }
+    for (slot, &id) in (0..).zip(&slots) {
+        if id < g.triangle_count() {
+            boxes[id as usize] = Some(Aabb::from_points(&g.slot_triangle(slot)));
         }
     }
-    for (k, inst) in g.instances.iter().enumerate() {
+    for (k, inst) in g.instances().iter().enumerate() {
         let m = inst.affine();
-        let placed = g.prototypes[inst.prototype as usize]
+        let placed = g.prototypes()[inst.prototype as usize]
             .file_order_triangles()
             .iter()
             .flatten()
             .fold(Aabb::EMPTY, |b, &p| b.grow(m.transform_point3(p)));
         boxes[g.first_instance() as usize + k] = Some(placed);
     }
-    g.bvh
+    g.bvh()
         .validate_leaves(&slots, g.primitive_count(), |id| boxes[id as usize])
         .unwrap_or_else(|e| panic!("the scene's BVH is invalid: {e}"));
-    for leaf in &g.csg.leaves {
+    for leaf in &g.csg().leaves {
         if let Solid::Mesh(ClosedMesh {
             first,
             count,
             bvh: Some(i),
         }) = leaf.solid
         {
-            let tris = &g.csg.triangles[first as usize..(first + count) as usize];
+            let tris = &g.csg().triangles[first as usize..(first + count) as usize];
             let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t)).collect();
-            g.csg.mesh_bvhs[i as usize]
+            g.csg().mesh_bvhs[i as usize]
                 .validate_boxes(&boxes)
                 .unwrap_or_else(|e| panic!("the BVH of CSG mesh {i} is invalid: {e}"));
         }

@@ -217,7 +217,7 @@ fn a_csg_object_is_one_primitive_with_a_tight_bound() {
             "[[objects]]\ncsg = {{ op = \"{o}\", a = {a}, b = {b} }}\n"
         ));
         assert_eq!(s.geometry.primitive_count(), 1);
-        (s.geometry.bvh.bounds.min, s.geometry.bvh.bounds.max)
+        (s.geometry.bvh().bounds.min, s.geometry.bvh().bounds.max)
     };
     let close = |(lo, hi): (Vec3, Vec3), elo: Vec3, ehi: Vec3| {
         assert!(

@@ -135,7 +135,7 @@ fn the_example_scene_compiles_to_csg_primitives() {
     let s = scene_at(&std::fs::read_to_string(&path).unwrap(), &path);
     let csg = s
         .geometry
-        .shapes
+        .shapes()
         .iter()
         .filter(|p| matches!(p.shape, strata::geometry::Shape::Csg(_)))
         .count();

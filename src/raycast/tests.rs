@@ -1,0 +1,226 @@
+//! A placed mesh answers as a mesh of its copies; a hit's normal and
+//! point are its world triangle's; every query counts a hit at `t_max`
+//! as a binding asks for `(0, t_max]`, with no nudge.
+
+use super::*;
+use glam::{Mat3, Quat};
+use rand::{RngExt, SeedableRng};
+
+/// The cube of side 2 around the origin, two triangles a face, wound
+/// outwards.
+fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let v = (0..8)
+        .map(|i| {
+            let bit = |k: u32| if i >> k & 1 == 1 { 1.0 } else { -1.0 };
+            Vec3::new(bit(0), bit(1), bit(2))
+        })
+        .collect();
+    let faces = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    (v, faces)
+}
+
+fn cube_mesh() -> Mesh {
+    let (v, f) = cube();
+    Mesh::new(v, f, BuildQuality::Auto).unwrap()
+}
+
+/// Maps that stretch, shear, mirror and overlap the copies.
+fn maps() -> Vec<Affine3A> {
+    vec![
+        Affine3A::IDENTITY,
+        Affine3A::from_scale_rotation_translation(
+            Vec3::new(2.0, 0.5, 1.0),
+            Quat::from_rotation_y(0.4),
+            Vec3::new(0.7, 0.2, -0.3),
+        ),
+        Affine3A::from_mat3_translation(
+            Mat3::from_cols(
+                Vec3::new(-1.0, 0.0, 0.0),
+                Vec3::new(0.3, 1.0, 0.0),
+                Vec3::new(0.0, 0.2, 0.8),
+            ),
+            Vec3::new(3.0, 0.0, 1.0),
+        ),
+    ]
+}
+
+/// A placed cube and a mesh of its copies (its `triangles()`).
+fn placed_and_copies() -> (Mesh, Mesh) {
+    let placed = cube_mesh().place(&maps(), BuildQuality::Auto).unwrap();
+    let tris = placed.triangles();
+    let vertices: Vec<Vec3> = tris.iter().flatten().copied().collect();
+    let faces = (0..tris.len() as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    let copies = Mesh::new(vertices, faces, BuildQuality::Auto).unwrap();
+    (placed, copies)
+}
+
+/// Rays between random points around the copies, and points among them.
+fn rays_and_points(n: usize) -> (Vec<Ray>, Vec<Vec3>) {
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(56);
+    let mut point = move || Vec3::new(rng.random(), rng.random(), rng.random()) * 8.0 - 3.0;
+    let rays = (0..n)
+        .map(|_| {
+            let (a, b) = (point(), point());
+            Ray::new(a, b - a)
+        })
+        .collect();
+    let points = (0..n).map(|_| point()).collect();
+    (rays, points)
+}
+
+#[test]
+fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
+    let (placed, copies) = placed_and_copies();
+    assert!(placed.is_placed() && !copies.is_placed());
+    assert_eq!(placed.triangle_count(), 36);
+    assert_eq!(placed.triangle_count(), copies.triangle_count());
+    assert_eq!(placed.bounds(), copies.bounds());
+    let (rays, points) = rays_and_points(2000);
+    // Crossings, counts, inside and nearest points are the copies' bit for
+    // bit (each candidate triangle moved to world space as they hold it).
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    let (mut na, mut nb) = (Vec::new(), Vec::new());
+    placed.all_hits(&rays, &mut a, &mut na);
+    copies.all_hits(&rays, &mut b, &mut nb);
+    assert_eq!((&a, &na), (&b, &nb));
+    assert!(a.len() > 1000, "{} crossings", a.len());
+    for (ray, &n) in rays.iter().zip(&na) {
+        assert_eq!(placed.count_hits(ray), n);
+    }
+    for &p in &points {
+        assert_eq!(placed.contains(p), copies.contains(p));
+        for signed in [false, true] {
+            let (x, y) = (
+                placed.closest_point(p, 1.5, signed),
+                copies.closest_point(p, 1.5, signed),
+            );
+            assert!(x == y || (x.face == -1 && y.face == -1), "{p}: {x:?} {y:?}");
+        }
+    }
+    // First hits are walked in each copy's own space, so t and the
+    // barycentrics may differ by rounding; the face (away from edges) and
+    // its world normal, computed from the same vertices, do not.
+    let mut x = vec![FirstHit::MISS; rays.len()];
+    let mut y = vec![FirstHit::MISS; rays.len()];
+    placed.first_hits(&rays, &mut x);
+    copies.first_hits(&rays, &mut y);
+    let mut compared = 0;
+    for (i, (x, y)) in x.iter().zip(&y).enumerate() {
+        assert_eq!(x.face == -1, y.face == -1, "ray {i}");
+        if x.face == -1 {
+            assert!(x.t == f32::INFINITY && x.u.is_nan() && x.point.is_nan());
+            continue;
+        }
+        assert!((x.t - y.t).abs() <= 1e-5 * y.t, "ray {i}: {x:?} {y:?}");
+        let near_edge = [y.u, y.v, 1.0 - y.u - y.v].iter().any(|&b| b < 1e-3);
+        if !near_edge {
+            assert_eq!((x.face, x.normal), (y.face, y.normal), "ray {i}");
+            assert!((x.point - y.point).length() <= 1e-5 * (1.0 + y.point.length()));
+            compared += 1;
+        }
+    }
+    assert!(compared > 500, "{compared}");
+    // Occlusion is whether a first hit exists.
+    let mut blocked = vec![false; rays.len()];
+    placed.occluded(&rays, &mut blocked);
+    assert!(blocked.iter().zip(&x).all(|(&b, h)| b == (h.face != -1)));
+}
+
+#[test]
+fn a_first_hit_carries_its_world_triangles_normal_and_point() {
+    let (v, f) = (vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]);
+    let one = Mesh::new(v, f, BuildQuality::Auto).unwrap();
+    let map = Affine3A::from_scale_rotation_translation(
+        Vec3::new(2.0, 1.0, 1.0),
+        Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+        Vec3::new(0.0, 0.0, 5.0),
+    );
+    let placed = one.place(&[map], BuildQuality::Auto).unwrap();
+    // Stretched twice along x, then its y turned onto z: the triangle
+    // (0, 0, 5), (2, 0, 5), (0, 0, 6) in the plane y = 0, facing -y.
+    let world = placed.triangles()[0];
+    let ray = Ray::new(Vec3::new(0.5, -3.0, 5.2), Vec3::Y);
+    let mut hit = [FirstHit::MISS];
+    placed.first_hits(&[ray], &mut hit);
+    let [a, b, c] = world;
+    assert_eq!(hit[0].face, 0);
+    assert_eq!(hit[0].normal, (b - a).cross(c - a).normalize());
+    assert!((hit[0].normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    let on = (1.0 - hit[0].u - hit[0].v) * a + hit[0].u * b + hit[0].v * c;
+    assert_eq!(hit[0].point, on);
+    assert!((hit[0].point - ray.at(hit[0].t)).length() < 1e-5);
+}
+
+#[test]
+fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
+    for mesh in [cube_mesh(), placed_and_copies().0] {
+        let towards = Ray::new(Vec3::new(0.13, 0.21, -5.0), Vec3::new(0.01, -0.02, 1.0));
+        let mut first = [FirstHit::MISS];
+        mesh.first_hits(&[towards], &mut first);
+        let mut all = Vec::new();
+        mesh.all_hits(&[towards], &mut all, &mut Vec::new());
+        for (t, crossing) in [(first[0].t, false), (all[0].t, true)] {
+            for (tmax, counts) in [(t, true), (t.next_down(), false)] {
+                let ray = Ray::segment(towards.origin, towards.direction, tmax);
+                if crossing {
+                    let mut found = Vec::new();
+                    mesh.all_hits(&[ray], &mut found, &mut Vec::new());
+                    assert_eq!(found.first().map(|c| c.t) == Some(t), counts);
+                    assert_eq!(mesh.count_hits(&ray) > 0, counts);
+                } else {
+                    let mut hit = [FirstHit::MISS];
+                    mesh.first_hits(&[ray], &mut hit);
+                    assert_eq!(hit[0].t == t, counts, "{tmax} against {t}");
+                    let mut blocked = [false];
+                    mesh.occluded(&[ray], &mut blocked);
+                    assert_eq!(blocked[0], counts);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn placing_is_refused_for_a_placed_mesh_and_a_singular_map() {
+    let cube = cube_mesh();
+    let placed = cube.place(&maps(), BuildQuality::Auto).unwrap();
+    assert_eq!(
+        placed.place(&maps(), BuildQuality::Auto).unwrap_err(),
+        PlaceError::AlreadyPlaced
+    );
+    let flat = Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0));
+    let err = cube.place(&[Affine3A::IDENTITY, flat], BuildQuality::Auto);
+    assert_eq!(err.unwrap_err(), PlaceError::Map(1));
+}
+
+#[test]
+fn a_mesh_without_faces_answers_nothing() {
+    let empty = Mesh::new(Vec::new(), Vec::new(), BuildQuality::Auto).unwrap();
+    assert_eq!(empty.triangle_count(), 0);
+    assert_eq!(empty.bounds(), [Vec3::INFINITY, Vec3::NEG_INFINITY]);
+    let mut hit = [FirstHit::MISS];
+    let ray = Ray::new(Vec3::ZERO, Vec3::X);
+    empty.first_hits(&[ray], &mut hit);
+    assert_eq!(hit[0].face, -1);
+    let near = empty.closest_point(Vec3::ZERO, f32::INFINITY, true);
+    assert_eq!((near.face, near.distance), (-1, f32::INFINITY));
+    assert!(near.point.is_nan());
+    assert!(!empty.contains(Vec3::ZERO));
+    let err = Mesh::new(vec![Vec3::ZERO], vec![[0, 0, 1]], BuildQuality::Auto);
+    assert!(err.is_err());
+}
