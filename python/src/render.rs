@@ -13,7 +13,7 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::ffi::CString;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
-use strata::accel::BuildQuality;
+use strata::scene::BuildQuality;
 use strata::render::aov::{self, Aov};
 use strata::render::progress::PassDone;
 use strata::render::{

@@ -29,6 +29,8 @@ pub use compile::{
     scene_from_str, LoadTimings, MeshArraysError,
 };
 pub use settings::{RenderOverrides, RenderSettings};
+/// The BVH build effort a render or a mesh query asks for (`bvh_quality`).
+pub use crate::accel::BuildQuality;
 
 /// A compiled scene. Primitives refer to materials by index.
 #[derive(Debug, Clone)]

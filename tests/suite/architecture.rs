@@ -593,7 +593,6 @@ fn the_python_check_refuses_the_geometry_and_passes_the_facade() {
 }
 
 #[test]
-#[ignore = "on once python/src uses strata::raycast (issue 56)"]
 fn python_uses_the_library_through_its_facade() {
     let mut wrong = Vec::new();
     for file in python_files() {
