@@ -1,5 +1,6 @@
-//! Which eight consecutive rays of a stream are narrow enough to walk as
-//! a packet.
+//! Whether eight rays are narrow enough to walk as a packet: the test
+//! itself, on the rays in lanes. How narrow is narrow enough, and which
+//! rays of a stream are asked, is [`crate::geometry::travel`]'s choice.
 //!
 //! A packet's node test serves its eight rays at once, which pays while
 //! they enter mostly the same nodes: the lens samples of one pixel, or
@@ -19,24 +20,14 @@
 //! Where every ray's direction lies within angle θ of the first ray's and
 //! its line passes within w of the packet's apex F (the point the rays
 //! pass near, [`Packet`]'s module docs), two rays are at most about
-//! 2w + θ·L apart inside a box of diagonal L. Eight rays walk as a packet
-//! where sin θ ≤ [`NARROW`] and 2w ≤ `NARROW`·L for every ray, a beam at
-//! most about 2·`NARROW`·L wide. Both tests compare squares of cross
-//! products, so they need neither a square root nor a division.
+//! 2w + θ·L apart inside a box of diagonal L. Eight rays are narrow for a
+//! spread `narrow` where sin θ ≤ `narrow` and 2w ≤ `narrow`·L for every
+//! ray, a beam at most about 2·`narrow`·L wide. Both tests compare squares
+//! of cross products, so they need neither a square root nor a division.
 
-use super::packet::{misses_box, reciprocals, Packet, PACKET_SIZE};
-use super::prefetch::prefetch;
-use crate::math::ray::ray_lanes;
-use crate::math::{Aabb, Ray};
-use std::ops::Range;
+use super::packet::{Packet, PACKET_SIZE};
+use crate::math::Ray;
 use wide::f32x8;
-
-/// The largest sine of the angle between two rays' directions, and the
-/// largest distance of a ray's line from the apex as a fraction of half
-/// the tree's diagonal, of eight rays that walk as a packet: drawn below
-/// the spread where packets stopped paying (docs/embree.md, "Narrow
-/// packets").
-pub const NARROW: f32 = 0.01;
 
 /// `a × b`, in glam's order of operations (see [`ends_narrow`]).
 fn cross(a: [f32x8; 3], b: [f32x8; 3]) -> [f32x8; 3] {
@@ -52,9 +43,9 @@ fn dot(a: [f32x8; 3], b: [f32x8; 3]) -> f32x8 {
 }
 
 impl Packet<'_> {
-    /// Whether the rays are narrow enough to travel together in a tree of
-    /// diagonal `extent` (module docs). False for a non-finite extent.
-    pub fn is_narrow(&self, extent: f32) -> bool {
+    /// Whether the rays are within spread `narrow` of each other in a tree
+    /// of diagonal `extent` (module docs). False for a non-finite extent.
+    pub fn is_narrow(&self, extent: f32, narrow: f32) -> bool {
         if !extent.is_finite() {
             return false;
         }
@@ -62,15 +53,15 @@ impl Packet<'_> {
         let dir = [soa[3], soa[4], soa[5]];
         let first = dir.map(|d| f32x8::splat(d.to_array()[0]));
         let len2 = dot(dir, dir);
-        // sin²θ = |d₀ × d|² / (|d₀|² |d|²) ≤ NARROW², on the same side.
+        // sin²θ = |d₀ × d|² / (|d₀|² |d|²) ≤ narrow², on the same side.
         let sin = dot(cross(first, dir), cross(first, dir));
-        let square = f32x8::splat(NARROW * NARROW);
+        let square = f32x8::splat(narrow * narrow);
         let angle =
             sin.simd_le(square * dot(first, first) * len2) & dot(first, dir).simd_gt(f32x8::ZERO);
-        // w² = |(F − o) × d|² / |d|² ≤ (NARROW · extent / 2)².
+        // w² = |(F − o) × d|² / |d|² ≤ (narrow · extent / 2)².
         let to_apex: [f32x8; 3] = std::array::from_fn(|a| f32x8::splat(self.apex()[a]) - soa[a]);
         let off = dot(cross(to_apex, dir), cross(to_apex, dir));
-        let half = 0.5 * NARROW * extent;
+        let half = 0.5 * narrow * extent;
         let near = off.simd_le(f32x8::splat(half * half) * len2);
         // NaN anywhere (a zero direction) fails the comparisons.
         (angle & near).to_bitmask() == (1 << PACKET_SIZE) - 1
@@ -81,98 +72,10 @@ impl Packet<'_> {
 /// in the same operations: a necessary condition in a few multiplications,
 /// which turns unrelated rays away before their packet is built.
 #[inline(always)]
-fn ends_narrow(eight: &[Ray]) -> bool {
+pub fn ends_narrow(eight: &[Ray], narrow: f32) -> bool {
     let (a, b) = (eight[0].direction, eight[eight.len() - 1].direction);
     let sin = a.cross(b).length_squared();
-    sin <= NARROW * NARROW * a.length_squared() * b.length_squared() && a.dot(b) > 0.0
-}
-
-/// How rays travel through the tree.
-#[allow(clippy::large_enum_variant)]
-pub enum Travel<'r> {
-    /// Eight rays or fewer, as one packet. Made and matched on the stack,
-    /// so the packet stays unboxed.
-    Packet(Packet<'r>),
-    /// Rays that all miss the tree's box ([`misses_box`]): nothing to
-    /// walk, no hit in the tree.
-    Outside,
-    /// Rays that walk alone.
-    Alone,
-}
-
-impl<'r> Travel<'r> {
-    /// How up to [`PACKET_SIZE`] rays a caller chose to trace together
-    /// travel in a tree whose box is `bounds`: not at all where they all
-    /// miss it, else as a packet where [`Packet::from_parts`] can make one,
-    /// else alone.
-    #[inline(always)]
-    pub fn of_packet(rays: &'r [Ray], bounds: &Aabb) -> Self {
-        if rays.is_empty() || rays.len() > PACKET_SIZE {
-            return Travel::Alone;
-        }
-        let lanes = ray_lanes(rays);
-        let inv = reciprocals(&lanes);
-        if misses_box(&lanes, &inv, bounds) {
-            return Travel::Outside;
-        }
-        match Packet::from_parts(rays, &lanes, &inv) {
-            Some(packet) => Travel::Packet(packet),
-            None => Travel::Alone,
-        }
-    }
-}
-
-/// Splits `rays` into the [`PACKET_SIZE`] consecutive rays that walk as
-/// packets (narrow in a tree whose box is `bounds`) or miss that box
-/// altogether, and the stretches of rays between them, and calls `visit`
-/// on each in order: `visit(range, Travel::Packet(..))` or
-/// `visit(range, Travel::Outside)` for the former, `visit(range,
-/// Travel::Alone)` for each non-empty one of the latter. A last few rays
-/// fewer than a packet holds walk alone.
-pub fn split_narrow<'r>(
-    rays: &'r [Ray],
-    bounds: &Aabb,
-    mut visit: impl FnMut(Range<usize>, Travel<'r>),
-) {
-    let extent = bounds.diagonal().length();
-    let mut alone_from = 0;
-    for (g, eight) in rays.chunks_exact(PACKET_SIZE).enumerate() {
-        // The rays sixteen on, asked for now: the walks in between push
-        // the stream's own lines out of the hardware prefetcher's reach.
-        let ahead = (g + 2) * PACKET_SIZE;
-        if let Some(next) = rays.get(ahead..ahead + PACKET_SIZE) {
-            prefetch(<&[Ray; PACKET_SIZE]>::try_from(next).unwrap());
-        }
-        if !ends_narrow(eight) {
-            continue;
-        }
-        let lanes = ray_lanes(eight);
-        let inv = reciprocals(&lanes);
-        let start = g * PACKET_SIZE;
-        let range = start..start + PACKET_SIZE;
-        if misses_box(&lanes, &inv, bounds) {
-            if alone_from < start {
-                visit(alone_from..start, Travel::Alone);
-            }
-            visit(range, Travel::Outside);
-            alone_from = start + PACKET_SIZE;
-            continue;
-        }
-        let Some(p) = Packet::from_parts(eight, &lanes, &inv) else {
-            continue;
-        };
-        if !p.is_narrow(extent) {
-            continue;
-        }
-        if alone_from < start {
-            visit(alone_from..start, Travel::Alone);
-        }
-        visit(range, Travel::Packet(p));
-        alone_from = start + PACKET_SIZE;
-    }
-    if alone_from < rays.len() {
-        visit(alone_from..rays.len(), Travel::Alone);
-    }
+    sin <= narrow * narrow * a.length_squared() * b.length_squared() && a.dot(b) > 0.0
 }
 
 #[cfg(test)]
@@ -191,8 +94,12 @@ mod tests {
         }
     }
 
+    /// The spread the cases below are drawn around (the renderer's own is
+    /// `geometry::travel::NARROW`).
+    const SPREAD: f32 = 0.01;
+
     fn narrow(rays: &[Ray], extent: f32) -> bool {
-        Packet::new(rays).is_some_and(|p| p.is_narrow(extent))
+        Packet::new(rays).is_some_and(|p| p.is_narrow(extent, SPREAD))
     }
 
     /// Eight rays from `eye` through a row of points `spacing` apart,
@@ -281,7 +188,7 @@ mod tests {
         for k in 0..4000 {
             let axis = Vec3::new(next(), next(), next()).normalize() * (1.0 + 10.0 * next().abs());
             let side = axis.any_orthonormal_vector();
-            let spread = NARROW * (next() + 0.5) * 0.3;
+            let spread = SPREAD * (next() + 0.5) * 0.3;
             let lens = if k % 2 == 0 { 0.0 } else { 1e-3 * next() };
             let eye = Vec3::new(next(), next(), next()) * 10.0;
             let eight: Vec<Ray> = (0..8)
@@ -293,49 +200,11 @@ mod tests {
                 .collect();
             if narrow(&eight, 1.0) {
                 accepted += 1;
-                assert!(ends_narrow(&eight), "{eight:?}");
+                assert!(ends_narrow(&eight, SPREAD), "{eight:?}");
             } else {
                 rejected += 1;
             }
         }
         assert!(accepted > 500 && rejected > 500, "{accepted} {rejected}");
-    }
-
-    #[test]
-    fn split_covers_every_ray_once_in_order() {
-        let good = fan(Vec3::ZERO, 1.0, 1e-4);
-        // Narrow too, but heading away from the box.
-        let away = fan(Vec3::ZERO, -1.0, 1e-4);
-        let bad: Vec<Ray> = (0..8)
-            .map(|i| Ray::new(Vec3::ZERO, Vec3::new(1.0, i as f32 - 3.5, 0.5)))
-            .collect();
-        let bounds = Aabb {
-            min: Vec3::new(-0.5, -0.5, 0.5),
-            max: Vec3::new(0.5, 0.5, 1.5),
-        };
-        // bad, good, away, good, bad, 3 left over.
-        let rays: Vec<Ray> = [&bad[..], &good, &away, &good, &bad, &good[..3]].concat();
-        let mut seen = Vec::new();
-        split_narrow(&rays, &bounds, |range, travel| {
-            let how = match travel {
-                Travel::Packet(_) => "packet",
-                Travel::Outside => "outside",
-                Travel::Alone => "rest",
-            };
-            seen.push((how, range))
-        });
-        assert_eq!(
-            seen,
-            [
-                ("rest", 0..8),
-                ("packet", 8..16),
-                ("outside", 16..24),
-                ("packet", 24..32),
-                ("rest", 32..43)
-            ]
-        );
-        let mut none = 0;
-        split_narrow(&[], &bounds, |_, _| none += 1);
-        assert_eq!(none, 0);
     }
 }

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use strata::accel::BuildQuality;
 use strata::error::InputError;
-use strata::experiment::bench::{rays, trace, Query, RayKind};
+use strata::experiment::bench::{rays, trace, Question, RayKind};
 use strata::geometry::Geometry;
 use strata::math::Ray;
 use strata::rays::file::{encode_rays, encode_triangles};
@@ -147,14 +147,11 @@ impl Embree {
         &mut self,
         first: usize,
         count: usize,
-        query: Query,
+        question: Question,
         packet: bool,
         threads: usize,
     ) -> Result<f64, CliError> {
-        let q = match query {
-            Query::Closest => "closest",
-            Query::Occlusion => "occlusion",
-        };
+        let q = question.name();
         let mode = if packet { "packet" } else { "single" };
         writeln!(self.stdin, "{first} {count} {q} {mode} {threads}").map_err(harness_error)?;
         self.stdin.flush().map_err(harness_error)?;
@@ -308,15 +305,15 @@ fn bench_meshes(
         let mut first = 0;
         for (kind, packets) in &sets {
             let (kind, count) = (*kind, packets.len() * 8);
-            for query in [Query::Closest, Query::Occlusion] {
+            for question in [Question::ClosestHit, Question::Occlusion] {
                 for (threads, pool) in pools {
                     for packet in [false, true] {
                         // strata's passes and Embree's alternate.
                         let (mut times, mut theirs) = (vec![], vec![]);
                         for _ in 0..args.repeats.max(1) {
-                            times.push(trace(&scene, packets, query, packet, pool).0);
+                            times.push(trace(&scene, packets, question, packet, pool).0);
                             if let Some(e) = embree.as_mut() {
-                                theirs.push(e.pass(first, count, query, packet, *threads)?);
+                                theirs.push(e.pass(first, count, question, packet, *threads)?);
                             }
                         }
                         let t = median(times);
@@ -336,10 +333,7 @@ fn bench_meshes(
                             ),
                             _ => ",,,".into(),
                         };
-                        let q = match query {
-                            Query::Closest => "closest",
-                            Query::Occlusion => "occlusion",
-                        };
+                        let q = question.name();
                         let mode = if packet { "packet" } else { "single" };
                         println!(
                             "{name:<22} {tris:>9} {build:>8.3} {bpt:>7.1} {peak_text:>8} {q:>9} {:>10} {mode:>6} {threads:>3} {mrays:>9.2} {their_text:>9} {ratio_text:>6}",

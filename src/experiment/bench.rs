@@ -71,11 +71,22 @@ pub fn rays(scene: &Scene, kind: RayKind, packets: usize, seed: u32) -> Vec<[Ray
         .collect()
 }
 
-/// Closest hit or occlusion.
+/// What the suite asks of each ray: its closest hit, or whether anything
+/// blocks it (not [`crate::accel::Query`], what a walk asks at a leaf).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Query {
-    Closest,
+pub enum Question {
+    ClosestHit,
     Occlusion,
+}
+
+impl Question {
+    /// The name the CSV and the Embree harness's protocol use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ClosestHit => "closest",
+            Self::Occlusion => "occlusion",
+        }
+    }
 }
 
 /// Trace every packet's rays once; returns (seconds, hits). `packet`
@@ -85,7 +96,7 @@ pub enum Query {
 pub fn trace(
     scene: &Scene,
     packets: &[[Ray; PACKET_SIZE]],
-    query: Query,
+    question: Question,
     packet: bool,
     pool: &rayon::ThreadPool,
 ) -> (f64, u64) {
@@ -96,20 +107,20 @@ pub fn trace(
             .map(|chunk| {
                 let mut hits = 0u64;
                 for rays in chunk {
-                    hits += match (query, packet) {
-                        (Query::Closest, false) => rays
+                    hits += match (question, packet) {
+                        (Question::ClosestHit, false) => rays
                             .iter()
                             .filter(|r| scene.geometry.intersect(r).is_some())
                             .count(),
-                        (Query::Occlusion, false) => {
+                        (Question::Occlusion, false) => {
                             rays.iter().filter(|r| scene.geometry.occluded(r)).count()
                         }
-                        (Query::Closest, true) => {
+                        (Question::ClosestHit, true) => {
                             let mut out = [None; PACKET_SIZE];
                             scene.geometry.intersect_packet(rays, &mut out);
                             out.iter().filter(|h| h.is_some()).count()
                         }
-                        (Query::Occlusion, true) => {
+                        (Question::Occlusion, true) => {
                             let mut out = [false; PACKET_SIZE];
                             scene.geometry.occluded_packet(rays, u32::MAX, &mut out);
                             out.iter().filter(|&&b| b).count()

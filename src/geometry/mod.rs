@@ -11,7 +11,8 @@
 //! outside the BVH. A ray goes down one way: [`query`] asks the BVH
 //! ([`crate::accel`]) for leaves, the [`leaf`] kernels test what they hold
 //! with the leaf primitives of [`crate::shape`], and [`surface`] turns the
-//! closest hit into a [`Surface`].
+//! closest hit into a [`Surface`]. How a set of rays travels (alone, as a
+//! packet, as bundles, several in flight) is decided in [`travel`].
 //!
 //! # What a hit's `part` says
 //!
@@ -31,7 +32,6 @@
 //! [`Geometry::object_triangle`], [`Geometry::inner_prim`] and
 //! [`Geometry::flat_prim`], never decoded by hand.
 
-pub mod bundles;
 pub mod crossings;
 pub mod csg;
 pub mod instance;
@@ -43,6 +43,7 @@ mod placed_rounding;
 pub mod primitive;
 pub mod query;
 pub mod surface;
+pub mod travel;
 
 use crate::accel::{Bvh8, PrimHit};
 use crate::math::lanes::LANES;

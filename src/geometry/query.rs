@@ -3,6 +3,7 @@
 //! written once, generic over a [`SceneQuery`]: the query's leaf tests
 //! ([`crate::accel::Query`] for single rays, in flight or in bundles;
 //! [`PacketQuery`] for packets) and what the planes outside the BVH add.
+//! How the rays travel is [`super::travel`]'s choice, which this runs.
 //! Packets and streams return bit for bit the single-ray answers.
 //!
 //! # The interval
@@ -29,10 +30,9 @@
 //!
 //! [`closer`]: crate::accel::hit::closer
 
-use super::bundles::StreamPart;
+use super::travel::Travel;
 use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
-use crate::accel::narrow::{split_narrow, Travel};
 use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
@@ -367,7 +367,7 @@ impl Geometry {
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
     /// `self.intersect(&rays[i])`. The rays traverse as one packet unless
     /// they all miss the tree's box (then not at all) or [`Packet::new`]
-    /// refuses them (directions differing in sign on every axis).
+    /// refuses them ([`Geometry::travel_packet`]).
     pub fn intersect_packet(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         self.packet(ClosestHit::<true>(self), rays, out);
     }
@@ -381,21 +381,16 @@ impl Geometry {
     }
 
     /// Closest hits of any number of rays: `out[i]` is bit for bit
-    /// `self.intersect(&rays[i])`. Spans of alike rays (close origins or
-    /// close directions) walk as bundles ([`crate::accel::bundle`],
-    /// [`Geometry::split_stream`]). Of the rest, eight consecutive rays
-    /// narrow enough to share their walk travel as a packet
-    /// ([`crate::accel::narrow`]); the others walk alone, several in
-    /// flight at once where the BVH prefetches (a tree that outgrows the
-    /// caches, [`crate::accel::prefetch`]; [`crate::accel::in_flight`]).
+    /// `self.intersect(&rays[i])`. Bundles, narrow packets, single rays
+    /// in flight or one at a time, as [`Geometry::travel_stream`] decides.
     pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         self.stream(ClosestHit::<true>(self), rays, out);
     }
 
     /// Occlusion of any number of rays, ignoring primitive `except`
     /// (`u32::MAX`: none): `out[i]` is exactly
-    /// `self.occluded_except(&rays[i], except)`. Bundles, packets and
-    /// single rays as for [`Geometry::intersect_stream`].
+    /// `self.occluded_except(&rays[i], except)`. Rays travel as for
+    /// [`Geometry::intersect_stream`].
     pub fn occluded_stream(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
         self.stream(self.occlusion(except), rays, out);
     }
@@ -449,32 +444,37 @@ impl Geometry {
         );
         let out = &mut out[..n];
         self.planes_before(query, rays, out);
-        match Travel::of_packet(rays, &self.bvh.bounds) {
-            Travel::Packet(packet) => self.walk_packet_unless_done(query, &packet, out),
-            // Nothing in the tree can answer them.
-            Travel::Outside => {}
-            Travel::Alone => self.one_by_one(query, rays, out),
-        }
+        self.travel(query, rays, out, self.travel_packet(rays));
         self.planes_after(query, rays, out);
     }
 
-    /// Any number of rays: bundles, packets and single rays (see
-    /// [`Geometry::intersect_stream`]).
+    /// Any number of rays, travelling as [`Geometry::travel_stream`] says.
     fn stream<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         self.planes_before(query, rays, out);
-        self.split_stream(rays, |part| match part {
-            StreamPart::Unlike(range) => {
-                self.narrow_or_alone(query, &rays[range.clone()], &mut out[range]);
-            }
-            StreamPart::Bundle(range) => {
-                self.bundle(query, &rays[range.clone()], &mut out[range]);
-            }
-            StreamPart::Sorted(ids) => {
-                on_gathered(rays, ids, out, |r, o| self.bundle(query, r, o));
-            }
-        });
+        self.travel_stream(rays, |how| self.travel(query, rays, out, how));
         self.planes_after(query, rays, out);
+    }
+
+    /// Walks the rays `how` names as it says. `out` holds the planes'
+    /// first answers; a ray they settle keeps its answer.
+    #[inline(always)]
+    fn travel<'g, Q: SceneQuery<'g>>(
+        &'g self,
+        query: Q,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+        how: Travel,
+    ) {
+        match how {
+            Travel::Packet(r, packet) => self.walk_packet_unless_done(query, &packet, &mut out[r]),
+            // Nothing in the tree can answer them.
+            Travel::Outside(_) => {}
+            Travel::Alone(r) => self.alone(query, &rays[r.clone()], &mut out[r], false),
+            Travel::InFlight(r) => self.alone(query, &rays[r.clone()], &mut out[r], true),
+            Travel::Bundle(r) => self.bundle(query, &rays[r.clone()], &mut out[r]),
+            Travel::Gathered(ids) => on_gathered(rays, ids, out, |r, o| self.bundle(query, r, o)),
+        }
     }
 
     /// `out[i]`: what the planes answer for ray `i` before the BVH is
@@ -510,25 +510,6 @@ impl Geometry {
         }
     }
 
-    /// Rays of a stream that are not alike: narrow packets as packets, the
-    /// rest alone. `out` holds the planes' first answers.
-    fn narrow_or_alone<'g, Q: SceneQuery<'g>>(
-        &'g self,
-        query: Q,
-        rays: &[Ray],
-        out: &mut [Q::Answer],
-    ) {
-        split_narrow(rays, &self.bvh.bounds, |range, travel| {
-            let (rays, out) = (&rays[range.clone()], &mut out[range]);
-            match travel {
-                Travel::Packet(packet) => self.walk_packet_unless_done(query, &packet, out),
-                // Nothing in the tree can answer them.
-                Travel::Outside => {}
-                Travel::Alone => self.alone(query, rays, out),
-            }
-        });
-    }
-
     /// `packet`'s walk, its answers written where `out` holds no final
     /// answer yet (a ray a plane blocks keeps its answer).
     #[inline(always)]
@@ -549,14 +530,23 @@ impl Geometry {
         }
     }
 
-    /// Rays walked one at a time, those `out` already answers skipped.
-    #[inline(always)]
-    fn one_by_one<'g, Q: SceneQuery<'g>>(
+    /// Rays walked alone, several `in_flight` at once or one at a time,
+    /// those `out` already answers skipped. Not inlined into the stream's
+    /// loop: next to the packet code it compiled to slower code
+    /// (docs/embree.md, "Rays in flight").
+    #[inline(never)]
+    fn alone<'g, Q: SceneQuery<'g>>(
         &'g self,
         mut query: Q,
         rays: &[Ray],
         out: &mut [Q::Answer],
+        in_flight: bool,
     ) {
+        if in_flight {
+            self.bvh
+                .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
+            return;
+        }
         for (o, r) in out.iter_mut().zip(rays) {
             if !Q::done(o) {
                 *o = self.bvh.walk(r, &self.leaf_blocks, &mut query);
@@ -568,20 +558,6 @@ impl Geometry {
     fn bundle<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         self.bvh
             .walk_bundle(rays, &self.leaf_blocks, &mut query, out, Q::done);
-    }
-
-    /// Rays that walk alone: several in flight where the BVH prefetches,
-    /// else one at a time (on a tree that fits the caches there is no wait
-    /// to overlap). Not inlined into the stream's split: next to the packet
-    /// code it compiled to slower code (docs/embree.md, "Rays in flight").
-    #[inline(never)]
-    fn alone<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
-        if !self.bvh.prefetch {
-            self.one_by_one(query, rays, out);
-            return;
-        }
-        self.bvh
-            .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
     }
 }
 

@@ -31,8 +31,8 @@ mod tests;
 
 pub use crate::accel::BuildQuality;
 use crate::error::InputResult;
-use crate::geometry::bundles::SPAN;
 use crate::geometry::instance::placed;
+use crate::geometry::travel::SPAN;
 use crate::geometry::Geometry;
 pub use crate::math::Ray;
 pub use crate::scene::MeshArraysError;

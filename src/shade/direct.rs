@@ -10,7 +10,7 @@
 //! Their shadow rays are then the batch's shadow rays towards one light
 //! sample: sample `j` of one light from every lane, gathered first and
 //! traced back to back (a packet only under `--packets on`; see
-//! [`super::packets`]). Traced together rather than between the shading
+//! [`BatchRays::auto`](crate::geometry::travel::BatchRays::auto)). Traced together rather than between the shading
 //! of each hit, they leave one another's tree nodes in the caches (3–7%
 //! off a render on one thread; docs/mitsuba.md, "What was tried for the
 //! whole process"), and each lane still adds its contributions in sample
@@ -29,9 +29,8 @@
 
 use super::bsdf::phong_brdf;
 use super::integrator::{ShadeLane, Shading};
-use super::packets::SHADOW_PACKET_MIN;
 use super::sample::draw_2d_lanes;
-use super::Integrator;
+use super::{BatchRays, Integrator};
 use crate::accel::PACKET_SIZE;
 use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::offset::spawn_origin;
@@ -205,7 +204,7 @@ impl Integrator<'_> {
         }
         let rays = &shadow.rays[..n];
         let mut blocked = [false; PACKET_SIZE];
-        if self.packets.use_packet(n, SHADOW_PACKET_MIN) {
+        if self.packets.use_packet(BatchRays::Shadow, n) {
             self.scene
                 .geometry
                 .occluded_packet(rays, except, &mut blocked[..n]);

@@ -1,9 +1,8 @@
 //! The [`Integrator`]: camera samples (alone or in packets), and the
 //! recursion from a hit to its emitted, direct and specular light.
 
-use super::packets::CAMERA_PACKET_MIN;
 use super::sample::draw_2d_lanes;
-use super::{CameraSample, FirstHit, PacketMode, PathEvent, RayCounts, SampleContext};
+use super::{BatchRays, CameraSample, FirstHit, PacketMode, PathEvent, RayCounts, SampleContext};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::geometry::Surface;
 use crate::light::Environment;
@@ -172,7 +171,7 @@ impl Integrator<'_> {
         let rays = self.scene.camera.generate_rays(&film, &lens);
         let rays = &rays[..n];
         let mut hits = [None; PACKET_SIZE];
-        if self.packets.use_packet(n, CAMERA_PACKET_MIN) {
+        if self.packets.use_packet(BatchRays::Camera, n) {
             self.scene.geometry.intersect_packet(rays, &mut hits[..n]);
         } else {
             for (h, r) in hits.iter_mut().zip(rays) {

@@ -18,7 +18,8 @@
 //! the cost grows by K once, not Kᵈᵉᵖᵗʰ. Lobe directions that fall below the
 //! surface are rejected (they contribute nothing) and counted.
 //!
-//! A batch's coherent rays are traced as packets ([`PacketMode`]): the
+//! A batch's coherent rays are traced as packets where [`PacketMode`]
+//! says (its rule lives in [`crate::geometry::travel`]): the
 //! camera rays of its neighbouring samples ([`Integrator::camera_batch`])
 //! and the shadow rays of the batch, from its hits towards one light
 //! sample, one per hit (`direct.rs`). Packets return exactly the hits of
@@ -35,15 +36,13 @@
 //! | [`specular`] | mirror, glossy and refracted rays |
 //! | [`bsdf`] | the Phong BRDF, Snell's law and Schlick's Fresnel |
 //! | [`sample`] | what identifies a sample, ray counts, replay events |
-//! | [`packets`] | when a batch's rays travel as packets |
 
 pub mod bsdf;
 pub mod direct;
 pub mod integrator;
-pub mod packets;
 pub mod sample;
 pub mod specular;
 
+pub use crate::geometry::travel::{BatchRays, PacketMode, CAMERA_PACKET_MIN};
 pub use integrator::Integrator;
-pub use packets::{PacketMode, CAMERA_PACKET_MIN, SHADOW_PACKET_MIN};
 pub use sample::{CameraSample, FirstHit, PathEvent, RayCounts, SampleContext};

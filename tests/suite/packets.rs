@@ -11,9 +11,8 @@ use crate::common::{bumpy_sphere_obj, scene_at, seeded, temp_dir, Draw};
 use glam::Vec3;
 use std::time::Instant;
 use strata::accel::bundle::{BUNDLE_MAX_BYTES, BUNDLE_SIZE};
-use strata::accel::narrow::{split_narrow, Travel};
 use strata::accel::{BuildQuality, PACKET_SIZE};
-use strata::geometry::bundles::StreamPart;
+use strata::geometry::travel::{split_narrow, Travel};
 use strata::math::Ray;
 use strata::scene::{parse, RenderOverrides, Scene};
 
@@ -259,15 +258,11 @@ fn streams_and_single_rays_return_identical_hits() {
         rays.extend(pinhole_rows());
         rays.extend(alternating_fan());
         let (mut packets, mut outside) = (0, 0);
-        split_narrow(
-            &rays,
-            &scene.geometry.bvh().bounds,
-            |_, travel| match travel {
-                Travel::Packet(_) => packets += 1,
-                Travel::Outside => outside += 1,
-                Travel::Alone => {}
-            },
-        );
+        split_narrow(&rays, &scene.geometry.bvh().bounds, |travel| match travel {
+            Travel::Packet(..) => packets += 1,
+            Travel::Outside(_) => outside += 1,
+            _ => {}
+        });
         assert!(
             packets >= 100 && outside >= 100,
             "{quality:?}: {packets} packets, {outside} packets outside the tree's box"
@@ -277,16 +272,19 @@ fn streams_and_single_rays_return_identical_hits() {
         // many origins (the lens samples, for one) walk sorted by octant.
         let mut seen = vec![0; rays.len()];
         let (mut one_origin, mut many_origins, mut scattered) = (0, 0, 0);
-        scene.geometry.split_stream(&rays, |part| match part {
-            StreamPart::Unlike(range) => range.for_each(|i| seen[i] += 1),
-            StreamPart::Bundle(range) => {
+        scene.geometry.travel_stream(&rays, |travel| match travel {
+            Travel::Packet(range, _)
+            | Travel::Outside(range)
+            | Travel::Alone(range)
+            | Travel::InFlight(range) => range.for_each(|i| seen[i] += 1),
+            Travel::Bundle(range) => {
                 assert!(!range.is_empty() && range.len() <= BUNDLE_SIZE);
                 let o = rays[range.start].origin;
                 assert!(rays[range.clone()].iter().all(|r| r.origin == o));
                 range.for_each(|i| seen[i] += 1);
                 one_origin += 1;
             }
-            StreamPart::Sorted(ids) => {
+            Travel::Gathered(ids) => {
                 assert!(!ids.is_empty() && ids.len() <= BUNDLE_SIZE);
                 ids.iter().for_each(|&i| seen[i as usize] += 1);
                 scattered += ids.windows(2).any(|w| w[1] != w[0] + 1) as usize;

@@ -9,7 +9,7 @@ use strata::accel::PACKET_SIZE;
 use strata::render::film::Film;
 use strata::render::{render, RenderOptions, SliceSpec};
 use strata::scene::Scene;
-use strata::shade::{PacketMode, CAMERA_PACKET_MIN};
+use strata::shade::{BatchRays, PacketMode, CAMERA_PACKET_MIN};
 
 const MODES: [PacketMode; 3] = [PacketMode::Off, PacketMode::On, PacketMode::Auto];
 
@@ -185,10 +185,12 @@ fn packet_modes_parse() {
     assert_eq!("off".parse::<PacketMode>(), Ok(PacketMode::Off));
     assert!("yes".parse::<PacketMode>().is_err());
     assert_eq!(PacketMode::default(), PacketMode::Auto);
-    assert!(!PacketMode::Auto.use_packet(CAMERA_PACKET_MIN - 1, CAMERA_PACKET_MIN));
-    assert!(PacketMode::Auto.use_packet(CAMERA_PACKET_MIN, CAMERA_PACKET_MIN));
-    assert!(PacketMode::On.use_packet(1, usize::MAX));
-    assert!(!PacketMode::Off.use_packet(PACKET_SIZE, 1));
+    let camera = BatchRays::Camera;
+    assert!(!PacketMode::Auto.use_packet(camera, CAMERA_PACKET_MIN - 1));
+    assert!(PacketMode::Auto.use_packet(camera, CAMERA_PACKET_MIN));
+    assert!(!PacketMode::Auto.use_packet(BatchRays::Shadow, PACKET_SIZE));
+    assert!(PacketMode::On.use_packet(BatchRays::Shadow, 1));
+    assert!(!PacketMode::Off.use_packet(camera, PACKET_SIZE));
 }
 
 #[test]
