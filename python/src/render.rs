@@ -13,7 +13,6 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::ffi::CString;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
-use strata::scene::BuildQuality;
 use strata::render::aov::{self, Aov};
 use strata::render::progress::PassDone;
 use strata::render::{
@@ -21,6 +20,7 @@ use strata::render::{
 };
 use strata::scene::edit::Edit;
 use strata::scene::settings::GlossySampling;
+use strata::scene::BuildQuality;
 use strata::scene::{load_edited_scene, RenderOverrides};
 use toml::Value;
 

@@ -41,7 +41,7 @@ use wide::{f32x8, u32x8};
 pub const BUNDLE_SIZE: usize = 64;
 
 /// The size of a tree's nodes and leaf blocks up to which a stream's
-/// alike rays walk as bundles (`geometry::bundles`): eight times the 32 MiB
+/// alike rays walk as bundles (`geometry::travel`): eight times the 32 MiB
 /// of last-level cache it was measured on, between the sizes where bundles
 /// went from level to slower (docs/embree.md, "Bundles"). A bundle saves
 /// instructions (a node's test set up once for all its rays, no sort or

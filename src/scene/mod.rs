@@ -24,13 +24,13 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::texture::Textures;
 
+/// The BVH build effort a render or a mesh query asks for (`bvh_quality`).
+pub use crate::accel::BuildQuality;
 pub use compile::{
     load_edited_scene, load_mesh_scene, load_scene, load_scene_for_tracing, mesh_geometry,
     scene_from_str, LoadTimings, MeshArraysError,
 };
 pub use settings::{RenderOverrides, RenderSettings};
-/// The BVH build effort a render or a mesh query asks for (`bvh_quality`).
-pub use crate::accel::BuildQuality;
 
 /// A compiled scene. Primitives refer to materials by index.
 #[derive(Debug, Clone)]
