@@ -79,7 +79,7 @@ pub fn ends_narrow(eight: &[Ray], narrow: f32) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use glam::Vec3;
 
@@ -104,7 +104,7 @@ mod tests {
 
     /// Eight rays from `eye` through a row of points `spacing` apart,
     /// `distance` ahead.
-    fn fan(eye: Vec3, distance: f32, spacing: f32) -> Vec<Ray> {
+    pub(crate) fn fan(eye: Vec3, distance: f32, spacing: f32) -> Vec<Ray> {
         (0..8)
             .map(|i| {
                 let target = eye + Vec3::new(i as f32 * spacing, 0.3, distance);

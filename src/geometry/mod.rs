@@ -115,38 +115,23 @@ pub trait Found {
     fn part(&self) -> u32;
 }
 
-impl Found for PrimHit {
-    #[inline(always)]
-    fn prim(&self) -> u32 {
-        self.prim
-    }
-    #[inline(always)]
-    fn part(&self) -> u32 {
-        self.part
-    }
+/// Each record keeps its primitive and part in fields of those names.
+macro_rules! found_by_fields {
+    ($($record:ty),*) => {$(
+        impl Found for $record {
+            #[inline(always)]
+            fn prim(&self) -> u32 {
+                self.prim
+            }
+            #[inline(always)]
+            fn part(&self) -> u32 {
+                self.part
+            }
+        }
+    )*};
 }
 
-impl Found for Crossing {
-    #[inline(always)]
-    fn prim(&self) -> u32 {
-        self.prim
-    }
-    #[inline(always)]
-    fn part(&self) -> u32 {
-        self.part
-    }
-}
-
-impl Found for Nearest {
-    #[inline(always)]
-    fn prim(&self) -> u32 {
-        self.prim
-    }
-    #[inline(always)]
-    fn part(&self) -> u32 {
-        self.part
-    }
-}
+found_by_fields!(PrimHit, Crossing, Nearest);
 
 impl Geometry {
     /// A geometry over `bvh`, whose leaf order (`prim_ids`) becomes the

@@ -33,6 +33,7 @@
 use super::travel::Travel;
 use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
+use crate::accel::hit::tie_ray;
 use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
@@ -78,12 +79,8 @@ fn closed_end(ray: &Ray) -> Ray {
 #[inline(always)]
 fn leaf_ray<const CLOSED: bool>(ray: &Ray, best: Option<&PrimHit>) -> Ray {
     match best {
-        Some(b) => Ray {
-            tmax: b.t.next_up(),
-            ..*ray
-        },
         None if CLOSED => closed_end(ray),
-        None => *ray,
+        _ => tie_ray(ray, best),
     }
 }
 

@@ -376,6 +376,7 @@ impl PacketMode {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::narrow::tests::fan;
 
     #[test]
     fn within_measures_the_box_diagonal() {
@@ -390,17 +391,6 @@ mod tests {
         assert!(within(40, |k| many[k], 3.9));
         many[39].y = 5.0;
         assert!(!within(40, |k| many[k], 3.9 * 1.5));
-    }
-
-    /// Eight rays from `eye` through a row of points `spacing` apart,
-    /// `distance` ahead.
-    fn fan(eye: Vec3, distance: f32, spacing: f32) -> Vec<Ray> {
-        (0..8)
-            .map(|i| {
-                let target = eye + Vec3::new(i as f32 * spacing, 0.3, distance);
-                Ray::new(eye, target - eye)
-            })
-            .collect()
     }
 
     #[test]
