@@ -107,7 +107,10 @@ fn edits(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Edit>> {
                 .extract()
                 .map_err(|_| error("set: keys must be key paths such as \"camera.fov\"".into()))?;
             let value = toml_value(&v, &path)?;
-            out.push(Edit { path, value });
+            out.push(Edit {
+                path,
+                value: Some(value),
+            });
         }
         return Ok(out);
     }

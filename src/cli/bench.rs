@@ -30,10 +30,10 @@ pub struct BenchArgs {
     /// Meshes (OBJ, glTF, GLB or PLY); default: every mesh in assets/.
     pub meshes: Vec<PathBuf>,
     /// Packets of 8 rays per ray set (the single rows trace them ray by ray).
-    #[arg(long = "batches", value_name = "N", default_value_t = 50_000)]
+    #[arg(long = "batches", value_name = "N", default_value_t = 50_000, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub packets: usize,
     /// Timed runs per row; the median is reported.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub repeats: usize,
     /// The "all threads" column (default: every core).
     #[arg(long)]

@@ -19,10 +19,10 @@ pub struct ConvergeArgs {
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference (keep it 16 times --max-spp
     /// or more, or the error curves flatten at the reference's own noise).
-    #[arg(long, default_value_t = converge::DEFAULT_REFERENCE_SPP)]
+    #[arg(long, default_value_t = converge::DEFAULT_REFERENCE_SPP, value_parser = clap::value_parser!(u32).range(1..))]
     pub reference_spp: u32,
     /// Largest spp measured (powers of two from 1).
-    #[arg(long, default_value_t = converge::DEFAULT_MAX_SPP)]
+    #[arg(long, default_value_t = converge::DEFAULT_MAX_SPP, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_spp: u32,
     /// Output CSV: method, spp, seconds, RMSE, relative MSE.
     #[arg(long, default_value = "converge.csv")]
@@ -37,7 +37,7 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub height: Option<u32>,
     /// Renders per point; the median time is reported (machines are noisy).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeats: u32,
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
@@ -60,9 +60,6 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
     };
     let (scene, _) = load_scene(&args.scene, &overrides, BuildQuality::Auto)?;
     let (w, h) = (scene.settings.width, scene.settings.height);
-    if args.max_spp == 0 || args.reference_spp == 0 {
-        return Err(InputError::new("<command line>", "--max-spp", "must be at least 1").into());
-    }
     let reference = match &args.reference {
         Some(path) => {
             let (pixels, rw, rh) =

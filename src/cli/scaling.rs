@@ -34,7 +34,7 @@ pub struct ScalingArgs {
     /// built-in seed scene.
     pub scene: Option<PathBuf>,
     /// Largest thread count; the run measures 1, 2, 4, … and this. Default: all cores.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub max_threads: Option<usize>,
     /// Renders per configuration; the median is reported.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
@@ -87,15 +87,9 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         &overrides(&args),
         BuildQuality::Auto,
     )?;
-    let max = match args.max_threads {
-        Some(0) => {
-            return Err(
-                InputError::new("<command line>", "--max-threads", "must be at least 1").into(),
-            )
-        }
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let max = args
+        .max_threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let counts = thread_counts(max);
     let mut modes = match args.schedule {
         ScheduleChoice::Slices => vec![Mode::Threads(Schedule::Slices)],

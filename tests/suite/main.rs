@@ -36,6 +36,7 @@ mod render_flags;
 mod render_packets;
 mod render_properties;
 mod scene_parsing;
+mod scene_warnings;
 mod self_intersection;
 mod slices;
 mod slurm;

@@ -400,6 +400,8 @@ fn compile_for(
         inst.world_bounds = b;
         boxes.push(b);
     }
+    let unreached = c.unreached_lights(desc.lights.len(), &boxes);
+    c.warnings.extend(unreached);
     let quality = for_purpose(quality, boxes.len());
     let bvh_quality = quality.preset(boxes.len());
     let mut bvh = Bvh8::build_from_with_others(boxes, quality, n_tris);
