@@ -131,6 +131,7 @@ impl Image {
                 format.extensions_str().first().unwrap_or(&"these")
             ));
         }
+        crate::system::budget::check_image("a texture", bytes, 6)?; // 8-bit RGB, converted and kept
         let decoded = image::ImageReader::with_format(std::io::Cursor::new(bytes), format)
             .decode()
             .map_err(|e| format!("cannot decode the image: {e}"))?
