@@ -277,7 +277,7 @@ pub fn render(
     };
     overrides
         .check()
-        .map_err(|(field, message)| error(format!("{field}: {message}")))?;
+        .map_err(|bad| error(format!("{}={}: {}", bad.field, bad.value, bad.message)))?;
     let edits = edits(set)?;
     let pool = Threads::new(threads)?;
     let passes = count(passes, "passes", 1)?;

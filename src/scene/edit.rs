@@ -54,6 +54,15 @@ impl Edit {
     pub fn flag(&self) -> String {
         format!("--set {}", self.path)
     }
+
+    /// The edit as the user wrote it: `--set KEY=VALUE`, or `--set KEY=`
+    /// for a removal.
+    pub fn written(&self) -> String {
+        match &self.value {
+            Some(value) => format!("--set {}={value}", self.path),
+            None => format!("--set {}=", self.path),
+        }
+    }
 }
 
 /// One step of a key path: a table key or an array index.
