@@ -40,3 +40,4 @@ mod self_intersection;
 mod slices;
 mod slurm;
 mod textures;
+mod timeline_picture;
