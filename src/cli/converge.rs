@@ -5,11 +5,29 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
+use strata::experiment::column_key;
 use strata::experiment::converge::{self, Point, METHODS};
 use strata::output::chart::write_svg;
 use strata::scene::{load_scene, RenderOverrides};
 
+/// The columns of the table `strata converge` prints (and of its CSV).
+const COLUMNS: [(&str, &str); 5] = [
+    ("method", "the sampling method (docs/converge.md)"),
+    ("spp", "samples per pixel of the render"),
+    ("seconds", "median wall time of its renders (--repeats)"),
+    (
+        "RMSE",
+        "root mean square error against the reference, over pixels and channels",
+    ),
+    (
+        "relMSE",
+        "relative MSE: the mean of (value - reference)^2 / (reference^2 + 0.01)",
+    ),
+];
+
 #[derive(Debug, Args, Clone)]
+#[command(after_help = "Every column of the table: strata converge --help.")]
+#[command(after_long_help = format!("The table's columns:\n{}", column_key(&COLUMNS)))]
 pub struct ConvergeArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,

@@ -8,11 +8,12 @@ use std::sync::Arc;
 use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
+use strata::experiment::column_key;
 use strata::experiment::predict::{ProcessCosts, RunCosts};
 use strata::experiment::scaling::{
     chart_panels, csv, predict_rows, predicted_scaling_rows, prediction_table, rows, table,
     thread_counts, time_processes, time_threads, time_threads_with, Mode, ScratchDir, SliceJob,
-    Timing,
+    Timing, PREDICTION_COLUMNS, TABLE_COLUMNS,
 };
 use strata::output::chart::write_svg;
 use strata::render::timeline::Timeline;
@@ -29,6 +30,8 @@ pub enum ScheduleChoice {
 }
 
 #[derive(Debug, Args, Clone)]
+#[command(after_help = "Every column of the tables: strata scaling --help.")]
+#[command(after_long_help = columns_help())]
 pub struct ScalingArgs {
     /// Scene file (TOML), rendered with its own settings. Default: the
     /// built-in seed scene.
@@ -72,9 +75,20 @@ pub struct ScalingArgs {
     /// Largest thread count --predict simulates.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub predict_max: u32,
-    /// Print only the table.
+    /// Print only the tables, without the progress and the key to the
+    /// --predict table's columns.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// What `strata scaling --help` says under the flags: every column of
+/// both tables.
+fn columns_help() -> String {
+    format!(
+        "The table's columns:\n{}\nThe --predict table's columns (docs/scaling.md, \"Past this machine's cores\"):\n{}",
+        column_key(&TABLE_COLUMNS),
+        column_key(&PREDICTION_COLUMNS)
+    )
 }
 
 pub fn run(args: ScalingArgs) -> Result<(), CliError> {
@@ -332,6 +346,9 @@ fn predict(
         );
     }
     print!("{}", prediction_table(&predictions));
+    if !args.quiet {
+        print!("\n{}", column_key(&PREDICTION_COLUMNS));
+    }
     Ok(predictions)
 }
 

@@ -41,3 +41,4 @@ mod self_intersection;
 mod slices;
 mod slurm;
 mod textures;
+mod timeline_picture;
