@@ -38,7 +38,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
-pub use instance::read_instances;
+pub use instance::{read_instances, PLACEMENT_BYTES};
 
 mod arrays;
 mod camera;
