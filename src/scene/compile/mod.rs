@@ -701,7 +701,7 @@ mod tests {
         let e = scene_from_str("", Path::new("t.toml"), &zero).unwrap_err();
         assert_eq!(
             (e.file.as_str(), e.location.as_str()),
-            ("<command line>", "--reflection-samples")
+            ("<command line>", "--reflection-samples 0")
         );
     }
 
