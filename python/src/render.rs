@@ -298,6 +298,19 @@ pub fn render(
     let window = crop
         .map(|text| Window::crop(&text, s.width, s.height).map_err(|e| error(format!("crop: {e}"))))
         .transpose()?;
+    // Weighed before the film is made: a size past the machine's memory is
+    // an exception naming it, not an aborted interpreter.
+    let (w, h) = window
+        .as_ref()
+        .map_or((s.width, s.height), |w| (w.width(), w.height()));
+    strata::render::film::check_memory(w, h, !aovs.is_empty(), true).map_err(|m| {
+        let given = if window.is_some() {
+            "crop"
+        } else {
+            "width, height"
+        };
+        error(format!("{given}: {m}"))
+    })?;
     let opts = RenderOptions {
         threads: pool.count(),
         slice: SliceSpec::WHOLE,

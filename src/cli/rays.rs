@@ -158,7 +158,7 @@ fn check_memory(n: usize, kinds: usize) -> Result<usize, CliError> {
     let total = n as u128 * kinds as u128;
     let need = total * (ray + RAY_BYTES as u128) + n as u128 * ray;
     let what = format_args!(
-        "{total} rays ({} bytes each, and the file's {RAY_BYTES})",
+        "writing {total} rays ({} bytes each, and the file's {RAY_BYTES})",
         std::mem::size_of::<Ray>()
     );
     strata::system::budget::check(need, what).map_err(|m| InputError::flag(flag(), m))?;

@@ -52,11 +52,11 @@ pub(super) fn count_mesh_uses(
 /// What one placement holds at the peak of a load, for weighing an
 /// instances file before it is read: its matrix as read and as placed,
 /// its [`Instance`], its box in the scene's tree, and its share of the
-/// tree and of the build's scratch (measured: docs/scene-format.md,
-/// "Instances").
+/// tree and of the build's scratch (held above the measured peak by
+/// tests/suite/sizes.rs).
 pub const PLACEMENT_BYTES: u64 =
     (2 * size_of::<Affine3A>() + size_of::<Instance>() + size_of::<crate::math::Aabb>()) as u64
-        + 256;
+        + 64;
 
 /// The longest line an instances file may have: twelve numbers of any
 /// sensible precision fit many times over, and a file that is one endless
@@ -74,11 +74,42 @@ const SAMPLE_BYTES: usize = 64 * 1024;
 /// The file is weighed against the machine's memory before it is read
 /// (its length over its first lines' mean length), and again as it is.
 pub fn read_instances(path: &Path) -> InputResult<Vec<Affine3A>> {
-    read_instances_within(path, Budget::of_this_process(), 0)
+    let budget = Budget::of_this_process();
+    weigh_instances(path, budget, 0).map_err(|m| InputError::file(path, m))?;
+    read_instances_within(path, budget, 0)
 }
 
-/// [`read_instances`] with `placed` placements made already, which
-/// `budget` must hold as well.
+/// Whether the placements an instances file holds, estimated from its
+/// length and its first lines, fit in `budget` with `placed` placements
+/// made already: the error's message if not. A file that cannot be read
+/// passes: reading it says why.
+pub(super) fn weigh_instances(
+    path: &Path,
+    budget: Option<Budget>,
+    placed: u64,
+) -> Result<(), String> {
+    let Ok(file) = std::fs::File::open(path) else {
+        return Ok(());
+    };
+    let length = file.metadata().map_or(0, |m| m.len());
+    let Ok(estimate) = estimated_rows(file, length) else {
+        return Ok(());
+    };
+    let need = u128::from(placed + estimate) * u128::from(PLACEMENT_BYTES);
+    let before = if placed > 0 {
+        format!(", with the {placed} placed before")
+    } else {
+        String::new()
+    };
+    let what = format_args!(
+        "a file of {} and about {estimate} placements ({PLACEMENT_BYTES} bytes each{before})",
+        bytes_text(u128::from(length)),
+    );
+    check_against(budget, need, what)
+}
+
+/// The rows of an instances file, weighed again against `budget` (with
+/// `placed` placements made already) as they pass what was estimated.
 pub(super) fn read_instances_within(
     path: &Path,
     budget: Option<Budget>,
@@ -87,25 +118,11 @@ pub(super) fn read_instances_within(
     let cannot_read =
         |e: std::io::Error| InputError::file(path, format!("cannot read: {}", io_message(&e)));
     let file = std::fs::File::open(path).map_err(cannot_read)?;
-    let length = file.metadata().map_err(cannot_read)?.len();
     let mut reader = std::io::BufReader::new(file);
     let weigh = |rows: u64, what: std::fmt::Arguments| {
         let need = u128::from(placed + rows) * u128::from(PLACEMENT_BYTES);
         check_against(budget, need, what).map_err(|m| InputError::file(path, m))
     };
-    let estimate = estimated_rows(&mut reader, length).map_err(cannot_read)?;
-    weigh(
-        estimate,
-        format_args!(
-            "a file of {} and about {estimate} placements ({PLACEMENT_BYTES} bytes each{})",
-            bytes_text(u128::from(length)),
-            if placed > 0 {
-                format!(", with the {placed} placed before")
-            } else {
-                String::new()
-            }
-        ),
-    )?;
     let mut out: Vec<Affine3A> = Vec::new();
     let mut line = String::new();
     for i in 0.. {
@@ -140,18 +157,12 @@ pub(super) fn read_instances_within(
 }
 
 /// The rows of a file of `length` bytes, estimated from its first
-/// [`SAMPLE_BYTES`]: their lines' mean length (the reader is left where
-/// it was).
-fn estimated_rows(
-    reader: &mut std::io::BufReader<std::fs::File>,
-    length: u64,
-) -> std::io::Result<u64> {
-    use std::io::{Seek, SeekFrom};
+/// [`SAMPLE_BYTES`]: their lines' mean length.
+fn estimated_rows(file: std::fs::File, length: u64) -> std::io::Result<u64> {
     let mut head = Vec::new();
-    std::io::Read::take(&mut *reader, SAMPLE_BYTES as u64).read_to_end(&mut head)?;
-    reader.seek(SeekFrom::Start(0))?;
+    file.take(SAMPLE_BYTES as u64).read_to_end(&mut head)?;
     let lines = head.iter().filter(|&&b| b == b'\n').count().max(1) as u64;
-    Ok(if (head.len() as u64) < length {
+    Ok(if !head.is_empty() && (head.len() as u64) < length {
         length.div_ceil(head.len() as u64) * lines
     } else {
         lines
@@ -216,7 +227,14 @@ impl Compiler<'_> {
         }
         // Every placement made so far, the objects' and their instances'.
         let placed = (self.instances.len() + self.shapes.len()) as u64;
-        let rows = read_instances_within(&path, Budget::of_this_process(), placed)?;
+        let budget = Budget::of_this_process();
+        weigh_instances(&path, budget, placed).map_err(|m| {
+            self.err(
+                &format!("{key}.instances"),
+                format!("'{}': {m}", path.display()),
+            )
+        })?;
+        let rows = read_instances_within(&path, budget, placed)?;
         let mut out = Vec::new();
         out.try_reserve_exact(rows.len()).map_err(|_| {
             let message = format!("cannot allocate {} placements", rows.len());
@@ -387,4 +405,67 @@ pub(super) fn build_prototype(
     let PrototypeParts { meshes, sources } = parts;
     triangle_geometry(meshes, sources, quality)
         .map_err(|(mesh, i)| InputError::new(path, mesh, format!("triangle {i} is not finite")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ROW: &str = "1,0,0,0, 0,1,0,0, 0,0,1,0\n";
+
+    fn file(name: &str, text: &str) -> (crate::scene::loaders::test_files::TempDir, PathBuf) {
+        let dir = crate::scene::loaders::test_files::temp_dir(name);
+        let path = dir.join("i.csv");
+        std::fs::write(&path, text).unwrap();
+        (dir, path)
+    }
+
+    /// A file is estimated from its length and first lines before it is
+    /// read: rows past the budget are refused with the figures.
+    #[test]
+    fn an_instances_file_past_the_budget_is_refused_before_it_is_read() {
+        let (_dir, path) = file("inst-weigh", &ROW.repeat(100));
+        let fits = Some(Budget::given(100 * PLACEMENT_BYTES));
+        assert!(weigh_instances(&path, fits, 0).is_ok());
+        let e = weigh_instances(&path, fits, 1).unwrap_err();
+        assert!(
+            e.contains("about 100 placements") && e.contains("with the 1 placed before"),
+            "{e}"
+        );
+        // A file far longer than its first lines (a sparse one here):
+        // estimated from their mean length, not read.
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_len(1 << 40)
+            .unwrap();
+        let e = weigh_instances(&path, Some(Budget::given(1 << 30)), 0).unwrap_err();
+        assert!(e.starts_with("a file of 1.0 TiB and about "), "{e}");
+    }
+
+    /// Rows past the estimate (long comment lines first, short rows
+    /// after) are weighed again as they are read, at their line; a line
+    /// past the longest a row may be is refused, not read whole.
+    #[test]
+    fn rows_past_the_estimate_are_weighed_as_they_are_read() {
+        let comment = format!("# {}\n", "x".repeat(4000));
+        let text = comment.repeat(17) + &ROW.repeat(20_000);
+        let (_dir, path) = file("inst-stream", &text);
+        let budget = Some(Budget::given(1000 * PLACEMENT_BYTES));
+        assert!(weigh_instances(&path, budget, 0).is_ok());
+        let e = read_instances_within(&path, budget, 0).unwrap_err();
+        assert_eq!(e.line, Some(17 + 513), "{e}");
+        assert!(
+            e.message.starts_with("reading more than 512 placements"),
+            "{e}"
+        );
+        assert_eq!(read_instances_within(&path, None, 0).unwrap().len(), 20_000);
+        let (_dir, path) = file("inst-long", &"1".repeat(MAX_LINE_BYTES + 1));
+        let e = read_instances_within(&path, None, 0).unwrap_err();
+        assert!(
+            e.to_string().contains("line 1: is longer than 4096 bytes"),
+            "{e}"
+        );
+    }
 }

@@ -38,7 +38,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
-pub use instance::read_instances;
+pub use instance::{read_instances, PLACEMENT_BYTES};
 
 mod arrays;
 mod camera;
@@ -730,7 +730,7 @@ mod tests {
         let e = scene_from_str("", Path::new("t.toml"), &zero).unwrap_err();
         assert_eq!(
             (e.file.as_str(), e.location.as_str()),
-            ("<command line>", "--reflection-samples")
+            ("<command line>", "--reflection-samples 0")
         );
     }
 
