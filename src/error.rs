@@ -7,6 +7,9 @@
 use std::fmt;
 use std::path::Path;
 
+/// What an [`InputError`] names as its "file" when the fault is a flag.
+pub const COMMAND_LINE: &str = "<command line>";
+
 /// A problem with something the user handed us: a scene, mesh, partial file or flag.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputError {
@@ -36,6 +39,12 @@ impl InputError {
             message: message.into(),
             more: Vec::new(),
         }
+    }
+
+    /// An error in a flag of the command line: `location` is the flag as
+    /// given, with its value (`--spp 0`, `--set render.spp=0`).
+    pub fn flag(location: impl Into<String>, message: impl Into<String>) -> Self {
+        Self::new(COMMAND_LINE, location, message)
     }
 
     /// An error about the file as a whole (unreadable, wrong format).

@@ -2,12 +2,11 @@
 
 mod cli;
 
-use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     cli::cpu::require_built_for_features();
-    let args = cli::Cli::parse();
+    let args = cli::flags::parse();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(cli::CliError::Input(e)) => {

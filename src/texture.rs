@@ -158,6 +158,7 @@ impl Image {
                 }
             ));
         }
+        crate::system::budget::check_image("a texture", bytes, 6)?; // 8-bit RGB, converted and kept
         let decoded = image::ImageReader::with_format(std::io::Cursor::new(bytes), format)
             .decode()
             .map_err(|e| format!("cannot decode the {} image: {e}", format_name(format)))?

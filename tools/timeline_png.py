@@ -7,25 +7,34 @@
 
 One row per track of the trace: the main thread on top (load, BVH build,
 setup, each pass, the film update after it, output), then one row per
-worker, each work item a box coloured by its duration against the median
-item's (pale: as long as the median or shorter; dark red: 10x and more,
-on a log scale), so that long items and idle gaps stand out. Below them,
-the rays-per-second counter. Perfetto (https://ui.perfetto.dev) opens the
-same file interactively; this is its still picture.
+worker, each work item a box coloured by the share of all the items' time
+spent in shorter items (pale yellow for the shortest, through green and
+blue, to dark purple for the longest), so that each colour covers as much
+of the picture as any other and items of different cost look different
+however the costs are spread; a hairline parts neighbouring boxes, and
+idle gaps stay white. Below them, the rays-per-second counter and a key
+with the times the colours stand for. Perfetto (https://ui.perfetto.dev)
+opens the same file interactively; this is its still picture.
 """
 
 import argparse
+import bisect
 import json
 import math
 import sys
 
-try:
-    from PIL import Image, ImageDraw, ImageFont
-except ImportError:
-    sys.exit(
-        "error: timeline_png.py needs Pillow: python3 -m venv tools/.venv-docs && "
-        "tools/.venv-docs/bin/pip install -r tools/requirements-docs.txt"
-    )
+
+def pillow():
+    """Pillow's drawing modules, imported only to draw (the colour scale
+    is tested without them: tests/suite/timeline_picture.rs)."""
+    try:
+        from PIL import Image, ImageDraw, ImageFont
+    except ImportError:
+        sys.exit(
+            "error: timeline_png.py needs Pillow: python3 -m venv tools/.venv-docs && "
+            "tools/.venv-docs/bin/pip install -r tools/requirements-docs.txt"
+        )
+    return Image, ImageDraw, ImageFont
 
 PHASE_COLOURS = {
     "load": (76, 120, 168),
@@ -48,12 +57,54 @@ def phase_colour(name):
     return (120, 120, 120)
 
 
-def item_colour(duration, median):
-    """Pale yellow at or below the median, dark red at 10x it (log scale)."""
-    x = 0.0 if median <= 0 else math.log10(max(duration / median, 1.0))
-    x = min(x, 1.0)
-    pale, dark = (253, 231, 160), (165, 15, 21)
-    return tuple(round(p + (d - p) * x) for p, d in zip(pale, dark))
+# Short to long: viridis reversed, a ramp whose steps a reader sees as
+# equal, and whose ends differ in lightness too (it survives greyscale).
+RAMP = [(253, 231, 37), (94, 201, 98), (33, 145, 140), (59, 82, 139), (68, 1, 84)]
+
+
+class ItemScale:
+    """Work item durations to colours, by the share of all the items' time
+    spent in shorter items: 0 (pale) for the shortest, 1 (dark) for the
+    longest, and each part of the ramp covering as much of the picture's
+    boxes as any other, so neighbours of different cost differ however the
+    costs are spread. Two scales that did not: one of duration itself (pale
+    at the median item, dark red at 10x and more) painted every item dark
+    red where most of the time went to items ten times the cheapest; one of
+    rank put all of those in the last quarter where most items are cheap."""
+
+    def __init__(self, durations):
+        self.sorted = sorted(max(d, 0.0) for d in durations) or [0.0]
+        self.before = [0.0]
+        for d in self.sorted:
+            self.before.append(self.before[-1] + d)
+        self.total = self.before[-1]
+
+    def position(self, duration):
+        """The share of the items' time in items shorter than `duration`,
+        with half of that in items as long."""
+        if self.total <= 0:
+            return 0.5
+        lo = bisect.bisect_left(self.sorted, duration)
+        hi = bisect.bisect_right(self.sorted, duration)
+        same = self.before[hi] - self.before[lo]
+        return min(max((self.before[lo] + same / 2) / self.total, 0.0), 1.0)
+
+    def quantile(self, q):
+        """The duration of the item at which a share q of the time is spent."""
+        k = bisect.bisect_left(self.before, q * self.total, 1)
+        return self.sorted[min(k, len(self.sorted)) - 1]
+
+    def colour(self, duration):
+        return ramp(self.position(duration))
+
+
+def ramp(x):
+    """The colour at x in [0, 1] along RAMP."""
+    x = min(max(x, 0.0), 1.0) * (len(RAMP) - 1)
+    i = min(int(x), len(RAMP) - 2)
+    f = x - i
+    a, b = RAMP[i], RAMP[i + 1]
+    return tuple(round(p + (q - p) * f) for p, q in zip(a, b))
 
 
 def nice_step(span, ticks):
@@ -84,6 +135,7 @@ def load_trace(path):
 
 
 def draw(events, width, title):
+    Image, ImageDraw, ImageFont = pillow()
     names = {e["tid"]: e["args"]["name"] for e in events if e.get("name") == "thread_name"}
     spans = [e for e in events if e.get("ph") == "X"]
     counters = sorted(
@@ -95,14 +147,13 @@ def draw(events, width, title):
     t0 = min(e["ts"] for e in spans)
     t1 = max(e["ts"] + e["dur"] for e in spans)
     items = [e for e in spans if e["name"] == "work item"]
-    durations = sorted(e["dur"] for e in items)
-    median = durations[len(durations) // 2] if durations else 0.0
+    scale = ItemScale([e["dur"] for e in items])
 
     font = ImageFont.load_default()
     left, right, top = 90, 20, 34
     row = 16 if len(tids) <= 40 else 8
     counter_h = 70
-    legend_h = 40
+    legend_h = 56
     height = top + row * len(tids) + 30 + counter_h + legend_h
     image = Image.new("RGB", (width, height), BACKGROUND)
     d = ImageDraw.Draw(image)
@@ -126,7 +177,11 @@ def draw(events, width, title):
         y0, y1 = top + i * row + 1, top + (i + 1) * row - 2
         x0, x1 = x_of(e["ts"]), x_of(e["ts"] + e["dur"])
         if e["name"] == "work item":
-            colour = item_colour(e["dur"], median)
+            colour = scale.colour(e["dur"])
+            # A hairline of background between neighbours wide enough to
+            # keep one, so that two alike items still read as two.
+            if x1 - x0 >= 3:
+                x1 -= 1
         else:
             colour = phase_colour(e["name"])
         d.rectangle([x0, y0, max(x1, x0 + 0.5), y1], fill=colour)
@@ -152,13 +207,30 @@ def draw(events, width, title):
         d.rectangle([x, y, x + 12, y + 10], fill=colour)
         d.text((x + 16, y - 1), name, fill=INK, font=font)
         x += 22 + 7 * len(name)
+    # The work items' key: the ramp, with the item times at which 0, 25,
+    # 50, 75 and 100% of the items' time is spent.
     y += 16
-    x = left
-    for label, ratio in (("work item: median or less", 1.0), ("3x", 3.0), ("10x the median", 10.0)):
-        d.rectangle([x, y, x + 12, y + 10], fill=item_colour(ratio * median, median))
-        d.text((x + 16, y - 1), label, fill=INK, font=font)
-        x += 22 + 7 * len(label)
+    d.text((left, y - 1), "work item:", fill=INK, font=font)
+    x, bar = left + 80, 400
+    for k in range(bar):
+        d.line([(x + k, y), (x + k, y + 10)], fill=ramp(k / (bar - 1)))
+    for q in (0.0, 0.25, 0.5, 0.75, 1.0):
+        label = duration_label(scale.quantile(q))
+        width = d.textlength(label, font=font)
+        d.text((x + q * (bar - width), y + 12), label, fill=INK, font=font)
+    d.text(
+        (x + bar + 12, y - 1),
+        "coloured by the share of all items' time spent in shorter items (0, 25, 50, 75, 100%)",
+        fill=INK,
+        font=font,
+    )
     return image
+
+
+def duration_label(us):
+    if us >= 1e3:
+        return f"{us / 1e3:.3g} ms"
+    return f"{us:.3g} us"
 
 
 def main():

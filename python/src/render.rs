@@ -107,7 +107,10 @@ fn edits(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Edit>> {
                 .extract()
                 .map_err(|_| error("set: keys must be key paths such as \"camera.fov\"".into()))?;
             let value = toml_value(&v, &path)?;
-            out.push(Edit { path, value });
+            out.push(Edit {
+                path,
+                value: Some(value),
+            });
         }
         return Ok(out);
     }
@@ -274,7 +277,7 @@ pub fn render(
     };
     overrides
         .check()
-        .map_err(|(field, message)| error(format!("{field}: {message}")))?;
+        .map_err(|bad| error(format!("{}={}: {}", bad.field, bad.value, bad.message)))?;
     let edits = edits(set)?;
     let pool = Threads::new(threads)?;
     let passes = count(passes, "passes", 1)?;
@@ -295,6 +298,19 @@ pub fn render(
     let window = crop
         .map(|text| Window::crop(&text, s.width, s.height).map_err(|e| error(format!("crop: {e}"))))
         .transpose()?;
+    // Weighed before the film is made: a size past the machine's memory is
+    // an exception naming it, not an aborted interpreter.
+    let (w, h) = window
+        .as_ref()
+        .map_or((s.width, s.height), |w| (w.width(), w.height()));
+    strata::render::film::check_memory(w, h, !aovs.is_empty(), true).map_err(|m| {
+        let given = if window.is_some() {
+            "crop"
+        } else {
+            "width, height"
+        };
+        error(format!("{given}: {m}"))
+    })?;
     let opts = RenderOptions {
         threads: pool.count(),
         slice: SliceSpec::WHOLE,

@@ -25,15 +25,36 @@ use strata::rays::file::{encode_rays, encode_triangles};
 use strata::scene::load_mesh_scene;
 use strata::system::memory::peak_rss_bytes;
 
+/// The columns of the table `strata bench` prints.
+const COLUMNS: [(&str, &str); 12] = [
+    ("mesh", "the mesh file"),
+    ("tris", "its triangles"),
+    ("build s", "seconds to build strata's BVH"),
+    ("B/tri", "bytes per triangle that tracing reads: nodes and leaf blocks"),
+    ("peak/tri", "how far memory rose while loading and building, per triangle"),
+    ("query", "closest: the nearest hit; occlusion: any hit"),
+    (
+        "rays",
+        "coherent: a pixel's 8 lens samples of a camera facing the mesh; incoherent: random chords of its bounding sphere",
+    ),
+    ("mode", "single: one ray at a time; packet: packets of 8"),
+    ("thr", "threads"),
+    ("Mrays/s", "strata's millions of rays per second (median of --repeats)"),
+    ("Embree", "Embree's on the same rays (docs/embree.md); - without it"),
+    ("ratio", "strata's Mrays/s over Embree's"),
+];
+
 #[derive(Debug, Args)]
+#[command(after_help = "Every column of the table: strata bench --help.")]
+#[command(after_long_help = format!("The table's columns:\n{}", strata::experiment::column_key(&COLUMNS)))]
 pub struct BenchArgs {
     /// Meshes (OBJ, glTF, GLB or PLY); default: every mesh in assets/.
     pub meshes: Vec<PathBuf>,
     /// Packets of 8 rays per ray set (the single rows trace them ray by ray).
-    #[arg(long = "batches", value_name = "N", default_value_t = 50_000)]
+    #[arg(long = "batches", value_name = "N", default_value_t = 50_000, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub packets: usize,
     /// Timed runs per row; the median is reported.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub repeats: usize,
     /// The "all threads" column (default: every core).
     #[arg(long)]

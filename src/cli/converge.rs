@@ -5,11 +5,29 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
+use strata::experiment::column_key;
 use strata::experiment::converge::{self, Point, METHODS};
 use strata::output::chart::write_svg;
 use strata::scene::{load_scene, RenderOverrides};
 
+/// The columns of the table `strata converge` prints (and of its CSV).
+const COLUMNS: [(&str, &str); 5] = [
+    ("method", "the sampling method (docs/converge.md)"),
+    ("spp", "samples per pixel of the render"),
+    ("seconds", "median wall time of its renders (--repeats)"),
+    (
+        "RMSE",
+        "root mean square error against the reference, over pixels and channels",
+    ),
+    (
+        "relMSE",
+        "relative MSE: the mean of (value - reference)^2 / (reference^2 + 0.01)",
+    ),
+];
+
 #[derive(Debug, Args, Clone)]
+#[command(after_help = "Every column of the table: strata converge --help.")]
+#[command(after_long_help = format!("The table's columns:\n{}", column_key(&COLUMNS)))]
 pub struct ConvergeArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
@@ -19,10 +37,10 @@ pub struct ConvergeArgs {
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a rendered reference (keep it 16 times --max-spp
     /// or more, or the error curves flatten at the reference's own noise).
-    #[arg(long, default_value_t = converge::DEFAULT_REFERENCE_SPP)]
+    #[arg(long, default_value_t = converge::DEFAULT_REFERENCE_SPP, value_parser = clap::value_parser!(u32).range(1..))]
     pub reference_spp: u32,
     /// Largest spp measured (powers of two from 1).
-    #[arg(long, default_value_t = converge::DEFAULT_MAX_SPP)]
+    #[arg(long, default_value_t = converge::DEFAULT_MAX_SPP, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_spp: u32,
     /// Output CSV: method, spp, seconds, RMSE, relative MSE.
     #[arg(long, default_value = "converge.csv")]
@@ -37,7 +55,7 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub height: Option<u32>,
     /// Renders per point; the median time is reported (machines are noisy).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeats: u32,
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
@@ -60,9 +78,6 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
     };
     let (scene, _) = load_scene(&args.scene, &overrides, BuildQuality::Auto)?;
     let (w, h) = (scene.settings.width, scene.settings.height);
-    if args.max_spp == 0 || args.reference_spp == 0 {
-        return Err(InputError::new("<command line>", "--max-spp", "must be at least 1").into());
-    }
     let reference = match &args.reference {
         Some(path) => {
             let (pixels, rw, rh) =

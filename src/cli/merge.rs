@@ -4,12 +4,14 @@ use super::render::is_partial_path;
 use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
-use strata::error::InputError;
+use strata::error::{InputError, COMMAND_LINE};
 use strata::output::atomic::check_target;
 use strata::output::image::write_image;
-use strata::partial::format::{read_partial, write_partial};
+use strata::partial::format::{read_partial, write_partial, PIXEL_BYTES};
 use strata::partial::merge::{merge_partials, MergeRules};
+use strata::render::film::render_bytes_per_pixel;
 use strata::render::Warning;
+use strata::system::budget::bytes_text;
 
 #[derive(Debug, Args, Clone)]
 pub struct MergeArgs {
@@ -43,6 +45,7 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
     };
     check_target(&args.output, extensions)
         .map_err(|e| InputError::new("<command line>", "--output", e))?;
+    check_memory(&args.parts, !partial_output)?;
     let mut parts = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
         let part = read_partial(path).map_err(|e| InputError::file(path, e))?;
@@ -89,4 +92,36 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// Whether merging `parts` fits in this machine's memory, weighed before
+/// any is read: a merge holds every part's film at once (as many bytes
+/// as its file, less a header), and with `image` the image made from them.
+fn check_memory(parts: &[PathBuf], image: bool) -> Result<(), CliError> {
+    // A file that cannot be read is named when it is read.
+    let lengths: Vec<u64> = parts
+        .iter()
+        .filter_map(|p| std::fs::metadata(p).ok())
+        .map(|m| m.len())
+        .collect();
+    let films: u128 = lengths.iter().map(|&l| u128::from(l)).sum();
+    let largest = lengths.iter().max().copied().unwrap_or(0);
+    let pixels = u128::from(largest / PIXEL_BYTES);
+    let per_pixel = render_bytes_per_pixel(false, true) - render_bytes_per_pixel(false, false);
+    let need = films
+        + if image {
+            pixels * u128::from(per_pixel)
+        } else {
+            0
+        };
+    let what = format_args!(
+        "merging {}, whose films ({}) are held at once{},",
+        super::count(parts.len(), "part", "parts"),
+        bytes_text(films),
+        if image { " with the image" } else { "" }
+    );
+    strata::system::budget::check(need, what).map_err(|m| {
+        let advice = "; merge a few at a time into .strata parts (-o a.strata), then merge those";
+        InputError::new(COMMAND_LINE, "PARTS", format!("{m}{advice}")).into()
+    })
 }

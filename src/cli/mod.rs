@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod converge;
 pub mod cpu;
+pub mod flags;
 pub mod merge;
 pub mod progress;
 pub mod rays;

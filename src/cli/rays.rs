@@ -19,7 +19,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
-use strata::rays::file::{encode_rays, write_file};
+use strata::math::Ray;
+use strata::rays::file::{encode_rays, write_file, RAY_BYTES};
 use strata::rays::{generate, topology::Topology, RayKind};
 use strata::scene::load_mesh_scene;
 
@@ -84,14 +85,21 @@ struct Description {
 pub fn run(args: RaysArgs) -> Result<(), CliError> {
     super::writable(&args.output, "--output", &[])?;
     let start = Instant::now();
-    let (scene, _) = load_mesh_scene(&args.mesh, BuildQuality::Fastest)?;
     let kinds: Vec<RayKind> = match args.kind {
         KindArg::One(kind) => vec![kind],
         KindArg::All => RayKind::ALL.to_vec(),
     };
+    let total = check_memory(args.n, kinds.len())?;
+    let (scene, _) = load_mesh_scene(&args.mesh, BuildQuality::Fastest)?;
     // Ray generation aims at triangles by their file-order index.
     let triangles = scene.geometry.file_order_triangles();
-    let mut rays = Vec::with_capacity(args.n * kinds.len());
+    let mut rays = Vec::new();
+    rays.try_reserve_exact(total).map_err(|_| {
+        InputError::flag(
+            format!("-n {}", args.n),
+            format!("cannot allocate {total} rays"),
+        )
+    })?;
     let mut groups = Vec::new();
     for kind in kinds {
         let set = generate(kind, &triangles, args.n, args.seed)
@@ -135,4 +143,25 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
         );
     }
     Ok(())
+}
+
+/// Whether `n` rays of each of `kinds` kinds fit in this machine's memory,
+/// weighed before the mesh is read: the rays, one kind's set as it is
+/// made, and the file's bytes. The rays in all.
+fn check_memory(n: usize, kinds: usize) -> Result<usize, CliError> {
+    let flag = || format!("-n {n}");
+    if u32::try_from(n).is_err() {
+        let message = format!("at most {} rays of a kind", u32::MAX);
+        return Err(InputError::flag(flag(), message).into());
+    }
+    let ray = std::mem::size_of::<Ray>() as u128;
+    let total = n as u128 * kinds as u128;
+    let need = total * (ray + RAY_BYTES as u128) + n as u128 * ray;
+    let what = format_args!(
+        "writing {total} rays ({} bytes each, and the file's {RAY_BYTES})",
+        std::mem::size_of::<Ray>()
+    );
+    strata::system::budget::check(need, what).map_err(|m| InputError::flag(flag(), m))?;
+    // Within the memory, so within usize.
+    Ok(total as usize)
 }

@@ -136,6 +136,11 @@ const SEED_SCENE_NAME: &str = "scenes/seed.toml (built in)";
 
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let (slice, partial_output) = check_outputs(&args)?;
+    // Flags that size the image alone are weighed before the scene is read.
+    if let (Some(w), Some(h), None) = (args.settings.width, args.settings.height, &args.crop) {
+        check_image_memory(&args, w, h)
+            .map_err(|m| InputError::flag(format!("--width {w} --height {h}"), m))?;
+    }
     let epoch = std::time::Instant::now();
     let (scene, timings) = load(&args)?;
     super::warn(&scene.warnings);
@@ -163,6 +168,10 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         ),
         None => None,
     };
+    let (w, h) = window
+        .as_ref()
+        .map_or((s.width, s.height), |w| (w.width(), w.height()));
+    check_image_memory(&args, w, h).map_err(|m| image_size_error(&args, m))?;
     let full = slice.samples(s.spp);
     // The header holds the scene's fingerprint, a hash of every triangle:
     // computed only when a .strata file (output or checkpoint) is written.
@@ -171,6 +180,11 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let (initial, resume_from) = match &header {
         Some(header) => resume(&args, header)?,
         None => (None, None),
+    };
+    // Made here, where its failure is an error, unless a checkpoint gave it.
+    let initial = match initial {
+        Some(film) => film,
+        None => Film::try_new(w, h).map_err(|m| image_size_error(&args, m))?,
     };
     let image = Output {
         args: &args,
@@ -212,7 +226,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let outcome = render(
         &scene,
         &opts,
-        initial,
+        Some(initial),
         (RenderBar::new(args.quiet), checkpoints),
     );
     super::warn(&outcome.warnings);
@@ -246,6 +260,57 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// Whether a render of a `width` × `height` window, with the AOVs and
+/// output that `args` ask for, fits in this machine's memory.
+fn check_image_memory(args: &RenderArgs, width: u32, height: u32) -> Result<(), String> {
+    let image = !is_partial_path(&args.output);
+    strata::render::film::check_memory(width, height, !args.aov.is_empty(), image)
+}
+
+/// An error about the image's size, naming where the size came from: the
+/// crop, the flags or `--set` edits that gave a side, or else the scene
+/// file's `[render]` keys at their line (or the model file, whose scene
+/// strata made).
+fn image_size_error(args: &RenderArgs, message: String) -> InputError {
+    use strata::scene::parse::within;
+    if let Some(crop) = &args.crop {
+        return InputError::flag(format!("--crop {crop}"), message);
+    }
+    let mut given = Vec::new();
+    let mut written = Vec::new();
+    for (field, flag) in [
+        ("width", args.settings.width),
+        ("height", args.settings.height),
+    ] {
+        let key = format!("render.{field}");
+        let edit = args
+            .set
+            .iter()
+            .rev()
+            .find(|e| within(&key, &e.path) || within(&e.path, &key));
+        match (flag, edit) {
+            (Some(v), _) => given.push(format!("--{field} {v}")),
+            (None, Some(e)) => given.push(e.written()),
+            (None, None) => written.push(key),
+        }
+    }
+    if !given.is_empty() {
+        return InputError::flag(given.join(" "), message);
+    }
+    let path = args.scene.as_deref();
+    if path.is_some_and(is_model_path) {
+        return InputError::file(path.unwrap_or(std::path::Path::new("")), message);
+    }
+    let text = match path {
+        Some(p) => std::fs::read_to_string(p).unwrap_or_default(),
+        None => SEED_SCENE.to_string(),
+    };
+    let map = strata::scene::source_map::SourceMap::new(&text);
+    let written: Vec<String> = written.into_iter().filter(|k| map.contains(k)).collect();
+    let line = written.first().and_then(|k| map.line_of(k));
+    InputError::new(scene_name(path), written.join(", "), message).on_line(line)
 }
 
 /// Warn about `path` the first time only.

@@ -8,11 +8,12 @@ use std::sync::Arc;
 use std::time::Instant;
 use strata::accel::BuildQuality;
 use strata::error::InputError;
+use strata::experiment::column_key;
 use strata::experiment::predict::{ProcessCosts, RunCosts};
 use strata::experiment::scaling::{
     chart_panels, csv, predict_rows, predicted_scaling_rows, prediction_table, rows, table,
     thread_counts, time_processes, time_threads, time_threads_with, Mode, ScratchDir, SliceJob,
-    Timing,
+    Timing, PREDICTION_COLUMNS, TABLE_COLUMNS,
 };
 use strata::output::chart::write_svg;
 use strata::render::timeline::Timeline;
@@ -29,12 +30,14 @@ pub enum ScheduleChoice {
 }
 
 #[derive(Debug, Args, Clone)]
+#[command(after_help = "Every column of the tables: strata scaling --help.")]
+#[command(after_long_help = columns_help())]
 pub struct ScalingArgs {
     /// Scene file (TOML), rendered with its own settings. Default: the
     /// built-in seed scene.
     pub scene: Option<PathBuf>,
     /// Largest thread count; the run measures 1, 2, 4, … and this. Default: all cores.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub max_threads: Option<usize>,
     /// Renders per configuration; the median is reported.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
@@ -72,9 +75,20 @@ pub struct ScalingArgs {
     /// Largest thread count --predict simulates.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub predict_max: u32,
-    /// Print only the table.
+    /// Print only the tables, without the progress and the key to the
+    /// --predict table's columns.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// What `strata scaling --help` says under the flags: every column of
+/// both tables.
+fn columns_help() -> String {
+    format!(
+        "The table's columns:\n{}\nThe --predict table's columns (docs/scaling.md, \"Past this machine's cores\"):\n{}",
+        column_key(&TABLE_COLUMNS),
+        column_key(&PREDICTION_COLUMNS)
+    )
 }
 
 pub fn run(args: ScalingArgs) -> Result<(), CliError> {
@@ -87,15 +101,9 @@ pub fn run(args: ScalingArgs) -> Result<(), CliError> {
         &overrides(&args),
         BuildQuality::Auto,
     )?;
-    let max = match args.max_threads {
-        Some(0) => {
-            return Err(
-                InputError::new("<command line>", "--max-threads", "must be at least 1").into(),
-            )
-        }
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let max = args
+        .max_threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let counts = thread_counts(max);
     let mut modes = match args.schedule {
         ScheduleChoice::Slices => vec![Mode::Threads(Schedule::Slices)],
@@ -338,6 +346,9 @@ fn predict(
         );
     }
     print!("{}", prediction_table(&predictions));
+    if !args.quiet {
+        print!("\n{}", column_key(&PREDICTION_COLUMNS));
+    }
     Ok(predictions)
 }
 

@@ -7,3 +7,18 @@ pub mod bench;
 pub mod converge;
 pub mod predict;
 pub mod scaling;
+
+/// A table's columns with what each means, as lines for `--help` or for
+/// printing under the table: each name (or names sharing a meaning)
+/// padded to one width, then its meaning.
+pub fn column_key(columns: &[(&str, &str)]) -> String {
+    let width = columns
+        .iter()
+        .map(|(n, _)| n.chars().count())
+        .max()
+        .unwrap_or(0);
+    columns
+        .iter()
+        .map(|(name, meaning)| format!("  {name:<width$}  {meaning}\n"))
+        .collect()
+}

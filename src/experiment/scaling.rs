@@ -24,7 +24,6 @@
 //! render across processes.
 
 use super::predict::{predict_processes, predict_threads, ProcessCosts, RunCosts, Split};
-use crate::output::chart::{Panel, Series};
 use crate::partial::merge::{merge_partials, MergeRules};
 use crate::partial::read_partial;
 use crate::render::timeline::Timeline;
@@ -35,6 +34,9 @@ use std::path::{Path, PathBuf};
 use std::process::Child;
 use std::sync::Arc;
 use std::time::Instant;
+
+mod report;
+pub use report::{chart_panels, csv, prediction_table, table, PREDICTION_COLUMNS, TABLE_COLUMNS};
 
 /// 1, 2, 4, … up to `max`, and `max` itself.
 pub fn thread_counts(max: usize) -> Vec<usize> {
@@ -375,164 +377,6 @@ pub fn predicted_scaling_rows(predictions: &[PredictionRow]) -> Vec<ScalingRow> 
     out
 }
 
-/// The prediction table `strata scaling --predict` prints.
-pub fn prediction_table(predictions: &[PredictionRow]) -> String {
-    let mut s = format!(
-        "{:>7} {:>8} {:>8} {:>9} {:>10} {:>9} {:>7} {:>8} {:>7} {:>9} {:>8} {:>7}\n",
-        "threads",
-        "slices",
-        "regions",
-        "processes",
-        "end-to-end",
-        "imbalance",
-        "serial",
-        "measured",
-        "error",
-        "item-cost",
-        "adjusted",
-        "error"
-    );
-    let x = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.2}x"));
-    let pct = |v: Option<f64>| v.map_or("-".into(), |e| format!("{:+.1}%", 100.0 * e));
-    for p in predictions {
-        s += &format!(
-            "{:>7} {:>7.2}x {:>7.2}x {:>9} {:>9.2}x {:>8.1}% {:>6.1}% {:>8} {:>7} {:>9} {:>8} {:>7}\n",
-            p.threads,
-            p.slices,
-            p.regions,
-            x(p.processes),
-            p.end_to_end,
-            100.0 * p.imbalance,
-            100.0 * p.serial_share,
-            x(p.measured),
-            pct(p.error),
-            x(p.item_slowdown),
-            x(p.adjusted),
-            pct(p.adjusted_error),
-        );
-    }
-    s
-}
-
-/// The chart `strata scaling` draws: speedup and efficiency against
-/// threads, each with the ideal as a reference line, a line per schedule
-/// from wall time and, where measured, one from the CPU critical path.
-pub fn chart_panels(title: &str, rows: &[ScalingRow]) -> Vec<Panel> {
-    let mut modes: Vec<&str> = Vec::new();
-    let mut counts: Vec<usize> = Vec::new();
-    for r in rows {
-        if !modes.contains(&r.mode.as_str()) {
-            modes.push(&r.mode);
-        }
-        if !counts.contains(&r.threads) {
-            counts.push(r.threads);
-        }
-    }
-    counts.sort_unstable();
-    // The ideal at every measured count, so that a line on it is seen to be.
-    let ideal = |value: &dyn Fn(f64) -> f64| {
-        let points = counts.iter().map(|&t| (t as f64, value(t as f64)));
-        Series::reference("ideal", points.collect())
-    };
-    let lines = |value: &dyn Fn(&ScalingRow, f64) -> f64| {
-        let mut series = Vec::new();
-        for mode in &modes {
-            let of = |pick: &dyn Fn(&ScalingRow) -> Option<f64>| -> Vec<(f64, f64)> {
-                rows.iter()
-                    .filter(|r| r.mode == *mode)
-                    .filter_map(|r| Some((r.threads as f64, value(r, pick(r)?))))
-                    .collect()
-            };
-            if mode.ends_with("(predicted)") {
-                series.push(Series::new(mode.to_string(), of(&|r| Some(r.speedup))));
-                continue;
-            }
-            series.push(Series::new(
-                format!("{mode} (wall)"),
-                of(&|r| Some(r.speedup)),
-            ));
-            let cpu = of(&|r| r.cpu_speedup);
-            if !cpu.is_empty() {
-                series.push(Series::new(format!("{mode} (CPU critical path)"), cpu));
-            }
-        }
-        series
-    };
-    let mut speedup = vec![ideal(&|t| t)];
-    speedup.extend(lines(&|_, s| s));
-    let mut efficiency = vec![ideal(&|_| 100.0)];
-    efficiency.extend(lines(&|r, s| 100.0 * s / r.threads as f64));
-    let panel = |title: String, y_label: &str, series| Panel {
-        title,
-        x_label: "threads (or processes)".into(),
-        y_label: y_label.into(),
-        // Predictions reach 64 threads: doublings spaced alike.
-        log_x: counts.last().is_some_and(|&t| t > 16),
-        log_y: false,
-        integer_x: true,
-        series,
-    };
-    vec![
-        panel(format!("speedup: {title}"), "speedup over 1", speedup),
-        panel("efficiency".into(), "efficiency (%)", efficiency),
-    ]
-}
-
-/// The table `strata scaling` prints.
-pub fn table(rows: &[ScalingRow]) -> String {
-    let mut s = format!(
-        "{:<10} {:>7} {:>9} {:>8} {:>10} {:>8} {:>12} {:>11}\n",
-        "schedule",
-        "threads",
-        "seconds",
-        "speedup",
-        "efficiency",
-        "Mrays/s",
-        "cpu-path",
-        "cpu-speedup"
-    );
-    for r in rows {
-        let path = r.cpu_path_s.map_or("-".into(), |x| format!("{x:.3}"));
-        let cpu = r.cpu_speedup.map_or("-".into(), |x| format!("{x:.2}x"));
-        s += &format!(
-            "{:<10} {:>7} {:>9.3} {:>7.2}x {:>9.1}% {:>8.2} {:>12} {:>11}\n",
-            r.mode,
-            r.threads,
-            r.seconds,
-            r.speedup,
-            100.0 * r.efficiency,
-            r.mrays_per_s,
-            path,
-            cpu
-        );
-    }
-    s
-}
-
-/// The CSV `strata scaling` writes: one line per (schedule, threads).
-pub fn csv(rows: &[ScalingRow]) -> String {
-    let mut s = String::from(
-        "schedule,threads,seconds,speedup,efficiency,mrays_per_s,cpu_path_s,cpu_speedup,runs\n",
-    );
-    let opt = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
-    for r in rows {
-        let runs: Vec<String> = r.runs.iter().map(|x| format!("{x:.6}")).collect();
-        s += &format!(
-            "{},{},{:.6},{:.4},{:.4},{:.4},{},{},{}\n",
-            r.mode,
-            r.threads,
-            r.seconds,
-            r.speedup,
-            r.efficiency,
-            r.mrays_per_s,
-            opt(r.cpu_path_s),
-            opt(r.cpu_speedup),
-            runs.join(" ")
-        );
-    }
-    s
-}
-
 /// A scratch directory for process runs, removed on drop.
 pub struct ScratchDir(pub PathBuf);
 
@@ -557,7 +401,6 @@ impl Drop for ScratchDir {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::chart::{legend_text, same_as};
 
     #[test]
     fn thread_counts_double_up_to_the_maximum() {
@@ -594,29 +437,5 @@ mod tests {
         assert!(panels[0].series[0].reference && panels.iter().all(|p| p.integer_x));
         assert_eq!(panels[1].series[0].points, vec![(1.0, 100.0), (2.0, 100.0)]);
         assert_eq!(panels[1].series[1].points, vec![(1.0, 100.0), (2.0, 100.0)]);
-    }
-
-    #[test]
-    fn the_chart_names_schedules_that_scale_alike() {
-        let t = |s: f64| Timing {
-            seconds: s,
-            rays: 1000,
-            cpu: None,
-        };
-        let timings = [vec![t(4.0)], vec![t(2.5)], vec![t(1.6)]];
-        let mut r = rows(Mode::Threads(Schedule::Slices), &[1, 2, 4], &timings);
-        r.extend(rows(Mode::Threads(Schedule::Regions), &[1, 2, 4], &timings));
-        let panels = chart_panels("t", &r);
-        for p in &panels {
-            assert!(p.integer_x && p.series[0].reference);
-            let ideal: Vec<f64> = p.series[0].points.iter().map(|q| q.0).collect();
-            assert_eq!(ideal, [1.0, 2.0, 4.0], "the ideal at every count");
-            let same = same_as(p);
-            assert_eq!(same, [None, None, Some(1)], "{}", p.title);
-            assert_eq!(
-                legend_text(p, 2, &same),
-                "regions (wall) (same as slices (wall))"
-            );
-        }
     }
 }

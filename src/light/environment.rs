@@ -210,6 +210,11 @@ impl std::fmt::Debug for EnvMap {
     }
 }
 
+/// Bytes a map holds per texel as it is made, besides the decoder's own:
+/// the f32 RGB conversion, the texels as read and as scaled, and the
+/// sampling distribution (its function and its cumulative sums).
+const MAP_TEXEL_BYTES: u64 = 3 * 12 + 4 * 4;
+
 impl EnvMap {
     /// A map of `width` × `height` texels (row-major, top row first), each
     /// multiplied by `scale`. Errors name the first texel that is not a
@@ -276,7 +281,12 @@ impl EnvMap {
                 format.extensions_str().first().unwrap_or(&"?").to_uppercase()
             ));
         }
-        let image = image::ImageReader::with_format(std::io::Cursor::new(bytes), format)
+        // Weighed before a texel is decoded; then the decoder may use what
+        // the machine has, not its default 512 MiB (a 16k map is 1.5 GiB).
+        crate::system::budget::check_image("an environment map", bytes, MAP_TEXEL_BYTES)?;
+        let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+        reader.limits(crate::system::budget::decoder_limits());
+        let image = reader
             .decode()
             .map_err(|e| format!("cannot decode: {e}"))?
             .into_rgb32f();
@@ -445,5 +455,17 @@ mod tests {
         let e = EnvMap::new(2, 1, vec![[-1.0, 0.0, 0.0], [0.0; 3]], Vec3::ONE).unwrap_err();
         assert!(e.contains("texel (0, 0)") && e.contains("≥ 0"), "{e}");
         assert!(EnvMap::decode(b"not an image", Vec3::ONE).is_err());
+    }
+
+    /// A header claiming more texels than the machine holds is refused
+    /// before a texel is decoded, with the size and the bytes.
+    #[test]
+    fn a_map_past_the_machines_memory_is_refused_from_its_header() {
+        let hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n\x02\x02";
+        let e = EnvMap::decode(hdr, Vec3::ONE).unwrap_err();
+        assert!(
+            e.starts_with("an environment map of 1000000×1000000 texels") && e.contains("TiB"),
+            "{e}"
+        );
     }
 }

@@ -25,21 +25,23 @@
 //! Reading checks the magic, the version and the header's numbers, then
 //! that the file is exactly as long as the header implies *before*
 //! allocating anything (a corrupt header claiming 10¹² pixels allocates
-//! nothing), then the checksum.
+//! nothing), and that its film fits in the machine's memory (a sparse file
+//! may have any length), then the checksum.
 
 use super::fingerprint::{scene_fingerprint, Hasher64};
-use crate::render::film::{BadSample, Film};
+use crate::render::film::{BadSample, Film, FILM_PIXEL_BYTES};
 use crate::render::SliceSpec;
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
+use crate::system::budget::Budget;
 use std::io::{Read, Write};
 use std::ops::Range;
 use std::path::Path;
 
 pub const MAGIC: [u8; 8] = *b"STRATAPT";
 pub const FORMAT_VERSION: u32 = 1;
-/// Bytes per pixel record: three i128 sums and a u32 count.
-pub const PIXEL_BYTES: u64 = 52;
+/// Bytes per pixel record: three i128 sums and a u32 count, as in memory.
+pub const PIXEL_BYTES: u64 = FILM_PIXEL_BYTES;
 const MAX_VERSION_BYTES: usize = 256;
 
 /// What a partial file says about the render it belongs to.
@@ -385,6 +387,11 @@ pub fn read_partial(path: &Path) -> Result<Partial, String> {
 
 /// Read and verify a partial of `file_len` bytes from `r`.
 pub fn read_partial_from(r: impl Read, file_len: u64) -> Result<Partial, String> {
+    read_within(r, file_len, Budget::of_this_process())
+}
+
+/// [`read_partial_from`] whose film must fit in `budget`.
+fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Partial, String> {
     let mut r = FieldReader {
         inner: r,
         hash: Hasher64::new(),
@@ -439,7 +446,9 @@ pub fn read_partial_from(r: impl Read, file_len: u64) -> Result<Partial, String>
         slice_count,
         samples: n0..n1,
     };
-    if width == 0 || height == 0 {
+    // No render makes an image of no pixels or past MAX_SIDE on a side.
+    let max = crate::scene::settings::MAX_SIDE;
+    if width == 0 || height == 0 || width > max || height > max {
         return Err(format!("corrupt header: image size {width}x{height}"));
     }
     if slice_count == 0 || s0 >= s1 || s1 > slice_count {
@@ -478,7 +487,12 @@ pub fn read_partial_from(r: impl Read, file_len: u64) -> Result<Partial, String>
         ));
     }
 
-    let mut film = Film::new(width, height);
+    // The length may be a sparse file's: the film is weighed against the
+    // machine's memory, and made where a failure is an error.
+    let need = pixels * u128::from(FILM_PIXEL_BYTES);
+    let what = format_args!("its {width}×{height} film ({FILM_PIXEL_BYTES} bytes a pixel)");
+    crate::system::budget::check_against(budget, need, what)?;
+    let mut film = Film::try_new(width, height)?;
     film.invalid = invalid;
     film.clamped = clamped;
     film.first_invalid = first_invalid;
@@ -589,13 +603,40 @@ mod tests {
     #[test]
     fn a_huge_claimed_size_allocates_nothing() {
         let mut p = sample_partial();
-        p.header.width = 1_000_000;
-        p.header.height = 1_000_000;
+        p.header.width = 32768;
+        p.header.height = 32768;
         let head = p.header.header_bytes();
         let mut b = head.clone();
         b.extend_from_slice(&[0u8; 32]);
         let e = read(&b).unwrap_err();
         assert!(e.contains("truncated"), "{e}");
+        // Past the largest image a render makes: corrupt, whatever the length.
+        p.header.width = 1_000_000;
+        let mut b = p.header.header_bytes();
+        b.extend_from_slice(&[0u8; 32]);
+        let e = read(&b).unwrap_err();
+        assert!(
+            e.contains("corrupt header: image size 1000000x32768"),
+            "{e}"
+        );
+    }
+
+    /// A length that matches the header (a sparse file's may, at any size)
+    /// is not enough: the film must fit in the memory there is, and the
+    /// error says so before allocating it.
+    #[test]
+    fn a_film_past_the_memory_there_is_is_refused_before_it_is_made() {
+        let mut p = sample_partial();
+        (p.header.width, p.header.height) = (1000, 1000);
+        let mut b = p.header.header_bytes();
+        b.extend_from_slice(&[0u8; 32]);
+        let claimed = b.len() as u64 + 1000 * 1000 * PIXEL_BYTES + 8;
+        let budget = Some(Budget::given(1 << 20));
+        let e = read_within(&b[..], claimed, budget).unwrap_err();
+        assert!(
+            e.starts_with("its 1000×1000 film (52 bytes a pixel) needs 49.6 MiB, more than the 1.0 MiB allowed"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -92,6 +92,41 @@ fn fixed(v: f32) -> i128 {
     }
 }
 
+/// Bytes of each pixel's record in a film: three i128 sums and a u32 count.
+pub const FILM_PIXEL_BYTES: u64 = (size_of::<[i128; 3]>() + size_of::<u32>()) as u64;
+
+/// Bytes a render holds at once per pixel of its window: the film's sums
+/// and a pass's ([`PixelSum`]); with `aovs`, their sums
+/// ([`AovSum`](super::aov::AovSum)) and seven channels of f32, made and
+/// encoded; with `image`, the image made from the film (linear RGB, its
+/// channels or 8-bit texels, and its encoding), which a `.strata` output
+/// streams instead. What [`check_memory`] weighs.
+pub fn render_bytes_per_pixel(aovs: bool, image: bool) -> u64 {
+    let sums = FILM_PIXEL_BYTES + size_of::<PixelSum>() as u64;
+    let rgb = size_of::<Vec3>() as u64;
+    let aov = size_of::<super::aov::AovSum>() as u64 + rgb + 2 * 7 * 4;
+    sums + if aovs { aov } else { 0 } + if image { 3 * rgb } else { 0 }
+}
+
+/// Whether a render of a `width` × `height` window fits in this process's
+/// memory ([`crate::system::budget`]), before its film is allocated: the
+/// message says the image, its bytes and the machine's memory.
+pub fn check_memory(width: u32, height: u32, aovs: bool, image: bool) -> Result<(), String> {
+    let per_pixel = render_bytes_per_pixel(aovs, image);
+    let need = u128::from(width) * u128::from(height) * u128::from(per_pixel);
+    let what = if aovs {
+        "its sums, AOVs and image"
+    } else if image {
+        "its sums and image"
+    } else {
+        "its sums"
+    };
+    crate::system::budget::check(
+        need,
+        format_args!("a {width}×{height} image ({per_pixel} bytes a pixel: {what})"),
+    )
+}
+
 impl Film {
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
@@ -104,6 +139,22 @@ impl Film {
             first_invalid: None,
             clamped: 0,
         }
+    }
+
+    /// [`Film::new`], or an error where its memory cannot be had (an
+    /// allocation failure is an error, never an abort).
+    pub fn try_new(width: u32, height: u32) -> Result<Self, String> {
+        let n = width as usize * height as usize;
+        let what = format!("the film of a {width}×{height} image");
+        Ok(Self {
+            width,
+            height,
+            sums: crate::system::budget::try_filled(n, [0; 3], &what)?,
+            counts: crate::system::budget::try_filled(n, 0, &what)?,
+            invalid: 0,
+            first_invalid: None,
+            clamped: 0,
+        })
     }
 
     pub fn pixel_count(&self) -> usize {
@@ -252,6 +303,20 @@ mod tests {
         assert_eq!(f1, f2);
         let exact: f64 = values.iter().map(|v| v.x as f64).sum::<f64>() / 1000.0;
         assert!((f1.mean(0).x as f64 - exact).abs() < 1e-6);
+    }
+
+    /// A render's pixels are weighed before its film is made, and a film
+    /// that cannot be had is an error naming it.
+    #[test]
+    fn memory_is_weighed_before_a_film_is_made() {
+        assert!(render_bytes_per_pixel(false, false) >= FILM_PIXEL_BYTES);
+        assert!(render_bytes_per_pixel(true, true) > render_bytes_per_pixel(false, true));
+        assert!(check_memory(64, 64, true, true).is_ok());
+        let e = check_memory(u32::MAX, u32::MAX, false, true).unwrap_err();
+        assert!(e.starts_with("a 4294967295×4294967295 image ("), "{e}");
+        assert_eq!(Film::try_new(3, 2), Ok(Film::new(3, 2)));
+        let e = Film::try_new(u32::MAX, u32::MAX).unwrap_err();
+        assert!(e.contains("cannot allocate the film"), "{e}");
     }
 
     #[test]

@@ -323,7 +323,7 @@ pub fn render(
         }
     }
     if let (Some(t), Some(lists)) = (timeline, item_lists) {
-        t.add_items(threads, lists.into_items());
+        t.add_items(&window, threads, lists.into_items());
     }
     observer.finished();
     let seconds = start.elapsed().as_secs_f64();

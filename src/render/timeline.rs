@@ -13,6 +13,7 @@
 //! phase's share of the wall time. `experiment::predict` replays the work
 //! items' costs on other thread counts.
 
+use super::window::Window;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::ops::Range;
@@ -36,6 +37,71 @@ impl ItemSpan {
     pub fn seconds(&self) -> f64 {
         self.end_ns.saturating_sub(self.start_ns) as f64 * 1e-9
     }
+
+    /// The item's pixels as rectangles of the image, in order: one where
+    /// they lie in one row, more where they wrap past the window's edge.
+    pub fn rects(&self, window: &Window) -> Vec<PixelRect> {
+        pixel_rects(window, &self.pixels)
+    }
+}
+
+/// A rectangle of pixels in the image's coordinates (from its top-left
+/// corner, as `--crop` and `--debug-sample` count them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct PixelRect {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl std::fmt::Display for PixelRect {
+    /// `64x1 at (128, 40)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}x{} at ({}, {})",
+            self.width, self.height, self.x, self.y
+        )
+    }
+}
+
+/// "64x1 at (128, 40)", or "36x1 at (64, 0) and 28x1 at (0, 1)".
+pub fn rects_text(rects: &[PixelRect]) -> String {
+    let texts: Vec<String> = rects.iter().map(PixelRect::to_string).collect();
+    texts.join(" and ")
+}
+
+/// The window's row-major pixels `pixels` as at most three rectangles of
+/// the image: the rest of the first row, whole rows, the start of the last.
+pub fn pixel_rects(window: &Window, pixels: &Range<u32>) -> Vec<PixelRect> {
+    let w = window.width().max(1);
+    let (x0, y0) = (window.x.start, window.y.start);
+    let mut out = Vec::new();
+    let mut i = pixels.start;
+    while i < pixels.end {
+        let (col, row) = (i % w, i / w);
+        let rest = pixels.end - i;
+        let rect = if col == 0 && rest >= w {
+            let rows = rest / w;
+            PixelRect {
+                x: x0,
+                y: y0 + row,
+                width: w,
+                height: rows,
+            }
+        } else {
+            PixelRect {
+                x: x0 + col,
+                y: y0 + row,
+                width: (w - col).min(rest),
+                height: 1,
+            }
+        };
+        i += rect.width * rect.height;
+        out.push(rect);
+    }
+    out
 }
 
 /// What the calling thread did, outside the work items.
@@ -95,6 +161,8 @@ struct Spans {
     items: Vec<ItemSpan>,
     phases: Vec<PhaseSpan>,
     threads: usize,
+    /// The window the items' pixel indices count in.
+    window: Option<Window>,
 }
 
 /// Where a render's spans are recorded; times are from `epoch`, which the
@@ -154,11 +222,28 @@ impl Timeline {
         self.phase(Phase::Build, load_ns, load_ns + build.as_nanos() as u64);
     }
 
-    /// Add one render's work items, recorded on `threads` workers.
-    pub fn add_items(&self, threads: usize, items: impl IntoIterator<Item = ItemSpan>) {
+    /// Add one render's work items, recorded on `threads` workers, their
+    /// pixels counted in `window`.
+    pub fn add_items(
+        &self,
+        window: &Window,
+        threads: usize,
+        items: impl IntoIterator<Item = ItemSpan>,
+    ) {
         let mut spans = self.lock();
         spans.threads = spans.threads.max(threads);
+        spans.window = Some(window.clone());
         spans.items.extend(items);
+    }
+
+    /// The window the work items' pixels lie in (the whole image if no
+    /// render said).
+    pub fn window(&self) -> Window {
+        let spans = self.lock();
+        spans.window.clone().unwrap_or_else(|| {
+            let end = spans.items.iter().map(|i| i.pixels.end).max().unwrap_or(0);
+            Window::whole(end.max(1), 1)
+        })
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Spans> {
@@ -192,6 +277,7 @@ impl Timeline {
         let items = self.items();
         let phases = self.phases();
         let threads = self.threads();
+        let window = self.window();
         let mut events: Vec<String> = Vec::with_capacity(items.len() + phases.len() + 64);
         let name = serde_json::to_string(process_name).expect("a string serialises");
         // Every event carries the same six fields, so that a reader may
@@ -231,13 +317,12 @@ impl Timeline {
         }
         for i in &items {
             events.push(format!(
-                r#"{{"name":"work item","cat":"work","ph":"X","ts":{:.3},"dur":{:.3},"pid":1,"tid":{},"args":{{"pass":{},"pixels":"{}..{}","samples":"{}..{}","rays":{}}}}}"#,
+                r#"{{"name":"work item","cat":"work","ph":"X","ts":{:.3},"dur":{:.3},"pid":1,"tid":{},"args":{{"pass":{},"pixels":"{}","samples":"{}..{}","rays":{}}}}}"#,
                 us(i.start_ns),
                 us(i.end_ns.saturating_sub(i.start_ns)),
                 i.thread + 1,
                 i.pass + 1,
-                i.pixels.start,
-                i.pixels.end,
+                rects_text(&i.rects(&window)),
                 i.samples.start,
                 i.samples.end,
                 i.rays
@@ -323,7 +408,7 @@ impl Timeline {
             longest_item_s: longest.seconds(),
             longest_item: LongestItem {
                 pass: longest.pass + 1,
-                pixels: [longest.pixels.start, longest.pixels.end],
+                pixels: longest.rects(&self.window()),
                 thread: longest.thread + 1,
             },
             phases,
@@ -383,8 +468,9 @@ pub struct ThreadTime {
 #[derive(Debug, Clone, Serialize)]
 pub struct LongestItem {
     pub pass: usize,
-    /// The window's pixel indices, half-open.
-    pub pixels: [u32; 2],
+    /// Its pixels as rectangles of the image (x, y, width, height): one,
+    /// or more where the item wraps past the window's edge.
+    pub pixels: Vec<PixelRect>,
     pub thread: usize,
 }
 
@@ -442,14 +528,13 @@ impl TimelineSummary {
         let l = &self.longest_item;
         let _ = writeln!(
             s,
-            "  {} work items: mean {:.3} ms, longest {:.3} ms ({:.1}x the mean: pass {}, pixels {}..{}, worker {})",
+            "  {} work items: mean {:.3} ms, longest {:.3} ms ({:.1}x the mean: pass {}, pixels {}, worker {})",
             self.items,
             self.mean_item_s * 1e3,
             self.longest_item_s * 1e3,
             self.longest_item_s / self.mean_item_s.max(1e-12),
             l.pass,
-            l.pixels[0],
-            l.pixels[1],
+            rects_text(&l.pixels),
             l.thread
         );
         s
@@ -508,7 +593,11 @@ mod tests {
         let t = Timeline::new(Instant::now());
         t.phase(Phase::Load, 0, 1_000);
         t.phase_of_pass(Phase::Pass, Some((0, 0..4)), 1_000, 11_000);
-        t.add_items(2, [item(0, 1_000, 11_000, 10), item(1, 1_000, 3_000, 5)]);
+        t.add_items(
+            &Window::whole(64, 1),
+            2,
+            [item(0, 1_000, 11_000, 10), item(1, 1_000, 3_000, 5)],
+        );
         let s = t.summary().unwrap();
         assert_eq!(s.items, 2);
         assert!((s.threads[0].busy_s - 1e-5).abs() < 1e-12);
@@ -518,5 +607,63 @@ mod tests {
         let json: serde_json::Value = serde_json::from_str(&t.to_chrome_json("x\"y")).unwrap();
         assert!(json["traceEvents"].as_array().unwrap().len() > 3);
         assert!(s.text().contains("worker  2"));
+    }
+
+    /// Issue 62: a work item is named by where its pixels are, not by
+    /// their flat indices: a rectangle of a row, or a row's end and the
+    /// next one's start where it wraps, in the image's coordinates.
+    #[test]
+    fn work_items_are_named_by_their_pixel_rectangles() {
+        let rect = |x, y, width, height| PixelRect {
+            x,
+            y,
+            width,
+            height,
+        };
+        let whole = Window::whole(100, 50);
+        assert_eq!(pixel_rects(&whole, &(0..64)), [rect(0, 0, 64, 1)]);
+        assert_eq!(
+            pixel_rects(&whole, &(64..128)),
+            [rect(64, 0, 36, 1), rect(0, 1, 28, 1)]
+        );
+        // A window narrower than an item: whole rows between the ends.
+        let crop = Window {
+            x: 10..30,
+            y: 5..25,
+            image_width: 100,
+        };
+        let rects = pixel_rects(&crop, &(15..79));
+        assert_eq!(
+            rects,
+            [rect(25, 5, 5, 1), rect(10, 6, 20, 2), rect(10, 8, 19, 1)]
+        );
+        let count: u32 = rects.iter().map(|r| r.width * r.height).sum();
+        assert_eq!(count, 64);
+        assert_eq!(
+            rects_text(&rects[..2]),
+            "5x1 at (25, 5) and 20x2 at (10, 6)"
+        );
+        // The trace and the summary say the same.
+        let t = Timeline::new(Instant::now());
+        t.phase_of_pass(Phase::Pass, Some((0, 0..4)), 0, 20_000);
+        let mut long = item(0, 0, 20_000, 1);
+        long.pixels = 64..128;
+        t.add_items(&whole, 1, [long]);
+        let trace: serde_json::Value = serde_json::from_str(&t.to_chrome_json("x")).unwrap();
+        let events = trace["traceEvents"].as_array().unwrap();
+        let work = events.iter().find(|e| e["name"] == "work item").unwrap();
+        assert_eq!(work["args"]["pixels"], "36x1 at (64, 0) and 28x1 at (0, 1)");
+        let summary = t.summary().unwrap();
+        assert_eq!(
+            summary.longest_item.pixels,
+            [rect(64, 0, 36, 1), rect(0, 1, 28, 1)]
+        );
+        assert!(
+            summary
+                .text()
+                .contains("pixels 36x1 at (64, 0) and 28x1 at (0, 1), worker 1"),
+            "{}",
+            summary.text()
+        );
     }
 }

@@ -71,6 +71,9 @@ pub fn model_scene(
     edits: &[Edit],
     camera: Option<usize>,
 ) -> InputResult<ModelScene> {
+    // The command line's values are its own: checked here, they are
+    // never blamed on the scene text made from them.
+    cli.check().map_err(|bad| bad.on_command_line())?;
     let asset = load_mesh_file(model)?;
     let mut notes = Vec::new();
     let name = model.display();
@@ -98,11 +101,13 @@ pub fn model_scene(
     } else {
         (asset.lights.iter().map(|l| l.to_desc()).collect(), true)
     };
-    let mut size = image_size(
-        cli,
-        &RenderOverrides::default(),
-        chosen.and_then(|c| c.aspect_ratio),
-    );
+    if let (Some(b), false) = (cli.background.filter(|b| *b != [0.0; 3]), own_lights) {
+        let flag = format!("--background {}", super::settings::rgb_text(b));
+        return Err(InputError::flag(flag, made_up_environment(model)));
+    }
+    let aspect = chosen.and_then(|c| c.aspect_ratio);
+    let mut size = image_size(cli, &RenderOverrides::default(), aspect);
+    check_aspect(model, camera.unwrap_or(0), aspect, size)?;
     let mut parts;
     let mut description;
     let bounds = bounds(&asset);
@@ -131,14 +136,17 @@ pub fn model_scene(
             .file_name()
             .ok_or_else(|| InputError::file(model, "is not a file name"))?;
         let text = scene_text(&parts, &file_name.to_string_lossy());
-        // The "scene file" is the model itself, so its mesh resolves to it.
+        // The "scene file" is the model itself, so its mesh resolves to it;
+        // the text is strata's, so no error points at a line of it.
         description = super::parse::parse_edited(model, &text, edits)?;
+        description.source = std::mem::take(&mut description.source).made_up();
         let edited = image_size(cli, &description.render, None);
         if edited == size || edits.is_empty() {
             break;
         }
         size = edited;
     }
+    background_by_edit(model, &description, edits, own_lights)?;
     match (chosen, bounds) {
         (Some(_), _) => {}
         (None, Some((lo, hi))) => notes.push(format!(
@@ -186,6 +194,67 @@ impl ModelScene {
 /// albedo ρ shows ρ.
 pub fn default_lights() -> Vec<LightDesc> {
     vec![LightDesc::constant_environment([1.0; 3])]
+}
+
+/// The advice for a background given to a model strata lights itself:
+/// the light is strata's, so the way out is to colour it, not to drop it.
+fn made_up_environment(model: &Path) -> String {
+    format!(
+        "{} has no lights, so strata lights it with a white environment, which is also what rays that hit nothing see; \
+         to change it, colour that light: --set 'lights[0].radiance=[R, G, B]' (it lights the model too), \
+         or give the scene lights of your own (--save-scene writes it to edit)",
+        model.display()
+    )
+}
+
+/// A background that a `--set` edit gives a model lit by strata's
+/// environment, refused as [`made_up_environment`] says.
+fn background_by_edit(
+    model: &Path,
+    description: &SceneDescription,
+    edits: &[Edit],
+    own_lights: bool,
+) -> InputResult<()> {
+    let environment = description
+        .lights
+        .iter()
+        .any(|l| l.kind == super::description::LightType::Environment);
+    let given = description.render.background.is_some_and(|b| b != [0.0; 3]);
+    if own_lights || !environment || !given {
+        return Ok(());
+    }
+    let key = "render.background";
+    let by = edits
+        .iter()
+        .rev()
+        .find(|e| super::parse::within(key, &e.path) || super::parse::within(&e.path, key));
+    let place = by.map_or_else(
+        || "--background".to_string(),
+        |e| e.written(),
+    );
+    Err(InputError::flag(place, made_up_environment(model)))
+}
+
+/// A model camera's aspect ratio (`aspectRatio` of glTF) that makes the
+/// image too large on one side: named as the file's, not as a `[render]`
+/// key strata wrote.
+fn check_aspect(
+    model: &Path,
+    camera: usize,
+    aspect: Option<f32>,
+    (w, h): (u32, u32),
+) -> InputResult<()> {
+    match aspect {
+        Some(a) if w.max(h) > super::settings::MAX_SIDE => Err(InputError::new(
+            model,
+            format!("camera {camera}"),
+            format!(
+                "its aspect ratio {a} makes the image {w}×{h}, larger than {} pixels on a side; give --width and --height",
+                super::settings::MAX_SIDE
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The image size: the command line's, else the scene's `[render]`, else

@@ -21,6 +21,7 @@
 //! glossy_sampling = "lobe"       # or "uniform"
 //! ```
 
+use crate::error::{InputError, COMMAND_LINE};
 use crate::light::LightSampling;
 use crate::sampling::SamplerKind;
 use glam::Vec3;
@@ -160,10 +161,48 @@ impl RenderSettings {
 pub const MAX_SIDE: u32 = 1 << 15;
 pub const MAX_SPP: u32 = 1 << 22;
 
+/// A value of one layer of settings that no render can use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unusable {
+    /// The `[render]` key: `spp`.
+    pub field: &'static str,
+    /// The value as the command line writes it: `0`, `0.1,0.1,0.1`.
+    pub value: String,
+    pub message: String,
+}
+
+impl Unusable {
+    /// The flag with its value, `--spp 0`: where a command-line value came from.
+    pub fn flag(&self) -> String {
+        format!("--{} {}", self.field.replace('_', "-"), self.value)
+    }
+
+    /// The scene file's key path, `render.spp`.
+    pub fn key(&self) -> String {
+        format!("render.{}", self.field)
+    }
+
+    /// The `--set` edit that gives it, `render.spp=0`.
+    pub fn edit(&self) -> String {
+        format!("{}={}", self.key(), self.value)
+    }
+
+    /// The error of a command-line flag: `<command line>: --spp 0: must be at least 1`.
+    pub fn on_command_line(&self) -> InputError {
+        InputError::new(COMMAND_LINE, self.flag(), &self.message)
+    }
+}
+
 impl RenderOverrides {
-    /// The first value this layer gives that no render can use, as (field,
-    /// message); the field is the `[render]` key (`spp`).
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
+    /// The first value this layer gives that no render can use.
+    pub fn check(&self) -> Result<(), Unusable> {
+        let bad = |field: &'static str, value: String, message: String| {
+            Err(Unusable {
+                field,
+                value,
+                message,
+            })
+        };
         for (value, field) in [
             (self.width, "width"),
             (self.height, "height"),
@@ -172,30 +211,38 @@ impl RenderOverrides {
             (self.reflection_samples, "reflection_samples"),
         ] {
             if value == Some(0) {
-                return Err((field, "must be at least 1".to_string()));
+                return bad(field, "0".into(), "must be at least 1".into());
             }
         }
         for (value, field) in [(self.width, "width"), (self.height, "height")] {
-            if value.is_some_and(|v| v > MAX_SIDE) {
-                return Err((
-                    field,
-                    format!("image larger than {MAX_SIDE} pixels on a side"),
-                ));
+            if let Some(v) = value.filter(|&v| v > MAX_SIDE) {
+                let message = format!("image larger than {MAX_SIDE} pixels on a side");
+                return bad(field, v.to_string(), message);
             }
         }
-        if self.spp.is_some_and(|v| v > MAX_SPP) {
-            return Err(("spp", format!("more than {MAX_SPP} samples per pixel")));
+        if let Some(v) = self.spp.filter(|&v| v > MAX_SPP) {
+            return bad(
+                "spp",
+                v.to_string(),
+                format!("more than {MAX_SPP} samples per pixel"),
+            );
         }
         if let Some(c) = self.background {
             if !c.iter().all(|x| x.is_finite() && *x >= 0.0) {
-                return Err((
-                    "background",
-                    format!("must be finite and not negative, got {c:?}"),
-                ));
+                let message = "must be finite and not negative".to_string();
+                return bad("background", rgb_text(c), message);
             }
         }
         Ok(())
     }
+}
+
+/// A colour as `--background` takes it: `0.1,0.2,0.3`, or `0.1` for a grey.
+pub fn rgb_text(c: [f32; 3]) -> String {
+    if c[0].to_bits() == c[1].to_bits() && c[1].to_bits() == c[2].to_bits() {
+        return c[0].to_string();
+    }
+    format!("{},{},{}", c[0], c[1], c[2])
 }
 
 impl RenderSettings {
@@ -264,17 +311,25 @@ mod tests {
             shadow_samples: Some(0),
             ..Default::default()
         };
-        assert_eq!(zero.check().unwrap_err().0, "shadow_samples");
+        let e = zero.check().unwrap_err();
+        assert_eq!(
+            (e.flag(), e.edit()),
+            (
+                "--shadow-samples 0".into(),
+                "render.shadow_samples=0".into()
+            )
+        );
         let huge = RenderOverrides {
             height: Some(MAX_SIDE + 1),
             ..Default::default()
         };
-        assert_eq!(huge.check().unwrap_err().0, "height");
+        assert_eq!(huge.check().unwrap_err().flag(), "--height 32769");
         let nan = RenderOverrides {
             background: Some([0.0, f32::NAN, 0.0]),
             ..Default::default()
         };
-        assert_eq!(nan.check().unwrap_err().0, "background");
+        let e = nan.check().unwrap_err();
+        assert_eq!((e.field, e.value.as_str()), ("background", "0,NaN,0"));
         assert!(RenderOverrides::default().check().is_ok());
     }
 

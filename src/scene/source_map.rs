@@ -23,6 +23,9 @@ pub struct SourceMap {
     entries: Vec<Entry>,
     /// Byte offset of the start of each line.
     line_starts: Vec<usize>,
+    /// The text was made by strata (the scene of a model file), not
+    /// written by the user: it has keys but no lines to point at.
+    made_up: bool,
 }
 
 impl SourceMap {
@@ -41,6 +44,17 @@ impl SourceMap {
         Self {
             entries,
             line_starts,
+            made_up: false,
+        }
+    }
+
+    /// The same map for text strata made up, which the user never saw:
+    /// its keys stay known (to tell a `--set` edit's keys from the
+    /// text's), but no error points at one of its lines.
+    pub fn made_up(self) -> Self {
+        Self {
+            made_up: true,
+            ..self
         }
     }
 
@@ -53,6 +67,9 @@ impl SourceMap {
     /// written ancestor (a default that the file left out is reported at
     /// the table that left it out).
     pub fn line_of(&self, path: &str) -> Option<usize> {
+        if self.made_up {
+            return None;
+        }
         let mut path = path;
         loop {
             if let Some(e) = self.entries.iter().find(|e| e.path == path) {
@@ -150,6 +167,14 @@ group = [ { plane = { normal = [0.0, 1.0, 0.0] } } ]
         );
         assert_eq!(map.line_at(at("radiance")), 11);
         assert_eq!(map.line_at(0), 1);
+    }
+
+    #[test]
+    fn made_up_text_has_keys_but_no_lines() {
+        let map = SourceMap::new(TEXT).made_up();
+        assert!(map.contains("render.width"));
+        assert_eq!(map.line_of("render.width"), None);
+        assert_eq!(map.line_of("lights[1].radiance"), None);
     }
 
     #[test]

@@ -85,3 +85,45 @@ fn mistyped_commands_and_misplaced_flags_get_a_suggestion() {
     assert!(!help.contains("1000+"), "stale --packets help");
     assert!(help.contains("[possible values: auto, on, off]"), "{help}");
 }
+
+/// Issue 62: a flag far from every real one gets no suggestion (clap's
+/// Jaro similarity offered `--resume` for `--exposure`, `--timeline` for
+/// `--time`), a slip gets one, and a negative count says its least value
+/// instead of advising `-- -4`.
+#[test]
+fn suggestions_are_near_misses_and_negative_counts_name_their_least_value() {
+    let dir = crate::common::temp_dir("flag-words");
+    for (args, far) in [
+        (&["render", "--exposure", "2"][..], "--resume"),
+        (&["render", "--time"][..], "--timeline"),
+    ] {
+        let o = strata(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let e = stderr(&o);
+        assert!(e.contains(&format!("'{}'", args[1])), "{args:?}: {e}");
+        assert!(!e.contains(far) && !e.contains("tip:"), "{args:?}: {e}");
+    }
+    let o = strata(&dir, &["render", "--shadow-sample", "2"]);
+    assert!(
+        stderr(&o).contains("a similar argument exists: '--shadow-samples'"),
+        "{}",
+        stderr(&o)
+    );
+    for (args, least) in [
+        (&["render", "--spp", "-4"][..], 1),
+        (&["render", "--width", "-100"][..], 1),
+        (&["render", "model.glb", "--camera", "-1"][..], 0),
+        (&["render", "--passes", "0"][..], 1),
+        (&["converge", "s.toml", "--max-spp", "-2"][..], 1),
+    ] {
+        let o = strata(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("for '{}", args[args.len() - 2]))
+                && e.contains(&format!("must be at least {least}")),
+            "{args:?}: {e}"
+        );
+        assert!(!e.contains("-- -"), "{args:?}: {e}");
+    }
+}

@@ -145,3 +145,70 @@ fn converge_is_quick_by_default_and_its_standard_output_is_the_table() {
     assert!(e.contains("wrote converge.csv and converge.svg"), "{e}");
     assert!(e.contains("no --reference given"), "{e}");
 }
+
+/// Issue 62: every column a report prints is explained where it prints or
+/// in `--help`: the scaling tables (the prediction's key under it), and
+/// those of converge and bench. And the --predict chart keeps the measured
+/// counts' scale, its predictions past them in a third panel.
+#[test]
+fn every_column_of_a_report_is_explained() {
+    let dir = crate::common::temp_dir("columns");
+    std::fs::write(dir.join("scene.toml"), LIT_SPHERE).unwrap();
+    let o = strata(
+        &dir,
+        &[
+            "scaling",
+            "scene.toml",
+            "--max-threads",
+            "2",
+            "--repeats",
+            "1",
+            "--predict",
+            "--predict-max",
+            "8",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    let help = stdout(&strata(&dir, &["scaling", "--help"]));
+    let explained = |help: &str, column: &str| {
+        help.lines().any(|l| {
+            let l = l.trim_start();
+            l.starts_with(column)
+                || l.split("  ")
+                    .next()
+                    .is_some_and(|n| n.split(", ").any(|c| c == column))
+        })
+    };
+    let headers: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("schedule") || l.starts_with("threads"))
+        .collect();
+    assert_eq!(headers.len(), 2, "{out}");
+    for column in headers.iter().flat_map(|h| h.split_whitespace()) {
+        assert!(explained(&help, column), "scaling --help: {column}");
+    }
+    // The prediction's key, under its table.
+    let key = &out[out.find("\nthreads ").unwrap()..];
+    for column in ["item-cost", "adjusted, error", "imbalance"] {
+        assert!(
+            key.lines().any(|l| l.trim_start().starts_with(column)),
+            "{out}"
+        );
+    }
+    let chart = std::fs::read_to_string(dir.join("scaling.svg")).unwrap();
+    assert!(chart.contains("predicted past 2 threads"), "no third panel");
+    // converge's and bench's tables, by their headers.
+    for (command, header) in [
+        ("converge", "method spp seconds RMSE relMSE"),
+        (
+            "bench",
+            "mesh tris B/tri peak/tri query rays mode thr Mrays/s Embree ratio",
+        ),
+    ] {
+        let help = stdout(&strata(&dir, &[command, "--help"]));
+        for column in header.split_whitespace() {
+            assert!(explained(&help, column), "{command} --help: {column}");
+        }
+    }
+}

@@ -1,5 +1,6 @@
 //! The flags of `strata render` that pipelines reach for, through the real
-//! binary: `--set` equals editing the file, `--crop` equals the window of
+//! binary: `--set` equals editing the file (and with no value removes a
+//! key), `--crop` equals the window of
 //! a full render, EXR headers carry the camera and the render's settings,
 //! `--aov` adds the first hits' albedo, normal and depth as EXR channels,
 //! and a killed `--progressive` render leaves a readable image.
@@ -61,6 +62,58 @@ fn set_equals_editing_the_file_bit_for_bit() {
         assert!(e.contains(needle), "{set}: {e}");
         assert!(!dir.join("x.png").exists());
     }
+}
+
+/// Issue 62: `--set KEY=` removes a key, so that a value another
+/// excludes can take its place: the white environment strata gives a
+/// model turned into a sky map. A key that is not there is named.
+#[test]
+fn set_with_no_value_removes_a_key() {
+    let dir = crate::common::temp_dir("unset");
+    let ball = crate::common::bumpy_sphere_obj(12, 6, 1.0, 0.0);
+    std::fs::write(dir.join("ball.obj"), ball).unwrap();
+    std::fs::copy(scene("sky.hdr"), dir.join("sky.hdr")).unwrap();
+    let mut args = vec![
+        "render",
+        "ball.obj",
+        "--width",
+        "24",
+        "--height",
+        "18",
+        "-q",
+        "-o",
+        "sky.png",
+        "--set",
+        "lights[0].map=\"sky.hdr\"",
+    ];
+    let o = strata(&dir, &args);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("give radiance or map, not both"), "{e}");
+    args.extend(["--set", "lights[0].radiance=", "--save-scene", "saved.toml"]);
+    strata_ok(&dir, &args);
+    assert!(dir.join("sky.png").is_file());
+    let saved = std::fs::read_to_string(dir.join("saved.toml")).unwrap();
+    assert!(saved.contains("map = \"sky.hdr\""), "{saved}");
+    assert!(!saved.contains("radiance"), "{saved}");
+    let o = strata(
+        &dir,
+        &[
+            "render",
+            "ball.obj",
+            "-q",
+            "-o",
+            "x.png",
+            "--set",
+            "lights[0].radiace=",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("--set lights[0].radiace: lights[0] has no key 'radiace' to remove"),
+        "{e}"
+    );
 }
 
 #[test]

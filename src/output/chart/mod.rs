@@ -18,6 +18,9 @@
 //!   one of its panel ([`same_as`]: every point within [`SAME_TOLERANCE`]),
 //!   its legend entry says so, and it is drawn dashed with hollow, larger
 //!   markers so the line beneath shows through.
+//! - **What was not measured looks it.** A series that extends another
+//!   ([`Series::extending`], such as a prediction past the measured
+//!   threads) is drawn in that series' colour, dashed, with hollow markers.
 
 mod legend;
 mod style;
@@ -44,6 +47,12 @@ pub struct Series {
     /// A line to compare against (such as ideal scaling), not a measurement:
     /// drawn grey and dashed, without markers.
     pub reference: bool,
+    /// Not measured but derived (a prediction): drawn dashed, with
+    /// hollow markers.
+    pub extension: bool,
+    /// The label of the series it extends, whose colour and marker it
+    /// takes (if that series is in the chart).
+    pub extends: Option<String>,
 }
 
 impl Series {
@@ -53,6 +62,19 @@ impl Series {
             label: label.into(),
             points,
             reference: false,
+            extension: false,
+            extends: None,
+        }
+    }
+
+    /// A series that extends the one labelled `of`, or with `None` (or a
+    /// label not in the chart) one not measured beside anything: dashed
+    /// either way, in its own colour in the second case.
+    pub fn extending(label: impl Into<String>, of: Option<&str>, points: Vec<(f64, f64)>) -> Self {
+        Self {
+            extension: true,
+            extends: of.map(str::to_string),
+            ..Self::new(label, points)
         }
     }
 

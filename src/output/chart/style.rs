@@ -57,6 +57,10 @@ const DASHES: [Option<(u32, u32)>; 4] = [None, Some((10, 7)), Some((3, 6)), Some
 
 const REFERENCE_DASH: (u32, u32) = (7, 5);
 
+/// The dash of a series that extends another (a prediction): longer than
+/// a reference line's, in the colour of what it extends.
+const EXTENSION_DASH: (u32, u32) = (9, 5);
+
 /// The `i`-th colour of measured series: the palette, then hues a golden
 /// angle apart at alternating lightness.
 pub fn colour(i: usize) -> RGBColor {
@@ -87,12 +91,19 @@ pub fn colour(i: usize) -> RGBColor {
 /// A label's overlay depth is the most earlier series it coincides with in
 /// any one panel: depth 0 is drawn solid with filled markers, deeper ones
 /// dashed with hollow, larger markers.
+///
+/// An extension ([`Series::extension`]) takes the colour and marker of
+/// the series it extends, hollow and dashed; one that extends none in the
+/// chart takes the next colour.
 pub fn styles(panels: &[Panel]) -> Vec<(String, Style)> {
     let mut out: Vec<(String, Style)> = Vec::new();
     let mut depth: Vec<usize> = Vec::new();
     let (mut measured, mut references) = (0, 0);
     for panel in panels {
         for (s, d) in panel.series.iter().zip(overlay_depths(panel)) {
+            if s.extension {
+                continue;
+            }
             if let Some(i) = out.iter().position(|(l, _)| *l == s.label) {
                 depth[i] = depth[i].max(d);
                 continue;
@@ -128,6 +139,30 @@ pub fn styles(panels: &[Panel]) -> Vec<(String, Style)> {
             style.marker_size = 3 + 2 * d as i32;
             style.dash = DASHES[d];
         }
+    }
+    for s in panels.iter().flat_map(|p| &p.series) {
+        if !s.extension || out.iter().any(|(l, _)| *l == s.label) {
+            continue;
+        }
+        let of = |(l, _): &&(String, Style)| s.extends.as_ref() == Some(l);
+        let base = out.iter().find(of).map(|(_, st)| *st);
+        let base = base.unwrap_or_else(|| {
+            measured += 1;
+            Style {
+                colour: colour(measured - 1),
+                marker: MARKERS[(measured - 1) % MARKERS.len()],
+                hollow: false,
+                marker_size: 3,
+                dash: None,
+            }
+        });
+        let style = Style {
+            hollow: true,
+            marker_size: 4,
+            dash: Some(EXTENSION_DASH),
+            ..base
+        };
+        out.push((s.label.clone(), style));
     }
     out
 }
@@ -245,6 +280,30 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Issue 62: a prediction is drawn as the dashed extension of what
+    /// it predicts, in its colour; one with nothing measured beside it
+    /// gets a colour of its own, dashed too.
+    #[test]
+    fn an_extension_is_its_series_dashed() {
+        let extension = |label: &str, of: Option<&str>| {
+            Series::extending(label, of, vec![(4.0, 3.0), (64.0, 40.0)])
+        };
+        let first = panel(vec![
+            extension("a (predicted)", Some("a")),
+            line("a", 0.9),
+            line("b", 0.8),
+        ]);
+        let second = panel(vec![extension("e (predicted)", None)]);
+        let styles = styles(&[first, second]);
+        let of = |label: &str| styles.iter().find(|(l, _)| l == label).unwrap().1;
+        let (a, predicted) = (of("a"), of("a (predicted)"));
+        assert_eq!((predicted.colour, predicted.marker), (a.colour, a.marker));
+        assert!(predicted.dash.is_some() && predicted.hollow && a.dash.is_none());
+        let orphan = of("e (predicted)");
+        assert!(orphan.dash.is_some());
+        assert!(![a.colour, of("b").colour].contains(&orphan.colour));
     }
 
     #[test]

@@ -2,14 +2,16 @@
 //! visible, one-sided emitting primitives that their own shadow rays skip.
 
 use super::Compiler;
-use crate::error::{io_message, InputResult};
+use crate::error::{io_message, InputError, InputResult};
 use crate::geometry::{AnalyticPrim, Shape, NO_TRANSFORM};
 use crate::light::environment::{Emission, EnvMap, Environment};
 use crate::light::Light;
 use crate::material::Material;
+use crate::math::Aabb;
 use crate::scene::description::{LightDesc, LightType, V3};
 use crate::scene::RenderSettings;
 use crate::shape::disk::Disk;
+use crate::shape::plane::Plane;
 use crate::shape::rect::Rect;
 use crate::shape::sphere::Sphere;
 use glam::{Mat3, Vec3};
@@ -258,6 +260,157 @@ impl Compiler<'_> {
     }
 }
 
+/// Where a light can send light, as far as an object's box can tell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Reach {
+    /// Every direction: point, sphere, directional and environment lights.
+    Everywhere,
+    /// The open half-space in front of a one-sided area light.
+    Front { point: Vec3, normal: Vec3 },
+    /// A spot light's cone: its apex, unit axis and half-angle (radians).
+    Cone { apex: Vec3, axis: Vec3, half: f32 },
+}
+
+impl Reach {
+    fn of(light: &Light) -> Reach {
+        match light {
+            Light::Rect { rect, .. } => Reach::Front {
+                point: rect.corner,
+                normal: rect.normal,
+            },
+            Light::Disk { disk, .. } => Reach::Front {
+                point: disk.center,
+                normal: disk.frame.z,
+            },
+            Light::Spot {
+                position,
+                direction,
+                cos_outer,
+                ..
+            } => Reach::Cone {
+                apex: *position,
+                axis: *direction,
+                half: cos_outer.clamp(-1.0, 1.0).acos(),
+            },
+            _ => Reach::Everywhere,
+        }
+    }
+
+    /// Whether some of `b` may lie where the light shines. Conservative:
+    /// a spot's cone is tested against the box's bounding sphere, and
+    /// anything not finite counts as reached.
+    fn reaches_box(&self, b: &Aabb) -> bool {
+        match *self {
+            Reach::Everywhere => true,
+            Reach::Front { point, normal } => {
+                // The box's farthest corner along the normal.
+                let far = (b.min - point) * normal;
+                let far = far.max((b.max - point) * normal);
+                !(far.x + far.y + far.z <= 0.0)
+            }
+            Reach::Cone { apex, axis, half } => {
+                let to = b.center() - apex;
+                let (d, r) = (to.length(), 0.5 * b.diagonal().length());
+                if !(d > r) {
+                    return true;
+                }
+                let off_axis = (axis.dot(to) / d).clamp(-1.0, 1.0).acos();
+                !(off_axis - (r / d).asin() >= half)
+            }
+        }
+    }
+
+    /// Whether the light shines on some of an infinite plane.
+    fn reaches_plane(&self, plane: &Plane) -> bool {
+        let (q, m) = (plane.point, plane.normal);
+        match *self {
+            Reach::Everywhere => true,
+            // A plane not parallel to the light's crosses its front.
+            Reach::Front { point, normal } => {
+                normal.cross(m).length() > 1e-6 || !(normal.dot(q - point) <= 0.0)
+            }
+            Reach::Cone { apex, axis, half } => {
+                let side = m.dot(apex - q);
+                if side == 0.0 {
+                    return true;
+                }
+                // Some direction of the cone heads towards the plane.
+                let towards = if side > 0.0 { -m } else { m };
+                let angle = axis.dot(towards).clamp(-1.0, 1.0).acos();
+                !(angle - half >= std::f32::consts::FRAC_PI_2)
+            }
+        }
+    }
+}
+
+/// What to say of a light whose [`Reach`] meets none of `boxes` (but
+/// those at the sorted indices `skip`) and none of `planes`, or `None`.
+fn unreached(light: &Light, boxes: &[Aabb], skip: &[u32], planes: &[Plane]) -> Option<String> {
+    let reach = Reach::of(light);
+    if reach == Reach::Everywhere {
+        return None;
+    }
+    let objects = boxes
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| skip.binary_search(&(*i as u32)).is_err())
+        .map(|(_, b)| b);
+    let mut any = false;
+    for b in objects {
+        if reach.reaches_box(b) {
+            return None;
+        }
+        any = true;
+    }
+    if planes.iter().any(|p| reach.reaches_plane(p)) {
+        return None;
+    }
+    if !any && planes.is_empty() {
+        // Nothing to light at all: not a light turned the wrong way.
+        return None;
+    }
+    let v = |v: Vec3| format!("[{}, {}, {}]", round(v.x), round(v.y), round(v.z));
+    Some(match (light, reach) {
+        (Light::Rect { rect, .. }, _) => format!(
+            "lights nothing: every object lies behind it (a rect light shines to the side of edge_u × edge_v, here {}); swap edge_u and edge_v to turn it round",
+            v(rect.normal)
+        ),
+        (Light::Disk { disk, .. }, _) => format!(
+            "lights nothing: every object lies behind it (a disk light shines to the side its normal points, here {}); negate normal to turn it round",
+            v(disk.frame.z)
+        ),
+        (Light::Spot { direction, .. }, Reach::Cone { half, .. }) => format!(
+            "lights nothing: its cone (outer_angle {}°) around {} misses every object; aim it with direction or look_at",
+            round(half.to_degrees()),
+            v(*direction)
+        ),
+        _ => return None,
+    })
+}
+
+/// `x` to three decimals, without a trailing ".0" or a "-0".
+fn round(x: f32) -> f32 {
+    (x * 1000.0).round() / 1000.0 + 0.0
+}
+
+impl Compiler<'_> {
+    /// A warning for each of the scene file's first `count` lights (its
+    /// `[[lights]]`) that can light none of the objects whose world boxes
+    /// are `boxes` (the lights' own surfaces skipped) or the planes: an
+    /// area light facing away from all of them, a spot light aimed past.
+    pub(super) fn unreached_lights(&self, count: usize, boxes: &[Aabb]) -> Vec<InputError> {
+        let mut emitters: Vec<u32> = self.lights.iter().filter_map(Light::prim).collect();
+        emitters.sort_unstable();
+        let lights = self.lights.iter().take(count).enumerate();
+        lights
+            .filter_map(|(i, light)| {
+                let message = unreached(light, boxes, &emitters, &self.planes)?;
+                Some(self.err(&format!("lights[{i}]"), message))
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::test_support::{compiled, rejected};
@@ -399,5 +552,87 @@ triangle = { v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] }
             "{d}intensity = [2.0, 2.0, 2.0]\nirradiance = [1.0, 1.0, 1.0]"
         ));
         assert!(e.message.contains("not both"), "{e}");
+    }
+
+    /// The warnings a scene's lights get for reaching nothing.
+    fn unreached(lights: &str, objects: &str) -> Vec<String> {
+        let s = compiled(&format!("{lights}\n{objects}"));
+        let said: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
+        said.into_iter()
+            .filter(|w| w.contains("lights nothing"))
+            .collect()
+    }
+
+    const FLOOR: &str =
+        "[[objects]]\ntriangle = { v = [[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.0, 1.0]] }\n";
+    const GROUND: &str = "[[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\n";
+
+    fn rect(edge_u: &str, edge_v: &str) -> String {
+        format!(
+            "[[lights]]\ntype = \"rect\"\ncorner = [-0.5, 3.0, -0.5]\nedge_u = {edge_u}\nedge_v = {edge_v}\nradiance = 5.0\n"
+        )
+    }
+
+    /// Issue 62: a rect light's side is edge_u × edge_v; turned away from
+    /// every object it lights nothing, and says so at its line.
+    #[test]
+    fn an_area_light_facing_away_from_every_object_is_warned_of() {
+        let (x, z) = ("[1.0, 0.0, 0.0]", "[0.0, 0.0, 1.0]");
+        // x × z is down, towards the floor: lit.
+        assert!(unreached(&rect(x, z), FLOOR).is_empty());
+        assert!(unreached(&rect(x, z), GROUND).is_empty());
+        for objects in [FLOOR, GROUND] {
+            let said = unreached(&rect(z, x), objects);
+            assert_eq!(said.len(), 1, "{said:?}");
+            assert!(
+                said[0].starts_with("t.toml: line 1: lights[0]: lights nothing")
+                    && said[0].contains("edge_u × edge_v, here [0, 1, 0]")
+                    && said[0].contains("swap edge_u and edge_v"),
+                "{}",
+                said[0]
+            );
+        }
+        // A plane tilted against the light crosses its front.
+        let tilted = "[[objects]]\nplane = { normal = [0.0, 1.0, 0.2] }\n";
+        assert!(unreached(&rect(z, x), tilted).is_empty());
+        // A disk shines where its normal points.
+        let disk = |n: &str| {
+            format!("[[lights]]\ntype = \"disk\"\ncenter = [0.0, 3.0, 0.0]\nnormal = {n}\nradius = 0.5\nradiance = 5.0\n")
+        };
+        assert!(unreached(&disk("[0.0, -1.0, 0.0]"), FLOOR).is_empty());
+        let said = unreached(&disk("[0.0, 1.0, 0.0]"), FLOOR);
+        assert!(
+            said.len() == 1 && said[0].contains("negate normal"),
+            "{said:?}"
+        );
+        // Lights that shine everywhere, and a scene with nothing to light.
+        let point = "[[lights]]\ntype = \"point\"\nposition = [0.0, -3.0, 0.0]\nintensity = 1.0\n";
+        assert!(unreached(point, FLOOR).is_empty());
+        assert!(unreached(&rect(z, x), "").is_empty());
+    }
+
+    #[test]
+    fn a_spot_light_aimed_past_every_object_is_warned_of() {
+        let spot = |aim: &str, outer: f32| {
+            format!("[[lights]]\ntype = \"spot\"\nposition = [0.0, 3.0, 0.0]\n{aim}\nintensity = 1.0\nouter_angle = {outer}\n")
+        };
+        assert!(unreached(&spot("direction = [0.0, -1.0, 0.0]", 20.0), FLOOR).is_empty());
+        assert!(unreached(&spot("look_at = [0.9, 0.0, -0.9]", 5.0), FLOOR).is_empty());
+        // Sideways: a narrow cone passes over the floor, a wide one takes it in.
+        assert!(unreached(&spot("direction = [1.0, 0.0, 0.0]", 100.0), FLOOR).is_empty());
+        let said = unreached(&spot("direction = [1.0, 0.0, 0.0]", 30.0), FLOOR);
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(
+            said[0]
+                .contains("lights[0]: lights nothing: its cone (outer_angle 30°) around [1, 0, 0]"),
+            "{}",
+            said[0]
+        );
+        // Up, away from a ground plane; any tilt down reaches it.
+        assert_eq!(
+            unreached(&spot("direction = [0.0, 1.0, 0.0]", 45.0), GROUND).len(),
+            1
+        );
+        assert!(unreached(&spot("direction = [1.0, -0.1, 0.0]", 1.0), GROUND).is_empty());
     }
 }

@@ -20,7 +20,7 @@ use super::source_map::SourceMap;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
-use crate::error::{InputError, InputResult};
+use crate::error::{InputError, InputResult, COMMAND_LINE};
 use crate::geometry::csg::Csg;
 use crate::geometry::{AnalyticPrim, Geometry, GeometryParts, Instance, MeshRange, NO_TRANSFORM};
 use crate::light::Light;
@@ -38,7 +38,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
-pub use instance::read_instances;
+pub use instance::{read_instances, PLACEMENT_BYTES};
 
 mod arrays;
 mod camera;
@@ -400,6 +400,8 @@ fn compile_for(
         inst.world_bounds = b;
         boxes.push(b);
     }
+    let unreached = c.unreached_lights(desc.lights.len(), &boxes);
+    c.warnings.extend(unreached);
     let quality = for_purpose(quality, boxes.len());
     let bvh_quality = quality.preset(boxes.len());
     let mut bvh = Bvh8::build_from_with_others(boxes, quality, n_tris);
@@ -518,21 +520,33 @@ impl<'d> Compiler<'d> {
     }
 
     /// The file's `[render]` table under the command line's overrides;
-    /// a bad value names the layer it came from.
+    /// a bad value names the layer it came from: the file's line, the
+    /// `--set` edit (`--set render.spp=0`) or the flag (`--spp 0`).
     fn settings(
         &self,
         file: &RenderOverrides,
         cli: &RenderOverrides,
     ) -> InputResult<RenderSettings> {
-        file.check()
-            .map_err(|(field, message)| self.err(&format!("render.{field}"), message))?;
-        cli.check().map_err(|(field, message)| {
-            InputError::new(
-                "<command line>",
-                format!("--{}", field.replace('_', "-")),
-                message,
-            )
+        file.check().map_err(|bad| {
+            let e = self.err(&bad.key(), bad.message.clone());
+            if e.file == COMMAND_LINE {
+                InputError::flag(format!("--set {}", bad.edit()), bad.message)
+            } else {
+                e
+            }
         })?;
+        cli.check().map_err(|bad| bad.on_command_line())?;
+        let environment = self.lights.iter().any(|l| l.environment().is_some());
+        if let (Some(b), true) = (cli.background.filter(|b| *b != [0.0; 3]), environment) {
+            let message = format!(
+                "rays that hit nothing see {}'s environment light; drop --background or the light",
+                self.file.display()
+            );
+            return Err(InputError::flag(
+                format!("--background {}", super::settings::rgb_text(b)),
+                message,
+            ));
+        }
         Ok(RenderSettings::merge(&[file, cli]))
     }
 
@@ -716,7 +730,7 @@ mod tests {
         let e = scene_from_str("", Path::new("t.toml"), &zero).unwrap_err();
         assert_eq!(
             (e.file.as_str(), e.location.as_str()),
-            ("<command line>", "--reflection-samples")
+            ("<command line>", "--reflection-samples 0")
         );
     }
 
