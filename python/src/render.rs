@@ -106,11 +106,13 @@ fn edits(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Edit>> {
             let path: String = k
                 .extract()
                 .map_err(|_| error("set: keys must be key paths such as \"camera.fov\"".into()))?;
-            let value = toml_value(&v, &path)?;
-            out.push(Edit {
-                path,
-                value: Some(value),
-            });
+            // None removes the key, as `--set KEY=` does.
+            let value = if v.is_none() {
+                None
+            } else {
+                Some(toml_value(&v, &path)?)
+            };
+            out.push(Edit { path, value });
         }
         return Ok(out);
     }
@@ -210,8 +212,9 @@ impl Observer for Interrupt {
 /// Every setting is the flag of the same name (``spp=64`` is ``--spp
 /// 64``), and overrides the scene file's ``[render]`` table; ``set`` edits
 /// any value of the file by key path, as ``--set`` does: a dict
-/// (``{"camera.fov": 30, "lights[0].radiance": [1, 1, 1]}``) or
-/// ``"KEY=VALUE"`` strings. ``crop=(x0, y0, x1, y1)`` renders only that
+/// (``{"camera.fov": 30, "lights[0].radiance": [1, 1, 1]}``; a value of
+/// ``None`` removes the key, as ``--set KEY=`` does) or ``"KEY=VALUE"``
+/// strings. ``crop=(x0, y0, x1, y1)`` renders only that
 /// window (each pixel as in the whole image). ``aovs=True`` (or a list of
 /// ``"albedo"``, ``"normal"``, ``"depth"``) also returns a dict of the
 /// AOVs: albedo and normal (height, width, 3), depth (height, width).

@@ -78,3 +78,15 @@ def test_set_strings_work_as_the_flag_does():
     same_bits(a, b)
     c = strata_rt.render(path, width=16, height=12, spp=2)
     assert not np.array_equal(a, c), "the edit changed nothing"
+
+
+def test_set_none_removes_a_key_as_an_empty_flag_value_does():
+    # mesh.toml sets camera.fov = 35; removed, the default (40) frames wider.
+    path = helpers.REPO / "scenes" / "mesh.toml"
+    a = strata_rt.render(path, width=16, height=12, spp=1, set={"camera.fov": None})
+    b = strata_rt.render(path, width=16, height=12, spp=1, set=["camera.fov="])
+    same_bits(a, b)
+    c = strata_rt.render(path, width=16, height=12, spp=1, set={"camera.fov": 40.0})
+    same_bits(a, c)
+    d = strata_rt.render(path, width=16, height=12, spp=1)
+    assert not np.array_equal(a, d), "removing the key changed nothing"
