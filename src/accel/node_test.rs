@@ -217,7 +217,7 @@ impl NodeTest for PointBoxes {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::super::build::{BuildQuality, Bvh8};
     use super::super::query::EveryLeaf;
     use super::super::walk::{AnyOrder, NearestFirst};
@@ -241,13 +241,15 @@ mod tests {
         (boxes, bvh)
     }
 
-    /// Whether `ray` meets `b` somewhere in `[tmin, tmax]`, in f64: the
-    /// answer every conservative f32 test must not deny.
-    fn meets(ray: &Ray, b: &Aabb) -> bool {
+    /// Whether `ray` meets `b` grown by `margin` somewhere in `[tmin, tmax]`,
+    /// in f64: the answer every conservative f32 test must not deny (also
+    /// geometry's grown slab's tests).
+    pub(crate) fn meets_grown(ray: &Ray, b: &Aabb, margin: f32) -> bool {
         let (mut near, mut far) = (ray.tmin as f64, ray.tmax as f64);
         for axis in 0..3 {
             let (o, d) = (ray.origin[axis] as f64, ray.direction[axis] as f64);
-            let (lo, hi) = (b.min[axis] as f64, b.max[axis] as f64);
+            let lo = b.min[axis] as f64 - margin as f64;
+            let hi = b.max[axis] as f64 + margin as f64;
             if d == 0.0 {
                 if o < lo || o > hi {
                     return false;
@@ -259,6 +261,48 @@ mod tests {
             far = far.min(a.max(c));
         }
         near <= far
+    }
+
+    fn meets(ray: &Ray, b: &Aabb) -> bool {
+        meets_grown(ray, b, 0.0)
+    }
+
+    /// The nearest of `points` to `q` within squared distance `limit`, by
+    /// brute force: (squared distance, index), the smaller index on a tie.
+    pub(crate) fn brute_nearest(points: &[Vec3], q: Vec3, limit: f32) -> Option<(f32, u32)> {
+        (0..points.len())
+            .map(|k| ((points[k] - q).length_squared(), k as u32))
+            .filter(|&(d2, _)| d2 <= limit)
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+    }
+
+    /// The best-first walk's answer over point primitives (their index is
+    /// their id in `bvh`) under `test`, as [`brute_nearest`] gives it, and
+    /// how many leaves it opened.
+    pub(crate) fn walk_nearest<T: NodeTest>(
+        bvh: &Bvh8,
+        test: T,
+        limit: f32,
+        queue: &mut NearestQueue,
+        points: &[Vec3],
+        q: Vec3,
+    ) -> (Option<(f32, u32)>, usize) {
+        let mut best: Option<(f32, u32)> = None;
+        let mut opened = 0;
+        bvh.nearest_by(test, limit, &[] as &[()], queue, |start, count, bound| {
+            opened += 1;
+            for (_, id) in bvh.leaf_prims(start, count) {
+                if id == crate::accel::NO_PRIM {
+                    continue;
+                }
+                let d2 = (points[id as usize] - q).length_squared();
+                if d2 <= bound && best.is_none_or(|b| (d2, id) < b) {
+                    best = Some((d2, id));
+                }
+            }
+            best.map_or(bound, |b| b.0)
+        });
+        (best, opened)
     }
 
     /// The leaves (by start) a walk of `ray` with `test` in `order` reaches.
@@ -389,35 +433,13 @@ mod tests {
             } else {
                 rng.range(0.0, 20.0)
             };
-            let brute = (0..points.len())
-                .map(|k| ((scaled(points[k]) - q).length_squared(), k as u32))
-                .filter(|&(d2, _)| d2 <= limit)
-                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let moved: Vec<Vec3> = points.iter().map(|&p| scaled(p)).collect();
+            let brute = brute_nearest(&moved, q, limit);
             let test = Scaled {
                 point: q.to_array(),
                 scale,
             };
-            let mut best: Option<(f32, u32)> = None;
-            let mut opened = 0;
-            bvh.nearest_by(
-                test,
-                limit,
-                &[] as &[()],
-                &mut queue,
-                |start, count, bound| {
-                    opened += 1;
-                    for (_, id) in bvh.leaf_prims(start, count) {
-                        if id == crate::accel::NO_PRIM {
-                            continue;
-                        }
-                        let d2 = (scaled(points[id as usize]) - q).length_squared();
-                        if d2 <= bound && best.is_none_or(|b| (d2, id) < b) {
-                            best = Some((d2, id));
-                        }
-                    }
-                    best.map_or(bound, |b| b.0)
-                },
-            );
+            let (best, opened) = walk_nearest(&bvh, test, limit, &mut queue, &moved, q);
             assert_eq!(best, brute, "query {i}, limit {limit}");
             assert!(opened < 200, "{opened} leaves: the walk is not pruned");
         }

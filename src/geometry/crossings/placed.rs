@@ -177,6 +177,7 @@ fn moved_block(block: &TriangleBlock, map: &Affine3A) -> TriangleBlock {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::node_test::tests::meets_grown;
     use crate::accel::{BuildQuality, Bvh8, NO_PRIM};
     use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
@@ -196,26 +197,6 @@ mod tests {
         }
         prims.remove(&NO_PRIM);
         prims
-    }
-
-    /// Whether `ray` meets `b` grown by `margin` in `[tmin, tmax]`, in f64.
-    fn meets_grown(ray: &Ray, b: &Aabb, margin: f32) -> bool {
-        let (mut near, mut far) = (ray.tmin as f64, ray.tmax as f64);
-        for axis in 0..3 {
-            let (o, d) = (ray.origin[axis] as f64, ray.direction[axis] as f64);
-            let lo = b.min[axis] as f64 - margin as f64;
-            let hi = b.max[axis] as f64 + margin as f64;
-            if d == 0.0 {
-                if o < lo || o > hi {
-                    return false;
-                }
-                continue;
-            }
-            let (a, c) = ((lo - o) / d, (hi - o) / d);
-            near = near.max(a.min(c));
-            far = far.min(a.max(c));
-        }
-        near <= far
     }
 
     /// The grown slab reaches every leaf the ray's own walk reaches and

@@ -197,7 +197,8 @@ impl ObjectBound {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::{BuildQuality, Bvh8, NO_PRIM};
+    use crate::accel::node_test::tests::{brute_nearest, walk_nearest};
+    use crate::accel::{BuildQuality, Bvh8};
     use crate::geometry::instance::NO_MATERIAL;
     use crate::geometry::placed_rounding::spectral_norm;
     use crate::sampling::stream::{seeded, Draw};
@@ -262,33 +263,10 @@ mod tests {
                 f32::INFINITY
             };
             let moved: Vec<Vec3> = points.iter().map(|&p| map.transform_point3(p)).collect();
-            let brute = (0..moved.len())
-                .map(|k| ((moved[k] - q).length_squared(), k as u32))
-                .filter(|&(d2, _)| d2 <= limit)
-                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let brute = brute_nearest(&moved, q, limit);
             let object = ObjectBound::new(&instance, &rounding, q);
             let lower = LowerBound::new(&map, &rounding, &object, q);
-            let mut best: Option<(f32, u32)> = None;
-            let mut opened = 0;
-            bvh.nearest_by(
-                lower,
-                limit,
-                &[] as &[()],
-                &mut queue,
-                |start, count, bound| {
-                    opened += 1;
-                    for (_, id) in bvh.leaf_prims(start, count) {
-                        if id == NO_PRIM {
-                            continue;
-                        }
-                        let d2 = (moved[id as usize] - q).length_squared();
-                        if d2 <= bound && best.is_none_or(|b| (d2, id) < b) {
-                            best = Some((d2, id));
-                        }
-                    }
-                    best.map_or(bound, |b| b.0)
-                },
-            );
+            let (best, opened) = walk_nearest(&bvh, lower, limit, &mut queue, &moved, q);
             assert_eq!(best, brute, "map {i}: {m}, limit {limit}");
             opened_all += opened;
             walks += 1;
