@@ -20,9 +20,12 @@
 //! closest-hit and occlusion queries test each leaf with `tmax` moved one
 //! step up (`next_up`: no float lies between): before a hit, the ray's own
 //! end; after one, the best hit's t, so a tie is seen and [`closer`] breaks
-//! it. An instance's prototype is walked with the ray its leaf was tested
-//! with, whose end is already moved, so that walk takes `tmax` as it comes
-//! (`Geometry::intersect_open_end`). Every `scenes/*.toml` render and
+//! it. A ray walked alone has its end moved once, before its walk, which
+//! then takes `tmax` as it comes ([`SceneQuery::Open`]); the rays of a
+//! packet, of a bundle or in flight, read from the caller's slice, are
+//! moved where a leaf is tested. An instance's prototype is walked with
+//! the ray its leaf was tested with, whose end is already moved, so that
+//! walk too takes `tmax` as it comes (`Geometry::intersect_open_end`). Every `scenes/*.toml` render and
 //! every `strata trace` hit file stayed the same when the end was closed:
 //! the ray sets end at infinity, where both rules agree, and a shadow ray
 //! ends at its light sample, where only the light lies, which it skips
@@ -60,6 +63,13 @@ trait SceneQuery<'g>: Query<Answer: Copy + Default> + Copy {
 
     /// The answer once the planes have been asked after the BVH.
     fn planes_last(self, ray: &Ray, answer: Self::Answer) -> Self::Answer;
+
+    /// The same question for a ray whose end the caller already closed
+    /// ([`closed_end`]), walked as it comes: a ray walked alone is closed
+    /// once, before its walk, rather than at every leaf it reaches.
+    type Open: Query<Answer = Self::Answer>;
+
+    fn open(self) -> Self::Open;
 }
 
 /// `ray` with its interval's end closed: `(tmin, tmax]` tested as the
@@ -201,6 +211,13 @@ impl<'g> SceneQuery<'g> for ClosestHit<'g, true> {
     fn planes_last(self, ray: &Ray, best: Option<PrimHit>) -> Option<PrimHit> {
         self.0.closest_plane(&closed_end(ray), best)
     }
+
+    type Open = ClosestHit<'g, false>;
+
+    #[inline(always)]
+    fn open(self) -> ClosestHit<'g, false> {
+        ClosestHit(self.0)
+    }
 }
 
 /// Occlusion by anything but primitive `except` (the light being sampled;
@@ -240,6 +257,11 @@ impl<const CLOSED: bool> Query for Occlusion<'_, CLOSED> {
 
     #[inline]
     fn leaf(&mut self, state: &mut OcclusionState, start: u32, count: u32, ray: &mut Ray) -> bool {
+        if !CLOSED {
+            return self
+                .geometry
+                .blocks_leaf(start, count, ray, &state.sheared, self.except);
+        }
         let test = Ray {
             tmax: state.tmax,
             ..*ray
@@ -319,6 +341,16 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
     #[inline(always)]
     fn planes_last(self, _: &Ray, blocked: bool) -> bool {
         blocked
+    }
+
+    type Open = Occlusion<'g, false>;
+
+    #[inline(always)]
+    fn open(self) -> Occlusion<'g, false> {
+        Occlusion {
+            geometry: self.geometry,
+            except: self.except,
+        }
     }
 }
 
@@ -423,13 +455,23 @@ impl Geometry {
     /// One ray: the planes, the BVH's walk unless they settle it, the
     /// planes again.
     #[inline(always)]
-    fn one<'g, Q: SceneQuery<'g>>(&'g self, mut query: Q, ray: &Ray) -> Q::Answer {
+    fn one<'g, Q: SceneQuery<'g>>(&'g self, query: Q, ray: &Ray) -> Q::Answer {
         let first = query.planes_first(ray);
         if Q::done(&first) {
             return first;
         }
-        let answer = self.bvh.walk(ray, &self.leaf_blocks, &mut query);
+        let answer = self.walk_closed(query, ray);
         query.planes_last(ray, answer)
+    }
+
+    /// The BVH's answer for one ray, its end closed once before the walk
+    /// ([`SceneQuery::Open`]). Bit for bit the walk of `query` itself:
+    /// each leaf is tested with the same interval, and a box is culled one
+    /// step later, which no hit in `(tmin, tmax]` can tell.
+    #[inline(always)]
+    fn walk_closed<'g, Q: SceneQuery<'g>>(&'g self, query: Q, ray: &Ray) -> Q::Answer {
+        self.bvh
+            .walk(&closed_end(ray), &self.leaf_blocks, &mut query.open())
     }
 
     /// Up to [`PACKET_SIZE`] rays a caller chose to trace together.
@@ -546,7 +588,7 @@ impl Geometry {
         }
         for (o, r) in out.iter_mut().zip(rays) {
             if !Q::done(o) {
-                *o = self.bvh.walk(r, &self.leaf_blocks, &mut query);
+                *o = self.walk_closed(query, r);
             }
         }
     }
