@@ -21,7 +21,10 @@ ray's hits come together, nearest first (index_ray ascending).
 
 Conventions kept from trimesh: indices are int64, locations float64,
 -1 marks a miss in ``intersects_first``, ``max_hits`` caps the hits of
-one ray, and a zero-length direction hits nothing. trimesh is not
+one ray, and a ray with a zero-length direction, or a NaN or infinite
+coordinate, hits nothing (as with trimesh's embreex engine), where
+``strata_rt.Mesh`` itself raises naming the bad row; a point that is not
+finite is not contained. trimesh is not
 imported: any object with ``vertices`` (n, 3) and ``faces`` (m, 3) works.
 """
 
@@ -66,8 +69,9 @@ class RayMeshIntersector:
     def _rays(
         self, ray_origins: Any, ray_directions: Any
     ) -> Tuple[np.ndarray, np.ndarray, Optional[np.ndarray]]:
-        """float64 origins and directions, and the indices of the rays with
-        a non-zero direction (``None``: all of them)."""
+        """float64 origins and directions, and the indices of the rays that
+        can hit anything: a finite origin and a finite, non-zero direction
+        (``None``: all of them)."""
         origins = np.asarray(ray_origins, dtype=np.float64)
         directions = np.asarray(ray_directions, dtype=np.float64)
         if origins.shape != directions.shape:
@@ -78,8 +82,15 @@ class RayMeshIntersector:
         if origins.size == 0:
             origins = origins.reshape((0, 3))
             directions = directions.reshape((0, 3))
-        live = np.any(directions != 0.0, axis=1) if directions.ndim == 2 else None
-        if live is None or live.all():
+        if directions.ndim != 2:
+            # Mesh's own error names the shape it wants.
+            return origins, directions, None
+        live = (
+            np.any(directions != 0.0, axis=1)
+            & np.isfinite(directions).all(axis=1)
+            & np.isfinite(origins).all(axis=1)
+        )
+        if live.all():
             return origins, directions, None
         return origins, directions, np.flatnonzero(live)
 
@@ -153,5 +164,12 @@ class RayMeshIntersector:
     def contains_points(self, points: Any) -> np.ndarray:
         """Whether each point is inside the mesh: bool (n,), by the parity of
         surface crossings along one ray (``Mesh.contains``; a closed mesh is
-        assumed, and points on the surface may go either way)."""
-        return self.strata_mesh.contains(points, threads=self.threads)
+        assumed, and points on the surface may go either way). A point with
+        a NaN or infinite coordinate is not contained."""
+        points = np.asarray(points, dtype=np.float64)
+        finite = np.isfinite(points).all(axis=-1) if points.ndim == 2 else None
+        if finite is None or finite.all():
+            return self.strata_mesh.contains(points, threads=self.threads)
+        inside = np.zeros(len(points), dtype=bool)
+        inside[finite] = self.strata_mesh.contains(points[finite], threads=self.threads)
+        return inside

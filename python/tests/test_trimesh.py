@@ -122,6 +122,19 @@ def test_conventions_kept_from_trimesh(bumpy):
     np.testing.assert_array_equal(ray.intersects_any(o, d), [True, False, True])
     tri, idx = ray.intersects_id(o, d)
     assert 1 not in idx and (np.bincount(idx, minlength=3) == [2, 0, 2]).all()
+    # A NaN or infinite coordinate makes a miss, not an error for the whole
+    # batch (trimesh's embreex engine returns -1 for it); the other rays
+    # answer as they would alone.
+    bad = np.array([[np.nan, 0.0, 3.0], [0.0131, 0.0217, np.inf], [0.0131, 0.0217, 3.0]])
+    down = np.array([[0, 0, -1.0], [0, 0, -1.0], [0, 0, -1.0]])
+    np.testing.assert_array_equal(ray.intersects_first(bad, down)[:2], -1)
+    assert ray.intersects_first(bad, down)[2] == ray.intersects_first(o, d)[0]
+    np.testing.assert_array_equal(ray.intersects_any(bad, down), [False, False, True])
+    np.testing.assert_array_equal(ray.intersects_any(o[:2], np.array([[0, np.nan, -1.0], [0, 0, -1.0]])), [False, True])
+    _, idx = ray.intersects_id(bad, down)
+    assert set(idx) == {2}
+    points = np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0], [0.0, 0.0, 9.0]])
+    np.testing.assert_array_equal(ray.contains_points(points), [True, False, False])
     # max_hits caps each ray's hits, nearest first.
     tri1, idx1 = ray.intersects_id(o, d, max_hits=1)
     np.testing.assert_array_equal(idx1, [0, 2])
