@@ -130,7 +130,8 @@ def test_conventions_kept_from_trimesh(bumpy):
     np.testing.assert_array_equal(ray.intersects_first(bad, down)[:2], -1)
     assert ray.intersects_first(bad, down)[2] == ray.intersects_first(o, d)[0]
     np.testing.assert_array_equal(ray.intersects_any(bad, down), [False, False, True])
-    np.testing.assert_array_equal(ray.intersects_any(o[:2], np.array([[0, np.nan, -1.0], [0, 0, -1.0]])), [False, True])
+    nan_direction = np.array([[0, np.nan, -1.0], [0, 0, -1.0]])
+    np.testing.assert_array_equal(ray.intersects_any(o[:2], nan_direction), [False, True])
     _, idx = ray.intersects_id(bad, down)
     assert set(idx) == {2}
     points = np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0], [0.0, 0.0, 9.0]])
