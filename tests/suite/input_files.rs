@@ -163,3 +163,24 @@ fn the_library_gives_every_mistake_with_its_line() {
     let lines: Vec<Option<usize>> = e.clone().into_each().iter().map(|e| e.line).collect();
     assert_eq!(lines, [Some(2), Some(4), Some(6)], "{e}");
 }
+
+/// A mesh traced on its own (`strata trace MESH`, `Mesh.load` in Python)
+/// is compiled as a made-up scene of one object; its errors name the file
+/// alone, never that scene's `objects[0].mesh`, which the user never wrote.
+#[test]
+fn a_mesh_file_s_errors_name_no_key_of_a_made_up_scene() {
+    let dir = temp_dir("first-contact-mesh-key");
+    std::fs::write(dir.join("notes.md"), "# not a mesh\n").unwrap();
+    for file in ["missing.obj", "notes.md"] {
+        let out = strata(
+            &dir,
+            &[
+                "trace", file, "--rays", "r.bin", "--hits", "h.bin", "--quiet",
+            ],
+        );
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.starts_with(&format!("error: {file}: ")), "{err}");
+        assert!(!err.contains("objects["), "{err}");
+    }
+}

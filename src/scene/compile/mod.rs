@@ -184,7 +184,8 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
         ..SceneDescription::default()
     };
     // The "scene file" is the mesh itself, so the mesh resolves to `path`
-    // and every error names it.
+    // and every error names it; the made-up scene's key is no place the
+    // user wrote, so errors at it name the file alone.
     compile_for(
         &desc,
         path,
@@ -195,6 +196,15 @@ pub fn load_mesh_scene(path: &Path, quality: BuildQuality) -> InputResult<(Scene
         &LoadProgress::default(),
         None,
     )
+    .map_err(|e| {
+        let each = e.into_each().into_iter().map(|mut e| {
+            if e.location == "objects[0].mesh" {
+                e.location.clear();
+            }
+            e
+        });
+        InputError::all(each.collect()).expect("at least the first error")
+    })
 }
 
 /// A scene file compiled for tracing ray files (`strata trace SCENE.toml`):
