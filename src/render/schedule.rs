@@ -9,6 +9,7 @@
 //! `Schedule::Regions` is the classic baseline for `strata scaling`: the
 //! image cut into one band of rows per thread, no stealing.
 
+use super::adaptive;
 use super::aov::AovSum;
 use super::film::{Film, PixelSum};
 use super::progress::{Observer, Pass, PassDone};
@@ -123,6 +124,10 @@ pub struct RenderOptions {
     /// Record every work item and pass here (`--timeline`); the image does
     /// not depend on it.
     pub timeline: Option<Arc<Timeline>>,
+    /// Seconds the passes may take (`--time`): no pass starts that the
+    /// last one's pace says would end past them (the first always runs).
+    /// The image then depends on the machine's speed.
+    pub budget: Option<f64>,
 }
 
 impl Default for RenderOptions {
@@ -137,6 +142,7 @@ impl Default for RenderOptions {
             window: None,
             aovs: false,
             timeline: None,
+            budget: None,
         }
     }
 }
@@ -155,9 +161,12 @@ pub struct RenderOutcome {
     pub aov: Option<Vec<AovSum>>,
     /// What the front end should say, in the order found.
     pub warnings: Vec<Warning>,
-    /// The observer ended the render after a pass: the film holds fewer
-    /// samples than `samples`.
+    /// The observer (or the time budget) ended the render after a pass:
+    /// the film holds fewer samples than `samples`.
     pub stopped: bool,
+    /// The end of the last pass rendered: the most samples a pixel has
+    /// (`samples.end` unless stopped, or every pixel met the noise target).
+    pub done: u32,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -207,9 +216,25 @@ pub fn render(
     let asked = opts
         .passes
         .unwrap_or_else(|| default_passes(full.end - full.start));
-    let passes = pass_ranges(start_sample..full.end, asked);
+    // A noise target needs every sample of a pixel so far: a slice's
+    // process has only its own, so slices render without one.
+    let target = s.noise_target().filter(|_| opts.slice.count == 1);
+    // A noise target judges, and a time budget stops, at the same points.
+    if target.is_some() {
+        film.track_squares();
+    }
+    let passes = if target.is_some() || opts.budget.is_some() {
+        adaptive::passes(start_sample, full.end)
+    } else {
+        pass_ranges(start_sample..full.end, asked)
+    };
     let mut warnings: Vec<Warning> = Warning::unlit(scene).into_iter().collect();
-    if opts.passes.is_some() && (passes.len() as u32) < asked && !passes.is_empty() {
+    if target.is_none()
+        && opts.budget.is_none()
+        && opts.passes.is_some()
+        && (passes.len() as u32) < asked
+        && !passes.is_empty()
+    {
         warnings.push(Warning::FewerPasses {
             asked,
             made: passes.len() as u32,
@@ -237,7 +262,30 @@ pub fn render(
         t.phase(Phase::Setup, setup_start, t.at(start));
     }
     let mut stopped = false;
+    let mut done = start_sample;
+    // Which pixels take this pass's samples, under a noise target.
+    let mut active = Vec::new();
+    // The last pass's seconds per pixel sample, for the time budget.
+    let mut pace: Option<f64> = None;
     for (pass_index, samples) in passes.iter().enumerate() {
+        if let Some(t) = target {
+            adaptive::active_pixels(&film, t, &mut active);
+        }
+        let live = match target {
+            Some(_) => active.iter().filter(|&&a| a).count(),
+            None => n,
+        };
+        if live == 0 {
+            break;
+        }
+        let work = live as f64 * samples.len() as f64;
+        if let (Some(budget), Some(pace)) = (opts.budget, pace) {
+            if start.elapsed().as_secs_f64() + pace * work > budget {
+                stopped = true;
+                break;
+            }
+        }
+        let pass_clock = Instant::now();
         let pass_start = timeline.map(Timeline::now);
         let pass = Pass {
             index: pass_index,
@@ -253,6 +301,7 @@ pub fn render(
             None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
         };
         let watching = &observer;
+        let active = (!active.is_empty()).then_some(&active[..]);
         // Each chunk's rays are counted by its own integrator and the
         // pass sums the counts.
         counts += pool.install(|| {
@@ -274,6 +323,7 @@ pub fn render(
                         let pixels = PixelRun {
                             window: &window,
                             first,
+                            active: active.map(|a| &a[first..first + accs.len()]),
                         };
                         let rays_before = integrator.counts.total();
                         render_pixels(&mut integrator, scene, pixels, accs, aov, samples.clone());
@@ -303,6 +353,8 @@ pub fn render(
             film.add_pixel(i, acc);
         }
         cpu.pass(&pool);
+        done = samples.end;
+        pace = Some(pass_clock.elapsed().as_secs_f64() / work);
         let after_start = timeline.map(Timeline::now);
         let done = PassDone {
             pass,
@@ -338,6 +390,7 @@ pub fn render(
         aov,
         warnings,
         stopped,
+        done,
     }
 }
 
@@ -354,6 +407,7 @@ pub fn render_pixel(
     let pixels = PixelRun {
         window: &whole,
         first: index,
+        active: None,
     };
     render_pixels(
         integrator,
@@ -365,11 +419,13 @@ pub fn render_pixel(
     );
 }
 
-/// Pixels `first..` of `window` (row-major).
+/// Pixels `first..` of `window` (row-major); with `active`, only those
+/// whose entry is true (a noise target's pixels still sampling).
 #[derive(Debug, Clone, Copy)]
 pub struct PixelRun<'w> {
     pub window: &'w Window,
     pub first: usize,
+    pub active: Option<&'w [bool]>,
 }
 
 /// All samples of `samples` for the pixels `run.first..run.first +
@@ -415,8 +471,18 @@ pub fn render_pixels(
         let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
         (Vec2::new(x as f32, y as f32), sampler, jitter)
     };
-    let (mut j, mut next) = (0, samples.start);
-    let (mut corner, mut sampler, mut jitter) = setup(0);
+    // The next pixel from `j` on that takes samples.
+    let live = |mut j: usize| {
+        while run.active.is_some_and(|a| j < a.len() && !a[j]) {
+            j += 1;
+        }
+        j
+    };
+    let (mut j, mut next) = (live(0), samples.start);
+    if j == accs.len() {
+        return;
+    }
+    let (mut corner, mut sampler, mut jitter) = setup(j);
     let mut batch = [CameraSample {
         ctx: SampleContext::new(sampler, 0, s.spp),
         film: Vec2::ZERO,
@@ -450,7 +516,7 @@ pub fn render_pixels(
             n += len;
             next = end;
             if next == samples.end {
-                j += 1;
+                j = live(j + 1);
                 next = samples.start;
                 if j < accs.len() {
                     (corner, sampler, jitter) = setup(j);

@@ -228,10 +228,7 @@ fn background_by_edit(
         .iter()
         .rev()
         .find(|e| super::parse::within(key, &e.path) || super::parse::within(&e.path, key));
-    let place = by.map_or_else(
-        || "--background".to_string(),
-        |e| e.written(),
-    );
+    let place = by.map_or_else(|| "--background".to_string(), |e| e.written());
     Err(InputError::flag(place, made_up_environment(model)))
 }
 
@@ -438,6 +435,9 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         background,
         light_sampling,
         glossy_sampling,
+        noise,
+        exposure,
+        tonemap,
     } = r;
     out.push_str("[render]\n");
     let whole = [
@@ -458,10 +458,16 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         ("sampler", sampler.map(|m| m.name())),
         ("light_sampling", light_sampling.map(|m| m.name())),
         ("glossy_sampling", glossy_sampling.map(|m| m.name())),
+        ("tonemap", tonemap.map(|m| m.name())),
     ];
     for (key, value) in modes {
         if let Some(v) = value {
             line(out, key, &format!("\"{v}\""));
+        }
+    }
+    for (key, value) in [("noise", noise), ("exposure", exposure)] {
+        if let Some(v) = value {
+            line(out, key, &number(*v));
         }
     }
     if let Some(b) = background {
