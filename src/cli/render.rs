@@ -28,9 +28,10 @@ pub struct RenderArgs {
     /// scenes/seed.toml).
     pub scene: Option<PathBuf>,
     /// With a model file: render from its camera N (0-based) instead of
-    /// the first.
-    #[arg(long, value_name = "N")]
-    pub camera: Option<usize>,
+    /// the first, or `auto`: strata's framing camera (a three-quarter
+    /// view that fits the model) even when the file has cameras.
+    #[arg(long, value_name = "N|auto")]
+    pub camera: Option<model::CameraChoice>,
     /// With a model file: write the scene made for it to FILE (.toml,
     /// atomically), to edit and render again with `strata render FILE`.
     #[arg(long, value_name = "FILE.toml")]

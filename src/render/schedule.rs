@@ -302,6 +302,11 @@ pub fn render(
         };
         let watching = &observer;
         let active = (!active.is_empty()).then_some(&active[..]);
+        let set = if target.is_some() || opts.budget.is_some() {
+            SampleSet::of_pass(s.seed, samples)
+        } else {
+            SampleSet::whole(s.seed, s.spp)
+        };
         // Each chunk's rays are counted by its own integrator and the
         // pass sums the counts.
         counts += pool.install(|| {
@@ -324,6 +329,7 @@ pub fn render(
                             window: &window,
                             first,
                             active: active.map(|a| &a[first..first + accs.len()]),
+                            set,
                         };
                         let rays_before = integrator.counts.total();
                         render_pixels(&mut integrator, scene, pixels, accs, aov, samples.clone());
@@ -408,6 +414,7 @@ pub fn render_pixel(
         window: &whole,
         first: index,
         active: None,
+        set: SampleSet::whole(scene.settings.seed, scene.settings.spp),
     };
     render_pixels(
         integrator,
@@ -420,12 +427,53 @@ pub fn render_pixel(
 }
 
 /// Pixels `first..` of `window` (row-major); with `active`, only those
-/// whose entry is true (a noise target's pixels still sampling).
+/// whose entry is true (a noise target's pixels still sampling); their
+/// samples drawn from `set`.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelRun<'w> {
     pub window: &'w Window,
     pub first: usize,
     pub active: Option<&'w [bool]>,
+    pub set: SampleSet,
+}
+
+/// The stratified set that samples are drawn from: sample `i` is index
+/// `i − first` of each pixel's set of `count`, whose scrambling `seed`
+/// chooses. A render's samples are one set of spp (`first` 0, the
+/// render's seed); a noise target's passes are each a set of their own
+/// (`render::adaptive`), so that a pixel stopped after any pass has used
+/// whole stratified sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleSet {
+    pub first: u32,
+    pub count: u32,
+    pub seed: u32,
+}
+
+impl SampleSet {
+    /// Every sample of a render of `spp`: one set.
+    pub fn whole(seed: u32, spp: u32) -> Self {
+        Self {
+            first: 0,
+            count: spp,
+            seed,
+        }
+    }
+
+    /// The samples of one pass of a noise target: a set of their own,
+    /// scrambled apart from every other pass's (the first keeps the
+    /// render's seed).
+    pub fn of_pass(seed: u32, pass: &Range<u32>) -> Self {
+        let seed = match pass.start {
+            0 => seed,
+            start => crate::sampling::hash::hash_words(&[seed, start]),
+        };
+        Self {
+            first: pass.start,
+            count: pass.end - pass.start,
+            seed,
+        }
+    }
 }
 
 /// All samples of `samples` for the pixels `run.first..run.first +
@@ -461,14 +509,15 @@ pub fn render_pixels(
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
     // The common set sizes, prepared once for all these pixels: camera
     // samples, and first-hit light samples.
-    let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
+    let set = run.set;
+    let sets = PixelSampler::prepare_sets([set.count, set.count.saturating_mul(s.shadow_samples)]);
     // The pixel the sequence is in (`j`), what it shares among its
     // samples, and its next sample; kept across batches, so that each pixel
     // is set up once and the sequence needs no divisions.
     let setup = |j: usize| {
         let (x, y, index) = run.window.pixel(run.first + j);
-        let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
-        let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
+        let sampler = PixelSampler::new(s.sampler, set.seed, index).with_sets(sets);
+        let jitter = sampler.dim_2d(Dim::PIXEL, set.count);
         (Vec2::new(x as f32, y as f32), sampler, jitter)
     };
     // The next pixel from `j` on that takes samples.
@@ -484,7 +533,7 @@ pub fn render_pixels(
     }
     let (mut corner, mut sampler, mut jitter) = setup(j);
     let mut batch = [CameraSample {
-        ctx: SampleContext::new(sampler, 0, s.spp),
+        ctx: SampleContext::new(sampler, 0, set.count),
         film: Vec2::ZERO,
     }; PACKET_SIZE];
     // Each lane's pixel: a lane that stays with its pixel from one batch
@@ -501,14 +550,15 @@ pub fn render_pixels(
             let len = (end - next) as usize;
             // This pixel's share of the batch: its pixel samples in SIMD
             // lanes (unused lanes repeat the last sample).
-            let index = std::array::from_fn(|i| (next + i as u32).min(end - 1));
+            let index = std::array::from_fn(|i| (next + i as u32).min(end - 1) - set.first);
             let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
             let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);
             for ((camera, pixel), (sample, offset)) in lanes.zip((next..end).zip(offsets)) {
+                let sample = sample - set.first;
                 if *pixel == j {
                     camera.ctx.sample = sample;
                 } else {
-                    camera.ctx = SampleContext::new(sampler, sample, s.spp);
+                    camera.ctx = SampleContext::new(sampler, sample, set.count);
                     *pixel = j;
                 }
                 camera.film = corner + offset;
@@ -526,7 +576,7 @@ pub fn render_pixels(
         let first = aov.is_some().then_some(&mut first_hits[..]);
         integrator.camera_batch(&batch[..n], &mut out, first);
         for ((v, camera), &pixel) in out.iter().zip(&batch[..n]).zip(&pixel_of) {
-            accs[pixel].add(*v, camera.ctx.sample);
+            accs[pixel].add(*v, camera.ctx.sample + set.first);
         }
         if let Some(aov) = aov.as_deref_mut() {
             for (hit, &j) in first_hits[..n].iter().zip(&pixel_of) {
