@@ -41,6 +41,7 @@
 //! a crop equal to the same window of a whole render.
 
 use super::film::{Film, FIXED_SCALE, LUMINANCE};
+use crate::scene::settings::RenderSettings;
 use std::ops::Range;
 
 /// Samples every pixel takes before the first decision: enough for a
@@ -59,6 +60,17 @@ pub const DARK_FLOOR: f64 = 0.05;
 pub struct NoiseTarget {
     pub error: f32,
     pub scale: f32,
+}
+
+impl NoiseTarget {
+    /// The noise target of a render's settings (`--noise`, judged at
+    /// `--exposure`), if it has one.
+    pub fn of(settings: &RenderSettings) -> Option<Self> {
+        settings.noise.map(|error| Self {
+            error,
+            scale: settings.exposure.exp2(),
+        })
+    }
 }
 
 /// The sample counts at which pixels are judged, for a ceiling of `spp`:

@@ -218,7 +218,7 @@ pub fn render(
         .unwrap_or_else(|| default_passes(full.end - full.start));
     // A noise target needs every sample of a pixel so far: a slice's
     // process has only its own, so slices render without one.
-    let target = s.noise_target().filter(|_| opts.slice.count == 1);
+    let target = adaptive::NoiseTarget::of(s).filter(|_| opts.slice.count == 1);
     // A noise target judges, and a time budget stops, at the same points.
     if target.is_some() {
         film.track_squares();

@@ -171,15 +171,6 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
-    /// The noise target of a `--noise` render.
-    pub fn noise_target(&self) -> Option<crate::render::adaptive::NoiseTarget> {
-        self.noise
-            .map(|error| crate::render::adaptive::NoiseTarget {
-                error,
-                scale: self.exposure.exp2(),
-            })
-    }
-
     /// The rays a render traces at its first hits: a camera ray per
     /// sample, and per hit one shadow ray per point or directional light
     /// and `shadow_samples` per area light. Reflected, refracted and
