@@ -143,7 +143,7 @@ fn aov_list(aovs: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Aov>> {
         vec![aovs.extract()?]
     } else {
         aovs.extract().map_err(|_| {
-            error("aovs must be True, False or a list of names (albedo, normal, depth)".into())
+            error("aovs must be True, False or a list of names (albedo, normal, depth, spp)".into())
         })?
     };
     names
@@ -216,8 +216,13 @@ impl Observer for Interrupt {
 /// ``None`` removes the key, as ``--set KEY=`` does) or ``"KEY=VALUE"``
 /// strings. ``crop=(x0, y0, x1, y1)`` renders only that
 /// window (each pixel as in the whole image). ``aovs=True`` (or a list of
-/// ``"albedo"``, ``"normal"``, ``"depth"``) also returns a dict of the
-/// AOVs: albedo and normal (height, width, 3), depth (height, width).
+/// ``"albedo"``, ``"normal"``, ``"depth"``, ``"spp"``) also returns a dict
+/// of the AOVs: albedo and normal (height, width, 3), depth and spp (the
+/// samples each pixel took) (height, width). ``noise=0.02`` stops each
+/// pixel at that estimated relative error (``spp`` the ceiling, default
+/// 1024). ``exposure`` and ``tonemap`` are what an 8-bit file shows: the
+/// array stays linear radiance (exposure only scales what the noise
+/// target judges).
 /// ``threads``, ``passes``, ``packets``, ``schedule`` and ``bvh_quality``
 /// change the time, never a pixel.
 ///
@@ -232,7 +237,8 @@ impl Observer for Interrupt {
 #[pyo3(signature = (
     scene, *, width=None, height=None, spp=None, shadow_samples=None,
     reflection_samples=None, max_depth=None, sampler=None, seed=None, background=None,
-    light_sampling=None, glossy_sampling=None, set=None, threads=None, passes=None,
+    light_sampling=None, glossy_sampling=None, noise=None, exposure=None, tonemap=None,
+    set=None, threads=None, passes=None,
     packets=None, schedule=None, bvh_quality=None, crop=None, aovs=None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -250,6 +256,9 @@ pub fn render(
     background: Option<&Bound<'_, PyAny>>,
     light_sampling: Option<&str>,
     glossy_sampling: Option<&str>,
+    noise: Option<f32>,
+    exposure: Option<f32>,
+    tonemap: Option<&str>,
     set: Option<&Bound<'_, PyAny>>,
     threads: Option<i64>,
     passes: Option<i64>,
@@ -277,6 +286,9 @@ pub fn render(
         background,
         light_sampling: mode(light_sampling, "light_sampling")?,
         glossy_sampling: mode::<GlossySampling>(glossy_sampling, "glossy_sampling")?,
+        noise,
+        exposure,
+        tonemap: mode(tonemap, "tonemap")?,
     };
     overrides
         .check()
@@ -284,6 +296,11 @@ pub fn render(
     let edits = edits(set)?;
     let pool = Threads::new(threads)?;
     let passes = count(passes, "passes", 1)?;
+    if let (Some(p), Some(e)) = (passes, noise) {
+        return Err(error(format!(
+            "passes={p} with noise={e}: a noise target's passes are its decision points (after 16, 24, 32, 48, … samples); leave passes out"
+        )));
+    }
     let packets = mode(packets, "packets")?.unwrap_or_default();
     let schedule: Schedule = mode(schedule, "schedule")?.unwrap_or_default();
     let quality: BuildQuality = mode(bvh_quality, "bvh_quality")?.unwrap_or_default();
@@ -324,6 +341,7 @@ pub fn render(
         window: window.clone(),
         aovs: !aovs.is_empty(),
         timeline: None,
+        budget: None,
     };
     let mut interrupt = Interrupt::default();
     let outcome = py.detach(|| render_scene(&scene, &opts, None, &mut interrupt));

@@ -142,7 +142,7 @@ class Mesh:
     ) -> ClosestPoints:
         """The nearest surface point to each point: point (n, 3), distance (n,), prim (n,)."""
 
-_Aovs = Union[bool, Sequence[Literal["albedo", "normal", "depth"]], None]
+_Aovs = Union[bool, Sequence[Literal["albedo", "normal", "depth", "spp"]], None]
 _Set = Union[Mapping[str, object], Sequence[str], str, None]
 
 @overload
@@ -160,6 +160,9 @@ def render(
     background: Optional[Sequence[float]] = None,
     light_sampling: Optional[Literal["solid_angle", "area"]] = None,
     glossy_sampling: Optional[Literal["lobe", "uniform"]] = None,
+    noise: Optional[float] = None,
+    exposure: Optional[float] = None,
+    tonemap: Optional[Literal["clamp", "filmic"]] = None,
     set: _Set = None,
     threads: Optional[int] = None,
     passes: Optional[int] = None,
@@ -185,6 +188,9 @@ def render(
     background: Optional[Sequence[float]] = None,
     light_sampling: Optional[Literal["solid_angle", "area"]] = None,
     glossy_sampling: Optional[Literal["lobe", "uniform"]] = None,
+    noise: Optional[float] = None,
+    exposure: Optional[float] = None,
+    tonemap: Optional[Literal["clamp", "filmic"]] = None,
     set: _Set = None,
     threads: Optional[int] = None,
     passes: Optional[int] = None,
@@ -192,6 +198,6 @@ def render(
     schedule: Optional[Literal["slices", "regions"]] = None,
     bvh_quality: Optional[Literal["fastest", "fast", "auto", "medium", "high"]] = None,
     crop: Union[Tuple[int, int, int, int], str, None] = None,
-    aovs: Union[Literal[True], Sequence[Literal["albedo", "normal", "depth"]]] = ...,
+    aovs: Union[Literal[True], Sequence[Literal["albedo", "normal", "depth", "spp"]]] = ...,
 ) -> Tuple[NDArray[np.float32], Dict[str, NDArray[np.float32]]]:
     """Render a scene file as ``strata render`` does, with its AOVs as a dict of arrays."""

@@ -130,6 +130,9 @@ RENDER_CASES = {
     "a set without =": (dict(set=["render.spp"]), ["set", "KEY=VALUE"]),
     "a set of an object": (dict(set={"camera.fov": object()}), ["camera.fov"]),
     "no threads": (dict(threads=0), ["threads"]),
+    "a noise of 0": (dict(noise=0.0), ["noise", "above 0"]),
+    "noise with passes": (dict(noise=0.05, passes=4), ["passes", "noise"]),
+    "an unknown tone curve": (dict(tonemap="aces"), ["tonemap", "aces"]),
 }
 
 

@@ -60,6 +60,16 @@ pub struct ConvergeArgs {
     /// Worker threads (default: all cores).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Also measure adaptive sampling (stratified+is with `--noise E`) at
+    /// each of these noise targets, e.g. 0.1,0.05,0.025: rows named
+    /// adaptive@E whose spp is the mean over the image; after the table,
+    /// each one's time against the best uniform method's at the same RMSE.
+    #[arg(long, value_delimiter = ',', value_name = "E,...")]
+    pub noise: Vec<f32>,
+    /// The adaptive renders' ceiling of samples per pixel (default: 4
+    /// times --max-spp).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub noise_spp: Option<u32>,
     /// No progress output.
     #[arg(short, long)]
     pub quiet: bool,
@@ -114,22 +124,70 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
             "method", "spp", "seconds", "RMSE", "relMSE"
         );
     }
-    let points = converge::measure(
+    if let Some(e) = args.noise.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
+        return Err(InputError::flag(
+            format!("--noise {e}"),
+            "must be relative errors above 0, such as 0.05,0.025",
+        )
+        .into());
+    }
+    let row = |p: &Point| {
+        if !args.quiet {
+            let method = match p.noise {
+                Some(e) => format!("{}@{e}", p.method),
+                None => p.method.to_string(),
+            };
+            println!(
+                "{:<28} {:>6} {:>10.4} {:>12.4e} {:>12.4e}",
+                method,
+                p.mean_spp.round(),
+                p.seconds,
+                p.rmse,
+                p.rel_mse
+            );
+        }
+    };
+    let mut points = converge::measure(
         &scene,
         &reference,
         &METHODS,
         args.max_spp,
         args.threads,
         args.repeats,
-        |p| {
-            if !args.quiet {
-                println!(
-                    "{:<28} {:>6} {:>10.4} {:>12.4e} {:>12.4e}",
-                    p.method, p.spp, p.seconds, p.rmse, p.rel_mse
-                );
-            }
-        },
+        row,
     );
+    let ceiling = args.noise_spp.unwrap_or(
+        args.max_spp
+            .saturating_mul(4)
+            .min(strata::scene::settings::MAX_SPP),
+    );
+    let adaptive = converge::measure_adaptive(
+        &scene,
+        &reference,
+        &args.noise,
+        ceiling,
+        args.threads,
+        args.repeats,
+        row,
+    );
+    if !args.quiet {
+        for p in &adaptive {
+            let e = p.noise.unwrap_or_default();
+            match converge::uniform_time_at(&points, p.rmse) {
+                Some((t, m)) => eprintln!(
+                    "adaptive@{e}: RMSE {:.4e} in {:.4} s; the best uniform method ({m}) takes {t:.4} s to it: {:.2}x its time",
+                    p.rmse,
+                    p.seconds,
+                    p.seconds / t
+                ),
+                None => eprintln!(
+                    "adaptive@{e}: RMSE {:.4e} in {:.4} s, outside the uniform curves (raise --max-spp)",
+                    p.rmse, p.seconds
+                ),
+            }
+        }
+    }
+    points.extend(adaptive);
     write_outputs(&args, &points)
 }
 
@@ -139,11 +197,12 @@ fn reference_path(args: &ConvergeArgs) -> PathBuf {
 }
 
 fn write_outputs(args: &ConvergeArgs, points: &[Point]) -> Result<(), CliError> {
-    let mut csv = String::from("method,spp,seconds,rmse,rel_mse\n");
+    let mut csv = String::from("method,spp,seconds,rmse,rel_mse,noise,mean_spp\n");
     for p in points {
+        let noise = p.noise.map_or(String::new(), |e| e.to_string());
         csv.push_str(&format!(
-            "{},{},{},{},{}\n",
-            p.method, p.spp, p.seconds, p.rmse, p.rel_mse
+            "{},{},{},{},{},{noise},{}\n",
+            p.method, p.spp, p.seconds, p.rmse, p.rel_mse, p.mean_spp
         ));
     }
     strata::output::atomic::write_bytes_atomic(&args.csv, csv.as_bytes())

@@ -340,7 +340,7 @@ mod tests {
 
     #[test]
     fn flags_far_from_any_get_no_suggestion() {
-        for (typed, far) in [("--exposure", "--resume"), ("--time", "--timeline")] {
+        for (typed, far) in [("--resolve", "--resume"), ("--timelapse", "--timeline")] {
             let text = error(&["render", typed]);
             assert!(!text.contains(far), "{typed}: {text}");
             assert!(text.contains("Usage: strata render [OPTIONS]"), "{text}");

@@ -28,9 +28,10 @@ pub struct RenderArgs {
     /// scenes/seed.toml).
     pub scene: Option<PathBuf>,
     /// With a model file: render from its camera N (0-based) instead of
-    /// the first.
-    #[arg(long, value_name = "N")]
-    pub camera: Option<usize>,
+    /// the first, or `auto`: strata's framing camera (a three-quarter
+    /// view that fits the model) even when the file has cameras.
+    #[arg(long, value_name = "N|auto")]
+    pub camera: Option<model::CameraChoice>,
     /// With a model file: write the scene made for it to FILE (.toml,
     /// atomically), to edit and render again with `strata render FILE`.
     #[arg(long, value_name = "FILE.toml")]
@@ -74,6 +75,13 @@ pub struct RenderArgs {
     /// the caches (thinner passes are slower, never a different image).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub passes: Option<u32>,
+    /// Render passes until this much time is spent (30s, 2m, 1.5h, or
+    /// seconds), then write the image and say how many samples per pixel
+    /// it reached: passes of 16, 24, 32, 48, … samples, up to --spp
+    /// (default 65536 with --time). Not bit-identical by nature: the
+    /// samples reached depend on the machine and its load.
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    pub time: Option<f64>,
     /// slices: work stealing over sample slices of work items (64 pixels); regions: one
     /// static band of rows per thread, a baseline for `strata scaling`.
     #[arg(long, default_value = "slices")]
@@ -105,7 +113,9 @@ pub struct RenderArgs {
     /// Add AOV channels to the EXR output, averaged over each pixel's camera
     /// samples: albedo (albedo.R/G/B, the first hit's diffuse colour),
     /// normal (normal.X/Y/Z, its world-space shading normal), depth
-    /// (depth.Z, the distance along the camera ray; inf where a ray misses).
+    /// (depth.Z, the distance along the camera ray; inf where a ray
+    /// misses), spp (spp, the samples the pixel took: fewer than --spp
+    /// where --noise stopped it).
     #[arg(long, value_delimiter = ',', value_name = "AOV,...")]
     pub aov: Vec<Aov>,
     /// Rewrite the output image after every pass (atomically), to watch it
@@ -134,8 +144,14 @@ impl Default for RenderArgs {
 const SEED_SCENE: &str = include_str!("../../scenes/seed.toml");
 const SEED_SCENE_NAME: &str = "scenes/seed.toml (built in)";
 
-pub fn run(args: RenderArgs) -> Result<(), CliError> {
+/// The ceiling of a `--time` render's samples when `--spp` is not given.
+pub const TIME_SPP: u32 = 1 << 16;
+
+pub fn run(mut args: RenderArgs) -> Result<(), CliError> {
     let (slice, partial_output) = check_outputs(&args)?;
+    if args.time.is_some() && args.settings.spp.is_none() {
+        args.settings.spp = Some(TIME_SPP);
+    }
     // Flags that size the image alone are weighed before the scene is read.
     if let (Some(w), Some(h), None) = (args.settings.width, args.settings.height, &args.crop) {
         check_image_memory(&args, w, h)
@@ -205,6 +221,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         window,
         aovs: !args.aov.is_empty(),
         timeline: timeline.clone(),
+        budget: args.time,
     };
     let mut failed = (false, false);
     let checkpoints = each_pass(|film, done| {
@@ -238,6 +255,19 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         image
             .write(&outcome.film, outcome.aov.as_deref(), full.end - full.start)
             .map_err(|e| InputError::file(&args.output, e))?;
+    }
+    if let (Some(budget), false) = (args.time, args.quiet) {
+        let s = &scene.settings;
+        let reached = outcome.done;
+        let ended = if reached < full.end && outcome.stopped {
+            "the budget ended it"
+        } else {
+            "it finished within the budget"
+        };
+        println!(
+            "time budget {budget} s: {reached} of {} samples per pixel reached in {:.2} s ({ended})",
+            s.spp, outcome.seconds
+        );
     }
     let mut stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
     if let (Some(t), Some(start)) = (&timeline, output_start) {
@@ -334,12 +364,13 @@ impl Output<'_> {
     /// The image of `film`, which holds `spp` samples per pixel, with the
     /// AOVs of `aov`.
     fn write(&self, film: &Film, aov: Option<&[AovSum]>, spp: u32) -> Result<(), String> {
-        let pixels = film.to_rgb();
+        let mut pixels = film.to_rgb();
         let (w, h) = (self.window.width(), self.window.height());
+        let s = &self.scene.settings;
         if ImageFormat::from_path(&self.args.output) != Some(ImageFormat::Exr) {
+            strata::output::tonemap::apply(&mut pixels, s.exposure, s.tonemap);
             return write_image(&self.args.output, &pixels, w, h);
         }
-        let s = &self.scene.settings;
         let camera = &self.scene.camera;
         let mut exr = ExrImage::rgb(&pixels, w, h);
         if let Some(sums) = aov {
@@ -388,6 +419,34 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
         None => SliceSpec::WHOLE,
         Some(text) => text.parse::<SliceSpec>().map_err(flag("--slice"))?,
     };
+    if let Some(noise) = args.settings.noise {
+        if slice.count > 1 {
+            return Err(flag("--slice")(format!(
+                "--noise {noise} decides per pixel from all of its samples so far, which a slice's process does not have: render with --noise in one process (--checkpoint lets it stop and resume), or give slices a fixed --spp"
+            ))
+            .into());
+        }
+        if let Some(p) = args.passes {
+            return Err(flag("--passes")(format!(
+                "--passes {p} with --noise {noise}: a noise target's passes are its decision points (after 16, 24, 32, 48, … samples); leave --passes out"
+            ))
+            .into());
+        }
+    }
+    if let Some(t) = args.time {
+        if partial_output {
+            return Err(flag("--time")(format!(
+                "a .strata part holds every sample of its slice, which a budget of {t} s need not reach: write .png or .exr (--checkpoint keeps the film to continue)"
+            ))
+            .into());
+        }
+        if args.passes.is_some() {
+            return Err(flag("--passes")(
+                "--time renders passes of 16, 24, 32, 48, … samples until the budget is spent; leave --passes out".into(),
+            )
+            .into());
+        }
+    }
     if slice.count > 1 && !partial_output {
         return Err(flag("--slice")(format!(
             "slice {}/{} is a partial render: write it to a .strata file (-o part_{}.strata) and combine the parts with `strata merge`",
@@ -623,6 +682,32 @@ fn resume(
         );
     }
     Ok((Some(part.film), Some(done)))
+}
+
+/// A duration: `30s`, `2m`, `1.5h`, `250ms`, or a number of seconds.
+fn parse_duration(text: &str) -> Result<f64, String> {
+    let t = text.trim();
+    let (number, unit) = match t.find(|c: char| c.is_ascii_alphabetic()) {
+        Some(i) => t.split_at(i),
+        None => (t, "s"),
+    };
+    let scale = match unit {
+        "ms" => 1e-3,
+        "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        other => {
+            return Err(format!(
+                "unknown unit '{other}': use ms, s, m or h, as in 30s"
+            ))
+        }
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v * scale),
+        _ => Err(format!(
+            "'{text}' is not a duration above 0, such as 30s or 2m"
+        )),
+    }
 }
 
 /// Whether `path` names a partial render (`.strata`).

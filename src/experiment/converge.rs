@@ -1,6 +1,8 @@
 //! Error against time: render at spp 1, 2, 4, … for each sampling method
 //! and measure RMSE against a reference (pbrt-v4 logs the same per pass
-//! with `--mse-reference-image`).
+//! with `--mse-reference-image`); and, with noise targets, the adaptive
+//! method (`render::adaptive`) beside them, with the time the best
+//! uniform method takes to the same RMSE.
 
 use crate::light::LightSampling;
 use crate::output::chart::{log_log_slope, Panel, Series};
@@ -63,7 +65,12 @@ pub const REFERENCE_METHOD: Method = METHODS[2];
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
     pub method: &'static str,
+    /// Samples per pixel: the ceiling of an adaptive render.
     pub spp: u32,
+    /// An adaptive render's noise target.
+    pub noise: Option<f32>,
+    /// Samples per pixel on average over the image.
+    pub mean_spp: f64,
     pub seconds: f64,
     pub rmse: f64,
     pub rel_mse: f64,
@@ -139,6 +146,8 @@ pub fn measure(
             let p = Point {
                 method: method.name,
                 spp,
+                noise: None,
+                mean_spp: spp as f64,
                 seconds: times[times.len() / 2],
                 rmse,
                 rel_mse,
@@ -149,6 +158,81 @@ pub fn measure(
         }
     }
     points
+}
+
+/// The adaptive method's name in tables, CSV and charts: the reference
+/// method's sampling with a noise target, `spp` the ceiling.
+pub const ADAPTIVE: &str = "adaptive";
+
+/// Measure the adaptive method at each noise target of `targets` with
+/// `ceiling` samples per pixel at most, as [`measure`] does the others.
+pub fn measure_adaptive(
+    scene: &Scene,
+    reference: &[Vec3],
+    targets: &[f32],
+    ceiling: u32,
+    threads: usize,
+    repeats: u32,
+    mut on_point: impl FnMut(&Point),
+) -> Vec<Point> {
+    let mut points = Vec::new();
+    for &noise in targets {
+        let mut s = configured(scene, &REFERENCE_METHOD, ceiling);
+        s.settings.noise = Some(noise);
+        let opts = RenderOptions {
+            threads,
+            ..RenderOptions::default()
+        };
+        let mut times = Vec::new();
+        let mut film = None;
+        for _ in 0..repeats.max(1) {
+            let outcome = render(&s, &opts, None, ());
+            times.push(outcome.seconds);
+            film = Some(outcome.film);
+        }
+        let film = film.expect("at least one render");
+        times.sort_by(f64::total_cmp);
+        let (rmse, rel_mse) = image_error(&film.to_rgb(), reference);
+        let p = Point {
+            method: ADAPTIVE,
+            spp: ceiling,
+            noise: Some(noise),
+            mean_spp: film.mean_samples(),
+            seconds: times[times.len() / 2],
+            rmse,
+            rel_mse,
+        };
+        on_point(&p);
+        points.push(p);
+    }
+    points
+}
+
+/// The least time any uniform method of `points` takes to `rmse`, and
+/// which method: each method's (time, RMSE) points joined by straight
+/// lines on log-log axes, read where they cross `rmse`; `None` where no
+/// method's points reach down to it.
+pub fn uniform_time_at(points: &[Point], rmse: f64) -> Option<(f64, &'static str)> {
+    let mut best: Option<(f64, &'static str)> = None;
+    for m in METHODS {
+        let pts: Vec<&Point> = points
+            .iter()
+            .filter(|p| p.method == m.name && p.noise.is_none())
+            .collect();
+        for pair in pts.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let (hi, lo) = (a.rmse.max(b.rmse), a.rmse.min(b.rmse));
+            if !(lo <= rmse && rmse <= hi) || hi == lo {
+                continue;
+            }
+            let t = (rmse.ln() - a.rmse.ln()) / (b.rmse.ln() - a.rmse.ln());
+            let seconds = (a.seconds.ln() + t * (b.seconds.ln() - a.seconds.ln())).exp();
+            if best.is_none_or(|(s, _)| seconds < s) {
+                best = Some((seconds, m.name));
+            }
+        }
+    }
+    best
 }
 
 /// The chart `strata converge` draws: RMSE against time and against spp,
@@ -167,6 +251,18 @@ pub fn chart_panels(title: &str, points: &[Point]) -> Vec<Panel> {
             pts.iter().map(|p| (p.seconds, p.rmse)).collect(),
         ));
         by_spp.push(Series::new(label, spp_pts));
+    }
+    let adaptive: Vec<&Point> = points.iter().filter(|p| p.noise.is_some()).collect();
+    if !adaptive.is_empty() {
+        let label = format!("{ADAPTIVE} (noise targets, mean spp)");
+        by_time.push(Series::new(
+            label.clone(),
+            adaptive.iter().map(|p| (p.seconds, p.rmse)).collect(),
+        ));
+        by_spp.push(Series::new(
+            label,
+            adaptive.iter().map(|p| (p.mean_spp, p.rmse)).collect(),
+        ));
     }
     vec![
         Panel {
@@ -215,6 +311,8 @@ mod tests {
                 points.push(Point {
                     method: m.name,
                     spp,
+                    noise: None,
+                    mean_spp: spp as f64,
                     seconds: 0.01 * spp as f64 * (1.0 + k as f64),
                     rmse: 0.1 / (1.0 + rmse_of as f64) / (spp as f64).sqrt(),
                     rel_mse: 0.0,
@@ -234,5 +332,11 @@ mod tests {
             legend_text(spp, 3, &same),
             "stratified+is/area-lights (slope -0.50) (same as stratified (slope -0.50))"
         );
+        // The stratified+is line crosses 0.1/3/2 = 0.0167 at spp 4, 0.12 s;
+        // random (twice the error) reaches it only at 16 spp, off its
+        // points; an error below every point has no uniform time.
+        let (t, m) = uniform_time_at(&points, 0.1 / 3.0 / 2.0).unwrap();
+        assert!((t - 0.12).abs() < 1e-9 && m == "stratified+is", "{t} {m}");
+        assert_eq!(uniform_time_at(&points, 1e-4), None);
     }
 }

@@ -7,3 +7,4 @@ pub mod atomic;
 pub mod chart;
 pub mod exr;
 pub mod image;
+pub mod tonemap;

@@ -176,6 +176,9 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         background,
         light_sampling,
         glossy_sampling,
+        noise,
+        exposure,
+        tonemap: _, // how an 8-bit output shows the film, not the film
     } = settings;
     let mut h = Hasher64::new();
     h.write(b"strata scene v1\0");
@@ -249,6 +252,13 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     // Sampling strategies change the noise, so parts must agree on them.
     h.write_debug("light_sampling", light_sampling);
     h.write_debug("glossy_sampling", glossy_sampling);
+    // A noise target decides which samples each pixel takes, judged at
+    // the exposure; hashed only when set, so that a render without one
+    // keeps its fingerprint.
+    if let Some(noise) = noise {
+        h.write_f32(*noise);
+        h.write_f32(*exposure);
+    }
     // Instanced meshes, each once, and their placements.
     h.write_u64(prototypes.len() as u64);
     for p in prototypes {

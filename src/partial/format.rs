@@ -11,7 +11,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | magic `STRATAPT` |
-//! | 4 | format version (1) |
+//! | 4 | format version (1, or 2 for a film with squares) |
 //! | 2 + n | strata version that wrote it (u16 length, UTF-8) |
 //! | 8 | scene fingerprint (`partial::fingerprint`) |
 //! | 4 × 8 | width, height, spp, seed, sampler (0 random, 1 stratified), shadow samples, reflection samples, max depth |
@@ -20,6 +20,7 @@
 //! | 8 × 2 | invalid samples dropped, samples clamped |
 //! | 4 × 4 | first invalid sample: present (0/1), x, y, sample |
 //! | 52 × w·h | per pixel, row-major: sums r, g, b as i128 (units of 2⁻³²), valid sample count u32 |
+//! | 16 × w·h | version 2 only: per pixel, the sum of squared luminance as i128 (units of 2⁻³²), which a `--noise` render's checkpoint needs |
 //! | 8 | checksum: `fingerprint::Hasher64` of every byte before it |
 //!
 //! Reading checks the magic, the version and the header's numbers, then
@@ -40,6 +41,9 @@ use std::path::Path;
 
 pub const MAGIC: [u8; 8] = *b"STRATAPT";
 pub const FORMAT_VERSION: u32 = 1;
+/// The version of a film that keeps squares (`Film::squares`, a `--noise`
+/// render's): version 1 followed by the squares.
+pub const FORMAT_VERSION_SQUARES: u32 = 2;
 /// Bytes per pixel record: three i128 sums and a u32 count, as in memory.
 pub const PIXEL_BYTES: u64 = FILM_PIXEL_BYTES;
 const MAX_VERSION_BYTES: usize = 256;
@@ -256,10 +260,10 @@ impl PartialHeader {
             .map(|(what, a, b)| format!("{what}: {a} vs {b}"))
     }
 
-    fn header_bytes(&self) -> Vec<u8> {
+    fn header_bytes(&self, version: u32) -> Vec<u8> {
         let mut b = Vec::with_capacity(128);
         b.extend_from_slice(&MAGIC);
-        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        b.extend_from_slice(&version.to_le_bytes());
         let v = self.strata_version.as_bytes();
         let v = &v[..v.len().min(MAX_VERSION_BYTES)];
         b.extend_from_slice(&(v.len() as u16).to_le_bytes());
@@ -318,7 +322,12 @@ pub fn write_partial_to(
         inner: w,
         hash: Hasher64::new(),
     };
-    w.write_all(&header.header_bytes())?;
+    let version = if film.squares.is_empty() {
+        FORMAT_VERSION
+    } else {
+        FORMAT_VERSION_SQUARES
+    };
+    w.write_all(&header.header_bytes(version))?;
     w.write_all(&film.invalid.to_le_bytes())?;
     w.write_all(&film.clamped.to_le_bytes())?;
     let bad = film.first_invalid;
@@ -337,6 +346,9 @@ pub fn write_partial_to(
         }
         record[48..52].copy_from_slice(&count.to_le_bytes());
         w.write_all(&record)?;
+    }
+    for q in &film.squares {
+        w.write_all(&q.to_le_bytes())?;
     }
     let checksum = w.hash.finish();
     w.inner.write_all(&checksum.to_le_bytes())
@@ -404,11 +416,12 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
         return Err(not_partial.to_string());
     }
     let version = r.u32()?;
-    if version != FORMAT_VERSION {
+    if version != FORMAT_VERSION && version != FORMAT_VERSION_SQUARES {
         return Err(format!(
-            "partial format version {version}; this strata reads version {FORMAT_VERSION}"
+            "partial format version {version}; this strata reads versions {FORMAT_VERSION} and {FORMAT_VERSION_SQUARES}"
         ));
     }
+    let squares = version == FORMAT_VERSION_SQUARES;
     let vlen = u16::from_le_bytes(r.bytes()?) as usize;
     if vlen > MAX_VERSION_BYTES {
         return Err(format!("corrupt header: version string of {vlen} bytes"));
@@ -475,7 +488,8 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
     // Check the length before allocating: the header may be garbage.
     let head_len = (8 + 4 + 2 + vlen + 8 + 13 * 4 + 2 * 8 + 4 * 4) as u128;
     let pixels = width as u128 * height as u128;
-    let expected = head_len + pixels * PIXEL_BYTES as u128 + 8;
+    let square_bytes = if squares { 16 } else { 0 };
+    let expected = head_len + pixels * (PIXEL_BYTES + square_bytes) as u128 + 8;
     if (file_len as u128) < expected {
         return Err(format!(
             "truncated: {file_len} bytes, but a {width}x{height} partial needs {expected}"
@@ -489,8 +503,9 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
 
     // The length may be a sparse file's: the film is weighed against the
     // machine's memory, and made where a failure is an error.
-    let need = pixels * u128::from(FILM_PIXEL_BYTES);
-    let what = format_args!("its {width}×{height} film ({FILM_PIXEL_BYTES} bytes a pixel)");
+    let need = pixels * u128::from(FILM_PIXEL_BYTES + square_bytes);
+    let per_pixel = FILM_PIXEL_BYTES + square_bytes;
+    let what = format_args!("its {width}×{height} film ({per_pixel} bytes a pixel)");
     crate::system::budget::check_against(budget, need, what)?;
     let mut film = Film::try_new(width, height)?;
     film.invalid = invalid;
@@ -504,6 +519,15 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
             film.sums[i][c] = i128::from_le_bytes(rec[16 * c..16 * c + 16].try_into().unwrap());
         }
         film.counts[i] = u32::from_le_bytes(rec[48..52].try_into().unwrap());
+    }
+    if squares {
+        film.track_squares();
+        for q in &mut film.squares {
+            *q = i128::from_le_bytes(r.bytes().map_err(|_| {
+                "truncated: the file ends inside its squares (did it shrink while read?)"
+                    .to_string()
+            })?);
+        }
     }
     let computed = r.hash.finish();
     let mut stored = [0u8; 8];
@@ -579,6 +603,22 @@ mod tests {
         assert!(p.header.is_complete());
     }
 
+    /// A `--noise` render's film keeps its squares through a file
+    /// (version 2), and one without writes version 1 as before.
+    #[test]
+    fn squares_round_trip_in_version_two() {
+        let mut p = sample_partial();
+        assert_eq!(bytes(&p)[8..12], FORMAT_VERSION.to_le_bytes());
+        p.film.track_squares();
+        for (i, q) in p.film.squares.iter_mut().enumerate() {
+            *q = (i as i128 + 1) << 70;
+        }
+        let b = bytes(&p);
+        assert_eq!(b[8..12], FORMAT_VERSION_SQUARES.to_le_bytes());
+        assert_eq!(read(&b).unwrap(), p);
+        assert!(read(&b[..b.len() - 9]).unwrap_err().contains("truncated"));
+    }
+
     #[test]
     fn truncation_corruption_and_garbage_are_refused() {
         let b = bytes(&sample_partial());
@@ -605,14 +645,14 @@ mod tests {
         let mut p = sample_partial();
         p.header.width = 32768;
         p.header.height = 32768;
-        let head = p.header.header_bytes();
+        let head = p.header.header_bytes(FORMAT_VERSION);
         let mut b = head.clone();
         b.extend_from_slice(&[0u8; 32]);
         let e = read(&b).unwrap_err();
         assert!(e.contains("truncated"), "{e}");
         // Past the largest image a render makes: corrupt, whatever the length.
         p.header.width = 1_000_000;
-        let mut b = p.header.header_bytes();
+        let mut b = p.header.header_bytes(FORMAT_VERSION);
         b.extend_from_slice(&[0u8; 32]);
         let e = read(&b).unwrap_err();
         assert!(
@@ -628,7 +668,7 @@ mod tests {
     fn a_film_past_the_memory_there_is_is_refused_before_it_is_made() {
         let mut p = sample_partial();
         (p.header.width, p.header.height) = (1000, 1000);
-        let mut b = p.header.header_bytes();
+        let mut b = p.header.header_bytes(FORMAT_VERSION);
         b.extend_from_slice(&[0u8; 32]);
         let claimed = b.len() as u64 + 1000 * 1000 * PIXEL_BYTES + 8;
         let budget = Some(Budget::given(1 << 20));

@@ -1,7 +1,9 @@
 //! Arbitrary output variables: per pixel, the mean over its camera samples
 //! of what each camera ray hit first (diffuse albedo, shading normal,
-//! distance), for denoisers and compositing. `--aov albedo,normal,depth`
-//! adds them to the EXR as `albedo.R/G/B`, `normal.X/Y/Z` and `depth.Z`.
+//! distance), for denoisers and compositing, and each pixel's sample
+//! count. `--aov albedo,normal,depth,spp` adds them to the EXR as
+//! `albedo.R/G/B`, `normal.X/Y/Z`, `depth.Z` and `spp` (what a noise target
+//! gave each pixel).
 //!
 //! Sums are f64, added in sample order by the one worker that owns the
 //! pixel in each pass and kept across passes, so they do not depend on the
@@ -21,6 +23,9 @@ crate::mode::mode_enum! {
         Normal = "normal",
         /// The first hit's distance along the camera ray (∞ on a miss).
         Depth = "depth",
+        /// The camera samples the pixel took (fewer than spp where a noise
+        /// target stopped it).
+        Spp = "spp",
     }
 }
 
@@ -31,6 +36,7 @@ impl Aov {
             Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
             Aov::Normal => &["normal.X", "normal.Y", "normal.Z"],
             Aov::Depth => &["depth.Z"],
+            Aov::Spp => &["spp"],
         }
     }
 }
@@ -75,6 +81,7 @@ pub fn channels(sums: &[AovSum], aovs: &[Aov]) -> Vec<(String, Vec<f32>)> {
                 Aov::Albedo => s.mean(s.albedo),
                 Aov::Normal => s.mean(s.normal),
                 Aov::Depth => Vec3::splat((s.depth / s.count.max(1) as f64) as f32),
+                Aov::Spp => Vec3::splat(s.count as f32),
             })
             .collect();
         for (axis, name) in aov.channels().iter().enumerate() {
@@ -103,8 +110,9 @@ mod tests {
         assert_eq!(names, ["depth.Z", "albedo.R", "albedo.G", "albedo.B"]);
         assert_eq!((c[0].1[0], c[1].1[0], c[2].1[0]), (3.0, 0.5, 0.25));
         s.add(&FirstHit::MISS);
-        let c = channels(&[s], &[Aov::Depth, Aov::Normal]);
+        let c = channels(&[s], &[Aov::Depth, Aov::Normal, Aov::Spp]);
         assert_eq!(c[0].1[0], f32::INFINITY);
+        assert_eq!((c[4].0.as_str(), c[4].1[0]), ("spp", 3.0));
         assert!(
             (c[3].1[0] - 2.0 / 3.0).abs() < 1e-6,
             "normal.Z averages the miss's 0"

@@ -28,6 +28,11 @@ pub struct Film {
     pub height: u32,
     pub sums: Vec<[i128; 3]>,
     pub counts: Vec<u32>,
+    /// Per pixel, the sum of its samples' squared luminance, in the same
+    /// fixed point: what a `--noise` render estimates each pixel's error
+    /// from (`render::adaptive`). Empty, and never added to, in a render
+    /// without a noise target ([`Film::track_squares`]).
+    pub squares: Vec<i128>,
     /// Samples dropped for NaN, infinity or negative values.
     pub invalid: u64,
     pub first_invalid: Option<BadSample>,
@@ -39,6 +44,8 @@ pub struct Film {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct PixelSum {
     pub sum: [i128; 3],
+    /// The sum of the samples' squared luminance ([`luminance`]).
+    pub square: i128,
     pub count: u32,
     pub invalid: u32,
     pub first_invalid: Option<u32>,
@@ -61,9 +68,24 @@ impl PixelSum {
             }
             self.sum[c] += fixed(v);
         }
+        // What the noise target's estimate needs: Y² per sample, in the
+        // film's fixed point (Y² at most 2⁴⁸ here, for the sum's room).
+        let y = luminance(value.min(Vec3::splat(MAX_SAMPLE_VALUE as f32)));
+        self.square += fixed((y * y).min(MAX_SAMPLE_VALUE as f32));
         self.count += 1;
     }
 }
+
+/// Rec. 709 luminance Y of linear RGB (ITU-R BT.709 primaries): the one
+/// number a pixel's noise is judged by.
+#[inline]
+pub fn luminance(c: Vec3) -> f32 {
+    let [r, g, b] = LUMINANCE;
+    r as f32 * c.x + g as f32 * c.y + b as f32 * c.z
+}
+
+/// The weights of [`luminance`].
+pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
 
 /// `(v · 2³²).round() as i128` for a float `v` in [0, [`MAX_SAMPLE_VALUE`]],
 /// from its bits, in integers: v = m · 2^e with a 24-bit m, so v · 2³² is
@@ -135,6 +157,7 @@ impl Film {
             height,
             sums: vec![[0; 3]; n],
             counts: vec![0; n],
+            squares: Vec::new(),
             invalid: 0,
             first_invalid: None,
             clamped: 0,
@@ -151,6 +174,7 @@ impl Film {
             height,
             sums: crate::system::budget::try_filled(n, [0; 3], &what)?,
             counts: crate::system::budget::try_filled(n, 0, &what)?,
+            squares: Vec::new(),
             invalid: 0,
             first_invalid: None,
             clamped: 0,
@@ -161,12 +185,29 @@ impl Film {
         self.sums.len()
     }
 
+    /// Keep each pixel's sum of squared luminance from now on (zero for
+    /// the samples already in): a `--noise` render's films do.
+    pub fn track_squares(&mut self) {
+        if self.squares.is_empty() {
+            self.squares = vec![0; self.pixel_count()];
+        }
+    }
+
+    /// The sum of pixel `index`'s squared luminance, in units of 2⁻³²
+    /// (0 where the film keeps none).
+    pub fn square(&self, index: usize) -> i128 {
+        self.squares.get(index).copied().unwrap_or(0)
+    }
+
     /// Fold one pixel's accumulator in.
     pub fn add_pixel(&mut self, index: usize, p: &PixelSum) {
         for c in 0..3 {
             self.sums[index][c] += p.sum[c];
         }
         self.counts[index] += p.count;
+        if let Some(q) = self.squares.get_mut(index) {
+            *q += p.square;
+        }
         self.clamped += p.clamped as u64;
         if p.invalid > 0 {
             self.invalid += p.invalid as u64;
@@ -193,6 +234,14 @@ impl Film {
                 self.sums[i][c] += other.sums[i][c];
             }
             self.counts[i] += other.counts[i];
+        }
+        // Squares are kept only where both parts kept them.
+        if other.squares.len() == self.squares.len() {
+            for (q, o) in self.squares.iter_mut().zip(&other.squares) {
+                *q += o;
+            }
+        } else {
+            self.squares.clear();
         }
         self.invalid += other.invalid;
         self.clamped += other.clamped;

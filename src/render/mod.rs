@@ -1,10 +1,12 @@
 //! The render core: scheduling samples onto threads ([`schedule`]),
+//! stopping each pixel at a noise target ([`adaptive`]),
 //! accumulating them exactly ([`film`]), telling the caller how it goes
 //! ([`progress`]) and what to warn of ([`warning`]), replaying one sample
 //! ([`replay`]), the statistics of a run ([`stats`]) and its timeline
 //! ([`timeline`]). It prints nothing: the front ends (`strata`'s `cli/`,
 //! the Python package) say what it reports.
 
+pub mod adaptive;
 pub mod aov;
 pub mod film;
 pub mod progress;

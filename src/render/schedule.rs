@@ -9,6 +9,7 @@
 //! `Schedule::Regions` is the classic baseline for `strata scaling`: the
 //! image cut into one band of rows per thread, no stealing.
 
+use super::adaptive;
 use super::aov::AovSum;
 use super::film::{Film, PixelSum};
 use super::progress::{Observer, Pass, PassDone};
@@ -123,6 +124,10 @@ pub struct RenderOptions {
     /// Record every work item and pass here (`--timeline`); the image does
     /// not depend on it.
     pub timeline: Option<Arc<Timeline>>,
+    /// Seconds the passes may take (`--time`): no pass starts that the
+    /// last one's pace says would end past them (the first always runs).
+    /// The image then depends on the machine's speed.
+    pub budget: Option<f64>,
 }
 
 impl Default for RenderOptions {
@@ -137,6 +142,7 @@ impl Default for RenderOptions {
             window: None,
             aovs: false,
             timeline: None,
+            budget: None,
         }
     }
 }
@@ -155,9 +161,12 @@ pub struct RenderOutcome {
     pub aov: Option<Vec<AovSum>>,
     /// What the front end should say, in the order found.
     pub warnings: Vec<Warning>,
-    /// The observer ended the render after a pass: the film holds fewer
-    /// samples than `samples`.
+    /// The observer (or the time budget) ended the render after a pass:
+    /// the film holds fewer samples than `samples`.
     pub stopped: bool,
+    /// The end of the last pass rendered: the most samples a pixel has
+    /// (`samples.end` unless stopped, or every pixel met the noise target).
+    pub done: u32,
 }
 
 /// The pass boundaries that split `range` into at most `passes` parts.
@@ -207,9 +216,25 @@ pub fn render(
     let asked = opts
         .passes
         .unwrap_or_else(|| default_passes(full.end - full.start));
-    let passes = pass_ranges(start_sample..full.end, asked);
+    // A noise target needs every sample of a pixel so far: a slice's
+    // process has only its own, so slices render without one.
+    let target = adaptive::NoiseTarget::of(s).filter(|_| opts.slice.count == 1);
+    // A noise target judges, and a time budget stops, at the same points.
+    if target.is_some() {
+        film.track_squares();
+    }
+    let passes = if target.is_some() || opts.budget.is_some() {
+        adaptive::passes(start_sample, full.end)
+    } else {
+        pass_ranges(start_sample..full.end, asked)
+    };
     let mut warnings: Vec<Warning> = Warning::unlit(scene).into_iter().collect();
-    if opts.passes.is_some() && (passes.len() as u32) < asked && !passes.is_empty() {
+    if target.is_none()
+        && opts.budget.is_none()
+        && opts.passes.is_some()
+        && (passes.len() as u32) < asked
+        && !passes.is_empty()
+    {
         warnings.push(Warning::FewerPasses {
             asked,
             made: passes.len() as u32,
@@ -237,7 +262,30 @@ pub fn render(
         t.phase(Phase::Setup, setup_start, t.at(start));
     }
     let mut stopped = false;
+    let mut done = start_sample;
+    // Which pixels take this pass's samples, under a noise target.
+    let mut active = Vec::new();
+    // The last pass's seconds per pixel sample, for the time budget.
+    let mut pace: Option<f64> = None;
     for (pass_index, samples) in passes.iter().enumerate() {
+        if let Some(t) = target {
+            adaptive::active_pixels(&film, t, &mut active);
+        }
+        let live = match target {
+            Some(_) => active.iter().filter(|&&a| a).count(),
+            None => n,
+        };
+        if live == 0 {
+            break;
+        }
+        let work = live as f64 * samples.len() as f64;
+        if let (Some(budget), Some(pace)) = (opts.budget, pace) {
+            if start.elapsed().as_secs_f64() + pace * work > budget {
+                stopped = true;
+                break;
+            }
+        }
+        let pass_clock = Instant::now();
         let pass_start = timeline.map(Timeline::now);
         let pass = Pass {
             index: pass_index,
@@ -253,6 +301,12 @@ pub fn render(
             None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
         };
         let watching = &observer;
+        let active = (!active.is_empty()).then_some(&active[..]);
+        let set = if target.is_some() || opts.budget.is_some() {
+            SampleSet::of_pass(s.seed, samples)
+        } else {
+            SampleSet::whole(s.seed, s.spp)
+        };
         // Each chunk's rays are counted by its own integrator and the
         // pass sums the counts.
         counts += pool.install(|| {
@@ -274,6 +328,8 @@ pub fn render(
                         let pixels = PixelRun {
                             window: &window,
                             first,
+                            active: active.map(|a| &a[first..first + accs.len()]),
+                            set,
                         };
                         let rays_before = integrator.counts.total();
                         render_pixels(&mut integrator, scene, pixels, accs, aov, samples.clone());
@@ -303,6 +359,8 @@ pub fn render(
             film.add_pixel(i, acc);
         }
         cpu.pass(&pool);
+        done = samples.end;
+        pace = Some(pass_clock.elapsed().as_secs_f64() / work);
         let after_start = timeline.map(Timeline::now);
         let done = PassDone {
             pass,
@@ -338,6 +396,7 @@ pub fn render(
         aov,
         warnings,
         stopped,
+        done,
     }
 }
 
@@ -354,6 +413,8 @@ pub fn render_pixel(
     let pixels = PixelRun {
         window: &whole,
         first: index,
+        active: None,
+        set: SampleSet::whole(scene.settings.seed, scene.settings.spp),
     };
     render_pixels(
         integrator,
@@ -365,11 +426,54 @@ pub fn render_pixel(
     );
 }
 
-/// Pixels `first..` of `window` (row-major).
+/// Pixels `first..` of `window` (row-major); with `active`, only those
+/// whose entry is true (a noise target's pixels still sampling); their
+/// samples drawn from `set`.
 #[derive(Debug, Clone, Copy)]
 pub struct PixelRun<'w> {
     pub window: &'w Window,
     pub first: usize,
+    pub active: Option<&'w [bool]>,
+    pub set: SampleSet,
+}
+
+/// The stratified set that samples are drawn from: sample `i` is index
+/// `i − first` of each pixel's set of `count`, whose scrambling `seed`
+/// chooses. A render's samples are one set of spp (`first` 0, the
+/// render's seed); a noise target's passes are each a set of their own
+/// (`render::adaptive`), so that a pixel stopped after any pass has used
+/// whole stratified sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleSet {
+    pub first: u32,
+    pub count: u32,
+    pub seed: u32,
+}
+
+impl SampleSet {
+    /// Every sample of a render of `spp`: one set.
+    pub fn whole(seed: u32, spp: u32) -> Self {
+        Self {
+            first: 0,
+            count: spp,
+            seed,
+        }
+    }
+
+    /// The samples of one pass of a noise target: a set of their own,
+    /// scrambled apart from every other pass's (the first keeps the
+    /// render's seed).
+    pub fn of_pass(seed: u32, pass: &Range<u32>) -> Self {
+        let seed = match pass.start {
+            0 => seed,
+            start => crate::sampling::hash::hash_words(&[seed, start]),
+        };
+        Self {
+            first: pass.start,
+            count: pass.end - pass.start,
+            seed,
+        }
+    }
 }
 
 /// All samples of `samples` for the pixels `run.first..run.first +
@@ -405,20 +509,31 @@ pub fn render_pixels(
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
     // The common set sizes, prepared once for all these pixels: camera
     // samples, and first-hit light samples.
-    let sets = PixelSampler::prepare_sets([s.spp, s.spp.saturating_mul(s.shadow_samples)]);
+    let set = run.set;
+    let sets = PixelSampler::prepare_sets([set.count, set.count.saturating_mul(s.shadow_samples)]);
     // The pixel the sequence is in (`j`), what it shares among its
     // samples, and its next sample; kept across batches, so that each pixel
     // is set up once and the sequence needs no divisions.
     let setup = |j: usize| {
         let (x, y, index) = run.window.pixel(run.first + j);
-        let sampler = PixelSampler::new(s.sampler, s.seed, index).with_sets(sets);
-        let jitter = sampler.dim_2d(Dim::PIXEL, s.spp);
+        let sampler = PixelSampler::new(s.sampler, set.seed, index).with_sets(sets);
+        let jitter = sampler.dim_2d(Dim::PIXEL, set.count);
         (Vec2::new(x as f32, y as f32), sampler, jitter)
     };
-    let (mut j, mut next) = (0, samples.start);
-    let (mut corner, mut sampler, mut jitter) = setup(0);
+    // The next pixel from `j` on that takes samples.
+    let live = |mut j: usize| {
+        while run.active.is_some_and(|a| j < a.len() && !a[j]) {
+            j += 1;
+        }
+        j
+    };
+    let (mut j, mut next) = (live(0), samples.start);
+    if j == accs.len() {
+        return;
+    }
+    let (mut corner, mut sampler, mut jitter) = setup(j);
     let mut batch = [CameraSample {
-        ctx: SampleContext::new(sampler, 0, s.spp),
+        ctx: SampleContext::new(sampler, 0, set.count),
         film: Vec2::ZERO,
     }; PACKET_SIZE];
     // Each lane's pixel: a lane that stays with its pixel from one batch
@@ -435,14 +550,15 @@ pub fn render_pixels(
             let len = (end - next) as usize;
             // This pixel's share of the batch: its pixel samples in SIMD
             // lanes (unused lanes repeat the last sample).
-            let index = std::array::from_fn(|i| (next + i as u32).min(end - 1));
+            let index = std::array::from_fn(|i| (next + i as u32).min(end - 1) - set.first);
             let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
             let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);
             for ((camera, pixel), (sample, offset)) in lanes.zip((next..end).zip(offsets)) {
+                let sample = sample - set.first;
                 if *pixel == j {
                     camera.ctx.sample = sample;
                 } else {
-                    camera.ctx = SampleContext::new(sampler, sample, s.spp);
+                    camera.ctx = SampleContext::new(sampler, sample, set.count);
                     *pixel = j;
                 }
                 camera.film = corner + offset;
@@ -450,7 +566,7 @@ pub fn render_pixels(
             n += len;
             next = end;
             if next == samples.end {
-                j += 1;
+                j = live(j + 1);
                 next = samples.start;
                 if j < accs.len() {
                     (corner, sampler, jitter) = setup(j);
@@ -460,7 +576,7 @@ pub fn render_pixels(
         let first = aov.is_some().then_some(&mut first_hits[..]);
         integrator.camera_batch(&batch[..n], &mut out, first);
         for ((v, camera), &pixel) in out.iter().zip(&batch[..n]).zip(&pixel_of) {
-            accs[pixel].add(*v, camera.ctx.sample);
+            accs[pixel].add(*v, camera.ctx.sample + set.first);
         }
         if let Some(aov) = aov.as_deref_mut() {
             for (hit, &j) in first_hits[..n].iter().zip(&pixel_of) {

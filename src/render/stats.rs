@@ -25,6 +25,11 @@ pub struct RenderStats {
     pub height: u32,
     pub spp: u32,
     pub samples_rendered: [u32; 2],
+    /// Valid samples per pixel, on average over the image: below the
+    /// samples rendered where a noise target stopped pixels early.
+    pub mean_spp: f64,
+    /// The noise target (`--noise`), if any.
+    pub noise: Option<f32>,
     pub sampler: String,
     pub seed: u32,
     pub threads: usize,
@@ -109,8 +114,10 @@ impl RenderStats {
             spp: s.spp,
             samples_rendered: [
                 opts.resume_from.unwrap_or(outcome.samples.start),
-                outcome.samples.end,
+                outcome.done,
             ],
+            mean_spp: outcome.film.mean_samples(),
+            noise: s.noise.filter(|_| opts.slice.count == 1),
             sampler: format!("{:?}", s.sampler).to_lowercase(),
             seed: s.seed,
             threads: outcome.threads,
@@ -190,11 +197,17 @@ impl RenderStats {
             }
         };
         let [start, end] = self.samples_rendered;
-        let samples = if end - start == self.spp {
+        let mut samples = if end - start == self.spp {
             format!("{} spp", self.spp)
         } else {
             format!("samples {start}..{end} of {} spp", self.spp)
         };
+        if let Some(noise) = self.noise {
+            samples = format!(
+                "noise {noise}: {:.1} spp on average, {samples}",
+                self.mean_spp
+            );
+        }
         let threads = if self.threads == 1 {
             "thread"
         } else {

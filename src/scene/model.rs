@@ -13,8 +13,12 @@
 //!   inside the picture.
 //! - **`[[lights]]`:** the file's own lights (glTF `KHR_lights_punctual`),
 //!   written out (so the object says `lights = false`), or
-//!   [`default_lights`].
-//! - **`[[objects]]`:** the model, with its own materials.
+//!   [`default_lights`]: a studio of a dim sky, a key light that casts
+//!   soft shadows, and a ground under the model that catches them.
+//! - **`[[objects]]`:** the model, with its own materials, and the ground.
+//! - **The budget:** unless the command line gives `--spp` or `--noise`,
+//!   a noise target ([`DEFAULT_NOISE`], at most [`DEFAULT_SPP`] samples),
+//!   and the filmic tone curve unless it gives `--tonemap`.
 
 use super::asset::LoadedAsset;
 use super::description::{CameraDesc, CameraType, LightDesc, SceneDescription, V3};
@@ -35,6 +39,44 @@ pub const FRAMING_FILL: f32 = 0.9;
 /// The most placed vertices of shared meshes framing reads one by one;
 /// past it, each placement's box ([`LoadedAsset::framing_positions`]).
 pub const FRAMING_POINTS: usize = 1 << 24;
+
+/// The noise target of a model's first picture when the command line
+/// asks for no sample count: 5% shows little grain at a glance, in
+/// seconds (the timings are in docs/model-pictures.md).
+pub const DEFAULT_NOISE: f32 = 0.05;
+/// The ceiling of samples per pixel under [`DEFAULT_NOISE`].
+pub const DEFAULT_SPP: u32 = 128;
+/// The studio's sky: a constant environment of this radiance, the fill
+/// light (an upward face of albedo ρ shows 0.35 ρ from it alone).
+pub const SKY_RADIANCE: f32 = 0.35;
+/// The irradiance the key light gives a face turned to it at the model's
+/// centre, over π: such a face of albedo ρ shows 0.8 ρ from it, so white
+/// (0.8) lit by key and sky stays below 1.
+pub const KEY_IRRADIANCE: f32 = 0.8;
+/// The ground's albedo: mid grey, so that shadows read on it.
+pub const GROUND_ALBEDO: f32 = 0.5;
+
+/// Which camera `--camera` asks for: one of the file's by number, or
+/// `auto`, the framing camera even when the file has cameras.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CameraChoice {
+    Index(usize),
+    Auto,
+}
+
+impl std::str::FromStr for CameraChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "auto" => Ok(Self::Auto),
+            n => match n.parse::<i64>() {
+                Ok(i) if i >= 0 => Ok(Self::Index(i as usize)),
+                Ok(_) => Err("must be at least 0, or auto".into()),
+                Err(_) => Err(format!("'{n}' is not a camera number (0, 1, …) or auto")),
+            },
+        }
+    }
+}
 
 /// A model file and the scene made around it.
 pub struct ModelScene {
@@ -60,6 +102,8 @@ struct Parts {
     /// Whether the file's lights are written out (the object then leaves
     /// them out).
     own_lights: bool,
+    /// The height of the studio's ground, where strata lights the model.
+    ground: Option<f32>,
 }
 
 /// Read `model` and make its scene: `camera` picks one of a glTF file's
@@ -69,7 +113,7 @@ pub fn model_scene(
     model: &Path,
     cli: &RenderOverrides,
     edits: &[Edit],
-    camera: Option<usize>,
+    camera: Option<CameraChoice>,
 ) -> InputResult<ModelScene> {
     // The command line's values are its own: checked here, they are
     // never blamed on the scene text made from them.
@@ -77,7 +121,12 @@ pub fn model_scene(
     let asset = load_mesh_file(model)?;
     let mut notes = Vec::new();
     let name = model.display();
-    let chosen = match (camera, asset.cameras.len()) {
+    let index = match camera {
+        Some(CameraChoice::Index(n)) => Some(n),
+        _ => None,
+    };
+    let chosen = match (index, asset.cameras.len()) {
+        _ if camera == Some(CameraChoice::Auto) => None,
         (Some(n), count) if n >= count => {
             let has = match count {
                 0 => "no cameras".to_string(),
@@ -93,24 +142,36 @@ pub fn model_scene(
         (n, count) if count > 0 => Some(&asset.cameras[n.unwrap_or(0)]),
         _ => None,
     };
+    let bounds = bounds(&asset);
     let (lights, own_lights) = if asset.lights.is_empty() {
         notes.push(format!(
-            "{name} has no lights: lit by a default white environment (--save-scene writes it out to edit)"
+            "{name} has no lights: lit by strata's studio, a dim sky, a key light from above left casting soft shadows and a grey ground under the model (--save-scene writes it out to edit)"
         ));
-        (default_lights(), false)
+        (default_lights(bounds), false)
     } else {
         (asset.lights.iter().map(|l| l.to_desc()).collect(), true)
     };
+    let ground = (!own_lights).then(|| ground_height(bounds));
+    let mut render = cli.clone();
+    if cli.spp.is_none() && cli.noise.is_none() {
+        render.noise = Some(DEFAULT_NOISE);
+        render.spp = Some(DEFAULT_SPP);
+        notes.push(format!(
+            "rendering to a noise target of {DEFAULT_NOISE} (at most {DEFAULT_SPP} samples a pixel): --noise E for another, --spp N for a fixed count"
+        ));
+    }
+    render.tonemap = cli
+        .tonemap
+        .or(Some(crate::output::tonemap::Tonemap::Filmic));
     if let (Some(b), false) = (cli.background.filter(|b| *b != [0.0; 3]), own_lights) {
         let flag = format!("--background {}", super::settings::rgb_text(b));
         return Err(InputError::flag(flag, made_up_environment(model)));
     }
     let aspect = chosen.and_then(|c| c.aspect_ratio);
     let mut size = image_size(cli, &RenderOverrides::default(), aspect);
-    check_aspect(model, camera.unwrap_or(0), aspect, size)?;
+    check_aspect(model, index.unwrap_or(0), aspect, size)?;
     let mut parts;
     let mut description;
-    let bounds = bounds(&asset);
     // Twice at most: a `--set render.width` changes the size to frame for.
     loop {
         let camera = match chosen {
@@ -126,11 +187,12 @@ pub fn model_scene(
             render: RenderOverrides {
                 width: Some(size.0),
                 height: Some(size.1),
-                ..cli.clone()
+                ..render.clone()
             },
             camera,
             lights: lights.clone(),
             own_lights,
+            ground,
         };
         let file_name = model
             .file_name()
@@ -188,12 +250,46 @@ impl ModelScene {
     }
 }
 
-/// The light of a model that brings none: a white constant environment
-/// of radiance 1, the light most people put around a scanned mesh. It
-/// lights every size of model alike, and an unshadowed diffuse surface of
-/// albedo ρ shows ρ.
-pub fn default_lights() -> Vec<LightDesc> {
-    vec![LightDesc::constant_environment([1.0; 3])]
+/// The light of a model that brings none, made for its `bounds`: a sky
+/// (a constant environment of [`SKY_RADIANCE`]) for fill, and a key light,
+/// a square rect light above the model to the front left of the framing
+/// camera's view (azimuth −20°, 55° up), at four times the model's radius
+/// and 1.5 radii across, so the shadows it casts on the ground are soft
+/// (a penumbra of about a third of the distance from the shadow's caster).
+/// Its radiance L gives a face turned to it irradiance L·A/d² ≈
+/// π·[`KEY_IRRADIANCE`] at the centre. Every size of model is lit alike.
+pub fn default_lights(bounds: Option<(Vec3, Vec3)>) -> Vec<LightDesc> {
+    let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(f32::MIN_POSITIVE.sqrt());
+    let (azimuth, elevation) = ((-20f32).to_radians(), 55f32.to_radians());
+    let towards = Vec3::new(
+        azimuth.sin() * elevation.cos(),
+        elevation.sin(),
+        azimuth.cos() * elevation.cos(),
+    );
+    let (distance, side) = (4.0 * radius, 1.5 * radius);
+    // Edges u, v with u × v = −towards: the light faces the model.
+    let facing = -towards;
+    let u = facing.cross(Vec3::Y).normalize() * side;
+    let v = facing.cross(u);
+    let at = centre + towards * distance - (u + v) * 0.5;
+    let radiance = std::f32::consts::PI * KEY_IRRADIANCE * (distance / side).powi(2);
+    let key = LightDesc {
+        corner: Some(at.into()),
+        edge_u: Some(u.into()),
+        edge_v: Some(v.into()),
+        radiance: Some([radiance; 3]),
+        ..LightDesc::of_type(super::description::LightType::Rect)
+    };
+    vec![LightDesc::constant_environment([SKY_RADIANCE; 3]), key]
+}
+
+/// Where the studio's ground lies: a hair below the model's lowest point,
+/// so that a flat bottom face is not coplanar with it.
+fn ground_height(bounds: Option<(Vec3, Vec3)>) -> f32 {
+    let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+    lo.y - 1e-4 * (hi - lo).length().max(f32::MIN_POSITIVE)
 }
 
 /// The advice for a background given to a model strata lights itself:
@@ -380,6 +476,21 @@ fn scene_text(parts: &Parts, mesh: &str) -> String {
     for light in &parts.lights {
         light_table(&mut out, light);
     }
+    if let Some(y) = parts.ground {
+        out.push_str("[materials.ground]\n");
+        line(&mut out, "diffuse", &number(GROUND_ALBEDO));
+        out.push_str("\n[[objects]]   # the studio's ground\n");
+        line(
+            &mut out,
+            "plane",
+            &format!(
+                "{{ point = [0.0, {}, 0.0], normal = [0.0, 1.0, 0.0] }}",
+                number(y)
+            ),
+        );
+        line(&mut out, "material", "\"ground\"");
+        out.push('\n');
+    }
     out.push_str("[[objects]]\n");
     line(
         &mut out,
@@ -435,6 +546,9 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         background,
         light_sampling,
         glossy_sampling,
+        noise,
+        exposure,
+        tonemap,
     } = r;
     out.push_str("[render]\n");
     let whole = [
@@ -455,10 +569,16 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         ("sampler", sampler.map(|m| m.name())),
         ("light_sampling", light_sampling.map(|m| m.name())),
         ("glossy_sampling", glossy_sampling.map(|m| m.name())),
+        ("tonemap", tonemap.map(|m| m.name())),
     ];
     for (key, value) in modes {
         if let Some(v) = value {
             line(out, key, &format!("\"{v}\""));
+        }
+    }
+    for (key, value) in [("noise", noise), ("exposure", exposure)] {
+        if let Some(v) = value {
+            line(out, key, &number(*v));
         }
     }
     if let Some(b) = background {

@@ -88,14 +88,14 @@ fn mistyped_commands_and_misplaced_flags_get_a_suggestion() {
 
 /// Issue 62: a flag far from every real one gets no suggestion (clap's
 /// Jaro similarity offered `--resume` for `--exposure`, `--timeline` for
-/// `--time`), a slip gets one, and a negative count says its least value
+/// `--time`, before both were flags), a slip gets one, and a negative count says its least value
 /// instead of advising `-- -4`.
 #[test]
 fn suggestions_are_near_misses_and_negative_counts_name_their_least_value() {
     let dir = crate::common::temp_dir("flag-words");
     for (args, far) in [
-        (&["render", "--exposure", "2"][..], "--resume"),
-        (&["render", "--time"][..], "--timeline"),
+        (&["render", "--resolve", "2"][..], "--resume"),
+        (&["render", "--timelapse", "2"][..], "--timeline"),
     ] {
         let o = strata(&dir, args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");

@@ -5,6 +5,7 @@
 //! Modules are named for what they test; `common` holds the helpers they
 //! share (its `mod.rs` has a table of its files).
 
+mod adaptive;
 mod architecture;
 mod bad_input;
 mod checkpoints_and_parts;

@@ -10,7 +10,7 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 use strata::accel::BuildQuality;
 use strata::scene::compile::{compile_model, LoadProgress};
-use strata::scene::model::model_scene;
+use strata::scene::model::{model_scene, CameraChoice};
 use strata::scene::{RenderOverrides, Scene};
 
 /// A glTF file `name`.gltf (with `name`.bin beside it) holding one mesh of
@@ -59,6 +59,7 @@ fn write_gltf(
 
 /// The scene `strata render MODEL` makes, compiled as it compiles it.
 fn model(path: &Path, cli: &RenderOverrides, camera: Option<usize>) -> Scene {
+    let camera = camera.map(CameraChoice::Index);
     let made = model_scene(path, cli, &[], camera).unwrap_or_else(|e| panic!("{e}"));
     let start = std::time::Instant::now();
     compile_model(
@@ -372,12 +373,39 @@ fn auto_framing_fills_the_image_without_cutting_the_model() {
         let out = strata(
             &dir,
             &[
-                "render", &name, "--width", &ws, "--height", &hs, "--aov", "depth", "-o", "f.exr",
+                "render",
+                &name,
+                "--width",
+                &ws,
+                "--height",
+                &hs,
+                "--aov",
+                "depth,normal",
+                "-o",
+                "f.exr",
+                "--spp",
+                "1",
                 "--quiet",
             ],
         );
         assert!(out.status.success(), "{}", stderr(&out));
-        let depth = read_exr(&dir.join("f.exr")).channel("depth.Z").to_vec();
+        let exr = read_exr(&dir.join("f.exr"));
+        let normal = |axis: &str| exr.channel(&format!("normal.{axis}")).to_vec();
+        let (nx, ny, nz) = (normal("X"), normal("Y"), normal("Z"));
+        // The model: hit, and not the studio's ground (normal exactly up).
+        let depth: Vec<f32> = exr
+            .channel("depth.Z")
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| {
+                let ground = (nx[i], ny[i], nz[i]) == (0.0, 1.0, 0.0);
+                if ground {
+                    f32::INFINITY
+                } else {
+                    d
+                }
+            })
+            .collect();
         let hit = |x: usize, y: usize| depth[y * w + x].is_finite();
         let (mut x0, mut x1, mut y0, mut y1) = (w, 0, h, 0);
         for y in 0..h {

@@ -229,7 +229,7 @@ fn unknown_keys_and_values_suggest_the_nearest_valid_one() {
         ),
         "{e}"
     );
-    assert!(e.ends_with("light_sampling or glossy_sampling)"), "{e}");
+    assert!(e.ends_with("noise, exposure or tonemap)"), "{e}");
     let e = error("[render]\nsampler = \"sobol\"\n");
     assert!(
         e.contains("unknown sampler 'sobol' (expected random or stratified)"),

@@ -1,0 +1,221 @@
+//! Adaptive sampling to a noise target (`--noise E`, `[render] noise`).
+//!
+//! A pixel stops taking samples once the estimated relative error of its
+//! luminance is at most E; `spp` is the ceiling. Decisions are made at
+//! pass boundaries, from the film alone: a pixel's record (its sums, its
+//! sum of squared luminance and its count) says whether it goes on. A
+//! stopped pixel's record no longer changes, so the decision is the same
+//! at every later boundary, and a render resumed from a checkpoint (which
+//! holds the film) decides as the uninterrupted one did. The image is
+//! therefore the same for any thread count, checkpoint and resume.
+//!
+//! **The estimate.** With n samples of luminance Yᵢ, mean Ȳ and sample
+//! variance s² = (ΣYᵢ² − nȲ²)/(n − 1), the standard error of the mean is
+//! s/√n, and the relative error is s/√n ÷ max(Ȳ·k, F)·k, where k = 2^exposure
+//! (what the output shows) and F = [`DARK_FLOOR`]: below F the target is an
+//! absolute one, so that black and dark pixels converge. s/√n is the error
+//! of n independent samples; a pixel's samples are part of one stratified
+//! set, whose error is smaller where the integrand is smooth, so the
+//! estimate errs on the side of more samples there (the factor is measured
+//! in tests/suite/adaptive.rs).
+//!
+//! **The passes** are the decision points: the first after
+//! [`FIRST_DECISION`] samples, then each ×1.5 or ×4/3 of the one before
+//! (16, 24, 32, 48, 64, 96, …) up to `spp`, whatever `--passes` says, so
+//! that a checkpoint taken at any of them resumes on the same plan.
+//!
+//! **What a stopped pixel used:** each pass's samples are a stratified
+//! set of their own (`schedule::SampleSet::of_pass`): the first pass a
+//! correlated multi-jittered set of 16 samples, the next ones sets of 8,
+//! 8, 16, 16, 32, 32, … each scrambled apart from the others. A pixel
+//! stopped after any pass has used whole stratified sets, never part of
+//! one; a pixel that reaches the ceiling has used the same sets, not the
+//! one set of spp a render without a noise target uses, so its image
+//! differs from that render's by noise. (A time budget, `--time`, renders
+//! the same passes.)
+//!
+//! The approach is Dammertz, Hanika, Keller and Lensch 2010, "A
+//! Hierarchical Automatic Stopping Condition for Monte Carlo Global
+//! Illumination" (per-pixel error from the samples so far, relative with a
+//! floor), without their hierarchy: each pixel decides alone, which keeps
+//! a crop equal to the same window of a whole render.
+
+use super::film::{Film, FIXED_SCALE, LUMINANCE};
+use crate::scene::settings::RenderSettings;
+use std::ops::Range;
+
+/// Samples every pixel takes before the first decision: enough for a
+/// variance of 15 degrees of freedom, two batches of eight lanes.
+pub const FIRST_DECISION: u32 = 16;
+
+/// Displayed luminance (linear, after exposure) below which the target is
+/// absolute: a pixel of mean Y·k < F stops when its error is at most E·F.
+/// At F = 0.05 an error of E·F shows as under one 8-bit sRGB level for
+/// E ≤ 0.02 (the sRGB curve's slope there is about 3).
+pub const DARK_FLOOR: f64 = 0.05;
+
+/// The noise target of a render: the relative error `error`, judged on
+/// luminance times `scale` (2^exposure).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NoiseTarget {
+    pub error: f32,
+    pub scale: f32,
+}
+
+impl NoiseTarget {
+    /// The noise target of a render's settings (`--noise`, judged at
+    /// `--exposure`), if it has one.
+    pub fn of(settings: &RenderSettings) -> Option<Self> {
+        settings.noise.map(|error| Self {
+            error,
+            scale: settings.exposure.exp2(),
+        })
+    }
+}
+
+/// The sample counts at which pixels are judged, for a ceiling of `spp`:
+/// 16, 24, 32, 48, 64, … (powers of two and 1.5 times them), then `spp`.
+pub fn decision_points(spp: u32) -> Vec<u32> {
+    let mut points = Vec::new();
+    let mut p = FIRST_DECISION;
+    while p < spp {
+        points.push(p);
+        // 16 → 24 → 32 → 48 → 64: alternately ×1.5 and ×4/3.
+        p = if p.is_power_of_two() {
+            p + p / 2
+        } else {
+            p / 3 * 4
+        };
+    }
+    points.push(spp);
+    points
+}
+
+/// The passes of a `--noise` render from sample `start` (0, or a decision
+/// point a checkpoint ended at) to `spp`: one per decision point.
+pub fn passes(start: u32, spp: u32) -> Vec<Range<u32>> {
+    let mut out = Vec::new();
+    let mut lo = start;
+    for p in decision_points(spp) {
+        if p > lo {
+            out.push(lo..p);
+            lo = p;
+        }
+    }
+    out
+}
+
+/// Pixel `index`'s mean luminance Ȳ and the estimated standard error of
+/// that mean, s/√n (module docs); `None` with fewer than two valid
+/// samples or no squares kept.
+pub fn standard_error(film: &Film, index: usize) -> Option<(f64, f64)> {
+    let n = film.counts[index];
+    if n < 2 || film.squares.is_empty() {
+        return None;
+    }
+    let n = n as f64;
+    let s = &film.sums[index];
+    // Ȳ from the channel sums, in f64 (the squares were rounded from f32,
+    // so samples that agree leave a variance of about 10⁻⁷ Ȳ², or 0).
+    let w = LUMINANCE;
+    let y = w[0] * s[0] as f64 + w[1] * s[1] as f64 + w[2] * s[2] as f64;
+    let mean = y / (FIXED_SCALE * n);
+    let mean_square = film.square(index) as f64 / (FIXED_SCALE * n);
+    let variance = ((mean_square - mean * mean) * n / (n - 1.0)).max(0.0);
+    Some((mean, (variance / n).sqrt()))
+}
+
+/// The estimated relative error of pixel `index` of `film`, as the module
+/// docs define it, with luminance scaled by `scale`; infinite with fewer
+/// than two valid samples or no squares kept.
+pub fn relative_error(film: &Film, index: usize, scale: f32) -> f64 {
+    let Some((mean, error)) = standard_error(film, index) else {
+        return f64::INFINITY;
+    };
+    let scale = scale as f64;
+    error * scale / (mean * scale).max(DARK_FLOOR)
+}
+
+/// Whether pixel `index` of `film` has met `target`.
+pub fn converged(film: &Film, index: usize, target: NoiseTarget) -> bool {
+    relative_error(film, index, target.scale) <= target.error as f64
+}
+
+/// Which pixels of `film` still take samples, into `active`.
+pub fn active_pixels(film: &Film, target: NoiseTarget, active: &mut Vec<bool>) {
+    active.clear();
+    active.extend((0..film.pixel_count()).map(|i| !converged(film, i, target)));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::film::PixelSum;
+    use glam::Vec3;
+
+    #[test]
+    fn decision_points_grow_by_half_and_third_and_end_at_the_ceiling() {
+        assert_eq!(
+            decision_points(200),
+            [16, 24, 32, 48, 64, 96, 128, 192, 200]
+        );
+        assert_eq!(decision_points(16), [16]);
+        assert_eq!(decision_points(4), [4]);
+        assert_eq!(decision_points(1024).last(), Some(&1024));
+        assert_eq!(passes(0, 40), [0..16, 16..24, 24..32, 32..40]);
+        assert_eq!(passes(24, 40), [24..32, 32..40]);
+        assert_eq!(passes(40, 40), Vec::<Range<u32>>::new());
+    }
+
+    fn film_of(values: &[Vec3]) -> Film {
+        let mut p = PixelSum::default();
+        for (i, v) in values.iter().enumerate() {
+            p.add(*v, i as u32);
+        }
+        let mut film = Film::new(1, 1);
+        film.track_squares();
+        film.add_pixel(0, &p);
+        film
+    }
+
+    /// Samples that agree have no error; two values a and b, half each,
+    /// have s = |a − b|/2 · √(n/(n−1)).
+    #[test]
+    fn the_estimate_is_the_standard_error_over_the_mean() {
+        let same = film_of(&[Vec3::new(0.3, 0.2, 0.7); 16]);
+        assert!(relative_error(&same, 0, 1.0) < 1e-3);
+        let target = NoiseTarget {
+            error: 1e-3,
+            scale: 1.0,
+        };
+        assert!(converged(&same, 0, target));
+        let values: Vec<Vec3> = (0..16)
+            .map(|i| Vec3::splat(if i % 2 == 0 { 1.0 } else { 3.0 }))
+            .collect();
+        let film = film_of(&values);
+        let s = (16.0f64 / 15.0).sqrt();
+        let expected = s / 4.0 / 2.0;
+        let e = relative_error(&film, 0, 1.0);
+        assert!((e - expected).abs() < 1e-5, "{e} vs {expected}");
+        // Exposure scales the mean and the error alike above the floor.
+        assert!((relative_error(&film, 0, 4.0) - expected).abs() < 1e-5);
+    }
+
+    /// A dark pixel is judged against the floor: its relative error is
+    /// its absolute error over F.
+    #[test]
+    fn dark_pixels_meet_an_absolute_target() {
+        let values: Vec<Vec3> = (0..16)
+            .map(|i| Vec3::splat(if i % 2 == 0 { 0.0 } else { 0.002 }))
+            .collect();
+        let film = film_of(&values);
+        let absolute = 0.001 * (16.0f64 / 15.0).sqrt() / 4.0;
+        let e = relative_error(&film, 0, 1.0);
+        assert!((e - absolute / DARK_FLOOR).abs() < 1e-4, "{e}");
+        assert_eq!(
+            relative_error(&film_of(&[Vec3::ONE]), 0, 1.0),
+            f64::INFINITY
+        );
+        assert_eq!(relative_error(&Film::new(1, 1), 0, 1.0), f64::INFINITY);
+    }
+}
