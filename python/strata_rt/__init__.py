@@ -24,6 +24,16 @@ on every core::
 trimesh's ray interface: ``mesh.ray = RayMeshIntersector(mesh)``.
 """
 
-from ._native import ClosestPoints, Hits, InputError, Mesh, __version__, render
+try:
+    from ._native import ClosestPoints, Hits, InputError, Mesh, __version__, render
+except ImportError as e:  # pragma: no cover - depends on how Python was started
+    import os as _os
+
+    _here = _os.path.dirname(_os.path.abspath(__file__))
+    raise ImportError(
+        f"strata_rt was imported from its source folder ({_here}), which has no compiled "
+        "module: start Python outside python/ to use the package `pip install ./python` "
+        "installed, or build it in place with `maturin develop --release`"
+    ) from e
 
 __all__ = ["ClosestPoints", "Hits", "InputError", "Mesh", "__version__", "render"]

@@ -188,3 +188,18 @@ def test_ctrl_c_stops_a_long_query(bumpy):
         signal.signal(signal.SIGINT, previous)
     small = mesh.intersect(o[:1000], d[:1000])
     np.testing.assert_array_equal(small.prim, mesh.intersect(o[:1000], d[:1000], threads=1).prim)
+
+
+def test_the_source_folder_imported_by_mistake_says_so(tmp_path):
+    # Python started inside python/ finds the source folder first, which
+    # has no compiled module: the error says what happened and what to do.
+    import shutil
+    import subprocess
+    import sys
+
+    source = helpers.REPO / "python" / "strata_rt"
+    shutil.copytree(source, tmp_path / "strata_rt", ignore=shutil.ignore_patterns("_native*.so", "*.pyd"))
+    done = subprocess.run([sys.executable, "-c", "import strata_rt"], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode != 0
+    last = done.stderr.strip().splitlines()[-1]
+    assert "source folder" in last and "pip install ./python" in last, last
