@@ -3,7 +3,9 @@
 use crate::convert;
 use crate::run::{self, Threads, CHUNK, TASK};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
-use pyo3::exceptions::{PyFileNotFoundError, PyKeyError, PyNotImplementedError, PyValueError};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyKeyError, PyNotImplementedError, PyTypeError, PyValueError,
+};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -185,22 +187,58 @@ pub fn rows<'py>(py: Python<'py>, rows: Vec<[f32; 3]>) -> PyResult<Bound<'py, Py
     PyArray1::from_vec(py, flat).reshape([n, 3])
 }
 
+type CornerArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i64>>);
+
+/// `tris` as ``vertices`` (3m, 3) float32, one row per corner, and
+/// ``faces`` (m, 3) int64 indexing them in order.
+fn corner_arrays(py: Python<'_>, tris: Vec<[glam::Vec3; 3]>) -> PyResult<CornerArrays<'_>> {
+    let m = tris.len();
+    let corners: Vec<f32> = tris
+        .into_iter()
+        .flat_map(|t| t.into_iter().flat_map(|p| p.to_array()))
+        .collect();
+    let vertices = PyArray1::from_vec(py, corners).reshape([3 * m, 3])?;
+    let faces = PyArray1::from_vec(py, (0..3 * m as i64).collect()).reshape([m, 3])?;
+    Ok((vertices, faces))
+}
+
+/// ``vertices`` and ``faces`` of one object passed as ``Mesh(obj)``.
+fn vertices_and_faces_of<'py>(
+    obj: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    if obj.hasattr("vertices")? && obj.hasattr("faces")? {
+        return Ok((obj.getattr("vertices")?, obj.getattr("faces")?));
+    }
+    Err(PyTypeError::new_err(format!(
+        "Mesh takes vertices and faces, or one object with both as attributes (a \
+         trimesh.Trimesh); faces is missing and a {} has no vertices and faces",
+        obj.get_type().name()?
+    )))
+}
+
 #[pymethods]
 impl Mesh {
     /// Build the mesh and its BVH from ``vertices`` ((n, 3) floats) and
-    /// ``faces`` ((m, 3) integer indices into ``vertices``).
+    /// ``faces`` ((m, 3) integer indices into ``vertices``), or from one
+    /// object that has both as attributes (a ``trimesh.Trimesh``:
+    /// ``Mesh(tm)``).
     ///
     /// Raises ValueError naming what is wrong: a shape or dtype, a
     /// vertex that is NaN or infinite (``vertices[i]``), an index out of
-    /// range (``faces[i][k]``).
+    /// range (``faces[i][k]``); TypeError for one object without them.
     #[new]
+    #[pyo3(signature = (vertices, faces=None))]
     fn new(
         py: Python<'_>,
         vertices: &Bound<'_, PyAny>,
-        faces: &Bound<'_, PyAny>,
+        faces: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let vertices = convert::vec3s(vertices, "vertices")?;
-        let faces = convert::faces(faces, vertices.len())?;
+        let (vertices, faces) = match faces {
+            Some(faces) => (vertices.clone(), faces.clone()),
+            None => vertices_and_faces_of(vertices)?,
+        };
+        let vertices = convert::vec3s(&vertices, "vertices")?;
+        let faces = convert::faces(&faces, vertices.len())?;
         let mesh = py
             .detach(|| raycast::Mesh::new(vertices, faces, BuildQuality::Auto))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -221,6 +259,45 @@ impl Mesh {
             Err(e) if !path.exists() => Err(PyFileNotFoundError::new_err(e.to_string())),
             Err(e) => Err(crate::InputError::new_err(e.to_string())),
         }
+    }
+
+    /// Pickling: the mesh as ``Mesh(vertices, faces)`` of its triangles,
+    /// one vertex row per corner, which answers every query bit for bit as
+    /// this one does (hits depend on the triangles' corners alone, never on
+    /// shared indices or on the tree); a placed mesh as that of the mesh it
+    /// places, placed again by the same maps.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let mesh = &slf.borrow().0;
+        let Some((prototype, maps)) = mesh.placement() else {
+            let (vertices, faces) = corner_arrays(py, mesh.triangles())?;
+            let args = (vertices, faces).into_pyobject(py)?.into_any();
+            return Ok((slf.get_type().into_any(), args));
+        };
+        let (vertices, faces) = corner_arrays(py, prototype)?;
+        // Row-major 3 x 4, in f64 (each f32 exactly), as `place` reads them.
+        let rows: Vec<f64> = maps
+            .iter()
+            .flat_map(|m| {
+                let (c, t) = (m.matrix3, m.translation);
+                (0..3).flat_map(move |r| [c.x_axis[r], c.y_axis[r], c.z_axis[r], t[r]])
+            })
+            .map(f64::from)
+            .collect();
+        let transforms = PyArray1::from_vec(py, rows).reshape([maps.len(), 3, 4])?;
+        let args = (vertices, faces, transforms).into_pyobject(py)?.into_any();
+        Ok((slf.get_type().getattr("_placed")?, args))
+    }
+
+    /// Unpickling a placed mesh: ``Mesh(vertices, faces).place(transforms)``.
+    #[staticmethod]
+    fn _placed(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        transforms: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        Self::new(py, vertices, Some(faces))?.place(py, transforms)
     }
 
     /// The number of triangles (faces); of a placed mesh, every copy's.

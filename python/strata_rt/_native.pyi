@@ -1,7 +1,7 @@
 """Type stubs of strata_rt._native, the compiled half of strata_rt."""
 
 import os
-from typing import Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -73,8 +73,11 @@ class Mesh:
     releases the GIL and runs on every core, or on ``threads`` threads.
     """
 
-    def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
-        """Build the mesh and its BVH from vertices ((n, 3) floats) and faces ((m, 3) integer indices)."""
+    def __init__(self, vertices: Any, faces: Optional[ArrayLike] = None) -> None:
+        """Build the mesh and its BVH from vertices ((n, 3) floats) and faces ((m, 3) integer indices),
+        or from one object with ``vertices`` and ``faces`` (a ``trimesh.Trimesh``)."""
+    def __reduce__(self) -> Tuple[type, Tuple[NDArray[np.float32], NDArray[np.int64]]]:
+        """Pickling: the mesh as its triangles, one vertex row per corner (same answers)."""
     @staticmethod
     def load(path: Union[str, os.PathLike[str]]) -> "Mesh":
         """Load an OBJ, PLY, glTF, GLB, OFF or STL file with strata's loaders; triangle i of the file is face i."""

@@ -52,6 +52,9 @@ pub struct Mesh {
     /// The [min, max] corners of the faces' box: every vertex's (of every
     /// copy), tighter than the tree's box.
     bounds: [Vec3; 2],
+    /// The maps a placed mesh was placed by, as given (the instances keep
+    /// their inverses); empty for a mesh that is not placed.
+    maps: Vec<Affine3A>,
 }
 
 /// One ray's first hit, or [`FirstHit::MISS`].
@@ -151,7 +154,23 @@ impl Mesh {
             return Err(PlaceError::AlreadyPlaced);
         }
         let geometry = placed(self.geometry.clone(), maps, quality).map_err(PlaceError::Map)?;
-        Ok(Self::from_geometry(geometry))
+        Ok(Self {
+            maps: maps.to_vec(),
+            ..Self::from_geometry(geometry)
+        })
+    }
+
+    /// What a placed mesh is made of: the mesh it places (its faces'
+    /// vertices, in face order) and the maps it was placed by, as given;
+    /// `None` for a mesh that is not placed. [`Mesh::new`] of those
+    /// triangles, placed by those maps, answers every query bit for bit as
+    /// this mesh does (a binding's pickling).
+    pub fn placement(&self) -> Option<(Vec<[Vec3; 3]>, &[Affine3A])> {
+        if !self.is_placed() {
+            return None;
+        }
+        let prototype = self.geometry.prototypes().first()?;
+        Some((prototype.file_order_triangles(), &self.maps))
     }
 
     fn from_geometry(geometry: Geometry) -> Self {
@@ -183,6 +202,7 @@ impl Mesh {
             flat: geometry.flat_offsets(),
             geometry,
             bounds,
+            maps: Vec::new(),
         }
     }
 
