@@ -24,6 +24,7 @@
 
 pub mod build;
 pub mod bundle;
+pub mod choice;
 mod cluster;
 mod collapse;
 mod descend;
@@ -32,6 +33,7 @@ pub mod in_flight;
 pub mod narrow;
 mod nearest;
 mod node;
+mod ploc;
 pub mod node_test;
 pub mod packet;
 pub mod prefetch;
@@ -41,6 +43,7 @@ mod validate;
 mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};
+pub use choice::BuildChoice;
 pub use collapse::NO_PRIM;
 pub use hit::PrimHit;
 pub use nearest::NearestQueue;
