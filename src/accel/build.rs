@@ -639,7 +639,11 @@ mod tests {
                 let params = quality.params(boxes.len());
                 let ours = binary_tree(Boxes::Borrowed(&boxes), bounds, quality);
                 let mut theirs = obvhs_ploc(&boxes, &params);
-                ReinsertionOptimizer::default().run(&mut theirs, params.reinsertion_batch_ratio, None);
+                ReinsertionOptimizer::default().run(
+                    &mut theirs,
+                    params.reinsertion_batch_ratio,
+                    None,
+                );
                 let cost = |b: &Bvh2| Bvh8::collapse(b, bounds, u32::MAX).stats().sah_cost;
                 let (ours, theirs) = (cost(&ours), cost(&theirs));
                 assert!(

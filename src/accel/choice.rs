@@ -94,7 +94,9 @@ impl BuildQuality {
     pub fn choose(self, prims: usize, rays: Option<u64>) -> BuildChoice {
         let (quality, reason) = match (self, rays) {
             (Self::Auto, _) if prims < MODEL_MIN_PRIMS => (Self::Medium, Reason::Small { prims }),
-            (Self::Auto, None) if prims > TRACING_FAST_ABOVE => (Self::Fast, Reason::Count { prims }),
+            (Self::Auto, None) if prims > TRACING_FAST_ABOVE => {
+                (Self::Fast, Reason::Count { prims })
+            }
             (Self::Auto, None) => (Self::Medium, Reason::Count { prims }),
             (Self::Auto, Some(rays)) => {
                 let (k, estimate) = fit(prims, rays);
@@ -168,10 +170,11 @@ mod tests {
     #[test]
     fn more_rays_never_choose_a_cheaper_build() {
         for prims in [MODEL_MIN_PRIMS, 871_414, 13_942_624] {
-            let chosen: Vec<usize> = (0..40)
-                .map(|e| fit(prims, 1u64 << e).0)
-                .collect();
-            assert!(chosen.windows(2).all(|w| w[0] <= w[1]), "{prims}: {chosen:?}");
+            let chosen: Vec<usize> = (0..40).map(|e| fit(prims, 1u64 << e).0).collect();
+            assert!(
+                chosen.windows(2).all(|w| w[0] <= w[1]),
+                "{prims}: {chosen:?}"
+            );
             assert_eq!(chosen[0], 0, "{prims}: one ray builds fastest");
             assert_eq!(*chosen.last().unwrap(), 3, "{prims}: 2^39 rays build high");
         }
@@ -186,9 +189,12 @@ mod tests {
                 let (k, e) = fit(prims, rays);
                 let per_ray = trace_ns(prims) * 1e-9;
                 for j in 0..PRESETS.len() {
-                    let other = BUILD_NS[j] * 1e-9 * prims as f64
-                        + per_ray * TRACE_FACTOR[j] * rays as f64;
-                    assert!(e.build_s + e.trace_s <= other, "{prims} {rays}: {k} over {j}");
+                    let other =
+                        BUILD_NS[j] * 1e-9 * prims as f64 + per_ray * TRACE_FACTOR[j] * rays as f64;
+                    assert!(
+                        e.build_s + e.trace_s <= other,
+                        "{prims} {rays}: {k} over {j}"
+                    );
                 }
             }
         }
@@ -209,8 +215,14 @@ mod tests {
         assert_eq!(auto.choose(50_000, None).quality, BuildQuality::Medium);
         assert_eq!(auto.choose(3_000_000, None).quality, BuildQuality::Fast);
         assert_eq!(auto.choose(1_000_000, None).quality, BuildQuality::Medium);
-        assert_eq!(auto.choose(1_000_000, Some(1)).quality, BuildQuality::Fastest);
-        assert_eq!(auto.choose(1_000_000, Some(1 << 40)).quality, BuildQuality::High);
+        assert_eq!(
+            auto.choose(1_000_000, Some(1)).quality,
+            BuildQuality::Fastest
+        );
+        assert_eq!(
+            auto.choose(1_000_000, Some(1 << 40)).quality,
+            BuildQuality::High
+        );
         for rays in [None, Some(0), Some(1 << 20), Some(u64::MAX)] {
             assert_ne!(auto.choose(1 << 20, rays).quality, BuildQuality::Auto);
         }

@@ -19,31 +19,49 @@
 //! count and any blocking.
 
 use crate::math::Aabb;
+use glam::Vec3A;
+use obvhs::aabb::Aabb as Box3A;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH};
 use rayon::prelude::*;
 
-/// A cluster of a pass: its box and what it is in the tree, a leaf (its
-/// primitive with [`LEAF`] set) or an inner node (its first child's index).
-#[derive(Clone, Copy)]
-struct Cluster {
-    bounds: Aabb,
-    node: u32,
+/// The clusters of a pass, in curve order: their boxes (in SIMD lanes,
+/// where the neighbour search spends its time) and what each is in the
+/// tree, a leaf (its primitive with [`LEAF`] set) or an inner node (its
+/// first child's index).
+struct Clusters {
+    bounds: Vec<Box3A>,
+    node: Vec<u32>,
 }
 
 const LEAF: u32 = 1 << 31;
 
-impl Cluster {
-    fn tree_node(self) -> Bvh2Node {
-        let aabb = obvhs::aabb::Aabb {
-            min: self.bounds.min.into(),
-            max: self.bounds.max.into(),
-        };
-        match self.node & LEAF {
-            0 => Bvh2Node::new(aabb, 0, self.node),
-            _ => Bvh2Node::new(aabb, 1, self.node & !LEAF),
-        }
+/// The tree's node for a cluster of box `aabb` and `node`.
+fn tree_node(aabb: Box3A, node: u32) -> Bvh2Node {
+    match node & LEAF {
+        0 => Bvh2Node::new(aabb, 0, node),
+        _ => Bvh2Node::new(aabb, 1, node & !LEAF),
     }
+}
+
+/// Half the surface area of the union of two boxes, its sides measured
+/// in `scale`s (the root box's sides, so that no area overflows to
+/// infinity or flushes to zero, whatever the scene's size): PLOC's distance.
+#[inline(always)]
+fn union_area(a: &Box3A, b: &Box3A, scale: Vec3A) -> f32 {
+    let d = (a.max.max(b.max) - a.min.min(b.min)) * scale;
+    (d.x + d.y) * d.z + d.x * d.y
+}
+
+/// Each axis's multiplier to the root box's side (0 for a flat axis).
+fn unit_scale(bounds: &[Box3A]) -> Vec3A {
+    let root = bounds
+        .par_iter()
+        .with_min_len(BLOCK)
+        .copied()
+        .reduce(Box3A::empty, |a, b| a.union(&b));
+    let side = root.max - root.min;
+    Vec3A::select(side.cmpgt(Vec3A::ZERO), Vec3A::ONE / side, Vec3A::ZERO)
 }
 
 /// Clusters a task takes in a pass: enough that its work dwarfs its
@@ -60,16 +78,30 @@ const BLOCK: usize = 1 << 14;
 pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: usize) -> Bvh2 {
     let n = order.len();
     assert!(n > 0 && n < LEAF as usize && radius >= 1);
-    let mut current: Vec<Cluster> = order
-        .par_iter()
-        .with_min_len(BLOCK)
-        .map(|&i| Cluster {
-            bounds: boxes[i as usize],
-            node: i | LEAF,
-        })
-        .collect();
-    let mut next = current.clone();
+    let mut current = Clusters {
+        bounds: order
+            .par_iter()
+            .with_min_len(BLOCK)
+            .map(|&i| {
+                let b = boxes[i as usize];
+                Box3A {
+                    min: b.min.into(),
+                    max: b.max.into(),
+                }
+            })
+            .collect(),
+        node: order
+            .par_iter()
+            .with_min_len(BLOCK)
+            .map(|&i| i | LEAF)
+            .collect(),
+    };
+    let mut next = Clusters {
+        bounds: current.bounds.clone(),
+        node: current.node.clone(),
+    };
     let mut nearest = vec![0u32; n];
+    let scale = unit_scale(&current.bounds);
     // The nodes, made in parallel (the first write to a fresh page costs
     // the kernel a clear, which one thread would do for all of them).
     let mut nodes: Vec<Bvh2Node> = (0..2 * n - 1)
@@ -82,13 +114,8 @@ pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: us
     let (mut count, mut passes) = (n, 0);
     while count > 1 {
         let r = if passes < near_passes { 1 } else { radius };
-        find_nearest(&current[..count], &mut nearest[..count], r);
-        let (kept, merged) = merge(
-            &current[..count],
-            &nearest[..count],
-            &mut next,
-            &mut nodes[..insert],
-        );
+        find_nearest(&current.bounds[..count], &mut nearest[..count], r, scale);
+        let (kept, merged) = merge(&current, count, &nearest, &mut next, &mut nodes[..insert]);
         debug_assert!(merged > 0, "a pass merges the closest pair at least");
         std::mem::swap(&mut current, &mut next);
         count = kept;
@@ -96,7 +123,7 @@ pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: us
         passes += 1;
     }
     debug_assert_eq!(insert, 1);
-    nodes[0] = current[0].tree_node();
+    nodes[0] = tree_node(current.bounds[0], current.node[0]);
     Bvh2 {
         nodes,
         primitive_indices: (0..n as u32).collect(),
@@ -109,49 +136,83 @@ pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: us
 /// `nearest[i]`: the index of the cluster within `r` places of `i` whose
 /// union with `i` has the least surface area, the nearer index on a tie.
 /// Each block weighs every pair that touches it once, from the left end
-/// of each pair.
-fn find_nearest(clusters: &[Cluster], nearest: &mut [u32], r: usize) {
-    let count = clusters.len();
+/// of each pair. A cluster's candidates arrive in increasing index (its
+/// left neighbours as the left ends of their pairs, then its right ones),
+/// so a strictly smaller area alone keeps the nearer index on a tie. The
+/// radius is a constant of each instance, so the inner loop unrolls, and
+/// the bests are kept by selects: which neighbour is nearer is a coin toss
+/// a branch would mispredict.
+fn find_nearest(bounds: &[Box3A], nearest: &mut [u32], r: usize, scale: Vec3A) {
+    match r {
+        1 => nearest_within::<1>(bounds, nearest, scale),
+        2 => nearest_within::<2>(bounds, nearest, scale),
+        6 => nearest_within::<6>(bounds, nearest, scale),
+        14 => nearest_within::<14>(bounds, nearest, scale),
+        24 => nearest_within::<24>(bounds, nearest, scale),
+        32 => nearest_within::<32>(bounds, nearest, scale),
+        _ => unreachable!("obvhs's search distances are 1, 2, 6, 14, 24 and 32"),
+    }
+}
+
+fn nearest_within<const R: usize>(bounds: &[Box3A], nearest: &mut [u32], scale: Vec3A) {
+    let count = bounds.len();
     nearest
         .par_chunks_mut(BLOCK)
         .enumerate()
         .for_each(|(b, nearest)| {
             let lo = b * BLOCK;
             let hi = lo + nearest.len();
-            let mut best = vec![(f32::INFINITY, u32::MAX); hi - lo];
-            let better = |(c, j): (f32, u32), (bc, bj): (f32, u32)| c < bc || (c == bc && j < bj);
-            for i in lo.saturating_sub(r)..hi {
-                let own = clusters[i].bounds;
-                for j in i + 1..(i + r + 1).min(count) {
-                    if j < lo {
-                        continue;
-                    }
-                    let cost = own.union(clusters[j].bounds).half_area();
-                    if i >= lo && better((cost, j as u32), best[i - lo]) {
-                        best[i - lo] = (cost, j as u32);
-                    }
-                    if j < hi && better((cost, i as u32), best[j - lo]) {
-                        best[j - lo] = (cost, i as u32);
-                    }
+            // The best of each cluster from lo to hi + R (those past hi
+            // are weighed but not kept), from its left neighbours so far.
+            let mut best = vec![(f32::INFINITY, 0u32); hi - lo + R];
+            let pair = |best: &mut [(f32, u32)], i: usize, j: usize, (bi, ni): (f32, u32)| {
+                let cost = union_area(&bounds[i], &bounds[j], scale);
+                let other = &mut best[j - lo];
+                *other = if cost < other.0 {
+                    (cost, i as u32)
+                } else {
+                    *other
+                };
+                if cost < bi {
+                    (cost, j as u32)
+                } else {
+                    (bi, ni)
+                }
+            };
+            // Left neighbours of the block's first clusters.
+            for i in lo.saturating_sub(R)..lo {
+                for j in lo..(i + R + 1).min(count) {
+                    pair(&mut best, i, j, (f32::INFINITY, 0));
                 }
             }
-            for (out, (_, j)) in nearest.iter_mut().zip(best) {
-                *out = j;
+            for i in lo..hi {
+                let mut own = best[i - lo];
+                if i + R < count {
+                    for k in 1..=R {
+                        own = pair(&mut best, i, i + k, own);
+                    }
+                } else {
+                    for j in i + 1..count {
+                        own = pair(&mut best, i, j, own);
+                    }
+                }
+                nearest[i - lo] = own.1;
             }
         });
 }
 
-/// One pass's merge: clusters that are each other's nearest become one
-/// in `next`, where the first of them was, their two nodes written at the
-/// end of `nodes` (the first pair last); the rest are copied. Returns the
-/// clusters in `next` and the pairs merged.
+/// One pass's merge of the first `count` clusters of `current`: clusters
+/// that are each other's nearest become one in `next`, where the first of
+/// them was, their two nodes written at the end of `nodes` (the first pair
+/// last); the rest are copied. Returns the clusters in `next` and the
+/// pairs merged.
 fn merge(
-    clusters: &[Cluster],
+    current: &Clusters,
+    count: usize,
     nearest: &[u32],
-    next: &mut [Cluster],
+    next: &mut Clusters,
     nodes: &mut [Bvh2Node],
 ) -> (usize, usize) {
-    let count = clusters.len();
     // What cluster i becomes: 0 merged into an earlier one, 1 kept, 2 the
     // first of a pair.
     let fate = |i: usize| {
@@ -163,10 +224,11 @@ fn merge(
         }
     };
     let blocks = count.div_ceil(BLOCK);
+    let block = |b: usize| b * BLOCK..((b + 1) * BLOCK).min(count);
     let tallies: Vec<(usize, usize)> = (0..blocks)
         .into_par_iter()
         .map(|b| {
-            (b * BLOCK..((b + 1) * BLOCK).min(count)).fold((0, 0), |(kept, pairs), i| match fate(i) {
+            block(b).fold((0, 0), |(kept, pairs), i| match fate(i) {
                 0 => (kept, pairs),
                 1 => (kept + 1, pairs),
                 _ => (kept + 1, pairs + 1),
@@ -177,41 +239,45 @@ fn merge(
         .iter()
         .fold((0, 0), |(k, p), &(bk, bp)| (k + bk, p + bp));
     // Each block's share of `next` (in order) and of `nodes` (from the
-    // end down: the first block's pairs last).
+    // end down: the first block's pairs last), and where its nodes start.
     let mut parts = Vec::with_capacity(blocks);
     let mut node_start = nodes.len();
     let first_pair = node_start - 2 * pairs;
-    let mut next_rest = &mut next[..kept];
+    let mut bounds_rest = &mut next.bounds[..kept];
+    let mut node_rest = &mut next.node[..kept];
     let mut nodes_rest = &mut nodes[first_pair..];
     for &(bk, bp) in &tallies {
-        let (out, rest) = std::mem::take(&mut next_rest).split_at_mut(bk);
+        let (bounds_out, b_rest) = std::mem::take(&mut bounds_rest).split_at_mut(bk);
+        let (node_out, n_rest) = std::mem::take(&mut node_rest).split_at_mut(bk);
         let below = nodes_rest.len() - 2 * bp;
         let (rest_nodes, mine) = std::mem::take(&mut nodes_rest).split_at_mut(below);
         node_start -= 2 * bp;
-        parts.push((out, mine, node_start));
-        (next_rest, nodes_rest) = (rest, rest_nodes);
+        parts.push((bounds_out, node_out, mine, node_start));
+        (bounds_rest, node_rest, nodes_rest) = (b_rest, n_rest, rest_nodes);
     }
     parts
         .into_par_iter()
         .enumerate()
-        .for_each(|(b, (out, mine, start))| {
-            let mut out = out.iter_mut();
+        .for_each(|(b, (bounds_out, node_out, mine, start))| {
+            let mut out = bounds_out.iter_mut().zip(node_out.iter_mut());
             // This block's pairs fill `mine` from its end down.
             let mut slot = mine.len();
-            for i in b * BLOCK..((b + 1) * BLOCK).min(count) {
-                let c = clusters[i];
+            for i in block(b) {
+                let (own, node) = (current.bounds[i], current.node[i]);
                 match fate(i) {
                     0 => {}
-                    1 => *out.next().unwrap() = c,
+                    1 => {
+                        let (b, n) = out.next().unwrap();
+                        (*b, *n) = (own, node);
+                    }
                     _ => {
-                        let other = clusters[nearest[i] as usize];
+                        let j = nearest[i] as usize;
+                        let other = current.bounds[j];
                         slot -= 2;
-                        mine[slot] = c.tree_node();
-                        mine[slot + 1] = other.tree_node();
-                        *out.next().unwrap() = Cluster {
-                            bounds: c.bounds.union(other.bounds),
-                            node: (start + slot) as u32,
-                        };
+                        mine[slot] = tree_node(own, node);
+                        mine[slot + 1] = tree_node(other, current.node[j]);
+                        let (b, n) = out.next().unwrap();
+                        (*b, *n) = (own.union(&other), (start + slot) as u32);
                     }
                 }
             }
@@ -323,19 +389,23 @@ mod tests {
     #[test]
     fn nearest_neighbours_match_brute_force() {
         let boxes = surface_boxes(2 * BLOCK + 50, 11);
-        let clusters: Vec<Cluster> = boxes
+        let bounds: Vec<Box3A> = boxes
             .iter()
-            .map(|&bounds| Cluster { bounds, node: 0 })
+            .map(|b| Box3A {
+                min: b.min.into(),
+                max: b.max.into(),
+            })
             .collect();
         for r in [1, 6, 14] {
-            let mut nearest = vec![0; clusters.len()];
-            find_nearest(&clusters, &mut nearest, r);
+            let mut nearest = vec![0; bounds.len()];
+            let scale = unit_scale(&bounds);
+            find_nearest(&bounds, &mut nearest, r, scale);
             for (i, &got) in nearest.iter().enumerate() {
                 let lo = i.saturating_sub(r);
-                let hi = (i + r + 1).min(clusters.len());
+                let hi = (i + r + 1).min(bounds.len());
                 let want = (lo..hi)
                     .filter(|&j| j != i)
-                    .map(|j| (boxes[i].union(boxes[j]).half_area(), j))
+                    .map(|j| (union_area(&bounds[i], &bounds[j], scale), j))
                     .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
                     .unwrap()
                     .1;

@@ -228,10 +228,7 @@ fn background_by_edit(
         .iter()
         .rev()
         .find(|e| super::parse::within(key, &e.path) || super::parse::within(&e.path, key));
-    let place = by.map_or_else(
-        || "--background".to_string(),
-        |e| e.written(),
-    );
+    let place = by.map_or_else(|| "--background".to_string(), |e| e.written());
     Err(InputError::flag(place, made_up_environment(model)))
 }
 

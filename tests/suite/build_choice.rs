@@ -88,7 +88,11 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
         chosen.push(want);
     }
     assert_eq!(chosen[0], BuildQuality::Fastest, "a preview builds fastest");
-    assert_ne!(chosen[1], BuildQuality::Fastest, "a long render builds more");
+    assert_ne!(
+        chosen[1],
+        BuildQuality::Fastest,
+        "a long render builds more"
+    );
 }
 
 /// `--bvh-quality` names the preset whatever the rays, and says so.
@@ -121,7 +125,10 @@ fn a_named_preset_overrides_auto() {
             ],
         );
         let st = stats(&json);
-        assert_eq!((st["bvh_quality"].as_str(), st["bvh_why"].as_str()), (Some(q), Some("as asked")));
+        assert_eq!(
+            (st["bvh_quality"].as_str(), st["bvh_why"].as_str()),
+            (Some(q), Some("as asked"))
+        );
         assert!(summary.contains(&format!("BVH {q} ")), "{summary}");
     }
 }
