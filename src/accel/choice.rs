@@ -29,20 +29,25 @@ const PRESETS: [BuildQuality; 4] = [
 ];
 
 /// Build time a primitive, in nanoseconds, of each preset of [`PRESETS`]
-/// (two threads, AMD EPYC; docs/performance.md).
-const BUILD_NS: [f64; 4] = [180.0, 330.0, 410.0, 900.0];
+/// (two threads, AMD EPYC; docs/performance.md: the dragon and its two
+/// subdivisions, 0.9 to 14 million triangles).
+const BUILD_NS: [f64; 4] = [195.0, 410.0, 530.0, 1280.0];
 
 /// Trace time a ray relative to the medium tree's, of each preset of
-/// [`PRESETS`] (docs/performance.md).
-const TRACE_FACTOR: [f64; 4] = [1.06, 1.02, 1.0, 0.98];
+/// [`PRESETS`]: 1 + 0.6 × (the tree's SAH cost over the medium tree's −
+/// 1) on the dragon (19.0, 17.8, 17.8, 17.4), 0.6 being the share of a
+/// render's time that moves with the tree (docs/performance.md).
+const TRACE_FACTOR: [f64; 4] = [1.04, 1.0, 1.0, 0.987];
 
-/// The medium tree's trace time a ray, in nanoseconds, over `prims`
-/// primitives: a walk's depth grows with the log of the count.
+/// The medium tree's trace time a ray of a render, in nanoseconds, over
+/// `prims` primitives: 62 ns on the dragon (871,414 triangles), 7.25 ns
+/// more for each doubling (the walk a level deeper, the tree further out
+/// of the caches), fitted to the dragon and its subdivisions; never
+/// under 10 ns.
 fn trace_ns(prims: usize) -> f64 {
-    TRACE_NS_BASE + TRACE_NS_PER_LEVEL * (prims.max(2) as f64).log2()
+    let doublings = (prims.max(2) as f64 / 871_414.0).log2();
+    (62.0 + 7.25 * doublings).max(10.0)
 }
-const TRACE_NS_BASE: f64 = 20.0;
-const TRACE_NS_PER_LEVEL: f64 = 4.0;
 
 /// Below this many primitives every preset builds in a few milliseconds
 /// and `auto` keeps the medium tree whatever the work (the fastest
@@ -145,7 +150,7 @@ impl std::fmt::Display for BuildChoice {
             Reason::Asked => write!(f, "as asked"),
             Reason::Small { prims } => write!(
                 f,
-                "auto: {prims} primitives, under {MODEL_MIN_PRIMS}, build in milliseconds"
+                "auto: {prims} primitives, under {MODEL_MIN_PRIMS}"
             ),
             Reason::Count { prims } => write!(f, "auto for ray files: {prims} primitives"),
             Reason::Fits(e) => write!(
