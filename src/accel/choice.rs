@@ -34,9 +34,9 @@ const PRESETS: [BuildQuality; 4] = [
 const BUILD_NS: [f64; 4] = [195.0, 410.0, 530.0, 1280.0];
 
 /// Trace time a ray relative to the medium tree's, of each preset of
-/// [`PRESETS`]: 1 + 0.6 × (the tree's SAH cost over the medium tree's −
-/// 1) on the dragon (19.0, 17.8, 17.8, 17.4), 0.6 being the share of a
-/// render's time that moves with the tree (docs/performance.md).
+/// [`PRESETS`]: one plus 0.6 times the tree's SAH cost over the medium
+/// tree's, less one, on the dragon (19.0, 17.8, 17.8, 17.4); 0.6 is the
+/// share of a render's time that moves with the tree (docs/performance.md).
 const TRACE_FACTOR: [f64; 4] = [1.04, 1.0, 1.0, 0.987];
 
 /// The medium tree's trace time a ray of a render, in nanoseconds, over

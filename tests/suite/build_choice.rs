@@ -44,7 +44,7 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
     std::fs::write(dir.join("ball.obj"), bumpy_sphere_obj(320, 200, 1.0, 0.05)).unwrap();
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, SCENE).unwrap();
-    assert!(TRIANGLES >= MODEL_MIN_PRIMS);
+    const { assert!(TRIANGLES >= MODEL_MIN_PRIMS) };
     let mut chosen = Vec::new();
     for (width, height, spp, crop) in [(24u32, 16u32, 2u32, false), (320, 240, 4096, true)] {
         let rays = u64::from(width * height * spp) * 2;
