@@ -1,4 +1,5 @@
-//! Building: obvhs PLOC into a binary tree, then a collapse into 8-wide
+//! Building: PLOC ([`super::ploc`]) and obvhs's reinsertion into a
+//! binary tree, then a collapse into 8-wide
 //! nodes chosen by the surface area heuristic over the whole subtree
 //! (Ylitie, Karras and Laine 2017), see [`super::collapse`].
 
