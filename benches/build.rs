@@ -1,4 +1,4 @@
-//! Criterion bench of the BVH build (`Bvh8::build`: obvhs PLOC, then the
+//! Criterion bench of the BVH build (`Bvh8::build`: PLOC in parallel, then the
 //! collapse to 8-wide nodes) over the triangle boxes of a real mesh, at
 //! three of the `--bvh-quality` levels.
 //!

@@ -1,23 +1,23 @@
-//! Building: obvhs PLOC into a binary tree, then a collapse into 8-wide
+//! Building: PLOC ([`super::ploc`]) and obvhs's reinsertion into a
+//! binary tree, then a collapse into 8-wide
 //! nodes chosen by the surface area heuristic over the whole subtree
 //! (Ylitie, Karras and Laine 2017), see [`super::collapse`].
 
-use super::cluster::Clusters;
+use super::cluster::{morton_order, Clusters};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
 use crate::math::Aabb;
 use glam::{Vec3, Vec3A};
-use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
-use obvhs::ploc::PlocBuilder;
+use obvhs::ploc::PlocSearchDistance;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
 crate::mode::mode_enum! {
-    /// Build effort. `auto` picks by primitive count, and for a render also
-    /// by the rays it will trace ([`BuildQuality::for_render`]): the better
-    /// presets pay off on big meshes only if rays outnumber triangles.
+    /// Build effort. `auto` picks by primitive count, and for a render by
+    /// the estimated build and trace time of each preset
+    /// ([`BuildQuality::choose`], [`super::choice`]).
     #[derive(Default)]
     pub enum BuildQuality("BVH quality") {
         Fastest = "fastest",
@@ -29,37 +29,12 @@ crate::mode::mode_enum! {
     }
 }
 
-/// A render that traces fewer rays than this per primitive builds a big
-/// mesh's tree with the fastest preset under `auto`: the presets' build
-/// and render times break even near 60 rays a triangle, and 32 keeps
-/// `auto` on the safe side (docs/embree.md, "Build and collapse").
-const FASTEST_BELOW_RAYS_PER_PRIM: u64 = 32;
-
-/// Below this many primitives every preset builds in a few milliseconds:
-/// `auto` keeps the better tree whatever the render.
-const FASTEST_MIN_PRIMS: usize = 100_000;
-
 impl BuildQuality {
-    /// The effort for a render that traces about `rays` rays over `prims`
-    /// primitives: `auto` becomes `fastest` for a big mesh that few rays
-    /// will cross (a preview), where the time a better tree saves in
-    /// tracing is less than it costs to build. Any other choice stands.
-    pub fn for_render(self, prims: usize, rays: u64) -> Self {
-        let few_rays = rays < FASTEST_BELOW_RAYS_PER_PRIM.saturating_mul(prims as u64);
-        match self {
-            Self::Auto if prims >= FASTEST_MIN_PRIMS && few_rays => Self::Fastest,
-            other => other,
-        }
-    }
-
-    /// The preset a build over `prim_count` primitives uses: `auto` is
-    /// `fast` above 2 million primitives and `medium` up to them.
+    /// The preset a build over `prim_count` primitives uses when no render
+    /// says how many rays it will trace: `auto` is `fast` above 2 million
+    /// primitives and `medium` up to them.
     pub fn preset(self, prim_count: usize) -> Self {
-        match self {
-            Self::Auto if prim_count > 2_000_000 => Self::Fast,
-            Self::Auto => Self::Medium,
-            other => other,
-        }
+        self.choose(prim_count, None).quality
     }
 
     fn params(self, prim_count: usize) -> BvhBuildParams {
@@ -334,7 +309,10 @@ fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
     let mut bvh2 = if preset == BuildQuality::Fastest {
         let clusters = Clusters::new(&boxes, bounds);
         drop(boxes);
-        let mut bvh2 = ploc(&clusters.boxes, &params);
+        // The clusters lie along the curve already: cluster c is leaf c.
+        let along: Vec<u32> = (0..clusters.boxes.len() as u32).collect();
+        let mut bvh2 = ploc(&clusters.boxes, &along, &params);
+        drop(along);
         // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
         // from starts[c] to starts[c + 1].
         bvh2.nodes
@@ -349,8 +327,9 @@ fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
         bvh2.primitive_indices = clusters.order;
         bvh2
     } else {
-        let bvh2 = ploc(&boxes, &params);
-        drop(boxes);
+        let order = morton_order(&boxes, bounds);
+        let bvh2 = ploc(&boxes, &order, &params);
+        drop((boxes, order));
         bvh2
     };
     if params.reinsertion_batch_ratio > 0.0 {
@@ -363,24 +342,28 @@ fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
     bvh2
 }
 
-/// obvhs's PLOC tree over `boxes`, one leaf each, leaf `i` holding id `i`.
-fn ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
-    // PLOC writes its tree's nodes (96 bytes a leaf) in one sequential
-    // merge loop, and the first write to each fresh page made the kernel
-    // clear it there, one page at a time: `perf record` put 80% of PLOC's
-    // time on the dragon in `clear_page_erms` under that loop. The nodes
-    // are made here in parallel instead (obvhs keeps an array of the
-    // right length as it is), and PLOC fills them as before: the same tree.
-    let mut bvh2 = Bvh2 {
-        nodes: (0..2 * boxes.len() - 1)
-            .into_par_iter()
-            .map(|_| Bvh2Node::default())
-            .collect(),
-        ..Bvh2::default()
+/// PLOC's tree over `boxes` sorted along the curve as `order` lists them
+/// ([`super::ploc`]: parallel, the same tree on any thread count), one
+/// leaf each, leaf `i` holding id `i`, with the preset's search radius.
+fn ploc(boxes: &[Aabb], order: &[u32], params: &BvhBuildParams) -> Bvh2 {
+    let radius = match params.ploc_search_distance {
+        PlocSearchDistance::Minimum => 1,
+        PlocSearchDistance::VeryLow => 2,
+        PlocSearchDistance::Low => 6,
+        PlocSearchDistance::Medium => 14,
+        PlocSearchDistance::High => 24,
+        PlocSearchDistance::VeryHigh => 32,
     };
-    // obvhs reads our boxes through `Boundable`: no converted copy
-    // (32 bytes a primitive) at the build's memory peak.
-    PlocBuilder::with_capacity(boxes.len()).build_with_bvh(
+    super::ploc::ploc(boxes, order, radius, params.search_depth_threshold)
+}
+
+/// obvhs's own PLOC tree over `boxes` (sequential merges), one leaf
+/// each, leaf `i` holding id `i`: what [`ploc`] replaced, kept to hold it
+/// to the same quality.
+#[cfg(test)]
+fn obvhs_ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
+    let mut bvh2 = Bvh2::default();
+    obvhs::ploc::PlocBuilder::with_capacity(boxes.len()).build_with_bvh(
         &mut bvh2,
         params.ploc_search_distance,
         boxes,
@@ -525,6 +508,35 @@ mod tests {
         }
     }
 
+    /// The whole build (PLOC, reinsertion, the collapse) makes the same
+    /// 8-wide tree, node array bit for bit, on 1 and 2 threads, for every
+    /// preset, over enough boxes for many blocks of every parallel step.
+    #[test]
+    fn every_preset_builds_the_same_nodes_on_one_and_two_threads() {
+        let boxes = random_boxes(120_000, 13);
+        for quality in BuildQuality::ALL {
+            let [one, two] = [1, 2].map(|t| on_threads(t, || Bvh8::build(&boxes, quality)));
+            let bits = |b: &Bvh8| -> Vec<u32> {
+                b.nodes
+                    .iter()
+                    .flat_map(|n| {
+                        n.child
+                            .into_iter()
+                            .chain(n.bounds.as_flattened().iter().map(|x| x.to_bits()))
+                    })
+                    .collect()
+            };
+            assert_eq!(one.nodes.len(), two.nodes.len(), "{quality:?}");
+            assert!(bits(&one) == bits(&two), "{quality:?}: the nodes differ");
+            assert_eq!(one.prim_ids, two.prim_ids, "{quality:?}");
+            assert_eq!(
+                (one.depth, one.bounds),
+                (two.depth, two.bounds),
+                "{quality:?}"
+            );
+        }
+    }
+
     /// The leaves of a tree as sorted lists of primitive ids, sorted: what
     /// the tree holds, whatever its node numbering and slot order.
     fn leaf_sets(bvh: &Bvh8) -> Vec<Vec<u32>> {
@@ -593,21 +605,6 @@ mod tests {
         assert!(reached.iter().all(|&r| r == 1));
     }
 
-    /// `auto` turns to `fastest` only for big meshes and few rays, and no
-    /// explicit choice changes.
-    #[test]
-    fn auto_builds_fastest_only_for_big_meshes_that_few_rays_cross() {
-        let auto = BuildQuality::Auto;
-        assert_eq!(auto.for_render(1_000_000, 2_000_000), BuildQuality::Fastest);
-        assert_eq!(auto.for_render(1_000_000, 50_000_000), BuildQuality::Auto);
-        assert_eq!(auto.for_render(50_000, 1_000), BuildQuality::Auto);
-        assert_eq!(
-            BuildQuality::High.for_render(1_000_000, 1),
-            BuildQuality::High
-        );
-        assert_eq!(auto.for_render(usize::MAX, u64::MAX), BuildQuality::Auto);
-    }
-
     /// A binary tree that is a chain 300,000 leaves deep (each inner node
     /// a leaf and the rest) collapses without overflowing the stack,
     /// holds every primitive once, and matches the sequential walk.
@@ -649,6 +646,42 @@ mod tests {
         assert_eq!(leaf_sets(&parallel), leaf_sets(&sequential));
         assert_eq!(leaf_sets(&parallel).concat().len(), n as usize);
         assert_eq!(parallel.stats().nodes, sequential.stats().nodes);
+    }
+
+    /// The parallel PLOC ([`super::ploc`]) makes trees as good as obvhs's
+    /// sequential one did, through reinsertion and the collapse: SAH cost
+    /// within 2% for each preset with a primitive a leaf, over boxes in a
+    /// volume and boxes on a surface (the dragon's figures are in
+    /// docs/performance.md).
+    #[test]
+    fn parallel_ploc_keeps_the_tree_quality_of_obvhs() {
+        let mut rng = seeded(12);
+        let surface: Vec<Aabb> = (0..150_000)
+            .map(|_| {
+                let d = rng.cube(1.0).normalize_or(Vec3::Y);
+                let c = d * (10.0 + (4.0 * d.x).sin() * (3.0 * d.y).cos());
+                Aabb::new(c - 0.03, c + 0.03)
+            })
+            .collect();
+        for boxes in [random_boxes(150_000, 9), surface] {
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            for quality in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::High] {
+                let params = quality.params(boxes.len());
+                let ours = binary_tree(Boxes::Borrowed(&boxes), bounds, quality);
+                let mut theirs = obvhs_ploc(&boxes, &params);
+                ReinsertionOptimizer::default().run(
+                    &mut theirs,
+                    params.reinsertion_batch_ratio,
+                    None,
+                );
+                let cost = |b: &Bvh2| Bvh8::collapse(b, bounds, u32::MAX).stats().sah_cost;
+                let (ours, theirs) = (cost(&ours), cost(&theirs));
+                assert!(
+                    ours < 1.02 * theirs,
+                    "{quality:?}: SAH cost {ours} against obvhs's {theirs}"
+                );
+            }
+        }
     }
 
     /// Taking the boxes (and freeing them before the collapse) builds the

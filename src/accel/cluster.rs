@@ -141,7 +141,7 @@ const PAIR_BLOCK: usize = 1 << 15;
 
 /// Primitive ids sorted by the Morton code of their boxes' centres, ties
 /// by id.
-fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
+pub(super) fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
     let extent = bounds.max - bounds.min;
     // Centres map to [0, 1023] on each axis; a flat axis maps to 0.
     let scale = Vec3::select(extent.cmpgt(Vec3::ZERO), 1023.0 / extent, Vec3::ZERO);

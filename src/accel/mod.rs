@@ -1,9 +1,11 @@
 //! One BVH over every bounded primitive.
 //!
-//! obvhs builds the tree (PLOC, Meister and Bittner 2018, with parallel
-//! reinsertion; the fastest preset starts it from clusters of neighbouring
-//! primitives, `cluster`); we collapse its binary tree into an 8-wide layout of our
-//! own whose child boxes are plain f32 in structure-of-arrays form, so one
+//! Our own PLOC (Meister and Bittner 2018; `ploc`: every pass in
+//! parallel, the same tree on any thread count) builds a binary tree in
+//! obvhs's layout, which obvhs's parallel reinsertion improves; the
+//! fastest preset starts it from clusters of neighbouring primitives
+//! (`cluster`), and `choice` says which preset a render gets. We collapse
+//! the binary tree into an 8-wide layout of our own whose child boxes are plain f32 in structure-of-arrays form, so one
 //! `wide::f32x8` slab test checks all eight children of a node. We traverse
 //! it ourselves: obvhs's own traversal clamps tmin to 1e-4, uses a
 //! non-watertight triangle test and drops nodes when its 32-entry stack
@@ -24,6 +26,7 @@
 
 pub mod build;
 pub mod bundle;
+pub mod choice;
 mod cluster;
 mod collapse;
 mod descend;
@@ -34,6 +37,7 @@ mod nearest;
 mod node;
 pub mod node_test;
 pub mod packet;
+mod ploc;
 pub mod prefetch;
 pub mod query;
 mod stack;
@@ -41,6 +45,7 @@ mod validate;
 mod walk;
 
 pub use build::{BuildQuality, Bvh8, TreeStats};
+pub use choice::BuildChoice;
 pub use collapse::NO_PRIM;
 pub use hit::PrimHit;
 pub use nearest::NearestQueue;

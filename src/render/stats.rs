@@ -53,6 +53,9 @@ pub struct RenderStats {
     pub planes: usize,
     /// The BVH build preset used (`--bvh-quality`, with `auto` resolved).
     pub bvh_quality: BuildQuality,
+    /// Why that preset: `as asked`, or what `auto` weighed (the rays
+    /// and primitives, each estimate; [`crate::accel::choice`]).
+    pub bvh_why: String,
     pub bvh_nodes: usize,
     pub bvh_bytes: usize,
     /// Whether traversal prefetched (`accel::prefetch`: on for trees of
@@ -142,6 +145,7 @@ impl RenderStats {
             analytic_shapes: g.shapes.len(),
             planes: g.planes.len(),
             bvh_quality: timings.bvh_quality,
+            bvh_why: timings.bvh_choice.to_string(),
             bvh_nodes: g.bvh.node_count(),
             bvh_bytes: g.bvh.memory_bytes(),
             bvh_prefetch: g.bvh.prefetch,
@@ -220,7 +224,7 @@ impl RenderStats {
             None => format!("{}x{}", self.width, self.height),
         };
         format!(
-            "{size} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {:.2} s{peak}{instanced}) -> {}",
+            "{size} {samples}: {:.2} M rays ({:.2} camera, {:.2} shadow, {:.2} reflection, {:.2} refraction) in {:.2} s = {:.2} Mrays/s on {} {threads} (load {:.2} s, BVH {} {:.2} s, {}{peak}{instanced}) -> {}",
             self.rays_total as f64 / 1e6,
             r.camera as f64 / 1e6,
             r.shadow as f64 / 1e6,
@@ -230,7 +234,9 @@ impl RenderStats {
             self.mrays_per_s,
             self.threads,
             self.time.load_s,
+            self.bvh_quality,
             self.time.bvh_build_s,
+            self.bvh_why,
             output.display()
         )
     }

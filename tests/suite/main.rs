@@ -8,6 +8,7 @@
 mod adaptive;
 mod architecture;
 mod bad_input;
+mod build_choice;
 mod checkpoints_and_parts;
 mod cli_arguments;
 mod cli_reports;

@@ -19,7 +19,7 @@ use super::settings::RenderOverrides;
 use super::source_map::SourceMap;
 use super::{RenderSettings, Scene};
 use crate::accel::prefetch::Prefetch;
-use crate::accel::{BuildQuality, Bvh8};
+use crate::accel::{BuildChoice, BuildQuality, Bvh8};
 use crate::error::{InputError, InputResult, COMMAND_LINE};
 use crate::geometry::csg::Csg;
 use crate::geometry::{AnalyticPrim, Geometry, GeometryParts, Instance, MeshRange, NO_TRANSFORM};
@@ -59,6 +59,8 @@ pub struct LoadTimings {
     pub bvh_build: Duration,
     /// The preset the BVH was built with (what `auto` chose).
     pub bvh_quality: BuildQuality,
+    /// Why: asked for, or what `auto` weighed ([`BuildQuality::choose`]).
+    pub bvh_choice: BuildChoice,
     pub load_peak_bytes: Option<u64>,
     pub build_peak_bytes: Option<u64>,
 }
@@ -234,7 +236,7 @@ pub fn load_scene_for_tracing(
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Purpose {
     /// Rendering with its settings: `auto` weighs the build against the
-    /// rays the render traces ([`BuildQuality::for_render`]).
+    /// rays the render traces ([`BuildQuality::choose`]).
     Render,
     /// Tracing ray files and benchmarks: `auto` by primitive count alone,
     /// the same tree however many rays are timed.
@@ -381,10 +383,13 @@ fn compile_for(
         .sum();
     progress.building(u64::from(n_tris) + prototype_tris);
     let build_start = Instant::now();
-    let for_purpose = |quality: BuildQuality, prims: usize| match purpose {
-        Purpose::Render => quality.for_render(prims, settings.first_hit_rays(&c.lights)),
-        Purpose::Tracing | Purpose::MeshFile => quality,
+    // The render's rays from its whole settings, never a slice's or the
+    // thread count: every split of one render builds the same tree.
+    let rays = match purpose {
+        Purpose::Render => Some(settings.first_hit_rays(&c.lights)),
+        Purpose::Tracing | Purpose::MeshFile => None,
     };
+    let for_purpose = |quality: BuildQuality, prims: usize| quality.choose(prims, rays);
     // Each prototype's tree first: an instance's box is its root's child
     // boxes moved into world space.
     let mut prototypes = Vec::with_capacity(c.prototypes.len());
@@ -396,7 +401,7 @@ fn compile_for(
             .map_or(0, |m| (m.first + m.count) as usize);
         prototypes.push(instance::build_prototype(
             parts,
-            for_purpose(quality, n),
+            for_purpose(quality, n).quality,
             &file,
         )?);
     }
@@ -412,9 +417,9 @@ fn compile_for(
     }
     let unreached = c.unreached_lights(desc.lights.len(), &boxes);
     c.warnings.extend(unreached);
-    let quality = for_purpose(quality, boxes.len());
-    let bvh_quality = quality.preset(boxes.len());
-    let mut bvh = Bvh8::build_from_with_others(boxes, quality, n_tris);
+    let bvh_choice = for_purpose(quality, boxes.len());
+    let bvh_quality = bvh_choice.quality;
+    let mut bvh = Bvh8::build_from_with_others(boxes, bvh_quality, n_tris);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.shrink_to_fit();
     // Store the vertices once, in the order the leaves read them, straight
@@ -437,6 +442,7 @@ fn compile_for(
         load,
         bvh_build: build_start.elapsed(),
         bvh_quality,
+        bvh_choice,
         load_peak_bytes,
         build_peak_bytes: memory.phase_peak(),
     };
@@ -660,7 +666,7 @@ mod tests {
     }
 
     /// A render's `auto` build is the fastest preset's tree when the render
-    /// traces few rays per triangle and the default one's when it traces
+    /// traces few rays per triangle and a better one's when it traces
     /// many; tracing a mesh file keeps the default whatever the settings.
     #[test]
     fn auto_bvh_effort_follows_the_renders_rays() {
@@ -707,10 +713,13 @@ mod tests {
             (fastest.1, medium.1),
             (BuildQuality::Fastest, BuildQuality::Medium)
         );
-        // 64·64·1·2 rays ≪ 32 per triangle; 64·64·1024·2 (79 per
-        // triangle) ≫. The timings name the preset used.
+        // 64·64·1·2 rays, 0.08 a triangle; 64·64·4096·2, 317 a triangle,
+        // pay for a better tree (`accel::choice`). The timings name the
+        // preset used.
         assert_eq!(tree(1, BuildQuality::Auto), fastest);
-        assert_eq!(tree(1024, BuildQuality::Auto), medium);
+        let many = BuildQuality::Auto.choose(105_800, Some(64 * 64 * 4096 * 2));
+        assert_ne!(many.quality, BuildQuality::Fastest);
+        assert_eq!(tree(4096, BuildQuality::Auto), tree(1, many.quality));
         let (traced, timings) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
         assert_eq!((traced.geometry.bvh.stats(), timings.bvh_quality), medium);
         std::fs::remove_dir_all(&dir).unwrap();

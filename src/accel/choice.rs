@@ -1,0 +1,235 @@
+//! Which build a tree gets: the preset asked for, or under `auto` the one
+//! that fits the work, chosen before the build from the settings alone.
+//!
+//! For a render, `auto` estimates the rays it will trace (pixels × samples
+//! × rays a sample, [`crate::scene::RenderSettings::first_hit_rays`]) and
+//! picks the preset whose build time plus trace time is least:
+//!
+//! ```text
+//! cost(q) = BUILD_NS[q] · prims + TRACE_NS(prims) · TRACE_FACTOR[q] · rays
+//! ```
+//!
+//! a linear model of each preset's build (nanoseconds a primitive) and of
+//! a ray's walk through its tree (the medium tree's cost a ray, which
+//! grows with the log of the primitive count, times the preset's factor).
+//! Its constants were measured on the dragon and its subdivisions
+//! (docs/performance.md, "The build that fits the render", with the model
+//! checked against measurement). Both terms are on the same two threads;
+//! the choice takes no thread count and no slice, so every slice and
+//! every thread count of one render builds the same tree.
+
+use super::build::BuildQuality;
+
+/// The presets `auto` chooses among, in order of effort.
+const PRESETS: [BuildQuality; 4] = [
+    BuildQuality::Fastest,
+    BuildQuality::Fast,
+    BuildQuality::Medium,
+    BuildQuality::High,
+];
+
+/// Build time a primitive, in nanoseconds, of each preset of [`PRESETS`]
+/// (two threads, AMD EPYC; docs/performance.md: the dragon and its two
+/// subdivisions, 0.9 to 14 million triangles).
+const BUILD_NS: [f64; 4] = [195.0, 410.0, 530.0, 1280.0];
+
+/// Trace time a ray relative to the medium tree's, of each preset of
+/// [`PRESETS`]: one plus 0.6 times the tree's SAH cost over the medium
+/// tree's, less one, on the dragon (19.0, 17.8, 17.8, 17.4); 0.6 is the
+/// share of a render's time that moves with the tree (docs/performance.md).
+const TRACE_FACTOR: [f64; 4] = [1.04, 1.0, 1.0, 0.987];
+
+/// The medium tree's trace time a ray of a render, in nanoseconds, over
+/// `prims` primitives: 62 ns on the dragon (871,414 triangles), 7.25 ns
+/// more for each doubling (the walk a level deeper, the tree further out
+/// of the caches), fitted to the dragon and its subdivisions; never
+/// under 10 ns.
+fn trace_ns(prims: usize) -> f64 {
+    let doublings = (prims.max(2) as f64 / 871_414.0).log2();
+    (62.0 + 7.25 * doublings).max(10.0)
+}
+
+/// Below this many primitives every preset builds in a few milliseconds
+/// and `auto` keeps the medium tree whatever the work (the fastest
+/// preset's clusters would put up to eight instances or shapes in a leaf).
+pub const MODEL_MIN_PRIMS: usize = 100_000;
+
+/// Above this many primitives a tree built for tracing ray files (no
+/// render settings to weigh) is `fast`, up to it `medium`.
+const TRACING_FAST_ABOVE: usize = 2_000_000;
+
+/// What was built and why.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BuildChoice {
+    /// The preset built: never `auto`.
+    pub quality: BuildQuality,
+    pub reason: Reason,
+}
+
+/// Why a build has its preset.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub enum Reason {
+    /// `--bvh-quality` (or Python's `bvh_quality`) named it.
+    #[default]
+    Asked,
+    /// `auto` under [`MODEL_MIN_PRIMS`] primitives: the medium tree.
+    Small { prims: usize },
+    /// `auto` for tracing ray files: by primitive count alone.
+    Count { prims: usize },
+    /// `auto` for a render: the least estimated build plus trace time.
+    Fits(Estimate),
+}
+
+/// The model's estimate for the chosen preset, and the work it weighed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    pub prims: usize,
+    pub rays: u64,
+    /// Estimated seconds of the chosen preset's build and of the trace.
+    pub build_s: f64,
+    pub trace_s: f64,
+    /// The same sum for the full (medium) build, for comparison.
+    pub medium_s: f64,
+}
+
+impl BuildQuality {
+    /// The preset for a render that traces about `rays` rays over `prims`
+    /// primitives (`None`: ray files, the same tree however many rays),
+    /// and why. Any preset but `auto` stands.
+    pub fn choose(self, prims: usize, rays: Option<u64>) -> BuildChoice {
+        let (quality, reason) = match (self, rays) {
+            (Self::Auto, _) if prims < MODEL_MIN_PRIMS => (Self::Medium, Reason::Small { prims }),
+            (Self::Auto, None) if prims > TRACING_FAST_ABOVE => {
+                (Self::Fast, Reason::Count { prims })
+            }
+            (Self::Auto, None) => (Self::Medium, Reason::Count { prims }),
+            (Self::Auto, Some(rays)) => {
+                let (k, estimate) = fit(prims, rays);
+                (PRESETS[k], Reason::Fits(estimate))
+            }
+            (asked, _) => (asked, Reason::Asked),
+        };
+        BuildChoice { quality, reason }
+    }
+}
+
+/// The index into [`PRESETS`] of the least estimated build plus trace
+/// time for `rays` rays over `prims` primitives (the less effort on a
+/// tie), and its estimate.
+fn fit(prims: usize, rays: u64) -> (usize, Estimate) {
+    let per_ray = trace_ns(prims) * 1e-9;
+    let parts = |k: usize| {
+        (
+            BUILD_NS[k] * 1e-9 * prims as f64,
+            per_ray * TRACE_FACTOR[k] * rays as f64,
+        )
+    };
+    let total = |k: usize| {
+        let (b, t) = parts(k);
+        b + t
+    };
+    let best = (0..PRESETS.len()).fold(0, |best, k| if total(k) < total(best) { k } else { best });
+    let (build_s, trace_s) = parts(best);
+    (
+        best,
+        Estimate {
+            prims,
+            rays,
+            build_s,
+            trace_s,
+            medium_s: total(2),
+        },
+    )
+}
+
+impl std::fmt::Display for BuildChoice {
+    /// Why, in a few words: what `--stats` records and the summary line
+    /// shows after the preset.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.reason {
+            Reason::Asked => write!(f, "as asked"),
+            Reason::Small { prims } => write!(
+                f,
+                "auto: {prims} primitives, under {MODEL_MIN_PRIMS}"
+            ),
+            Reason::Count { prims } => write!(f, "auto for ray files: {prims} primitives"),
+            Reason::Fits(e) => write!(
+                f,
+                "auto: {:.2} M rays over {:.2} M primitives, est. build {:.2} s + trace {:.2} s (medium {:.2} s)",
+                e.rays as f64 / 1e6,
+                e.prims as f64 / 1e6,
+                e.build_s,
+                e.trace_s,
+                e.medium_s
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Few rays a primitive build fastest, many the best tree, and the
+    /// choice moves one way only as the rays grow.
+    #[test]
+    fn more_rays_never_choose_a_cheaper_build() {
+        for prims in [MODEL_MIN_PRIMS, 871_414, 13_942_624] {
+            let chosen: Vec<usize> = (0..40).map(|e| fit(prims, 1u64 << e).0).collect();
+            assert!(
+                chosen.windows(2).all(|w| w[0] <= w[1]),
+                "{prims}: {chosen:?}"
+            );
+            assert_eq!(chosen[0], 0, "{prims}: one ray builds fastest");
+            assert_eq!(*chosen.last().unwrap(), 3, "{prims}: 2^39 rays build high");
+        }
+    }
+
+    /// The chosen preset's estimate is never above any other preset's,
+    /// by brute force over every preset.
+    #[test]
+    fn the_choice_is_the_least_estimated_time() {
+        for prims in [100_000usize, 1_000_000, 20_000_000] {
+            for rays in [1u64, 77_000, 5_000_000, 300_000_000, 1 << 34] {
+                let (k, e) = fit(prims, rays);
+                let per_ray = trace_ns(prims) * 1e-9;
+                for j in 0..PRESETS.len() {
+                    let other =
+                        BUILD_NS[j] * 1e-9 * prims as f64 + per_ray * TRACE_FACTOR[j] * rays as f64;
+                    assert!(
+                        e.build_s + e.trace_s <= other,
+                        "{prims} {rays}: {k} over {j}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// A named preset wins over the model; `auto` for a small scene or
+    /// for ray files does not weigh rays.
+    #[test]
+    fn a_named_preset_wins_and_auto_resolves() {
+        for q in PRESETS {
+            for rays in [None, Some(1), Some(u64::MAX)] {
+                let c = q.choose(5_000_000, rays);
+                assert_eq!((c.quality, c.reason), (q, Reason::Asked));
+            }
+        }
+        let auto = BuildQuality::Auto;
+        assert_eq!(auto.choose(50_000, Some(1)).quality, BuildQuality::Medium);
+        assert_eq!(auto.choose(50_000, None).quality, BuildQuality::Medium);
+        assert_eq!(auto.choose(3_000_000, None).quality, BuildQuality::Fast);
+        assert_eq!(auto.choose(1_000_000, None).quality, BuildQuality::Medium);
+        assert_eq!(
+            auto.choose(1_000_000, Some(1)).quality,
+            BuildQuality::Fastest
+        );
+        assert_eq!(
+            auto.choose(1_000_000, Some(1 << 40)).quality,
+            BuildQuality::High
+        );
+        for rays in [None, Some(0), Some(1 << 20), Some(u64::MAX)] {
+            assert_ne!(auto.choose(1 << 20, rays).quality, BuildQuality::Auto);
+        }
+    }
+}

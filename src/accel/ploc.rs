@@ -1,0 +1,416 @@
+//! PLOC, parallel locally-ordered clustering (Meister and Bittner 2018,
+//! "Parallel Locally-Ordered Clustering for Bounding Volume Hierarchy
+//! Construction"), every pass of it in parallel and the same tree on any
+//! thread count.
+//!
+//! The leaves are sorted along a Morton curve (`cluster::morton_order`).
+//! Each pass, every cluster finds its nearest neighbour within `radius`
+//! places of the sorted order, by the surface area of their union; the
+//! pairs that are each other's nearest merge into a new cluster, which
+//! takes the place of the first of the two, and the others stay. obvhs's
+//! builder finds the neighbours in parallel but merges in one sequential
+//! loop, which bends the build's scaling over threads (docs/performance.md).
+//! Here the merge is parallel too: each block of the clusters counts what
+//! it keeps and how many pairs it merges, and a prefix sum over the
+//! blocks says where each block writes its clusters of the next pass and
+//! its children into the tree, in the order one sequential walk would.
+//! Ties between neighbours go to the nearer index, so every choice is a
+//! function of the boxes alone and the tree is the same for any thread
+//! count and any blocking.
+
+use crate::math::Aabb;
+use glam::Vec3A;
+use obvhs::aabb::Aabb as Box3A;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH};
+use rayon::prelude::*;
+
+/// The clusters of a pass, in curve order: their boxes (in SIMD lanes,
+/// where the neighbour search spends its time) and what each is in the
+/// tree, a leaf (its primitive with [`LEAF`] set) or an inner node (its
+/// first child's index).
+struct Clusters {
+    bounds: Vec<Box3A>,
+    node: Vec<u32>,
+}
+
+const LEAF: u32 = 1 << 31;
+
+/// The tree's node for a cluster of box `aabb` and `node`.
+fn tree_node(aabb: Box3A, node: u32) -> Bvh2Node {
+    match node & LEAF {
+        0 => Bvh2Node::new(aabb, 0, node),
+        _ => Bvh2Node::new(aabb, 1, node & !LEAF),
+    }
+}
+
+/// Half the surface area of the union of two boxes, its sides measured
+/// in `scale`s (the root box's sides, so that no area overflows to
+/// infinity or flushes to zero, whatever the scene's size): PLOC's distance.
+#[inline(always)]
+fn union_area(a: &Box3A, b: &Box3A, scale: Vec3A) -> f32 {
+    let d = (a.max.max(b.max) - a.min.min(b.min)) * scale;
+    (d.x + d.y) * d.z + d.x * d.y
+}
+
+/// Each axis's multiplier to the root box's side (0 for a flat axis).
+fn unit_scale(bounds: &[Box3A]) -> Vec3A {
+    let root = bounds
+        .par_iter()
+        .with_min_len(BLOCK)
+        .copied()
+        .reduce(Box3A::empty, |a, b| a.union(&b));
+    let side = root.max - root.min;
+    Vec3A::select(side.cmpgt(Vec3A::ZERO), Vec3A::ONE / side, Vec3A::ZERO)
+}
+
+/// Clusters a task takes in a pass: enough that its work dwarfs its
+/// hand-off. The blocks never change the tree.
+const BLOCK: usize = 1 << 14;
+
+/// The binary tree over `boxes`, whose ids `order` lists along the Morton
+/// curve: leaf `i` holds primitive `i` (as obvhs writes it: the leaf's
+/// `first_index` is `i`, and `primitive_indices` is the identity). Each
+/// cluster looks `radius` places each way, but only one for the first
+/// `near_passes` passes (obvhs's `search_depth_threshold`), when clusters
+/// are many and their neighbours on the curve already near. Children come
+/// after their parents.
+pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: usize) -> Bvh2 {
+    let n = order.len();
+    assert!(n > 0 && n < LEAF as usize && radius >= 1);
+    let mut current = Clusters {
+        bounds: order
+            .par_iter()
+            .with_min_len(BLOCK)
+            .map(|&i| {
+                let b = boxes[i as usize];
+                Box3A {
+                    min: b.min.into(),
+                    max: b.max.into(),
+                }
+            })
+            .collect(),
+        node: order
+            .par_iter()
+            .with_min_len(BLOCK)
+            .map(|&i| i | LEAF)
+            .collect(),
+    };
+    let mut next = Clusters {
+        bounds: current.bounds.clone(),
+        node: current.node.clone(),
+    };
+    let mut nearest = vec![0u32; n];
+    let scale = unit_scale(&current.bounds);
+    // The nodes, made in parallel (the first write to a fresh page costs
+    // the kernel a clear, which one thread would do for all of them).
+    let mut nodes: Vec<Bvh2Node> = (0..2 * n - 1)
+        .into_par_iter()
+        .with_min_len(BLOCK)
+        .map(|_| Bvh2Node::default())
+        .collect();
+    // Pairs are written down from the end, so children follow parents.
+    let mut insert = nodes.len();
+    let (mut count, mut passes) = (n, 0);
+    while count > 1 {
+        let r = if passes < near_passes { 1 } else { radius };
+        find_nearest(&current.bounds[..count], &mut nearest[..count], r, scale);
+        let (kept, merged) = merge(&current, count, &nearest, &mut next, &mut nodes[..insert]);
+        debug_assert!(merged > 0, "a pass merges the closest pair at least");
+        std::mem::swap(&mut current, &mut next);
+        count = kept;
+        insert -= 2 * merged;
+        passes += 1;
+    }
+    debug_assert_eq!(insert, 1);
+    nodes[0] = tree_node(current.bounds[0], current.node[0]);
+    Bvh2 {
+        nodes,
+        primitive_indices: (0..n as u32).collect(),
+        max_depth: DEFAULT_MAX_STACK_DEPTH.max(passes + 1),
+        children_are_ordered_after_parents: true,
+        ..Bvh2::default()
+    }
+}
+
+/// `nearest[i]`: the index of the cluster within `r` places of `i` whose
+/// union with `i` has the least surface area, the nearer index on a tie.
+/// Each block weighs every pair that touches it once, from the left end
+/// of each pair. A cluster's candidates arrive in increasing index (its
+/// left neighbours as the left ends of their pairs, then its right ones),
+/// so a strictly smaller area alone keeps the nearer index on a tie. The
+/// radius is a constant of each instance, so the inner loop unrolls, and
+/// the bests are kept by selects: which neighbour is nearer is a coin toss
+/// a branch would mispredict.
+fn find_nearest(bounds: &[Box3A], nearest: &mut [u32], r: usize, scale: Vec3A) {
+    match r {
+        1 => nearest_within::<1>(bounds, nearest, scale),
+        2 => nearest_within::<2>(bounds, nearest, scale),
+        6 => nearest_within::<6>(bounds, nearest, scale),
+        14 => nearest_within::<14>(bounds, nearest, scale),
+        24 => nearest_within::<24>(bounds, nearest, scale),
+        32 => nearest_within::<32>(bounds, nearest, scale),
+        _ => unreachable!("obvhs's search distances are 1, 2, 6, 14, 24 and 32"),
+    }
+}
+
+fn nearest_within<const R: usize>(bounds: &[Box3A], nearest: &mut [u32], scale: Vec3A) {
+    let count = bounds.len();
+    nearest
+        .par_chunks_mut(BLOCK)
+        .enumerate()
+        .for_each(|(b, nearest)| {
+            let lo = b * BLOCK;
+            let hi = lo + nearest.len();
+            // The best of each cluster from lo to hi + R (those past hi
+            // are weighed but not kept), from its left neighbours so far.
+            let mut best = vec![(f32::INFINITY, 0u32); hi - lo + R];
+            let pair = |best: &mut [(f32, u32)], i: usize, j: usize, (bi, ni): (f32, u32)| {
+                let cost = union_area(&bounds[i], &bounds[j], scale);
+                let other = &mut best[j - lo];
+                *other = if cost < other.0 {
+                    (cost, i as u32)
+                } else {
+                    *other
+                };
+                if cost < bi {
+                    (cost, j as u32)
+                } else {
+                    (bi, ni)
+                }
+            };
+            // Left neighbours of the block's first clusters.
+            for i in lo.saturating_sub(R)..lo {
+                for j in lo..(i + R + 1).min(count) {
+                    pair(&mut best, i, j, (f32::INFINITY, 0));
+                }
+            }
+            for i in lo..hi {
+                let mut own = best[i - lo];
+                if i + R < count {
+                    for k in 1..=R {
+                        own = pair(&mut best, i, i + k, own);
+                    }
+                } else {
+                    for j in i + 1..count {
+                        own = pair(&mut best, i, j, own);
+                    }
+                }
+                nearest[i - lo] = own.1;
+            }
+        });
+}
+
+/// One pass's merge of the first `count` clusters of `current`: clusters
+/// that are each other's nearest become one in `next`, where the first of
+/// them was, their two nodes written at the end of `nodes` (the first pair
+/// last); the rest are copied. Returns the clusters in `next` and the
+/// pairs merged.
+fn merge(
+    current: &Clusters,
+    count: usize,
+    nearest: &[u32],
+    next: &mut Clusters,
+    nodes: &mut [Bvh2Node],
+) -> (usize, usize) {
+    // What cluster i becomes: 0 merged into an earlier one, 1 kept, 2 the
+    // first of a pair.
+    let fate = |i: usize| {
+        let j = nearest[i] as usize;
+        match (nearest[j] as usize == i, j > i) {
+            (true, false) => 0u8,
+            (false, _) => 1,
+            (true, true) => 2,
+        }
+    };
+    let blocks = count.div_ceil(BLOCK);
+    let block = |b: usize| b * BLOCK..((b + 1) * BLOCK).min(count);
+    let tallies: Vec<(usize, usize)> = (0..blocks)
+        .into_par_iter()
+        .map(|b| {
+            block(b).fold((0, 0), |(kept, pairs), i| match fate(i) {
+                0 => (kept, pairs),
+                1 => (kept + 1, pairs),
+                _ => (kept + 1, pairs + 1),
+            })
+        })
+        .collect();
+    let (kept, pairs) = tallies
+        .iter()
+        .fold((0, 0), |(k, p), &(bk, bp)| (k + bk, p + bp));
+    // Each block's share of `next` (in order) and of `nodes` (from the
+    // end down: the first block's pairs last), and where its nodes start.
+    let mut parts = Vec::with_capacity(blocks);
+    let mut node_start = nodes.len();
+    let first_pair = node_start - 2 * pairs;
+    let mut bounds_rest = &mut next.bounds[..kept];
+    let mut node_rest = &mut next.node[..kept];
+    let mut nodes_rest = &mut nodes[first_pair..];
+    for &(bk, bp) in &tallies {
+        let (bounds_out, b_rest) = std::mem::take(&mut bounds_rest).split_at_mut(bk);
+        let (node_out, n_rest) = std::mem::take(&mut node_rest).split_at_mut(bk);
+        let below = nodes_rest.len() - 2 * bp;
+        let (rest_nodes, mine) = std::mem::take(&mut nodes_rest).split_at_mut(below);
+        node_start -= 2 * bp;
+        parts.push((bounds_out, node_out, mine, node_start));
+        (bounds_rest, node_rest, nodes_rest) = (b_rest, n_rest, rest_nodes);
+    }
+    parts
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(b, (bounds_out, node_out, mine, start))| {
+            let mut out = bounds_out.iter_mut().zip(node_out.iter_mut());
+            // This block's pairs fill `mine` from its end down.
+            let mut slot = mine.len();
+            for i in block(b) {
+                let (own, node) = (current.bounds[i], current.node[i]);
+                match fate(i) {
+                    0 => {}
+                    1 => {
+                        let (b, n) = out.next().unwrap();
+                        (*b, *n) = (own, node);
+                    }
+                    _ => {
+                        let j = nearest[i] as usize;
+                        let other = current.bounds[j];
+                        slot -= 2;
+                        mine[slot] = tree_node(own, node);
+                        mine[slot + 1] = tree_node(other, current.node[j]);
+                        let (b, n) = out.next().unwrap();
+                        (*b, *n) = (own.union(&other), (start + slot) as u32);
+                    }
+                }
+            }
+        });
+    (kept, pairs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::stream::{seeded, Draw};
+    use glam::Vec3;
+
+    fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(work)
+    }
+
+    /// Boxes of small triangles on a bumpy sphere, in a shuffled order: a
+    /// surface, as meshes are, with many equal areas on its regular grid.
+    fn surface_boxes(n: usize, seed: u64) -> Vec<Aabb> {
+        let mut rng = seeded(seed);
+        (0..n)
+            .map(|_| {
+                let d = rng.cube(1.0).normalize_or(Vec3::X);
+                let c = d * (10.0 + (5.0 * d.x).sin());
+                let c = (c * 64.0).round() / 64.0;
+                Aabb::new(c, c + Vec3::splat(0.05))
+            })
+            .collect()
+    }
+
+    fn node_bits(bvh: &Bvh2) -> Vec<[u32; 8]> {
+        bvh.nodes
+            .iter()
+            .map(|n| {
+                let (a, b) = (n.aabb.min, n.aabb.max);
+                [a.x, a.y, a.z, b.x, b.y, b.z]
+                    .map(f32::to_bits)
+                    .iter()
+                    .copied()
+                    .chain([n.prim_count, n.first_index])
+                    .collect::<Vec<u32>>()
+                    .try_into()
+                    .unwrap()
+            })
+            .collect()
+    }
+
+    /// The same tree, node for node and bit for bit, on 1, 2 and 3
+    /// threads, for the near-only radius and wide ones, over several
+    /// blocks of clusters.
+    #[test]
+    fn the_tree_is_the_same_on_any_thread_count() {
+        let boxes = surface_boxes(5 * BLOCK + 123, 7);
+        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        let order = super::super::cluster::morton_order(&boxes, bounds);
+        for (radius, near) in [(1, 0), (6, 2), (14, 3)] {
+            let trees: Vec<_> = [1, 2, 3]
+                .map(|t| on_threads(t, || node_bits(&ploc(&boxes, &order, radius, near))))
+                .into();
+            assert_eq!(trees[0], trees[1], "radius {radius}: 1 and 2 threads");
+            assert_eq!(trees[0], trees[2], "radius {radius}: 1 and 3 threads");
+        }
+    }
+
+    /// Every node's box is its children's union, children follow their
+    /// parents, every node but the root is a child once, and every
+    /// primitive is in one leaf.
+    #[test]
+    fn the_tree_is_well_formed() {
+        for n in [1usize, 2, 3, 17, 40_000] {
+            let boxes = surface_boxes(n, 3);
+            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            let order = super::super::cluster::morton_order(&boxes, bounds);
+            let bvh = ploc(&boxes, &order, 6, 2);
+            assert_eq!(bvh.nodes.len(), 2 * n - 1);
+            let as_box = |k: usize| {
+                let a = bvh.nodes[k].aabb;
+                Aabb::new(a.min.into(), a.max.into())
+            };
+            assert_eq!(as_box(0), bounds, "{n}: the root is the union");
+            let mut parents = vec![0u32; bvh.nodes.len()];
+            let mut leaves = vec![0u32; n];
+            for (k, node) in bvh.nodes.iter().enumerate() {
+                if node.prim_count > 0 {
+                    assert_eq!(node.prim_count, 1);
+                    leaves[node.first_index as usize] += 1;
+                    assert_eq!(as_box(k), boxes[node.first_index as usize]);
+                    continue;
+                }
+                let c = node.first_index as usize;
+                assert!(c > k, "{n}: children after their parent");
+                parents[c] += 1;
+                parents[c + 1] += 1;
+                assert_eq!(as_box(k), as_box(c).union(as_box(c + 1)));
+            }
+            assert_eq!(parents[0], 0);
+            assert!(parents[1..].iter().all(|&p| p == 1), "{n}");
+            assert!(leaves.iter().all(|&l| l == 1), "{n}");
+        }
+    }
+
+    /// Each cluster's nearest is the brute-force least union area within
+    /// the radius, the nearer index on a tie, across block edges.
+    #[test]
+    fn nearest_neighbours_match_brute_force() {
+        let boxes = surface_boxes(2 * BLOCK + 50, 11);
+        let bounds: Vec<Box3A> = boxes
+            .iter()
+            .map(|b| Box3A {
+                min: b.min.into(),
+                max: b.max.into(),
+            })
+            .collect();
+        for r in [1, 6, 14] {
+            let mut nearest = vec![0; bounds.len()];
+            let scale = unit_scale(&bounds);
+            find_nearest(&bounds, &mut nearest, r, scale);
+            for (i, &got) in nearest.iter().enumerate() {
+                let lo = i.saturating_sub(r);
+                let hi = (i + r + 1).min(bounds.len());
+                let want = (lo..hi)
+                    .filter(|&j| j != i)
+                    .map(|j| (union_area(&bounds[i], &bounds[j], scale), j))
+                    .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+                    .unwrap()
+                    .1;
+                assert_eq!(got as usize, want, "radius {r}, cluster {i}");
+            }
+        }
+    }
+}

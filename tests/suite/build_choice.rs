@@ -1,0 +1,138 @@
+//! The build that fits the render: `auto` chooses from the whole render's
+//! settings (never a slice or the thread count), so every split builds the
+//! same tree and merges to the one image; a named preset wins; the choice
+//! and its reason are in `--stats` and the summary line.
+
+use crate::common::meshes::bumpy_sphere_obj;
+use crate::common::process::{repo, strata_ok};
+use crate::common::temp_dir;
+use std::path::Path;
+use strata::accel::choice::MODEL_MIN_PRIMS;
+use strata::accel::BuildQuality;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// 2 × 320 × 200 = 128,000 triangles: over `MODEL_MIN_PRIMS`, so `auto`
+/// weighs the rays; one point light, so two rays a sample.
+const TRIANGLES: usize = 128_000;
+const SCENE: &str = "[camera]\nposition = [0.0, 0.0, 4.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+    [[lights]]\ntype = \"point\"\nposition = [2.0, 3.0, 4.0]\nintensity = [30.0, 30.0, 30.0]\n\
+    [[objects]]\nmesh = \"ball.obj\"\n";
+
+fn stats(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn pixel_bits(path: &Path) -> Vec<[u32; 3]> {
+    let (pixels, _, _) = strata::output::image::read_image(path).unwrap();
+    pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+/// A preview and a long render of the same scene choose different presets,
+/// each the one the model names for the whole render's rays; each slice
+/// (of the preview) on each thread count chooses the same as the whole,
+/// and the slices merge to the whole image bit for bit. A crop renders a
+/// few pixels of the long render cheaply and leaves the choice alone.
+#[test]
+fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
+    let dir = temp_dir("build-choice");
+    std::fs::write(dir.join("ball.obj"), bumpy_sphere_obj(320, 200, 1.0, 0.05)).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    const { assert!(TRIANGLES >= MODEL_MIN_PRIMS) };
+    let mut chosen = Vec::new();
+    for (width, height, spp, crop) in [(24u32, 16u32, 2u32, false), (320, 240, 4096, true)] {
+        let rays = u64::from(width * height * spp) * 2;
+        let want = BuildQuality::Auto.choose(TRIANGLES, Some(rays)).quality;
+        let mut settings = vec![
+            "--width".to_string(),
+            width.to_string(),
+            "--height".into(),
+            height.to_string(),
+            "--spp".into(),
+            spp.to_string(),
+        ];
+        if crop {
+            settings.extend(["--crop".into(), "150,110,152,112".into()]);
+        }
+        let render = |name: &str, extra: &[&str]| {
+            let out = dir.join(name);
+            let json = dir.join(format!("{name}.json"));
+            let mut args = vec!["render", s(&scene), "-o", s(&out), "--stats", s(&json)];
+            args.extend(settings.iter().map(String::as_str));
+            args.extend(extra);
+            let summary = strata_ok(repo(), &args);
+            let st = stats(&json);
+            assert_eq!(st["triangles"], TRIANGLES);
+            assert_eq!(st["bvh_quality"], want.name(), "{name}: {st}");
+            let why = st["bvh_why"].as_str().unwrap().to_string();
+            assert!(why.starts_with("auto: "), "{why}");
+            assert!(summary.contains(&format!("BVH {want} ")), "{summary}");
+            assert!(summary.contains(&why), "{summary}");
+            (out, why)
+        };
+        let (whole, why) = render("whole.exr", &["--threads", "2"]);
+        let (one, why_one) = render("one.exr", &["--threads", "1"]);
+        assert_eq!(why_one, why);
+        let bits = pixel_bits(&whole);
+        assert_eq!(pixel_bits(&one), bits, "{spp} spp: 1 and 2 threads");
+        if !crop {
+            let (p0, why0) = render("p0.strata", &["--slice", "0/2", "--threads", "1"]);
+            let (p1, why1) = render("p1.strata", &["--slice", "1/2", "--threads", "2"]);
+            assert_eq!([&why0, &why1], [&why; 2]);
+            let merged = dir.join("merged.exr");
+            strata_ok(repo(), &["merge", s(&p0), s(&p1), "-o", s(&merged)]);
+            assert_eq!(pixel_bits(&merged), bits, "{spp} spp: merged slices");
+        }
+        chosen.push(want);
+    }
+    assert_eq!(chosen[0], BuildQuality::Fastest, "a preview builds fastest");
+    assert_ne!(
+        chosen[1],
+        BuildQuality::Fastest,
+        "a long render builds more"
+    );
+}
+
+/// `--bvh-quality` names the preset whatever the rays, and says so.
+#[test]
+fn a_named_preset_overrides_auto() {
+    let dir = temp_dir("build-choice-named");
+    std::fs::write(dir.join("ball.obj"), bumpy_sphere_obj(320, 200, 1.0, 0.05)).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    for q in ["high", "fastest"] {
+        let json = dir.join("s.json");
+        let out = dir.join("o.png");
+        let summary = strata_ok(
+            repo(),
+            &[
+                "render",
+                s(&scene),
+                "-o",
+                s(&out),
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--spp",
+                "1",
+                "--bvh-quality",
+                q,
+                "--stats",
+                s(&json),
+            ],
+        );
+        let st = stats(&json);
+        assert_eq!(
+            (st["bvh_quality"].as_str(), st["bvh_why"].as_str()),
+            (Some(q), Some("as asked"))
+        );
+        assert!(summary.contains(&format!("BVH {q} ")), "{summary}");
+    }
+}
