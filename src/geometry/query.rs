@@ -25,8 +25,9 @@
 //! packet, of a bundle or in flight, read from the caller's slice, are
 //! moved where a leaf is tested. An instance's prototype is walked with
 //! the ray its leaf was tested with, whose end is already moved, so that
-//! walk too takes `tmax` as it comes (`Geometry::intersect_open_end`). Every `scenes/*.toml` render and
-//! every `strata trace` hit file stayed the same when the end was closed:
+//! walk too takes `tmax` as it comes (`Geometry::intersect_open_end`).
+//! Every `scenes/*.toml` render and every `strata trace` hit file stayed
+//! the same when the end was closed:
 //! the ray sets end at infinity, where both rules agree, and a shadow ray
 //! ends at its light sample, where only the light lies, which it skips
 //! ([`Geometry::occluded_except`]).
