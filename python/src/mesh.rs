@@ -189,15 +189,18 @@ pub fn rows<'py>(py: Python<'py>, rows: Vec<[f32; 3]>) -> PyResult<Bound<'py, Py
 
 type CornerArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<i64>>);
 
+/// Every corner's x, y, z of `tris`, in face order.
+fn corner_coordinates(tris: Vec<[glam::Vec3; 3]>) -> Vec<f32> {
+    tris.into_iter()
+        .flat_map(|t| t.into_iter().flat_map(|p| p.to_array()))
+        .collect()
+}
+
 /// `tris` as ``vertices`` (3m, 3) float32, one row per corner, and
 /// ``faces`` (m, 3) int64 indexing them in order.
 fn corner_arrays(py: Python<'_>, tris: Vec<[glam::Vec3; 3]>) -> PyResult<CornerArrays<'_>> {
     let m = tris.len();
-    let corners: Vec<f32> = tris
-        .into_iter()
-        .flat_map(|t| t.into_iter().flat_map(|p| p.to_array()))
-        .collect();
-    let vertices = PyArray1::from_vec(py, corners).reshape([3 * m, 3])?;
+    let vertices = PyArray1::from_vec(py, corner_coordinates(tris)).reshape([3 * m, 3])?;
     let faces = PyArray1::from_vec(py, (0..3 * m as i64).collect()).reshape([m, 3])?;
     Ok((vertices, faces))
 }
@@ -357,11 +360,7 @@ impl Mesh {
     fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let tris = self.0.triangles();
         let m = tris.len();
-        let flat: Vec<f32> = tris
-            .into_iter()
-            .flat_map(|t| t.into_iter().flat_map(|p| p.to_array()))
-            .collect();
-        PyArray1::from_vec(py, flat).reshape([m, 3, 3])
+        PyArray1::from_vec(py, corner_coordinates(tris)).reshape([m, 3, 3])
     }
 
     fn __repr__(&self) -> String {

@@ -375,7 +375,7 @@ fn obvhs_ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::collapse::CollapseCosts;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
@@ -440,7 +440,10 @@ mod tests {
     }
 
     /// `work` on a pool of exactly `threads` threads.
-    fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+    pub(in crate::accel) fn on_threads<T: Send>(
+        threads: usize,
+        work: impl FnOnce() -> T + Send,
+    ) -> T {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()

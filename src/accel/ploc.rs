@@ -287,17 +287,10 @@ fn merge(
 
 #[cfg(test)]
 mod tests {
+    use super::super::build::tests::on_threads;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
     use glam::Vec3;
-
-    fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(work)
-    }
 
     /// Boxes of small triangles on a bumpy sphere, in a shuffled order: a
     /// surface, as meshes are, with many equal areas on its regular grid.

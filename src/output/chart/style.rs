@@ -119,14 +119,7 @@ pub fn styles(panels: &[Panel]) -> Vec<(String, Style)> {
                     dash: Some(REFERENCE_DASH),
                 }
             } else {
-                measured += 1;
-                Style {
-                    colour: colour(measured - 1),
-                    marker: MARKERS[(measured - 1) % MARKERS.len()],
-                    hollow: false,
-                    marker_size: 3,
-                    dash: None,
-                }
+                next_measured(&mut measured)
             };
             out.push((s.label.clone(), style));
             depth.push(d);
@@ -146,16 +139,7 @@ pub fn styles(panels: &[Panel]) -> Vec<(String, Style)> {
         }
         let of = |(l, _): &&(String, Style)| s.extends.as_ref() == Some(l);
         let base = out.iter().find(of).map(|(_, st)| *st);
-        let base = base.unwrap_or_else(|| {
-            measured += 1;
-            Style {
-                colour: colour(measured - 1),
-                marker: MARKERS[(measured - 1) % MARKERS.len()],
-                hollow: false,
-                marker_size: 3,
-                dash: None,
-            }
-        });
+        let base = base.unwrap_or_else(|| next_measured(&mut measured));
         let style = Style {
             hollow: true,
             marker_size: 4,
@@ -165,6 +149,20 @@ pub fn styles(panels: &[Panel]) -> Vec<(String, Style)> {
         out.push((s.label.clone(), style));
     }
     out
+}
+
+/// The style of the next measured series: the `measured`-th colour and
+/// marker, solid with filled markers; counts it.
+fn next_measured(measured: &mut usize) -> Style {
+    let k = *measured;
+    *measured += 1;
+    Style {
+        colour: colour(k),
+        marker: MARKERS[k % MARKERS.len()],
+        hollow: false,
+        marker_size: 3,
+        dash: None,
+    }
 }
 
 pub(super) fn style_of(styles: &[(String, Style)], label: &str) -> Style {
