@@ -6,7 +6,8 @@ use clap::Args;
 use std::path::PathBuf;
 use strata::error::{InputError, COMMAND_LINE};
 use strata::output::atomic::check_target;
-use strata::output::image::write_image;
+use strata::output::image::{write_image, ImageFormat};
+use strata::output::tonemap::Tonemap;
 use strata::partial::format::{read_partial, write_partial, PIXEL_BYTES};
 use strata::partial::merge::{merge_partials, MergeRules};
 use strata::render::film::render_bytes_per_pixel;
@@ -31,6 +32,14 @@ pub struct MergeArgs {
     /// not agree bit for bit).
     #[arg(long)]
     pub force: bool,
+    /// Stops for an 8-bit output (PNG): radiance times 2^exposure. Default:
+    /// the exposure the parts were rendered with ([render] exposure).
+    #[arg(long, value_name = "STOPS", allow_hyphen_values = true)]
+    pub exposure: Option<f32>,
+    /// Tone curve of an 8-bit output: clamp or filmic. Default: the parts'
+    /// own ([render] tonemap). EXR stays linear.
+    #[arg(long)]
+    pub tonemap: Option<Tonemap>,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -46,9 +55,18 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
     check_target(&args.output, extensions)
         .map_err(|e| InputError::new("<command line>", "--output", e))?;
     check_memory(&args.parts, !partial_output)?;
+    if let Some(e) = args.exposure.filter(|e| !e.is_finite()) {
+        let why = format!("{e} is not a number of stops");
+        return Err(InputError::new(COMMAND_LINE, "--exposure", why).into());
+    }
     let mut parts = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
-        let part = read_partial(path).map_err(|e| InputError::file(path, e))?;
+        let mut part = read_partial(path).map_err(|e| InputError::file(path, e))?;
+        // The flags replace the display the parts carry: it shows the film,
+        // and does not change it.
+        let h = &mut part.header;
+        h.exposure = args.exposure.unwrap_or(h.exposure);
+        h.tonemap = args.tonemap.unwrap_or(h.tonemap);
         parts.push((path.clone(), part));
     }
     let n = parts.len();
@@ -63,7 +81,11 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
         write_partial(&args.output, h, &merged.film)
             .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
     } else {
-        write_image(&args.output, &merged.film.to_rgb(), h.width, h.height)
+        let mut pixels = merged.film.to_rgb();
+        if ImageFormat::from_path(&args.output) != Some(ImageFormat::Exr) {
+            strata::output::tonemap::apply(&mut pixels, h.exposure, h.tonemap);
+        }
+        write_image(&args.output, &pixels, h.width, h.height)
             .map_err(|e| InputError::file(&args.output, e))?;
     }
     super::warn(Warning::dropped(&merged.film));

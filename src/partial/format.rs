@@ -11,16 +11,17 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | magic `STRATAPT` |
-//! | 4 | format version (1, or 2 for a film with squares) |
+//! | 4 | format version: 3 (1 and 2, written before, are read as well) |
 //! | 2 + n | strata version that wrote it (u16 length, UTF-8) |
 //! | 8 | scene fingerprint (`partial::fingerprint`) |
 //! | 4 × 8 | width, height, spp, seed, sampler (0 random, 1 stratified), shadow samples, reflection samples, max depth |
 //! | 4 × 3 | slices `first..end` of `count`: a part holds one (`k..k+1`), a merged part a run of them |
 //! | 4 × 2 | sample indices `start..end` summed: the slices' samples, or less in an unfinished checkpoint |
+//! | 4 × 3 | version 3 only: the display of 8-bit outputs, exposure (f32 stops) and tone curve (0 clamp, 1 filmic), and whether squares follow the pixels (0/1) |
 //! | 8 × 2 | invalid samples dropped, samples clamped |
 //! | 4 × 4 | first invalid sample: present (0/1), x, y, sample |
 //! | 52 × w·h | per pixel, row-major: sums r, g, b as i128 (units of 2⁻³²), valid sample count u32 |
-//! | 16 × w·h | version 2 only: per pixel, the sum of squared luminance as i128 (units of 2⁻³²), which a `--noise` render's checkpoint needs |
+//! | 16 × w·h | version 2, or 3 with squares: per pixel, the sum of squared luminance as i128 (units of 2⁻³²), which a `--noise` render's checkpoint needs |
 //! | 8 | checksum: `fingerprint::Hasher64` of every byte before it |
 //!
 //! Reading checks the magic, the version and the header's numbers, then
@@ -30,6 +31,7 @@
 //! may have any length), then the checksum.
 
 use super::fingerprint::{scene_fingerprint, Hasher64};
+use crate::output::tonemap::Tonemap;
 use crate::render::film::{BadSample, Film, FILM_PIXEL_BYTES};
 use crate::render::SliceSpec;
 use crate::sampling::SamplerKind;
@@ -40,16 +42,21 @@ use std::ops::Range;
 use std::path::Path;
 
 pub const MAGIC: [u8; 8] = *b"STRATAPT";
-pub const FORMAT_VERSION: u32 = 1;
-/// The version of a film that keeps squares (`Film::squares`, a `--noise`
-/// render's): version 1 followed by the squares.
-pub const FORMAT_VERSION_SQUARES: u32 = 2;
+/// The version written: version 1 with the display of 8-bit outputs (so
+/// that `strata merge` shows the film as `strata render` would) and a flag
+/// for the squares.
+pub const FORMAT_VERSION: u32 = 3;
+/// Read only: the first version, without display or squares.
+const FORMAT_VERSION_PLAIN: u32 = 1;
+/// Read only: version 1 followed by the squares (`Film::squares`, a
+/// `--noise` render's).
+const FORMAT_VERSION_SQUARES: u32 = 2;
 /// Bytes per pixel record: three i128 sums and a u32 count, as in memory.
 pub const PIXEL_BYTES: u64 = FILM_PIXEL_BYTES;
 const MAX_VERSION_BYTES: usize = 256;
 
 /// What a partial file says about the render it belongs to.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PartialHeader {
     /// The strata build that wrote the file ([`crate::VERSION`]).
     pub strata_version: String,
@@ -67,6 +74,11 @@ pub struct PartialHeader {
     pub slice_count: u32,
     /// Sample indices whose sums the file holds.
     pub samples: Range<u32>,
+    /// How 8-bit outputs show the film ([render] exposure, in stops): not
+    /// part of the film, but what an image merged from it shows.
+    pub exposure: f32,
+    /// The tone curve of 8-bit outputs ([render] tonemap).
+    pub tonemap: Tonemap,
 }
 
 /// A header and its film.
@@ -94,6 +106,8 @@ impl PartialHeader {
             slices: slice.index..slice.index + 1,
             slice_count: slice.count,
             samples,
+            exposure: s.exposure,
+            tonemap: s.tonemap,
         }
     }
 
@@ -260,7 +274,9 @@ impl PartialHeader {
             .map(|(what, a, b)| format!("{what}: {a} vs {b}"))
     }
 
-    fn header_bytes(&self, version: u32) -> Vec<u8> {
+    /// The header as `version` writes it, for a film with `squares` or
+    /// without.
+    fn header_bytes(&self, version: u32, squares: bool) -> Vec<u8> {
         let mut b = Vec::with_capacity(128);
         b.extend_from_slice(&MAGIC);
         b.extend_from_slice(&version.to_le_bytes());
@@ -290,6 +306,15 @@ impl PartialHeader {
         ] {
             b.extend_from_slice(&x.to_le_bytes());
         }
+        if version == FORMAT_VERSION {
+            let tonemap = match self.tonemap {
+                Tonemap::Clamp => 0u32,
+                Tonemap::Filmic => 1,
+            };
+            for x in [self.exposure.to_bits(), tonemap, squares as u32] {
+                b.extend_from_slice(&x.to_le_bytes());
+            }
+        }
         b
     }
 }
@@ -317,17 +342,25 @@ pub fn write_partial_to(
     header: &PartialHeader,
     film: &Film,
 ) -> std::io::Result<()> {
+    write_version(w, header, film, FORMAT_VERSION)
+}
+
+/// [`write_partial_to`] in format `version` (older ones for the tests
+/// that read them).
+fn write_version(
+    w: &mut impl Write,
+    header: &PartialHeader,
+    film: &Film,
+    version: u32,
+) -> std::io::Result<()> {
     assert_eq!((header.width, header.height), (film.width, film.height));
     let mut w = HashingWriter {
         inner: w,
         hash: Hasher64::new(),
     };
-    let version = if film.squares.is_empty() {
-        FORMAT_VERSION
-    } else {
-        FORMAT_VERSION_SQUARES
-    };
-    w.write_all(&header.header_bytes(version))?;
+    let squares = !film.squares.is_empty();
+    debug_assert!(version != FORMAT_VERSION_PLAIN || !squares);
+    w.write_all(&header.header_bytes(version, squares))?;
     w.write_all(&film.invalid.to_le_bytes())?;
     w.write_all(&film.clamped.to_le_bytes())?;
     let bad = film.first_invalid;
@@ -416,12 +449,11 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
         return Err(not_partial.to_string());
     }
     let version = r.u32()?;
-    if version != FORMAT_VERSION && version != FORMAT_VERSION_SQUARES {
+    if ![FORMAT_VERSION_PLAIN, FORMAT_VERSION_SQUARES, FORMAT_VERSION].contains(&version) {
         return Err(format!(
-            "partial format version {version}; this strata reads versions {FORMAT_VERSION} and {FORMAT_VERSION_SQUARES}"
+            "partial format version {version}; this strata reads versions 1 to {FORMAT_VERSION}"
         ));
     }
-    let squares = version == FORMAT_VERSION_SQUARES;
     let vlen = u16::from_le_bytes(r.bytes()?) as usize;
     if vlen > MAX_VERSION_BYTES {
         return Err(format!("corrupt header: version string of {vlen} bytes"));
@@ -444,6 +476,26 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
         1 => SamplerKind::Stratified,
         other => return Err(format!("corrupt header: sampler {other}")),
     };
+    // Versions 1 and 2 were written before the display was kept: they show
+    // the film as the defaults do.
+    let (exposure, tonemap, squares) = if version == FORMAT_VERSION {
+        let [exposure, tonemap, squares] = [r.u32()?, r.u32()?, r.u32()?];
+        let exposure = f32::from_bits(exposure);
+        if !exposure.is_finite() {
+            return Err(format!("corrupt header: exposure {exposure}"));
+        }
+        let tonemap = match tonemap {
+            0 => Tonemap::Clamp,
+            1 => Tonemap::Filmic,
+            other => return Err(format!("corrupt header: tone curve {other}")),
+        };
+        if squares > 1 {
+            return Err(format!("corrupt header: squares flag {squares}"));
+        }
+        (exposure, tonemap, squares == 1)
+    } else {
+        (0.0, Tonemap::Clamp, version == FORMAT_VERSION_SQUARES)
+    };
     let header = PartialHeader {
         strata_version,
         scene_hash,
@@ -458,6 +510,8 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
         slices: s0..s1,
         slice_count,
         samples: n0..n1,
+        exposure,
+        tonemap,
     };
     // No render makes an image of no pixels or past MAX_SIDE on a side.
     let max = crate::scene::settings::MAX_SIDE;
@@ -486,7 +540,8 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
     });
 
     // Check the length before allocating: the header may be garbage.
-    let head_len = (8 + 4 + 2 + vlen + 8 + 13 * 4 + 2 * 8 + 4 * 4) as u128;
+    let display_len = if version == FORMAT_VERSION { 3 * 4 } else { 0 };
+    let head_len = (8 + 4 + 2 + vlen + 8 + 13 * 4 + display_len + 2 * 8 + 4 * 4) as u128;
     let pixels = width as u128 * height as u128;
     let square_bytes = if squares { 16 } else { 0 };
     let expected = head_len + pixels * (PIXEL_BYTES + square_bytes) as u128 + 8;
@@ -576,6 +631,8 @@ mod tests {
                 slices: 1..2,
                 slice_count: 4,
                 samples: 4..8,
+                exposure: -1.5,
+                tonemap: Tonemap::Filmic,
             },
             film,
         }
@@ -597,16 +654,16 @@ mod tests {
         let b = bytes(&p);
         assert_eq!(
             b.len() as u64,
-            8 + 4 + 2 + 5 + 8 + 52 + 16 + 16 + 6 * 52 + 8
+            8 + 4 + 2 + 5 + 8 + 52 + 12 + 16 + 16 + 6 * 52 + 8
         );
         assert_eq!(read(&b).unwrap(), p);
         assert!(p.header.is_complete());
     }
 
-    /// A `--noise` render's film keeps its squares through a file
-    /// (version 2), and one without writes version 1 as before.
+    /// A `--noise` render's film keeps its squares through a file, and the
+    /// display of 8-bit outputs is kept whatever the film.
     #[test]
-    fn squares_round_trip_in_version_two() {
+    fn squares_and_display_round_trip() {
         let mut p = sample_partial();
         assert_eq!(bytes(&p)[8..12], FORMAT_VERSION.to_le_bytes());
         p.film.track_squares();
@@ -614,9 +671,39 @@ mod tests {
             *q = (i as i128 + 1) << 70;
         }
         let b = bytes(&p);
-        assert_eq!(b[8..12], FORMAT_VERSION_SQUARES.to_le_bytes());
+        assert_eq!(b.len(), bytes(&sample_partial()).len() + 6 * 16);
         assert_eq!(read(&b).unwrap(), p);
         assert!(read(&b[..b.len() - 9]).unwrap_err().contains("truncated"));
+        p.header.tonemap = Tonemap::Clamp;
+        p.header.exposure = 2.25;
+        assert_eq!(read(&bytes(&p)).unwrap(), p);
+    }
+
+    /// Files of versions 1 and 2 (written before the display was kept)
+    /// still read, and show the film as the defaults do.
+    #[test]
+    fn versions_one_and_two_still_read() {
+        let mut p = sample_partial();
+        let old = |p: &Partial, version| {
+            let mut v = Vec::new();
+            write_version(&mut v, &p.header, &p.film, version).unwrap();
+            v
+        };
+        let one = old(&p, FORMAT_VERSION_PLAIN);
+        assert_eq!(one.len() + 12, bytes(&p).len());
+        let back = read(&one).unwrap();
+        assert_eq!(
+            (back.header.exposure, back.header.tonemap),
+            (0.0, Tonemap::Clamp)
+        );
+        assert_eq!(back.film, p.film);
+        p.film.track_squares();
+        p.film.squares[5] = 77;
+        let back = read(&old(&p, FORMAT_VERSION_SQUARES)).unwrap();
+        assert_eq!(back.film, p.film);
+        let mut v4 = bytes(&p);
+        v4[8..12].copy_from_slice(&4u32.to_le_bytes());
+        assert!(read(&v4).unwrap_err().contains("reads versions 1 to 3"));
     }
 
     #[test]
@@ -645,14 +732,14 @@ mod tests {
         let mut p = sample_partial();
         p.header.width = 32768;
         p.header.height = 32768;
-        let head = p.header.header_bytes(FORMAT_VERSION);
+        let head = p.header.header_bytes(FORMAT_VERSION, false);
         let mut b = head.clone();
         b.extend_from_slice(&[0u8; 32]);
         let e = read(&b).unwrap_err();
         assert!(e.contains("truncated"), "{e}");
         // Past the largest image a render makes: corrupt, whatever the length.
         p.header.width = 1_000_000;
-        let mut b = p.header.header_bytes(FORMAT_VERSION);
+        let mut b = p.header.header_bytes(FORMAT_VERSION, false);
         b.extend_from_slice(&[0u8; 32]);
         let e = read(&b).unwrap_err();
         assert!(
@@ -668,7 +755,7 @@ mod tests {
     fn a_film_past_the_memory_there_is_is_refused_before_it_is_made() {
         let mut p = sample_partial();
         (p.header.width, p.header.height) = (1000, 1000);
-        let mut b = p.header.header_bytes(FORMAT_VERSION);
+        let mut b = p.header.header_bytes(FORMAT_VERSION, false);
         b.extend_from_slice(&[0u8; 32]);
         let claimed = b.len() as u64 + 1000 * 1000 * PIXEL_BYTES + 8;
         let budget = Some(Budget::given(1 << 20));

@@ -122,11 +122,20 @@ pub fn merge_partials(
 fn check_same_render(parts: &[(PathBuf, Partial)], force: bool) -> InputResult<()> {
     let (first_path, first) = (&parts[0].0, &parts[0].1.header);
     for (path, p) in &parts[1..] {
-        let mismatch = p
-            .header
+        let h = &p.header;
+        let mismatch = h
             .render_mismatch(first)
+            .or_else(|| {
+                // Not the film but how an image shows it: one image, one curve.
+                (h.tonemap != first.tonemap).then(|| {
+                    format!(
+                        "tone curve: {} vs {}; choose one with strata merge --tonemap",
+                        h.tonemap, first.tonemap
+                    )
+                })
+            })
             .map(|m| format!("{m} (this file vs that one)"))
-            .or_else(|| p.header.build_mismatch(first).filter(|_| !force));
+            .or_else(|| h.build_mismatch(first).filter(|_| !force));
         if let Some(m) = mismatch {
             return Err(InputError::file(
                 path,

@@ -1,7 +1,8 @@
 //! Checkpoints and parts through the real binary: an existing checkpoint
 //! is never discarded silently and can be previewed, one of another spp
-//! says what to do instead (and the plan it gives runs), and parts of
-//! another build are refused unless forced.
+//! says what to do instead (and the plan it gives runs), parts of
+//! another build are refused unless forced, and a merged PNG shows the
+//! film as `strata render` would (the scene's exposure and tone curve).
 
 use crate::common::scenes::{LIT_SPHERE, SPHERE_ON_PLANE};
 use crate::common::{load_scene, stderr, stdout, strata};
@@ -201,4 +202,82 @@ fn parts_of_another_build_are_refused_unless_forced() {
     // The version names the build.
     let o = strata(&dir, &["--version"]);
     assert_eq!(stdout(&o).trim(), format!("strata {}", strata::VERSION));
+}
+
+/// A sliced render of a scene with its own exposure and tone curve merges
+/// into the PNG that one process writes; parts of different curves are
+/// refused with the way out, and the merge's flags choose another display.
+#[test]
+fn a_merged_png_shows_the_film_as_the_render_does() {
+    let dir = crate::common::temp_dir("display");
+    let scene = LIT_SPHERE.replacen(
+        "[render]",
+        "[render]\nexposure = 3.0\ntonemap = \"filmic\"",
+        1,
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let ok = |args: &[&str]| {
+        let o = strata(&dir, args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+    };
+    ok(&["render", "s.toml", "-q", "-o", "whole.png"]);
+    ok(&[
+        "render",
+        "s.toml",
+        "-q",
+        "-o",
+        "clamp.png",
+        "--tonemap",
+        "clamp",
+    ]);
+    for k in 0..2 {
+        let (slice, out) = (format!("{k}/2"), format!("p{k}.strata"));
+        ok(&["render", "s.toml", "-q", "--slice", &slice, "-o", &out]);
+    }
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    ok(&["merge", "-q", "p0.strata", "p1.strata", "-o", "merged.png"]);
+    assert_eq!(read("merged.png"), read("whole.png"));
+    // The display changes the PNG (the scene is bright enough to tell).
+    assert_ne!(read("clamp.png"), read("whole.png"));
+    ok(&[
+        "merge",
+        "-q",
+        "--tonemap",
+        "clamp",
+        "p0.strata",
+        "p1.strata",
+        "-o",
+        "c.png",
+    ]);
+    assert_eq!(read("c.png"), read("clamp.png"));
+    // A merged part keeps the display too.
+    ok(&["merge", "-q", "p0.strata", "-o", "half.strata"]);
+    assert_eq!(
+        read_partial(&dir.join("half.strata"))
+            .unwrap()
+            .header
+            .exposure,
+        3.0
+    );
+
+    let p1 = dir.join("p1.strata");
+    let mut part = read_partial(&p1).unwrap();
+    part.header.tonemap = strata::output::tonemap::Tonemap::Clamp;
+    write_partial(&p1, &part.header, &part.film).unwrap();
+    let o = strata(&dir, &["merge", "p0.strata", "p1.strata", "-o", "m.png"]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(e.contains("tone curve") && e.contains("--tonemap"), "{e}");
+    assert!(!dir.join("m.png").exists());
+    ok(&[
+        "merge",
+        "-q",
+        "--tonemap",
+        "filmic",
+        "p0.strata",
+        "p1.strata",
+        "-o",
+        "m.png",
+    ]);
+    assert_eq!(read("m.png"), read("whole.png"));
 }
