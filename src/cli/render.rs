@@ -168,7 +168,7 @@ pub fn run(mut args: RenderArgs) -> Result<(), CliError> {
     });
     let scene_name = scene_name(args.scene.as_deref());
     if let Some(id) = args.debug_sample {
-        let (value, events) = strata::render::replay::replay(&scene, id)
+        let (value, events) = strata::render::replay::replay(&scene, id, args.time.is_some())
             .map_err(|e| InputError::new("<command line>", "--debug-sample", e))?;
         print!(
             "{}",

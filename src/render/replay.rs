@@ -2,7 +2,8 @@
 //! pixel, sample, dimension), so one sample can be recomputed alone and its
 //! whole path printed (`strata render --debug-sample x,y,s`).
 
-use super::schedule::render_pixel;
+use super::adaptive;
+use super::schedule::{render_pixel_of, SampleSet};
 use crate::render::film::PixelSum;
 use crate::scene::Scene;
 use crate::shade::{Integrator, PathEvent};
@@ -37,8 +38,16 @@ impl std::str::FromStr for SampleId {
 }
 
 /// Recompute one sample; returns its radiance and the path it took, or
-/// an error if the pixel or sample is outside the render.
-pub fn replay(scene: &Scene, id: SampleId) -> Result<(Vec3, Vec<PathEvent>), String> {
+/// an error if the pixel or sample is outside the render. `per_pass`: the
+/// render drew each pass's samples from a set of its own (`--time`; a
+/// `--noise` scene's settings say so themselves), so the sample is
+/// replayed from its pass's set. A noise render's pixel may have stopped
+/// before the sample: it is then the sample the pixel would have taken.
+pub fn replay(
+    scene: &Scene,
+    id: SampleId,
+    per_pass: bool,
+) -> Result<(Vec3, Vec<PathEvent>), String> {
     let s = &scene.settings;
     if id.x >= s.width || id.y >= s.height || id.sample >= s.spp {
         return Err(format!(
@@ -50,13 +59,16 @@ pub fn replay(scene: &Scene, id: SampleId) -> Result<(Vec3, Vec<PathEvent>), Str
     integrator.trace = Some(Vec::new());
     let mut acc = PixelSum::default();
     let index = id.y as usize * s.width as usize + id.x as usize;
-    render_pixel(
-        &mut integrator,
-        scene,
-        index,
-        id.sample..id.sample + 1,
-        &mut acc,
-    );
+    let set = match per_pass || s.noise.is_some() {
+        true => adaptive::passes(0, s.spp)
+            .iter()
+            .find(|pass| pass.contains(&id.sample))
+            .map(|pass| SampleSet::of_pass(s.seed, pass))
+            .expect("the passes cover 0..spp"),
+        false => SampleSet::whole(s.seed, s.spp),
+    };
+    let samples = id.sample..id.sample + 1;
+    render_pixel_of(&mut integrator, scene, index, samples, set, &mut acc);
     let events = integrator.trace.take().unwrap_or_default();
     let value = events.first().map_or(Vec3::ZERO, |e| e.radiance);
     Ok((value, events))
@@ -101,6 +113,60 @@ pub fn describe(scene: &Scene, id: SampleId, value: Vec3, events: &[PathEvent]) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::schedule::render_pixel;
+    use crate::render::RenderOptions;
+
+    /// A render whose passes draw sets of their own (a noise target, or a
+    /// time budget) replays each pixel's samples from its pass's set: the
+    /// replayed samples of every pixel, as many as it took, sum to its film.
+    #[test]
+    fn a_noise_or_time_render_replays_from_its_passes_sets() {
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/seed-mc.toml"))
+                .unwrap();
+        // At 40 × 30 pixels (the camera made for them), 20 spp: passes
+        // 0..16 and 16..20.
+        let overrides = crate::scene::settings::RenderOverrides {
+            width: Some(40),
+            height: Some(30),
+            spp: Some(20),
+            ..Default::default()
+        };
+        let path = std::path::Path::new("seed-mc.toml");
+        let mut scene = crate::scene::scene_from_str(&text, path, &overrides).unwrap();
+        let check = |scene: &crate::scene::Scene, film: &crate::render::film::Film, per_pass| {
+            let mut counts = std::collections::BTreeSet::new();
+            for (x, y) in [(20, 17), (5, 5), (33, 20), (20, 12)] {
+                let index = y * 40 + x;
+                let taken = film.counts[index];
+                counts.insert(taken);
+                let mut replayed = PixelSum::default();
+                for sample in 0..taken {
+                    let id = SampleId {
+                        x: x as u32,
+                        y: y as u32,
+                        sample,
+                    };
+                    replayed.add(replay(scene, id, per_pass).unwrap().0, sample);
+                }
+                assert_eq!(replayed.sum, film.sums[index], "pixel ({x}, {y})");
+            }
+            counts
+        };
+        let timed = RenderOptions {
+            budget: Some(1e9),
+            ..Default::default()
+        };
+        let film = super::super::render(&scene, &timed, None, ()).film;
+        assert_eq!(check(&scene, &film, true), [20].into());
+        // The same pixels replayed from the one set of a plain render differ.
+        let plain = super::super::render(&scene, &Default::default(), None, ()).film;
+        assert!(plain.sums != film.sums, "the sets differ");
+        scene.settings.noise = Some(0.05);
+        let film = super::super::render(&scene, &Default::default(), None, ()).film;
+        // Some of these pixels stopped at the first decision, some went on.
+        assert_eq!(check(&scene, &film, false), [16, 20].into());
+    }
 
     #[test]
     fn a_replayed_sample_equals_the_rendered_one() {
@@ -132,6 +198,7 @@ mod tests {
                         y: y as u32,
                         sample,
                     },
+                    false,
                 )
                 .unwrap();
                 assert_eq!(events[0].kind, "camera");
@@ -152,7 +219,8 @@ mod tests {
                 x: 40,
                 y: 0,
                 sample: 0
-            }
+            },
+            false,
         )
         .is_err());
         assert_eq!(

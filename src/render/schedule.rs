@@ -400,7 +400,7 @@ pub fn render(
     }
 }
 
-/// All samples of `samples` for one pixel.
+/// All samples of `samples` for one pixel, of a render's one set.
 #[inline]
 pub fn render_pixel(
     integrator: &mut Integrator,
@@ -409,12 +409,25 @@ pub fn render_pixel(
     samples: Range<u32>,
     acc: &mut PixelSum,
 ) {
+    let set = SampleSet::whole(scene.settings.seed, scene.settings.spp);
+    render_pixel_of(integrator, scene, index, samples, set, acc);
+}
+
+/// All samples of `samples` for one pixel, drawn from `set`.
+pub fn render_pixel_of(
+    integrator: &mut Integrator,
+    scene: &Scene,
+    index: usize,
+    samples: Range<u32>,
+    set: SampleSet,
+    acc: &mut PixelSum,
+) {
     let whole = Window::whole(scene.settings.width, scene.settings.height);
     let pixels = PixelRun {
         window: &whole,
         first: index,
         active: None,
-        set: SampleSet::whole(scene.settings.seed, scene.settings.spp),
+        set,
     };
     render_pixels(
         integrator,
