@@ -14,6 +14,7 @@ use strata::render::aov::{self, Aov, AovSum};
 use strata::render::stats::RenderStats;
 use strata::render::timeline::{Phase, Timeline};
 use strata::render::{each_pass, render, Film, RenderOptions, Schedule, SliceSpec, Window};
+use strata::sampling::SamplerKind;
 use strata::scene::edit::Edit;
 use strata::scene::{
     compile, load_edited_scene, model, parse, LoadTimings, RenderOverrides, Scene,
@@ -158,7 +159,13 @@ pub fn run(mut args: RenderArgs) -> Result<(), CliError> {
             .map_err(|m| InputError::flag(format!("--width {w} --height {h}"), m))?;
     }
     let epoch = std::time::Instant::now();
-    let (scene, timings) = load(&args)?;
+    let (mut scene, timings) = load(&args)?;
+    if args.time.is_some() && scene.settings.sampler == SamplerKind::Stratified {
+        // As under a noise target (`RenderSettings::merge`): a timed render
+        // may stop after any pass, so it draws from the sequence that is
+        // stratified at every power-of-two prefix.
+        scene.settings.sampler = SamplerKind::Sobol;
+    }
     super::warn(&scene.warnings);
     // Recorded for the trace, and for the summary in the statistics.
     let timeline = (args.timeline.is_some() || args.stats.is_some()).then(|| {

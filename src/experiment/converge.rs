@@ -161,7 +161,8 @@ pub fn measure(
 }
 
 /// The adaptive method's name in tables, CSV and charts: the reference
-/// method's sampling with a noise target, `spp` the ceiling.
+/// method's importance sampling with a noise target, `spp` the ceiling,
+/// drawing from the Sobol sequence as `--noise` does by default.
 pub const ADAPTIVE: &str = "adaptive";
 
 /// Measure the adaptive method at each noise target of `targets` with
@@ -179,6 +180,8 @@ pub fn measure_adaptive(
     for &noise in targets {
         let mut s = configured(scene, &REFERENCE_METHOD, ceiling);
         s.settings.noise = Some(noise);
+        // The sampler a noise target draws from by default.
+        s.settings.sampler = SamplerKind::Sobol;
         let opts = RenderOptions {
             threads,
             ..RenderOptions::default()

@@ -14,7 +14,7 @@
 //! | 4 | format version: 3 (1 and 2, written before, are read as well) |
 //! | 2 + n | strata version that wrote it (u16 length, UTF-8) |
 //! | 8 | scene fingerprint (`partial::fingerprint`) |
-//! | 4 × 8 | width, height, spp, seed, sampler (0 random, 1 stratified), shadow samples, reflection samples, max depth |
+//! | 4 × 8 | width, height, spp, seed, sampler (0 random, 1 stratified, 2 sobol), shadow samples, reflection samples, max depth |
 //! | 4 × 3 | slices `first..end` of `count`: a part holds one (`k..k+1`), a merged part a run of them |
 //! | 4 × 2 | sample indices `start..end` summed: the slices' samples, or less in an unfinished checkpoint |
 //! | 4 × 3 | version 3 only: the display of 8-bit outputs, exposure (f32 stops) and tone curve (0 clamp, 1 filmic), and whether squares follow the pixels (0/1) |
@@ -169,7 +169,7 @@ impl PartialHeader {
             SamplerKind::Stratified => format!(
                 "each pixel's samples are one stratified set of spp samples, so the first {have} of a {want}-spp render are not this render's {have}"
             ),
-            SamplerKind::Random => {
+            SamplerKind::Random | SamplerKind::Sobol => {
                 "a checkpoint continues, and a part merges with, renders of its own spp only"
                     .to_string()
             }
@@ -288,6 +288,7 @@ impl PartialHeader {
         let sampler = match self.sampler {
             SamplerKind::Random => 0u32,
             SamplerKind::Stratified => 1,
+            SamplerKind::Sobol => 2,
         };
         for x in [
             self.width,
@@ -474,6 +475,7 @@ fn read_within(r: impl Read, file_len: u64, budget: Option<Budget>) -> Result<Pa
     let sampler = match sampler {
         0 => SamplerKind::Random,
         1 => SamplerKind::Stratified,
+        2 => SamplerKind::Sobol,
         other => return Err(format!("corrupt header: sampler {other}")),
     };
     // Versions 1 and 2 were written before the display was kept: they show

@@ -24,15 +24,16 @@
 //! (16, 24, 32, 48, 64, 96, …) up to `spp`, whatever `--passes` says, so
 //! that a checkpoint taken at any of them resumes on the same plan.
 //!
-//! **What a stopped pixel used:** each pass's samples are a stratified
-//! set of their own (`schedule::SampleSet::of_pass`): the first pass a
-//! correlated multi-jittered set of 16 samples, the next ones sets of 8,
-//! 8, 16, 16, 32, 32, … each scrambled apart from the others. A pixel
-//! stopped after any pass has used whole stratified sets, never part of
-//! one; a pixel that reaches the ceiling has used the same sets, not the
-//! one set of spp a render without a noise target uses, so its image
-//! differs from that render's by noise. (A time budget, `--time`, renders
-//! the same passes.)
+//! **What a stopped pixel used:** under the Sobol sampler (the default
+//! with a noise target), a prefix of one sequence that is stratified at
+//! every power of two (`sampling::sobol`). Under the multi-jittered
+//! sampler each pass's samples are a stratified set of their own
+//! (`schedule::SampleSet::of`): the first pass a set of 16 samples, the
+//! next ones sets of 8, 8, 16, 16, 32, 32, … each scrambled apart from the
+//! others, so a pixel stopped after any pass has used whole sets, never
+//! part of one, and a pixel that reaches the ceiling has used those sets,
+//! not the one set of spp a render without a noise target uses. (A time
+//! budget, `--time`, renders the same passes.)
 //!
 //! The approach is Dammertz, Hanika, Keller and Lensch 2010, "A
 //! Hierarchical Automatic Stopping Condition for Monte Carlo Global

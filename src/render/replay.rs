@@ -59,14 +59,15 @@ pub fn replay(
     integrator.trace = Some(Vec::new());
     let mut acc = PixelSum::default();
     let index = id.y as usize * s.width as usize + id.x as usize;
-    let set = match per_pass || s.noise.is_some() {
+    let may_stop = per_pass || s.noise.is_some();
+    let pass = match may_stop {
         true => adaptive::passes(0, s.spp)
-            .iter()
+            .into_iter()
             .find(|pass| pass.contains(&id.sample))
-            .map(|pass| SampleSet::of_pass(s.seed, pass))
             .expect("the passes cover 0..spp"),
-        false => SampleSet::whole(s.seed, s.spp),
+        false => 0..s.spp,
     };
+    let set = SampleSet::of(s, may_stop, &pass);
     let samples = id.sample..id.sample + 1;
     render_pixel_of(&mut integrator, scene, index, samples, set, &mut acc);
     let events = integrator.trace.take().unwrap_or_default();

@@ -17,7 +17,8 @@ use super::timeline::{ItemLists, ItemSpan, Phase, Timeline};
 use super::warning::Warning;
 use super::window::Window;
 use crate::accel::PACKET_SIZE;
-use crate::sampling::{Dim, PixelSampler};
+use crate::sampling::{Dim, PixelSampler, SamplerKind};
+use crate::scene::settings::RenderSettings;
 use crate::scene::Scene;
 use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext};
 use glam::{Vec2, Vec3};
@@ -302,11 +303,7 @@ pub fn render(
         };
         let watching = &observer;
         let active = (!active.is_empty()).then_some(&active[..]);
-        let set = if target.is_some() || opts.budget.is_some() {
-            SampleSet::of_pass(s.seed, samples)
-        } else {
-            SampleSet::whole(s.seed, s.spp)
-        };
+        let set = SampleSet::of(s, target.is_some() || opts.budget.is_some(), samples);
         // Each chunk's rays are counted by its own integrator and the
         // pass sums the counts.
         counts += pool.install(|| {
@@ -470,6 +467,18 @@ impl SampleSet {
             first: 0,
             count: spp,
             seed,
+        }
+    }
+
+    /// The set that a render of `settings` draws the samples of `pass`
+    /// from. `may_stop`: a pixel may stop after any pass (a noise target, a
+    /// time budget), so each pass is a stratified set of its own, except
+    /// under the Sobol sampler, whose one sequence is stratified at every
+    /// power-of-two prefix and so serves as one set.
+    pub fn of(settings: &RenderSettings, may_stop: bool, pass: &Range<u32>) -> Self {
+        match may_stop && settings.sampler != SamplerKind::Sobol {
+            true => Self::of_pass(settings.seed, pass),
+            false => Self::whole(settings.seed, settings.spp),
         }
     }
 

@@ -15,6 +15,7 @@ pub mod distribution;
 pub mod hash;
 pub mod mis;
 pub mod sampler;
+pub mod sobol;
 pub mod spherical_rect;
 pub mod spherical_rect_lanes;
 pub mod stream;

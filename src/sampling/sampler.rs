@@ -8,18 +8,23 @@
 use super::cmj::{cmj_2d, stratified_1d, CmjSet};
 use super::cmj_lanes::CmjLanes;
 use super::hash::{hash_step, hash_step_lanes, unit_float, unit_float_lanes, HASH_WORDS_INIT};
+use super::sobol::{sobol_1d, sobol_2d};
 use crate::math::lanes::{mask_lanes, LANES};
 use glam::Vec2;
 use wide::u32x8;
 
 crate::mode::mode_enum! {
     /// `random`: independent uniform numbers. `stratified`: correlated
-    /// multi-jittered sets, one per pixel, effect and depth.
+    /// multi-jittered sets, one per pixel, effect and depth. `sobol`: an
+    /// Owen-scrambled Sobol sequence per pixel, effect and depth, whose
+    /// every prefix of 2^k samples is stratified (for renders that may stop
+    /// a pixel after any pass: `--noise`, `--time`).
     #[derive(Default)]
     pub enum SamplerKind("sampler") {
         Random = "random",
         #[default]
         Stratified = "stratified",
+        Sobol = "sobol",
     }
 }
 
@@ -120,6 +125,7 @@ impl PixelSampler {
         match self.kind {
             SamplerKind::Stratified => stratified_1d(index, count, p),
             SamplerKind::Random => unit_float(hash_step(random_prefix(p, index), 2)),
+            SamplerKind::Sobol => sobol_1d(index, p),
         }
     }
 
@@ -147,6 +153,7 @@ impl PixelSampler {
                     .unwrap_or(CmjSet::EMPTY),
             ),
             SamplerKind::Random => (hash_step(HASH_WORDS_INIT, pattern), CmjSet::EMPTY),
+            SamplerKind::Sobol => (0, CmjSet::EMPTY),
         };
         DimSampler {
             kind: self.kind,
@@ -186,6 +193,8 @@ impl DimSampler {
                 let h = hash_step(self.random_state, index);
                 Vec2::new(unit_float(hash_step(h, 0)), unit_float(hash_step(h, 1)))
             }
+            // A sequence, not a set: the count does not matter.
+            SamplerKind::Sobol => sobol_2d(index, self.pattern),
         }
     }
 }
@@ -221,6 +230,8 @@ impl DimSampler {
                     let (x, y) = (x.to_array(), y.to_array());
                     return std::array::from_fn(|i| Vec2::new(x[i], y[i]));
                 }
+                // One point at a time, below.
+                SamplerKind::Sobol => {}
             }
         }
         let mut points = [Vec2::ZERO; LANES];
@@ -253,6 +264,7 @@ mod tests {
                 unit_float(hash_words(&[p, i, 0])),
                 unit_float(hash_words(&[p, i, 1])),
             ),
+            SamplerKind::Sobol => sobol_2d(i, p),
         }
     }
 
@@ -271,7 +283,11 @@ mod tests {
 
     #[test]
     fn kept_prefixes_and_prepared_sets_change_no_number() {
-        for kind in [SamplerKind::Stratified, SamplerKind::Random] {
+        for kind in [
+            SamplerKind::Stratified,
+            SamplerKind::Random,
+            SamplerKind::Sobol,
+        ] {
             for (seed, pixel) in [(0u32, 0u32), (7, 12_345), (0xffff_ffff, 76_799)] {
                 let plain = PixelSampler::new(kind, seed, pixel);
                 let prepared = plain.with_sets(PixelSampler::prepare_sets([16, 64]));
@@ -314,6 +330,7 @@ mod tests {
                     let want = match kind {
                         SamplerKind::Stratified => stratified_1d(3, 10, p),
                         SamplerKind::Random => unit_float(hash_words(&[p, 3, 2])),
+                        SamplerKind::Sobol => sobol_1d(3, p),
                     };
                     assert_eq!(plain.get_1d(dim, 3, 10).to_bits(), want.to_bits());
                 }

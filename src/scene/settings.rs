@@ -69,7 +69,9 @@ pub struct RenderOverrides {
     #[arg(long)]
     pub max_depth: Option<u32>,
     /// stratified: correlated multi-jittered sets of any sample count;
-    /// random: independent numbers, a baseline [render.sampler; default stratified]
+    /// sobol: an Owen-scrambled Sobol sequence, stratified at every
+    /// power-of-two prefix; random: independent numbers, a baseline
+    /// [render.sampler; default stratified, sobol with --noise or --time]
     #[arg(long)]
     pub sampler: Option<SamplerKind>,
     /// Seed of every random number: same seed, same image [render.seed; default 0]
@@ -297,7 +299,7 @@ impl RenderSettings {
     /// layer with [`RenderOverrides::check`] first.
     pub fn merge(layers: &[&RenderOverrides]) -> Self {
         let mut s = Self::default();
-        let mut spp_given = false;
+        let (mut spp_given, mut sampler_given) = (false, false);
         for layer in layers {
             let RenderOverrides {
                 width,
@@ -316,6 +318,7 @@ impl RenderSettings {
                 tonemap,
             } = **layer;
             spp_given |= spp.is_some();
+            sampler_given |= sampler.is_some();
             s.width = width.unwrap_or(s.width);
             s.height = height.unwrap_or(s.height);
             s.spp = spp.unwrap_or(s.spp);
@@ -334,6 +337,13 @@ impl RenderSettings {
         if s.noise.is_some() && !spp_given {
             s.spp = NOISE_SPP;
         }
+        // A pixel of a noise target may stop after any pass: the sequence
+        // that is stratified at every power-of-two prefix serves it as one
+        // set (`sampling::sobol`), where the multi-jittered sets would need
+        // a set per pass (docs/converge.md measures the difference).
+        if s.noise.is_some() && !sampler_given {
+            s.sampler = SamplerKind::Sobol;
+        }
         s
     }
 }
@@ -341,6 +351,28 @@ impl RenderSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A noise target draws from the Sobol sequence unless a layer names
+    /// a sampler.
+    #[test]
+    fn a_noise_target_samples_sobol_unless_a_sampler_is_given() {
+        let noise = RenderOverrides {
+            noise: Some(0.05),
+            ..Default::default()
+        };
+        assert_eq!(RenderSettings::merge(&[&noise]).sampler, SamplerKind::Sobol);
+        assert_eq!(RenderSettings::merge(&[]).sampler, SamplerKind::Stratified);
+        let stratified = RenderOverrides {
+            sampler: Some(SamplerKind::Stratified),
+            ..Default::default()
+        };
+        for layers in [[&stratified, &noise], [&noise, &stratified]] {
+            assert_eq!(
+                RenderSettings::merge(&layers).sampler,
+                SamplerKind::Stratified
+            );
+        }
+    }
 
     #[test]
     fn later_layers_win_and_absent_values_fall_through() {
