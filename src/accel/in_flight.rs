@@ -57,17 +57,18 @@ impl Bvh8 {
         let mut next = 0;
         // Restarts `walk` for the next ray to walk; its index, or None
         // once every ray has been started.
-        let mut launch = |walk: &mut Walk<RayPlanes, Q::State>, query: &mut Q, out: &[Q::Answer]| {
-            while next < rays.len() {
-                let i = next;
-                next += 1;
-                if !done(&out[i]) {
-                    walk.restart(&rays[i], RayPlanes::new(&rays[i]), query.start(&rays[i]));
-                    return Some(i);
+        let mut launch =
+            |walk: &mut Walk<RayPlanes, Q::State>, query: &mut Q, out: &[Q::Answer]| {
+                while next < rays.len() {
+                    let i = next;
+                    next += 1;
+                    if !done(&out[i]) {
+                        walk.restart(&rays[i], RayPlanes::new(&rays[i]), query.start(&rays[i]));
+                        return Some(i);
+                    }
                 }
-            }
-            None
-        };
+                None
+            };
         let boxes = RayPlanes::new(&rays[0]);
         let mut walks: [Walk<RayPlanes, Q::State>; IN_FLIGHT] =
             std::array::from_fn(|_| Walk::new(&rays[0], boxes, query.start(&rays[0])));

@@ -18,7 +18,7 @@
 
 use crate::math::offset::gamma;
 use crate::math::Ray;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use wide::f32x8;
 
 /// The factor far distances are widened by, 1 + 2γ(3) (Ize 2013).
@@ -204,35 +204,32 @@ const PLANE_LIMIT: f32 = (1u128 << 100) as f32;
 impl RayPlanes {
     #[inline(always)]
     pub(crate) fn new(ray: &Ray) -> Self {
-        let o = ray.origin.to_array();
-        let d = ray.direction.to_array();
-        let inv: [f32; 3] = std::array::from_fn(|a| {
-            let limit = PLANE_LIMIT / o[a].abs().max(1.0);
-            let r = 1.0 / d[a];
-            if r.abs() > limit {
-                limit.copysign(d[a])
-            } else {
-                r
-            }
-        });
+        // The three axes at once in SSE lanes: a lone ray pays this setup
+        // for every walk, as many instructions as a few node tests.
+        let o = Vec3A::from(ray.origin);
+        let d = Vec3A::from(ray.direction);
+        let scale = o.abs().max(Vec3A::ONE);
+        let r = Vec3A::ONE / d;
+        // |1/d| beyond 2¹⁰⁰/max(|o|, 1) (an infinite one too): clamped there.
+        let clamp = (r * scale).abs().cmpgt(Vec3A::splat(PLANE_LIMIT));
+        let inv = Vec3A::select(clamp, (PLANE_LIMIT / scale).copysign(d), r);
+        let lanes = |v: Vec3A| v.to_array().map(f32x8::splat);
         #[cfg(target_feature = "fma")]
         let add = {
-            let product = |a: usize| o[a] * inv[a];
+            let product = o * inv;
             // 4u·|p| bounds the product's rounding, u·|o·(1/d)|, and the
-            // rounding of this subtraction too (module analysis above).
-            let err = |a: usize| product(a).abs() * (4.0 * f32::EPSILON / 2.0);
-            [
-                std::array::from_fn(|a| f32x8::splat(-product(a) - err(a))),
-                std::array::from_fn(|a| f32x8::splat(-product(a) + err(a))),
-            ]
+            // rounding of these sums too (the analysis above).
+            let err = product.abs() * (4.0 * f32::EPSILON / 2.0);
+            [lanes(-product - err), lanes(-product + err)]
         };
+        let flip = inv.is_negative_bitmask() as usize;
         Self {
-            inv: inv.map(f32x8::splat),
+            inv: lanes(inv),
             #[cfg(target_feature = "fma")]
             add,
             #[cfg(not(target_feature = "fma"))]
-            origin: o.map(f32x8::splat),
-            flip: inv.map(|r| r.is_sign_negative() as usize),
+            origin: lanes(o),
+            flip: [flip & 1, flip >> 1 & 1, flip >> 2 & 1],
             tmin: ray.tmin,
         }
     }
