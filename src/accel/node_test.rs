@@ -504,19 +504,21 @@ pub(crate) mod tests {
             let mut ray = Ray::new(origin, direction);
             // Boxes around points on the ray's line (met or narrowly
             // missed), some flat, some reaching exactly the ray's end.
+            let boxes: Vec<Aabb> = (0..8)
+                .map(|slot| {
+                    let t = rng.range(-0.5, 4.0) * scale;
+                    let p = origin + direction * t;
+                    let h = rng.cube(scale).abs() * if slot % 3 == 0 { 0.0 } else { 0.3 };
+                    let shift = rng.cube(scale) * if slot % 2 == 0 { 0.0 } else { 0.5 };
+                    Aabb::new(p - h + shift, p + h + shift)
+                })
+                .collect();
             let mut rows = Node8::EMPTY.bounds;
-            let mut boxes = Vec::new();
-            for slot in 0..8 {
-                let t = rng.range(-0.5, 4.0) * scale;
-                let p = origin + direction * t;
-                let h = rng.cube(scale).abs() * if slot % 3 == 0 { 0.0 } else { 0.3 };
-                let shift = rng.cube(scale) * if slot % 2 == 0 { 0.0 } else { 0.5 };
-                let b = Aabb::new(p - h + shift, p + h + shift);
+            for (slot, b) in boxes.iter().enumerate() {
                 for axis in 0..3 {
                     rows[2 * axis][slot] = b.min[axis];
                     rows[2 * axis + 1][slot] = b.max[axis];
                 }
-                boxes.push(b);
             }
             ray.tmax = match i % 3 {
                 0 => f32::INFINITY,
