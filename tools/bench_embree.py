@@ -3,7 +3,7 @@
 
     bench_embree.py MESH [RAYS.bin] [MESH [RAYS.bin] ...] [-n 100000] [--seed 1]
                     [--strata target/release/strata] [--threads 1] [--repeats 3]
-                    [--mode stream|single] [--csv embree_bench.csv]
+                    [--mode stream|single|both] [--csv embree_bench.csv]
 
 Each MESH (OBJ or PLY) is traced with the rays of the RAYS.bin that follows
 it, or, if none follows, with `strata rays all MESH -n N --seed S` (N rays
@@ -22,7 +22,13 @@ How the rays are handed over (--mode):
   (rtcIntersect1M / rtcOccluded1M, which traces each eight consecutive
   rays with its packet kernel, dropping to single rays as they part);
 * `single`: one ray at a time, `strata trace --one-at-a-time` against
-  rtcIntersect1 / rtcOccluded1 in a plain loop.
+  rtcIntersect1 / rtcOccluded1 in a plain loop;
+* `both`: each row measured both ways, one at a time and in streams, with
+  a geometric mean per mode.
+
+Before its rows, each mesh gets a line saying which tree and which one-ray
+kernel Embree chose on this CPU (its verbose output: BVH8 or BVH4, and the
+ISA of the kernel, avx2 or avx512), since a ratio is against that choice.
 
 The engines:
 
@@ -107,9 +113,13 @@ class Harness:
 
     def __init__(self, exe, tris, rays, robust, threads):
         self.threads = threads
-        args = [exe, tris, rays, "--serve", "--threads", str(threads)] + (["--robust"] if robust else [])
-        self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-        ready = self.proc.stdout.readline().split()
+        args = [exe, tris, rays, "--serve", "--verbose", "--threads", str(threads)] + (["--robust"] if robust else [])
+        # Embree's verbose report of its build goes to stderr (--serve --verbose).
+        with tempfile.TemporaryFile("w+") as report:
+            self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=report, text=True)
+            ready = self.proc.stdout.readline().split()
+            report.seek(0)
+            self.tree = embree_tree(report.read())
         if not ready or ready[0] != "ready":
             raise InputError(tris, f"embree_trace did not start ({' '.join(args)})")
         self.triangles = int(ready[1])
@@ -131,6 +141,18 @@ class Harness:
     def close(self):
         self.proc.stdin.close()
         self.proc.wait()
+
+
+def embree_tree(report):
+    """'BVH8<triangle4>, one-ray kernel avx512::BVH8Triangle4Intersector1Moeller' from Embree's verbose report."""
+    tree = kernel = "?"
+    for line in report.splitlines():
+        words = line.split()
+        if len(words) >= 2 and words[0] == "building":
+            tree = words[1]
+        if len(words) == 3 and words[0] == "intersector1" and words[1] == "=":
+            kernel = words[2]
+    return f"{tree}, one-ray kernel {kernel}"
 
 
 def strata_rate(args, mesh, threads):
@@ -189,35 +211,41 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
         tris = os.path.join(workdir, "mesh.tris")
         write_tris(vertices, triangles, tris)
         harnesses = [Harness(exe, tris, rays_path, robust, a.threads) for robust in (False, True)]
-    ratios = ([], [])
+    modes = ("single", "stream") if a.mode == "both" else (a.mode,)
+    ratios = {mode: ([], []) for mode in modes}
     builds = []
     try:
+        if harnesses:
+            print(f"# {name}: Embree built {harnesses[0].tree} (default mode); {harnesses[1].tree} (robust)", flush=True)
         for kind, first, count, _ in groups:
             sub = os.path.join(workdir, "kind.rays")
             rays[first:first + count].astype("<f4").tofile(sub)
             for query in ("closest", "occlusion"):
-                args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", str(a.threads), "--repeats", str(PASSES)]
-                if query == "occlusion":
-                    args.append("--occlusion")
-                if a.mode == "single":
-                    args.append("--one-at-a-time")
-                s, e = [], ([], [])
-                for _ in range(a.repeats):
-                    rate, build = strata_rate(args, mesh, a.threads)
-                    s.append(rate)
-                    builds.append(build)
-                    for h, out in zip(harnesses, e):
-                        out.append(h.rate(first, count, query, a.mode))
-                s = statistics.median(s)
-                ed, er = (statistics.median(x) if x else None for x in e)
-                if ed:
-                    ratios[0].append(s / ed)
-                    ratios[1].append(s / er)
-                rows.append((name, len(triangles), kind, query, count, s, ed, er))
-                print(f"{name:<16} {len(triangles):>8} {kind:<8} {query:<10} {count:>8} {s:>7.2f} {fmt(ed, 7)} {fmt(er, 7)} "
-                      f"{fmt(ed and s / ed, 8)}x {fmt(er and s / er, 8)}x", flush=True)
+                for mode in modes:
+                    args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", str(a.threads), "--repeats", str(PASSES)]
+                    if query == "occlusion":
+                        args.append("--occlusion")
+                    if mode == "single":
+                        args.append("--one-at-a-time")
+                    s, e = [], ([], [])
+                    for _ in range(a.repeats):
+                        rate, build = strata_rate(args, mesh, a.threads)
+                        s.append(rate)
+                        builds.append(build)
+                        for h, out in zip(harnesses, e):
+                            out.append(h.rate(first, count, query, mode))
+                    s = statistics.median(s)
+                    ed, er = (statistics.median(x) if x else None for x in e)
+                    if ed:
+                        ratios[mode][0].append(s / ed)
+                        ratios[mode][1].append(s / er)
+                    rows.append((name, len(triangles), kind, query, mode, count, s, ed, er))
+                    print(f"{name:<16} {len(triangles):>8} {kind:<8} {query:<10} {mode:<6} {count:>8} {s:>7.2f} {fmt(ed, 7)} {fmt(er, 7)} "
+                          f"{fmt(ed and s / ed, 8)}x {fmt(er and s / er, 8)}x", flush=True)
         if harnesses:
-            print(f"{name:<16} {len(triangles):>8} {'all':<8} {'geomean':<10} {'':>8} {'':>7} {'':>7} {'':>7} {geomean(ratios[0]):>7.2f}x {geomean(ratios[1]):>7.2f}x", flush=True)
+            for mode in modes:
+                print(f"{name:<16} {len(triangles):>8} {'all':<8} {'geomean':<10} {mode:<6} {'':>8} {'':>7} {'':>7} {'':>7} "
+                      f"{geomean(ratios[mode][0]):>7.2f}x {geomean(ratios[mode][1]):>7.2f}x", flush=True)
         line = f"# {name}: BVH build on {threads_word(a.threads)}: strata {statistics.median(builds):.2f} s"
         if harnesses:
             d, r = harnesses
@@ -238,9 +266,9 @@ def main(argv=None):
     p.add_argument("--strata", default="target/release/strata", help="the strata executable")
     p.add_argument("--threads", type=int, default=1, help="threads each engine traces (and builds) on; 0: all cores (default 1)")
     p.add_argument("--repeats", type=int, default=3, help="measurements per row; the median is kept")
-    p.add_argument("--mode", choices=("stream", "single"), default="stream",
+    p.add_argument("--mode", choices=("stream", "single", "both"), default="stream",
                    help="stream: chunks of 256 rays (strata trace, rtcIntersect1M); single: one ray at a time "
-                        "(strata trace --one-at-a-time, rtcIntersect1) (default stream)")
+                        "(strata trace --one-at-a-time, rtcIntersect1); both: each row both ways (default stream)")
     p.add_argument("--csv", default="embree_bench.csv", help="where to save the rows (default embree_bench.csv)")
     a = p.parse_args(argv)
     if a.threads < 0:
@@ -252,9 +280,11 @@ def main(argv=None):
         jobs = pairs(a.inputs)
         exe = build_harness()
         how = {"stream": "streams of 256 rays (strata trace, rtcIntersect1M)",
-               "single": "one ray at a time (strata trace --one-at-a-time, rtcIntersect1)"}[a.mode]
+               "single": "one ray at a time (strata trace --one-at-a-time, rtcIntersect1)",
+               "both": "one ray at a time (single: strata trace --one-at-a-time, rtcIntersect1) and "
+                       "streams of 256 rays (stream: strata trace, rtcIntersect1M)"}[a.mode]
         print(f"# {how} on {threads_word(a.threads)} per engine")
-        print(f"{'mesh':<16} {'tris':>8} {'kind':<8} {'query':<10} {'rays':>8} {'strata':>7} {'embree':>7} {'robust':>7} {'s/embree':>8} {'s/robust':>8}")
+        print(f"{'mesh':<16} {'tris':>8} {'kind':<8} {'query':<10} {'mode':<6} {'rays':>8} {'strata':>7} {'embree':>7} {'robust':>7} {'s/embree':>8} {'s/robust':>8}")
         with tempfile.TemporaryDirectory() as workdir:
             for mesh, rays_path in jobs:
                 bench_mesh(a, exe, mesh, rays_path, workdir, rows)
@@ -264,9 +294,9 @@ def main(argv=None):
     with open(a.csv, "w") as f:
         f.write("mesh,triangles,kind,query,rays,threads,mode,strata_mrays_per_s,embree_mrays_per_s,embree_robust_mrays_per_s,"
                 "strata_over_embree,strata_over_embree_robust\n")
-        for name, tris, kind, query, count, s, ed, er in rows:
+        for name, tris, kind, query, mode, count, s, ed, er in rows:
             cols = [f"{x:.4f}" if x else "" for x in (ed, er, ed and s / ed, er and s / er)]
-            f.write(f"{name},{tris},{kind},{query},{count},{a.threads},{a.mode},{s:.4f},{','.join(cols)}\n")
+            f.write(f"{name},{tris},{kind},{query},{count},{a.threads},{mode},{s:.4f},{','.join(cols)}\n")
     print(f"-> {a.csv}")
     return 0
 

@@ -15,7 +15,7 @@
 //! only the order of memory accesses across rays changes.
 
 use super::build::Bvh8;
-use super::node_test::RayBoxes;
+use super::node_test::RayPlanes;
 use super::query::Query;
 use super::walk::{NearestFirst, Walk};
 use crate::math::Ray;
@@ -57,19 +57,20 @@ impl Bvh8 {
         let mut next = 0;
         // Restarts `walk` for the next ray to walk; its index, or None
         // once every ray has been started.
-        let mut launch = |walk: &mut Walk<RayBoxes, Q::State>, query: &mut Q, out: &[Q::Answer]| {
-            while next < rays.len() {
-                let i = next;
-                next += 1;
-                if !done(&out[i]) {
-                    walk.restart(&rays[i], RayBoxes::new(&rays[i]), query.start(&rays[i]));
-                    return Some(i);
+        let mut launch =
+            |walk: &mut Walk<RayPlanes, Q::State>, query: &mut Q, out: &[Q::Answer]| {
+                while next < rays.len() {
+                    let i = next;
+                    next += 1;
+                    if !done(&out[i]) {
+                        walk.restart(&rays[i], RayPlanes::new(&rays[i]), query.start(&rays[i]));
+                        return Some(i);
+                    }
                 }
-            }
-            None
-        };
-        let boxes = RayBoxes::new(&rays[0]);
-        let mut walks: [Walk<RayBoxes, Q::State>; IN_FLIGHT] =
+                None
+            };
+        let boxes = RayPlanes::new(&rays[0]);
+        let mut walks: [Walk<RayPlanes, Q::State>; IN_FLIGHT] =
             std::array::from_fn(|_| Walk::new(&rays[0], boxes, query.start(&rays[0])));
         let mut index = [0; IN_FLIGHT];
         let mut live = 0u32;

@@ -18,7 +18,7 @@
 
 use crate::math::offset::gamma;
 use crate::math::Ray;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use wide::f32x8;
 
 /// The factor far distances are widened by, 1 + 2γ(3) (Ize 2013).
@@ -160,6 +160,120 @@ impl NodeTest for RayBoxes {
     }
 }
 
+/// A ray's slab test as the fastest one-ray kernels make it (Embree's
+/// one-ray BVH8 node test): the near and far rows of each axis chosen once
+/// per ray, and each slab one fused multiply-add, bound·(1/d) − o·(1/d),
+/// with o·(1/d) made once per ray. What a lone walk asks at a node.
+///
+/// Conservative as [`RayBoxes`] is, by the same widening of the far end:
+/// o·(1/d) is rounded once, per ray, with an error of at most u·|o/d|
+/// (u = 2⁻²⁴), so the near plane's addend is moved down by 4u·|o/d| and
+/// the far plane's up by as much, which leaves each slab with relative
+/// errors alone (the reciprocal's and the multiply-add's rounding, within
+/// γ(2)), and those 1 + 2γ(3) covers. A box the ray meets is never culled,
+/// so every hit is the one [`RayBoxes`] finds; a box is sometimes entered
+/// that the other test culls, and the other way round, which the tie rule
+/// makes harmless (`super::hit`).
+///
+/// A reciprocal beyond 2¹⁰⁰/max(|o|, 1) (a zero or nearly zero direction
+/// component) is clamped there with the direction's sign, so o·(1/d) stays
+/// finite: over any distance below 2⁷⁶ such a ray moves less than a
+/// rounding step of its origin on that axis, so it is tested as parallel
+/// to it (a slab of ±2⁷⁶ or more, or everything when the origin lies in it).
+///
+/// Without hardware FMA (the portable build) a multiply-add would round
+/// twice, which a per-ray addend cannot cover: the slab is then
+/// (bound − o)·(1/d), [`RayBoxes`]'s operations.
+#[derive(Clone, Copy)]
+pub(crate) struct RayPlanes {
+    inv: [f32x8; 3],
+    /// −o·(1/d) moved down (near) and up (far) by its rounding bound.
+    #[cfg(target_feature = "fma")]
+    add: [[f32x8; 3]; 2],
+    #[cfg(not(target_feature = "fma"))]
+    origin: [f32x8; 3],
+    /// 1 where the direction is negative on the axis: its near plane is the
+    /// box's maximum (row 2·axis + 1).
+    flip: [usize; 3],
+    tmin: f32,
+}
+
+/// The largest |o·(1/d)| [`RayPlanes`] lets a ray have: 2¹⁰⁰.
+const PLANE_LIMIT: f32 = (1u128 << 100) as f32;
+
+impl RayPlanes {
+    #[inline(always)]
+    pub(crate) fn new(ray: &Ray) -> Self {
+        // The three axes at once in SSE lanes: a lone ray pays this setup
+        // for every walk, as many instructions as a few node tests.
+        let o = Vec3A::from(ray.origin);
+        let d = Vec3A::from(ray.direction);
+        let scale = o.abs().max(Vec3A::ONE);
+        let r = Vec3A::ONE / d;
+        // |1/d| beyond 2¹⁰⁰/max(|o|, 1) (an infinite one too): clamped there.
+        let clamp = (r * scale).abs().cmpgt(Vec3A::splat(PLANE_LIMIT));
+        let inv = Vec3A::select(clamp, (PLANE_LIMIT / scale).copysign(d), r);
+        let lanes = |v: Vec3A| v.to_array().map(f32x8::splat);
+        #[cfg(target_feature = "fma")]
+        let add = {
+            let product = o * inv;
+            // 4u·|p| bounds the product's rounding, u·|o·(1/d)|, and the
+            // rounding of these sums too (the analysis above).
+            let err = product.abs() * (4.0 * f32::EPSILON / 2.0);
+            [lanes(-product - err), lanes(-product + err)]
+        };
+        let flip = inv.is_negative_bitmask() as usize;
+        Self {
+            inv: lanes(inv),
+            #[cfg(target_feature = "fma")]
+            add,
+            #[cfg(not(target_feature = "fma"))]
+            origin: lanes(o),
+            flip: [flip & 1, flip >> 1 & 1, flip >> 2 & 1],
+            tmin: ray.tmin,
+        }
+    }
+
+    /// The slab of axis `axis` at the boxes' side `side` (0: the near
+    /// plane, 1: the far one).
+    #[inline(always)]
+    fn slab(&self, boxes: &ChildBoxes<'_>, axis: usize, side: usize) -> f32x8 {
+        // 2·axis + (0 or 1): within the six rows, no bounds check.
+        let row = boxes.row(2 * axis + ((self.flip[axis] ^ side) & 1));
+        #[cfg(target_feature = "fma")]
+        {
+            row.mul_add(self.inv[axis], self.add[side & 1][axis])
+        }
+        #[cfg(not(target_feature = "fma"))]
+        {
+            (row - self.origin[axis]) * self.inv[axis]
+        }
+    }
+}
+
+impl NodeTest for RayPlanes {
+    #[inline(always)]
+    fn test(&self, boxes: ChildBoxes<'_>, reach: f32) -> (f32x8, u32) {
+        // No slab is NaN (finite bounds or ±∞ for empty slots, finite
+        // nonzero reciprocals): plain min and max suffice, as in RayBoxes.
+        let tn = self
+            .slab(&boxes, 0, 0)
+            .fast_max(self.slab(&boxes, 1, 0))
+            .fast_max(self.slab(&boxes, 2, 0).fast_max(f32x8::splat(self.tmin)));
+        let tf = self
+            .slab(&boxes, 0, 1)
+            .fast_min(self.slab(&boxes, 1, 1))
+            .fast_min(self.slab(&boxes, 2, 1).fast_min(f32x8::splat(reach)));
+        let tf = tf * f32x8::splat(WIDEN);
+        (tn, tn.simd_le(tf).to_bitmask())
+    }
+
+    #[inline(always)]
+    fn widened(&self, reach: f32) -> f32 {
+        reach * WIDEN
+    }
+}
+
 /// [`RayBoxes`] for a line that may run through boxes at negative t:
 /// both ends are widened by their own magnitude, so a box behind the
 /// origin is not culled by rounding either.
@@ -219,6 +333,7 @@ impl NodeTest for PointBoxes {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::super::build::{BuildQuality, Bvh8};
+    use super::super::node::Node8;
     use super::super::query::EveryLeaf;
     use super::super::walk::{AnyOrder, NearestFirst};
     use super::super::NearestQueue;
@@ -365,6 +480,78 @@ pub(crate) mod tests {
             }
         }
         assert!(met > 1000, "the rays meet boxes: {met}");
+    }
+
+    /// The lone walk's fused test never culls a box the ray meets (in
+    /// f64), for origins near and far from the boxes (where o·(1/d) is
+    /// large against the distance to a box), directions with zero and
+    /// tiny components, boxes touching the ray's path and rays ending at a
+    /// box's face; and it culls most boxes the ray misses.
+    #[test]
+    fn the_fused_ray_test_never_culls_a_box_the_ray_meets() {
+        let mut rng = seeded(21);
+        let (mut met, mut culled) = (0, 0);
+        for i in 0..20000 {
+            let scale = [1.0, 1e3, 1e6, 1e-3][i % 4];
+            let center = rng.cube(scale * [1.0, 100.0][i / 4 % 2]);
+            let origin = center + rng.cube(scale * 2.0);
+            let mut direction = rng.unit_vector();
+            match i / 8 % 4 {
+                0 => direction[i % 3] = 0.0,
+                1 => direction[i % 3] = [1e-30, -1e-38, 1e-42][i % 3],
+                _ => {}
+            }
+            let mut ray = Ray::new(origin, direction);
+            // Boxes around points on the ray's line (met or narrowly
+            // missed), some flat, some reaching exactly the ray's end.
+            let boxes: Vec<Aabb> = (0..8)
+                .map(|slot| {
+                    let t = rng.range(-0.5, 4.0) * scale;
+                    let p = origin + direction * t;
+                    let h = rng.cube(scale).abs() * if slot % 3 == 0 { 0.0 } else { 0.3 };
+                    let shift = rng.cube(scale) * if slot % 2 == 0 { 0.0 } else { 0.5 };
+                    Aabb::new(p - h + shift, p + h + shift)
+                })
+                .collect();
+            let mut rows = Node8::EMPTY.bounds;
+            for (slot, b) in boxes.iter().enumerate() {
+                for axis in 0..3 {
+                    rows[2 * axis][slot] = b.min[axis];
+                    rows[2 * axis + 1][slot] = b.max[axis];
+                }
+            }
+            ray.tmax = match i % 3 {
+                0 => f32::INFINITY,
+                1 => rng.range(0.0, 3.0) * scale,
+                _ => {
+                    // Ends on a box face: where the box's near slab begins.
+                    let b = &boxes[i % 8];
+                    let axis = (0..3)
+                        .max_by(|&a, &c| direction[a].abs().total_cmp(&direction[c].abs()))
+                        .unwrap();
+                    let face = if direction[axis] > 0.0 {
+                        b.min[axis]
+                    } else {
+                        b.max[axis]
+                    };
+                    ((face - origin[axis]) / direction[axis]).max(0.0)
+                }
+            };
+            let (_, mask) = RayPlanes::new(&ray).test(ChildBoxes::new(&rows), ray.tmax);
+            for (slot, b) in boxes.iter().enumerate() {
+                if meets(&ray, b) {
+                    met += 1;
+                    assert_eq!(mask >> slot & 1, 1, "ray {i} {ray:?} meets box {b:?}");
+                } else if mask >> slot & 1 == 0 {
+                    culled += 1;
+                }
+            }
+            // Empty slots are never entered.
+            let (_, mask) =
+                RayPlanes::new(&ray).test(ChildBoxes::new(&Node8::EMPTY.bounds), ray.tmax);
+            assert_eq!(mask, 0, "ray {i} enters an empty slot");
+        }
+        assert!(met > 20000 && culled > 50000, "{met} met, {culled} culled");
     }
 
     /// The start of the leaf holding slot `slot`.

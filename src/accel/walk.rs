@@ -1,12 +1,18 @@
-//! The depth-first walk: one ray through the 8-wide BVH, one node or leaf
-//! per step, generic over its node test ([`NodeTest`]), its order
-//! ([`WalkOrder`]) and its [`Query`], all monomorphised: the loop of
-//! [`Bvh8::walk_by`] (and so of [`Bvh8::walk`], [`Bvh8::closest_hit`],
-//! [`Bvh8::occluded`] and [`Bvh8::visit_line`]), and the unit that
-//! [`super::in_flight`] interleaves across several rays. Keeping a walk's
-//! state in a value rather than in a loop's locals is what lets both run
-//! the same steps, so a ray's answer does not depend on which of them
-//! traced it.
+//! The depth-first walk: one ray through the 8-wide BVH, generic over its
+//! node test ([`NodeTest`]), its order ([`WalkOrder`]) and its [`Query`],
+//! all monomorphised. One step (a node or a leaf, then the next) is
+//! written twice over the same helpers ([`Bvh8::descend_nearest`],
+//! `next_deferred`): as [`Walk::step`], whose state is a value that
+//! [`super::in_flight`] interleaves across several rays, and as the loop
+//! of [`Bvh8::walk_by`] (and so of [`Bvh8::walk`], [`Bvh8::closest_hit`],
+//! [`Bvh8::occluded`] and [`Bvh8::visit_line`]), whose state is in locals
+//! and whose way down the inner nodes is a loop of its own, so the ray's
+//! values stay in registers from leaf to leaf (docs/performance.md, "The
+//! lone walk"). With the same node test both visit the same leaves in
+//! the same order; the tie rule (`super::hit`) would make any order give
+//! the same answer anyway. A ray's node test, alone or in flight, is
+//! `RayPlanes` (one fused multiply-add per slab), the test Embree's
+//! one-ray kernel makes.
 //!
 //! Nearest first ([`NearestFirst`], [`super::descend`]), a closest-hit
 //! walk skips a deferred child beyond its nearest hit; an occlusion walk
@@ -20,7 +26,7 @@ use super::build::Bvh8;
 use super::descend::{descend_any, order_key};
 use super::hit::{tie_ray, PrimHit};
 use super::node::{is_leaf, leaf_range};
-use super::node_test::{ChildBoxes, LineBoxes, NodeTest, RayBoxes};
+use super::node_test::{ChildBoxes, LineBoxes, NodeTest, RayPlanes};
 use super::query::{keep_closer, ClosestHit, EveryLeaf, Occlusion, Query};
 use super::stack::Stack;
 use crate::math::Ray;
@@ -124,29 +130,35 @@ impl<T: NodeTest, S> Walk<T, S> {
                 return Some(query.answer(&self.state, true));
             }
         }
-        // Next: the nearest deferred child the ray can still reach. The
-        // entry distance carries rounding error like the box test's far
-        // distance, so it is compared with the same widening: a child
-        // whose box holds a triangle at exactly the best t (a ray along
-        // an edge shared across two leaves) must still be visited, or the
-        // tie would go to whichever leaf came first. Keys carry a slot in
-        // their low bits (see `nearest_last`). An occlusion ray's end
-        // never moves, so every child it pushed is still in reach.
-        let reach = order_key(self.test.widened(self.ray.tmax)) | 7;
-        loop {
-            match self.stack.pop() {
-                None => return Some(query.answer(&self.state, false)),
-                Some(entry)
-                    if !O::NEAREST_FIRST || !Q::SHORTENS || (entry >> 32) as u32 <= reach =>
-                {
-                    self.current = entry as u32;
-                    if prefetch_next {
-                        bvh.prefetch_child(self.current, leaf_data);
-                    }
-                    return None;
+        match next_deferred::<O, Q>(&mut self.stack, self.test.widened(self.ray.tmax)) {
+            None => Some(query.answer(&self.state, false)),
+            Some(next) => {
+                self.current = next;
+                if prefetch_next {
+                    bvh.prefetch_child(self.current, leaf_data);
                 }
-                Some(_) => {}
+                None
             }
+        }
+    }
+}
+
+/// The nearest deferred child a walk whose (widened) reach is `reach` can
+/// still reach, popped off `stack`; `None` once the stack is empty. The
+/// entry distance carries rounding error like the box test's far
+/// distance, so it is compared with the same widening: a child whose box
+/// holds a triangle at exactly the best t (a ray along an edge shared
+/// across two leaves) must still be visited, or the tie would go to
+/// whichever leaf came first. Keys carry a slot in their low bits (see
+/// `nearest_last`). An occlusion ray's end never moves, so every child it
+/// pushed is still in reach.
+#[inline(always)]
+fn next_deferred<O: WalkOrder, Q: Query>(stack: &mut Stack<u64>, reach: f32) -> Option<u32> {
+    let reach = order_key(reach) | 7;
+    loop {
+        let entry = stack.pop()?;
+        if !O::NEAREST_FIRST || !Q::SHORTENS || (entry >> 32) as u32 <= reach {
+            return Some(entry as u32);
         }
     }
 }
@@ -175,15 +187,40 @@ impl Bvh8 {
         O: WalkOrder,
         Q: Query,
     {
-        let state = query.start(ray);
+        let mut state = query.start(ray);
         if self.nodes.is_empty() {
             return query.answer(&state, false);
         }
-        let mut walk = Walk::new(ray, test, state);
+        // The steps of `Walk::step` with the walk's state in locals, and
+        // the way down the inner nodes a loop of its own: between two
+        // leaves the ray's values stay in registers (in one loop with the
+        // leaf test they were reloaded from memory at every node).
+        let mut ray = *ray;
+        let mut stack = Stack::new();
+        let mut current = 0u32;
         loop {
-            if let Some(answer) = walk.step::<O, Q, L>(self, leaf_data, query, false) {
-                return answer;
+            while !is_leaf(current) {
+                let node = &self.nodes[current as usize];
+                let (tn, mask) = test.test(ChildBoxes::new(&node.bounds), ray.tmax);
+                current = if mask == 0 {
+                    match next_deferred::<O, Q>(&mut stack, test.widened(ray.tmax)) {
+                        Some(next) => next,
+                        None => return query.answer(&state, false),
+                    }
+                } else if O::NEAREST_FIRST {
+                    self.descend_nearest(&mut stack, leaf_data, &node.child, tn, mask)
+                } else {
+                    descend_any(&mut stack, &node.child, mask)
+                };
             }
+            let (start, count) = leaf_range(current);
+            if query.leaf(&mut state, start, count, &mut ray) {
+                return query.answer(&state, true);
+            }
+            current = match next_deferred::<O, Q>(&mut stack, test.widened(ray.tmax)) {
+                Some(next) => next,
+                None => return query.answer(&state, false),
+            };
         }
     }
 
@@ -194,7 +231,7 @@ impl Bvh8 {
     where
         Q: Query,
     {
-        self.walk_by(ray, RayBoxes::new(ray), NearestFirst, leaf_data, query)
+        self.walk_by(ray, RayPlanes::new(ray), NearestFirst, leaf_data, query)
     }
 
     /// Closest hit in `(ray.tmin, ray.tmax)`: [`Bvh8::walk`] with

@@ -4,7 +4,7 @@
  *   embree_trace MESH.tris RAYS.bin [--hits HITS.bin] [--occlusion] [--packet | --stream]
  *                [--robust] [--quality low|medium|high] [--threads N] [--repeats R]
  *                [--first F --count C] [--isa ISA] [--verbose]
- *   embree_trace MESH.tris RAYS.bin --serve [--robust] [--quality Q] [--threads N]
+ *   embree_trace MESH.tris RAYS.bin --serve [--robust] [--quality Q] [--threads N] [--verbose]
  *   ... [--instances PLACES.csv]
  *
  * MESH.tris (little-endian, no padding): u32 vertex count, u32 triangle
@@ -44,7 +44,9 @@
  * and then answers each line "FIRST COUNT closest|occlusion single|packet|stream
  * THREADS" on stdin with "SECONDS HITS" (one pass over rays FIRST..FIRST +
  * COUNT), until end of input: `strata bench` drives it that way so that its
- * passes and Embree's can alternate without building twice.
+ * passes and Embree's can alternate without building twice. With --verbose
+ * (Embree's verbose=2) what Embree prints while it builds, the tree and the
+ * kernels it chose among them, goes to stderr in --serve mode.
  */
 #define _GNU_SOURCE
 #include <embree3/rtcore.h>
@@ -444,6 +446,15 @@ int main(int argc, char **argv) {
     if ((size_t)first > nrays || (size_t)count > nrays - (size_t)first) die(rays_path, "--first/--count outside the file");
     t_load = now() - t_load;
 
+    /* --serve --verbose: what Embree prints while it builds (its ISA, the
+     * tree and the kernels it chose) goes to stderr, so that stdout carries
+     * the protocol alone. */
+    int protocol = -1;
+    if (serve && verbose) {
+        fflush(stdout);
+        protocol = dup(1);
+        if (protocol < 0 || dup2(2, 1) < 0) die("stdout", strerror(errno));
+    }
     char config[256];
     snprintf(config, sizeof config, "threads=%d,set_affinity=0,verbose=%d%s%s", threads, verbose ? 2 : 0,
              isa ? ",isa=" : "", isa ? isa : "");
@@ -489,6 +500,11 @@ int main(int argc, char **argv) {
     t_build = now() - t_build;
 
     Job job = {.scene = scene, .rays = rays};
+    if (protocol >= 0) {
+        fflush(stdout);
+        if (dup2(protocol, 1) < 0) die("stdout", strerror(errno));
+        close(protocol);
+    }
     if (serve) {
         printf("ready %u %.6f %lld %lld\n", nt, t_build, (long long)atomic_load(&embree_bytes),
                (long long)atomic_load(&embree_peak));
