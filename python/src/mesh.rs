@@ -1,11 +1,10 @@
 //! `Mesh`: a triangle mesh with its BVH, and the queries on it.
 
-use crate::convert;
+use crate::convert::{self, BadRays, RaySpec};
+use crate::results::{ClosestPoints, Hits};
 use crate::run::{self, Threads, CHUNK, TASK};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
-use pyo3::exceptions::{
-    PyFileNotFoundError, PyKeyError, PyNotImplementedError, PyTypeError, PyValueError,
-};
+use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -22,131 +21,22 @@ use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 ///
 /// Queries take (n, 3) ``origins`` and ``directions`` (any float dtype;
 /// a direction need not be unit length, and ``t`` is measured in its
-/// lengths) and ``t_max`` (a number or one per ray; a ray reports what
-/// lies in (0, t_max]). Every query releases the GIL and runs on every
-/// core, or on ``threads`` threads; Ctrl-C stops it between chunks of
-/// 65,536 rays. Bad input raises ``ValueError`` naming the argument.
+/// lengths), ``t_max`` (a number or one per ray) and ``t_min`` (a number):
+/// a ray reports what lies in (t_min, t_max], (0, inf] by default. Every
+/// query releases the GIL and runs on every core, or on ``threads``
+/// threads; Ctrl-C stops it between chunks of 65,536 rays. Bad input
+/// raises ``ValueError`` naming the argument; ``bad_rays="miss"`` makes a
+/// ray with a NaN or infinite coordinate or a zero direction a miss
+/// instead, as Open3D's and trimesh's engines answer it.
+///
+/// A mesh whose box lies farther from the origin than its size (UTM
+/// coordinates) is traced relative to a centre near its middle, in float32
+/// numbers of its own size; rays and points are moved there in float64.
+/// Hit points and closest points are float64, computed on the triangle
+/// the walk found as given, so they lie on its plane to float64's
+/// precision wherever the mesh lies.
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Mesh(raycast::Mesh);
-
-/// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
-/// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
-#[pyclass(frozen, module = "strata_rt._native")]
-pub struct Hits {
-    /// float32 (n,): distance along the ray, in direction lengths; inf on a miss.
-    #[pyo3(get)]
-    t: Py<PyArray1<f32>>,
-    /// int64 (n,): the triangle (face index) hit; -1 on a miss.
-    #[pyo3(get)]
-    prim: Py<PyArray1<i64>>,
-    /// float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss.
-    #[pyo3(get)]
-    u: Py<PyArray1<f32>>,
-    /// float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss.
-    #[pyo3(get)]
-    v: Py<PyArray1<f32>>,
-    /// float32 (n, 3): unit geometric normal of the triangle hit, by the
-    /// right-hand rule over its vertex order (trimesh's face normal); NaN on a miss.
-    #[pyo3(get)]
-    normal: Py<PyArray2<f32>>,
-    /// float32 (n, 3): the hit point on the triangle, (1-u-v)·v0 + u·v1 + v·v2; NaN on a miss.
-    #[pyo3(get)]
-    point: Py<PyArray2<f32>>,
-}
-
-const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
-
-#[pymethods]
-impl Hits {
-    /// The array named ``key``: one of ``keys()``.
-    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        Ok(match key {
-            "t" => self.t.clone_ref(py).into_any(),
-            "prim" => self.prim.clone_ref(py).into_any(),
-            "u" => self.u.clone_ref(py).into_any(),
-            "v" => self.v.clone_ref(py).into_any(),
-            "normal" => self.normal.clone_ref(py).into_any(),
-            "point" => self.point.clone_ref(py).into_any(),
-            _ => return Err(PyKeyError::new_err(key.to_string())),
-        })
-    }
-
-    /// The names of the arrays: t, prim, u, v, normal, point.
-    fn keys(&self) -> Vec<&'static str> {
-        HITS_KEYS.to_vec()
-    }
-
-    /// Whether ``key`` names one of the arrays.
-    fn __contains__(&self, key: &str) -> bool {
-        HITS_KEYS.contains(&key)
-    }
-
-    /// The number of rays.
-    fn __len__(&self, py: Python<'_>) -> usize {
-        self.t.bind(py).len().unwrap_or(0)
-    }
-
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let t = self.t.bind(py);
-        let n = t.len().unwrap_or(0);
-        let hits = self
-            .prim
-            .bind(py)
-            .to_vec()
-            .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count());
-        format!("Hits({n} rays, {hits} hit; keys t, prim, u, v, normal, point)")
-    }
-}
-
-/// The nearest surface point to each query point (``Mesh.closest_point``),
-/// as attributes or keys (``near.distance`` or ``near["distance"]``).
-#[pyclass(frozen, module = "strata_rt._native")]
-pub struct ClosestPoints {
-    /// float32 (n, 3): the nearest point on the surface; NaN where none lies within max_distance.
-    #[pyo3(get)]
-    point: Py<PyArray2<f32>>,
-    /// float32 (n,): its distance (negative inside with ``signed=True``); inf where none.
-    #[pyo3(get)]
-    distance: Py<PyArray1<f32>>,
-    /// int64 (n,): the triangle (face index) it lies on; -1 where none.
-    #[pyo3(get)]
-    prim: Py<PyArray1<i64>>,
-}
-
-const CLOSEST_KEYS: [&str; 3] = ["point", "distance", "prim"];
-
-#[pymethods]
-impl ClosestPoints {
-    /// The array named ``key``: one of ``keys()``.
-    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        Ok(match key {
-            "point" => self.point.clone_ref(py).into_any(),
-            "distance" => self.distance.clone_ref(py).into_any(),
-            "prim" => self.prim.clone_ref(py).into_any(),
-            _ => return Err(PyKeyError::new_err(key.to_string())),
-        })
-    }
-
-    /// The names of the arrays: point, distance, prim.
-    fn keys(&self) -> Vec<&'static str> {
-        CLOSEST_KEYS.to_vec()
-    }
-
-    /// Whether ``key`` names one of the arrays.
-    fn __contains__(&self, key: &str) -> bool {
-        CLOSEST_KEYS.contains(&key)
-    }
-
-    /// The number of query points.
-    fn __len__(&self, py: Python<'_>) -> usize {
-        self.distance.bind(py).len().unwrap_or(0)
-    }
-
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let n = self.distance.bind(py).len().unwrap_or(0);
-        format!("ClosestPoints({n} points; keys point, distance, prim)")
-    }
-}
 
 /// Each ray's answer, written in place by the threads.
 struct HitColumns<'a> {
@@ -156,7 +46,7 @@ struct HitColumns<'a> {
     v: &'a mut [f32],
     /// Three per ray.
     normal: &'a mut [f32],
-    point: &'a mut [f32],
+    point: &'a mut [f64],
 }
 
 impl HitColumns<'_> {
@@ -219,6 +109,27 @@ fn vertices_and_faces_of<'py>(
     )))
 }
 
+impl Mesh {
+    /// A ray query's rays: its arguments read and checked (``ValueError``
+    /// naming the argument), origins made relative to the mesh's centre.
+    fn rays(
+        &self,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        t_min: Option<f64>,
+        bad_rays: &str,
+        threads: &Threads,
+    ) -> PyResult<Vec<strata::math::Ray>> {
+        let spec = RaySpec {
+            t_min,
+            t_max,
+            bad: BadRays::new(bad_rays)?,
+        };
+        convert::rays(origins, directions, &spec, self.0.centre(), threads)
+    }
+}
+
 #[pymethods]
 impl Mesh {
     /// Build the mesh and its BVH from ``vertices`` ((n, 3) floats) and
@@ -240,10 +151,10 @@ impl Mesh {
             Some(faces) => (vertices.clone(), faces.clone()),
             None => vertices_and_faces_of(vertices)?,
         };
-        let vertices = convert::vec3s(&vertices, "vertices")?;
+        let vertices = convert::dvec3s(&vertices, "vertices")?;
         let faces = convert::faces(&faces, vertices.len())?;
         let mesh = py
-            .detach(|| raycast::Mesh::new(vertices, faces, BuildQuality::Auto))
+            .detach(|| raycast::Mesh::new_exact(vertices, faces, BuildQuality::Auto))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Self(mesh))
     }
@@ -272,6 +183,16 @@ impl Mesh {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let py = slf.py();
         let mesh = &slf.borrow().0;
+        if let Some((vertices, faces)) = mesh.given() {
+            // As given, in float64: the same centre, tree and answers.
+            let n = vertices.len();
+            let flat: Vec<f64> = vertices.iter().flat_map(|v| v.to_array()).collect();
+            let vertices = PyArray1::from_vec(py, flat).reshape([n, 3])?;
+            let idx: Vec<i64> = faces.iter().flatten().map(|&k| i64::from(k)).collect();
+            let faces = PyArray1::from_vec(py, idx).reshape([faces.len(), 3])?;
+            let args = (vertices, faces).into_pyobject(py)?.into_any();
+            return Ok((slf.get_type().into_any(), args));
+        }
         let Some((prototype, maps)) = mesh.placement() else {
             let (vertices, faces) = corner_arrays(py, mesh.triangles())?;
             let args = (vertices, faces).into_pyobject(py)?.into_any();
@@ -379,7 +300,7 @@ impl Mesh {
     ///
     /// Watertight: a ray through a shared edge or vertex of a closed mesh
     /// hits one of the triangles there, never none.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
     fn intersect(
         &self,
         py: Python<'_>,
@@ -387,16 +308,18 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
+        t_min: Option<f64>,
+        bad_rays: &str,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let n = rays.len();
         let mut t = vec![0f32; n];
         let mut prim = vec![0i64; n];
         let mut u = vec![0f32; n];
         let mut v = vec![0f32; n];
         let mut normal = vec![0f32; 3 * n];
-        let mut point = vec![0f32; 3 * n];
+        let mut point = vec![0f64; 3 * n];
         for start in (0..n).step_by(CHUNK) {
             let r = start..(start + CHUNK).min(n);
             let columns = (
@@ -441,7 +364,7 @@ impl Mesh {
     }
 
     /// Whether anything blocks each ray in (0, t_max]: bool (n,).
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
     fn occluded<'py>(
         &self,
         py: Python<'py>,
@@ -449,9 +372,11 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
+        t_min: Option<f64>,
+        bad_rays: &str,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![false; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             self.0.occluded(rays, out)
@@ -467,7 +392,7 @@ impl Mesh {
     /// One traversal per ray, not a re-cast from each hit: a ray through a
     /// shared edge or vertex of a closed mesh crosses the surface there
     /// once and is reported once, never zero times or twice, at any scale.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
     fn all_hits<'py>(
         &self,
         py: Python<'py>,
@@ -475,9 +400,11 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
+        t_min: Option<f64>,
+        bad_rays: &str,
     ) -> PyResult<AllHits<'py>> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
             self.0.all_hits(rays, found, counts)
         })?;
@@ -499,7 +426,7 @@ impl Mesh {
 
     /// The number of surface crossings along each ray in (0, t_max]: int64
     /// (n,), as ``all_hits`` would list them.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
     fn count_hits<'py>(
         &self,
         py: Python<'py>,
@@ -507,9 +434,11 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
+        t_min: Option<f64>,
+        bad_rays: &str,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![0i64; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             for (o, ray) in out.iter_mut().zip(rays) {
@@ -534,11 +463,11 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let threads = Threads::new(threads)?;
-        let points = convert::points(points, "points", &threads)?;
+        let points = convert::points(points, "points", self.0.centre(), &threads)?;
         let mut out = vec![false; points.len()];
         run::each(py, &threads, &points, &mut out, |points, out| {
-            for (o, &p) in out.iter_mut().zip(points) {
-                *o = self.0.contains(p);
+            for (o, &(_, near)) in out.iter_mut().zip(points) {
+                *o = self.0.contains(near);
             }
         })?;
         Ok(PyArray1::from_vec(py, out))
@@ -561,7 +490,7 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<ClosestPoints> {
         let threads = Threads::new(threads)?;
-        let points = convert::points(points, "points", &threads)?;
+        let points = convert::points(points, "points", self.0.centre(), &threads)?;
         let max_distance = match max_distance {
             None => f32::INFINITY,
             Some(d) if d >= 0.0 => d as f32,
@@ -573,23 +502,28 @@ impl Mesh {
         };
         let mut near = vec![raycast::ClosestPoint::MISS; points.len()];
         run::each(py, &threads, &points, &mut near, |points, out| {
-            for (o, &p) in out.iter_mut().zip(points) {
-                *o = self.0.closest_point(p, max_distance, signed);
+            for (o, &(p, near)) in out.iter_mut().zip(points) {
+                *o = self.0.closest_point(p, near, max_distance, signed);
             }
         })?;
         let n = near.len();
         let mut point = Vec::with_capacity(3 * n);
         let mut distance = Vec::with_capacity(n);
         let mut prim = Vec::with_capacity(n);
+        let (mut u, mut v) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for c in near {
             point.extend(c.point.to_array());
             distance.push(c.distance);
             prim.push(c.face);
+            u.push(c.u);
+            v.push(c.v);
         }
         Ok(ClosestPoints {
             point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
             distance: PyArray1::from_vec(py, distance).unbind(),
             prim: PyArray1::from_vec(py, prim).unbind(),
+            u: PyArray1::from_vec(py, u).unbind(),
+            v: PyArray1::from_vec(py, v).unbind(),
         })
     }
 }

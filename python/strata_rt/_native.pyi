@@ -31,8 +31,9 @@ class Hits:
     def normal(self) -> NDArray[np.float32]:
         """float32 (n, 3): unit geometric normal of the triangle hit (right-hand rule); NaN on a miss."""
     @property
-    def point(self) -> NDArray[np.float32]:
-        """float32 (n, 3): the hit point on the triangle; NaN on a miss."""
+    def point(self) -> NDArray[np.float64]:
+        """float64 (n, 3): where the ray meets the triangle's plane, computed in float64 on the
+        triangle as given (on its plane to float64's precision, wherever the mesh lies); NaN on a miss."""
     def __getitem__(self, key: str) -> NDArray[np.generic]:
         """The array named ``key``: one of ``keys()``."""
     def keys(self) -> List[str]:
@@ -46,18 +47,25 @@ class ClosestPoints:
     """The nearest surface point to each query point (``Mesh.closest_point``), as attributes or keys."""
 
     @property
-    def point(self) -> NDArray[np.float32]:
-        """float32 (n, 3): the nearest point on the surface; NaN where none lies within max_distance."""
+    def point(self) -> NDArray[np.float64]:
+        """float64 (n, 3): the nearest point on the surface, computed in float64 on the triangle
+        as given; NaN where none lies within max_distance."""
     @property
-    def distance(self) -> NDArray[np.float32]:
-        """float32 (n,): its distance (negative inside with ``signed=True``); inf where none."""
+    def distance(self) -> NDArray[np.float64]:
+        """float64 (n,): its distance (negative inside with ``signed=True``); inf where none."""
     @property
     def prim(self) -> NDArray[np.int64]:
         """int64 (n,): the triangle (face index) it lies on; -1 where none."""
+    @property
+    def u(self) -> NDArray[np.float64]:
+        """float64 (n,): barycentric coordinate of the face's second vertex at the point; NaN where none."""
+    @property
+    def v(self) -> NDArray[np.float64]:
+        """float64 (n,): barycentric coordinate of the face's third vertex at the point; NaN where none."""
     def __getitem__(self, key: str) -> NDArray[np.generic]:
         """The array named ``key``: one of ``keys()``."""
     def keys(self) -> List[str]:
-        """The names of the arrays: point, distance, prim."""
+        """The names of the arrays: point, distance, prim, u, v."""
     def __contains__(self, key: str) -> bool:
         """Whether ``key`` names one of the arrays."""
     def __len__(self) -> int:
@@ -69,8 +77,12 @@ class Mesh:
     """A triangle mesh and its BVH, built once (on every core) and asked any number of queries.
 
     Queries take (n, 3) origins and directions (any float dtype; ``t`` is in
-    direction lengths) and ``t_max`` (a number or one per ray); each
-    releases the GIL and runs on every core, or on ``threads`` threads.
+    direction lengths), ``t_max`` (a number or one per ray) and ``t_min``
+    (where rays start); each releases the GIL and runs on every core, or on
+    ``threads`` threads. ``bad_rays="miss"`` makes a ray with a NaN or
+    infinite coordinate or a zero direction a miss instead of a ValueError.
+    A mesh far from the origin is traced relative to its centre, and hit
+    and closest points are float64, computed on the triangle as given.
     """
 
     def __init__(self, vertices: Any, faces: Optional[ArrayLike] = None) -> None:
@@ -108,6 +120,8 @@ class Mesh:
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
     ) -> Hits:
         """The first hit of each ray in (0, t_max]: t, prim, u, v, normal, point."""
     def occluded(
@@ -116,6 +130,8 @@ class Mesh:
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
     ) -> NDArray[np.bool_]:
         """Whether anything blocks each ray in (0, t_max]: bool (n,)."""
     def all_hits(
@@ -124,6 +140,8 @@ class Mesh:
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
     ) -> Tuple[NDArray[np.int64], NDArray[np.float32], NDArray[np.int64]]:
         """Every surface crossing along each ray, nearest first: (splits (n+1,), t, prim)."""
     def count_hits(
@@ -132,6 +150,8 @@ class Mesh:
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
     ) -> NDArray[np.int64]:
         """The number of surface crossings along each ray in (0, t_max]: int64 (n,)."""
     def contains(self, points: ArrayLike, threads: Optional[int] = None) -> NDArray[np.bool_]:

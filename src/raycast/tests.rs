@@ -106,8 +106,8 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
         assert_eq!(placed.contains(p), copies.contains(p));
         for signed in [false, true] {
             let (x, y) = (
-                placed.closest_point(p, 1.5, signed),
-                copies.closest_point(p, 1.5, signed),
+                placed.closest_point(p.as_dvec3(), p, 1.5, signed),
+                copies.closest_point(p.as_dvec3(), p, 1.5, signed),
             );
             assert!(x == y || (x.face == -1 && y.face == -1), "{p}: {x:?} {y:?}");
         }
@@ -131,6 +131,13 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
         if !near_edge {
             assert_eq!((x.face, x.normal), (y.face, y.normal), "ray {i}");
             assert!((x.point - y.point).length() <= 1e-5 * (1.0 + y.point.length()));
+            // On the face's plane, in float64.
+            let [a, b, c] = copies.triangles()[y.face as usize].map(|p| p.as_dvec3());
+            let n = (b - a).cross(c - a).normalize();
+            assert!(
+                (y.point - a).dot(n).abs() < 1e-12 * (1.0 + a.length()),
+                "ray {i}"
+            );
             compared += 1;
         }
     }
@@ -159,11 +166,20 @@ fn a_first_hit_carries_its_world_triangles_normal_and_point() {
     placed.first_hits(&[ray], &mut hit);
     let [a, b, c] = world;
     assert_eq!(hit[0].face, 0);
-    assert_eq!(hit[0].normal, (b - a).cross(c - a).normalize());
+    let normal = (b - a).cross(c - a).normalize();
+    assert!((hit[0].normal - normal).length() < 1e-7);
     assert!((hit[0].normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    // The point is where the ray meets the face's plane, in float64.
+    let [a64, b64, c64] = world.map(|p| p.as_dvec3());
+    let n64 = (b64 - a64).cross(c64 - a64).normalize();
+    assert!(
+        (hit[0].point - a64).dot(n64).abs() < 1e-14,
+        "{:?}",
+        hit[0].point
+    );
+    assert_eq!((hit[0].point.x, hit[0].point.z), (0.5, 5.2f32 as f64));
     let on = (1.0 - hit[0].u - hit[0].v) * a + hit[0].u * b + hit[0].v * c;
-    assert_eq!(hit[0].point, on);
-    assert!((hit[0].point - ray.at(hit[0].t)).length() < 1e-5);
+    assert!((hit[0].point - on.as_dvec3()).length() < 1e-6);
 }
 
 #[test]
@@ -217,8 +233,8 @@ fn a_mesh_without_faces_answers_nothing() {
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     empty.first_hits(&[ray], &mut hit);
     assert_eq!(hit[0].face, -1);
-    let near = empty.closest_point(Vec3::ZERO, f32::INFINITY, true);
-    assert_eq!((near.face, near.distance), (-1, f32::INFINITY));
+    let near = empty.closest_point(glam::DVec3::ZERO, Vec3::ZERO, f32::INFINITY, true);
+    assert_eq!((near.face, near.distance), (-1, f64::INFINITY));
     assert!(near.point.is_nan());
     assert!(!empty.contains(Vec3::ZERO));
     let err = Mesh::new(vec![Vec3::ZERO], vec![[0, 0, 1]], BuildQuality::Auto);

@@ -1,0 +1,135 @@
+//! The named results of `Mesh`'s queries: arrays as attributes or keys.
+
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyKeyError;
+use pyo3::prelude::*;
+
+/// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
+/// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
+#[pyclass(frozen, module = "strata_rt._native")]
+pub struct Hits {
+    /// float32 (n,): distance along the ray, in direction lengths; inf on a miss.
+    #[pyo3(get)]
+    pub(crate) t: Py<PyArray1<f32>>,
+    /// int64 (n,): the triangle (face index) hit; -1 on a miss.
+    #[pyo3(get)]
+    pub(crate) prim: Py<PyArray1<i64>>,
+    /// float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss.
+    #[pyo3(get)]
+    pub(crate) u: Py<PyArray1<f32>>,
+    /// float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss.
+    #[pyo3(get)]
+    pub(crate) v: Py<PyArray1<f32>>,
+    /// float32 (n, 3): unit geometric normal of the triangle hit, by the
+    /// right-hand rule over its vertex order (trimesh's face normal); NaN on a miss.
+    #[pyo3(get)]
+    pub(crate) normal: Py<PyArray2<f32>>,
+    /// float64 (n, 3): where the ray meets the triangle's plane, computed
+    /// in float64 on the triangle as given (on its plane to float64's
+    /// precision, wherever the mesh lies); NaN on a miss.
+    #[pyo3(get)]
+    pub(crate) point: Py<PyArray2<f64>>,
+}
+
+const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
+
+#[pymethods]
+impl Hits {
+    /// The array named ``key``: one of ``keys()``.
+    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
+        Ok(match key {
+            "t" => self.t.clone_ref(py).into_any(),
+            "prim" => self.prim.clone_ref(py).into_any(),
+            "u" => self.u.clone_ref(py).into_any(),
+            "v" => self.v.clone_ref(py).into_any(),
+            "normal" => self.normal.clone_ref(py).into_any(),
+            "point" => self.point.clone_ref(py).into_any(),
+            _ => return Err(PyKeyError::new_err(key.to_string())),
+        })
+    }
+
+    /// The names of the arrays: t, prim, u, v, normal, point.
+    fn keys(&self) -> Vec<&'static str> {
+        HITS_KEYS.to_vec()
+    }
+
+    /// Whether ``key`` names one of the arrays.
+    fn __contains__(&self, key: &str) -> bool {
+        HITS_KEYS.contains(&key)
+    }
+
+    /// The number of rays.
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.t.bind(py).len().unwrap_or(0)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let t = self.t.bind(py);
+        let n = t.len().unwrap_or(0);
+        let hits = self
+            .prim
+            .bind(py)
+            .to_vec()
+            .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count());
+        format!("Hits({n} rays, {hits} hit; keys t, prim, u, v, normal, point)")
+    }
+}
+
+/// The nearest surface point to each query point (``Mesh.closest_point``),
+/// as attributes or keys (``near.distance`` or ``near["distance"]``).
+#[pyclass(frozen, module = "strata_rt._native")]
+pub struct ClosestPoints {
+    /// float64 (n, 3): the nearest point on the surface, computed in
+    /// float64 on the triangle as given; NaN where none lies within max_distance.
+    #[pyo3(get)]
+    pub(crate) point: Py<PyArray2<f64>>,
+    /// float64 (n,): its distance (negative inside with ``signed=True``); inf where none.
+    #[pyo3(get)]
+    pub(crate) distance: Py<PyArray1<f64>>,
+    /// int64 (n,): the triangle (face index) it lies on; -1 where none.
+    #[pyo3(get)]
+    pub(crate) prim: Py<PyArray1<i64>>,
+    /// float64 (n,): barycentric coordinate of the face's second vertex at the point; NaN where none.
+    #[pyo3(get)]
+    pub(crate) u: Py<PyArray1<f64>>,
+    /// float64 (n,): barycentric coordinate of the face's third vertex at the point; NaN where none.
+    #[pyo3(get)]
+    pub(crate) v: Py<PyArray1<f64>>,
+}
+
+const CLOSEST_KEYS: [&str; 5] = ["point", "distance", "prim", "u", "v"];
+
+#[pymethods]
+impl ClosestPoints {
+    /// The array named ``key``: one of ``keys()``.
+    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
+        Ok(match key {
+            "point" => self.point.clone_ref(py).into_any(),
+            "distance" => self.distance.clone_ref(py).into_any(),
+            "prim" => self.prim.clone_ref(py).into_any(),
+            "u" => self.u.clone_ref(py).into_any(),
+            "v" => self.v.clone_ref(py).into_any(),
+            _ => return Err(PyKeyError::new_err(key.to_string())),
+        })
+    }
+
+    /// The names of the arrays: point, distance, prim, u, v.
+    fn keys(&self) -> Vec<&'static str> {
+        CLOSEST_KEYS.to_vec()
+    }
+
+    /// Whether ``key`` names one of the arrays.
+    fn __contains__(&self, key: &str) -> bool {
+        CLOSEST_KEYS.contains(&key)
+    }
+
+    /// The number of query points.
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.distance.bind(py).len().unwrap_or(0)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let n = self.distance.bind(py).len().unwrap_or(0);
+        format!("ClosestPoints({n} points; keys point, distance, prim, u, v)")
+    }
+}
