@@ -90,7 +90,7 @@ def _mesh_arrays(mesh: Any) -> Tuple[Any, Any]:
         return tris.reshape(-1, 3), np.arange(3 * len(tris)).reshape(-1, 3)
     if hasattr(mesh, "vertex") and hasattr(mesh, "triangle"):
         return mesh.vertex["positions"], mesh.triangle["indices"]
-    for faces in ("triangles", "faces"):
+    for faces in ("faces", "triangles"):
         if hasattr(mesh, "vertices") and hasattr(mesh, faces):
             return mesh.vertices, getattr(mesh, faces)
     raise TypeError(
