@@ -517,8 +517,13 @@ pub fn rays(
     let bad =
         |r: &Ray| !r.origin.is_finite() || !r.direction.is_finite() || r.direction == Vec3::ZERO;
     let miss = spec.bad == BadRays::Miss;
+    let centred = centre != DVec3::ZERO;
     let (rays, bad) = with_rows!(o, |ro| with_rows!(d, |rd| gather(threads, n, |i| {
-        let origin = (ro.row64(i) - centre).as_vec3();
+        // Without a centre, the row rounded once, as (row - 0) would be.
+        let origin = match centred {
+            true => (ro.row64(i) - centre).as_vec3(),
+            false => ro.row(i),
+        };
         let ray = Ray {
             origin,
             direction: rd.row(i),

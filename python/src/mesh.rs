@@ -1,7 +1,7 @@
 //! `Mesh`: a triangle mesh with its BVH, and the queries on it.
 
 use crate::convert::{self, BadRays, RaySpec};
-use crate::results::{ClosestPoints, Hits};
+use crate::results::{ClosestPoints, Hits, HITS_KEYS};
 use crate::run::{self, Threads, CHUNK, TASK};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, PyValueError};
@@ -38,7 +38,8 @@ use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Mesh(raycast::Mesh);
 
-/// Each ray's answer, written in place by the threads.
+/// Each task's rays' answers, written in place by the threads: a column
+/// not asked for is empty.
 struct HitColumns<'a> {
     t: &'a mut [f32],
     prim: &'a mut [i64],
@@ -50,16 +51,78 @@ struct HitColumns<'a> {
 }
 
 impl HitColumns<'_> {
-    /// Copies `hits` in, one row each.
+    /// Copies `hits` into the columns asked for, one row each.
     fn fill(self, hits: &[FirstHit]) {
-        for (i, h) in hits.iter().enumerate() {
-            self.t[i] = h.t;
-            self.prim[i] = h.face;
-            self.u[i] = h.u;
-            self.v[i] = h.v;
-            h.normal.write_to_slice(&mut self.normal[3 * i..3 * i + 3]);
-            h.point.write_to_slice(&mut self.point[3 * i..3 * i + 3]);
+        if !self.t.is_empty() {
+            self.t.iter_mut().zip(hits).for_each(|(o, h)| *o = h.t);
         }
+        if !self.prim.is_empty() {
+            self.prim.iter_mut().zip(hits).for_each(|(o, h)| *o = h.face);
+        }
+        if !self.u.is_empty() {
+            self.u.iter_mut().zip(hits).for_each(|(o, h)| *o = h.u);
+        }
+        if !self.v.is_empty() {
+            self.v.iter_mut().zip(hits).for_each(|(o, h)| *o = h.v);
+        }
+        if !self.normal.is_empty() {
+            let rows = self.normal.chunks_exact_mut(3).zip(hits);
+            rows.for_each(|(o, h)| h.normal.write_to_slice(o));
+        }
+        if !self.point.is_empty() {
+            let rows = self.point.chunks_exact_mut(3).zip(hits);
+            rows.for_each(|(o, h)| h.point.write_to_slice(o));
+        }
+    }
+}
+
+/// Rows `rows` of `column` (`width` values a row) cut into one piece per
+/// task of `TASK` rows; an empty column (not asked for) into empty pieces.
+fn task_pieces<T>(column: &mut [T], width: usize, rows: std::ops::Range<usize>) -> Vec<&mut [T]> {
+    if column.is_empty() {
+        let tasks = rows.len().div_ceil(TASK);
+        return (0..tasks).map(|_| <&mut [T]>::default()).collect();
+    }
+    column[width * rows.start..width * rows.end]
+        .chunks_mut(width * TASK)
+        .collect()
+}
+
+/// A zeroed column of `len` values where `wanted`, else an empty one.
+fn column<T: Clone + Default>(wanted: bool, len: usize) -> Vec<T> {
+    if wanted {
+        vec![T::default(); len]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Which of `Hits`' arrays a query was asked for (``fields``).
+struct Fields([bool; 6]);
+
+impl Fields {
+    fn new(fields: Option<Vec<String>>) -> PyResult<Self> {
+        let Some(names) = fields else {
+            return Ok(Self([true; 6]));
+        };
+        let mut wanted = [false; 6];
+        for name in names {
+            let Some(k) = HITS_KEYS.iter().position(|&key| key == name) else {
+                return Err(PyValueError::new_err(format!(
+                    "fields names {name:?}, which Hits does not have; it has {}",
+                    HITS_KEYS.join(", ")
+                )));
+            };
+            wanted[k] = true;
+        }
+        Ok(Self(wanted))
+    }
+
+    fn has(&self, key: &str) -> bool {
+        HITS_KEYS
+            .iter()
+            .position(|&k| k == key)
+            .is_some_and(|k| self.0[k])
     }
 }
 
@@ -300,7 +363,12 @@ impl Mesh {
     ///
     /// Watertight: a ray through a shared edge or vertex of a closed mesh
     /// hits one of the triangles there, never none.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
+    ///
+    /// ``fields``: the names of the arrays to compute (default all); the
+    /// others are None and cost nothing (``fields=("t", "prim")`` skips
+    /// the second look at each hit face that ``normal`` and ``point`` take).
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise", fields=None))]
+    #[allow(clippy::too_many_arguments)]
     fn intersect(
         &self,
         py: Python<'_>,
@@ -310,56 +378,66 @@ impl Mesh {
         threads: Option<i64>,
         t_min: Option<f64>,
         bad_rays: &str,
+        fields: Option<Vec<String>>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
         let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let n = rays.len();
-        let mut t = vec![0f32; n];
-        let mut prim = vec![0i64; n];
-        let mut u = vec![0f32; n];
-        let mut v = vec![0f32; n];
-        let mut normal = vec![0f32; 3 * n];
-        let mut point = vec![0f64; 3 * n];
+        let fields = Fields::new(fields)?;
+        let mut t = column::<f32>(fields.has("t"), n);
+        let mut prim = column::<i64>(fields.has("prim"), n);
+        let mut u = column::<f32>(fields.has("u"), n);
+        let mut v = column::<f32>(fields.has("v"), n);
+        let mut normal = column::<f32>(fields.has("normal"), 3 * n);
+        let mut point = column::<f64>(fields.has("point"), 3 * n);
+        let surface = fields.has("normal") || fields.has("point");
         for start in (0..n).step_by(CHUNK) {
             let r = start..(start + CHUNK).min(n);
-            let columns = (
-                rays[r.clone()].par_chunks(TASK),
-                t[r.clone()].par_chunks_mut(TASK),
-                prim[r.clone()].par_chunks_mut(TASK),
-                u[r.clone()].par_chunks_mut(TASK),
-                v[r.clone()].par_chunks_mut(TASK),
-                normal[3 * r.start..3 * r.end].par_chunks_mut(3 * TASK),
-                point[3 * r.start..3 * r.end].par_chunks_mut(3 * TASK),
-            );
+            let pieces = task_pieces(&mut t, 1, r.clone())
+                .into_iter()
+                .zip(task_pieces(&mut prim, 1, r.clone()))
+                .zip(task_pieces(&mut u, 1, r.clone()))
+                .zip(task_pieces(&mut v, 1, r.clone()))
+                .zip(task_pieces(&mut normal, 3, r.clone()))
+                .zip(task_pieces(&mut point, 3, r.clone()))
+                .map(|(((((t, prim), u), v), normal), point)| HitColumns {
+                    t,
+                    prim,
+                    u,
+                    v,
+                    normal,
+                    point,
+                })
+                .collect::<Vec<_>>();
+            let work = rays[r.clone()].par_chunks(TASK).zip(pieces);
             py.detach(|| {
                 threads.install(|| {
-                    columns
-                        .into_par_iter()
-                        .for_each(|(rays, t, prim, u, v, normal, point)| {
-                            let mut hits = [FirstHit::MISS; TASK];
-                            let hits = &mut hits[..rays.len()];
-                            self.0.first_hits(rays, hits);
-                            let out = HitColumns {
-                                t,
-                                prim,
-                                u,
-                                v,
-                                normal,
-                                point,
-                            };
-                            out.fill(hits)
-                        })
+                    work.for_each(|(rays, out)| {
+                        let mut hits = [FirstHit::MISS; TASK];
+                        let hits = &mut hits[..rays.len()];
+                        self.0.first_hits(rays, hits, surface);
+                        out.fill(hits)
+                    })
                 })
             });
             py.check_signals()?;
         }
+        let normal = match fields.has("normal") {
+            true => Some(PyArray1::from_vec(py, normal).reshape([n, 3])?.unbind()),
+            false => None,
+        };
+        let point = match fields.has("point") {
+            true => Some(PyArray1::from_vec(py, point).reshape([n, 3])?.unbind()),
+            false => None,
+        };
+        let has = |key| fields.has(key);
         Ok(Hits {
-            t: PyArray1::from_vec(py, t).unbind(),
-            prim: PyArray1::from_vec(py, prim).unbind(),
-            u: PyArray1::from_vec(py, u).unbind(),
-            v: PyArray1::from_vec(py, v).unbind(),
-            normal: PyArray1::from_vec(py, normal).reshape([n, 3])?.unbind(),
-            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
+            t: has("t").then(|| PyArray1::from_vec(py, t).unbind()),
+            prim: has("prim").then(|| PyArray1::from_vec(py, prim).unbind()),
+            u: has("u").then(|| PyArray1::from_vec(py, u).unbind()),
+            v: has("v").then(|| PyArray1::from_vec(py, v).unbind()),
+            normal,
+            point,
         })
     }
 

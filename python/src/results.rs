@@ -8,70 +8,77 @@ use pyo3::prelude::*;
 /// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Hits {
-    /// float32 (n,): distance along the ray, in direction lengths; inf on a miss.
+    /// float32 (n,): distance along the ray, in direction lengths; inf on a miss (None unless asked for in ``fields``, as every array here).
     #[pyo3(get)]
-    pub(crate) t: Py<PyArray1<f32>>,
+    pub(crate) t: Option<Py<PyArray1<f32>>>,
     /// int64 (n,): the triangle (face index) hit; -1 on a miss.
     #[pyo3(get)]
-    pub(crate) prim: Py<PyArray1<i64>>,
+    pub(crate) prim: Option<Py<PyArray1<i64>>>,
     /// float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss.
     #[pyo3(get)]
-    pub(crate) u: Py<PyArray1<f32>>,
+    pub(crate) u: Option<Py<PyArray1<f32>>>,
     /// float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss.
     #[pyo3(get)]
-    pub(crate) v: Py<PyArray1<f32>>,
+    pub(crate) v: Option<Py<PyArray1<f32>>>,
     /// float32 (n, 3): unit geometric normal of the triangle hit, by the
     /// right-hand rule over its vertex order (trimesh's face normal); NaN on a miss.
     #[pyo3(get)]
-    pub(crate) normal: Py<PyArray2<f32>>,
+    pub(crate) normal: Option<Py<PyArray2<f32>>>,
     /// float64 (n, 3): where the ray meets the triangle's plane, computed
     /// in float64 on the triangle as given (on its plane to float64's
     /// precision, wherever the mesh lies); NaN on a miss.
     #[pyo3(get)]
-    pub(crate) point: Py<PyArray2<f64>>,
+    pub(crate) point: Option<Py<PyArray2<f64>>>,
 }
 
-const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
+pub const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
 
 #[pymethods]
 impl Hits {
     /// The array named ``key``: one of ``keys()``.
     fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        Ok(match key {
-            "t" => self.t.clone_ref(py).into_any(),
-            "prim" => self.prim.clone_ref(py).into_any(),
-            "u" => self.u.clone_ref(py).into_any(),
-            "v" => self.v.clone_ref(py).into_any(),
-            "normal" => self.normal.clone_ref(py).into_any(),
-            "point" => self.point.clone_ref(py).into_any(),
-            _ => return Err(PyKeyError::new_err(key.to_string())),
-        })
+        let found = match key {
+            "t" => self.t.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "prim" => self.prim.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "u" => self.u.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "v" => self.v.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "normal" => self.normal.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "point" => self.point.as_ref().map(|a| a.clone_ref(py).into_any()),
+            _ => None,
+        };
+        found.ok_or_else(|| PyKeyError::new_err(key.to_string()))
     }
 
-    /// The names of the arrays: t, prim, u, v, normal, point.
-    fn keys(&self) -> Vec<&'static str> {
-        HITS_KEYS.to_vec()
+    /// The names of the arrays computed (``fields``; by default t, prim,
+    /// u, v, normal, point).
+    fn keys(&self, py: Python<'_>) -> Vec<&'static str> {
+        HITS_KEYS
+            .into_iter()
+            .filter(|k| self.__getitem__(py, k).is_ok())
+            .collect()
     }
 
-    /// Whether ``key`` names one of the arrays.
-    fn __contains__(&self, key: &str) -> bool {
-        HITS_KEYS.contains(&key)
+    /// Whether ``key`` names one of the arrays computed.
+    fn __contains__(&self, py: Python<'_>, key: &str) -> bool {
+        self.__getitem__(py, key).is_ok()
     }
 
     /// The number of rays.
     fn __len__(&self, py: Python<'_>) -> usize {
-        self.t.bind(py).len().unwrap_or(0)
+        HITS_KEYS
+            .into_iter()
+            .find_map(|k| self.__getitem__(py, k).ok())
+            .and_then(|a| a.bind(py).len().ok())
+            .unwrap_or(0)
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
-        let t = self.t.bind(py);
-        let n = t.len().unwrap_or(0);
-        let hits = self
-            .prim
-            .bind(py)
-            .to_vec()
-            .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count());
-        format!("Hits({n} rays, {hits} hit; keys t, prim, u, v, normal, point)")
+        let n = self.__len__(py);
+        let hits = match &self.prim {
+            Some(p) => p.bind(py).to_vec().map_or(0, |p| p.iter().filter(|&&p| p >= 0).count()),
+            None => 0,
+        };
+        format!("Hits({n} rays, {hits} hit; keys {})", self.keys(py).join(", "))
     }
 }
 

@@ -13,31 +13,32 @@ class InputError(ValueError):
     naming the file and the key or line."""
 
 class Hits:
-    """The first hit of each ray (``Mesh.intersect``), as attributes or keys."""
+    """The first hit of each ray (``Mesh.intersect``), as attributes or keys; an array
+    not asked for in ``fields`` is None and not among the keys."""
 
     @property
-    def t(self) -> NDArray[np.float32]:
+    def t(self) -> Optional[NDArray[np.float32]]:
         """float32 (n,): distance along the ray, in direction lengths; inf on a miss."""
     @property
-    def prim(self) -> NDArray[np.int64]:
+    def prim(self) -> Optional[NDArray[np.int64]]:
         """int64 (n,): the triangle (face index) hit; -1 on a miss."""
     @property
-    def u(self) -> NDArray[np.float32]:
+    def u(self) -> Optional[NDArray[np.float32]]:
         """float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss."""
     @property
-    def v(self) -> NDArray[np.float32]:
+    def v(self) -> Optional[NDArray[np.float32]]:
         """float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss."""
     @property
-    def normal(self) -> NDArray[np.float32]:
+    def normal(self) -> Optional[NDArray[np.float32]]:
         """float32 (n, 3): unit geometric normal of the triangle hit (right-hand rule); NaN on a miss."""
     @property
-    def point(self) -> NDArray[np.float64]:
+    def point(self) -> Optional[NDArray[np.float64]]:
         """float64 (n, 3): where the ray meets the triangle's plane, computed in float64 on the
         triangle as given (on its plane to float64's precision, wherever the mesh lies); NaN on a miss."""
     def __getitem__(self, key: str) -> NDArray[np.generic]:
         """The array named ``key``: one of ``keys()``."""
     def keys(self) -> List[str]:
-        """The names of the arrays: t, prim, u, v, normal, point."""
+        """The names of the arrays computed (by default t, prim, u, v, normal, point)."""
     def __contains__(self, key: str) -> bool:
         """Whether ``key`` names one of the arrays."""
     def __len__(self) -> int:
@@ -122,8 +123,10 @@ class Mesh:
         threads: Optional[int] = None,
         t_min: Optional[float] = None,
         bad_rays: Literal["raise", "miss"] = "raise",
+        fields: Optional[Sequence[Literal["t", "prim", "u", "v", "normal", "point"]]] = None,
     ) -> Hits:
-        """The first hit of each ray in (0, t_max]: t, prim, u, v, normal, point."""
+        """The first hit of each ray in (t_min, t_max]: t, prim, u, v, normal, point, or only
+        the arrays named in ``fields`` (the others are not computed)."""
     def occluded(
         self,
         origins: ArrayLike,

@@ -236,7 +236,9 @@ class RaycastingScene:
         (INVALID_ID on a miss), ``primitive_uvs`` float32 (..., 2) and
         ``primitive_normals`` float32 (..., 3) (zeros on a miss)."""
         o, d, shape = self._rays(rays)
-        hits = self.mesh.intersect(o, d, threads=self._query_threads(nthreads), bad_rays="miss")
+        hits = self.mesh.intersect(
+            o, d, threads=self._query_threads(nthreads), bad_rays="miss", fields=("t", "prim", "u", "v", "normal")
+        )
         hit = hits.prim >= 0
         geometry_ids, primitive_ids = self._ids(hits.prim)
         uvs = np.where(hit[:, None], np.stack([hits.u, hits.v], axis=1), 0.0).astype(np.float32)

@@ -129,7 +129,7 @@ class RayMeshIntersector:
         """
         origins, directions = self._rays(ray_origins, ray_directions)
         mesh = self.strata_mesh
-        first = mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss")
+        first = mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss", fields=("t", "prim"))
         if multiple_hits:
             splits, t, prim = mesh.all_hits(origins, directions, threads=self.threads, bad_rays="miss")
             splits, t, prim = _with_first_hits(splits, t, prim, first.t, first.prim)
@@ -160,7 +160,8 @@ class RayMeshIntersector:
     def intersects_first(self, ray_origins: Any, ray_directions: Any) -> np.ndarray:
         """The first triangle each ray hits: int64 (n,), -1 for a miss."""
         origins, directions = self._rays(ray_origins, ray_directions)
-        return self.strata_mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss").prim
+        hits = self.strata_mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss", fields=("prim",))
+        return hits.prim
 
     def intersects_any(self, ray_origins: Any, ray_directions: Any) -> np.ndarray:
         """Whether each ray hits the mesh at all: bool (n,)."""

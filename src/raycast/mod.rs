@@ -352,7 +352,10 @@ impl Mesh {
     /// `out[i]`: the first hit of `rays[i]` in `(tmin, tmax]`. Watertight:
     /// a ray through a shared edge or vertex of a closed mesh hits one of
     /// the faces there, never none.
-    pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit]) {
+    ///
+    /// `surface`: whether to find the face's normal and the hit point (a
+    /// second look at the face's corners); without it they stay NaN.
+    pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit], surface: bool) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (rays, out) in rays.chunks(SPAN).zip(out.chunks_mut(SPAN)) {
             let mut found = [None; SPAN];
@@ -361,7 +364,14 @@ impl Mesh {
             for ((o, hit), ray) in out.iter_mut().zip(found.iter()).zip(rays) {
                 *o = match hit {
                     None => FirstHit::MISS,
-                    Some(hit) => self.first_hit(ray, hit),
+                    Some(hit) if surface => self.first_hit(ray, hit),
+                    Some(hit) => FirstHit {
+                        t: hit.t,
+                        face: self.geometry.flat_prim(hit, &self.flat) as i64,
+                        u: hit.u,
+                        v: hit.v,
+                        ..FirstHit::MISS
+                    },
                 };
             }
         }

@@ -117,8 +117,8 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
     // its world normal, computed from the same vertices, do not.
     let mut x = vec![FirstHit::MISS; rays.len()];
     let mut y = vec![FirstHit::MISS; rays.len()];
-    placed.first_hits(&rays, &mut x);
-    copies.first_hits(&rays, &mut y);
+    placed.first_hits(&rays, &mut x, true);
+    copies.first_hits(&rays, &mut y, true);
     let mut compared = 0;
     for (i, (x, y)) in x.iter().zip(&y).enumerate() {
         assert_eq!(x.face == -1, y.face == -1, "ray {i}");
@@ -163,7 +163,7 @@ fn a_first_hit_carries_its_world_triangles_normal_and_point() {
     let world = placed.triangles()[0];
     let ray = Ray::new(Vec3::new(0.5, -3.0, 5.2), Vec3::Y);
     let mut hit = [FirstHit::MISS];
-    placed.first_hits(&[ray], &mut hit);
+    placed.first_hits(&[ray], &mut hit, true);
     let [a, b, c] = world;
     assert_eq!(hit[0].face, 0);
     let normal = (b - a).cross(c - a).normalize();
@@ -187,7 +187,7 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
     for mesh in [cube_mesh(), placed_and_copies().0] {
         let towards = Ray::new(Vec3::new(0.13, 0.21, -5.0), Vec3::new(0.01, -0.02, 1.0));
         let mut first = [FirstHit::MISS];
-        mesh.first_hits(&[towards], &mut first);
+        mesh.first_hits(&[towards], &mut first, true);
         let mut all = Vec::new();
         mesh.all_hits(&[towards], &mut all, &mut Vec::new());
         for (t, crossing) in [(first[0].t, false), (all[0].t, true)] {
@@ -200,7 +200,7 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
                     assert_eq!(mesh.count_hits(&ray) > 0, counts);
                 } else {
                     let mut hit = [FirstHit::MISS];
-                    mesh.first_hits(&[ray], &mut hit);
+                    mesh.first_hits(&[ray], &mut hit, true);
                     assert_eq!(hit[0].t == t, counts, "{tmax} against {t}");
                     let mut blocked = [false];
                     mesh.occluded(&[ray], &mut blocked);
@@ -231,7 +231,7 @@ fn a_mesh_without_faces_answers_nothing() {
     assert_eq!(empty.bounds(), [Vec3::INFINITY, Vec3::NEG_INFINITY]);
     let mut hit = [FirstHit::MISS];
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
-    empty.first_hits(&[ray], &mut hit);
+    empty.first_hits(&[ray], &mut hit, true);
     assert_eq!(hit[0].face, -1);
     let near = empty.closest_point(glam::DVec3::ZERO, Vec3::ZERO, f32::INFINITY, true);
     assert_eq!((near.face, near.distance), (-1, f64::INFINITY));
