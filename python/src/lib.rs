@@ -32,6 +32,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<mesh::Mesh>()?;
     m.add_class::<results::Hits>()?;
     m.add_class::<results::ClosestPoints>()?;
+    m.add_class::<results::Crossings>()?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add("InputError", m.py().get_type::<InputError>())?;
     m.add("__version__", strata::VERSION)?;

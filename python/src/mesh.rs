@@ -1,7 +1,7 @@
 //! `Mesh`: a triangle mesh with its BVH, and the queries on it.
 
 use crate::convert::{self, BadRays, RaySpec};
-use crate::results::{ClosestPoints, Hits, HITS_KEYS};
+use crate::results::{ClosestPoints, Crossings, Hits, HITS_KEYS};
 use crate::run::{self, Threads, CHUNK, TASK};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, PyValueError};
@@ -57,7 +57,10 @@ impl HitColumns<'_> {
             self.t.iter_mut().zip(hits).for_each(|(o, h)| *o = h.t);
         }
         if !self.prim.is_empty() {
-            self.prim.iter_mut().zip(hits).for_each(|(o, h)| *o = h.face);
+            self.prim
+                .iter_mut()
+                .zip(hits)
+                .for_each(|(o, h)| *o = h.face);
         }
         if !self.u.is_empty() {
             self.u.iter_mut().zip(hits).for_each(|(o, h)| *o = h.u);
@@ -126,13 +129,6 @@ impl Fields {
     }
 }
 
-/// `all_hits`'s answer: splits, t, prim.
-type AllHits<'py> = (
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<f32>>,
-    Bound<'py, PyArray1<i64>>,
-);
-
 /// A flat vector of rows as an (n, 3) array.
 pub fn rows<'py>(py: Python<'py>, rows: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let n = rows.len();
@@ -173,6 +169,32 @@ fn vertices_and_faces_of<'py>(
 }
 
 impl Mesh {
+    /// Vertices and faces: as given, or the triangles' corners merged by
+    /// exact position (a loaded or placed mesh).
+    fn indexed(&self) -> (Vec<glam::DVec3>, Vec<[u32; 3]>) {
+        if let Some((vertices, faces)) = self.0.given() {
+            return (vertices.to_vec(), faces.to_vec());
+        }
+        let mut index = std::collections::HashMap::new();
+        let mut vertices = Vec::new();
+        let faces = self
+            .0
+            .triangles()
+            .iter()
+            .map(|tri| {
+                tri.map(|p| {
+                    *index
+                        .entry(p.to_array().map(f32::to_bits))
+                        .or_insert_with(|| {
+                            vertices.push(p.as_dvec3());
+                            vertices.len() as u32 - 1
+                        })
+                })
+            })
+            .collect();
+        (vertices, faces)
+    }
+
     /// A ray query's rays: its arguments read and checked (``ValueError``
     /// naming the argument), origins made relative to the mesh's centre.
     fn rays(
@@ -338,6 +360,27 @@ impl Mesh {
         rows(py, self.0.bounds().map(|p| p.to_array()).to_vec())
     }
 
+    /// float64 (n, 3): the faces' corners, each position once, in order of
+    /// first use (``faces`` indexes them): a loaded file's vertices, less
+    /// any that no face uses. A mesh from arrays far from the origin (held
+    /// as given, in float64) gives its arrays back exactly.
+    #[getter]
+    fn vertices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (vertices, _) = self.indexed();
+        let n = vertices.len();
+        let flat: Vec<f64> = vertices.iter().flat_map(|v| v.to_array()).collect();
+        PyArray1::from_vec(py, flat).reshape([n, 3])
+    }
+
+    /// int64 (m, 3): each face's vertex indices into ``vertices``, in face order.
+    #[getter]
+    fn faces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let (_, faces) = self.indexed();
+        let m = faces.len();
+        let flat: Vec<i64> = faces.iter().flatten().map(|&k| i64::from(k)).collect();
+        PyArray1::from_vec(py, flat).reshape([m, 3])
+    }
+
     /// float32 (m, 3, 3): each face's three vertices, in face order (a copy
     /// of what the BVH stores).
     #[getter]
@@ -462,44 +505,56 @@ impl Mesh {
         Ok(PyArray1::from_vec(py, out))
     }
 
-    /// Every surface crossing along each ray in (0, t_max], nearest first,
-    /// as ``(splits, t, prim)`` in Open3D's layout: ray i's crossings are
-    /// ``t[splits[i]:splits[i+1]]`` (float32) on triangles
-    /// ``prim[splits[i]:splits[i+1]]`` (int64); ``splits`` is int64 (n+1,).
+    /// Every surface crossing along each ray in (t_min, t_max], nearest
+    /// first: a ``Crossings`` with ``splits`` (int64 (n+1,), Open3D's
+    /// layout: ray i's crossings are ``splits[i]:splits[i+1]``), ``t``
+    /// (float32), ``prim`` (int64), ``ray`` (int64, the ray of each) and,
+    /// with ``uv=True``, the barycentrics ``u`` and ``v`` (float64, where
+    /// the ray meets the face's plane). It unpacks as ``splits, t, prim``.
     ///
     /// One traversal per ray, not a re-cast from each hit: a ray through a
     /// shared edge or vertex of a closed mesh crosses the surface there
     /// once and is reported once, never zero times or twice, at any scale.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
-    fn all_hits<'py>(
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise", uv=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn all_hits(
         &self,
-        py: Python<'py>,
+        py: Python<'_>,
         origins: &Bound<'_, PyAny>,
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
         t_min: Option<f64>,
         bad_rays: &str,
-    ) -> PyResult<AllHits<'py>> {
+        uv: bool,
+    ) -> PyResult<Crossings> {
         let threads = Threads::new(threads)?;
         let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
-            self.0.all_hits(rays, found, counts)
+            self.0.all_hits(rays, found, counts, uv)
         })?;
         let mut splits = Vec::with_capacity(counts.len() + 1);
+        let mut ray = Vec::with_capacity(found.len());
         let mut total = 0i64;
         splits.push(0);
-        for c in counts {
+        for (i, c) in counts.into_iter().enumerate() {
             total += c as i64;
             splits.push(total);
+            ray.extend(std::iter::repeat_n(i as i64, c as usize));
         }
         let t: Vec<f32> = found.iter().map(|c| c.t).collect();
         let prim: Vec<i64> = found.iter().map(|c| c.face).collect();
-        Ok((
-            PyArray1::from_vec(py, splits),
-            PyArray1::from_vec(py, t),
-            PyArray1::from_vec(py, prim),
-        ))
+        let column = |f: fn(&raycast::Crossing) -> f64| {
+            uv.then(|| PyArray1::from_vec(py, found.iter().map(f).collect()).unbind())
+        };
+        Ok(Crossings {
+            splits: PyArray1::from_vec(py, splits).unbind(),
+            t: PyArray1::from_vec(py, t).unbind(),
+            prim: PyArray1::from_vec(py, prim).unbind(),
+            ray: PyArray1::from_vec(py, ray).unbind(),
+            u: column(|c| c.u),
+            v: column(|c| c.v),
+        })
     }
 
     /// The number of surface crossings along each ray in (0, t_max]: int64

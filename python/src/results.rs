@@ -75,10 +75,16 @@ impl Hits {
     fn __repr__(&self, py: Python<'_>) -> String {
         let n = self.__len__(py);
         let hits = match &self.prim {
-            Some(p) => p.bind(py).to_vec().map_or(0, |p| p.iter().filter(|&&p| p >= 0).count()),
+            Some(p) => p
+                .bind(py)
+                .to_vec()
+                .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count()),
             None => 0,
         };
-        format!("Hits({n} rays, {hits} hit; keys {})", self.keys(py).join(", "))
+        format!(
+            "Hits({n} rays, {hits} hit; keys {})",
+            self.keys(py).join(", ")
+        )
     }
 }
 
@@ -138,5 +144,98 @@ impl ClosestPoints {
     fn __repr__(&self, py: Python<'_>) -> String {
         let n = self.distance.bind(py).len().unwrap_or(0);
         format!("ClosestPoints({n} points; keys point, distance, prim, u, v)")
+    }
+}
+
+/// Every crossing of each ray (``Mesh.all_hits``), ray after ray, each
+/// ray's nearest first, as attributes or keys; it also unpacks as
+/// ``splits, t, prim = mesh.all_hits(...)``.
+#[pyclass(frozen, module = "strata_rt._native")]
+pub struct Crossings {
+    /// int64 (n + 1,): ray i's crossings are ``splits[i]:splits[i+1]`` (Open3D's ray_splits).
+    #[pyo3(get)]
+    pub(crate) splits: Py<PyArray1<i64>>,
+    /// float32 (h,): each crossing's distance along its ray, in direction lengths.
+    #[pyo3(get)]
+    pub(crate) t: Py<PyArray1<f32>>,
+    /// int64 (h,): the triangle (face index) crossed.
+    #[pyo3(get)]
+    pub(crate) prim: Py<PyArray1<i64>>,
+    /// int64 (h,): the ray each crossing is on (Open3D's ray_ids, trimesh's index_ray).
+    #[pyo3(get)]
+    pub(crate) ray: Py<PyArray1<i64>>,
+    /// float64 (h,): barycentric coordinate of the face's second vertex where
+    /// the ray meets its plane; None unless ``uv=True``.
+    #[pyo3(get)]
+    pub(crate) u: Option<Py<PyArray1<f64>>>,
+    /// float64 (h,): barycentric coordinate of the face's third vertex; None unless ``uv=True``.
+    #[pyo3(get)]
+    pub(crate) v: Option<Py<PyArray1<f64>>>,
+}
+
+const CROSSINGS_KEYS: [&str; 6] = ["splits", "t", "prim", "ray", "u", "v"];
+
+#[pymethods]
+impl Crossings {
+    /// The array named ``key`` (one of ``keys()``), or ``splits``, ``t``,
+    /// ``prim`` by their place 0, 1, 2 in the tuple ``all_hits`` returned.
+    fn __getitem__(&self, py: Python<'_>, key: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
+        if let Ok(i) = key.extract::<isize>() {
+            let name = match i {
+                0 | -3 => "splits",
+                1 | -2 => "t",
+                2 | -1 => "prim",
+                _ => return Err(pyo3::exceptions::PyIndexError::new_err(format!("{i}"))),
+            };
+            return self.named(py, name);
+        }
+        self.named(py, &key.extract::<String>()?)
+    }
+
+    /// The names of the arrays computed: splits, t, prim, ray (and u, v with ``uv=True``).
+    fn keys(&self, py: Python<'_>) -> Vec<&'static str> {
+        CROSSINGS_KEYS
+            .into_iter()
+            .filter(|k| self.named(py, k).is_ok())
+            .collect()
+    }
+
+    /// Whether ``key`` names one of the arrays computed.
+    fn __contains__(&self, py: Python<'_>, key: &str) -> bool {
+        self.named(py, key).is_ok()
+    }
+    /// ``splits, t, prim``: what ``all_hits`` returned as a tuple before.
+    fn __iter__(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let parts = (
+            self.splits.clone_ref(py),
+            self.t.clone_ref(py),
+            self.prim.clone_ref(py),
+        );
+        Ok(parts.into_pyobject(py)?.try_iter()?.into_any().unbind())
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let rays = self.splits.bind(py).len().unwrap_or(1).saturating_sub(1);
+        let h = self.t.bind(py).len().unwrap_or(0);
+        format!(
+            "Crossings({rays} rays, {h} crossings; keys {})",
+            self.keys(py).join(", ")
+        )
+    }
+}
+
+impl Crossings {
+    /// The array named `name`, if it was computed.
+    fn named(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        let found = match name {
+            "splits" => Some(self.splits.clone_ref(py).into_any()),
+            "t" => Some(self.t.clone_ref(py).into_any()),
+            "prim" => Some(self.prim.clone_ref(py).into_any()),
+            "ray" => Some(self.ray.clone_ref(py).into_any()),
+            "u" => self.u.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "v" => self.v.as_ref().map(|a| a.clone_ref(py).into_any()),
+            _ => None,
+        };
+        found.ok_or_else(|| PyKeyError::new_err(name.to_string()))
     }
 }

@@ -72,6 +72,37 @@ class ClosestPoints:
     def __len__(self) -> int:
         """The number of query points."""
 
+class Crossings:
+    """Every crossing of each ray (``Mesh.all_hits``), ray after ray, each ray's nearest first,
+    as attributes or keys; unpacks as ``splits, t, prim``."""
+
+    @property
+    def splits(self) -> NDArray[np.int64]:
+        """int64 (n + 1,): ray i's crossings are ``splits[i]:splits[i+1]`` (Open3D's ray_splits)."""
+    @property
+    def t(self) -> NDArray[np.float32]:
+        """float32 (h,): each crossing's distance along its ray, in direction lengths."""
+    @property
+    def prim(self) -> NDArray[np.int64]:
+        """int64 (h,): the triangle (face index) crossed."""
+    @property
+    def ray(self) -> NDArray[np.int64]:
+        """int64 (h,): the ray each crossing is on (Open3D's ray_ids, trimesh's index_ray)."""
+    @property
+    def u(self) -> Optional[NDArray[np.float64]]:
+        """float64 (h,): barycentric coordinate of the face's second vertex; None unless ``uv=True``."""
+    @property
+    def v(self) -> Optional[NDArray[np.float64]]:
+        """float64 (h,): barycentric coordinate of the face's third vertex; None unless ``uv=True``."""
+    def __getitem__(self, key: Union[str, int]) -> NDArray[np.generic]:
+        """The array named ``key`` (one of ``keys()``), or splits, t, prim by their place 0, 1, 2."""
+    def keys(self) -> List[str]:
+        """The names of the arrays computed: splits, t, prim, ray (and u, v with ``uv=True``)."""
+    def __contains__(self, key: str) -> bool:
+        """Whether ``key`` names one of the arrays computed."""
+    def __iter__(self) -> Iterator[NDArray[np.generic]]:
+        """``splits, t, prim``: what ``all_hits`` returned as a tuple before."""
+
 _TMax = Union[float, ArrayLike, None]
 
 class Mesh:
@@ -102,6 +133,13 @@ class Mesh:
     @property
     def bounds(self) -> NDArray[np.float32]:
         """float32 (2, 3): the [min, max] corners of the bounding box."""
+    @property
+    def vertices(self) -> NDArray[np.float64]:
+        """float64 (n, 3): the faces' corners, each position once, in order of first use (a loaded
+        file's vertices less unused ones; a far mesh's arrays as given)."""
+    @property
+    def faces(self) -> NDArray[np.int64]:
+        """int64 (m, 3): each face's indices into ``vertices``, in face order."""
     @property
     def triangles(self) -> NDArray[np.float32]:
         """float32 (m, 3, 3): each face's three vertices, in face order."""
@@ -145,8 +183,10 @@ class Mesh:
         threads: Optional[int] = None,
         t_min: Optional[float] = None,
         bad_rays: Literal["raise", "miss"] = "raise",
-    ) -> Tuple[NDArray[np.int64], NDArray[np.float32], NDArray[np.int64]]:
-        """Every surface crossing along each ray, nearest first: (splits (n+1,), t, prim)."""
+        uv: bool = False,
+    ) -> Crossings:
+        """Every surface crossing along each ray, nearest first: splits (n+1,), t, prim, ray
+        (and u, v with ``uv=True``); unpacks as ``splits, t, prim``."""
     def count_hits(
         self,
         origins: ArrayLike,

@@ -280,35 +280,17 @@ class RaycastingScene:
         float32 (h, 2). The uvs are computed in float64 where the ray meets
         the face's plane."""
         o, d, _ = self._rays(rays)
-        splits, t, face = self.mesh.all_hits(o, d, threads=self._query_threads(nthreads), bad_rays="miss")
-        counts = np.diff(splits)
-        ray_ids = np.repeat(np.arange(len(counts), dtype=np.uint32), counts)
-        geometry_ids, primitive_ids = self._ids(face)
-        uvs = self._crossing_uvs(o[ray_ids], d[ray_ids], face)
+        found = self.mesh.all_hits(o, d, threads=self._query_threads(nthreads), bad_rays="miss", uv=True)
+        geometry_ids, primitive_ids = self._ids(found.prim)
+        uvs = np.stack([found.u, found.v], axis=1).clip(0.0, 1.0).astype(np.float32)
         return self._out(rays, {
-            "ray_splits": splits.astype(np.uint32),
-            "ray_ids": ray_ids,
-            "t_hit": t,
+            "ray_splits": found.splits.astype(np.uint32),
+            "ray_ids": found.ray.astype(np.uint32),
+            "t_hit": found.t,
             "geometry_ids": geometry_ids,
             "primitive_ids": primitive_ids,
             "primitive_uvs": uvs,
         })
-
-    def _crossing_uvs(self, o: np.ndarray, d: np.ndarray, face: np.ndarray) -> np.ndarray:
-        """Barycentric (u, v) where each ray meets its face's plane (float64
-        Cramer's rule, as Möller and Trumbore 1997), float32 (h, 2)."""
-        tri = self._scene_vertices[self._scene_faces[face]]
-        a = tri[:, 0]
-        e1, e2 = tri[:, 1] - a, tri[:, 2] - a
-        d = d.astype(np.float64)
-        p = np.cross(d, e2)
-        det = np.einsum("ij,ij->i", e1, p)
-        s = o.astype(np.float64) - a
-        q = np.cross(s, e1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = np.einsum("ij,ij->i", s, p) / det
-            v = np.einsum("ij,ij->i", d, q) / det
-        return np.clip(np.stack([u, v], axis=1), 0.0, 1.0).astype(np.float32)
 
     # ----------------------------------------------------------- points
 

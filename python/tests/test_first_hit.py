@@ -175,3 +175,18 @@ def test_every_query_answers_for_t_in_0_to_t_max_inclusive():
         assert quad.occluded(o, d, t_max=t_max)[0] == bool(expected), t_max
         assert quad.count_hits(o, d, t_max=t_max)[0] == expected, t_max
         assert np.diff(quad.all_hits(o, d, t_max=t_max)[0])[0] == expected, t_max
+
+
+def test_fields_computes_only_what_is_asked(bumpy):
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(3)
+    origins, directions = helpers.random_rays(rng, vertices, 500)
+    every = mesh.intersect(origins, directions)
+    some = mesh.intersect(origins, directions, fields=("t", "prim"))
+    assert some.keys() == ["t", "prim"] and some.normal is None and some.point is None
+    assert "u" not in some and len(some) == 500
+    np.testing.assert_array_equal(some.t, every.t)
+    np.testing.assert_array_equal(some.prim, every.prim)
+    with pytest.raises(ValueError, match="fields"):
+        mesh.intersect(origins, directions, fields=("depth",))

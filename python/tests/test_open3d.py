@@ -111,7 +111,10 @@ def test_counts_and_lists_agree_with_each_other_and_with_brute_force(bumpy):
     face = lx["primitive_ids"].astype(np.int64) + len(f) * lx["geometry_ids"]
     t, u, w = helpers.ray_triangle_pairs(tris, o, d, lx["ray_ids"], face)
     np.testing.assert_allclose(lx["t_hit"], t, rtol=1e-5, atol=1e-6)
-    np.testing.assert_allclose(lx["primitive_uvs"], np.stack([u, w], 1).clip(0, 1), atol=1e-6)
+    # (strata traces the rays rounded to float32: uvs to that rounding,
+    # which the slivers at the bumpy sphere's poles magnify)
+    np.testing.assert_allclose(lx["primitive_uvs"], np.stack([u, w], 1).clip(0, 1), atol=2e-4)
+    assert np.median(np.abs(lx["primitive_uvs"] - np.stack([u, w], 1).clip(0, 1))) < 1e-5
     # The count is the brute-force count on rays clear of every edge.
     r, p = helpers.candidates(tris, o, d)
     t, u, w = helpers.ray_triangle_pairs(tris, o, d, r, p)

@@ -124,6 +124,11 @@ impl FirstHit {
 pub struct Crossing {
     pub t: f32,
     pub face: i64,
+    /// Barycentric weights of the face's second and third vertices where
+    /// the ray meets the face's plane, in float64 ([`exact::plane_hit`]);
+    /// NaN unless asked for.
+    pub u: f64,
+    pub v: f64,
 }
 
 /// The nearest surface point to a query point, or [`ClosestPoint::MISS`].
@@ -415,17 +420,37 @@ impl Mesh {
     /// not a re-cast from each hit: a ray through a shared edge or vertex
     /// of a closed mesh, where it crosses the surface, is reported once
     /// ([`Geometry::crossings`]).
-    pub fn all_hits(&self, rays: &[Ray], out: &mut Vec<Crossing>, counts: &mut Vec<u32>) {
+    ///
+    /// `uv`: whether to find each crossing's barycentrics (a second look at
+    /// the face's corners); without it they stay NaN.
+    pub fn all_hits(&self, rays: &[Ray], out: &mut Vec<Crossing>, counts: &mut Vec<u32>, uv: bool) {
         let mut found = Vec::new();
         for ray in rays {
             found.clear();
             self.geometry.crossings(ray, &mut found);
             counts.push(found.len() as u32);
-            out.extend(found.iter().map(|c| Crossing {
-                t: c.t,
-                face: self.geometry.flat_prim(c, &self.flat) as i64,
+            out.extend(found.iter().map(|c| {
+                let face = self.geometry.flat_prim(c, &self.flat) as i64;
+                let (u, v) = match uv {
+                    true => self.plane_uv(ray, c, face),
+                    false => (f64::NAN, f64::NAN),
+                };
+                Crossing { t: c.t, face, u, v }
             }));
         }
+    }
+
+    /// Where `ray` (relative to the centre) meets the plane of the face
+    /// `found` lies on, as barycentric weights, in float64.
+    fn plane_uv(&self, ray: &Ray, found: &impl Found, face: i64) -> (f64, f64) {
+        let [a, b, c] = self.corners(found, face);
+        let origin = ray.origin.as_dvec3() + self.centre - a;
+        let hit = exact::plane_hit(
+            origin,
+            ray.direction.as_dvec3(),
+            [DVec3::ZERO, b - a, c - a],
+        );
+        hit.map_or((f64::NAN, f64::NAN), |(_, u, v)| (u, v))
     }
 
     /// How many crossings [`Mesh::all_hits`] would list for `ray`.

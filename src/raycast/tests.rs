@@ -95,9 +95,15 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
     // bit (each candidate triangle moved to world space as they hold it).
     let (mut a, mut b) = (Vec::new(), Vec::new());
     let (mut na, mut nb) = (Vec::new(), Vec::new());
-    placed.all_hits(&rays, &mut a, &mut na);
-    copies.all_hits(&rays, &mut b, &mut nb);
-    assert_eq!((&a, &na), (&b, &nb));
+    placed.all_hits(&rays, &mut a, &mut na, true);
+    copies.all_hits(&rays, &mut b, &mut nb, true);
+    let key = |c: &Crossing| (c.t, c.face);
+    let (ka, kb): (Vec<_>, Vec<_>) = (a.iter().map(key).collect(), b.iter().map(key).collect());
+    assert_eq!((&ka, &na), (&kb, &nb));
+    // Each crossing's barycentrics put it on its face.
+    assert!(a
+        .iter()
+        .all(|c| c.u >= -1e-9 && c.v >= -1e-9 && c.u + c.v <= 1.0 + 1e-9));
     assert!(a.len() > 1000, "{} crossings", a.len());
     for (ray, &n) in rays.iter().zip(&na) {
         assert_eq!(placed.count_hits(ray), n);
@@ -189,13 +195,13 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
         let mut first = [FirstHit::MISS];
         mesh.first_hits(&[towards], &mut first, true);
         let mut all = Vec::new();
-        mesh.all_hits(&[towards], &mut all, &mut Vec::new());
+        mesh.all_hits(&[towards], &mut all, &mut Vec::new(), true);
         for (t, crossing) in [(first[0].t, false), (all[0].t, true)] {
             for (tmax, counts) in [(t, true), (t.next_down(), false)] {
                 let ray = Ray::segment(towards.origin, towards.direction, tmax);
                 if crossing {
                     let mut found = Vec::new();
-                    mesh.all_hits(&[ray], &mut found, &mut Vec::new());
+                    mesh.all_hits(&[ray], &mut found, &mut Vec::new(), false);
                     assert_eq!(found.first().map(|c| c.t) == Some(t), counts);
                     assert_eq!(mesh.count_hits(&ray) > 0, counts);
                 } else {
