@@ -486,6 +486,7 @@ impl Mesh {
 
     /// Whether anything blocks each ray in (0, t_max]: bool (n,).
     #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, one each
     fn occluded<'py>(
         &self,
         py: Python<'py>,
@@ -560,6 +561,7 @@ impl Mesh {
     /// The number of surface crossings along each ray in (0, t_max]: int64
     /// (n,), as ``all_hits`` would list them.
     #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, one each
     fn count_hits<'py>(
         &self,
         py: Python<'py>,
