@@ -375,6 +375,25 @@ fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
     }
 }
 
+/// An array of shape (..., 3) with more than two dimensions as its (n, 3)
+/// rows (a numpy reshape, a view where it can be) and its leading shape;
+/// anything else as it is, with no leading shape (answers stay (n,)).
+pub fn rows3<'py>(obj: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Vec<usize>)> {
+    let ndim = match obj.hasattr("ndim")? {
+        true => obj.getattr("ndim")?.extract::<usize>().unwrap_or(0),
+        false => 0,
+    };
+    if ndim <= 2 {
+        return Ok((obj.clone(), Vec::new()));
+    }
+    let shape: Vec<usize> = obj.getattr("shape")?.extract()?;
+    if shape[ndim - 1] != 3 {
+        return Ok((obj.clone(), Vec::new()));
+    }
+    let rows = obj.call_method1("reshape", ((-1i64, 3i64),))?;
+    Ok((rows, shape[..ndim - 1].to_vec()))
+}
+
 /// Whether `obj` is an array (or a list or tuple) rather than a number.
 fn is_sequence(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {

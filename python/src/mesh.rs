@@ -3,7 +3,7 @@
 use crate::convert::{self, BadRays, RaySpec};
 use crate::results::{ClosestPoints, Crossings, Hits, HITS_KEYS};
 use crate::run::{self, Threads, CHUNK, TASK};
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -19,7 +19,8 @@ use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 /// answer. Lists and non-contiguous arrays are accepted. Degenerate faces
 /// are kept (no ray hits them), so face ids stay yours.
 ///
-/// Queries take (n, 3) ``origins`` and ``directions`` (any float dtype;
+/// Queries take (n, 3) ``origins`` and ``directions``, or (..., 3) of any
+/// leading shape, whose answers come back in that shape (any float dtype;
 /// a direction need not be unit length, and ``t`` is measured in its
 /// lengths), ``t_max`` (a number or one per ray) and ``t_min`` (a number):
 /// a ray reports what lies in (t_min, t_max], (0, inf] by default. Every
@@ -129,6 +130,38 @@ impl Fields {
     }
 }
 
+/// `values` (`n` items of `tail` values each) as an array of shape
+/// `lead + tail`, the query's input's leading shape, or `(n,) + tail`.
+fn shaped<T: numpy::Element>(
+    py: Python<'_>,
+    values: Vec<T>,
+    lead: &[usize],
+    n: usize,
+    tail: &[usize],
+) -> PyResult<Py<PyArrayDyn<T>>> {
+    let mut dims = if lead.is_empty() {
+        vec![n]
+    } else {
+        lead.to_vec()
+    };
+    dims.extend_from_slice(tail);
+    Ok(PyArray1::from_vec(py, values).reshape(dims)?.unbind())
+}
+
+/// [`shaped`] where `wanted.0` (tail `wanted.1`), else None.
+fn maybe<T: numpy::Element>(
+    py: Python<'_>,
+    wanted: (bool, &[usize]),
+    values: Vec<T>,
+    lead: &[usize],
+    n: usize,
+) -> PyResult<Option<Py<PyArrayDyn<T>>>> {
+    let (wanted, tail) = wanted;
+    wanted
+        .then(|| shaped(py, values, lead, n, tail))
+        .transpose()
+}
+
 /// A flat vector of rows as an (n, 3) array.
 pub fn rows<'py>(py: Python<'py>, rows: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let n = rows.len();
@@ -205,13 +238,36 @@ impl Mesh {
         t_min: Option<f64>,
         bad_rays: &str,
         threads: &Threads,
-    ) -> PyResult<Vec<strata::math::Ray>> {
+    ) -> PyResult<(Vec<strata::math::Ray>, Vec<usize>)> {
         let spec = RaySpec {
             t_min,
             t_max,
             bad: BadRays::new(bad_rays)?,
         };
-        convert::rays(origins, directions, &spec, self.0.centre(), threads)
+        let (o, lead) = convert::rows3(origins)?;
+        let (d, lead_d) = convert::rows3(directions)?;
+        if lead != lead_d && !(lead.is_empty() || lead_d.is_empty()) {
+            return Err(PyValueError::new_err(format!(
+                "origins and directions must have the same shape; got {lead:?} and {lead_d:?} before the last axis"
+            )));
+        }
+        let lead = if lead.is_empty() { lead_d } else { lead };
+        // One t_max per ray of an (..., 3) array: in its leading shape.
+        let flat_t_max = match t_max {
+            Some(t) if !lead.is_empty() && t.hasattr("shape")? => {
+                let shape: Vec<usize> = t.getattr("shape")?.extract()?;
+                (shape == lead)
+                    .then(|| t.call_method1("reshape", (-1i64,)))
+                    .transpose()?
+            }
+            _ => None,
+        };
+        let spec = RaySpec {
+            t_max: flat_t_max.as_ref().or(spec.t_max),
+            ..spec
+        };
+        let rays = convert::rays(&o, &d, &spec, self.0.centre(), threads)?;
+        Ok((rays, lead))
     }
 }
 
@@ -424,7 +480,7 @@ impl Mesh {
         fields: Option<Vec<String>>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
-        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let n = rays.len();
         let fields = Fields::new(fields)?;
         let mut t = column::<f32>(fields.has("t"), n);
@@ -465,22 +521,14 @@ impl Mesh {
             });
             py.check_signals()?;
         }
-        let normal = match fields.has("normal") {
-            true => Some(PyArray1::from_vec(py, normal).reshape([n, 3])?.unbind()),
-            false => None,
-        };
-        let point = match fields.has("point") {
-            true => Some(PyArray1::from_vec(py, point).reshape([n, 3])?.unbind()),
-            false => None,
-        };
-        let has = |key| fields.has(key);
+        let to = |key: &str, tail: &'static [usize]| (fields.has(key), tail);
         Ok(Hits {
-            t: has("t").then(|| PyArray1::from_vec(py, t).unbind()),
-            prim: has("prim").then(|| PyArray1::from_vec(py, prim).unbind()),
-            u: has("u").then(|| PyArray1::from_vec(py, u).unbind()),
-            v: has("v").then(|| PyArray1::from_vec(py, v).unbind()),
-            normal,
-            point,
+            t: maybe(py, to("t", &[]), t, &lead, n)?,
+            prim: maybe(py, to("prim", &[]), prim, &lead, n)?,
+            u: maybe(py, to("u", &[]), u, &lead, n)?,
+            v: maybe(py, to("v", &[]), v, &lead, n)?,
+            normal: maybe(py, to("normal", &[3]), normal, &lead, n)?,
+            point: maybe(py, to("point", &[3]), point, &lead, n)?,
         })
     }
 
@@ -496,14 +544,15 @@ impl Mesh {
         threads: Option<i64>,
         t_min: Option<f64>,
         bad_rays: &str,
-    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+    ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
-        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![false; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             self.0.occluded(rays, out)
         })?;
-        Ok(PyArray1::from_vec(py, out))
+        let n = out.len();
+        shaped(py, out, &lead, n, &[])
     }
 
     /// Every surface crossing along each ray in (t_min, t_max], nearest
@@ -530,7 +579,7 @@ impl Mesh {
         uv: bool,
     ) -> PyResult<Crossings> {
         let threads = Threads::new(threads)?;
-        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, _) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
             self.0.all_hits(rays, found, counts, uv)
         })?;
@@ -571,16 +620,17 @@ impl Mesh {
         threads: Option<i64>,
         t_min: Option<f64>,
         bad_rays: &str,
-    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    ) -> PyResult<Py<PyArrayDyn<i64>>> {
         let threads = Threads::new(threads)?;
-        let rays = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![0i64; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             for (o, ray) in out.iter_mut().zip(rays) {
                 *o = i64::from(self.0.count_hits(ray));
             }
         })?;
-        Ok(PyArray1::from_vec(py, out))
+        let n = out.len();
+        shaped(py, out, &lead, n, &[])
     }
 
     /// Whether each point ((n, 3) floats) is inside the mesh: bool (n,), by
@@ -596,16 +646,18 @@ impl Mesh {
         py: Python<'py>,
         points: &Bound<'_, PyAny>,
         threads: Option<i64>,
-    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+    ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
-        let points = convert::points(points, "points", self.0.centre(), &threads)?;
+        let (points, lead) = convert::rows3(points)?;
+        let points = convert::points(&points, "points", self.0.centre(), &threads)?;
         let mut out = vec![false; points.len()];
         run::each(py, &threads, &points, &mut out, |points, out| {
             for (o, &(_, near)) in out.iter_mut().zip(points) {
                 *o = self.0.contains(near);
             }
         })?;
-        Ok(PyArray1::from_vec(py, out))
+        let n = out.len();
+        shaped(py, out, &lead, n, &[])
     }
 
     /// The nearest point on the surface to each point ((n, 3) floats),
@@ -625,7 +677,8 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<ClosestPoints> {
         let threads = Threads::new(threads)?;
-        let points = convert::points(points, "points", self.0.centre(), &threads)?;
+        let (points, lead) = convert::rows3(points)?;
+        let points = convert::points(&points, "points", self.0.centre(), &threads)?;
         let max_distance = match max_distance {
             None => f32::INFINITY,
             Some(d) if d >= 0.0 => d as f32,
@@ -654,11 +707,11 @@ impl Mesh {
             v.push(c.v);
         }
         Ok(ClosestPoints {
-            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
-            distance: PyArray1::from_vec(py, distance).unbind(),
-            prim: PyArray1::from_vec(py, prim).unbind(),
-            u: PyArray1::from_vec(py, u).unbind(),
-            v: PyArray1::from_vec(py, v).unbind(),
+            point: shaped(py, point, &lead, n, &[3])?,
+            distance: shaped(py, distance, &lead, n, &[])?,
+            prim: shaped(py, prim, &lead, n, &[])?,
+            u: shaped(py, u, &lead, n, &[])?,
+            v: shaped(py, v, &lead, n, &[])?,
         })
     }
 }

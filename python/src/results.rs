@@ -1,6 +1,6 @@
 //! The named results of `Mesh`'s queries: arrays as attributes or keys.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::exceptions::PyKeyError;
 use pyo3::prelude::*;
 
@@ -10,25 +10,25 @@ use pyo3::prelude::*;
 pub struct Hits {
     /// float32 (n,): distance along the ray, in direction lengths; inf on a miss (None unless asked for in ``fields``, as every array here).
     #[pyo3(get)]
-    pub(crate) t: Option<Py<PyArray1<f32>>>,
+    pub(crate) t: Option<Py<PyArrayDyn<f32>>>,
     /// int64 (n,): the triangle (face index) hit; -1 on a miss.
     #[pyo3(get)]
-    pub(crate) prim: Option<Py<PyArray1<i64>>>,
+    pub(crate) prim: Option<Py<PyArrayDyn<i64>>>,
     /// float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss.
     #[pyo3(get)]
-    pub(crate) u: Option<Py<PyArray1<f32>>>,
+    pub(crate) u: Option<Py<PyArrayDyn<f32>>>,
     /// float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss.
     #[pyo3(get)]
-    pub(crate) v: Option<Py<PyArray1<f32>>>,
+    pub(crate) v: Option<Py<PyArrayDyn<f32>>>,
     /// float32 (n, 3): unit geometric normal of the triangle hit, by the
     /// right-hand rule over its vertex order (trimesh's face normal); NaN on a miss.
     #[pyo3(get)]
-    pub(crate) normal: Option<Py<PyArray2<f32>>>,
+    pub(crate) normal: Option<Py<PyArrayDyn<f32>>>,
     /// float64 (n, 3): where the ray meets the triangle's plane, computed
     /// in float64 on the triangle as given (on its plane to float64's
     /// precision, wherever the mesh lies); NaN on a miss.
     #[pyo3(get)]
-    pub(crate) point: Option<Py<PyArray2<f64>>>,
+    pub(crate) point: Option<Py<PyArrayDyn<f64>>>,
 }
 
 pub const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
@@ -95,19 +95,19 @@ pub struct ClosestPoints {
     /// float64 (n, 3): the nearest point on the surface, computed in
     /// float64 on the triangle as given; NaN where none lies within max_distance.
     #[pyo3(get)]
-    pub(crate) point: Py<PyArray2<f64>>,
+    pub(crate) point: Py<PyArrayDyn<f64>>,
     /// float64 (n,): its distance (negative inside with ``signed=True``); inf where none.
     #[pyo3(get)]
-    pub(crate) distance: Py<PyArray1<f64>>,
+    pub(crate) distance: Py<PyArrayDyn<f64>>,
     /// int64 (n,): the triangle (face index) it lies on; -1 where none.
     #[pyo3(get)]
-    pub(crate) prim: Py<PyArray1<i64>>,
+    pub(crate) prim: Py<PyArrayDyn<i64>>,
     /// float64 (n,): barycentric coordinate of the face's second vertex at the point; NaN where none.
     #[pyo3(get)]
-    pub(crate) u: Py<PyArray1<f64>>,
+    pub(crate) u: Py<PyArrayDyn<f64>>,
     /// float64 (n,): barycentric coordinate of the face's third vertex at the point; NaN where none.
     #[pyo3(get)]
-    pub(crate) v: Py<PyArray1<f64>>,
+    pub(crate) v: Py<PyArrayDyn<f64>>,
 }
 
 const CLOSEST_KEYS: [&str; 5] = ["point", "distance", "prim", "u", "v"];
