@@ -99,7 +99,7 @@ def _mesh_arrays(mesh: Any) -> Tuple[Any, Any]:
     )
 
 
-def _closest_directions(n: int) -> np.ndarray:
+def _vote_directions(n: int) -> np.ndarray:
     """``n`` fixed directions for majority votes of inside or outside:
     points of a Fibonacci sphere turned off every axis and diagonal."""
     k = np.arange(n, dtype=np.float64) + 0.5
@@ -323,7 +323,7 @@ class RaycastingScene:
         if nsamples == 1:
             return self.mesh.contains(p, threads=threads)
         votes = np.zeros(len(p), dtype=np.int64)
-        for direction in _closest_directions(nsamples):
+        for direction in _vote_directions(nsamples):
             d = np.broadcast_to(direction, p.shape)
             votes += self.mesh.count_hits(p, d, threads=threads) % 2
         return votes * 2 > nsamples
