@@ -5,7 +5,7 @@
 //! Every refusal is a `ValueError` that names the argument and what it
 //! wanted.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -120,7 +120,7 @@ fn as_numpy<'py>(
 pub enum Vec3Array<'py> {
     F32(PyReadonlyArray2<'py, f32>),
     F64(PyReadonlyArray2<'py, f64>),
-    Copied(Vec<Vec3>),
+    Copied(Vec<DVec3>),
 }
 
 /// The rows of a [`Vec3Array`], shareable by threads.
@@ -128,7 +128,7 @@ pub enum Vec3Array<'py> {
 pub enum Vec3Rows<'a> {
     F32(&'a [f32]),
     F64(&'a [f64]),
-    Copied(&'a [Vec3]),
+    Copied(&'a [DVec3]),
 }
 
 impl Vec3Rows<'_> {
@@ -146,6 +146,8 @@ impl Vec3Rows<'_> {
 /// dispatch), not matched on each row.
 trait Row: Sync {
     fn row(&self, i: usize) -> Vec3;
+    /// The row as given, in float64 (a float32 row exactly).
+    fn row64(&self, i: usize) -> DVec3;
 }
 
 struct Flat<'a, T>(&'a [T]);
@@ -155,6 +157,10 @@ impl Row for Flat<'_, f32> {
     fn row(&self, i: usize) -> Vec3 {
         Vec3::from_slice(&self.0[3 * i..3 * i + 3])
     }
+    #[inline(always)]
+    fn row64(&self, i: usize) -> DVec3 {
+        self.row(i).as_dvec3()
+    }
 }
 
 impl Row for Flat<'_, f64> {
@@ -163,11 +169,19 @@ impl Row for Flat<'_, f64> {
         let r = &self.0[3 * i..3 * i + 3];
         Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32)
     }
+    #[inline(always)]
+    fn row64(&self, i: usize) -> DVec3 {
+        DVec3::from_slice(&self.0[3 * i..3 * i + 3])
+    }
 }
 
-impl Row for &[Vec3] {
+impl Row for &[DVec3] {
     #[inline(always)]
     fn row(&self, i: usize) -> Vec3 {
+        self[i].as_vec3()
+    }
+    #[inline(always)]
+    fn row64(&self, i: usize) -> DVec3 {
         self[i]
     }
 }
@@ -213,18 +227,18 @@ fn in_place<T: Element>(a: &PyReadonlyArray2<'_, T>) -> bool {
 pub fn read_vec3s<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Vec3Array<'py>> {
     const WHAT: &str = "floats";
     let copied =
-        |rows: Vec<[f32; 3]>| Vec3Array::Copied(rows.into_iter().map(Vec3::from).collect());
+        |rows: Vec<[f64; 3]>| Vec3Array::Copied(rows.into_iter().map(DVec3::from).collect());
     if let Ok(a) = obj.extract::<PyReadonlyArray2<f32>>() {
         if in_place(&a) {
             return Ok(Vec3Array::F32(a));
         }
-        return Ok(copied(rows_of(&a, name, WHAT, |x| x)?));
+        return Ok(copied(rows_of(&a, name, WHAT, f64::from)?));
     }
     if let Ok(a) = obj.extract::<PyReadonlyArray2<f64>>() {
         if in_place(&a) {
             return Ok(Vec3Array::F64(a));
         }
-        return Ok(copied(rows_of(&a, name, WHAT, |x| x as f32)?));
+        return Ok(copied(rows_of(&a, name, WHAT, |x| x)?));
     }
     match as_numpy(obj, name, "fiu", WHAT, "float64", 2)? {
         None => Ok(Vec3Array::Copied(Vec::new())),
@@ -233,13 +247,23 @@ pub fn read_vec3s<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Vec3Arra
             if in_place(&a) {
                 Ok(Vec3Array::F64(a))
             } else {
-                Ok(copied(rows_of(&a, name, WHAT, |x| x as f32)?))
+                Ok(copied(rows_of(&a, name, WHAT, |x| x)?))
             }
         }
     }
 }
 
+/// An (n, 3) array of any float or integer dtype, as float64 triples (a
+/// float32 array's values exactly).
+pub fn dvec3s(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<DVec3>> {
+    let array = read_vec3s(obj, name)?;
+    let rows = array.rows()?;
+    let n = rows.len();
+    Ok(with_rows!(rows, |r| (0..n).map(|i| r.row64(i)).collect()))
+}
+
 /// An (n, 3) array of any float or integer dtype, as float32 triples.
+#[allow(dead_code)]
 pub fn vec3s(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec3>> {
     let array = read_vec3s(obj, name)?;
     let rows = array.rows()?;
@@ -256,16 +280,23 @@ fn not_finite(name: &str, i: usize, v: Vec3) -> PyErr {
 
 /// Points: an (n, 3) array of finite values (after rounding to float32),
 /// read on `threads` (with the GIL held, so that no Python code changes the
-/// array meanwhile).
-pub fn points(obj: &Bound<'_, PyAny>, name: &str, threads: &Threads) -> PyResult<Vec<Vec3>> {
+/// array meanwhile), each as given in float64 and as strata traces it:
+/// relative to `centre`, rounded to float32.
+pub fn points(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    centre: DVec3,
+    threads: &Threads,
+) -> PyResult<Vec<(DVec3, Vec3)>> {
     let array = read_vec3s(obj, name)?;
     let rows = array.rows()?;
     let (points, bad) = with_rows!(rows, |r| gather(threads, rows.len(), |i| {
-        let p = r.row(i);
-        (p, !p.is_finite())
+        let p = r.row64(i);
+        let near = (p - centre).as_vec3();
+        ((p, near), !p.as_vec3().is_finite() || !near.is_finite())
     }));
     match bad {
-        Some(i) => Err(not_finite(name, i, points[i])),
+        Some(i) => Err(not_finite(name, i, points[i].0.as_vec3())),
         None => Ok(points),
     }
 }
@@ -344,6 +375,25 @@ fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
     }
 }
 
+/// An array of shape (..., 3) with more than two dimensions as its (n, 3)
+/// rows (a numpy reshape, a view where it can be) and its leading shape;
+/// anything else as it is, with no leading shape (answers stay (n,)).
+pub fn rows3<'py>(obj: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Vec<usize>)> {
+    let ndim = match obj.hasattr("ndim")? {
+        true => obj.getattr("ndim")?.extract::<usize>().unwrap_or(0),
+        false => 0,
+    };
+    if ndim <= 2 {
+        return Ok((obj.clone(), Vec::new()));
+    }
+    let shape: Vec<usize> = obj.getattr("shape")?.extract()?;
+    if shape[ndim - 1] != 3 {
+        return Ok((obj.clone(), Vec::new()));
+    }
+    let rows = obj.call_method1("reshape", ((-1i64, 3i64),))?;
+    Ok((rows, shape[..ndim - 1].to_vec()))
+}
+
 /// Whether `obj` is an array (or a list or tuple) rather than a number.
 fn is_sequence(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
@@ -407,13 +457,67 @@ fn t_maxes(t_max: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<TMax> {
     Ok(TMax::Each(ts?))
 }
 
+/// What a ray query does with a ray that cannot hit anything: a NaN or
+/// infinite coordinate, or a zero direction.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum BadRays {
+    /// `ValueError` naming the first such row (`Mesh`'s own queries).
+    Raise,
+    /// A miss, as Open3D and trimesh's engines answer it (the adapters).
+    Miss,
+}
+
+impl BadRays {
+    /// The `bad_rays` keyword: "raise" or "miss".
+    pub fn new(name: &str) -> PyResult<Self> {
+        match name {
+            "raise" => Ok(Self::Raise),
+            "miss" => Ok(Self::Miss),
+            _ => Err(error(format!(
+                "bad_rays must be \"raise\" or \"miss\"; got {name:?}"
+            ))),
+        }
+    }
+}
+
+/// A ray that hits nothing: its interval (0, 0] is empty. What a bad ray
+/// becomes under [`BadRays::Miss`].
+const NO_RAY: Ray = Ray {
+    origin: Vec3::ZERO,
+    direction: Vec3::X,
+    tmin: 0.0,
+    tmax: 0.0,
+};
+
+/// `t_min`: where rays start (>= 0, finite; `None`: 0).
+fn t_min_of(t_min: Option<f64>) -> PyResult<f32> {
+    match t_min {
+        None => Ok(0.0),
+        Some(t) if t >= 0.0 && t.is_finite() => Ok(t as f32),
+        Some(t) => Err(error(format!(
+            "t_min must be a finite number >= 0; got {t}"
+        ))),
+    }
+}
+
+/// How a query reads its rays: where they start and end, and what a ray
+/// that cannot hit anything is.
+pub struct RaySpec<'a, 'py> {
+    pub t_min: Option<f64>,
+    pub t_max: Option<&'a Bound<'py, PyAny>>,
+    pub bad: BadRays,
+}
+
 /// Rays from `origins` and `directions` ((n, 3) each, finite, no zero
-/// direction), starting at t = 0 and ending at `t_max`, read on `threads`
+/// direction, else per `spec.bad`), on `(t_min, t_max]`, read on `threads`
 /// (with the GIL held, so no Python code can change the arrays meanwhile).
+/// Origins are made relative to `centre` (in float64, then rounded) where
+/// the mesh is held relative to it.
 pub fn rays(
     origins: &Bound<'_, PyAny>,
     directions: &Bound<'_, PyAny>,
-    t_max: Option<&Bound<'_, PyAny>>,
+    spec: &RaySpec<'_, '_>,
+    centre: DVec3,
     threads: &Threads,
 ) -> PyResult<Vec<Ray>> {
     let o = read_vec3s(origins, "origins")?;
@@ -426,13 +530,29 @@ pub fn rays(
             d.len()
         )));
     }
-    let t = t_maxes(t_max, o.len())?;
+    let t = t_maxes(spec.t_max, o.len())?;
+    let t_min = t_min_of(spec.t_min)?;
     let n = o.len();
     let bad =
         |r: &Ray| !r.origin.is_finite() || !r.direction.is_finite() || r.direction == Vec3::ZERO;
+    let miss = spec.bad == BadRays::Miss;
+    let centred = centre != DVec3::ZERO;
     let (rays, bad) = with_rows!(o, |ro| with_rows!(d, |rd| gather(threads, n, |i| {
-        let ray = Ray::segment(ro.row(i), rd.row(i), t.get(i));
-        (ray, bad(&ray))
+        // Without a centre, the row rounded once, as (row - 0) would be.
+        let origin = match centred {
+            true => (ro.row64(i) - centre).as_vec3(),
+            false => ro.row(i),
+        };
+        let ray = Ray {
+            origin,
+            direction: rd.row(i),
+            tmin: t_min,
+            tmax: t.get(i),
+        };
+        match bad(&ray) {
+            true if miss => (NO_RAY, false),
+            b => (ray, b),
+        }
     })));
     let Some(i) = bad else {
         return Ok(rays);

@@ -12,6 +12,7 @@
 mod convert;
 mod mesh;
 mod render;
+mod results;
 mod run;
 
 use pyo3::prelude::*;
@@ -29,8 +30,9 @@ pyo3::create_exception!(
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<mesh::Mesh>()?;
-    m.add_class::<mesh::Hits>()?;
-    m.add_class::<mesh::ClosestPoints>()?;
+    m.add_class::<results::Hits>()?;
+    m.add_class::<results::ClosestPoints>()?;
+    m.add_class::<results::Crossings>()?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add("InputError", m.py().get_type::<InputError>())?;
     m.add("__version__", strata::VERSION)?;

@@ -1,11 +1,10 @@
 //! `Mesh`: a triangle mesh with its BVH, and the queries on it.
 
-use crate::convert;
+use crate::convert::{self, BadRays, RaySpec};
+use crate::results::{ClosestPoints, Crossings, Hits, HITS_KEYS};
 use crate::run::{self, Threads, CHUNK, TASK};
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
-use pyo3::exceptions::{
-    PyFileNotFoundError, PyKeyError, PyNotImplementedError, PyTypeError, PyValueError,
-};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods};
+use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -20,135 +19,28 @@ use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 /// answer. Lists and non-contiguous arrays are accepted. Degenerate faces
 /// are kept (no ray hits them), so face ids stay yours.
 ///
-/// Queries take (n, 3) ``origins`` and ``directions`` (any float dtype;
+/// Queries take (n, 3) ``origins`` and ``directions``, or (..., 3) of any
+/// leading shape, whose answers come back in that shape (any float dtype;
 /// a direction need not be unit length, and ``t`` is measured in its
-/// lengths) and ``t_max`` (a number or one per ray; a ray reports what
-/// lies in (0, t_max]). Every query releases the GIL and runs on every
-/// core, or on ``threads`` threads; Ctrl-C stops it between chunks of
-/// 65,536 rays. Bad input raises ``ValueError`` naming the argument.
+/// lengths), ``t_max`` (a number or one per ray) and ``t_min`` (a number):
+/// a ray reports what lies in (t_min, t_max], (0, inf] by default. Every
+/// query releases the GIL and runs on every core, or on ``threads``
+/// threads; Ctrl-C stops it between chunks of 65,536 rays. Bad input
+/// raises ``ValueError`` naming the argument; ``bad_rays="miss"`` makes a
+/// ray with a NaN or infinite coordinate or a zero direction a miss
+/// instead, as Open3D's and trimesh's engines answer it.
+///
+/// A mesh whose box lies farther from the origin than its size (UTM
+/// coordinates) is traced relative to a centre near its middle, in float32
+/// numbers of its own size; rays and points are moved there in float64.
+/// Hit points and closest points are float64, computed on the triangle
+/// the walk found as given, so they lie on its plane to float64's
+/// precision wherever the mesh lies.
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Mesh(raycast::Mesh);
 
-/// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
-/// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
-#[pyclass(frozen, module = "strata_rt._native")]
-pub struct Hits {
-    /// float32 (n,): distance along the ray, in direction lengths; inf on a miss.
-    #[pyo3(get)]
-    t: Py<PyArray1<f32>>,
-    /// int64 (n,): the triangle (face index) hit; -1 on a miss.
-    #[pyo3(get)]
-    prim: Py<PyArray1<i64>>,
-    /// float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss.
-    #[pyo3(get)]
-    u: Py<PyArray1<f32>>,
-    /// float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss.
-    #[pyo3(get)]
-    v: Py<PyArray1<f32>>,
-    /// float32 (n, 3): unit geometric normal of the triangle hit, by the
-    /// right-hand rule over its vertex order (trimesh's face normal); NaN on a miss.
-    #[pyo3(get)]
-    normal: Py<PyArray2<f32>>,
-    /// float32 (n, 3): the hit point on the triangle, (1-u-v)·v0 + u·v1 + v·v2; NaN on a miss.
-    #[pyo3(get)]
-    point: Py<PyArray2<f32>>,
-}
-
-const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
-
-#[pymethods]
-impl Hits {
-    /// The array named ``key``: one of ``keys()``.
-    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        Ok(match key {
-            "t" => self.t.clone_ref(py).into_any(),
-            "prim" => self.prim.clone_ref(py).into_any(),
-            "u" => self.u.clone_ref(py).into_any(),
-            "v" => self.v.clone_ref(py).into_any(),
-            "normal" => self.normal.clone_ref(py).into_any(),
-            "point" => self.point.clone_ref(py).into_any(),
-            _ => return Err(PyKeyError::new_err(key.to_string())),
-        })
-    }
-
-    /// The names of the arrays: t, prim, u, v, normal, point.
-    fn keys(&self) -> Vec<&'static str> {
-        HITS_KEYS.to_vec()
-    }
-
-    /// Whether ``key`` names one of the arrays.
-    fn __contains__(&self, key: &str) -> bool {
-        HITS_KEYS.contains(&key)
-    }
-
-    /// The number of rays.
-    fn __len__(&self, py: Python<'_>) -> usize {
-        self.t.bind(py).len().unwrap_or(0)
-    }
-
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let t = self.t.bind(py);
-        let n = t.len().unwrap_or(0);
-        let hits = self
-            .prim
-            .bind(py)
-            .to_vec()
-            .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count());
-        format!("Hits({n} rays, {hits} hit; keys t, prim, u, v, normal, point)")
-    }
-}
-
-/// The nearest surface point to each query point (``Mesh.closest_point``),
-/// as attributes or keys (``near.distance`` or ``near["distance"]``).
-#[pyclass(frozen, module = "strata_rt._native")]
-pub struct ClosestPoints {
-    /// float32 (n, 3): the nearest point on the surface; NaN where none lies within max_distance.
-    #[pyo3(get)]
-    point: Py<PyArray2<f32>>,
-    /// float32 (n,): its distance (negative inside with ``signed=True``); inf where none.
-    #[pyo3(get)]
-    distance: Py<PyArray1<f32>>,
-    /// int64 (n,): the triangle (face index) it lies on; -1 where none.
-    #[pyo3(get)]
-    prim: Py<PyArray1<i64>>,
-}
-
-const CLOSEST_KEYS: [&str; 3] = ["point", "distance", "prim"];
-
-#[pymethods]
-impl ClosestPoints {
-    /// The array named ``key``: one of ``keys()``.
-    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        Ok(match key {
-            "point" => self.point.clone_ref(py).into_any(),
-            "distance" => self.distance.clone_ref(py).into_any(),
-            "prim" => self.prim.clone_ref(py).into_any(),
-            _ => return Err(PyKeyError::new_err(key.to_string())),
-        })
-    }
-
-    /// The names of the arrays: point, distance, prim.
-    fn keys(&self) -> Vec<&'static str> {
-        CLOSEST_KEYS.to_vec()
-    }
-
-    /// Whether ``key`` names one of the arrays.
-    fn __contains__(&self, key: &str) -> bool {
-        CLOSEST_KEYS.contains(&key)
-    }
-
-    /// The number of query points.
-    fn __len__(&self, py: Python<'_>) -> usize {
-        self.distance.bind(py).len().unwrap_or(0)
-    }
-
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let n = self.distance.bind(py).len().unwrap_or(0);
-        format!("ClosestPoints({n} points; keys point, distance, prim)")
-    }
-}
-
-/// Each ray's answer, written in place by the threads.
+/// Each task's rays' answers, written in place by the threads: a column
+/// not asked for is empty.
 struct HitColumns<'a> {
     t: &'a mut [f32],
     prim: &'a mut [i64],
@@ -156,29 +48,119 @@ struct HitColumns<'a> {
     v: &'a mut [f32],
     /// Three per ray.
     normal: &'a mut [f32],
-    point: &'a mut [f32],
+    point: &'a mut [f64],
 }
 
 impl HitColumns<'_> {
-    /// Copies `hits` in, one row each.
+    /// Copies `hits` into the columns asked for, one row each.
     fn fill(self, hits: &[FirstHit]) {
-        for (i, h) in hits.iter().enumerate() {
-            self.t[i] = h.t;
-            self.prim[i] = h.face;
-            self.u[i] = h.u;
-            self.v[i] = h.v;
-            h.normal.write_to_slice(&mut self.normal[3 * i..3 * i + 3]);
-            h.point.write_to_slice(&mut self.point[3 * i..3 * i + 3]);
+        if !self.t.is_empty() {
+            self.t.iter_mut().zip(hits).for_each(|(o, h)| *o = h.t);
+        }
+        if !self.prim.is_empty() {
+            self.prim
+                .iter_mut()
+                .zip(hits)
+                .for_each(|(o, h)| *o = h.face);
+        }
+        if !self.u.is_empty() {
+            self.u.iter_mut().zip(hits).for_each(|(o, h)| *o = h.u);
+        }
+        if !self.v.is_empty() {
+            self.v.iter_mut().zip(hits).for_each(|(o, h)| *o = h.v);
+        }
+        if !self.normal.is_empty() {
+            let rows = self.normal.chunks_exact_mut(3).zip(hits);
+            rows.for_each(|(o, h)| h.normal.write_to_slice(o));
+        }
+        if !self.point.is_empty() {
+            let rows = self.point.chunks_exact_mut(3).zip(hits);
+            rows.for_each(|(o, h)| h.point.write_to_slice(o));
         }
     }
 }
 
-/// `all_hits`'s answer: splits, t, prim.
-type AllHits<'py> = (
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<f32>>,
-    Bound<'py, PyArray1<i64>>,
-);
+/// Rows `rows` of `column` (`width` values a row) cut into one piece per
+/// task of `TASK` rows; an empty column (not asked for) into empty pieces.
+fn task_pieces<T>(column: &mut [T], width: usize, rows: std::ops::Range<usize>) -> Vec<&mut [T]> {
+    if column.is_empty() {
+        let tasks = rows.len().div_ceil(TASK);
+        return (0..tasks).map(|_| <&mut [T]>::default()).collect();
+    }
+    column[width * rows.start..width * rows.end]
+        .chunks_mut(width * TASK)
+        .collect()
+}
+
+/// A zeroed column of `len` values where `wanted`, else an empty one.
+fn column<T: Clone + Default>(wanted: bool, len: usize) -> Vec<T> {
+    if wanted {
+        vec![T::default(); len]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Which of `Hits`' arrays a query was asked for (``fields``).
+struct Fields([bool; 6]);
+
+impl Fields {
+    fn new(fields: Option<Vec<String>>) -> PyResult<Self> {
+        let Some(names) = fields else {
+            return Ok(Self([true; 6]));
+        };
+        let mut wanted = [false; 6];
+        for name in names {
+            let Some(k) = HITS_KEYS.iter().position(|&key| key == name) else {
+                return Err(PyValueError::new_err(format!(
+                    "fields names {name:?}, which Hits does not have; it has {}",
+                    HITS_KEYS.join(", ")
+                )));
+            };
+            wanted[k] = true;
+        }
+        Ok(Self(wanted))
+    }
+
+    fn has(&self, key: &str) -> bool {
+        HITS_KEYS
+            .iter()
+            .position(|&k| k == key)
+            .is_some_and(|k| self.0[k])
+    }
+}
+
+/// `values` (`n` items of `tail` values each) as an array of shape
+/// `lead + tail`, the query's input's leading shape, or `(n,) + tail`.
+fn shaped<T: numpy::Element>(
+    py: Python<'_>,
+    values: Vec<T>,
+    lead: &[usize],
+    n: usize,
+    tail: &[usize],
+) -> PyResult<Py<PyArrayDyn<T>>> {
+    let mut dims = if lead.is_empty() {
+        vec![n]
+    } else {
+        lead.to_vec()
+    };
+    dims.extend_from_slice(tail);
+    Ok(PyArray1::from_vec(py, values).reshape(dims)?.unbind())
+}
+
+/// [`shaped`] where `wanted.0` (tail `wanted.1`), else None.
+fn maybe<T: numpy::Element>(
+    py: Python<'_>,
+    wanted: (bool, &[usize]),
+    values: Vec<T>,
+    lead: &[usize],
+    n: usize,
+) -> PyResult<Option<Py<PyArrayDyn<T>>>> {
+    let (wanted, tail) = wanted;
+    wanted
+        .then(|| shaped(py, values, lead, n, tail))
+        .transpose()
+}
 
 /// A flat vector of rows as an (n, 3) array.
 pub fn rows<'py>(py: Python<'py>, rows: Vec<[f32; 3]>) -> PyResult<Bound<'py, PyArray2<f32>>> {
@@ -219,6 +201,76 @@ fn vertices_and_faces_of<'py>(
     )))
 }
 
+impl Mesh {
+    /// Vertices and faces: as given, or the triangles' corners merged by
+    /// exact position (a loaded or placed mesh).
+    fn indexed(&self) -> (Vec<glam::DVec3>, Vec<[u32; 3]>) {
+        if let Some((vertices, faces)) = self.0.given() {
+            return (vertices.to_vec(), faces.to_vec());
+        }
+        let mut index = std::collections::HashMap::new();
+        let mut vertices = Vec::new();
+        let faces = self
+            .0
+            .triangles()
+            .iter()
+            .map(|tri| {
+                tri.map(|p| {
+                    *index
+                        .entry(p.to_array().map(f32::to_bits))
+                        .or_insert_with(|| {
+                            vertices.push(p.as_dvec3());
+                            vertices.len() as u32 - 1
+                        })
+                })
+            })
+            .collect();
+        (vertices, faces)
+    }
+
+    /// A ray query's rays: its arguments read and checked (``ValueError``
+    /// naming the argument), origins made relative to the mesh's centre.
+    fn rays(
+        &self,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        t_max: Option<&Bound<'_, PyAny>>,
+        t_min: Option<f64>,
+        bad_rays: &str,
+        threads: &Threads,
+    ) -> PyResult<(Vec<strata::math::Ray>, Vec<usize>)> {
+        let spec = RaySpec {
+            t_min,
+            t_max,
+            bad: BadRays::new(bad_rays)?,
+        };
+        let (o, lead) = convert::rows3(origins)?;
+        let (d, lead_d) = convert::rows3(directions)?;
+        if lead != lead_d && !(lead.is_empty() || lead_d.is_empty()) {
+            return Err(PyValueError::new_err(format!(
+                "origins and directions must have the same shape; got {lead:?} and {lead_d:?} before the last axis"
+            )));
+        }
+        let lead = if lead.is_empty() { lead_d } else { lead };
+        // One t_max per ray of an (..., 3) array: in its leading shape.
+        let flat_t_max = match t_max {
+            Some(t) if !lead.is_empty() && t.hasattr("shape")? => {
+                let shape: Vec<usize> = t.getattr("shape")?.extract()?;
+                (shape == lead)
+                    .then(|| t.call_method1("reshape", (-1i64,)))
+                    .transpose()?
+            }
+            _ => None,
+        };
+        let spec = RaySpec {
+            t_max: flat_t_max.as_ref().or(spec.t_max),
+            ..spec
+        };
+        let rays = convert::rays(&o, &d, &spec, self.0.centre(), threads)?;
+        Ok((rays, lead))
+    }
+}
+
 #[pymethods]
 impl Mesh {
     /// Build the mesh and its BVH from ``vertices`` ((n, 3) floats) and
@@ -240,10 +292,10 @@ impl Mesh {
             Some(faces) => (vertices.clone(), faces.clone()),
             None => vertices_and_faces_of(vertices)?,
         };
-        let vertices = convert::vec3s(&vertices, "vertices")?;
+        let vertices = convert::dvec3s(&vertices, "vertices")?;
         let faces = convert::faces(&faces, vertices.len())?;
         let mesh = py
-            .detach(|| raycast::Mesh::new(vertices, faces, BuildQuality::Auto))
+            .detach(|| raycast::Mesh::new_exact(vertices, faces, BuildQuality::Auto))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Self(mesh))
     }
@@ -272,6 +324,16 @@ impl Mesh {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let py = slf.py();
         let mesh = &slf.borrow().0;
+        if let Some((vertices, faces)) = mesh.given() {
+            // As given, in float64: the same centre, tree and answers.
+            let n = vertices.len();
+            let flat: Vec<f64> = vertices.iter().flat_map(|v| v.to_array()).collect();
+            let vertices = PyArray1::from_vec(py, flat).reshape([n, 3])?;
+            let idx: Vec<i64> = faces.iter().flatten().map(|&k| i64::from(k)).collect();
+            let faces = PyArray1::from_vec(py, idx).reshape([faces.len(), 3])?;
+            let args = (vertices, faces).into_pyobject(py)?.into_any();
+            return Ok((slf.get_type().into_any(), args));
+        }
         let Some((prototype, maps)) = mesh.placement() else {
             let (vertices, faces) = corner_arrays(py, mesh.triangles())?;
             let args = (vertices, faces).into_pyobject(py)?.into_any();
@@ -354,6 +416,27 @@ impl Mesh {
         rows(py, self.0.bounds().map(|p| p.to_array()).to_vec())
     }
 
+    /// float64 (n, 3): the faces' corners, each position once, in order of
+    /// first use (``faces`` indexes them): a loaded file's vertices, less
+    /// any that no face uses. A mesh from arrays far from the origin (held
+    /// as given, in float64) gives its arrays back exactly.
+    #[getter]
+    fn vertices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (vertices, _) = self.indexed();
+        let n = vertices.len();
+        let flat: Vec<f64> = vertices.iter().flat_map(|v| v.to_array()).collect();
+        PyArray1::from_vec(py, flat).reshape([n, 3])
+    }
+
+    /// int64 (m, 3): each face's vertex indices into ``vertices``, in face order.
+    #[getter]
+    fn faces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let (_, faces) = self.indexed();
+        let m = faces.len();
+        let flat: Vec<i64> = faces.iter().flatten().map(|&k| i64::from(k)).collect();
+        PyArray1::from_vec(py, flat).reshape([m, 3])
+    }
+
     /// float32 (m, 3, 3): each face's three vertices, in face order (a copy
     /// of what the BVH stores).
     #[getter]
@@ -379,7 +462,12 @@ impl Mesh {
     ///
     /// Watertight: a ray through a shared edge or vertex of a closed mesh
     /// hits one of the triangles there, never none.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    ///
+    /// ``fields``: the names of the arrays to compute (default all); the
+    /// others are None and cost nothing (``fields=("t", "prim")`` skips
+    /// the second look at each hit face that ``normal`` and ``point`` take).
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise", fields=None))]
+    #[allow(clippy::too_many_arguments)]
     fn intersect(
         &self,
         py: Python<'_>,
@@ -387,61 +475,66 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
+        t_min: Option<f64>,
+        bad_rays: &str,
+        fields: Option<Vec<String>>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let n = rays.len();
-        let mut t = vec![0f32; n];
-        let mut prim = vec![0i64; n];
-        let mut u = vec![0f32; n];
-        let mut v = vec![0f32; n];
-        let mut normal = vec![0f32; 3 * n];
-        let mut point = vec![0f32; 3 * n];
+        let fields = Fields::new(fields)?;
+        let mut t = column::<f32>(fields.has("t"), n);
+        let mut prim = column::<i64>(fields.has("prim"), n);
+        let mut u = column::<f32>(fields.has("u"), n);
+        let mut v = column::<f32>(fields.has("v"), n);
+        let mut normal = column::<f32>(fields.has("normal"), 3 * n);
+        let mut point = column::<f64>(fields.has("point"), 3 * n);
+        let surface = fields.has("normal") || fields.has("point");
         for start in (0..n).step_by(CHUNK) {
             let r = start..(start + CHUNK).min(n);
-            let columns = (
-                rays[r.clone()].par_chunks(TASK),
-                t[r.clone()].par_chunks_mut(TASK),
-                prim[r.clone()].par_chunks_mut(TASK),
-                u[r.clone()].par_chunks_mut(TASK),
-                v[r.clone()].par_chunks_mut(TASK),
-                normal[3 * r.start..3 * r.end].par_chunks_mut(3 * TASK),
-                point[3 * r.start..3 * r.end].par_chunks_mut(3 * TASK),
-            );
+            let pieces = task_pieces(&mut t, 1, r.clone())
+                .into_iter()
+                .zip(task_pieces(&mut prim, 1, r.clone()))
+                .zip(task_pieces(&mut u, 1, r.clone()))
+                .zip(task_pieces(&mut v, 1, r.clone()))
+                .zip(task_pieces(&mut normal, 3, r.clone()))
+                .zip(task_pieces(&mut point, 3, r.clone()))
+                .map(|(((((t, prim), u), v), normal), point)| HitColumns {
+                    t,
+                    prim,
+                    u,
+                    v,
+                    normal,
+                    point,
+                })
+                .collect::<Vec<_>>();
+            let work = rays[r.clone()].par_chunks(TASK).zip(pieces);
             py.detach(|| {
                 threads.install(|| {
-                    columns
-                        .into_par_iter()
-                        .for_each(|(rays, t, prim, u, v, normal, point)| {
-                            let mut hits = [FirstHit::MISS; TASK];
-                            let hits = &mut hits[..rays.len()];
-                            self.0.first_hits(rays, hits);
-                            let out = HitColumns {
-                                t,
-                                prim,
-                                u,
-                                v,
-                                normal,
-                                point,
-                            };
-                            out.fill(hits)
-                        })
+                    work.for_each(|(rays, out)| {
+                        let mut hits = [FirstHit::MISS; TASK];
+                        let hits = &mut hits[..rays.len()];
+                        self.0.first_hits(rays, hits, surface);
+                        out.fill(hits)
+                    })
                 })
             });
             py.check_signals()?;
         }
+        let to = |key: &str, tail: &'static [usize]| (fields.has(key), tail);
         Ok(Hits {
-            t: PyArray1::from_vec(py, t).unbind(),
-            prim: PyArray1::from_vec(py, prim).unbind(),
-            u: PyArray1::from_vec(py, u).unbind(),
-            v: PyArray1::from_vec(py, v).unbind(),
-            normal: PyArray1::from_vec(py, normal).reshape([n, 3])?.unbind(),
-            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
+            t: maybe(py, to("t", &[]), t, &lead, n)?,
+            prim: maybe(py, to("prim", &[]), prim, &lead, n)?,
+            u: maybe(py, to("u", &[]), u, &lead, n)?,
+            v: maybe(py, to("v", &[]), v, &lead, n)?,
+            normal: maybe(py, to("normal", &[3]), normal, &lead, n)?,
+            point: maybe(py, to("point", &[3]), point, &lead, n)?,
         })
     }
 
     /// Whether anything blocks each ray in (0, t_max]: bool (n,).
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, one each
     fn occluded<'py>(
         &self,
         py: Python<'py>,
@@ -449,57 +542,75 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
-    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        t_min: Option<f64>,
+        bad_rays: &str,
+    ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![false; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             self.0.occluded(rays, out)
         })?;
-        Ok(PyArray1::from_vec(py, out))
+        let n = out.len();
+        shaped(py, out, &lead, n, &[])
     }
 
-    /// Every surface crossing along each ray in (0, t_max], nearest first,
-    /// as ``(splits, t, prim)`` in Open3D's layout: ray i's crossings are
-    /// ``t[splits[i]:splits[i+1]]`` (float32) on triangles
-    /// ``prim[splits[i]:splits[i+1]]`` (int64); ``splits`` is int64 (n+1,).
+    /// Every surface crossing along each ray in (t_min, t_max], nearest
+    /// first: a ``Crossings`` with ``splits`` (int64 (n+1,), Open3D's
+    /// layout: ray i's crossings are ``splits[i]:splits[i+1]``), ``t``
+    /// (float32), ``prim`` (int64), ``ray`` (int64, the ray of each) and,
+    /// with ``uv=True``, the barycentrics ``u`` and ``v`` (float64, where
+    /// the ray meets the face's plane). It unpacks as ``splits, t, prim``.
     ///
     /// One traversal per ray, not a re-cast from each hit: a ray through a
     /// shared edge or vertex of a closed mesh crosses the surface there
     /// once and is reported once, never zero times or twice, at any scale.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
-    fn all_hits<'py>(
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise", uv=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn all_hits(
         &self,
-        py: Python<'py>,
+        py: Python<'_>,
         origins: &Bound<'_, PyAny>,
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
-    ) -> PyResult<AllHits<'py>> {
+        t_min: Option<f64>,
+        bad_rays: &str,
+        uv: bool,
+    ) -> PyResult<Crossings> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let (rays, _) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
-            self.0.all_hits(rays, found, counts)
+            self.0.all_hits(rays, found, counts, uv)
         })?;
         let mut splits = Vec::with_capacity(counts.len() + 1);
+        let mut ray = Vec::with_capacity(found.len());
         let mut total = 0i64;
         splits.push(0);
-        for c in counts {
+        for (i, c) in counts.into_iter().enumerate() {
             total += c as i64;
             splits.push(total);
+            ray.extend(std::iter::repeat_n(i as i64, c as usize));
         }
         let t: Vec<f32> = found.iter().map(|c| c.t).collect();
         let prim: Vec<i64> = found.iter().map(|c| c.face).collect();
-        Ok((
-            PyArray1::from_vec(py, splits),
-            PyArray1::from_vec(py, t),
-            PyArray1::from_vec(py, prim),
-        ))
+        let column = |f: fn(&raycast::Crossing) -> f64| {
+            uv.then(|| PyArray1::from_vec(py, found.iter().map(f).collect()).unbind())
+        };
+        Ok(Crossings {
+            splits: PyArray1::from_vec(py, splits).unbind(),
+            t: PyArray1::from_vec(py, t).unbind(),
+            prim: PyArray1::from_vec(py, prim).unbind(),
+            ray: PyArray1::from_vec(py, ray).unbind(),
+            u: column(|c| c.u),
+            v: column(|c| c.v),
+        })
     }
 
     /// The number of surface crossings along each ray in (0, t_max]: int64
     /// (n,), as ``all_hits`` would list them.
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None))]
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, one each
     fn count_hits<'py>(
         &self,
         py: Python<'py>,
@@ -507,16 +618,19 @@ impl Mesh {
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         threads: Option<i64>,
-    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        t_min: Option<f64>,
+        bad_rays: &str,
+    ) -> PyResult<Py<PyArrayDyn<i64>>> {
         let threads = Threads::new(threads)?;
-        let rays = convert::rays(origins, directions, t_max, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![0i64; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
             for (o, ray) in out.iter_mut().zip(rays) {
                 *o = i64::from(self.0.count_hits(ray));
             }
         })?;
-        Ok(PyArray1::from_vec(py, out))
+        let n = out.len();
+        shaped(py, out, &lead, n, &[])
     }
 
     /// Whether each point ((n, 3) floats) is inside the mesh: bool (n,), by
@@ -532,16 +646,18 @@ impl Mesh {
         py: Python<'py>,
         points: &Bound<'_, PyAny>,
         threads: Option<i64>,
-    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+    ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
-        let points = convert::points(points, "points", &threads)?;
+        let (points, lead) = convert::rows3(points)?;
+        let points = convert::points(&points, "points", self.0.centre(), &threads)?;
         let mut out = vec![false; points.len()];
         run::each(py, &threads, &points, &mut out, |points, out| {
-            for (o, &p) in out.iter_mut().zip(points) {
-                *o = self.0.contains(p);
+            for (o, &(_, near)) in out.iter_mut().zip(points) {
+                *o = self.0.contains(near);
             }
         })?;
-        Ok(PyArray1::from_vec(py, out))
+        let n = out.len();
+        shaped(py, out, &lead, n, &[])
     }
 
     /// The nearest point on the surface to each point ((n, 3) floats),
@@ -561,7 +677,8 @@ impl Mesh {
         threads: Option<i64>,
     ) -> PyResult<ClosestPoints> {
         let threads = Threads::new(threads)?;
-        let points = convert::points(points, "points", &threads)?;
+        let (points, lead) = convert::rows3(points)?;
+        let points = convert::points(&points, "points", self.0.centre(), &threads)?;
         let max_distance = match max_distance {
             None => f32::INFINITY,
             Some(d) if d >= 0.0 => d as f32,
@@ -573,23 +690,28 @@ impl Mesh {
         };
         let mut near = vec![raycast::ClosestPoint::MISS; points.len()];
         run::each(py, &threads, &points, &mut near, |points, out| {
-            for (o, &p) in out.iter_mut().zip(points) {
-                *o = self.0.closest_point(p, max_distance, signed);
+            for (o, &(p, near)) in out.iter_mut().zip(points) {
+                *o = self.0.closest_point(p, near, max_distance, signed);
             }
         })?;
         let n = near.len();
         let mut point = Vec::with_capacity(3 * n);
         let mut distance = Vec::with_capacity(n);
         let mut prim = Vec::with_capacity(n);
+        let (mut u, mut v) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for c in near {
             point.extend(c.point.to_array());
             distance.push(c.distance);
             prim.push(c.face);
+            u.push(c.u);
+            v.push(c.v);
         }
         Ok(ClosestPoints {
-            point: PyArray1::from_vec(py, point).reshape([n, 3])?.unbind(),
-            distance: PyArray1::from_vec(py, distance).unbind(),
-            prim: PyArray1::from_vec(py, prim).unbind(),
+            point: shaped(py, point, &lead, n, &[3])?,
+            distance: shaped(py, distance, &lead, n, &[])?,
+            prim: shaped(py, prim, &lead, n, &[])?,
+            u: shaped(py, u, &lead, n, &[])?,
+            v: shaped(py, v, &lead, n, &[])?,
         })
     }
 }

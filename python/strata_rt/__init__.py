@@ -12,7 +12,7 @@ on every core::
     mesh = strata_rt.Mesh(vertices, faces)        # or strata_rt.Mesh.load("bunny.obj")
     hits = mesh.intersect(origins, directions)    # hits.t, .prim, .u, .v, .normal, .point
     blocked = mesh.occluded(origins, directions, t_max=1.0)
-    splits, t, prim = mesh.all_hits(origins, directions)
+    splits, t, prim = mesh.all_hits(origins, directions)   # or .splits, .t, .prim, .ray
     counts = mesh.count_hits(origins, directions)
     inside = mesh.contains(points)
     near = mesh.closest_point(points, signed=True)
@@ -21,11 +21,12 @@ on every core::
     image = strata_rt.render("scenes/seed.toml", spp=16)   # float32 (height, width, 3)
 
 ``strata_rt.trimesh.RayMeshIntersector`` puts the same engine behind
-trimesh's ray interface: ``mesh.ray = RayMeshIntersector(mesh)``.
+trimesh's ray interface (``mesh.ray = RayMeshIntersector(mesh)``), and
+``strata_rt.open3d.RaycastingScene`` behind Open3D's.
 """
 
 try:
-    from ._native import ClosestPoints, Hits, InputError, Mesh, __version__, render
+    from ._native import ClosestPoints, Crossings, Hits, InputError, Mesh, __version__, render
 except ImportError as e:  # pragma: no cover - depends on how Python was started
     import os as _os
 
@@ -36,4 +37,4 @@ except ImportError as e:  # pragma: no cover - depends on how Python was started
         "installed, or build it in place with `maturin develop --release`"
     ) from e
 
-__all__ = ["ClosestPoints", "Hits", "InputError", "Mesh", "__version__", "render"]
+__all__ = ["ClosestPoints", "Crossings", "Hits", "InputError", "Mesh", "__version__", "render"]

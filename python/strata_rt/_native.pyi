@@ -13,30 +13,32 @@ class InputError(ValueError):
     naming the file and the key or line."""
 
 class Hits:
-    """The first hit of each ray (``Mesh.intersect``), as attributes or keys."""
+    """The first hit of each ray (``Mesh.intersect``), as attributes or keys; an array
+    not asked for in ``fields`` is None and not among the keys."""
 
     @property
-    def t(self) -> NDArray[np.float32]:
+    def t(self) -> Optional[NDArray[np.float32]]:
         """float32 (n,): distance along the ray, in direction lengths; inf on a miss."""
     @property
-    def prim(self) -> NDArray[np.int64]:
+    def prim(self) -> Optional[NDArray[np.int64]]:
         """int64 (n,): the triangle (face index) hit; -1 on a miss."""
     @property
-    def u(self) -> NDArray[np.float32]:
+    def u(self) -> Optional[NDArray[np.float32]]:
         """float32 (n,): barycentric coordinate of the face's second vertex; NaN on a miss."""
     @property
-    def v(self) -> NDArray[np.float32]:
+    def v(self) -> Optional[NDArray[np.float32]]:
         """float32 (n,): barycentric coordinate of the face's third vertex; NaN on a miss."""
     @property
-    def normal(self) -> NDArray[np.float32]:
+    def normal(self) -> Optional[NDArray[np.float32]]:
         """float32 (n, 3): unit geometric normal of the triangle hit (right-hand rule); NaN on a miss."""
     @property
-    def point(self) -> NDArray[np.float32]:
-        """float32 (n, 3): the hit point on the triangle; NaN on a miss."""
+    def point(self) -> Optional[NDArray[np.float64]]:
+        """float64 (n, 3): where the ray meets the triangle's plane, computed in float64 on the
+        triangle as given (on its plane to float64's precision, wherever the mesh lies); NaN on a miss."""
     def __getitem__(self, key: str) -> NDArray[np.generic]:
         """The array named ``key``: one of ``keys()``."""
     def keys(self) -> List[str]:
-        """The names of the arrays: t, prim, u, v, normal, point."""
+        """The names of the arrays computed (by default t, prim, u, v, normal, point)."""
     def __contains__(self, key: str) -> bool:
         """Whether ``key`` names one of the arrays."""
     def __len__(self) -> int:
@@ -46,31 +48,74 @@ class ClosestPoints:
     """The nearest surface point to each query point (``Mesh.closest_point``), as attributes or keys."""
 
     @property
-    def point(self) -> NDArray[np.float32]:
-        """float32 (n, 3): the nearest point on the surface; NaN where none lies within max_distance."""
+    def point(self) -> NDArray[np.float64]:
+        """float64 (n, 3): the nearest point on the surface, computed in float64 on the triangle
+        as given; NaN where none lies within max_distance."""
     @property
-    def distance(self) -> NDArray[np.float32]:
-        """float32 (n,): its distance (negative inside with ``signed=True``); inf where none."""
+    def distance(self) -> NDArray[np.float64]:
+        """float64 (n,): its distance (negative inside with ``signed=True``); inf where none."""
     @property
     def prim(self) -> NDArray[np.int64]:
         """int64 (n,): the triangle (face index) it lies on; -1 where none."""
+    @property
+    def u(self) -> NDArray[np.float64]:
+        """float64 (n,): barycentric coordinate of the face's second vertex at the point; NaN where none."""
+    @property
+    def v(self) -> NDArray[np.float64]:
+        """float64 (n,): barycentric coordinate of the face's third vertex at the point; NaN where none."""
     def __getitem__(self, key: str) -> NDArray[np.generic]:
         """The array named ``key``: one of ``keys()``."""
     def keys(self) -> List[str]:
-        """The names of the arrays: point, distance, prim."""
+        """The names of the arrays: point, distance, prim, u, v."""
     def __contains__(self, key: str) -> bool:
         """Whether ``key`` names one of the arrays."""
     def __len__(self) -> int:
         """The number of query points."""
+
+class Crossings:
+    """Every crossing of each ray (``Mesh.all_hits``), ray after ray, each ray's nearest first,
+    as attributes or keys; unpacks as ``splits, t, prim``."""
+
+    @property
+    def splits(self) -> NDArray[np.int64]:
+        """int64 (n + 1,): ray i's crossings are ``splits[i]:splits[i+1]`` (Open3D's ray_splits)."""
+    @property
+    def t(self) -> NDArray[np.float32]:
+        """float32 (h,): each crossing's distance along its ray, in direction lengths."""
+    @property
+    def prim(self) -> NDArray[np.int64]:
+        """int64 (h,): the triangle (face index) crossed."""
+    @property
+    def ray(self) -> NDArray[np.int64]:
+        """int64 (h,): the ray each crossing is on (Open3D's ray_ids, trimesh's index_ray)."""
+    @property
+    def u(self) -> Optional[NDArray[np.float64]]:
+        """float64 (h,): barycentric coordinate of the face's second vertex; None unless ``uv=True``."""
+    @property
+    def v(self) -> Optional[NDArray[np.float64]]:
+        """float64 (h,): barycentric coordinate of the face's third vertex; None unless ``uv=True``."""
+    def __getitem__(self, key: Union[str, int]) -> NDArray[np.generic]:
+        """The array named ``key`` (one of ``keys()``), or splits, t, prim by their place 0, 1, 2."""
+    def keys(self) -> List[str]:
+        """The names of the arrays computed: splits, t, prim, ray (and u, v with ``uv=True``)."""
+    def __contains__(self, key: str) -> bool:
+        """Whether ``key`` names one of the arrays computed."""
+    def __iter__(self) -> Iterator[NDArray[np.generic]]:
+        """``splits, t, prim``: what ``all_hits`` returned as a tuple before."""
 
 _TMax = Union[float, ArrayLike, None]
 
 class Mesh:
     """A triangle mesh and its BVH, built once (on every core) and asked any number of queries.
 
-    Queries take (n, 3) origins and directions (any float dtype; ``t`` is in
-    direction lengths) and ``t_max`` (a number or one per ray); each
-    releases the GIL and runs on every core, or on ``threads`` threads.
+    Queries take (n, 3) origins, directions and points, or (..., 3) of any leading shape
+    whose answers come back in that shape (all_hits lists the rays flattened) (any float dtype; ``t`` is in
+    direction lengths), ``t_max`` (a number or one per ray) and ``t_min``
+    (where rays start); each releases the GIL and runs on every core, or on
+    ``threads`` threads. ``bad_rays="miss"`` makes a ray with a NaN or
+    infinite coordinate or a zero direction a miss instead of a ValueError.
+    A mesh far from the origin is traced relative to its centre, and hit
+    and closest points are float64, computed on the triangle as given.
     """
 
     def __init__(self, vertices: Any, faces: Optional[ArrayLike] = None) -> None:
@@ -90,6 +135,13 @@ class Mesh:
     def bounds(self) -> NDArray[np.float32]:
         """float32 (2, 3): the [min, max] corners of the bounding box."""
     @property
+    def vertices(self) -> NDArray[np.float64]:
+        """float64 (n, 3): the faces' corners, each position once, in order of first use (a loaded
+        file's vertices less unused ones; a far mesh's arrays as given)."""
+    @property
+    def faces(self) -> NDArray[np.int64]:
+        """int64 (m, 3): each face's indices into ``vertices``, in face order."""
+    @property
     def triangles(self) -> NDArray[np.float32]:
         """float32 (m, 3, 3): each face's three vertices, in face order."""
     def place(self, transforms: ArrayLike) -> "Mesh":
@@ -108,14 +160,20 @@ class Mesh:
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
+        fields: Optional[Sequence[Literal["t", "prim", "u", "v", "normal", "point"]]] = None,
     ) -> Hits:
-        """The first hit of each ray in (0, t_max]: t, prim, u, v, normal, point."""
+        """The first hit of each ray in (t_min, t_max]: t, prim, u, v, normal, point, or only
+        the arrays named in ``fields`` (the others are not computed)."""
     def occluded(
         self,
         origins: ArrayLike,
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
     ) -> NDArray[np.bool_]:
         """Whether anything blocks each ray in (0, t_max]: bool (n,)."""
     def all_hits(
@@ -124,14 +182,20 @@ class Mesh:
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
-    ) -> Tuple[NDArray[np.int64], NDArray[np.float32], NDArray[np.int64]]:
-        """Every surface crossing along each ray, nearest first: (splits (n+1,), t, prim)."""
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
+        uv: bool = False,
+    ) -> Crossings:
+        """Every surface crossing along each ray, nearest first: splits (n+1,), t, prim, ray
+        (and u, v with ``uv=True``); unpacks as ``splits, t, prim``."""
     def count_hits(
         self,
         origins: ArrayLike,
         directions: ArrayLike,
         t_max: _TMax = None,
         threads: Optional[int] = None,
+        t_min: Optional[float] = None,
+        bad_rays: Literal["raise", "miss"] = "raise",
     ) -> NDArray[np.int64]:
         """The number of surface crossings along each ray in (0, t_max]: int64 (n,)."""
     def contains(self, points: ArrayLike, threads: Optional[int] = None) -> NDArray[np.bool_]:

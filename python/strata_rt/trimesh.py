@@ -19,13 +19,17 @@ hit plus an offset, so a ray through a shared edge or vertex of a closed
 mesh is reported once, never zero times or twice, at any scale; and each
 ray's hits come together, nearest first (index_ray ascending).
 
-Conventions kept from trimesh: indices are int64, locations float64,
--1 marks a miss in ``intersects_first``, ``max_hits`` caps the hits of
-one ray, and a ray with a zero-length direction, or a NaN or infinite
-coordinate, hits nothing (as with trimesh's embreex engine), where
-``strata_rt.Mesh`` itself raises naming the bad row; a point that is not
-finite is not contained. trimesh is not
-imported: any object with ``vertices`` (n, 3) and ``faces`` (m, 3) works.
+Conventions kept from trimesh: indices are int64, locations float64
+(computed in float64 on the mesh's own triangles, so they lie on the
+face's plane at any coordinates), -1 marks a miss in
+``intersects_first``, ``max_hits`` caps the hits of one ray, and a ray
+with a zero-length direction, or a NaN or infinite coordinate, hits
+nothing (as with trimesh's embreex engine), where ``strata_rt.Mesh``
+itself raises naming the bad row; a point that is not finite is not
+contained. The first hit ``intersects_first`` reports is always the first
+of the ray's hits in ``intersects_id`` and ``intersects_location``, even
+for a ray that only grazes a corner. trimesh is not imported: any object
+with ``vertices`` (n, 3) and ``faces`` (m, 3) works.
 """
 
 from __future__ import annotations
@@ -66,14 +70,15 @@ class RayMeshIntersector:
             self._key = key
         return self._strata
 
-    def _rays(
-        self, ray_origins: Any, ray_directions: Any
-    ) -> Tuple[np.ndarray, np.ndarray, Optional[np.ndarray]]:
-        """float64 origins and directions, and the indices of the rays that
-        can hit anything: a finite origin and a finite, non-zero direction
-        (``None``: all of them)."""
-        origins = np.asarray(ray_origins, dtype=np.float64)
-        directions = np.asarray(ray_directions, dtype=np.float64)
+    def _rays(self, ray_origins: Any, ray_directions: Any) -> Tuple[np.ndarray, np.ndarray]:
+        """Origins and directions as arrays of the same shape; float64
+        unless given as float32 (strata reads either where it lies)."""
+        origins = np.asarray(ray_origins)
+        directions = np.asarray(ray_directions)
+        if origins.dtype.kind != "f" or origins.dtype.itemsize < 4:
+            origins = origins.astype(np.float64)
+        if directions.dtype.kind != "f" or directions.dtype.itemsize < 4:
+            directions = directions.astype(np.float64)
         if origins.shape != directions.shape:
             raise ValueError(
                 f"ray_origins and ray_directions must have the same shape; "
@@ -82,17 +87,26 @@ class RayMeshIntersector:
         if origins.size == 0:
             origins = origins.reshape((0, 3))
             directions = directions.reshape((0, 3))
-        if directions.ndim != 2:
-            # Mesh's own error names the shape it wants.
-            return origins, directions, None
-        live = (
-            np.any(directions != 0.0, axis=1)
-            & np.isfinite(directions).all(axis=1)
-            & np.isfinite(origins).all(axis=1)
-        )
-        if live.all():
-            return origins, directions, None
-        return origins, directions, np.flatnonzero(live)
+        return origins, directions
+
+    def _locations(
+        self, origins: np.ndarray, directions: np.ndarray, index_ray: np.ndarray, index_tri: np.ndarray
+    ) -> np.ndarray:
+        """Where each ray meets its triangle's plane, in float64 on the
+        mesh's own vertices (Cramer's rule, as Möller and Trumbore 1997):
+        on the face's plane to float64's precision at any coordinates."""
+        tri = np.asarray(self.mesh.vertices, dtype=np.float64)[np.asarray(self.mesh.faces)[index_tri]]
+        o = origins[index_ray].astype(np.float64)
+        d = directions[index_ray].astype(np.float64)
+        a = tri[:, 0]
+        e1, e2 = tri[:, 1] - a, tri[:, 2] - a
+        p = np.cross(d, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        s = o - a
+        q = np.cross(s, e1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.einsum("ij,ij->i", e2, q) / det
+        return o + d * t[:, None]
 
     def intersects_id(
         self,
@@ -103,33 +117,35 @@ class RayMeshIntersector:
         return_locations: bool = False,
     ) -> Union[Tuple[np.ndarray, np.ndarray], Tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """The triangles the rays hit: ``(index_tri, index_ray)``, int64 (h,)
-        each, and with ``return_locations`` the hit points, float64 (h, 3).
+        each, and with ``return_locations`` the hit points, float64 (h, 3),
+        computed in float64 on the mesh's own triangles.
 
         ``multiple_hits``: every hit along each ray (at most ``max_hits``,
         ``None`` for no limit), else only the first. Hits are grouped by
-        ray, rays in ascending order, each ray's hits nearest first.
+        ray, rays in ascending order, each ray's hits nearest first. A ray
+        that only touches the surface (at a silhouette edge or corner) has
+        its first hit listed where its crossings would not list it, so the
+        first of a ray's hits is always ``intersects_first``'s.
         """
-        origins, directions, live = self._rays(ray_origins, ray_directions)
-        o, d = (origins, directions) if live is None else (origins[live], directions[live])
+        origins, directions = self._rays(ray_origins, ray_directions)
+        mesh = self.strata_mesh
+        first = mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss", fields=("t", "prim"))
         if multiple_hits:
-            splits, t, prim = self.strata_mesh.all_hits(o, d, threads=self.threads)
+            splits, t, prim = mesh.all_hits(origins, directions, threads=self.threads, bad_rays="miss")
+            splits, t, prim = _with_first_hits(splits, t, prim, first.t, first.prim)
             counts = np.diff(splits)
             index_ray = np.repeat(np.arange(len(counts), dtype=np.int64), counts)
             if max_hits is not None:
                 rank = np.arange(len(t), dtype=np.int64) - np.repeat(splits[:-1], counts)
                 keep = rank < max_hits
-                t, prim, index_ray = t[keep], prim[keep], index_ray[keep]
+                prim, index_ray = prim[keep], index_ray[keep]
         else:
-            hits = self.strata_mesh.intersect(o, d, threads=self.threads)
-            index_ray = np.flatnonzero(hits.prim >= 0).astype(np.int64)
-            t, prim = hits.t[index_ray], hits.prim[index_ray]
+            index_ray = np.flatnonzero(first.prim >= 0).astype(np.int64)
+            prim = first.prim[index_ray]
         index_tri = prim.astype(np.int64)
-        if live is not None:
-            index_ray = live[index_ray].astype(np.int64)
         if not return_locations:
             return index_tri, index_ray
-        locations = origins[index_ray] + directions[index_ray] * t.astype(np.float64)[:, None]
-        return index_tri, index_ray, locations
+        return index_tri, index_ray, self._locations(origins, directions, index_ray, index_tri)
 
     def intersects_location(
         self, ray_origins: Any, ray_directions: Any, multiple_hits: bool = True
@@ -143,23 +159,14 @@ class RayMeshIntersector:
 
     def intersects_first(self, ray_origins: Any, ray_directions: Any) -> np.ndarray:
         """The first triangle each ray hits: int64 (n,), -1 for a miss."""
-        origins, directions, live = self._rays(ray_origins, ray_directions)
-        if live is None:
-            return self.strata_mesh.intersect(origins, directions, threads=self.threads).prim
-        first = np.full(len(origins), -1, dtype=np.int64)
-        first[live] = self.strata_mesh.intersect(
-            origins[live], directions[live], threads=self.threads
-        ).prim
-        return first
+        origins, directions = self._rays(ray_origins, ray_directions)
+        hits = self.strata_mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss", fields=("prim",))
+        return hits.prim
 
     def intersects_any(self, ray_origins: Any, ray_directions: Any) -> np.ndarray:
         """Whether each ray hits the mesh at all: bool (n,)."""
-        origins, directions, live = self._rays(ray_origins, ray_directions)
-        if live is None:
-            return self.strata_mesh.occluded(origins, directions, threads=self.threads)
-        hit = np.zeros(len(origins), dtype=bool)
-        hit[live] = self.strata_mesh.occluded(origins[live], directions[live], threads=self.threads)
-        return hit
+        origins, directions = self._rays(ray_origins, ray_directions)
+        return self.strata_mesh.occluded(origins, directions, threads=self.threads, bad_rays="miss")
 
     def contains_points(self, points: Any) -> np.ndarray:
         """Whether each point is inside the mesh: bool (n,), by the parity of
@@ -173,3 +180,32 @@ class RayMeshIntersector:
         inside = np.zeros(len(points), dtype=bool)
         inside[finite] = self.strata_mesh.contains(points[finite], threads=self.threads)
         return inside
+
+
+def _with_first_hits(
+    splits: np.ndarray, t: np.ndarray, prim: np.ndarray, first_t: np.ndarray, first_prim: np.ndarray
+) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every ray's crossings, led by its first hit: where the first
+    crossing is at the first hit's t but names another face of the edge or
+    corner there, the first hit's face; where the crossings start later
+    (or not at all), the first hit put in front (a ray that touches the
+    surface at a silhouette edge or corner before, or without, crossing it)."""
+    counts = np.diff(splits)
+    has = counts > 0
+    starts = splits[:-1]
+    first_crossing = np.full(len(counts), np.inf, dtype=np.float32)
+    first_crossing[has] = t[starts[has]]
+    hit = first_prim >= 0
+    same_t = hit & has & (first_t == first_crossing)
+    prim = prim.copy()
+    prim[starts[same_t]] = first_prim[same_t]
+    touch = hit & (first_t < first_crossing)
+    if not touch.any():
+        return splits, t, prim
+    rays = np.flatnonzero(touch)
+    at = starts[rays]
+    t = np.insert(t, at, first_t[rays])
+    prim = np.insert(prim, at, first_prim[rays])
+    counts = counts + touch
+    splits = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return splits, t, prim

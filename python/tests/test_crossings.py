@@ -178,3 +178,24 @@ def test_empty_rays_give_empty_lists(bumpy):
     np.testing.assert_array_equal(splits, [0])
     assert t.shape == (0,) and prim.shape == (0,) and splits.dtype == np.int64
     assert mesh.count_hits([], []).shape == (0,)
+
+
+def test_all_hits_is_named_and_gives_rays_and_barycentrics(bumpy):
+    """all_hits's Crossings: splits, t, prim as before (and as a tuple),
+    each crossing's ray, and with uv=True where it meets its face, in
+    float64."""
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(5)
+    origins, directions = helpers.random_rays(rng, vertices, 300)
+    found = mesh.all_hits(origins, directions, uv=True)
+    splits, t, prim = found
+    np.testing.assert_array_equal(splits, found.splits)
+    np.testing.assert_array_equal(found.ray, np.repeat(np.arange(300), np.diff(splits)))
+    assert set(found.keys()) == {"splits", "t", "prim", "ray", "u", "v"} and found.u.dtype == np.float64
+    assert mesh.all_hits(origins, directions).u is None
+    tri = vertices[faces[prim]]
+    on = (1 - found.u - found.v)[:, None] * tri[:, 0] + found.u[:, None] * tri[:, 1] + found.v[:, None] * tri[:, 2]
+    along = origins[found.ray] + t[:, None].astype(np.float64) * directions[found.ray]
+    np.testing.assert_allclose(on, along, atol=1e-5)
+    assert (found.u >= -1e-9).all() and (found.v >= -1e-9).all() and (found.u + found.v <= 1 + 1e-9).all()

@@ -175,3 +175,38 @@ def test_every_query_answers_for_t_in_0_to_t_max_inclusive():
         assert quad.occluded(o, d, t_max=t_max)[0] == bool(expected), t_max
         assert quad.count_hits(o, d, t_max=t_max)[0] == expected, t_max
         assert np.diff(quad.all_hits(o, d, t_max=t_max)[0])[0] == expected, t_max
+
+
+def test_fields_computes_only_what_is_asked(bumpy):
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(3)
+    origins, directions = helpers.random_rays(rng, vertices, 500)
+    every = mesh.intersect(origins, directions)
+    some = mesh.intersect(origins, directions, fields=("t", "prim"))
+    assert some.keys() == ["t", "prim"] and some.normal is None and some.point is None
+    assert "u" not in some and len(some) == 500
+    np.testing.assert_array_equal(some.t, every.t)
+    np.testing.assert_array_equal(some.prim, every.prim)
+    with pytest.raises(ValueError, match="fields"):
+        mesh.intersect(origins, directions, fields=("depth",))
+
+
+def test_inputs_of_any_leading_shape_answer_in_that_shape(bumpy):
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(4)
+    o, d = helpers.random_rays(rng, vertices, 60)
+    grid_o, grid_d = o.reshape(3, 4, 5, 3), d.reshape(3, 4, 5, 3)
+    flat, grid = mesh.intersect(o, d), mesh.intersect(grid_o, grid_d, t_max=np.full((3, 4, 5), np.inf))
+    assert grid.t.shape == (3, 4, 5) and grid.normal.shape == (3, 4, 5, 3) and grid.point.shape == (3, 4, 5, 3)
+    for key in flat.keys():
+        np.testing.assert_array_equal(grid[key].reshape(flat[key].shape), flat[key])
+    assert mesh.occluded(grid_o, grid_d).shape == (3, 4, 5)
+    np.testing.assert_array_equal(mesh.count_hits(grid_o, grid_d).reshape(-1), mesh.count_hits(o, d))
+    np.testing.assert_array_equal(mesh.all_hits(grid_o, grid_d).splits, mesh.all_hits(o, d).splits)
+    points = rng.uniform(-1, 1, (2, 3, 4, 3))
+    assert mesh.contains(points).shape == (2, 3, 4)
+    near = mesh.closest_point(points)
+    assert near.point.shape == (2, 3, 4, 3) and near.distance.shape == (2, 3, 4)
+    np.testing.assert_array_equal(near.distance.reshape(-1), mesh.closest_point(points.reshape(-1, 3)).distance)

@@ -75,3 +75,20 @@ def test_one_object_with_vertices_and_faces_is_a_mesh(bumpy, rays_and_points):
     np.testing.assert_array_equal(strata_rt.Mesh(tm).triangles, mesh.triangles)
     with pytest.raises(TypeError, match="vertices and faces"):
         strata_rt.Mesh(vertices)
+
+
+def test_a_loaded_mesh_gives_its_vertices_and_faces(bunny):
+    """Mesh.load's vertices and faces make the same mesh again: each face's
+    corners are the file's, and a Mesh of them answers as the loaded one."""
+    path = helpers.bunny_path()
+    loaded = strata_rt.Mesh.load(path)
+    v, f = loaded.vertices, loaded.faces
+    assert v.dtype == np.float64 and f.dtype == np.int64 and f.shape == (len(loaded), 3)
+    np.testing.assert_array_equal(v[f].astype(np.float32), loaded.triangles)
+    file_v, file_f = bunny
+    used = np.unique(file_f)
+    assert len(v) == len(np.unique(file_v[used].astype(np.float32), axis=0))
+    again = strata_rt.Mesh(v, f)
+    rng = np.random.default_rng(2)
+    o, d = helpers.random_rays(rng, v, 2000)
+    np.testing.assert_array_equal(again.count_hits(o, d), loaded.count_hits(o, d))

@@ -76,7 +76,7 @@ def test_closest_points_match_brute_force(request, name):
     points = np.vstack([around, on + off])
     dist, prim, point, second = helpers.closest_on_triangles(points, tris)
     near = mesh.closest_point(points)
-    assert near.distance.dtype == np.float32 and near.prim.dtype == np.int64 and near.point.shape == (300, 3)
+    assert near.distance.dtype == np.float64 and near.point.dtype == np.float64 and near.prim.dtype == np.int64 and near.point.shape == (300, 3)
     tol = 1e-5 * size
     np.testing.assert_allclose(near.distance, dist, rtol=1e-5, atol=tol)
     # The triangle strata names is that far away, and so is its point.
@@ -106,7 +106,12 @@ def test_closest_points_match_brute_force(request, name):
     assert (capped.prim[far & sure] == -1).all() and np.isinf(capped.distance[far & sure]).all()
     assert np.isnan(capped.point[far & sure]).all()
     np.testing.assert_array_equal(capped.prim[~far & sure], near.prim[~far & sure])
-    assert set(near.keys()) == {"point", "distance", "prim"}
+    assert set(near.keys()) == {"point", "distance", "prim", "u", "v"}
+    # u and v weigh the face's corners to the point, in float64.
+    hit = near.prim >= 0
+    w = np.stack([1 - near.u - near.v, near.u, near.v], axis=1)[hit]
+    by_weights = np.einsum("ij,ijk->ik", w, tris[near.prim[hit]])
+    np.testing.assert_allclose(by_weights, near.point[hit], rtol=0, atol=1e-12 * size)
 
 
 def test_points_on_vertices_and_empty_input(bumpy):

@@ -149,3 +149,38 @@ def test_conventions_kept_from_trimesh(bumpy):
     mesh.vertices = mesh.vertices * 0.1
     locations, _, _ = ray.intersects_location(o[:1], d[:1], multiple_hits=False)
     assert abs(locations[0, 2]) < 0.2, "the intersector kept the old mesh"
+
+
+def test_first_hit_and_locations_agree_on_grazing_rays():
+    """Rays that only touch a box at a corner or along an edge: whatever
+    intersects_first says, every hit list's first entry is it, and the
+    locations lie on their faces (trimesh's own tests ask np.isclose)."""
+    mesh = trimesh.creation.box()
+    mesh.ray = RayMeshIntersector(mesh)
+    corners = mesh.vertices
+    rng = np.random.default_rng(3)
+    origins, directions = [], []
+    for c in corners:
+        # Directions that leave the box behind on both sides of the corner.
+        for _ in range(8):
+            d = np.sign(c) * rng.uniform(0.2, 1, 3) * np.array([1, -1, 1])[rng.permutation(3)]
+            origins.append(c - 2 * d)
+            directions.append(d)
+    # Along an edge (x = y = 0.5), and through the middle of a face from z = -100.
+    origins += [[0.5, 0.5, -3.0], [0.1, 0.2, -100.0]]
+    directions += [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]
+    origins, directions = np.array(origins), np.array(directions)
+    first = mesh.ray.intersects_first(origins, directions)
+    for multiple in (True, False):
+        locations, index_ray, index_tri = mesh.ray.intersects_location(origins, directions, multiple_hits=multiple)
+        hit_rays = np.unique(index_ray)
+        np.testing.assert_array_equal(hit_rays, np.flatnonzero(first >= 0))
+        leading = np.searchsorted(index_ray, hit_rays)
+        np.testing.assert_array_equal(index_tri[leading], first[hit_rays])
+        # On the face's plane, exactly as trimesh's own test_box asks.
+        normals = mesh.face_normals[index_tri]
+        offset = np.einsum("ij,ij->i", locations - mesh.vertices[mesh.faces[index_tri, 0]], normals)
+        assert np.abs(offset).max() < 1e-12
+    assert first[-1] >= 0
+    loc, ray, _ = mesh.ray.intersects_location(origins[-1:], directions[-1:])
+    assert np.isclose(loc[0, 2], -0.5, rtol=0, atol=1e-12)

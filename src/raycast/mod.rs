@@ -25,7 +25,21 @@
 //! | [`Mesh::count_hits`] | how many crossings | ray |
 //! | [`Mesh::contains`] | inside or not (parity of crossings) | point |
 //! | [`Mesh::closest_point`] | [`ClosestPoint`]: point, distance, face | point |
+//!
+//! **Far from the origin.** A mesh made from arrays ([`Mesh::new_exact`])
+//! whose box lies farther from the origin than its size is held relative
+//! to a centre near its box's middle ([`Mesh::centre`]): the tree and the
+//! walk are float32 numbers of the mesh's own size, not of its distance
+//! from the origin, so UTM coordinates or a mesh moved by 1e6 are traced as
+//! accurately as at the origin. A binding makes rays and points relative
+//! to it (in float64, then rounded). The centre is the box's middle
+//! rounded to a multiple of the power of two at least the box's size, so a
+//! mesh near the origin keeps centre 0 (and every bit of its answers), and
+//! a mesh moved by a multiple of that power answers bit for bit as it did
+//! unmoved. Hit points and closest points are computed in float64 on the
+//! triangle the walk found, as given ([`exact`]).
 
+pub mod exact;
 #[cfg(test)]
 mod tests;
 
@@ -33,11 +47,11 @@ pub use crate::accel::BuildQuality;
 use crate::error::InputResult;
 use crate::geometry::instance::placed;
 use crate::geometry::travel::SPAN;
-use crate::geometry::Geometry;
+use crate::geometry::{Found, Geometry};
 pub use crate::math::Ray;
 pub use crate::scene::MeshArraysError;
 use crate::scene::{load_mesh_scene, mesh_geometry};
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -55,6 +69,23 @@ pub struct Mesh {
     /// The maps a placed mesh was placed by, as given (the instances keep
     /// their inverses); empty for a mesh that is not placed.
     maps: Vec<Affine3A>,
+    /// What the tree's coordinates are relative to (module docs): zero
+    /// but for a mesh from arrays far from the origin.
+    centre: DVec3,
+    /// The vertices and faces as given, where the tree's float32 corners
+    /// (plus the centre) are not them exactly: what float64 answers are
+    /// computed on.
+    given: Option<Given>,
+    /// A placed mesh's prototype's centre: its tree's coordinates are
+    /// relative to it (the maps it was built with are composed with it).
+    prototype_centre: DVec3,
+}
+
+/// A mesh's vertices in float64 and its faces, as a binding gave them.
+#[derive(Debug, Clone)]
+struct Given {
+    vertices: Vec<DVec3>,
+    faces: Vec<[u32; 3]>,
 }
 
 /// One ray's first hit, or [`FirstHit::MISS`].
@@ -70,8 +101,10 @@ pub struct FirstHit {
     /// The unit geometric normal of the face in world space, by the
     /// right-hand rule over its vertex order (trimesh's face normal).
     pub normal: Vec3,
-    /// `(1 − u − v)·v0 + u·v1 + v·v2` of the face in world space.
-    pub point: Vec3,
+    /// Where the ray meets the plane of the face, in world space and
+    /// float64 ([`exact::plane_hit`]): on the face's plane to float64's
+    /// precision, wherever the mesh lies.
+    pub point: DVec3,
 }
 
 impl FirstHit {
@@ -82,7 +115,7 @@ impl FirstHit {
         u: f32::NAN,
         v: f32::NAN,
         normal: Vec3::NAN,
-        point: Vec3::NAN,
+        point: DVec3::NAN,
     };
 }
 
@@ -91,14 +124,25 @@ impl FirstHit {
 pub struct Crossing {
     pub t: f32,
     pub face: i64,
+    /// Barycentric weights of the face's second and third vertices where
+    /// the ray meets the face's plane, in float64 ([`exact::plane_hit`]);
+    /// NaN unless asked for.
+    pub u: f64,
+    pub v: f64,
 }
 
 /// The nearest surface point to a query point, or [`ClosestPoint::MISS`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ClosestPoint {
-    pub point: Vec3,
-    /// Its distance; negative inside where a signed distance was asked.
-    pub distance: f32,
+    /// In world space and float64, on the face as given
+    /// ([`exact::closest_on_triangle`]).
+    pub point: DVec3,
+    /// Its distance (float64); negative inside where a signed distance
+    /// was asked.
+    pub distance: f64,
+    /// Barycentric weights of the face's second and third vertices at it.
+    pub u: f64,
+    pub v: f64,
     /// The face it lies on; -1 where none lies within reach.
     pub face: i64,
 }
@@ -106,8 +150,10 @@ pub struct ClosestPoint {
 impl ClosestPoint {
     /// Nothing within reach: point NaN, distance infinite, face -1.
     pub const MISS: ClosestPoint = ClosestPoint {
-        point: Vec3::NAN,
-        distance: f32::INFINITY,
+        point: DVec3::NAN,
+        distance: f64::INFINITY,
+        u: f64::NAN,
+        v: f64::NAN,
         face: -1,
     };
 }
@@ -135,9 +181,63 @@ impl Mesh {
         faces: Vec<[u32; 3]>,
         quality: BuildQuality,
     ) -> Result<Self, MeshArraysError> {
-        Ok(Self::from_geometry(mesh_geometry(
-            vertices, faces, quality,
-        )?))
+        let vertices = vertices.iter().map(|v| v.as_dvec3()).collect();
+        Self::new_exact(vertices, faces, quality)
+    }
+
+    /// [`Mesh::new`] of float64 vertices: traced relative to a centre where
+    /// the mesh lies far from the origin, its hit and closest points
+    /// computed on these vertices (module docs).
+    pub fn new_exact(
+        vertices: Vec<DVec3>,
+        faces: Vec<[u32; 3]>,
+        quality: BuildQuality,
+    ) -> Result<Self, MeshArraysError> {
+        let centre = centre_of(&vertices);
+        let near: Vec<Vec3> = vertices.iter().map(|&v| (v - centre).as_vec3()).collect();
+        let held_exactly = near
+            .iter()
+            .zip(&vertices)
+            .all(|(n, &v)| n.as_dvec3() + centre == v);
+        let given = (!held_exactly).then(|| Given {
+            vertices,
+            faces: faces.clone(),
+        });
+        let mesh = Self::from_geometry(mesh_geometry(near, faces, quality)?);
+        let bounds = mesh.bounds.map(|b| (b.as_dvec3() + centre).as_vec3());
+        Ok(Self {
+            centre,
+            given,
+            bounds,
+            ..mesh
+        })
+    }
+
+    /// What rays and points are made relative to before they are traced
+    /// (module docs): zero for a mesh near the origin, a loaded or a
+    /// placed mesh.
+    pub fn centre(&self) -> DVec3 {
+        self.centre
+    }
+
+    /// The vertices and faces as given to [`Mesh::new_exact`] where the
+    /// tree does not hold them exactly (a binding's pickling keeps them).
+    pub fn given(&self) -> Option<(&[DVec3], &[[u32; 3]])> {
+        self.given
+            .as_ref()
+            .map(|g| (g.vertices.as_slice(), g.faces.as_slice()))
+    }
+
+    /// The world corners, in float64, of the face `found` lies on: as
+    /// given, or the tree's (exact, then) moved back by the centre.
+    fn corners(&self, found: &impl Found, face: i64) -> [DVec3; 3] {
+        match &self.given {
+            Some(g) => g.faces[face as usize].map(|k| g.vertices[k as usize]),
+            None => self
+                .geometry
+                .world_triangle(found)
+                .map(|p| p.as_dvec3() + self.centre),
+        }
     }
 
     /// A mesh file (OBJ, PLY, glTF or GLB) read with strata's loaders and
@@ -153,9 +253,13 @@ impl Mesh {
         if self.is_placed() {
             return Err(PlaceError::AlreadyPlaced);
         }
-        let geometry = placed(self.geometry.clone(), maps, quality).map_err(PlaceError::Map)?;
+        // The tree is relative to the centre: each map takes it there first.
+        let shift = Affine3A::from_translation(self.centre.as_vec3());
+        let built: Vec<Affine3A> = maps.iter().map(|&m| m * shift).collect();
+        let geometry = placed(self.geometry.clone(), &built, quality).map_err(PlaceError::Map)?;
         Ok(Self {
             maps: maps.to_vec(),
+            prototype_centre: self.centre,
             ..Self::from_geometry(geometry)
         })
     }
@@ -170,7 +274,10 @@ impl Mesh {
             return None;
         }
         let prototype = self.geometry.prototypes().first()?;
-        Some((prototype.file_order_triangles(), &self.maps))
+        let c = self.prototype_centre;
+        let back = |p: Vec3| (p.as_dvec3() + c).as_vec3();
+        let tris = prototype.file_order_triangles();
+        Some((tris.into_iter().map(|t| t.map(back)).collect(), &self.maps))
     }
 
     fn from_geometry(geometry: Geometry) -> Self {
@@ -203,6 +310,9 @@ impl Mesh {
             geometry,
             bounds,
             maps: Vec::new(),
+            centre: DVec3::ZERO,
+            given: None,
+            prototype_centre: DVec3::ZERO,
         }
     }
 
@@ -225,8 +335,17 @@ impl Mesh {
     /// Every face's vertices in face order (every copy's, in world space):
     /// a copy of what the trees store.
     pub fn triangles(&self) -> Vec<[Vec3; 3]> {
+        if let Some(g) = &self.given {
+            let corner = |k: u32| g.vertices[k as usize].as_vec3();
+            return g.faces.iter().map(|f| f.map(corner)).collect();
+        }
         let g = &self.geometry;
         let mut tris = g.file_order_triangles();
+        if self.centre != DVec3::ZERO {
+            let c = self.centre;
+            let back = |p: Vec3| (p.as_dvec3() + c).as_vec3();
+            tris.iter_mut().for_each(|t| *t = t.map(back));
+        }
         for instance in g.instances() {
             let m = instance.affine();
             let own = g.prototypes()[instance.prototype as usize].file_order_triangles();
@@ -238,28 +357,55 @@ impl Mesh {
     /// `out[i]`: the first hit of `rays[i]` in `(tmin, tmax]`. Watertight:
     /// a ray through a shared edge or vertex of a closed mesh hits one of
     /// the faces there, never none.
-    pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit]) {
+    ///
+    /// `surface`: whether to find the face's normal and the hit point (a
+    /// second look at the face's corners); without it they stay NaN.
+    pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit], surface: bool) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (rays, out) in rays.chunks(SPAN).zip(out.chunks_mut(SPAN)) {
             let mut found = [None; SPAN];
             let found = &mut found[..rays.len()];
             self.geometry.intersect_stream(rays, found);
-            for (o, hit) in out.iter_mut().zip(found.iter()) {
+            for ((o, hit), ray) in out.iter_mut().zip(found.iter()).zip(rays) {
                 *o = match hit {
                     None => FirstHit::MISS,
-                    Some(hit) => {
-                        let [a, b, c] = self.geometry.world_triangle(hit);
-                        FirstHit {
-                            t: hit.t,
-                            face: self.geometry.flat_prim(hit, &self.flat) as i64,
-                            u: hit.u,
-                            v: hit.v,
-                            normal: (b - a).cross(c - a).normalize(),
-                            point: (1.0 - hit.u - hit.v) * a + hit.u * b + hit.v * c,
-                        }
-                    }
+                    Some(hit) if surface => self.first_hit(ray, hit),
+                    Some(hit) => FirstHit {
+                        t: hit.t,
+                        face: self.geometry.flat_prim(hit, &self.flat) as i64,
+                        u: hit.u,
+                        v: hit.v,
+                        ..FirstHit::MISS
+                    },
                 };
             }
+        }
+    }
+
+    /// What [`Mesh::first_hits`] answers for `ray`'s hit `hit`: the face
+    /// and its normal, and the point in float64 where the ray (as traced,
+    /// relative to the centre) meets the face's plane.
+    fn first_hit(&self, ray: &Ray, hit: &crate::accel::PrimHit) -> FirstHit {
+        let face = self.geometry.flat_prim(hit, &self.flat) as i64;
+        let [a, b, c] = self.corners(hit, face);
+        let origin = ray.origin.as_dvec3() + self.centre;
+        let direction = ray.direction.as_dvec3();
+        let point = match exact::plane_hit(origin - a, direction, [DVec3::ZERO, b - a, c - a]) {
+            Some((t, ..)) => origin + t * direction,
+            // Parallel in float64 where float32 found a hit: the f32 barycentrics.
+            None => {
+                (1.0 - f64::from(hit.u) - f64::from(hit.v)) * a
+                    + f64::from(hit.u) * b
+                    + f64::from(hit.v) * c
+            }
+        };
+        FirstHit {
+            t: hit.t,
+            face,
+            u: hit.u,
+            v: hit.v,
+            normal: (b - a).cross(c - a).normalize().as_vec3(),
+            point,
         }
     }
 
@@ -274,17 +420,37 @@ impl Mesh {
     /// not a re-cast from each hit: a ray through a shared edge or vertex
     /// of a closed mesh, where it crosses the surface, is reported once
     /// ([`Geometry::crossings`]).
-    pub fn all_hits(&self, rays: &[Ray], out: &mut Vec<Crossing>, counts: &mut Vec<u32>) {
+    ///
+    /// `uv`: whether to find each crossing's barycentrics (a second look at
+    /// the face's corners); without it they stay NaN.
+    pub fn all_hits(&self, rays: &[Ray], out: &mut Vec<Crossing>, counts: &mut Vec<u32>, uv: bool) {
         let mut found = Vec::new();
         for ray in rays {
             found.clear();
             self.geometry.crossings(ray, &mut found);
             counts.push(found.len() as u32);
-            out.extend(found.iter().map(|c| Crossing {
-                t: c.t,
-                face: self.geometry.flat_prim(c, &self.flat) as i64,
+            out.extend(found.iter().map(|c| {
+                let face = self.geometry.flat_prim(c, &self.flat) as i64;
+                let (u, v) = match uv {
+                    true => self.plane_uv(ray, c, face),
+                    false => (f64::NAN, f64::NAN),
+                };
+                Crossing { t: c.t, face, u, v }
             }));
         }
+    }
+
+    /// Where `ray` (relative to the centre) meets the plane of the face
+    /// `found` lies on, as barycentric weights, in float64.
+    fn plane_uv(&self, ray: &Ray, found: &impl Found, face: i64) -> (f64, f64) {
+        let [a, b, c] = self.corners(found, face);
+        let origin = ray.origin.as_dvec3() + self.centre - a;
+        let hit = exact::plane_hit(
+            origin,
+            ray.direction.as_dvec3(),
+            [DVec3::ZERO, b - a, c - a],
+        );
+        hit.map_or((f64::NAN, f64::NAN), |(_, u, v)| (u, v))
     }
 
     /// How many crossings [`Mesh::all_hits`] would list for `ray`.
@@ -292,8 +458,9 @@ impl Mesh {
         self.geometry.count_crossings(ray)
     }
 
-    /// Whether `point` is inside: the parity of the crossings along one ray
-    /// from it ([`Geometry::contains`]; meant for closed meshes).
+    /// Whether `point` (relative to [`Mesh::centre`]) is inside: the parity
+    /// of the crossings along one ray from it ([`Geometry::contains`]; meant
+    /// for closed meshes).
     pub fn contains(&self, point: Vec3) -> bool {
         self.geometry.contains(point)
     }
@@ -302,17 +469,55 @@ impl Mesh {
     /// (infinite: no limit), its distance (negative inside where `signed`,
     /// by [`Mesh::contains`]) and its face; [`ClosestPoint::MISS`] where
     /// none lies that near.
-    pub fn closest_point(&self, point: Vec3, max_distance: f32, signed: bool) -> ClosestPoint {
-        let Some(n) = self.geometry.nearest(point, max_distance) else {
+    ///
+    /// `point` is as given (float64, world) and `near` as traced (relative
+    /// to [`Mesh::centre`], float32): the walk finds the face from `near`,
+    /// and the point on it and its distance are computed from `point` on
+    /// the face as given, in float64 ([`exact::closest_on_triangle`]).
+    pub fn closest_point(
+        &self,
+        point: DVec3,
+        near: Vec3,
+        max_distance: f32,
+        signed: bool,
+    ) -> ClosestPoint {
+        let Some(n) = self.geometry.nearest(near, max_distance) else {
             return ClosestPoint::MISS;
         };
-        let inside = signed && self.geometry.contains(point);
+        let face = self.geometry.flat_prim(&n, &self.flat) as i64;
+        let [a, b, c] = self.corners(&n, face);
+        // Relative to the first corner, where the numbers are small.
+        let (q, u, v) = exact::closest_on_triangle(point - a, [DVec3::ZERO, b - a, c - a]);
+        let distance = (point - a - q).length();
+        let inside = signed && self.geometry.contains(near);
         ClosestPoint {
-            point: n.point,
-            distance: if inside { -n.distance } else { n.distance },
-            face: self.geometry.flat_prim(&n, &self.flat) as i64,
+            point: a + q,
+            distance: if inside { -distance } else { distance },
+            u,
+            v,
+            face,
         }
     }
+}
+
+/// What a mesh of `vertices` is traced relative to (module docs): the
+/// middle of their box rounded to a multiple of the power of two at least
+/// its largest side; zero where that is zero (a mesh near the origin).
+fn centre_of(vertices: &[DVec3]) -> DVec3 {
+    let (lo, hi) = vertices
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !(lo.is_finite() && hi.is_finite()) {
+        return DVec3::ZERO;
+    }
+    let size = (hi - lo).max_element().max(f64::MIN_POSITIVE);
+    let step = 2f64.powi(size.log2().ceil() as i32);
+    let centre = ((lo + hi) * 0.5 / step).round() * step;
+    // -0.0 is 0.0 (a centre of zero keeps every bit).
+    centre + DVec3::ZERO
 }
 
 /// The [min, max] corners of the box of `tris`'s vertices moved by `map`.

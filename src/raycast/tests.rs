@@ -95,9 +95,15 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
     // bit (each candidate triangle moved to world space as they hold it).
     let (mut a, mut b) = (Vec::new(), Vec::new());
     let (mut na, mut nb) = (Vec::new(), Vec::new());
-    placed.all_hits(&rays, &mut a, &mut na);
-    copies.all_hits(&rays, &mut b, &mut nb);
-    assert_eq!((&a, &na), (&b, &nb));
+    placed.all_hits(&rays, &mut a, &mut na, true);
+    copies.all_hits(&rays, &mut b, &mut nb, true);
+    let key = |c: &Crossing| (c.t, c.face);
+    let (ka, kb): (Vec<_>, Vec<_>) = (a.iter().map(key).collect(), b.iter().map(key).collect());
+    assert_eq!((&ka, &na), (&kb, &nb));
+    // Each crossing's barycentrics put it on its face.
+    assert!(a
+        .iter()
+        .all(|c| c.u >= -1e-9 && c.v >= -1e-9 && c.u + c.v <= 1.0 + 1e-9));
     assert!(a.len() > 1000, "{} crossings", a.len());
     for (ray, &n) in rays.iter().zip(&na) {
         assert_eq!(placed.count_hits(ray), n);
@@ -106,8 +112,8 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
         assert_eq!(placed.contains(p), copies.contains(p));
         for signed in [false, true] {
             let (x, y) = (
-                placed.closest_point(p, 1.5, signed),
-                copies.closest_point(p, 1.5, signed),
+                placed.closest_point(p.as_dvec3(), p, 1.5, signed),
+                copies.closest_point(p.as_dvec3(), p, 1.5, signed),
             );
             assert!(x == y || (x.face == -1 && y.face == -1), "{p}: {x:?} {y:?}");
         }
@@ -117,8 +123,8 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
     // its world normal, computed from the same vertices, do not.
     let mut x = vec![FirstHit::MISS; rays.len()];
     let mut y = vec![FirstHit::MISS; rays.len()];
-    placed.first_hits(&rays, &mut x);
-    copies.first_hits(&rays, &mut y);
+    placed.first_hits(&rays, &mut x, true);
+    copies.first_hits(&rays, &mut y, true);
     let mut compared = 0;
     for (i, (x, y)) in x.iter().zip(&y).enumerate() {
         assert_eq!(x.face == -1, y.face == -1, "ray {i}");
@@ -131,6 +137,13 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
         if !near_edge {
             assert_eq!((x.face, x.normal), (y.face, y.normal), "ray {i}");
             assert!((x.point - y.point).length() <= 1e-5 * (1.0 + y.point.length()));
+            // On the face's plane, in float64.
+            let [a, b, c] = copies.triangles()[y.face as usize].map(|p| p.as_dvec3());
+            let n = (b - a).cross(c - a).normalize();
+            assert!(
+                (y.point - a).dot(n).abs() < 1e-12 * (1.0 + a.length()),
+                "ray {i}"
+            );
             compared += 1;
         }
     }
@@ -156,14 +169,23 @@ fn a_first_hit_carries_its_world_triangles_normal_and_point() {
     let world = placed.triangles()[0];
     let ray = Ray::new(Vec3::new(0.5, -3.0, 5.2), Vec3::Y);
     let mut hit = [FirstHit::MISS];
-    placed.first_hits(&[ray], &mut hit);
+    placed.first_hits(&[ray], &mut hit, true);
     let [a, b, c] = world;
     assert_eq!(hit[0].face, 0);
-    assert_eq!(hit[0].normal, (b - a).cross(c - a).normalize());
+    let normal = (b - a).cross(c - a).normalize();
+    assert!((hit[0].normal - normal).length() < 1e-7);
     assert!((hit[0].normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    // The point is where the ray meets the face's plane, in float64.
+    let [a64, b64, c64] = world.map(|p| p.as_dvec3());
+    let n64 = (b64 - a64).cross(c64 - a64).normalize();
+    assert!(
+        (hit[0].point - a64).dot(n64).abs() < 1e-14,
+        "{:?}",
+        hit[0].point
+    );
+    assert_eq!((hit[0].point.x, hit[0].point.z), (0.5, 5.2f32 as f64));
     let on = (1.0 - hit[0].u - hit[0].v) * a + hit[0].u * b + hit[0].v * c;
-    assert_eq!(hit[0].point, on);
-    assert!((hit[0].point - ray.at(hit[0].t)).length() < 1e-5);
+    assert!((hit[0].point - on.as_dvec3()).length() < 1e-6);
 }
 
 #[test]
@@ -171,20 +193,20 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
     for mesh in [cube_mesh(), placed_and_copies().0] {
         let towards = Ray::new(Vec3::new(0.13, 0.21, -5.0), Vec3::new(0.01, -0.02, 1.0));
         let mut first = [FirstHit::MISS];
-        mesh.first_hits(&[towards], &mut first);
+        mesh.first_hits(&[towards], &mut first, true);
         let mut all = Vec::new();
-        mesh.all_hits(&[towards], &mut all, &mut Vec::new());
+        mesh.all_hits(&[towards], &mut all, &mut Vec::new(), true);
         for (t, crossing) in [(first[0].t, false), (all[0].t, true)] {
             for (tmax, counts) in [(t, true), (t.next_down(), false)] {
                 let ray = Ray::segment(towards.origin, towards.direction, tmax);
                 if crossing {
                     let mut found = Vec::new();
-                    mesh.all_hits(&[ray], &mut found, &mut Vec::new());
+                    mesh.all_hits(&[ray], &mut found, &mut Vec::new(), false);
                     assert_eq!(found.first().map(|c| c.t) == Some(t), counts);
                     assert_eq!(mesh.count_hits(&ray) > 0, counts);
                 } else {
                     let mut hit = [FirstHit::MISS];
-                    mesh.first_hits(&[ray], &mut hit);
+                    mesh.first_hits(&[ray], &mut hit, true);
                     assert_eq!(hit[0].t == t, counts, "{tmax} against {t}");
                     let mut blocked = [false];
                     mesh.occluded(&[ray], &mut blocked);
@@ -215,10 +237,10 @@ fn a_mesh_without_faces_answers_nothing() {
     assert_eq!(empty.bounds(), [Vec3::INFINITY, Vec3::NEG_INFINITY]);
     let mut hit = [FirstHit::MISS];
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
-    empty.first_hits(&[ray], &mut hit);
+    empty.first_hits(&[ray], &mut hit, true);
     assert_eq!(hit[0].face, -1);
-    let near = empty.closest_point(Vec3::ZERO, f32::INFINITY, true);
-    assert_eq!((near.face, near.distance), (-1, f32::INFINITY));
+    let near = empty.closest_point(glam::DVec3::ZERO, Vec3::ZERO, f32::INFINITY, true);
+    assert_eq!((near.face, near.distance), (-1, f64::INFINITY));
     assert!(near.point.is_nan());
     assert!(!empty.contains(Vec3::ZERO));
     let err = Mesh::new(vec![Vec3::ZERO], vec![[0, 0, 1]], BuildQuality::Auto);

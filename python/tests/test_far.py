@@ -1,0 +1,116 @@
+"""Meshes far from the origin answer as they do at the origin.
+
+A mesh whose box lies farther from the origin than its size is traced
+relative to a centre near its middle, and hit and closest points are
+float64, computed on the triangle as given (``strata_rt.Mesh``'s docs):
+an icosphere of radius 5 at UTM-like coordinates, and the bunny moved by
+1e6 (a multiple of the power of two its centre is rounded to, so its
+answers equal the unmoved bunny's bit for bit).
+"""
+
+import numpy as np
+import pytest
+
+import helpers
+import strata_rt
+from strata_rt.trimesh import RayMeshIntersector
+
+UTM = np.array([500123.37, 5000456.71, 100.0])
+
+
+def plane_distance(points, tris):
+    """Each point's distance to the plane of its triangle, in float64."""
+    a = tris[:, 0]
+    n = helpers.unit(np.cross(tris[:, 1] - a, tris[:, 2] - a))
+    return np.abs(np.einsum("ij,ij->i", points - a, n))
+
+
+def sphere_at(centre, radius=5.0):
+    v, f = helpers.icosphere(3)
+    return v * radius + centre, f
+
+
+def rays_through(rng, centre, radius, n, within):
+    """Rays from 4 radii away aimed at points within `within` of the centre."""
+    origins = centre + helpers.random_directions(rng, n) * 4 * radius
+    targets = centre + helpers.random_directions(rng, n) * rng.uniform(0, within, (n, 1))
+    return origins, targets - origins
+
+
+def test_a_sphere_at_utm_coordinates_answers_as_at_the_origin():
+    v, f = sphere_at(UTM)
+    mesh = strata_rt.Mesh(v, f)
+    rng = np.random.default_rng(4)
+    origins, directions = rays_through(rng, UTM, 5.0, 4000, 4.5)
+    hits = mesh.intersect(origins, directions)
+    assert (hits.prim >= 0).all()
+    # Hit points on their triangle's plane, in float64 (float32 at these
+    # coordinates is 0.5 m coarse).
+    off = plane_distance(hits.point, v[f[hits.prim]])
+    assert off.max() < 1e-8, off.max()
+    # The hit point is on the ray, where the traced t says.
+    along = np.linalg.norm(hits.point - origins - hits.t[:, None] * directions, axis=1)
+    assert along.max() < 1e-5 * np.linalg.norm(directions, axis=1).max()
+    # Through a closed sphere: exactly two crossings each, also on rays
+    # from outside through each vertex and the centre.
+    assert (mesh.count_hits(origins, directions) == 2).all()
+    assert (mesh.count_hits(UTM + (v - UTM) * 3, UTM - v) == 2).all()
+    # Inside or outside: every point clear of the surface, as at the origin.
+    r = np.concatenate([rng.uniform(0, 4.85, 2000), rng.uniform(5.05, 9, 2000)])
+    points = UTM + helpers.random_directions(rng, 4000) * r[:, None]
+    np.testing.assert_array_equal(mesh.contains(points), r < 5)
+    # Closest points: on the surface, in float64, at the distance said.
+    near = mesh.closest_point(points)
+    np.testing.assert_allclose(np.linalg.norm(near.point - points, axis=1), near.distance, rtol=0, atol=1e-8)
+    assert plane_distance(near.point, v[f[near.prim]]).max() < 1e-8
+    # The same through the trimesh adapter, whose locations trimesh users read.
+    trimesh = pytest.importorskip("trimesh", reason="trimesh is in tools/requirements.txt")
+    tm = trimesh.Trimesh(v, f, process=False)
+    tm.ray = RayMeshIntersector(tm)
+    locations, index_ray, index_tri = tm.ray.intersects_location(origins, directions)
+    assert np.bincount(index_ray, minlength=len(origins)).tolist() == [2] * len(origins)
+    assert plane_distance(locations, v[f[index_tri]]).max() < 1e-8
+    np.testing.assert_array_equal(tm.ray.contains_points(points), r < 5)
+
+
+def test_the_bunny_moved_by_a_million_answers_as_unmoved(bunny):
+    v, f = bunny
+    v = helpers.as_stored(v)
+    moved_by = 1e6
+    here, there = strata_rt.Mesh(v, f), strata_rt.Mesh(v + moved_by, f)
+    rng = np.random.default_rng(6)
+    origins, directions = helpers.random_rays(rng, v, 20000)
+    origins = origins.astype(np.float32).astype(np.float64)
+    np.testing.assert_array_equal(there.count_hits(origins + moved_by, directions), here.count_hits(origins, directions))
+    a, b = here.intersect(origins, directions), there.intersect(origins + moved_by, directions)
+    np.testing.assert_array_equal(a.prim, b.prim)
+    np.testing.assert_array_equal(a.t, b.t)
+    hit = a.prim >= 0
+    np.testing.assert_allclose(b.point[hit] - moved_by, a.point[hit], atol=1e-9)
+    points = (v.min(0) + rng.random((20000, 3)) * (v.max(0) - v.min(0))).astype(np.float32).astype(np.float64)
+    np.testing.assert_array_equal(there.contains(points + moved_by), here.contains(points))
+    na, nb = here.closest_point(points), there.closest_point(points + moved_by)
+    np.testing.assert_array_equal(na.prim, nb.prim)
+    np.testing.assert_allclose(nb.distance, na.distance, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(nb.point - moved_by, na.point, rtol=0, atol=1e-9)
+
+
+def test_a_far_mesh_pickles_as_given():
+    import pickle
+
+    v, f = sphere_at(UTM)
+    mesh = strata_rt.Mesh(v, f)
+    copy = pickle.loads(pickle.dumps(mesh))
+    rng = np.random.default_rng(9)
+    origins, directions = rays_through(rng, UTM, 5.0, 500, 6.0)
+    a, b = mesh.intersect(origins, directions), copy.intersect(origins, directions)
+    for key in a.keys():
+        np.testing.assert_array_equal(a[key], b[key])
+
+
+def test_a_mesh_near_the_origin_keeps_every_bit(bumpy):
+    """Near the origin nothing moves: the stored triangles are the float32
+    vertices given, bit for bit."""
+    v, f = bumpy
+    mesh = strata_rt.Mesh(v, f)
+    np.testing.assert_array_equal(mesh.triangles, v.astype(np.float32)[f])

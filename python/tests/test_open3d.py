@@ -1,0 +1,288 @@
+"""strata_rt.open3d.RaycastingScene: Open3D's interface, strata's answers.
+
+Without Open3D: analytic boxes and spheres, float64 brute force, the keys,
+dtypes, shapes and invalid ids Open3D documents, and Open3D tensors
+played by a stand-in module (tools/compare_open3d.py compares the answers
+with Open3D's own where it is installed).
+"""
+
+import math
+import sys
+import types
+
+import numpy as np
+import pytest
+
+import helpers
+import strata_rt
+from strata_rt.open3d import INVALID_ID, RaycastingScene
+
+CAST_KEYS = {"t_hit": np.float32, "geometry_ids": np.uint32, "primitive_ids": np.uint32,
+             "primitive_uvs": np.float32, "primitive_normals": np.float32}
+
+
+def two_boxes():
+    """The unit cube [0, 1]³ (geometry 0) and the same moved by 3 along x (1)."""
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    scene = RaycastingScene()
+    assert scene.add_triangles(v.astype(np.float32), f.astype(np.uint32)) == 0
+    assert scene.add_triangles(v + [3, 0, 0], f) == 1
+    return scene, v, f
+
+
+def test_cast_rays_keys_dtypes_shapes_and_misses():
+    scene, v, f = two_boxes()
+    rays = np.array([
+        [0.25, 0.5, 5, 0, 0, -1],    # box 0, top face, t = 4
+        [3.5, 0.25, -2, 0, 0, 2],    # box 1, bottom face, t = 1 (direction length 2)
+        [10, 10, 10, 0, 0, -1],      # nothing
+        [np.nan, 0, 0, 1, 0, 0],     # a NaN origin: a miss, as in Open3D
+        [0.5, 0.5, 5, 0, 0, 0],      # a zero direction: a miss
+    ], dtype=np.float32)
+    ans = scene.cast_rays(rays)
+    assert {k: a.dtype.type for k, a in ans.items()} == CAST_KEYS
+    assert ans["t_hit"].shape == (5,) and ans["primitive_uvs"].shape == (5, 2) and ans["primitive_normals"].shape == (5, 3)
+    np.testing.assert_allclose(ans["t_hit"][:2], [4.0, 1.0], rtol=1e-6)
+    assert np.isinf(ans["t_hit"][2:]).all()
+    assert ans["geometry_ids"].tolist() == [0, 1, INVALID_ID, INVALID_ID, INVALID_ID]
+    assert (ans["primitive_ids"][2:] == INVALID_ID).all()
+    # Faces 10, 11 are z = hi (outward +z), 8, 9 z = lo (-z), per geometry.
+    assert ans["primitive_ids"][0] in (10, 11) and ans["primitive_ids"][1] in (8, 9)
+    np.testing.assert_allclose(ans["primitive_normals"][:2], [[0, 0, 1], [0, 0, -1]], atol=1e-7)
+    assert (ans["primitive_normals"][2:] == 0).all() and (ans["primitive_uvs"][2:] == 0).all()
+    # The uvs weigh the face's corners to the hit point.
+    for i, g in [(0, 0), (1, 1)]:
+        tri = (v + [3 * g, 0, 0])[f[ans["primitive_ids"][i]]]
+        u, w = ans["primitive_uvs"][i]
+        point = (1 - u - w) * tri[0] + u * tri[1] + w * tri[2]
+        np.testing.assert_allclose(point, rays[i, :3] + ans["t_hit"][i] * rays[i, 3:], atol=1e-6)
+    assert RaycastingScene.INVALID_ID == INVALID_ID == 2**32 - 1
+
+
+def test_rays_of_any_leading_shape_answer_in_that_shape():
+    scene, *_ = two_boxes()
+    rays = RaycastingScene.create_rays_pinhole(fov_deg=60, center=[2, 0.5, 0.5], eye=[2, -6, 0.5],
+                                               up=[0, 0, 1], width_px=8, height_px=6)
+    ans = scene.cast_rays(rays)
+    assert ans["t_hit"].shape == (6, 8) and ans["primitive_uvs"].shape == (6, 8, 2)
+    flat = scene.cast_rays(rays.reshape(-1, 6))
+    for k in ans:
+        np.testing.assert_array_equal(ans[k].reshape(flat[k].shape), flat[k])
+    deep = scene.count_intersections(rays.reshape(2, 3, 8, 6))
+    assert deep.shape == (2, 3, 8) and deep.dtype == np.int32
+    assert scene.test_occlusions(rays[0, 0]).shape == ()
+    assert scene.compute_distance(np.zeros((2, 2, 2, 3))).shape == (2, 2, 2)
+
+
+def test_occlusions_between_tnear_and_tfar():
+    scene, *_ = two_boxes()
+    # Along +x at y = z = 0.5 from x = -1: box 0 over t in [1, 2], box 1 over [4, 5].
+    rays = np.tile([-1, 0.5, 0.5, 1, 0, 0], (6, 1))
+    cases = [(0, np.inf, True), (0, 0.5, False), (2.5, 3.5, False), (2.5, 4.5, True), (5.5, np.inf, False), (0.5, 1.0, True)]
+    for ray, (near, far, blocked) in zip(rays, cases):
+        got = scene.test_occlusions(ray[None], tnear=near, tfar=far)
+        assert got.dtype == np.bool_ and bool(got[0]) == blocked, (near, far)
+    with pytest.raises(ValueError, match="tnear"):
+        scene.test_occlusions(rays, tnear=-1)
+
+
+def test_counts_and_lists_agree_with_each_other_and_with_brute_force(bumpy):
+    v, f = bumpy
+    scene = RaycastingScene()
+    scene.add_triangles(v, f)
+    scene.add_triangles(v + [2.5, 0, 0], f)
+    tris = np.concatenate([v[f], (v + [2.5, 0, 0])[f]])
+    rng = np.random.default_rng(2)
+    o, d = helpers.random_rays(rng, np.vstack([v, v + [2.5, 0, 0]]), 400)
+    rays = np.hstack([o, d])
+    counts = scene.count_intersections(rays)
+    lx = scene.list_intersections(rays)
+    assert {k: a.dtype for k, a in lx.items()} == {
+        "ray_splits": np.uint32, "ray_ids": np.uint32, "t_hit": np.float32,
+        "geometry_ids": np.uint32, "primitive_ids": np.uint32, "primitive_uvs": np.float32}
+    splits = lx["ray_splits"].astype(np.int64)
+    np.testing.assert_array_equal(np.diff(splits), counts)
+    np.testing.assert_array_equal(lx["ray_ids"], np.repeat(np.arange(len(rays)), counts))
+    # Each ray's crossings nearest first; some rays cross both spheres.
+    assert counts.max() >= 4
+    for a, b in zip(splits[:-1], splits[1:]):
+        assert (np.diff(lx["t_hit"][a:b]) >= 0).all()
+    # Each crossing is on the face it names: brute force of that pair.
+    face = lx["primitive_ids"].astype(np.int64) + len(f) * lx["geometry_ids"]
+    t, u, w = helpers.ray_triangle_pairs(tris, o, d, lx["ray_ids"], face)
+    np.testing.assert_allclose(lx["t_hit"], t, rtol=1e-5, atol=1e-6)
+    # (strata traces the rays rounded to float32: uvs to that rounding,
+    # which the slivers at the bumpy sphere's poles magnify)
+    np.testing.assert_allclose(lx["primitive_uvs"], np.stack([u, w], 1).clip(0, 1), atol=2e-4)
+    assert np.median(np.abs(lx["primitive_uvs"] - np.stack([u, w], 1).clip(0, 1))) < 1e-5
+    # The count is the brute-force count on rays clear of every edge.
+    r, p = helpers.candidates(tris, o, d)
+    t, u, w = helpers.ray_triangle_pairs(tris, o, d, r, p)
+    m = helpers.margin(u, w)
+    clear = np.ones(len(rays), bool)
+    clear[r[np.abs(m) < 1e-5]] = False
+    brute = np.bincount(r[(m > 0) & (t > 0)], minlength=len(rays))
+    np.testing.assert_array_equal(counts[clear], brute[clear])
+    # And the first hit is the first crossing.
+    first = scene.cast_rays(rays)
+    hit = counts > 0
+    np.testing.assert_allclose(first["t_hit"][hit], lx["t_hit"][splits[:-1][hit]], rtol=1e-6)
+
+
+def test_closest_points_distances_signs_and_occupancy():
+    scene, v, f = two_boxes()
+    points = np.array([[0.5, 0.5, 2.0], [0.5, 0.5, 0.4], [1.5, 0.5, 0.5], [3.2, 0.9, -1], [-1, -1, -1]])
+    near = scene.compute_closest_points(points)
+    assert {k: a.dtype.type for k, a in near.items()} == {
+        "points": np.float32, "geometry_ids": np.uint32, "primitive_ids": np.uint32,
+        "primitive_uvs": np.float32, "primitive_normals": np.float32}
+    expected = np.array([[0.5, 0.5, 1.0], [0.5, 0.5, 0.0], [1.0, 0.5, 0.5], [3.2, 0.9, 0.0], [0, 0, 0]])
+    np.testing.assert_allclose(near["points"], expected, atol=1e-6)
+    assert near["geometry_ids"].tolist() == [0, 0, 0, 1, 0]
+    np.testing.assert_allclose(near["primitive_normals"][:4], [[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, 0, -1]], atol=1e-7)
+    # uvs weigh the face's corners to the point.
+    for i in range(len(points)):
+        tri = (v + [3 * near["geometry_ids"][i], 0, 0])[f[near["primitive_ids"][i]]]
+        u, w = near["primitive_uvs"][i].astype(np.float64)
+        np.testing.assert_allclose((1 - u - w) * tri[0] + u * tri[1] + w * tri[2], expected[i], atol=1e-6)
+    distance = np.array([1.0, 0.4, 0.5, 1.0, math.sqrt(3)])
+    np.testing.assert_allclose(scene.compute_distance(points), distance, rtol=1e-6)
+    inside = np.array([False, True, False, False, False])
+    signed = scene.compute_signed_distance(points)
+    assert signed.dtype == np.float32
+    np.testing.assert_allclose(signed, np.where(inside, -distance, distance), rtol=1e-6)
+    for nsamples in (1, 3, 5):
+        occupancy = scene.compute_occupancy(points, nsamples=nsamples)
+        assert occupancy.dtype == np.float32
+        np.testing.assert_array_equal(occupancy, inside.astype(np.float32))
+        np.testing.assert_allclose(scene.compute_signed_distance(points, nsamples=nsamples), signed)
+    for bad in (0, 2, -1, 1.0):
+        with pytest.raises(ValueError, match="nsamples"):
+            scene.compute_occupancy(points, nsamples=bad)
+
+
+def test_occupancy_is_exact_on_vertices_and_edges_with_one_sample(bumpy):
+    """Open3D asks for more samples where a ray meets an edge or a vertex;
+    strata's one ray is exact there: points just inside and outside,
+    against the parity of a float64 brute force away from edges."""
+    v, f = bumpy
+    scene = RaycastingScene(nthreads=1)
+    scene.add_triangles(v, f)
+    rng = np.random.default_rng(8)
+    points = rng.uniform(v.min(0), v.max(0), (3000, 3))
+    occupancy = scene.compute_occupancy(points)
+    brute, clear = helpers.parity_inside(v[f], points, rng)
+    assert clear.mean() > 0.9
+    np.testing.assert_array_equal(occupancy.astype(bool)[clear], brute[clear])
+    np.testing.assert_array_equal(scene.compute_occupancy(points, nsamples=3), occupancy)
+
+
+def test_nthreads_and_bad_input_name_the_argument():
+    scene, *_ = two_boxes()
+    rays = np.random.default_rng(1).normal(size=(1000, 6))
+    one = scene.cast_rays(rays, nthreads=1)
+    every = scene.cast_rays(rays, nthreads=0)
+    for k in one:
+        np.testing.assert_array_equal(one[k], every[k])
+    cases = [
+        (lambda: scene.cast_rays(np.zeros((4, 3))), "rays"),
+        (lambda: scene.cast_rays(np.array(["a"] * 6)), "rays"),
+        (lambda: scene.cast_rays(rays, nthreads=-1), "nthreads"),
+        (lambda: RaycastingScene(nthreads=1.5), "nthreads"),
+        (lambda: scene.compute_distance(np.zeros((3, 2))), "query_points"),
+        (lambda: scene.add_triangles(np.zeros((3, 3)), np.array([[0, 1, 3]])), "triangle_indices"),
+        (lambda: scene.add_triangles(np.full((3, 3), np.nan), np.array([[0, 1, 2]])), "vertex_positions"),
+        (lambda: scene.add_triangles(np.zeros((3, 2)), np.array([[0, 1, 2]])), "vertex_positions"),
+        (lambda: RaycastingScene.create_rays_pinhole(np.eye(3), np.eye(3), 4, 4), "extrinsic_matrix"),
+        (lambda: RaycastingScene.create_rays_pinhole(np.eye(3), np.eye(4), 0, 4), "width_px"),
+        (lambda: RaycastingScene.create_rays_pinhole(fov_deg=200, center=[0, 0, 0], eye=[0, 0, 1], up=[0, 1, 0], width_px=2, height_px=2), "fov_deg"),
+        (lambda: RaycastingScene.create_rays_pinhole(fov_deg=60, center=[0, 0, 0], eye=[0, 0, 1], up=[0, 0, 1], width_px=2, height_px=2), "up"),
+    ]
+    for call, name in cases:
+        with pytest.raises(ValueError, match=name):
+            call()
+    with pytest.raises(TypeError, match="add_triangles"):
+        scene.add_triangles(object())
+
+
+def test_an_empty_scene_and_a_scene_grown_after_a_query():
+    scene = RaycastingScene()
+    rays = np.array([[0.5, 0.5, 10, 0, 0, -1]])
+    assert np.isinf(scene.cast_rays(rays)["t_hit"][0])
+    assert scene.count_intersections(rays)[0] == 0
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    assert scene.add_triangles(v, f) == 0
+    assert scene.count_intersections(rays)[0] == 2
+    # Meshes of every kind Open3D's users hold: a strata_rt.Mesh, a
+    # trimesh-like object, an Open3D legacy-like one.
+    assert scene.add_triangles(strata_rt.Mesh(v + [0, 0, 2], f)) == 1
+    assert scene.add_triangles(types.SimpleNamespace(vertices=v + [0, 0, 4], faces=f)) == 2
+    assert scene.add_triangles(types.SimpleNamespace(vertices=v + [0, 0, 6], triangles=f)) == 3
+    assert scene.count_intersections(rays)[0] == 8
+    assert scene.cast_rays(rays)["geometry_ids"][0] == 3
+
+
+def test_create_rays_pinhole_both_forms():
+    k = np.array([[100.0, 0, 20], [0, 50, 10], [0, 0, 1]])
+    angle = 0.3
+    r = np.array([[math.cos(angle), -math.sin(angle), 0], [math.sin(angle), math.cos(angle), 0], [0, 0, 1]])
+    e = np.eye(4)
+    e[:3, :3], e[:3, 3] = r, [1, 2, 3]
+    rays = RaycastingScene.create_rays_pinhole(k, e, 4, 3)
+    assert rays.shape == (3, 4, 6) and rays.dtype == np.float32
+    # Every origin is the camera's centre: e maps it to the camera's origin.
+    np.testing.assert_allclose(r @ rays[0, 0, :3] + [1, 2, 3], 0, atol=1e-6)
+    # Pixel (row 2, column 3)'s ray, in camera space, is K⁻¹ (3.5, 2.5, 1).
+    np.testing.assert_allclose(r @ rays[2, 3, 3:], [(3.5 - 20) / 100, (2.5 - 10) / 50, 1], atol=1e-6)
+    # The fov form is the matrix form of its camera: the middle of the
+    # image looks at center, the outer pixel edges span fov_deg across.
+    w, h, fov = 64, 48, 70.0
+    rays = RaycastingScene.create_rays_pinhole(fov_deg=fov, center=[1, 2, 3], eye=[4, -2, 3], up=[0, 0, 1], width_px=w, height_px=h)
+    d = helpers.unit(rays[..., 3:].astype(np.float64))
+    forward = helpers.unit(np.array([1.0, 2, 3]) - [4, -2, 3])
+    middle = helpers.unit(d[h // 2 - 1:h // 2 + 1, w // 2 - 1:w // 2 + 1].sum(axis=(0, 1)))
+    np.testing.assert_allclose(middle, forward, atol=1e-6)
+    # Pixel (row i, column j) looks along (j + ½ − w/2, i + ½ − h/2, f) in
+    # the camera's axes: x along up × forward, y along forward × x.
+    focal = w / 2 / math.tan(math.radians(fov) / 2)
+    side = helpers.unit(np.cross([0, 0, 1], forward))
+    along_y = np.cross(forward, side)
+    ahead = d @ forward
+    cols, rows = np.meshgrid(np.arange(w) + 0.5 - w / 2, np.arange(h) + 0.5 - h / 2)
+    np.testing.assert_allclose((d @ side) / ahead, cols / focal, atol=1e-6)
+    np.testing.assert_allclose((d @ along_y) / ahead, rows / focal, atol=1e-6)
+    row = d[h // 2]
+    # Row 0 lies along -up (Open3D's order), columns run along up × forward.
+    assert (d[0, :, 2] < 0).all() and (d[-1, :, 2] > 0).all()
+    assert (row[-1] - row[0]) @ np.cross([0, 0, 1], forward) > 0
+    np.testing.assert_array_equal(rays[..., :3], np.broadcast_to(np.float32([4, -2, 3]), (h, w, 3)))
+
+
+class FakeTensor:
+    """What strata_rt needs of an Open3D tensor: numpy()."""
+
+    def __init__(self, a):
+        self.a = np.asarray(a)
+
+    def numpy(self):
+        return self.a
+
+    @staticmethod
+    def from_numpy(a):
+        return FakeTensor(a)
+
+
+FakeTensor.__module__ = "open3d.core"
+
+
+def test_open3d_tensors_in_give_open3d_tensors_out(monkeypatch):
+    fake = types.ModuleType("open3d")
+    fake.core = types.SimpleNamespace(Tensor=FakeTensor)
+    monkeypatch.setitem(sys.modules, "open3d", fake)
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    scene = RaycastingScene()
+    scene.add_triangles(FakeTensor(v.astype(np.float32)), FakeTensor(f.astype(np.uint32)))
+    ans = scene.cast_rays(FakeTensor(np.float32([[0.5, 0.5, 5, 0, 0, -1]])))
+    assert isinstance(ans["t_hit"], FakeTensor) and ans["t_hit"].numpy()[0] == 4.0
+    rays = RaycastingScene.create_rays_pinhole(FakeTensor(np.eye(3)), FakeTensor(np.eye(4)), 2, 2)
+    assert isinstance(rays, FakeTensor) and rays.numpy().shape == (2, 2, 6)
