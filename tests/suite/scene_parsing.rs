@@ -230,9 +230,9 @@ fn unknown_keys_and_values_suggest_the_nearest_valid_one() {
         "{e}"
     );
     assert!(e.ends_with("noise, exposure or tonemap)"), "{e}");
-    let e = error("[render]\nsampler = \"sobol\"\n");
+    let e = error("[render]\nsampler = \"halton\"\n");
     assert!(
-        e.contains("unknown sampler 'sobol' (expected random or stratified)"),
+        e.contains("unknown sampler 'halton' (expected random, stratified or sobol)"),
         "{e}"
     );
     assert!(!e.contains("did you mean"), "{e}");
