@@ -7,12 +7,14 @@
 use crate::mesh::rows;
 use crate::run::Threads;
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeWarning, PyUserWarning, PyValueError};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyRuntimeWarning, PyTypeError, PyUserWarning, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::ffi::CString;
 use std::ops::ControlFlow;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use strata::render::aov::{self, Aov};
 use strata::render::progress::PassDone;
 use strata::render::{
@@ -21,7 +23,7 @@ use strata::render::{
 use strata::scene::edit::Edit;
 use strata::scene::settings::GlossySampling;
 use strata::scene::BuildQuality;
-use strata::scene::{load_edited_scene, RenderOverrides};
+use strata::scene::{load_edited_scene, load_edited_text, RenderOverrides};
 use toml::Value;
 
 fn error(message: String) -> PyErr {
@@ -50,11 +52,12 @@ fn mode<T: std::str::FromStr<Err = String>>(
         .transpose()
 }
 
-/// A Python value as the TOML value a `--set` would give.
-fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
+/// A Python value as the TOML value a `--set` would give; `at` names it
+/// in errors (`set["camera.fov"]`, `scene`).
+fn toml_value(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Value> {
     // numpy scalars and arrays, as Python numbers and lists.
     if !obj.is_instance_of::<PyString>() && obj.hasattr("tolist")? {
-        return toml_value(&obj.call_method0("tolist")?, key);
+        return toml_value(&obj.call_method0("tolist")?, at);
     }
     if obj.is_instance_of::<PyBool>() {
         return Ok(Value::Boolean(obj.extract()?));
@@ -62,7 +65,7 @@ fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
     if obj.is_instance_of::<PyInt>() {
         let v: i64 = obj
             .extract()
-            .map_err(|_| error(format!("set[{key:?}]: {obj} does not fit a 64-bit integer")))?;
+            .map_err(|_| error(format!("{at}: {obj} does not fit a 64-bit integer")))?;
         return Ok(Value::Integer(v));
     }
     if obj.is_instance_of::<PyFloat>() {
@@ -72,10 +75,8 @@ fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         return Ok(Value::String(obj.extract()?));
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
-        let items: PyResult<Vec<Value>> = obj
-            .try_iter()?
-            .map(|item| toml_value(&item?, key))
-            .collect();
+        let items: PyResult<Vec<Value>> =
+            obj.try_iter()?.map(|item| toml_value(&item?, at)).collect();
         return Ok(Value::Array(items?));
     }
     if let Ok(dict) = obj.cast::<PyDict>() {
@@ -83,15 +84,57 @@ fn toml_value(obj: &Bound<'_, PyAny>, key: &str) -> PyResult<Value> {
         for (k, v) in dict.iter() {
             let k: String = k
                 .extract()
-                .map_err(|_| error(format!("set[{key:?}]: table keys must be strings")))?;
-            table.insert(k, toml_value(&v, key)?);
+                .map_err(|_| error(format!("{at}: table keys must be strings")))?;
+            table.insert(k, toml_value(&v, at)?);
         }
         return Ok(Value::Table(table));
     }
     Err(error(format!(
-        "set[{key:?}]: a {} is not a scene value (a bool, number, string, list or dict)",
+        "{at}: a {} is not a scene value (a bool, number, string, list or dict)",
         obj.get_type().name()?
     )))
+}
+
+/// Where `render`'s scene comes from.
+enum SceneSource {
+    File(PathBuf),
+    /// TOML text: given as a string with a line break, or a dict written
+    /// as TOML.
+    Text(String),
+}
+
+/// The name a scene given as text has in errors; its relative paths are
+/// resolved against the working directory.
+const TEXT_SCENE: &str = "<scene>";
+
+/// `render`'s `scene`: a path (str or os.PathLike), TOML text (a str with
+/// a line break), or a dict of the scene file's tables.
+fn scene_source(scene: &Bound<'_, PyAny>) -> PyResult<SceneSource> {
+    if let Ok(dict) = scene.cast::<PyDict>() {
+        let Value::Table(table) = toml_value(dict.as_any(), "scene")? else {
+            unreachable!("a dict is a table")
+        };
+        let text = toml::to_string(&table).map_err(|e| error(format!("scene: {e}")))?;
+        return Ok(SceneSource::Text(text));
+    }
+    if scene.is_instance_of::<PyString>() {
+        let text: String = scene.extract()?;
+        if text.contains('\n') {
+            return Ok(SceneSource::Text(text));
+        }
+    }
+    scene
+        .extract::<PathBuf>()
+        .map(SceneSource::File)
+        .map_err(|_| {
+            let kind = scene
+                .get_type()
+                .name()
+                .map_or("?".into(), |n| n.to_string());
+            PyTypeError::new_err(format!(
+            "scene must be a path, TOML text or a dict of the scene file's tables; got a {kind}"
+        ))
+        })
 }
 
 /// `set=`: a dict of key path to value, or `"KEY=VALUE"` strings as
@@ -110,7 +153,7 @@ fn edits(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Edit>> {
             let value = if v.is_none() {
                 None
             } else {
-                Some(toml_value(&v, &path)?)
+                Some(toml_value(&v, &format!("set[{path:?}]"))?)
             };
             out.push(Edit { path, value });
         }
@@ -209,6 +252,12 @@ impl Observer for Interrupt {
 /// float32 (height, width, 3), linear RGB, the pixels of the CLI's EXR
 /// output bit for bit.
 ///
+/// ``scene`` is a path (str or os.PathLike), the scene file's TOML text (a
+/// str with a line break), or a dict of its tables (``{"camera": {...},
+/// "objects": [...]}``); text and dicts render as the same file would,
+/// their relative paths resolved against the working directory and their
+/// errors naming ``<scene>``.
+///
 /// Every setting is the flag of the same name (``spp=64`` is ``--spp
 /// 64``), and overrides the scene file's ``[render]`` table; ``set`` edits
 /// any value of the file by key path, as ``--set`` does: a dict
@@ -244,7 +293,7 @@ impl Observer for Interrupt {
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     py: Python<'_>,
-    scene: PathBuf,
+    scene: &Bound<'_, PyAny>,
     width: Option<i64>,
     height: Option<i64>,
     spp: Option<i64>,
@@ -307,12 +356,22 @@ pub fn render(
     let crop = crop_text(crop)?;
     let aovs = aov_list(aovs)?;
 
-    let loaded =
-        py.detach(|| pool.install(|| load_edited_scene(&scene, &edits, &overrides, quality)));
-    let scene = match loaded {
-        Ok((scene, _)) => scene,
-        Err(e) if !scene.exists() => return Err(PyFileNotFoundError::new_err(e.to_string())),
-        Err(e) => return Err(crate::InputError::new_err(e.to_string())),
+    let source = scene_source(scene)?;
+    let loaded = py.detach(|| {
+        pool.install(|| match &source {
+            SceneSource::File(path) => load_edited_scene(path, &edits, &overrides, quality),
+            SceneSource::Text(text) => {
+                let path = Path::new(TEXT_SCENE);
+                load_edited_text(text, path, &edits, &overrides, quality)
+            }
+        })
+    });
+    let scene = match (loaded, &source) {
+        (Ok((scene, _)), _) => scene,
+        (Err(e), SceneSource::File(path)) if !path.exists() => {
+            return Err(PyFileNotFoundError::new_err(e.to_string()))
+        }
+        (Err(e), _) => return Err(crate::InputError::new_err(e.to_string())),
     };
     let s = &scene.settings;
     let window = crop

@@ -214,7 +214,7 @@ _Set = Union[Mapping[str, object], Sequence[str], str, None]
 
 @overload
 def render(
-    scene: Union[str, os.PathLike[str]],
+    scene: Union[str, os.PathLike[str], Mapping[str, Any]],
     *,
     width: Optional[int] = None,
     height: Optional[int] = None,
@@ -242,7 +242,7 @@ def render(
     """Render a scene file as ``strata render`` does: float32 (height, width, 3), the CLI's EXR pixels bit for bit."""
 @overload
 def render(
-    scene: Union[str, os.PathLike[str]],
+    scene: Union[str, os.PathLike[str], Mapping[str, Any]],
     *,
     width: Optional[int] = None,
     height: Optional[int] = None,

@@ -90,3 +90,36 @@ def test_set_none_removes_a_key_as_an_empty_flag_value_does():
     same_bits(a, c)
     d = strata_rt.render(path, width=16, height=12, spp=1)
     assert not np.array_equal(a, d), "removing the key changed nothing"
+
+
+def test_a_scene_as_text_or_dict_renders_as_its_file(monkeypatch):
+    """TOML text and a dict of tables render as the same file does, bit
+    for bit; their relative paths resolve against the working directory."""
+    import tomllib
+
+    settings = dict(width=40, height=30, spp=2)
+    for name in ["seed.toml", "mesh.toml"]:
+        path = helpers.REPO / "scenes" / name
+        from_file = strata_rt.render(path, **settings)
+        text = path.read_text()
+        monkeypatch.chdir(path.parent)
+        same_bits(strata_rt.render(text, **settings), from_file)
+        same_bits(strata_rt.render(tomllib.loads(text), **settings), from_file)
+        # Edits and overrides apply to a dict as to the file.
+        same_bits(
+            strata_rt.render(tomllib.loads(text), set={"camera.fov": 30}, **settings),
+            strata_rt.render(path, set={"camera.fov": 30}, **settings),
+        )
+
+
+def test_a_bad_scene_as_text_or_dict_names_where():
+    with pytest.raises(strata_rt.InputError, match=r"<scene>.*spp"):
+        strata_rt.render({"render": {"spp": "many"}})
+    with pytest.raises(strata_rt.InputError, match=r"<scene>.*line 2"):
+        strata_rt.render("[render]\nwidth = = 3\n")
+    with pytest.raises(ValueError, match=r"scene: table keys must be strings"):
+        strata_rt.render({"render": {1: 2}})
+    with pytest.raises(TypeError, match=r"scene must be a path, TOML text or a dict"):
+        strata_rt.render(42)
+    with pytest.raises(FileNotFoundError):
+        strata_rt.render("no-such-scene.toml")

@@ -39,6 +39,7 @@ use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
 pub use instance::{read_instances, PLACEMENT_BYTES};
+pub use text::load_edited_text;
 
 mod arrays;
 mod camera;
@@ -49,6 +50,7 @@ mod light;
 mod material;
 mod mesh;
 mod object;
+mod text;
 mod validate;
 
 /// Wall time of each loading phase, and how far resident memory rose above
