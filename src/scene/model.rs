@@ -549,6 +549,7 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         noise,
         exposure,
         tonemap,
+        integrator,
     } = r;
     out.push_str("[render]\n");
     let whole = [
@@ -570,6 +571,7 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         ("light_sampling", light_sampling.map(|m| m.name())),
         ("glossy_sampling", glossy_sampling.map(|m| m.name())),
         ("tonemap", tonemap.map(|m| m.name())),
+        ("integrator", integrator.map(|m| m.name())),
     ];
     for (key, value) in modes {
         if let Some(v) = value {

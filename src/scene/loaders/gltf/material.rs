@@ -8,9 +8,6 @@ use crate::material::Material;
 use crate::texture::Textures;
 use glam::Vec3;
 
-/// Largest Phong exponent the roughness mapping produces.
-const MAX_PHONG_EXPONENT: f32 = 1.0e6;
-
 impl Loader<'_> {
     /// Every material, in file order, and the base colour textures they
     /// name (decoded here, so a missing image is an error even if no
@@ -54,7 +51,7 @@ impl Loader<'_> {
             let base = Vec3::new(base[0], base[1], base[2]);
             let material = Material {
                 diffuse_texture,
-                ..pbr_material(base, metallic, roughness, emission)
+                ..Material::metallic_roughness(base, metallic, roughness, emission)
             };
             materials.push((name, material));
         }
@@ -62,30 +59,6 @@ impl Loader<'_> {
     }
 }
 
-/// Phong exponent matching roughness `r`: `2/α² − 2` with `α = r²`,
-/// clamped to [1, 10⁶].
-fn phong_exponent(roughness: f32) -> f32 {
-    let alpha = roughness * roughness;
-    let alpha2 = alpha * alpha;
-    if alpha2 <= 0.0 {
-        return MAX_PHONG_EXPONENT;
-    }
-    (2.0 / alpha2 - 2.0).clamp(1.0, MAX_PHONG_EXPONENT)
-}
-
-/// The metallic-roughness mapping in the module documentation's table.
-fn pbr_material(base: Vec3, metallic: f32, roughness: f32, emission: Vec3) -> Material {
-    let exponent = phong_exponent(roughness);
-    Material {
-        diffuse: base * (1.0 - metallic),
-        specular: Vec3::splat(0.04 * (1.0 - metallic)),
-        shininess: exponent,
-        reflectivity: metallic,
-        glossiness: if roughness == 0.0 { 0.0 } else { exponent },
-        emission,
-        ..Material::default()
-    }
-}
 #[cfg(test)]
 mod tests {
     use super::super::test_support::*;
