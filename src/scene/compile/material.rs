@@ -110,4 +110,27 @@ material = "red"
         assert_eq!(e.location, "objects[0].material");
         assert!(e.message.contains("unknown material 'blue'"), "{e}");
     }
+
+    #[test]
+    fn metallic_roughness_keys_make_that_model_and_refuse_phong_keys() {
+        let s = compiled(
+            "[materials.gold]\nbase_color = [1.0, 0.77, 0.34]\nmetallic = 1.0\nroughness = 0.3\n\
+             [[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"gold\"\n",
+        );
+        let gold = s.materials[s.geometry.shapes[0].material as usize];
+        let pbr = gold.pbr.expect("a metallic-roughness material");
+        assert_eq!(pbr.base_color, Vec3::new(1.0, 0.77, 0.34));
+        assert_eq!((pbr.metallic, pbr.roughness), (1.0, 0.3));
+        // Its Phong stand-in, for the distribution integrator.
+        assert_eq!(gold.reflectivity, 1.0);
+        for (text, key, needle) in [
+            ("roughness = 0.2\ndiffuse = 0.5", "materials.m.diffuse", "takes no Phong key"),
+            ("metallic = 1.5", "materials.m.metallic", "between 0 and 1"),
+            ("base_color = [2.0, 0.5, 0.5]", "materials.m.base_color", "between 0 and 1"),
+        ] {
+            let e = rejected(&format!("[materials.m]\n{text}\n[[objects]]\nsphere = {{ radius = 1.0 }}\nmaterial = \"m\""));
+            assert_eq!(e.location, key, "{e}");
+            assert!(e.message.contains(needle), "{e}");
+        }
+    }
 }

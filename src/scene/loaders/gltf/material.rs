@@ -4,6 +4,7 @@
 use super::texture::TextureCache;
 use super::Loader;
 use crate::error::InputResult;
+use crate::scene::asset::LoadedAsset;
 use crate::material::Material;
 use crate::texture::Textures;
 use glam::Vec3;
@@ -57,6 +58,37 @@ impl Loader<'_> {
         }
         Ok((materials, textures.textures))
     }
+
+    /// The textures no renderer here reads (metallic-roughness, normal,
+    /// emissive and occlusion maps): a warning for each kind, naming the
+    /// first material that has one and counting the others, so that a
+    /// model does not lose its detail unsaid.
+    pub(super) fn warn_of_unread_textures(&self, asset: &mut LoadedAsset) {
+        let materials = &self.root.materials;
+        let kinds: [(&str, &str, fn(&::gltf::json::Material) -> bool); 4] = [
+            ("pbrMetallicRoughness.metallicRoughnessTexture", "metallic-roughness texture", |m| {
+                m.pbr_metallic_roughness.metallic_roughness_texture.is_some()
+            }),
+            ("normalTexture", "normal map", |m| m.normal_texture.is_some()),
+            ("emissiveTexture", "emissive texture", |m| m.emissive_texture.is_some()),
+            ("occlusionTexture", "occlusion texture", |m| m.occlusion_texture.is_some()),
+        ];
+        for (key, what, has) in kinds {
+            let with: Vec<usize> = (0..materials.len()).filter(|&i| has(&materials[i])).collect();
+            let Some(&first) = with.first() else {
+                continue;
+            };
+            let more = match with.len() - 1 {
+                0 => String::new(),
+                1 => " (and 1 more material)".to_string(),
+                n => format!(" (and {n} more materials)"),
+            };
+            asset.warnings.push(self.error(
+                format!("materials[{first}].{key}"),
+                format!("not read: this {what}{more} is ignored; the material's factors apply alone"),
+            ));
+        }
+    }
 }
 
 #[cfg(test)]
@@ -90,6 +122,10 @@ mod tests {
         assert_eq!(plastic.glossiness, 1.0);
         assert_eq!(plastic.emission, Vec3::ZERO);
 
+        let pbr = plastic.pbr.expect("a glTF material is metallic-roughness");
+        assert_close(pbr.base_color, Vec3::new(0.5, 0.25, 1.0));
+        assert_eq!((pbr.metallic, pbr.roughness), (0.0, 1.0));
+
         let metal = asset.materials[1].1;
         assert_eq!(metal.diffuse, Vec3::ZERO);
         assert_eq!(metal.reflectivity, 1.0);
@@ -117,5 +153,24 @@ mod tests {
         assert_eq!(asset.meshes[0].material, Some(2));
         assert_eq!(asset.meshes[1].material, None);
         assert_eq!(asset.meshes[1].indices, vec![[2, 1, 0]]);
+    }
+
+    #[test]
+    fn textures_not_read_are_warned_of_once_per_kind() {
+        let mut b = triangle_builder();
+        b.u8s(&[2, 1, 0]);
+        let rest = r#""materials":[
+                {"normalTexture":{"index":0}},
+                {"normalTexture":{"index":0},"emissiveTexture":{"index":0}},
+                {"pbrMetallicRoughness":{"metallicRoughnessTexture":{"index":0}}}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],
+            "nodes":[{"mesh":0}],
+            "textures":[{"source":0}],"images":[{"uri":"never-read.png"}]"#;
+        let asset = load_json(&b, rest).unwrap();
+        let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(said.len(), 3, "{said:?}");
+        assert!(said[0].contains("materials[2].pbrMetallicRoughness.metallicRoughnessTexture"), "{said:?}");
+        assert!(said[1].contains("materials[0].normalTexture: not read: this normal map (and 1 more material) is ignored"), "{said:?}");
+        assert!(said[2].contains("materials[1].emissiveTexture"), "{said:?}");
     }
 }
