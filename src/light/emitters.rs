@@ -22,8 +22,15 @@ use std::f32::consts::PI;
 /// One glowing surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Emitter {
-    Triangle { v: [Vec3; 3], radiance: Vec3 },
-    Sphere { center: Vec3, radius: f32, radiance: Vec3 },
+    Triangle {
+        v: [Vec3; 3],
+        radiance: Vec3,
+    },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        radiance: Vec3,
+    },
 }
 
 impl Emitter {
@@ -283,7 +290,11 @@ mod tests {
     #[test]
     fn sampled_densities_match_the_density_function() {
         let tri = Emitter::Triangle {
-            v: [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(1.0, 2.0, -1.0), Vec3::new(0.0, 2.0, 1.0)],
+            v: [
+                Vec3::new(-1.0, 2.0, -1.0),
+                Vec3::new(1.0, 2.0, -1.0),
+                Vec3::new(0.0, 2.0, 1.0),
+            ],
             radiance: Vec3::splat(2.0),
         };
         let sphere = Emitter::Sphere {

@@ -19,7 +19,11 @@ impl Light {
         }
         let wi = to / d2.sqrt();
         let by_area = |area: f32, one_sided: bool| {
-            let cos_l = if one_sided { -n.dot(wi) } else { n.dot(wi).abs() };
+            let cos_l = if one_sided {
+                -n.dot(wi)
+            } else {
+                n.dot(wi).abs()
+            };
             if cos_l > 0.0 {
                 d2 / (cos_l * area)
             } else {
@@ -122,7 +126,10 @@ mod tests {
                     };
                     let want = light.surface_radiance().max_element() / s.weight.max_element();
                     let got = light.pdf(p, q, n, method);
-                    assert!((got - want).abs() <= 2e-3 * want, "{light:?} {method:?}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() <= 2e-3 * want,
+                        "{light:?} {method:?}: {got} vs {want}"
+                    );
                 }
                 // (A sphere drawn by area shows its far half from behind.)
                 assert!(drawn >= 5, "{light:?} {method:?}: {drawn} samples of 16");

@@ -343,7 +343,12 @@ impl Integrator<'_> {
         }
     }
 
-    pub(super) fn finish_record(&mut self, slot: usize, hit: Option<(f32, u32, Vec3)>, radiance: Vec3) {
+    pub(super) fn finish_record(
+        &mut self,
+        slot: usize,
+        hit: Option<(f32, u32, Vec3)>,
+        radiance: Vec3,
+    ) {
         if let Some(e) = self.trace.as_mut().and_then(|t| t.get_mut(slot)) {
             e.hit = hit;
             e.radiance = radiance;

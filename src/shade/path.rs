@@ -82,7 +82,12 @@ impl Integrator<'_> {
     }
 
     /// The radiance a camera path starting with `ray` brings back.
-    fn path(&mut self, ctx: &SampleContext, mut ray: Ray, mut first: Option<&mut FirstHit>) -> Vec3 {
+    fn path(
+        &mut self,
+        ctx: &SampleContext,
+        mut ray: Ray,
+        mut first: Option<&mut FirstHit>,
+    ) -> Vec3 {
         let scene = self.scene;
         let settings = &scene.settings;
         let (index, count) = (ctx.index(), ctx.count());
@@ -191,7 +196,11 @@ impl Integrator<'_> {
             return le;
         };
         let settings = &self.scene.settings;
-        let light_pdf = env.pdf(Some(came.ng), ray.direction.normalize(), settings.light_sampling);
+        let light_pdf = env.pdf(
+            Some(came.ng),
+            ray.direction.normalize(),
+            settings.light_sampling,
+        );
         le * power_heuristic(pdf, settings.shadow_samples as f32 * light_pdf)
     }
 
@@ -292,9 +301,9 @@ impl Integrator<'_> {
             }
             None => {
                 let s = light.sample(p, u, method)?;
-                let pdf = light.is_area().then(|| {
-                    light.surface_radiance().max_element() / s.weight.max_element()
-                });
+                let pdf = light
+                    .is_area()
+                    .then(|| light.surface_radiance().max_element() / s.weight.max_element());
                 (s.wi, s.distance, s.weight, pdf)
             }
         };
@@ -308,7 +317,7 @@ impl Integrator<'_> {
             None => 1.0,
         };
         let value = f * le_over_pdf * (cos * w);
-        value.is_finite().then(|| Contribution {
+        value.is_finite().then_some(Contribution {
             wi,
             distance,
             except: light.prim().unwrap_or(u32::MAX),
@@ -326,7 +335,7 @@ impl Integrator<'_> {
         }
         let w = power_heuristic(samples as f32 * e.pdf, bsdf_pdf);
         let value = f * e.radiance * (cos * w / e.pdf);
-        value.is_finite().then(|| Contribution {
+        value.is_finite().then_some(Contribution {
             wi: e.wi,
             distance: e.distance,
             except: e.prim,

@@ -249,7 +249,8 @@ impl Phong {
         }
         let diffuse = m.diffuse * texel;
         // Energy conservation: the weights of the brightest channel sum to at most 1.
-        let sum = (diffuse + m.specular + Vec3::splat(m.reflectivity + m.transparency)).max_element();
+        let sum =
+            (diffuse + m.specular + Vec3::splat(m.reflectivity + m.transparency)).max_element();
         let scale = if sum > 1.0 { 1.0 / sum } else { 1.0 };
         let (glossy, mirror) = if m.glossiness > 0.0 {
             (kr * scale, 0.0)
@@ -339,7 +340,8 @@ impl Microfacet {
         // wo (not glTF's 1 − F at the half vector, whose sum with the
         // coat reflects 4.5% more than arrives at 80° for a white rough
         // dielectric; scatter_tests). Symmetric, so still reciprocal.
-        let through = (Vec3::ONE - schlick_rgb(self.f0, wi.z)) * (Vec3::ONE - schlick_rgb(self.f0, wo.z));
+        let through =
+            (Vec3::ONE - schlick_rgb(self.f0, wi.z)) * (Vec3::ONE - schlick_rgb(self.f0, wo.z));
         let diff = through * self.c_diff * FRAC_1_PI;
         let pdf = self.p_spec * reflected_pdf(wo, wi, self.alpha)
             + (1.0 - self.p_spec) * wi.z * FRAC_1_PI;

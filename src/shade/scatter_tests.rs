@@ -35,11 +35,26 @@ fn materials() -> Vec<(&'static str, Material)> {
                 ..Material::default()
             },
         ),
-        ("smooth gold", Material::metallic_roughness(Vec3::new(1.0, 0.77, 0.34), 1.0, 0.05, Vec3::ZERO)),
-        ("white metal", Material::metallic_roughness(Vec3::ONE, 1.0, 0.02, Vec3::ZERO)),
-        ("rough metal", Material::metallic_roughness(Vec3::ONE, 1.0, 0.8, Vec3::ZERO)),
-        ("rough plastic", Material::metallic_roughness(Vec3::ONE, 0.0, 0.6, Vec3::ZERO)),
-        ("half metal", Material::metallic_roughness(Vec3::splat(0.9), 0.5, 0.3, Vec3::ZERO)),
+        (
+            "smooth gold",
+            Material::metallic_roughness(Vec3::new(1.0, 0.77, 0.34), 1.0, 0.05, Vec3::ZERO),
+        ),
+        (
+            "white metal",
+            Material::metallic_roughness(Vec3::ONE, 1.0, 0.02, Vec3::ZERO),
+        ),
+        (
+            "rough metal",
+            Material::metallic_roughness(Vec3::ONE, 1.0, 0.8, Vec3::ZERO),
+        ),
+        (
+            "rough plastic",
+            Material::metallic_roughness(Vec3::ONE, 0.0, 0.6, Vec3::ZERO),
+        ),
+        (
+            "half metal",
+            Material::metallic_roughness(Vec3::splat(0.9), 0.5, 0.3, Vec3::ZERO),
+        ),
     ]
 }
 
@@ -70,7 +85,10 @@ fn albedo(b: &Bsdf, n: u32, rng: &mut Numbers) -> Vec3 {
     let mut sum = Vec3::ZERO;
     for i in 0..n {
         for j in 0..n {
-            let u = Vec2::new((i as f32 + rng.next()) / n as f32, (j as f32 + rng.next()) / n as f32);
+            let u = Vec2::new(
+                (i as f32 + rng.next()) / n as f32,
+                (j as f32 + rng.next()) / n as f32,
+            );
             if let Some(s) = b.sample(rng.next(), u) {
                 sum += s.weight;
             }
@@ -85,7 +103,10 @@ fn every_material_reflects_at_most_what_arrives_and_lossless_ones_all_of_it() {
     for (name, m) in materials() {
         for theta in [0.0f32, 30.0, 60.0, 80.0] {
             let a = albedo(&bsdf(&m, view(theta)), 128, &mut rng);
-            assert!(a.max_element() <= 1.0 + 1e-2, "{name} at {theta}°: albedo {a}");
+            assert!(
+                a.max_element() <= 1.0 + 1e-2,
+                "{name} at {theta}°: albedo {a}"
+            );
             // The Phong highlight (n+2)/(2π) cosⁿα loses what falls below
             // the horizon, so it is lossless only at normal incidence.
             let lossless = matches!(name, "white lambert" | "glass")
@@ -132,7 +153,10 @@ fn samples_follow_the_density_they_report() {
     const COLS: usize = 16;
     let mut rng = Numbers(777);
     for (name, m) in materials() {
-        if matches!(name, "glass" | "white lambert" | "grey lambert" | "smooth gold" | "white metal") {
+        if matches!(
+            name,
+            "glass" | "white lambert" | "grey lambert" | "smooth gold" | "white metal"
+        ) {
             // A delta lobe, the cosine that `albedo` already checks, or a
             // lobe too sharp for bins this size to integrate.
             continue;
@@ -148,7 +172,8 @@ fn samples_follow_the_density_they_report() {
                     for i in 0..sub {
                         for j in 0..sub {
                             let z = (r as f32 + (i as f32 + 0.5) / sub as f32) / ROWS as f32;
-                            let phi = 2.0 * PI * (c as f32 + (j as f32 + 0.5) / sub as f32) / COLS as f32;
+                            let phi =
+                                2.0 * PI * (c as f32 + (j as f32 + 0.5) / sub as f32) / COLS as f32;
                             let s = (1.0 - z * z).max(0.0).sqrt();
                             let (_, pdf) = b.eval(Vec3::new(s * phi.cos(), s * phi.sin(), z));
                             let d_omega = 2.0 * PI as f64 / (ROWS * COLS * sub * sub) as f64;
@@ -180,7 +205,10 @@ fn samples_follow_the_density_they_report() {
                         chi2 += (o - e) * (o - e) / e;
                         dof += 1;
                     } else {
-                        assert!(o < 5.0 * (e + 4.0), "{name} at {theta}°: bin {r},{c}: {o} vs {e}");
+                        assert!(
+                            o < 5.0 * (e + 4.0),
+                            "{name} at {theta}°: bin {r},{c}: {o} vs {e}"
+                        );
                     }
                 }
             }
@@ -188,7 +216,10 @@ fn samples_follow_the_density_they_report() {
             // if the samples and the density disagree; the midpoint rule
             // adds a little of its own error on sharp lobes.
             let limit = dof as f64 + 6.0 * (2.0 * dof as f64).sqrt() + 0.002 * n as f64;
-            assert!(chi2 < limit, "{name} at {theta}°: χ² = {chi2:.0} over {dof} bins");
+            assert!(
+                chi2 < limit,
+                "{name} at {theta}°: χ² = {chi2:.0} over {dof} bins"
+            );
         }
     }
 }

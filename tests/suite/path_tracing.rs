@@ -6,6 +6,7 @@
 
 use crate::common::scene;
 use glam::Vec3;
+use std::path::PathBuf;
 use strata::partial::format::{read_partial_from, write_partial_to, PartialHeader};
 use strata::partial::merge::{merge_partials, MergeRules};
 use strata::render::film::{Film, PixelSum, FIXED_SCALE};
@@ -14,7 +15,6 @@ use strata::render::{render, RenderOptions, SliceSpec};
 use strata::scene::settings::IntegratorKind;
 use strata::scene::Scene;
 use strata::shade::Integrator;
-use std::path::PathBuf;
 
 /// Each pixel's mean of `spp` samples of `scene` (one seed), linear RGB,
 /// pixel by pixel, with no sample dropped as NaN.
@@ -63,7 +63,10 @@ fn a_lambertian_sphere_in_a_white_furnace_shows_its_albedo_times_the_light() {
         let s = furnace(&format!("diffuse = [{albedo}, {albedo}, {albedo}]"));
         for p in pixels(&s, 3, 4) {
             let want = 0.5 * albedo;
-            assert!((p - Vec3::splat(want)).abs().max_element() < 1e-4, "albedo {albedo}: {p}");
+            assert!(
+                (p - Vec3::splat(want)).abs().max_element() < 1e-4,
+                "albedo {albedo}: {p}"
+            );
         }
     }
 }
@@ -73,14 +76,26 @@ fn a_lambertian_sphere_in_a_white_furnace_shows_its_albedo_times_the_light() {
 #[test]
 fn metallic_roughness_spheres_in_a_white_furnace_reflect_at_most_the_light() {
     for (material, floor) in [
-        ("base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.05", 0.98),
-        ("base_color = [1.0, 1.0, 1.0]\nmetallic = 0.0\nroughness = 0.5", 0.8),
-        ("base_color = [1.0, 0.77, 0.34]\nmetallic = 1.0\nroughness = 0.4", 0.3),
+        (
+            "base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.05",
+            0.98,
+        ),
+        (
+            "base_color = [1.0, 1.0, 1.0]\nmetallic = 0.0\nroughness = 0.5",
+            0.8,
+        ),
+        (
+            "base_color = [1.0, 0.77, 0.34]\nmetallic = 1.0\nroughness = 0.4",
+            0.3,
+        ),
     ] {
         let s = furnace(material);
         let values: Vec<f64> = pixels(&s, 5, 64).iter().map(|p| p.x as f64 / 0.5).collect();
         let (mean, se) = mean_and_se(&values);
-        assert!(mean <= 1.0 + 3.0 * se + 1e-3, "{material}: albedo {mean} ± {se}");
+        assert!(
+            mean <= 1.0 + 3.0 * se + 1e-3,
+            "{material}: albedo {mean} ± {se}"
+        );
         assert!(mean >= floor, "{material}: albedo {mean} ± {se}");
     }
 }
@@ -151,7 +166,10 @@ fn glowing_surfaces_light_the_room_as_the_lights_they_equal() {
         let (b, sb) = floor(&glows);
         let se = (sa * sa + sb * sb).sqrt();
         assert!(a > 0.05, "the floor is lit: {a}");
-        assert!((a - b).abs() < 4.0 * se + 2e-3 * a, "light {a} ± {sa} vs glowing {b} ± {sb}");
+        assert!(
+            (a - b).abs() < 4.0 * se + 2e-3 * a,
+            "light {a} ± {sa} vs glowing {b} ± {sb}"
+        );
     }
 }
 
@@ -182,14 +200,19 @@ fn ceiling(integrator: IntegratorKind, seed: u32, spp: u32) -> f64 {
 fn indirect_light_reaches_the_ceiling_and_converges_as_one_over_n() {
     assert_eq!(ceiling(IntegratorKind::Distribution, 1, 16), 0.0);
     let variance = |spp: u32| {
-        let values: Vec<f64> = (0..40).map(|seed| ceiling(IntegratorKind::Path, seed, spp)).collect();
+        let values: Vec<f64> = (0..40)
+            .map(|seed| ceiling(IntegratorKind::Path, seed, spp))
+            .collect();
         let (mean, se) = mean_and_se(&values);
         (mean, se * se * values.len() as f64)
     };
     let (m4, v4) = variance(4);
     let (m32, v32) = variance(32);
     assert!(m32 > 0.05, "the ceiling is lit: {m32}");
-    assert!((m4 - m32).abs() < 4.0 * (v4 / 40.0).sqrt(), "unbiased: {m4} vs {m32}");
+    assert!(
+        (m4 - m32).abs() < 4.0 * (v4 / 40.0).sqrt(),
+        "unbiased: {m4} vs {m32}"
+    );
     // 8× the samples: the variance falls 8× for independent samples
     // (faster is stratification's gain); 4× allows for the noise of 40
     // estimates of each variance.
@@ -242,10 +265,17 @@ fn paths_are_bit_identical_across_threads_slices_and_noise_targets() {
             preview: false,
             force: false,
         };
-        assert_eq!(merge_partials(parts, rules).unwrap().film, whole, "{p} slices");
+        assert_eq!(
+            merge_partials(parts, rules).unwrap().film,
+            whole,
+            "{p} slices"
+        );
     }
     let mut noisy = s.clone();
     noisy.settings.noise = Some(0.1);
     noisy.settings.spp = 64;
-    assert_eq!(film_of(&noisy, SliceSpec::WHOLE, 1), film_of(&noisy, SliceSpec::WHOLE, 3));
+    assert_eq!(
+        film_of(&noisy, SliceSpec::WHOLE, 1),
+        film_of(&noisy, SliceSpec::WHOLE, 3)
+    );
 }

@@ -124,11 +124,21 @@ material = "red"
         // Its Phong stand-in, for the distribution integrator.
         assert_eq!(gold.reflectivity, 1.0);
         for (text, key, needle) in [
-            ("roughness = 0.2\ndiffuse = 0.5", "materials.m.diffuse", "takes no Phong key"),
+            (
+                "roughness = 0.2\ndiffuse = 0.5",
+                "materials.m.diffuse",
+                "takes no Phong key",
+            ),
             ("metallic = 1.5", "materials.m.metallic", "between 0 and 1"),
-            ("base_color = [2.0, 0.5, 0.5]", "materials.m.base_color", "between 0 and 1"),
+            (
+                "base_color = [2.0, 0.5, 0.5]",
+                "materials.m.base_color",
+                "between 0 and 1",
+            ),
         ] {
-            let e = rejected(&format!("[materials.m]\n{text}\n[[objects]]\nsphere = {{ radius = 1.0 }}\nmaterial = \"m\""));
+            let e = rejected(&format!(
+                "[materials.m]\n{text}\n[[objects]]\nsphere = {{ radius = 1.0 }}\nmaterial = \"m\""
+            ));
             assert_eq!(e.location, key, "{e}");
             assert!(e.message.contains(needle), "{e}");
         }

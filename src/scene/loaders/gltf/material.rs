@@ -4,8 +4,11 @@
 use super::texture::TextureCache;
 use super::Loader;
 use crate::error::InputResult;
-use crate::scene::asset::LoadedAsset;
 use crate::material::Material;
+use crate::scene::asset::LoadedAsset;
+
+/// Whether a glTF material has one kind of texture.
+type HasTexture = fn(&::gltf::json::Material) -> bool;
 use crate::texture::Textures;
 use glam::Vec3;
 
@@ -65,16 +68,30 @@ impl Loader<'_> {
     /// model does not lose its detail unsaid.
     pub(super) fn warn_of_unread_textures(&self, asset: &mut LoadedAsset) {
         let materials = &self.root.materials;
-        let kinds: [(&str, &str, fn(&::gltf::json::Material) -> bool); 4] = [
-            ("pbrMetallicRoughness.metallicRoughnessTexture", "metallic-roughness texture", |m| {
-                m.pbr_metallic_roughness.metallic_roughness_texture.is_some()
+        let kinds: [(&str, &str, HasTexture); 4] = [
+            (
+                "pbrMetallicRoughness.metallicRoughnessTexture",
+                "metallic-roughness texture",
+                |m| {
+                    m.pbr_metallic_roughness
+                        .metallic_roughness_texture
+                        .is_some()
+                },
+            ),
+            ("normalTexture", "normal map", |m| {
+                m.normal_texture.is_some()
             }),
-            ("normalTexture", "normal map", |m| m.normal_texture.is_some()),
-            ("emissiveTexture", "emissive texture", |m| m.emissive_texture.is_some()),
-            ("occlusionTexture", "occlusion texture", |m| m.occlusion_texture.is_some()),
+            ("emissiveTexture", "emissive texture", |m| {
+                m.emissive_texture.is_some()
+            }),
+            ("occlusionTexture", "occlusion texture", |m| {
+                m.occlusion_texture.is_some()
+            }),
         ];
         for (key, what, has) in kinds {
-            let with: Vec<usize> = (0..materials.len()).filter(|&i| has(&materials[i])).collect();
+            let with: Vec<usize> = (0..materials.len())
+                .filter(|&i| has(&materials[i]))
+                .collect();
             let Some(&first) = with.first() else {
                 continue;
             };
@@ -85,7 +102,9 @@ impl Loader<'_> {
             };
             asset.warnings.push(self.error(
                 format!("materials[{first}].{key}"),
-                format!("not read: this {what}{more} is ignored; the material's factors apply alone"),
+                format!(
+                    "not read: this {what}{more} is ignored; the material's factors apply alone"
+                ),
             ));
         }
     }
@@ -169,7 +188,10 @@ mod tests {
         let asset = load_json(&b, rest).unwrap();
         let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
         assert_eq!(said.len(), 3, "{said:?}");
-        assert!(said[0].contains("materials[2].pbrMetallicRoughness.metallicRoughnessTexture"), "{said:?}");
+        assert!(
+            said[0].contains("materials[2].pbrMetallicRoughness.metallicRoughnessTexture"),
+            "{said:?}"
+        );
         assert!(said[1].contains("materials[0].normalTexture: not read: this normal map (and 1 more material) is ignored"), "{said:?}");
         assert!(said[2].contains("materials[1].emissiveTexture"), "{said:?}");
     }
