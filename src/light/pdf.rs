@@ -54,8 +54,10 @@ impl Light {
                     };
                     1.0 / solid_angle
                 } else {
-                    // Sampled over the sphere's area: the normal there is outward.
-                    by_area(4.0 * PI * radius * radius, false)
+                    // Sampled over the sphere's area, whose samples see only
+                    // its outside (none from within: there BSDF rays alone
+                    // find it, with weight 1).
+                    by_area(4.0 * PI * radius * radius, true)
                 }
             }
             _ => 0.0,
