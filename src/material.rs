@@ -20,6 +20,14 @@
 //!
 //! Mesh files may texture ρ (MTL `map_Kd`, glTF `baseColorTexture`): then
 //! ρ at a hit is `diffuse` times the texture there; see [`crate::texture`].
+//!
+//! A material may instead be glTF's metallic-roughness model (the scene
+//! file's `base_color`, `metallic` and `roughness` keys, or a glTF
+//! material): [`MetallicRoughness`], which the path integrator shades
+//! with its own BSDF (GGX; `shade::microfacet`). The distribution
+//! integrator shades such a material by its Phong stand-in
+//! ([`Material::metallic_roughness`]): the fields above, as it always has
+//! for glTF files.
 
 use glam::Vec3;
 
@@ -43,6 +51,25 @@ pub struct Material {
     ///
     /// [`Textures`]: crate::texture::Textures
     pub diffuse_texture: Option<u32>,
+    /// glTF's metallic-roughness parameters, where the material is one:
+    /// what the path integrator shades (the Phong fields above are its
+    /// stand-in under the distribution integrator). The diffuse texture
+    /// multiplies `base_color`.
+    pub pbr: Option<MetallicRoughness>,
+}
+
+/// glTF 2.0's core material (Khronos, "glTF 2.0 Specification", Appendix
+/// B): a Lambertian base under a GGX specular layer, blended by `metallic`
+/// between a dielectric (F0 = 0.04) and a conductor (F0 = `base_color`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MetallicRoughness {
+    /// Linear RGB in [0, 1]: the diffuse albedo of the dielectric, the
+    /// normal-incidence reflectance of the metal.
+    pub base_color: Vec3,
+    /// 0 a dielectric, 1 a metal.
+    pub metallic: f32,
+    /// Perceptual roughness in [0, 1]; the GGX α is its square.
+    pub roughness: f32,
 }
 
 impl Default for Material {
@@ -60,6 +87,47 @@ impl Default for Material {
             emission: Vec3::ZERO,
             one_sided: false,
             diffuse_texture: None,
+            pbr: None,
+        }
+    }
+}
+
+/// Largest Phong exponent the roughness mapping produces.
+const MAX_PHONG_EXPONENT: f32 = 1.0e6;
+
+/// Phong exponent matching roughness `r`: `2/α² − 2` with `α = r²`
+/// (Walter, Marschner, Li and Torrance 2007, the Beckmann–Phong relation
+/// carried over to GGX), clamped to [1, 10⁶].
+fn phong_exponent(roughness: f32) -> f32 {
+    let alpha = roughness * roughness;
+    let alpha2 = alpha * alpha;
+    if alpha2 <= 0.0 {
+        return MAX_PHONG_EXPONENT;
+    }
+    (2.0 / alpha2 - 2.0).clamp(1.0, MAX_PHONG_EXPONENT)
+}
+
+impl Material {
+    /// A metallic-roughness material, with the Phong stand-in the
+    /// distribution integrator shades it by (the table in the glTF
+    /// loader's documentation): diffuse `base (1 − metallic)`, a 0.04
+    /// highlight and a mirror of weight `metallic`, both with the Phong
+    /// exponent of the roughness.
+    pub fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32, emission: Vec3) -> Self {
+        let exponent = phong_exponent(roughness);
+        Material {
+            diffuse: base * (1.0 - metallic),
+            specular: Vec3::splat(0.04 * (1.0 - metallic)),
+            shininess: exponent,
+            reflectivity: metallic,
+            glossiness: if roughness == 0.0 { 0.0 } else { exponent },
+            emission,
+            pbr: Some(MetallicRoughness {
+                base_color: base,
+                metallic,
+                roughness,
+            }),
+            ..Material::default()
         }
     }
 }

@@ -18,7 +18,8 @@ each axis, on which its bilinear lookup is strata's nearest one but for a
 sixteenth of a texel at each edge), a plane as a large rectangle, spheres, PLY/OBJ meshes
 (flat-shaded, as strata shades meshes without normals), and the `direct`
 integrator (emitter_samples = strata's shadow_samples, bsdf_samples = 1) with the `independent`
-sampler. strata's direct light has the same expectation (one light sample
+sampler; a scene with `integrator = "path"` gets Mitsuba's `path` integrator
+(max_depth = strata's + 2). strata's direct light has the same expectation (one light sample
 per hit; no diffuse interreflection). A scene the translation cannot
 express (specular or glossy materials, emission, textures, a background,
 thin lenses, disk or sphere lights, CSG, cylinders, transforms, ...) is
@@ -111,7 +112,7 @@ def translate(path, mi):
     for key in r:
         if key not in ("width", "height", "spp", "shadow_samples", "seed", "sampler",
                        "light_sampling", "max_depth", "reflection_samples", "background",
-                       "glossy_sampling"):
+                       "glossy_sampling", "integrator"):
             problems.append(f"render.{key}")
     if any(c != 0 for c in r.get("background", [0, 0, 0])):
         problems.append("a background radiance (Mitsuba's constant emitter would also light the scene)")
@@ -130,7 +131,12 @@ def translate(path, mi):
         "type": "scene",
         # strata's shadow_samples light samples per hit, and one BSDF sample.
         "integrator": {"type": "direct", "emitter_samples": int(r.get("shadow_samples", 1)),
-                       "bsdf_samples": 1},
+                       "bsdf_samples": 1}
+        if r.get("integrator", "distribution") != "path" else
+        # strata's max_depth D bounds the bounces (light reflects at most
+        # D + 1 times); Mitsuba's counts path segments from the camera, so
+        # D + 2. Both end paths by Russian roulette (unbiased).
+        {"type": "path", "max_depth": int(r.get("max_depth", 5)) + 2},
         "sensor": {
             "type": "perspective",
             "fov_axis": "y",

@@ -271,7 +271,9 @@ impl Observer for Interrupt {
 /// pixel at that estimated relative error (``spp`` the ceiling, default
 /// 1024). ``exposure`` and ``tonemap`` are what an 8-bit file shows: the
 /// array stays linear radiance (exposure only scales what the noise
-/// target judges).
+/// target judges). ``integrator="path"`` traces light past the first
+/// bounce (``"distribution"``, the seed's ray tracer, is the default for
+/// scene files).
 /// ``threads``, ``passes``, ``packets``, ``schedule`` and ``bvh_quality``
 /// change the time, never a pixel.
 ///
@@ -287,7 +289,7 @@ impl Observer for Interrupt {
     scene, *, width=None, height=None, spp=None, shadow_samples=None,
     reflection_samples=None, max_depth=None, sampler=None, seed=None, background=None,
     light_sampling=None, glossy_sampling=None, noise=None, exposure=None, tonemap=None,
-    set=None, threads=None, passes=None,
+    integrator=None, set=None, threads=None, passes=None,
     packets=None, schedule=None, bvh_quality=None, crop=None, aovs=None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -308,6 +310,7 @@ pub fn render(
     noise: Option<f32>,
     exposure: Option<f32>,
     tonemap: Option<&str>,
+    integrator: Option<&str>,
     set: Option<&Bound<'_, PyAny>>,
     threads: Option<i64>,
     passes: Option<i64>,
@@ -338,6 +341,7 @@ pub fn render(
         noise,
         exposure,
         tonemap: mode(tonemap, "tonemap")?,
+        integrator: mode(integrator, "integrator")?,
     };
     overrides
         .check()

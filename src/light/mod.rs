@@ -52,13 +52,17 @@
 //! Zimmerman 1996, "Monte Carlo Techniques for Direct Lighting
 //! Calculations"); disks, parallelograms and points inside a sphere light
 //! fall back to sampling by area, which `light_sampling = "area"` forces.
-//! The environment light ([`environment`]) has its own sampling.
+//! The environment light ([`environment`]) has its own sampling. Glowing
+//! surfaces are one more light for the path integrator ([`emitters`]).
 
+pub mod emitters;
 pub mod environment;
 mod lanes;
+mod pdf;
 mod sample;
 mod spot;
 
+pub use emitters::{Emitter, Emitters};
 pub use environment::Environment;
 pub use lanes::LightLanes;
 pub use sample::{LightFrom, LightSample, LightSampling};

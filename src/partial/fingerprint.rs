@@ -27,6 +27,7 @@
 
 use crate::geometry::csg::Csg;
 use crate::geometry::{Geometry, MeshAttribute, MeshRange};
+use crate::scene::settings::IntegratorKind;
 use crate::scene::{RenderSettings, Scene};
 use crate::texture::Textures;
 use std::fmt;
@@ -144,6 +145,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         materials,
         textures,
         lights,
+        emitters: _, // made from the geometry and materials hashed here
         camera,
         settings,
         warnings: _, // what a loader said: the image does not depend on it
@@ -179,6 +181,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         noise,
         exposure,
         tonemap: _, // how an 8-bit output shows the film, not the film
+        integrator,
     } = settings;
     let mut h = Hasher64::new();
     h.write(b"strata scene v1\0");
@@ -258,6 +261,11 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
     if let Some(noise) = noise {
         h.write_f32(*noise);
         h.write_f32(*exposure);
+    }
+    // The light transport; hashed only for the path tracer, so that a
+    // render of the seed's integrator keeps its fingerprint.
+    if *integrator != IntegratorKind::Distribution {
+        h.write_debug("integrator", integrator);
     }
     // Instanced meshes, each once, and their placements.
     h.write_u64(prototypes.len() as u64);

@@ -57,6 +57,22 @@ impl Dim {
     pub fn glossy_environment(depth: u32) -> Dim {
         Dim(0x4000 + depth * 0x1_0000)
     }
+
+    /// The path integrator's next direction from the vertex at path
+    /// depth `depth` (2D).
+    pub fn bounce(depth: u32) -> Dim {
+        Dim(0x5000 + depth * 0x1_0000)
+    }
+
+    /// The path integrator's choice of a BSDF lobe at path depth `depth` (1D).
+    pub fn lobe(depth: u32) -> Dim {
+        Dim(0x6000 + depth * 0x1_0000)
+    }
+
+    /// Russian roulette's draw at path depth `depth` (1D).
+    pub fn roulette(depth: u32) -> Dim {
+        Dim(0x7000 + depth * 0x1_0000)
+    }
 }
 
 /// The sampler for one pixel.

@@ -187,6 +187,14 @@ pub struct MaterialDesc {
     pub fresnel: bool,
     #[serde(deserialize_with = "colour")]
     pub emission: V3,
+    /// glTF's metallic-roughness model instead of the Phong keys: linear
+    /// RGB in [0, 1].
+    #[serde(deserialize_with = "optional_colour")]
+    pub base_color: Option<V3>,
+    /// 0 a dielectric, 1 a metal (metallic-roughness model).
+    pub metallic: Option<f32>,
+    /// Perceptual roughness in [0, 1] (metallic-roughness model).
+    pub roughness: Option<f32>,
 }
 
 impl Default for MaterialDesc {
@@ -202,6 +210,9 @@ impl Default for MaterialDesc {
             ior: m.ior,
             fresnel: m.fresnel,
             emission: m.emission.into(),
+            base_color: None,
+            metallic: None,
+            roughness: None,
         }
     }
 }

@@ -20,7 +20,7 @@ pub mod source_map;
 use crate::camera::Camera;
 use crate::error::InputError;
 use crate::geometry::Geometry;
-use crate::light::Light;
+use crate::light::{Emitters, Light};
 use crate::material::Material;
 use crate::texture::Textures;
 
@@ -40,6 +40,9 @@ pub struct Scene {
     /// What the materials' `diffuse_texture` indices name.
     pub textures: Textures,
     pub lights: Vec<Light>,
+    /// The surfaces whose material glows, which the path integrator
+    /// samples as one more light (made from `geometry` and `materials`).
+    pub emitters: Emitters,
     pub camera: Camera,
     pub settings: RenderSettings,
     /// What the mesh loaders read leniently, as other tools do (see

@@ -24,7 +24,7 @@ use super::asset::LoadedAsset;
 use super::description::{CameraDesc, CameraType, LightDesc, SceneDescription, V3};
 use super::edit::{self, Edit};
 use super::loaders::load_mesh_file;
-use super::settings::{RenderOverrides, RenderSettings};
+use super::settings::{IntegratorKind, RenderOverrides, RenderSettings};
 use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use std::fmt::Write;
@@ -163,6 +163,9 @@ pub fn model_scene(
     render.tonemap = cli
         .tonemap
         .or(Some(crate::output::tonemap::Tonemap::Filmic));
+    // A model is rendered as the tools it comes from show it: light that
+    // bounces, glowing parts that light, its metallic-roughness materials.
+    render.integrator = cli.integrator.or(Some(IntegratorKind::Path));
     if let (Some(b), false) = (cli.background.filter(|b| *b != [0.0; 3]), own_lights) {
         let flag = format!("--background {}", super::settings::rgb_text(b));
         return Err(InputError::flag(flag, made_up_environment(model)));
@@ -549,6 +552,7 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         noise,
         exposure,
         tonemap,
+        integrator,
     } = r;
     out.push_str("[render]\n");
     let whole = [
@@ -570,6 +574,7 @@ fn render_table(out: &mut String, r: &RenderOverrides) {
         ("light_sampling", light_sampling.map(|m| m.name())),
         ("glossy_sampling", glossy_sampling.map(|m| m.name())),
         ("tonemap", tonemap.map(|m| m.name())),
+        ("integrator", integrator.map(|m| m.name())),
     ];
     for (key, value) in modes {
         if let Some(v) = value {

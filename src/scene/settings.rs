@@ -22,6 +22,7 @@
 //! noise = 0.02           # stop each pixel at 2% estimated error (spp the ceiling)
 //! exposure = 0.0         # stops, for 8-bit outputs (and the noise target's floor)
 //! tonemap = "clamp"      # or "filmic", for 8-bit outputs
+//! integrator = "distribution"    # or "path": light past the first bounce
 //! ```
 
 use crate::error::{InputError, COMMAND_LINE};
@@ -40,6 +41,20 @@ crate::mode::mode_enum! {
         #[default]
         Lobe = "lobe",
         Uniform = "uniform",
+    }
+}
+
+crate::mode::mode_enum! {
+    /// Which light transport a render computes. `distribution`: the seed's
+    /// distribution ray tracer (direct light from the scene's lights,
+    /// mirrors, glass and glossy reflection; no indirect diffuse light).
+    /// `path`: a unidirectional path tracer with next-event estimation
+    /// (all light transport from the lights and glowing surfaces).
+    #[derive(Default)]
+    pub enum IntegratorKind("integrator") {
+        #[default]
+        Distribution = "distribution" | "whitted",
+        Path = "path",
     }
 }
 
@@ -110,6 +125,14 @@ pub struct RenderOverrides {
     /// only past 32 [render.tonemap; default clamp]
     #[arg(long)]
     pub tonemap: Option<Tonemap>,
+    /// Light transport: distribution is the seed's ray tracer (direct
+    /// light, mirrors, glass; no light past the first diffuse bounce);
+    /// path traces paths of any length with next-event estimation, so
+    /// light bounces off walls and glowing surfaces light the room
+    /// (docs/scene-format.md) [render.integrator; default distribution
+    /// for scene files, path for model files]
+    #[arg(long)]
+    pub integrator: Option<IntegratorKind>,
 }
 
 /// `r,g,b` as three numbers, or one number for a grey, as in the scene file.
@@ -146,6 +169,7 @@ pub struct RenderSettings {
     /// Stops: 8-bit outputs show radiance times 2^exposure.
     pub exposure: f32,
     pub tonemap: Tonemap,
+    pub integrator: IntegratorKind,
 }
 
 /// The ceiling of a `--noise` render's samples when no layer gives `spp`.
@@ -168,6 +192,7 @@ impl Default for RenderSettings {
             noise: None,
             exposure: 0.0,
             tonemap: Tonemap::default(),
+            integrator: IntegratorKind::default(),
         }
     }
 }
@@ -316,6 +341,7 @@ impl RenderSettings {
                 noise,
                 exposure,
                 tonemap,
+                integrator,
             } = **layer;
             spp_given |= spp.is_some();
             sampler_given |= sampler.is_some();
@@ -333,6 +359,7 @@ impl RenderSettings {
             s.noise = noise.or(s.noise);
             s.exposure = exposure.unwrap_or(s.exposure);
             s.tonemap = tonemap.unwrap_or(s.tonemap);
+            s.integrator = integrator.unwrap_or(s.integrator);
         }
         if s.noise.is_some() && !spp_given {
             s.spp = NOISE_SPP;

@@ -9,6 +9,7 @@ use crate::light::Environment;
 use crate::material::Material;
 use crate::math::Ray;
 use crate::sampling::Dim;
+use crate::scene::settings::IntegratorKind;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 
@@ -110,7 +111,7 @@ impl<'a> Integrator<'a> {
 impl Integrator<'_> {
     /// The primary ray of one camera sample.
     #[inline]
-    fn camera_ray(&self, ctx: &SampleContext, film: Vec2) -> Ray {
+    pub(super) fn camera_ray(&self, ctx: &SampleContext, film: Vec2) -> Ray {
         let lens = if self.scene.camera.uses_lens() {
             ctx.sampler.get_2d(Dim::LENS, ctx.sample, ctx.spp)
         } else {
@@ -142,6 +143,9 @@ impl Integrator<'_> {
         assert!(n <= PACKET_SIZE && out.len() >= n);
         if n == 0 {
             return;
+        }
+        if self.scene.settings.integrator == IntegratorKind::Path {
+            return self.path_batch(batch, out, first);
         }
         if self.trace.is_some() && n > 1 {
             // A replay records each path's vertices in pre-order, one
@@ -323,7 +327,7 @@ impl Integrator<'_> {
 
     /// Path vertices are recorded in pre-order (a parent before its
     /// children), so a replayed path prints as a tree.
-    fn begin_record(&mut self, depth: u32, kind: &'static str, ray: &Ray) -> usize {
+    pub(super) fn begin_record(&mut self, depth: u32, kind: &'static str, ray: &Ray) -> usize {
         match &mut self.trace {
             Some(trace) => {
                 trace.push(PathEvent {
@@ -339,7 +343,12 @@ impl Integrator<'_> {
         }
     }
 
-    fn finish_record(&mut self, slot: usize, hit: Option<(f32, u32, Vec3)>, radiance: Vec3) {
+    pub(super) fn finish_record(
+        &mut self,
+        slot: usize,
+        hit: Option<(f32, u32, Vec3)>,
+        radiance: Vec3,
+    ) {
         if let Some(e) = self.trace.as_mut().and_then(|t| t.get_mut(slot)) {
             e.hit = hit;
             e.radiance = radiance;

@@ -36,11 +36,23 @@
 //! | [`specular`] | mirror, glossy and refracted rays |
 //! | [`bsdf`] | the Phong BRDF, Snell's law and Schlick's Fresnel |
 //! | [`sample`] | what identifies a sample, ray counts, replay events |
+//! | [`path`] | the path integrator (`integrator = "path"`): NEE with MIS, Russian roulette |
+//! | [`scatter`] | the path integrator's BSDFs: the Phong keys as lobes, metallic-roughness |
+//! | [`microfacet`] | GGX, Smith masking, visible-normal sampling, coloured Schlick |
+//!
+//! All of the above but the last three is the distribution ray tracer,
+//! the default for scene files; `integrator = "path"` ([`path`]) shares
+//! its camera samples, counts and replays, and nothing of its shading.
 
 pub mod bsdf;
 pub mod direct;
 pub mod integrator;
+pub mod microfacet;
+pub mod path;
 pub mod sample;
+pub mod scatter;
+#[cfg(test)]
+mod scatter_tests;
 pub mod specular;
 
 pub use crate::geometry::travel::{BatchRays, PacketMode, CAMERA_PACKET_MIN};

@@ -31,6 +31,7 @@ mod mesh_queries;
 mod model_render;
 mod monte_carlo;
 mod packets;
+mod path_tracing;
 mod primitives;
 mod python;
 mod python_settings;

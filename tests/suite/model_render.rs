@@ -117,10 +117,11 @@ const LIT_SCENE: &str = r#""scene":0,"scenes":[{"nodes":[0,1,2,3,4,5]}],
              {"camera":1,"translation":[0,3,8]}]"#;
 
 /// The same scene written by hand: the camera, the three lights in W/sr
-/// and W/m², the angles in degrees.
+/// and W/m², the angles in degrees, and the path integrator a model file
+/// renders with.
 fn by_hand(mesh: &str) -> String {
     format!(
-        "[render]\nwidth = 120\nheight = 80\nspp = 2\n\
+        "[render]\nwidth = 120\nheight = 80\nspp = 2\nintegrator = \"path\"\n\
          [camera]\nposition = [0.0, 2.0, 6.0]\nlook_at = [0.0, 2.0, 0.0]\nfov = {:?}\n\
          [[lights]]\ntype = \"point\"\nposition = [-1.0, 3.0, 0.0]\nintensity = [20.0, 10.0, 5.0]\n\
          [[lights]]\ntype = \"spot\"\nposition = [2.0, 4.0, -2.0]\ndirection = [0.0, -1.0, 0.0]\n\
@@ -155,7 +156,8 @@ fn a_gltfs_camera_and_lights_render_as_the_same_scene_written_by_hand() {
     );
     // A scene file that imports the file's camera and lights renders the same.
     let imported = scene_at(
-        "[render]\nwidth = 120\nheight = 80\nspp = 2\n[[objects]]\nmesh = \"lit.gltf\"\ncamera = 0\n",
+        "[render]\nwidth = 120\nheight = 80\nspp = 2\nintegrator = \"path\"\n\
+         [[objects]]\nmesh = \"lit.gltf\"\ncamera = 0\n",
         &dir.join("import.toml"),
     );
     assert!(

@@ -229,7 +229,10 @@ fn unknown_keys_and_values_suggest_the_nearest_valid_one() {
         ),
         "{e}"
     );
-    assert!(e.ends_with("noise, exposure or tonemap)"), "{e}");
+    assert!(
+        e.ends_with("noise, exposure, tonemap or integrator)"),
+        "{e}"
+    );
     let e = error("[render]\nsampler = \"halton\"\n");
     assert!(
         e.contains("unknown sampler 'halton' (expected random, stratified or sobol)"),

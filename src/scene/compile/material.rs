@@ -15,6 +15,9 @@ impl Compiler<'_> {
 
     pub(super) fn material(&self, m: &MaterialDesc, key: &str) -> InputResult<Material> {
         let k = |field: &str| format!("{key}.{field}");
+        if m.base_color.is_some() || m.metallic.is_some() || m.roughness.is_some() {
+            return self.metallic_roughness(m, key);
+        }
         Ok(Material {
             diffuse: self.colour(m.diffuse, &k("diffuse"))?,
             specular: self.colour(m.specular, &k("specular"))?,
@@ -27,7 +30,54 @@ impl Compiler<'_> {
             emission: self.colour(m.emission, &k("emission"))?,
             one_sided: false,
             diffuse_texture: None,
+            pbr: None,
         })
+    }
+
+    /// A material written with `base_color`, `metallic` and `roughness`
+    /// (glTF's model), which takes no Phong key but `emission`.
+    fn metallic_roughness(&self, m: &MaterialDesc, key: &str) -> InputResult<Material> {
+        let k = |field: &str| format!("{key}.{field}");
+        const PHONG: [&str; 8] = [
+            "diffuse",
+            "specular",
+            "shininess",
+            "reflectivity",
+            "glossiness",
+            "transparency",
+            "ior",
+            "fresnel",
+        ];
+        if let Some(phong) = PHONG.iter().find(|f| self.source.contains(&k(f))) {
+            return Err(self.err(
+                &k(phong),
+                "a material with base_color, metallic or roughness is glTF's \
+                 metallic-roughness model, which takes no Phong key (diffuse, specular, \
+                 shininess, reflectivity, glossiness, transparency, ior, fresnel); write \
+                 one model or the other",
+            ));
+        }
+        let base = self.colour(m.base_color.unwrap_or([0.8; 3]), &k("base_color"))?;
+        if base.max_element() > 1.0 {
+            return Err(self.err(
+                &k("base_color"),
+                format!("must be a reflectance between 0 and 1, got {base:?}"),
+            ));
+        }
+        let unit = |x: Option<f32>, field: &str, default: f32| {
+            let x = x.unwrap_or(default);
+            if (0.0..=1.0).contains(&x) {
+                Ok(x)
+            } else {
+                Err(self.err(&k(field), format!("must be between 0 and 1, got {x}")))
+            }
+        };
+        let metallic = unit(m.metallic, "metallic", 0.0)?;
+        let roughness = unit(m.roughness, "roughness", 0.5)?;
+        let emission = self.colour(m.emission, &k("emission"))?;
+        Ok(Material::metallic_roughness(
+            base, metallic, roughness, emission,
+        ))
     }
 }
 
@@ -59,5 +109,38 @@ material = "red"
         let e = rejected("[[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"blue\"");
         assert_eq!(e.location, "objects[0].material");
         assert!(e.message.contains("unknown material 'blue'"), "{e}");
+    }
+
+    #[test]
+    fn metallic_roughness_keys_make_that_model_and_refuse_phong_keys() {
+        let s = compiled(
+            "[materials.gold]\nbase_color = [1.0, 0.77, 0.34]\nmetallic = 1.0\nroughness = 0.3\n\
+             [[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"gold\"\n",
+        );
+        let gold = s.materials[s.geometry.shapes[0].material as usize];
+        let pbr = gold.pbr.expect("a metallic-roughness material");
+        assert_eq!(pbr.base_color, Vec3::new(1.0, 0.77, 0.34));
+        assert_eq!((pbr.metallic, pbr.roughness), (1.0, 0.3));
+        // Its Phong stand-in, for the distribution integrator.
+        assert_eq!(gold.reflectivity, 1.0);
+        for (text, key, needle) in [
+            (
+                "roughness = 0.2\ndiffuse = 0.5",
+                "materials.m.diffuse",
+                "takes no Phong key",
+            ),
+            ("metallic = 1.5", "materials.m.metallic", "between 0 and 1"),
+            (
+                "base_color = [2.0, 0.5, 0.5]",
+                "materials.m.base_color",
+                "between 0 and 1",
+            ),
+        ] {
+            let e = rejected(&format!(
+                "[materials.m]\n{text}\n[[objects]]\nsphere = {{ radius = 1.0 }}\nmaterial = \"m\""
+            ));
+            assert_eq!(e.location, key, "{e}");
+            assert!(e.message.contains(needle), "{e}");
+        }
     }
 }

@@ -44,6 +44,7 @@ pub use text::load_edited_text;
 mod arrays;
 mod camera;
 mod csg;
+mod emitters;
 mod import;
 mod instance;
 mod light;
@@ -449,11 +450,13 @@ fn compile_for(
         build_peak_bytes: memory.phase_peak(),
     };
     geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
+    let emitters = emitters::emitters(&geometry, &c.materials, &c.lights);
     let scene = Scene {
         geometry,
         materials: c.materials,
         textures: c.textures,
         lights: c.lights,
+        emitters,
         camera,
         settings,
         warnings: c.warnings,

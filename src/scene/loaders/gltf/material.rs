@@ -5,11 +5,12 @@ use super::texture::TextureCache;
 use super::Loader;
 use crate::error::InputResult;
 use crate::material::Material;
+use crate::scene::asset::LoadedAsset;
+
+/// Whether a glTF material has one kind of texture.
+type HasTexture = fn(&::gltf::json::Material) -> bool;
 use crate::texture::Textures;
 use glam::Vec3;
-
-/// Largest Phong exponent the roughness mapping produces.
-const MAX_PHONG_EXPONENT: f32 = 1.0e6;
 
 impl Loader<'_> {
     /// Every material, in file order, and the base colour textures they
@@ -54,38 +55,61 @@ impl Loader<'_> {
             let base = Vec3::new(base[0], base[1], base[2]);
             let material = Material {
                 diffuse_texture,
-                ..pbr_material(base, metallic, roughness, emission)
+                ..Material::metallic_roughness(base, metallic, roughness, emission)
             };
             materials.push((name, material));
         }
         Ok((materials, textures.textures))
     }
+
+    /// The textures no renderer here reads (metallic-roughness, normal,
+    /// emissive and occlusion maps): a warning for each kind, naming the
+    /// first material that has one and counting the others, so that a
+    /// model does not lose its detail unsaid.
+    pub(super) fn warn_of_unread_textures(&self, asset: &mut LoadedAsset) {
+        let materials = &self.root.materials;
+        let kinds: [(&str, &str, HasTexture); 4] = [
+            (
+                "pbrMetallicRoughness.metallicRoughnessTexture",
+                "metallic-roughness texture",
+                |m| {
+                    m.pbr_metallic_roughness
+                        .metallic_roughness_texture
+                        .is_some()
+                },
+            ),
+            ("normalTexture", "normal map", |m| {
+                m.normal_texture.is_some()
+            }),
+            ("emissiveTexture", "emissive texture", |m| {
+                m.emissive_texture.is_some()
+            }),
+            ("occlusionTexture", "occlusion texture", |m| {
+                m.occlusion_texture.is_some()
+            }),
+        ];
+        for (key, what, has) in kinds {
+            let with: Vec<usize> = (0..materials.len())
+                .filter(|&i| has(&materials[i]))
+                .collect();
+            let Some(&first) = with.first() else {
+                continue;
+            };
+            let more = match with.len() - 1 {
+                0 => String::new(),
+                1 => " (and 1 more material)".to_string(),
+                n => format!(" (and {n} more materials)"),
+            };
+            asset.warnings.push(self.error(
+                format!("materials[{first}].{key}"),
+                format!(
+                    "not read: this {what}{more} is ignored; the material's factors apply alone"
+                ),
+            ));
+        }
+    }
 }
 
-/// Phong exponent matching roughness `r`: `2/α² − 2` with `α = r²`,
-/// clamped to [1, 10⁶].
-fn phong_exponent(roughness: f32) -> f32 {
-    let alpha = roughness * roughness;
-    let alpha2 = alpha * alpha;
-    if alpha2 <= 0.0 {
-        return MAX_PHONG_EXPONENT;
-    }
-    (2.0 / alpha2 - 2.0).clamp(1.0, MAX_PHONG_EXPONENT)
-}
-
-/// The metallic-roughness mapping in the module documentation's table.
-fn pbr_material(base: Vec3, metallic: f32, roughness: f32, emission: Vec3) -> Material {
-    let exponent = phong_exponent(roughness);
-    Material {
-        diffuse: base * (1.0 - metallic),
-        specular: Vec3::splat(0.04 * (1.0 - metallic)),
-        shininess: exponent,
-        reflectivity: metallic,
-        glossiness: if roughness == 0.0 { 0.0 } else { exponent },
-        emission,
-        ..Material::default()
-    }
-}
 #[cfg(test)]
 mod tests {
     use super::super::test_support::*;
@@ -117,6 +141,10 @@ mod tests {
         assert_eq!(plastic.glossiness, 1.0);
         assert_eq!(plastic.emission, Vec3::ZERO);
 
+        let pbr = plastic.pbr.expect("a glTF material is metallic-roughness");
+        assert_close(pbr.base_color, Vec3::new(0.5, 0.25, 1.0));
+        assert_eq!((pbr.metallic, pbr.roughness), (0.0, 1.0));
+
         let metal = asset.materials[1].1;
         assert_eq!(metal.diffuse, Vec3::ZERO);
         assert_eq!(metal.reflectivity, 1.0);
@@ -144,5 +172,27 @@ mod tests {
         assert_eq!(asset.meshes[0].material, Some(2));
         assert_eq!(asset.meshes[1].material, None);
         assert_eq!(asset.meshes[1].indices, vec![[2, 1, 0]]);
+    }
+
+    #[test]
+    fn textures_not_read_are_warned_of_once_per_kind() {
+        let mut b = triangle_builder();
+        b.u8s(&[2, 1, 0]);
+        let rest = r#""materials":[
+                {"normalTexture":{"index":0}},
+                {"normalTexture":{"index":0},"emissiveTexture":{"index":0}},
+                {"pbrMetallicRoughness":{"metallicRoughnessTexture":{"index":0}}}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],
+            "nodes":[{"mesh":0}],
+            "textures":[{"source":0}],"images":[{"uri":"never-read.png"}]"#;
+        let asset = load_json(&b, rest).unwrap();
+        let said: Vec<String> = asset.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(said.len(), 3, "{said:?}");
+        assert!(
+            said[0].contains("materials[2].pbrMetallicRoughness.metallicRoughnessTexture"),
+            "{said:?}"
+        );
+        assert!(said[1].contains("materials[0].normalTexture: not read: this normal map (and 1 more material) is ignored"), "{said:?}");
+        assert!(said[2].contains("materials[1].emissiveTexture"), "{said:?}");
     }
 }

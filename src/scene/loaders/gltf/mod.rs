@@ -251,6 +251,7 @@ impl Loader<'_> {
         }
         self.place_meshes(&uses, &mut asset)?;
         self.warn_of_rest_poses(&uses, &mut asset);
+        self.warn_of_unread_textures(&mut asset);
         if !empty_scene {
             super::warn_without_triangles(
                 &mut asset,

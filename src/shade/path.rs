@@ -1,0 +1,345 @@
+//! The path integrator (`integrator = "path"`): unidirectional path
+//! tracing (Kajiya 1986, "The Rendering Equation") with next-event
+//! estimation at every vertex and multiple importance sampling (Veach and
+//! Guibas 1995) between light samples and the BSDF's own direction.
+//!
+//! At each vertex of a camera path:
+//! 1. emitted radiance, weighed against the light sampling that could
+//!    have found it (the power heuristic); the camera's and a mirror's or
+//!    glass's rays (delta lobes) count it whole;
+//! 2. next-event estimation: every light of the scene, and the glowing
+//!    surfaces as one more ([`crate::light::emitters`]), is sampled
+//!    `shadow_samples` times (a delta light once) and each sample is
+//!    weighed by the power heuristic against the BSDF's density;
+//! 3. a direction from the BSDF ([`super::scatter`]) continues the
+//!    path; after [`ROULETTE_DEPTH`] bounces Russian roulette ends it with
+//!    the chance that its throughput has fallen (Arvo and Kirk 1990).
+//!
+//! `max_depth` D bounds the bounces: vertices 0..=D take steps 1–3, and
+//! vertex D + 1 adds only its emission (the BSDF's share of vertex D's
+//! direct light), so light reflects at most D + 1 times; D = 0 is direct
+//! light alone, as under the distribution integrator.
+//!
+//! Every number is drawn from the pixel's counter-based sampler, one
+//! dimension per effect and depth ([`Dim::bounce`], [`Dim::lobe`],
+//! [`Dim::roulette`], [`Dim::light`]), at the path's index in its sample
+//! set: the image is the same for any thread count, slice, checkpoint or
+//! noise target. Escaping rays see the environment (sampled as a light)
+//! or the background (not sampled: it lights the scene as found).
+
+use super::sample::{CameraSample, FirstHit, SampleContext};
+use super::scatter::Bsdf;
+use super::Integrator;
+use crate::accel::PrimHit;
+use crate::light::{Light, LightSampling};
+use crate::math::offset::spawn_origin;
+use crate::math::Ray;
+use crate::sampling::mis::power_heuristic;
+use crate::sampling::Dim;
+use glam::{Vec2, Vec3};
+
+/// Bounces after which Russian roulette may end a path.
+pub const ROULETTE_DEPTH: u32 = 3;
+
+/// What the BSDF ray that reached a vertex was drawn with: what light
+/// found along it is weighed by.
+#[derive(Clone, Copy)]
+struct Came {
+    /// The BSDF's density for the ray; `None` for the camera's ray and
+    /// delta lobes, which no light sample can find.
+    pdf: Option<f32>,
+    /// The vertex it left, and its geometric normal faced towards the
+    /// side it left from.
+    from: Vec3,
+    ng: Vec3,
+}
+
+/// One vertex's light sample, before its shadow ray.
+struct Contribution {
+    wi: Vec3,
+    /// To the point sampled (∞ for light from infinity).
+    distance: f32,
+    /// The primitive of the light's surface, which the shadow ray skips.
+    except: u32,
+    value: Vec3,
+}
+
+impl Integrator<'_> {
+    /// Radiance of each camera sample of `batch` into `out` by path
+    /// tracing; `first` as [`Integrator::camera_batch`] fills it.
+    pub(super) fn path_batch(
+        &mut self,
+        batch: &[CameraSample],
+        out: &mut [Vec3],
+        mut first: Option<&mut [FirstHit]>,
+    ) {
+        for (i, sample) in batch.iter().enumerate() {
+            let ray = self.camera_ray(&sample.ctx, sample.film);
+            self.counts.camera += 1;
+            let first_i = first.as_deref_mut().map(|f| &mut f[i]);
+            out[i] = self.path(&sample.ctx, ray, first_i);
+        }
+    }
+
+    /// The radiance a camera path starting with `ray` brings back.
+    fn path(
+        &mut self,
+        ctx: &SampleContext,
+        mut ray: Ray,
+        mut first: Option<&mut FirstHit>,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let settings = &scene.settings;
+        let (index, count) = (ctx.index(), ctx.count());
+        let mut l = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        let mut came = Came {
+            pdf: None,
+            from: ray.origin,
+            ng: Vec3::ZERO,
+        };
+        let mut depth = 0;
+        loop {
+            let slot = self.begin_record(depth, if depth == 0 { "camera" } else { "bounce" }, &ray);
+            let hit = scene.geometry.intersect(&ray);
+            let Some(hit) = hit else {
+                let le = self.escaped(&ray, &came);
+                l += beta * le;
+                self.finish_record(slot, None, le);
+                if let Some(f) = first.take() {
+                    *f = FirstHit::MISS;
+                }
+                break;
+            };
+            let s = scene.geometry.surface(&ray, &hit);
+            let m = &scene.materials[s.material as usize];
+            let wo = -ray.direction.normalize();
+            let entering = s.geometric_normal.dot(wo) >= 0.0;
+            let (ng, ns) = if entering {
+                (s.geometric_normal, s.shading_normal)
+            } else {
+                (-s.geometric_normal, -s.shading_normal)
+            };
+            let texel = match (m.diffuse_texture, s.uv) {
+                (Some(t), Some(uv)) => scene.textures.sample(t, uv),
+                _ => Vec3::ONE,
+            };
+            if let Some(f) = first.take() {
+                let albedo = match m.pbr {
+                    Some(pbr) => pbr.base_color * texel,
+                    None => m.diffuse * texel,
+                };
+                *f = FirstHit {
+                    albedo,
+                    normal: s.shading_normal,
+                    depth: hit.t * ray.direction.length(),
+                };
+            }
+            let mut vertex = Vec3::ZERO;
+            if m.is_emissive() && (entering || !m.one_sided) {
+                vertex += m.emission * self.emission_weight(&hit, &came, s.p, s.geometric_normal);
+            }
+            // The vertex past the last bounce: only its emission, the
+            // BSDF's half of the previous vertex's direct light.
+            if depth > settings.max_depth {
+                l += beta * vertex;
+                self.finish_record(slot, Some((hit.t, hit.prim, s.p)), vertex);
+                break;
+            }
+            let bsdf = Bsdf::new(m, texel, wo, ng, ns, entering);
+            if bsdf.has_smooth_lobe() {
+                vertex += self.next_event(ctx, depth, &bsdf, s.p, s.p_error, ng);
+            }
+            l += beta * vertex;
+            self.finish_record(slot, Some((hit.t, hit.prim, s.p)), vertex);
+            let choice = ctx.sampler.get_1d(Dim::lobe(depth), index, count);
+            let u = ctx.sampler.get_2d(Dim::bounce(depth), index, count);
+            let Some(b) = bsdf.sample(choice, u) else {
+                break;
+            };
+            beta *= b.weight;
+            if depth + 1 >= ROULETTE_DEPTH {
+                let survive = beta.max_element().min(0.95);
+                if !(ctx.sampler.get_1d(Dim::roulette(depth), index, count) < survive) {
+                    break;
+                }
+                beta /= survive;
+            }
+            if !(beta.max_element() > 0.0 && beta.is_finite()) {
+                break;
+            }
+            let through = ng.dot(b.wi) < 0.0;
+            if through {
+                self.counts.refraction += 1;
+            } else {
+                self.counts.reflection += 1;
+            }
+            ray = Ray::new(spawn_origin(s.p, s.p_error, ng, b.wi), b.wi);
+            came = Came {
+                pdf: (!b.delta).then_some(b.pdf),
+                from: s.p,
+                ng,
+            };
+            depth += 1;
+        }
+        l
+    }
+
+    /// What a ray that hits nothing brings: the environment, weighed
+    /// against its sampling, or the background.
+    fn escaped(&self, ray: &Ray, came: &Came) -> Vec3 {
+        let Some(env) = self.environment else {
+            return self.scene.settings.background;
+        };
+        let le = env.radiance(ray.direction);
+        let Some(pdf) = came.pdf else {
+            return le;
+        };
+        let settings = &self.scene.settings;
+        let light_pdf = env.pdf(
+            Some(came.ng),
+            ray.direction.normalize(),
+            settings.light_sampling,
+        );
+        le * power_heuristic(pdf, settings.shadow_samples as f32 * light_pdf)
+    }
+
+    /// The MIS weight of emission found by a BSDF ray at `q` (normal `n`)
+    /// on the hit's primitive: 1 where no light sampling could have found
+    /// it.
+    fn emission_weight(&self, hit: &PrimHit, came: &Came, q: Vec3, n: Vec3) -> f32 {
+        let Some(pdf) = came.pdf else {
+            return 1.0;
+        };
+        let scene = self.scene;
+        let method = scene.settings.light_sampling;
+        let light_pdf = match scene.lights.iter().find(|l| l.prim() == Some(hit.prim)) {
+            Some(light) => light.pdf(came.from, q, n, method),
+            None => scene.emitters.pdf(hit.prim, came.from, q, n),
+        };
+        if light_pdf > 0.0 {
+            power_heuristic(pdf, scene.settings.shadow_samples as f32 * light_pdf)
+        } else {
+            1.0
+        }
+    }
+
+    /// Next-event estimation at a vertex (`p`, its rounding bound, `ng`
+    /// faced towards the viewer): every light and the glowing surfaces,
+    /// each sample weighed against the BSDF's density.
+    fn next_event(
+        &mut self,
+        ctx: &SampleContext,
+        depth: u32,
+        bsdf: &Bsdf,
+        p: Vec3,
+        p_error: Vec3,
+        ng: Vec3,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let method = scene.settings.light_sampling;
+        let m_samples = scene.settings.shadow_samples;
+        let mut l = Vec3::ZERO;
+        let lights = scene.lights.len();
+        let sources = lights + usize::from(!scene.emitters.is_empty());
+        for source in 0..sources {
+            let light = scene.lights.get(source);
+            let samples = match light {
+                Some(light) if !light.is_area() => 1,
+                _ => m_samples,
+            };
+            let dim = Dim::light(depth, source as u32);
+            let mut sum = Vec3::ZERO;
+            for j in 0..samples {
+                // A delta light draws nothing.
+                let u = if light.is_some_and(|l| !l.is_area()) {
+                    Vec2::splat(0.5)
+                } else {
+                    let at = (ctx.index() * samples + j, ctx.count() * samples);
+                    ctx.sampler.get_2d(dim, at.0, at.1)
+                };
+                let c = match light {
+                    Some(light) => self.light_sample(light, bsdf, p, ng, u, method, samples),
+                    None => self.emitter_sample(bsdf, p, u, samples),
+                };
+                let Some(c) = c else { continue };
+                let origin = spawn_origin(p, p_error, ng, c.wi);
+                let tmax = if c.distance.is_finite() {
+                    (c.distance - (origin - p).length()).max(0.0)
+                } else {
+                    f32::INFINITY
+                };
+                let ray = Ray::segment(origin, c.wi, tmax);
+                self.counts.shadow += 1;
+                if !scene.geometry.occluded_except(&ray, c.except) {
+                    sum += c.value;
+                }
+            }
+            l += sum / samples as f32;
+        }
+        l
+    }
+
+    /// One sample of `light` from `p`: f · L · cos / pdf times its MIS
+    /// weight against the BSDF (`samples` light samples a vertex), with the
+    /// direction and distance of its shadow ray (origin still `p`).
+    #[allow(clippy::too_many_arguments)]
+    fn light_sample(
+        &self,
+        light: &Light,
+        bsdf: &Bsdf,
+        p: Vec3,
+        ng: Vec3,
+        u: Vec2,
+        method: LightSampling,
+        samples: u32,
+    ) -> Option<Contribution> {
+        let (wi, distance, le_over_pdf, light_pdf) = match light.environment() {
+            Some(env) => {
+                let e = env.sample(Some(ng), u, method)?;
+                (e.wi, f32::INFINITY, e.radiance / e.pdf, Some(e.pdf))
+            }
+            None => {
+                let s = light.sample(p, u, method)?;
+                let pdf = light
+                    .is_area()
+                    .then(|| light.surface_radiance().max_element() / s.weight.max_element());
+                (s.wi, s.distance, s.weight, pdf)
+            }
+        };
+        let (f, bsdf_pdf) = bsdf.eval(wi);
+        let cos = bsdf.cos(wi);
+        if f.max_element() <= 0.0 || cos <= 0.0 {
+            return None;
+        }
+        let w = match light_pdf {
+            Some(pdf) => power_heuristic(samples as f32 * pdf, bsdf_pdf),
+            None => 1.0,
+        };
+        let value = f * le_over_pdf * (cos * w);
+        value.is_finite().then_some(Contribution {
+            wi,
+            distance,
+            except: light.prim().unwrap_or(u32::MAX),
+            value,
+        })
+    }
+
+    /// One sample of the glowing surfaces from `p`, as [`Self::light_sample`].
+    fn emitter_sample(&self, bsdf: &Bsdf, p: Vec3, u: Vec2, samples: u32) -> Option<Contribution> {
+        let e = self.scene.emitters.sample(p, u)?;
+        let (f, bsdf_pdf) = bsdf.eval(e.wi);
+        let cos = bsdf.cos(e.wi);
+        if f.max_element() <= 0.0 || cos <= 0.0 {
+            return None;
+        }
+        let w = power_heuristic(samples as f32 * e.pdf, bsdf_pdf);
+        let value = f * e.radiance * (cos * w / e.pdf);
+        value.is_finite().then_some(Contribution {
+            wi: e.wi,
+            distance: e.distance,
+            except: e.prim,
+            value,
+        })
+    }
+}

@@ -1,0 +1,281 @@
+//! The path integrator (`integrator = "path"`): analytic answers (white
+//! furnaces, the bounce series inside a glowing sphere), glowing surfaces
+//! against the lights they equal, indirect light that the distribution
+//! integrator lacks and that converges as 1/N, and images bit-identical
+//! across threads, slices and noise targets.
+
+use crate::common::scene;
+use glam::Vec3;
+use std::path::PathBuf;
+use strata::partial::format::{read_partial_from, write_partial_to, PartialHeader};
+use strata::partial::merge::{merge_partials, MergeRules};
+use strata::render::film::{Film, PixelSum, FIXED_SCALE};
+use strata::render::schedule::render_pixel;
+use strata::render::{render, RenderOptions, SliceSpec};
+use strata::scene::settings::IntegratorKind;
+use strata::scene::Scene;
+use strata::shade::Integrator;
+
+/// Each pixel's mean of `spp` samples of `scene` (one seed), linear RGB,
+/// pixel by pixel, with no sample dropped as NaN.
+fn pixels(scene: &Scene, seed: u32, spp: u32) -> Vec<Vec3> {
+    let mut s = scene.clone();
+    s.settings.seed = seed;
+    s.settings.spp = spp;
+    let mut integrator = Integrator::new(&s);
+    let n = (s.settings.width * s.settings.height) as usize;
+    (0..n)
+        .map(|i| {
+            let mut acc = PixelSum::default();
+            render_pixel(&mut integrator, &s, i, 0..spp, &mut acc);
+            assert_eq!(acc.invalid, 0, "no NaN or infinite samples");
+            Vec3::from(acc.sum.map(|c| c as f32)) / (FIXED_SCALE as f32 * acc.count as f32)
+        })
+        .collect()
+}
+
+fn mean_and_se(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// A sphere of `material` filling a narrow camera's view under a constant
+/// environment of radiance 0.5.
+fn furnace(material: &str) -> Scene {
+    scene(&format!(
+        "[render]\nwidth = 6\nheight = 6\nintegrator = \"path\"\nmax_depth = 6\n\
+         [camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 4.0\n\
+         [materials.m]\n{material}\n\
+         [[lights]]\ntype = \"environment\"\nradiance = [0.5, 0.5, 0.5]\n\
+         [[objects]]\nsphere = {{ radius = 1.0 }}\nmaterial = \"m\"\n"
+    ))
+}
+
+/// A convex Lambertian sphere of albedo a sees only the environment, so it
+/// shows a·L: exactly, in every sample, since the light's cosine sampling
+/// and the BSDF's share one density and MIS weights sum to 1. White, it
+/// vanishes.
+#[test]
+fn a_lambertian_sphere_in_a_white_furnace_shows_its_albedo_times_the_light() {
+    for albedo in [1.0f32, 0.5] {
+        let s = furnace(&format!("diffuse = [{albedo}, {albedo}, {albedo}]"));
+        for p in pixels(&s, 3, 4) {
+            let want = 0.5 * albedo;
+            assert!(
+                (p - Vec3::splat(want)).abs().max_element() < 1e-4,
+                "albedo {albedo}: {p}"
+            );
+        }
+    }
+}
+
+/// Metallic-roughness spheres in the furnace: never brighter than the
+/// light, and a smooth white metal (F0 = 1) all of it.
+#[test]
+fn metallic_roughness_spheres_in_a_white_furnace_reflect_at_most_the_light() {
+    for (material, floor) in [
+        (
+            "base_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.05",
+            0.98,
+        ),
+        (
+            "base_color = [1.0, 1.0, 1.0]\nmetallic = 0.0\nroughness = 0.5",
+            0.8,
+        ),
+        (
+            "base_color = [1.0, 0.77, 0.34]\nmetallic = 1.0\nroughness = 0.4",
+            0.3,
+        ),
+    ] {
+        let s = furnace(material);
+        let values: Vec<f64> = pixels(&s, 5, 64).iter().map(|p| p.x as f64 / 0.5).collect();
+        let (mean, se) = mean_and_se(&values);
+        assert!(
+            mean <= 1.0 + 3.0 * se + 1e-3,
+            "{material}: albedo {mean} ± {se}"
+        );
+        assert!(mean >= floor, "{material}: albedo {mean} ± {se}");
+    }
+}
+
+/// Inside a closed sphere that glows with Le and reflects a, light that
+/// reflects at most D + 1 times sums to Le (1 + a + … + a^(D+1)), the
+/// series of `max_depth` D, Russian roulette or not.
+#[test]
+fn inside_a_glowing_sphere_the_bounces_sum_the_series() {
+    let a = 0.6f64;
+    for depth in [0u32, 1, 4] {
+        let s = scene(&format!(
+            "[render]\nwidth = 4\nheight = 4\nintegrator = \"path\"\nmax_depth = {depth}\n\
+             [camera]\nposition = [0.0, 0.0, 0.5]\nlook_at = [0.0, 0.0, 0.0]\nfov = 60.0\n\
+             [materials.glow]\ndiffuse = [{a}, {a}, {a}]\nemission = [1.0, 1.0, 1.0]\n\
+             [[objects]]\nsphere = {{ radius = 2.0 }}\nmaterial = \"glow\"\n"
+        ));
+        assert_eq!(s.emitters.len(), 1, "the sphere is a light");
+        let values: Vec<f64> = (0..8)
+            .flat_map(|seed| pixels(&s, seed, 64))
+            .map(|p| p.x as f64)
+            .collect();
+        let (mean, se) = mean_and_se(&values);
+        let want: f64 = (0..=depth + 1).map(|k| a.powi(k as i32)).sum();
+        assert!(
+            (mean - want).abs() < 4.0 * se + 1e-3,
+            "max_depth {depth}: {mean} ± {se}, want {want}"
+        );
+    }
+}
+
+/// A floor under an overhead square, once a rect light and once two
+/// glowing triangles (or a sphere light and a glowing sphere): the same
+/// light, so the same mean on the floor, which the camera sees from below
+/// the square.
+#[test]
+fn glowing_surfaces_light_the_room_as_the_lights_they_equal() {
+    let base = "[render]\nwidth = 8\nheight = 8\nintegrator = \"path\"\nmax_depth = 2\n\
+        [camera]\nposition = [0.0, 0.8, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 30.0\n\
+        [materials.glow]\ndiffuse = [0.0, 0.0, 0.0]\nemission = [4.0, 4.0, 4.0]\n\
+        [[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\n";
+    let pairs = [
+        (
+            "[[lights]]\ntype = \"rect\"\ncorner = [-0.5, 1.5, -0.5]\nedge_u = [1.0, 0.0, 0.0]\n\
+             edge_v = [0.0, 0.0, 1.0]\nradiance = [4.0, 4.0, 4.0]\n",
+            // The square's two triangles, facing down (the light is one-sided).
+            "[[objects]]\ntriangle = { v = [[-0.5, 1.5, -0.5], [0.5, 1.5, -0.5], [0.5, 1.5, 0.5]] }\n\
+             material = \"glow\"\n\
+             [[objects]]\ntriangle = { v = [[-0.5, 1.5, -0.5], [0.5, 1.5, 0.5], [-0.5, 1.5, 0.5]] }\n\
+             material = \"glow\"\n",
+        ),
+        (
+            "[[lights]]\ntype = \"sphere\"\ncenter = [0.3, 1.0, 0.0]\nradius = 0.3\nradiance = [4.0, 4.0, 4.0]\n",
+            "[[objects]]\nsphere = { center = [0.3, 1.0, 0.0], radius = 0.3 }\nmaterial = \"glow\"\n",
+        ),
+    ];
+    for (light, glowing) in pairs {
+        let lit = scene(&format!("{base}{light}"));
+        let glows = scene(&format!("{base}{glowing}"));
+        assert!(!glows.emitters.is_empty());
+        let floor = |s: &Scene| {
+            let values: Vec<f64> = (0..6)
+                .map(|seed| pixels(s, seed, 32).iter().map(|p| p.x as f64).sum::<f64>() / 64.0)
+                .collect();
+            mean_and_se(&values)
+        };
+        let (a, sa) = floor(&lit);
+        let (b, sb) = floor(&glows);
+        let se = (sa * sa + sb * sb).sqrt();
+        assert!(a > 0.05, "the floor is lit: {a}");
+        assert!(
+            (a - b).abs() < 4.0 * se + 2e-3 * a,
+            "light {a} ± {sa} vs glowing {b} ± {sb}"
+        );
+    }
+}
+
+/// A white box lit by a small square in its ceiling: the ceiling beside
+/// the light sees no light directly.
+const BOX: &str = "[render]\nwidth = 1\nheight = 1\nmax_depth = 6\n\
+    [camera]\nposition = [0.6, 0.2, 0.6]\nlook_at = [0.6, 2.0, 0.6]\nup = [0.0, 0.0, -1.0]\nfov = 2.0\n\
+    [materials.white]\ndiffuse = [0.75, 0.75, 0.75]\n\
+    [materials.red]\ndiffuse = [0.7, 0.05, 0.05]\n\
+    [[lights]]\ntype = \"rect\"\ncorner = [-0.25, 1.99, -0.25]\nedge_u = [0.5, 0.0, 0.0]\n\
+    edge_v = [0.0, 0.0, 0.5]\nradiance = [15.0, 15.0, 15.0]\n\
+    [[objects]]\nplane = { point = [0.0, 0.0, 0.0], normal = [0.0, 1.0, 0.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nplane = { point = [0.0, 2.0, 0.0], normal = [0.0, -1.0, 0.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nplane = { point = [-1.0, 0.0, 0.0], normal = [1.0, 0.0, 0.0] }\nmaterial = \"red\"\n\
+    [[objects]]\nplane = { point = [1.0, 0.0, 0.0], normal = [-1.0, 0.0, 0.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nplane = { point = [0.0, 0.0, -1.0], normal = [0.0, 0.0, 1.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nplane = { point = [0.0, 0.0, 1.0], normal = [0.0, 0.0, -1.0] }\nmaterial = \"white\"\n";
+
+fn ceiling(integrator: IntegratorKind, seed: u32, spp: u32) -> f64 {
+    let mut s = scene(BOX);
+    s.settings.integrator = integrator;
+    pixels(&s, seed, spp)[0].x as f64
+}
+
+/// The distribution integrator leaves the ceiling black; the path
+/// integrator lights it, and its error across seeds falls as 1/N.
+#[test]
+fn indirect_light_reaches_the_ceiling_and_converges_as_one_over_n() {
+    assert_eq!(ceiling(IntegratorKind::Distribution, 1, 16), 0.0);
+    let variance = |spp: u32| {
+        let values: Vec<f64> = (0..40)
+            .map(|seed| ceiling(IntegratorKind::Path, seed, spp))
+            .collect();
+        let (mean, se) = mean_and_se(&values);
+        (mean, se * se * values.len() as f64)
+    };
+    let (m4, v4) = variance(4);
+    let (m32, v32) = variance(32);
+    assert!(m32 > 0.05, "the ceiling is lit: {m32}");
+    assert!(
+        (m4 - m32).abs() < 4.0 * (v4 / 40.0).sqrt(),
+        "unbiased: {m4} vs {m32}"
+    );
+    // 8× the samples: the variance falls 8× for independent samples
+    // (faster is stratification's gain); 4× allows for the noise of 40
+    // estimates of each variance.
+    assert!(v4 / v32 > 4.0, "variance {v4} at 4 spp, {v32} at 32 spp");
+}
+
+/// A glowing triangle, a gold sphere, glass and an environment, traced
+/// by paths: every kind of vertex.
+const BUSY: &str = "[render]\nwidth = 24\nheight = 18\nspp = 6\nintegrator = \"path\"\n\
+    [camera]\nposition = [0.0, 1.0, 6.0]\nlook_at = [0.0, 0.5, 0.0]\n\
+    [materials.glass]\ndiffuse = [0.0, 0.0, 0.0]\ntransparency = 1.0\nfresnel = true\n\
+    [materials.gold]\nbase_color = [1.0, 0.77, 0.34]\nmetallic = 1.0\nroughness = 0.3\n\
+    [materials.glow]\nemission = [3.0, 2.0, 1.0]\n\
+    [[lights]]\ntype = \"point\"\nposition = [2.0, 5.0, 4.0]\nintensity = [20.0, 20.0, 20.0]\n\
+    [[lights]]\ntype = \"environment\"\nradiance = [0.2, 0.3, 0.4]\n\
+    [[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\n\
+    [[objects]]\ntriangle = { v = [[-2.0, 0.1, -1.0], [-1.0, 2.0, -1.5], [-2.5, 2.0, -1.0]] }\nmaterial = \"glow\"\n\
+    [[objects]]\nsphere = { center = [-0.8, 0.6, 0.0], radius = 0.6 }\nmaterial = \"glass\"\n\
+    [[objects]]\nsphere = { center = [0.8, 0.6, -0.5], radius = 0.6 }\nmaterial = \"gold\"\n";
+
+fn film_of(scene: &Scene, slice: SliceSpec, threads: usize) -> Film {
+    let opts = RenderOptions {
+        threads,
+        slice,
+        ..RenderOptions::default()
+    };
+    render(scene, &opts, None, ()).film
+}
+
+#[test]
+fn paths_are_bit_identical_across_threads_slices_and_noise_targets() {
+    let s = scene(BUSY);
+    let whole = film_of(&s, SliceSpec::WHOLE, 1);
+    assert!(whole.to_rgb().iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(whole, film_of(&s, SliceSpec::WHOLE, 3), "3 threads");
+    for p in [2u32, 3] {
+        let parts: Vec<_> = (0..p)
+            .map(|k| {
+                let slice = SliceSpec { index: k, count: p };
+                let film = film_of(&s, slice, 1 + k as usize % 2);
+                let header = PartialHeader::for_scene(&s, slice, slice.samples(s.settings.spp));
+                let mut bytes = Vec::new();
+                write_partial_to(&mut bytes, &header, &film).unwrap();
+                let back = read_partial_from(bytes.as_slice(), bytes.len() as u64).unwrap();
+                (PathBuf::from(format!("part_{k}.strata")), back)
+            })
+            .collect();
+        let rules = MergeRules {
+            require_all: true,
+            preview: false,
+            force: false,
+        };
+        assert_eq!(
+            merge_partials(parts, rules).unwrap().film,
+            whole,
+            "{p} slices"
+        );
+    }
+    let mut noisy = s.clone();
+    noisy.settings.noise = Some(0.1);
+    noisy.settings.spp = 64;
+    assert_eq!(
+        film_of(&noisy, SliceSpec::WHOLE, 1),
+        film_of(&noisy, SliceSpec::WHOLE, 3)
+    );
+}
