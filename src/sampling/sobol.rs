@@ -26,8 +26,9 @@
 use super::hash::hash_u32;
 use glam::Vec2;
 
-/// Point `index` of Sobol's second dimension, as 32 bits of a fraction.
-#[inline]
+/// Point `index` of Sobol's second dimension, as 32 bits of a fraction
+/// (the reference formula; [`sobol_second_reversed`] is what draws use).
+#[cfg(test)]
 fn sobol_second(mut index: u32) -> u32 {
     // Direction numbers of x + 1: v₁ = 1/2, and each next one is the last
     // xor itself shifted right by one.
@@ -41,6 +42,52 @@ fn sobol_second(mut index: u32) -> u32 {
         v ^= v >> 1;
     }
     bits
+}
+
+/// The xor of the (bit-reversed) direction numbers each byte of an index
+/// selects: the point is linear in the index's bits over GF(2), so four
+/// lookups make it, where a loop over 32 bits would take 32 steps.
+const SOBOL_BYTES: [[u32; 256]; 4] = sobol_bytes();
+
+const fn sobol_bytes() -> [[u32; 256]; 4] {
+    let mut directions = [0u32; 32];
+    let mut v = 1u32 << 31;
+    let mut j = 0;
+    while j < 32 {
+        directions[j] = v.reverse_bits();
+        v ^= v >> 1;
+        j += 1;
+    }
+    let mut table = [[0u32; 256]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let mut b = 0;
+        while b < 256 {
+            let mut bits = 0u32;
+            let mut j = 0;
+            while j < 8 {
+                if b >> j & 1 != 0 {
+                    bits ^= directions[8 * k + j];
+                }
+                j += 1;
+            }
+            table[k][b] = bits;
+            b += 1;
+        }
+        k += 1;
+    }
+    table
+}
+
+/// Point `index` of Sobol's second dimension with its bits reversed (so
+/// that the scramble, which works on reversed values, needs no reversal).
+#[inline]
+fn sobol_second_reversed(index: u32) -> u32 {
+    let [a, b, c, d] = index.to_le_bytes();
+    SOBOL_BYTES[0][a as usize]
+        ^ SOBOL_BYTES[1][b as usize]
+        ^ SOBOL_BYTES[2][c as usize]
+        ^ SOBOL_BYTES[3][d as usize]
 }
 
 /// Burley (2020)'s Laine-Karras hash: bit `b` of the result depends on
@@ -65,12 +112,16 @@ pub fn nested_scramble(x: u32, seed: u32) -> u32 {
 }
 
 /// Point `index` in [0,1)² of the sequence that `pattern` scrambles.
+///
+/// The nested scramble of a value v is reverse(LK(reverse(v))), so that of
+/// the van der Corput point reverse(i) is reverse(LK(i)), and that of the
+/// second dimension is reverse(LK(its reversed bits)): one reversal each.
 #[inline]
 pub fn sobol_2d(index: u32, pattern: u32) -> Vec2 {
     let seeds = [1, 2, 3].map(|k| hash_u32(pattern ^ (k * 0x9e37_79b9)));
     let i = nested_scramble(index, seeds[0]);
-    let x = nested_scramble(i.reverse_bits(), seeds[1]);
-    let y = nested_scramble(sobol_second(i), seeds[2]);
+    let x = laine_karras(i, seeds[1]).reverse_bits();
+    let y = laine_karras(sobol_second_reversed(i), seeds[2]).reverse_bits();
     Vec2::new(to_unit(x), to_unit(y))
 }
 
@@ -80,7 +131,7 @@ pub fn sobol_2d(index: u32, pattern: u32) -> Vec2 {
 pub fn sobol_1d(index: u32, pattern: u32) -> f32 {
     let seeds = [4, 5].map(|k| hash_u32(pattern ^ (k * 0x9e37_79b9)));
     let i = nested_scramble(index, seeds[0]);
-    to_unit(nested_scramble(i.reverse_bits(), seeds[1]))
+    to_unit(laine_karras(i, seeds[1]).reverse_bits())
 }
 
 /// The top 24 bits as a float in [0, 1), exactly.
@@ -130,6 +181,25 @@ mod tests {
                 cells.sort_unstable();
                 assert_eq!(cells, (0..n).collect::<Vec<_>>());
             }
+        }
+    }
+
+    /// The fast forms (byte tables, reversals cancelled) are the reference
+    /// formulas bit for bit.
+    #[test]
+    fn the_fast_forms_are_the_reference_formulas() {
+        let mut x = 1u32;
+        for _ in 0..100_000 {
+            x = hash_u32(x);
+            assert_eq!(sobol_second_reversed(x), sobol_second(x).reverse_bits());
+            let pattern = x.rotate_left(11);
+            let seeds = [1, 2, 3].map(|k| hash_u32(pattern ^ (k * 0x9e37_79b9)));
+            let i = nested_scramble(x, seeds[0]);
+            let reference = Vec2::new(
+                to_unit(nested_scramble(i.reverse_bits(), seeds[1])),
+                to_unit(nested_scramble(sobol_second(i), seeds[2])),
+            );
+            assert_eq!(sobol_2d(x, pattern), reference);
         }
     }
 
