@@ -125,16 +125,16 @@ fn check_same_render(parts: &[(PathBuf, Partial)], force: bool) -> InputResult<(
         let h = &p.header;
         let mismatch = h
             .render_mismatch(first)
+            .map(|m| format!("{m} (this file vs that one)"))
             .or_else(|| {
                 // Not the film but how an image shows it: one image, one curve.
                 (h.tonemap != first.tonemap).then(|| {
                     format!(
-                        "tone curve: {} vs {}; choose one with strata merge --tonemap",
+                        "tone curve: {} vs {} (this file vs that one); choose one with strata merge --tonemap",
                         h.tonemap, first.tonemap
                     )
                 })
             })
-            .map(|m| format!("{m} (this file vs that one)"))
             .or_else(|| h.build_mismatch(first).filter(|_| !force));
         if let Some(m) = mismatch {
             return Err(InputError::file(
