@@ -198,7 +198,7 @@ impl Emitters {
                 let cos_l = n.dot(wi).abs();
                 d2 / (cos_l * self.emitters[i].area())
             }
-            Emitter::Sphere { center, radius, .. } => match sphere_cone(p, center, radius) {
+            Emitter::Sphere { center, radius, .. } => match super::sphere_cone(p, center, radius) {
                 Some((_, solid_angle)) => 1.0 / solid_angle,
                 None => d2 / (n.dot(wi).abs() * self.emitters[i].area()),
             },
@@ -217,24 +217,6 @@ impl Emitters {
     }
 }
 
-/// The cone of directions from `p` that see the sphere, as (cos of its
-/// half-angle, solid angle), where `p` is outside it.
-fn sphere_cone(p: Vec3, center: Vec3, radius: f32) -> Option<(f32, f32)> {
-    let dc2 = (center - p).length_squared();
-    if !(dc2 > radius * radius * 1.0001) {
-        return None;
-    }
-    let sin2_max = radius * radius / dc2;
-    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-    // 1 − cos θ ≈ sin²θ/2 avoids cancellation for tiny or far spheres.
-    let solid_angle = if sin2_max < 1e-4 {
-        2.0 * PI * (0.5 * sin2_max + 0.125 * sin2_max * sin2_max)
-    } else {
-        2.0 * PI * (1.0 - cos_max)
-    };
-    Some((cos_max, solid_angle))
-}
-
 /// A sphere's point seen from `p`: in its cone from outside, uniform by
 /// area from inside.
 fn sphere_sample(
@@ -245,7 +227,7 @@ fn sphere_sample(
     u: Vec2,
 ) -> Option<EmitterSample> {
     let to_center = center - p;
-    if let Some((cos_max, solid_angle)) = sphere_cone(p, center, radius) {
+    if let Some((cos_max, solid_angle)) = super::sphere_cone(p, center, radius) {
         let dc = to_center.length();
         let wi = Frame::from_z(to_center / dc).to_world(uniform_cone(u, cos_max));
         let b = wi.dot(to_center);

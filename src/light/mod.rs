@@ -171,3 +171,23 @@ impl Light {
         }
     }
 }
+
+/// The cone of directions from `p` that see the sphere, as (cos of its
+/// half-angle, solid angle), where `p` is outside it (by a margin, so
+/// that the cone is not degenerate): what solid-angle sampling of a sphere
+/// draws from, and the density it reports.
+pub(crate) fn sphere_cone(p: Vec3, center: Vec3, radius: f32) -> Option<(f32, f32)> {
+    let dc2 = (center - p).length_squared();
+    if !(dc2 > radius * radius * 1.0001) {
+        return None;
+    }
+    let sin2_max = radius * radius / dc2;
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+    // 1 − cos θ ≈ sin²θ/2 avoids cancellation for tiny or far spheres.
+    let solid_angle = if sin2_max < 1e-4 {
+        2.0 * PI * (0.5 * sin2_max + 0.125 * sin2_max * sin2_max)
+    } else {
+        2.0 * PI * (1.0 - cos_max)
+    };
+    Some((cos_max, solid_angle))
+}

@@ -43,15 +43,8 @@ impl Light {
             }
             Light::Disk { disk, .. } => by_area(disk.area(), true),
             Light::Sphere { center, radius, .. } => {
-                let dc2 = (center - p).length_squared();
-                if method == LightSampling::SolidAngle && dc2 > radius * radius * 1.0001 {
-                    let sin2_max = radius * radius / dc2;
-                    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-                    let solid_angle = if sin2_max < 1e-4 {
-                        2.0 * PI * (0.5 * sin2_max + 0.125 * sin2_max * sin2_max)
-                    } else {
-                        2.0 * PI * (1.0 - cos_max)
-                    };
+                let cone = super::sphere_cone(p, center, radius);
+                if let (LightSampling::SolidAngle, Some((_, solid_angle))) = (method, cone) {
                     1.0 / solid_angle
                 } else {
                     // Sampled over the sphere's area, whose samples see only

@@ -177,24 +177,16 @@ impl Light {
                 ..
             } => {
                 let to_center = center - p;
-                let dc2 = to_center.length_squared();
-                if method == LightSampling::SolidAngle && dc2 > radius * radius * 1.0001 {
+                let cone = super::sphere_cone(p, center, radius);
+                if let (LightSampling::SolidAngle, Some((cos_max, solid_angle))) = (method, cone) {
                     // Uniform in the cone of directions that see the sphere.
-                    let dc = dc2.sqrt();
-                    let sin2_max = radius * radius / dc2;
-                    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+                    let dc = to_center.length_squared().sqrt();
                     let frame = Frame::from_z(to_center / dc);
                     let wi = frame.to_world(uniform_cone(u, cos_max));
                     // Distance to the near intersection along wi.
                     let b = wi.dot(to_center);
                     let disc = (radius * radius - (to_center - b * wi).length_squared()).max(0.0);
                     let distance = b - disc.sqrt();
-                    let solid_angle = if sin2_max < 1e-4 {
-                        // 1 − cos θ ≈ sin²θ/2 avoids cancellation for tiny or far spheres.
-                        2.0 * PI * (0.5 * sin2_max + 0.125 * sin2_max * sin2_max)
-                    } else {
-                        2.0 * PI * (1.0 - cos_max)
-                    };
                     return Some(LightSample {
                         wi,
                         distance,
