@@ -106,17 +106,7 @@ pub fn load_edited_scene_with_progress(
 ) -> InputResult<(Scene, LoadTimings)> {
     let start = Instant::now();
     let text = super::loaders::read_scene_file(path)?;
-    let desc = super::parse::parse_edited(path, &text, edits)?;
-    compile_for(
-        &desc,
-        path,
-        overrides,
-        quality,
-        Purpose::Render,
-        start,
-        progress,
-        None,
-    )
+    text::compile_text(&text, path, edits, overrides, quality, start, progress)
 }
 
 /// What a load is doing, set by the compiler as it goes and read by a

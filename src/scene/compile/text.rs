@@ -19,17 +19,32 @@ pub fn load_edited_text(
     overrides: &RenderOverrides,
     quality: BuildQuality,
 ) -> InputResult<(Scene, LoadTimings)> {
-    let start = Instant::now();
-    let desc = crate::scene::parse::parse_edited(path, text, edits)?;
     let progress = LoadProgress::default();
-    compile_for(
-        &desc,
+    compile_text(
+        text,
         path,
+        edits,
         overrides,
         quality,
-        Purpose::Render,
-        start,
+        Instant::now(),
         &progress,
-        None,
+    )
+}
+
+/// A render's scene from `text` read from `path` (or as if), edited,
+/// loading since `start`: what both entry points share.
+pub(super) fn compile_text(
+    text: &str,
+    path: &Path,
+    edits: &[Edit],
+    overrides: &RenderOverrides,
+    quality: BuildQuality,
+    start: Instant,
+    progress: &LoadProgress,
+) -> InputResult<(Scene, LoadTimings)> {
+    let desc = crate::scene::parse::parse_edited(path, text, edits)?;
+    let purpose = Purpose::Render;
+    compile_for(
+        &desc, path, overrides, quality, purpose, start, progress, None,
     )
 }
