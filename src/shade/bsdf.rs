@@ -48,6 +48,41 @@ pub fn schlick(cos_i: f32, ior: f32) -> f32 {
     f0 + (1.0 - f0) * (1.0 - cos_i.clamp(0.0, 1.0)).powi(5)
 }
 
+/// The mirror and glass weights of `m` seen along `wo` (shading normal
+/// `ns`, on the side `entering` says), after Fresnel and total internal
+/// reflection move transmitted energy to the mirror, with the refracted
+/// direction where there is one: how both integrators split a surface's
+/// `reflectivity` and `transparency`.
+pub fn mirror_and_glass(
+    m: &Material,
+    wo: Vec3,
+    ns: Vec3,
+    entering: bool,
+) -> (f32, f32, Option<Vec3>) {
+    let mut kr = m.reflectivity;
+    let mut kt = m.transparency;
+    let mut refracted = None;
+    if kt > 0.0 {
+        let eta = if entering { 1.0 / m.ior } else { m.ior };
+        match refract(wo, ns, eta) {
+            Some(t) => {
+                if m.fresnel {
+                    let f = schlick(wo.dot(ns), if entering { m.ior } else { 1.0 / m.ior });
+                    kr += kt * f;
+                    kt *= 1.0 - f;
+                }
+                refracted = Some(t);
+            }
+            None => {
+                // Total internal reflection: all transmitted energy reflects.
+                kr += kt;
+                kt = 0.0;
+            }
+        }
+    }
+    (kr, kt, refracted)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -24,7 +24,7 @@
 //! specular lobe with the chance of its Fresnel weight at wo, then a
 //! visible normal (Heitz 2018); else the cosine hemisphere.
 
-use super::bsdf::{refract, schlick};
+use super::bsdf::mirror_and_glass;
 use super::microfacet::{
     ggx_d, ggx_g2, reflected_pdf, sample_visible_normal, schlick_rgb, MIN_ALPHA,
 };
@@ -227,26 +227,7 @@ impl Phong {
     fn new(m: &Material, texel: Vec3, wo: Vec3, ns: Vec3, entering: bool) -> Self {
         // The mirror and glass weights after Fresnel and total internal
         // reflection, as the distribution integrator splits them.
-        let mut kr = m.reflectivity;
-        let mut kt = m.transparency;
-        let mut refracted = None;
-        if kt > 0.0 {
-            let eta = if entering { 1.0 / m.ior } else { m.ior };
-            match refract(wo, ns, eta) {
-                Some(t) => {
-                    if m.fresnel {
-                        let f = schlick(wo.dot(ns), if entering { m.ior } else { 1.0 / m.ior });
-                        kr += kt * f;
-                        kt *= 1.0 - f;
-                    }
-                    refracted = Some(t);
-                }
-                None => {
-                    kr += kt;
-                    kt = 0.0;
-                }
-            }
-        }
+        let (kr, kt, refracted) = mirror_and_glass(m, wo, ns, entering);
         let diffuse = m.diffuse * texel;
         // Energy conservation: the weights of the brightest channel sum to at most 1.
         let sum =

@@ -1,7 +1,7 @@
 //! Specular transport: the mirror ray (or, on a glossy surface, rays
 //! importance-sampled from the cosⁿ lobe) and the refracted ray.
 
-use super::bsdf::{refract, schlick};
+use super::bsdf::mirror_and_glass;
 use super::integrator::{Shading, MIN_PATH_WEIGHT};
 use super::{Integrator, SampleContext};
 use crate::geometry::Surface;
@@ -25,27 +25,7 @@ impl Integrator<'_> {
         weight: f32,
     ) -> Vec3 {
         let (m, s, wo, ng, ns) = (sh.material, sh.surface, sh.wo, sh.ng, sh.ns);
-        let mut kr = m.reflectivity;
-        let mut kt = m.transparency;
-        let mut refracted = None;
-        if kt > 0.0 {
-            let eta = if sh.entering { 1.0 / m.ior } else { m.ior };
-            match refract(wo, ns, eta) {
-                Some(t) => {
-                    if m.fresnel {
-                        let f = schlick(wo.dot(ns), if sh.entering { m.ior } else { 1.0 / m.ior });
-                        kr += kt * f;
-                        kt *= 1.0 - f;
-                    }
-                    refracted = Some(t);
-                }
-                None => {
-                    // Total internal reflection: all transmitted energy reflects.
-                    kr += kt;
-                    kt = 0.0;
-                }
-            }
-        }
+        let (kr, kt, refracted) = mirror_and_glass(m, wo, ns, sh.entering);
         let mut l = Vec3::ZERO;
         if kr > 0.0 && weight * kr >= MIN_PATH_WEIGHT {
             let mirror = 2.0 * ns.dot(wo) * ns - wo;
