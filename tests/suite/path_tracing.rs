@@ -4,14 +4,13 @@
 //! integrator lacks and that converges as 1/N, and images bit-identical
 //! across threads, slices and noise targets.
 
+use crate::common::films::{film_of, part};
 use crate::common::scene;
 use glam::Vec3;
-use std::path::PathBuf;
-use strata::partial::format::{read_partial_from, write_partial_to, PartialHeader};
 use strata::partial::merge::{merge_partials, MergeRules};
-use strata::render::film::{Film, PixelSum, FIXED_SCALE};
+use strata::render::film::{PixelSum, FIXED_SCALE};
 use strata::render::schedule::render_pixel;
-use strata::render::{render, RenderOptions, SliceSpec};
+use strata::render::SliceSpec;
 use strata::scene::settings::IntegratorKind;
 use strata::scene::Scene;
 use strata::shade::Integrator;
@@ -233,15 +232,6 @@ const BUSY: &str = "[render]\nwidth = 24\nheight = 18\nspp = 6\nintegrator = \"p
     [[objects]]\nsphere = { center = [-0.8, 0.6, 0.0], radius = 0.6 }\nmaterial = \"glass\"\n\
     [[objects]]\nsphere = { center = [0.8, 0.6, -0.5], radius = 0.6 }\nmaterial = \"gold\"\n";
 
-fn film_of(scene: &Scene, slice: SliceSpec, threads: usize) -> Film {
-    let opts = RenderOptions {
-        threads,
-        slice,
-        ..RenderOptions::default()
-    };
-    render(scene, &opts, None, ()).film
-}
-
 #[test]
 fn paths_are_bit_identical_across_threads_slices_and_noise_targets() {
     let s = scene(BUSY);
@@ -250,15 +240,7 @@ fn paths_are_bit_identical_across_threads_slices_and_noise_targets() {
     assert_eq!(whole, film_of(&s, SliceSpec::WHOLE, 3), "3 threads");
     for p in [2u32, 3] {
         let parts: Vec<_> = (0..p)
-            .map(|k| {
-                let slice = SliceSpec { index: k, count: p };
-                let film = film_of(&s, slice, 1 + k as usize % 2);
-                let header = PartialHeader::for_scene(&s, slice, slice.samples(s.settings.spp));
-                let mut bytes = Vec::new();
-                write_partial_to(&mut bytes, &header, &film).unwrap();
-                let back = read_partial_from(bytes.as_slice(), bytes.len() as u64).unwrap();
-                (PathBuf::from(format!("part_{k}.strata")), back)
-            })
+            .map(|k| part(&s, SliceSpec { index: k, count: p }, 1 + k as usize % 2))
             .collect();
         let rules = MergeRules {
             require_all: true,

@@ -2,15 +2,14 @@
 //! bit-identical however the work is split, bad parts are refused, and
 //! slicing keeps each pixel's one stratified set.
 
+use crate::common::films::{film_of, part};
 use crate::common::process::{repo, strata, strata_command};
 use crate::common::{scene, temp_dir};
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
-use strata::partial::format::{
-    read_partial, read_partial_from, write_partial_to, Partial, PartialHeader,
-};
+use strata::partial::format::read_partial;
 use strata::partial::merge::{merge_partials, MergeRules};
 
 /// An image's pixels as bits: exact, and blind to EXR header attributes
@@ -45,25 +44,6 @@ const BUSY: &str = "[render]\nwidth = 40\nheight = 30\nspp = 10\nmax_depth = 6\n
     [[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\n\
     [[objects]]\nsphere = { center = [-0.8, 0.6, 0.0], radius = 0.6 }\nmaterial = \"glass\"\n\
     [[objects]]\nsphere = { center = [0.8, 0.6, -0.5], radius = 0.6 }\nmaterial = \"mirror\"\n";
-
-fn film_of(scene: &Scene, slice: SliceSpec, threads: usize) -> Film {
-    let opts = RenderOptions {
-        threads,
-        slice,
-        ..RenderOptions::default()
-    };
-    render(scene, &opts, None, ()).film
-}
-
-/// A slice rendered and sent through the partial format in memory.
-fn part(scene: &Scene, slice: SliceSpec, threads: usize) -> (PathBuf, Partial) {
-    let film = film_of(scene, slice, threads);
-    let header = PartialHeader::for_scene(scene, slice, slice.samples(scene.settings.spp));
-    let mut bytes = Vec::new();
-    write_partial_to(&mut bytes, &header, &film).unwrap();
-    let back = read_partial_from(bytes.as_slice(), bytes.len() as u64).unwrap();
-    (PathBuf::from(format!("part_{}.strata", slice.index)), back)
-}
 
 #[test]
 fn slices_merged_equal_one_render_for_any_split_and_thread_count() {

@@ -14,6 +14,7 @@
 
 pub mod checked;
 pub mod exr;
+pub mod films;
 pub mod meshes;
 pub mod process;
 pub mod queries;
