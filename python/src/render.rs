@@ -268,7 +268,8 @@ impl Observer for Interrupt {
 /// ``"albedo"``, ``"normal"``, ``"depth"``, ``"spp"``) also returns a dict
 /// of the AOVs: albedo and normal (height, width, 3), depth and spp (the
 /// samples each pixel took) (height, width). ``noise=0.02`` stops each
-/// pixel at that estimated relative error (``spp`` the ceiling, default
+/// pixel at that estimated error, the standard error over the square root
+/// of the luminance (``spp`` the ceiling, default
 /// 1024). ``exposure`` and ``tonemap`` are what an 8-bit file shows: the
 /// array stays linear radiance (exposure only scales what the noise
 /// target judges). ``integrator="path"`` traces light past the first

@@ -11,13 +11,31 @@
 //!
 //! **The estimate.** With n samples of luminance Yᵢ, mean Ȳ and sample
 //! variance s² = (ΣYᵢ² − nȲ²)/(n − 1), the standard error of the mean is
-//! s/√n, and the relative error is s/√n ÷ max(Ȳ·k, F)·k, where k = 2^exposure
-//! (what the output shows) and F = [`DARK_FLOOR`]: below F the target is an
-//! absolute one, so that black and dark pixels converge. s/√n is the error
-//! of n independent samples; a pixel's samples are part of one stratified
-//! set, whose error is smaller where the integrand is smooth, so the
-//! estimate errs on the side of more samples there (the factor is measured
-//! in tests/suite/adaptive.rs).
+//! s/√n, and a pixel's error is s/√n · k ÷ √max(Ȳ·k, F), where k =
+//! 2^exposure (what the output shows) and F = [`DARK_FLOOR`]: the standard
+//! error over the square root of the displayed luminance, the measure of
+//! Dammertz et al. 2010 (section 3) that Cycles' adaptive threshold also
+//! uses. Where Ȳ·k = 1 it is the relative error; a darker pixel may keep a
+//! larger relative error and a smaller absolute one. Against the relative
+//! error s/√n ÷ Ȳ this measure spends fewer samples on dark pixels, whose
+//! noise is small in absolute terms, and more on bright noisy ones (a lit
+//! penumbra): on the dragon under an area light the relative measure took
+//! 0.8 of the uniform samples to a given RMSE, this one 0.3 to 0.5
+//! (docs/converge.md). s/√n is the error of n independent samples; a
+//! pixel's samples are part of one stratified set, whose error is smaller
+//! where the integrand is smooth, so the estimate errs on the side of more
+//! samples there (the factor is measured in tests/suite/adaptive.rs).
+//!
+//! **Neighbours.** A pixel whose first samples all agree (16 shadow rays
+//! that all missed the light's edge) estimates an error of 0 though its
+//! own is not; alone it would stop, and such pixels set a floor under the
+//! image's error. So a pixel keeps sampling while any pixel of its 3 × 3
+//! neighbourhood does (Cycles dilates its active pixels the same way):
+//! noise is rarely a single pixel wide. The decision still reads the film
+//! alone, so threads, checkpoints and resumes do not change it; a crop is
+//! rendered with a margin of one pixel per decision
+//! ([`crop_margin`]: how far a neighbour's influence can travel), so it
+//! still equals the same window of the whole render.
 //!
 //! **The passes** are the decision points: the first after
 //! [`FIRST_DECISION`] samples, then each ×1.5 or ×4/3 of the one before
@@ -37,9 +55,9 @@
 //!
 //! The approach is Dammertz, Hanika, Keller and Lensch 2010, "A
 //! Hierarchical Automatic Stopping Condition for Monte Carlo Global
-//! Illumination" (per-pixel error from the samples so far, relative with a
-//! floor), without their hierarchy: each pixel decides alone, which keeps
-//! a crop equal to the same window of a whole render.
+//! Illumination" (per-pixel error from the samples so far, over the
+//! square root of the luminance), with a neighbourhood of 3 × 3 pixels in
+//! place of their hierarchy of blocks.
 
 use super::film::{Film, FIXED_SCALE, LUMINANCE};
 use crate::scene::settings::RenderSettings;
@@ -50,10 +68,10 @@ use std::ops::Range;
 pub const FIRST_DECISION: u32 = 16;
 
 /// Displayed luminance (linear, after exposure) below which the target is
-/// absolute: a pixel of mean Y·k < F stops when its error is at most E·F.
-/// At F = 0.05 an error of E·F shows as under one 8-bit sRGB level for
-/// E ≤ 0.02 (the sRGB curve's slope there is about 3).
-pub const DARK_FLOOR: f64 = 0.05;
+/// absolute: a pixel of mean Y·k < F stops when its standard error (times
+/// k) is at most E·√F, a tenth of E. Only a floor, so that black pixels
+/// whose samples differ converge; Cycles' is 10⁻⁴ added to √Y.
+pub const DARK_FLOOR: f64 = 0.01;
 
 /// The noise target of a render: the relative error `error`, judged on
 /// luminance times `scale` (2^exposure).
@@ -126,26 +144,54 @@ pub fn standard_error(film: &Film, index: usize) -> Option<(f64, f64)> {
     Some((mean, (variance / n).sqrt()))
 }
 
-/// The estimated relative error of pixel `index` of `film`, as the module
-/// docs define it, with luminance scaled by `scale`; infinite with fewer
-/// than two valid samples or no squares kept.
-pub fn relative_error(film: &Film, index: usize, scale: f32) -> f64 {
+/// The estimated error of pixel `index` of `film`, as the module docs
+/// define it (the standard error over the square root of the displayed
+/// luminance), with luminance scaled by `scale`; infinite with fewer than
+/// two valid samples or no squares kept.
+pub fn pixel_error(film: &Film, index: usize, scale: f32) -> f64 {
     let Some((mean, error)) = standard_error(film, index) else {
         return f64::INFINITY;
     };
     let scale = scale as f64;
-    error * scale / (mean * scale).max(DARK_FLOOR)
+    error * scale / (mean * scale).max(DARK_FLOOR).sqrt()
 }
 
-/// Whether pixel `index` of `film` has met `target`.
+/// Whether pixel `index` of `film` has met `target` on its own samples.
 pub fn converged(film: &Film, index: usize, target: NoiseTarget) -> bool {
-    relative_error(film, index, target.scale) <= target.error as f64
+    pixel_error(film, index, target.scale) <= target.error as f64
 }
 
-/// Which pixels of `film` still take samples, into `active`.
+/// Which pixels of `film` still take samples, into `active`: those that
+/// have not met `target`, and their neighbours (module docs).
 pub fn active_pixels(film: &Film, target: NoiseTarget, active: &mut Vec<bool>) {
     active.clear();
     active.extend((0..film.pixel_count()).map(|i| !converged(film, i, target)));
+    dilate(active, film.width as usize);
+}
+
+/// Marks every pixel whose 3 × 3 neighbourhood (inside the image) holds
+/// a marked pixel, in rows of `width`: along rows, then along columns.
+fn dilate(marked: &mut [bool], width: usize) {
+    if width == 0 {
+        return;
+    }
+    let rows: Vec<bool> = (0..marked.len())
+        .map(|i| {
+            let x = i % width;
+            marked[i] || (x > 0 && marked[i - 1]) || (x + 1 < width && marked[i + 1])
+        })
+        .collect();
+    for (i, m) in marked.iter_mut().enumerate() {
+        *m = rows[i] || (i >= width && rows[i - width]) || rows.get(i + width) == Some(&true);
+    }
+}
+
+/// How far, in pixels, the samples of one pixel can change a decision
+/// elsewhere in a render of `spp` samples: one step of the neighbourhood
+/// a decision, so a crop rendered with this margin around it takes the
+/// samples the whole render gives it.
+pub fn crop_margin(spp: u32) -> u32 {
+    decision_points(spp).len() as u32 - 1
 }
 
 #[cfg(test)]
@@ -180,11 +226,11 @@ mod tests {
     }
 
     /// Samples that agree have no error; two values a and b, half each,
-    /// have s = |a − b|/2 · √(n/(n−1)).
+    /// have s = |a − b|/2 · √(n/(n−1)), judged over √Ȳ.
     #[test]
-    fn the_estimate_is_the_standard_error_over_the_mean() {
+    fn the_estimate_is_the_standard_error_over_the_root_of_the_mean() {
         let same = film_of(&[Vec3::new(0.3, 0.2, 0.7); 16]);
-        assert!(relative_error(&same, 0, 1.0) < 1e-3);
+        assert!(pixel_error(&same, 0, 1.0) < 1e-3);
         let target = NoiseTarget {
             error: 1e-3,
             scale: 1.0,
@@ -195,15 +241,16 @@ mod tests {
             .collect();
         let film = film_of(&values);
         let s = (16.0f64 / 15.0).sqrt();
-        let expected = s / 4.0 / 2.0;
-        let e = relative_error(&film, 0, 1.0);
+        let expected = s / 4.0 / 2.0f64.sqrt();
+        let e = pixel_error(&film, 0, 1.0);
         assert!((e - expected).abs() < 1e-5, "{e} vs {expected}");
-        // Exposure scales the mean and the error alike above the floor.
-        assert!((relative_error(&film, 0, 4.0) - expected).abs() < 1e-5);
+        // Four times the exposure shows four times the error over twice
+        // the root of the mean, above the floor.
+        assert!((pixel_error(&film, 0, 4.0) - 2.0 * expected).abs() < 1e-5);
     }
 
-    /// A dark pixel is judged against the floor: its relative error is
-    /// its absolute error over F.
+    /// A dark pixel is judged against the floor: its error is its
+    /// absolute error over √F.
     #[test]
     fn dark_pixels_meet_an_absolute_target() {
         let values: Vec<Vec3> = (0..16)
@@ -211,12 +258,39 @@ mod tests {
             .collect();
         let film = film_of(&values);
         let absolute = 0.001 * (16.0f64 / 15.0).sqrt() / 4.0;
-        let e = relative_error(&film, 0, 1.0);
-        assert!((e - absolute / DARK_FLOOR).abs() < 1e-4, "{e}");
-        assert_eq!(
-            relative_error(&film_of(&[Vec3::ONE]), 0, 1.0),
-            f64::INFINITY
-        );
-        assert_eq!(relative_error(&Film::new(1, 1), 0, 1.0), f64::INFINITY);
+        let e = pixel_error(&film, 0, 1.0);
+        assert!((e - absolute / DARK_FLOOR.sqrt()).abs() < 1e-4, "{e}");
+        assert_eq!(pixel_error(&film_of(&[Vec3::ONE]), 0, 1.0), f64::INFINITY);
+        assert_eq!(pixel_error(&Film::new(1, 1), 0, 1.0), f64::INFINITY);
+    }
+
+    /// One marked pixel marks its 3 × 3 neighbourhood and nothing else,
+    /// cut off at the image's edges and not wrapped to the next row.
+    #[test]
+    fn a_pixel_that_samples_on_keeps_its_neighbours_sampling() {
+        let (w, h) = (5usize, 4usize);
+        for marked in [(0usize, 0usize), (4, 1), (2, 2), (4, 3)] {
+            let mut m = vec![false; w * h];
+            m[marked.1 * w + marked.0] = true;
+            dilate(&mut m, w);
+            for y in 0..h {
+                for x in 0..w {
+                    let near = x.abs_diff(marked.0) <= 1 && y.abs_diff(marked.1) <= 1;
+                    assert_eq!(m[y * w + x], near, "{marked:?}: ({x}, {y})");
+                }
+            }
+        }
+        let mut none = vec![false; w * h];
+        dilate(&mut none, w);
+        assert!(none.iter().all(|&m| !m));
+    }
+
+    /// One pixel of margin per decision after the first, so a crop's
+    /// margin covers every step a neighbour's influence can take.
+    #[test]
+    fn the_crop_margin_is_the_decisions_after_the_first() {
+        assert_eq!(crop_margin(16), 0);
+        assert_eq!(crop_margin(24), 1);
+        assert_eq!(crop_margin(200), decision_points(200).len() as u32 - 1);
     }
 }

@@ -8,6 +8,7 @@
 //! absolute, is far below what any output format stores. i128 leaves room
 //! for 2⁴⁸ per sample (values above are clamped and counted) times 2⁴⁷ samples.
 
+use super::window::Window;
 use glam::Vec3;
 
 pub const FIXED_SCALE: f64 = 4_294_967_296.0; // 2^32
@@ -183,6 +184,32 @@ impl Film {
 
     pub fn pixel_count(&self) -> usize {
         self.sums.len()
+    }
+
+    /// The film of window `inner`, cut from this film of window `outer`
+    /// (which holds it). The counts of invalid and clamped samples are the
+    /// whole film's: they are not kept per pixel; the first invalid one is
+    /// kept only if it lies inside `inner`.
+    pub fn cut(&self, outer: &Window, inner: &Window) -> Film {
+        let (dx, dy) = (inner.x.start - outer.x.start, inner.y.start - outer.y.start);
+        let first_invalid = self.first_invalid.and_then(|b| {
+            let (x, y) = (b.x.checked_sub(dx)?, b.y.checked_sub(dy)?);
+            (x < inner.width() && y < inner.height()).then_some(BadSample { x, y, ..b })
+        });
+        Film {
+            width: inner.width(),
+            height: inner.height(),
+            sums: outer.cut(inner, &self.sums),
+            counts: outer.cut(inner, &self.counts),
+            squares: if self.squares.is_empty() {
+                Vec::new()
+            } else {
+                outer.cut(inner, &self.squares)
+            },
+            invalid: self.invalid,
+            first_invalid,
+            clamped: self.clamped,
+        }
     }
 
     /// Keep each pixel's sum of squared luminance from now on (zero for

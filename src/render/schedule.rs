@@ -23,7 +23,7 @@ use crate::scene::Scene;
 use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use std::ops::Range;
+use std::ops::{ControlFlow, Range};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -187,7 +187,68 @@ pub fn pass_ranges(range: Range<u32>, passes: u32) -> Vec<Range<u32>> {
 /// Render this process's slice, telling `observer` how it goes (each
 /// pass's end is where checkpoints are written); `film` starts from
 /// `initial` when resuming.
+///
+/// A crop under a noise target is rendered with a margin around it (a
+/// pixel's decisions read its neighbours: `adaptive::crop_margin`), which
+/// is cut off again, so that it equals the same window of the whole
+/// render; `observer` sees the crop alone.
 pub fn render(
+    scene: &Scene,
+    opts: &RenderOptions,
+    initial: Option<Film>,
+    observer: impl Observer,
+) -> RenderOutcome {
+    let s = &scene.settings;
+    let noise = adaptive::NoiseTarget::of(s).is_some() && opts.slice.count == 1;
+    let crop = opts.window.clone().filter(|_| noise && initial.is_none());
+    let Some(crop) = crop else {
+        return render_window(scene, opts, initial, observer);
+    };
+    let grown = crop.grown(adaptive::crop_margin(s.spp), s.height);
+    let inner = RenderOptions {
+        window: Some(grown.clone()),
+        ..opts.clone()
+    };
+    let cut = CutTo {
+        observer,
+        outer: &grown,
+        inner: &crop,
+    };
+    let mut outcome = render_window(scene, &inner, None, cut);
+    outcome.film = outcome.film.cut(&grown, &crop);
+    outcome.aov = outcome.aov.map(|a| grown.cut(&crop, &a));
+    outcome
+}
+
+/// An observer shown a film of window `outer` that passes on only its
+/// window `inner`.
+struct CutTo<'w, O> {
+    observer: O,
+    outer: &'w Window,
+    inner: &'w Window,
+}
+
+impl<O: Observer> Observer for CutTo<'_, O> {
+    fn started(&mut self, work_items: u64) {
+        self.observer.started(work_items);
+    }
+    fn pass_started(&mut self, pass: &Pass) {
+        self.observer.pass_started(pass);
+    }
+    fn item_done(&self) {
+        self.observer.item_done();
+    }
+    fn pass_done(&mut self, film: &Film, done: &PassDone) -> ControlFlow<()> {
+        self.observer
+            .pass_done(&film.cut(self.outer, self.inner), done)
+    }
+    fn finished(&mut self) {
+        self.observer.finished();
+    }
+}
+
+/// [`render`] of `opts.window` as it is.
+fn render_window(
     scene: &Scene,
     opts: &RenderOptions,
     initial: Option<Film>,

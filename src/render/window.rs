@@ -46,6 +46,31 @@ impl Window {
         (x, y, y * self.image_width + x)
     }
 
+    /// This window grown by `margin` pixels on every side, within an image
+    /// `image_height` rows tall.
+    pub fn grown(&self, margin: u32, image_height: u32) -> Self {
+        Self {
+            x: self.x.start.saturating_sub(margin)..(self.x.end + margin).min(self.image_width),
+            y: self.y.start.saturating_sub(margin)..(self.y.end + margin).min(image_height),
+            image_width: self.image_width,
+        }
+    }
+
+    /// Of `values`, one per pixel of this window (row-major), those of the
+    /// pixels of `inner`, a window inside this one.
+    pub fn cut<T: Copy>(&self, inner: &Window, values: &[T]) -> Vec<T> {
+        let w = self.width() as usize;
+        let x0 = (inner.x.start - self.x.start) as usize;
+        inner
+            .y
+            .clone()
+            .flat_map(|y| {
+                let row = (y - self.y.start) as usize * w + x0;
+                values[row..row + inner.width() as usize].iter().copied()
+            })
+            .collect()
+    }
+
     /// `--crop X0,Y0,X1,Y1` (half-open pixel ranges) inside a `width` ×
     /// `height` image.
     pub fn crop(text: &str, width: u32, height: u32) -> Result<Self, String> {
@@ -98,5 +123,16 @@ mod tests {
             let e = Window::crop(text, 8, 4).unwrap_err();
             assert!(e.contains(needle), "{text}: {e}");
         }
+    }
+
+    #[test]
+    fn a_grown_window_stays_in_the_image_and_cuts_back_to_the_crop() {
+        let crop = Window::crop("2,1,5,3", 8, 6).unwrap();
+        let grown = crop.grown(2, 6);
+        assert_eq!((grown.x.clone(), grown.y.clone()), (0..7, 0..5));
+        let ids: Vec<u32> = (0..grown.pixel_count()).map(|i| grown.pixel(i).2).collect();
+        let mine: Vec<u32> = (0..crop.pixel_count()).map(|i| crop.pixel(i).2).collect();
+        assert_eq!(grown.cut(&crop, &ids), mine);
+        assert_eq!(Window::whole(8, 6).grown(3, 6), Window::whole(8, 6));
     }
 }

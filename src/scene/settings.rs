@@ -106,12 +106,13 @@ pub struct RenderOverrides {
     /// baseline [render.glossy_sampling; default lobe]
     #[arg(long)]
     pub glossy_sampling: Option<GlossySampling>,
-    /// Adaptive sampling: stop each pixel once the estimated relative error
-    /// of its luminance is at most E (0.02 is 2%), judged at pass
-    /// boundaries (after 16, 24, 32, 48, 64, … samples); --spp is the
-    /// ceiling (default 1024 with --noise). Dark pixels meet an absolute
-    /// target instead (docs/cli.md, "Noise target"). The image is the same
-    /// for any thread count, checkpoint and resume [render.noise; default
+    /// Adaptive sampling: stop each pixel once the estimated standard error
+    /// of its luminance, over the square root of that luminance, is at most
+    /// E (for a pixel of luminance 1, 0.02 is 2%), and its 3x3 neighbours
+    /// have stopped too; judged at pass boundaries (after 16, 24, 32, 48,
+    /// 64, … samples); --spp is the ceiling (default 1024 with --noise).
+    /// See docs/cli.md, "Noise target". The image is the same for any
+    /// thread count, crop, checkpoint and resume [render.noise; default
     /// none: every pixel takes spp samples]
     #[arg(long, value_name = "E")]
     pub noise: Option<f32>,
@@ -163,7 +164,7 @@ pub struct RenderSettings {
     pub background: Vec3,
     pub light_sampling: LightSampling,
     pub glossy_sampling: GlossySampling,
-    /// The relative error each pixel stops at (`render::adaptive`); `None`
+    /// The error each pixel stops at (`render::adaptive`); `None`
     /// renders every pixel's `spp` samples.
     pub noise: Option<f32>,
     /// Stops: 8-bit outputs show radiance times 2^exposure.
@@ -290,7 +291,8 @@ impl RenderOverrides {
             );
         }
         if let Some(e) = self.noise.filter(|e| !(e.is_finite() && *e > 0.0)) {
-            let message = "must be a relative error above 0, such as 0.02 for 2%".to_string();
+            let message =
+                "must be an error above 0, such as 0.02 (2% where the luminance is 1)".to_string();
             return bad("noise", e.to_string(), message);
         }
         if let Some(e) = self

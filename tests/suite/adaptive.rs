@@ -37,12 +37,12 @@ fn film(s: &Scene, threads: usize) -> Film {
     render(s, &opts, None, ()).film
 }
 
-/// Pixels whose samples all agree (sky) stop at the first decision; the
-/// penumbra (floor pixels, by their normal, at a fifth to four fifths of
+/// Pixels whose samples all agree (sky) stop at the first decision, but
+/// for those beside a pixel that samples on (the horizon); the penumbra (floor pixels, by their normal, at a fifth to four fifths of
 /// the light the floor gets without the sphere, in uniform renders)
 /// keeps sampling; and no pixel passes the ceiling.
 #[test]
-fn agreeing_pixels_stop_at_the_first_decision_and_the_penumbra_keeps_sampling() {
+fn agreeing_pixels_stop_at_the_first_decision_unless_a_neighbour_samples_on() {
     let adaptive = film(&scene(&penumbra_scene(512, "noise = 0.02")), 2);
     let opts = RenderOptions {
         aovs: true,
@@ -53,20 +53,42 @@ fn agreeing_pixels_stop_at_the_first_decision_and_the_penumbra_keeps_sampling() 
     let bare = text.split("[[objects]]\nsphere").next().unwrap();
     let without = film(&scene(bare), 2).to_rgb();
     let aov = with.aov.unwrap();
-    let mut sky = 0;
+    // Every one of the 256 camera rays missed: all sky.
+    let is_sky: Vec<bool> = aov
+        .iter()
+        .map(|a| a.normal == [0.0; 3] && a.depth.is_infinite())
+        .collect();
+    let (w, h) = (48usize, 36usize);
+    let neighbours = |i: usize| {
+        let (x, y) = ((i % w) as i64, (i / w) as i64);
+        (-1..=1i64)
+            .flat_map(move |dy| (-1..=1i64).map(move |dx| (x + dx, y + dy)))
+            .filter(|&(x, y)| x >= 0 && y >= 0 && x < w as i64 && y < h as i64)
+            .map(|(x, y)| y as usize * w + x as usize)
+    };
+    let (mut sky, mut kept_by_neighbours) = (0, 0);
     let mut penumbra = Vec::new();
     for (i, p) in with.film.to_rgb().iter().enumerate() {
         assert!(adaptive.counts[i] >= FIRST_DECISION && adaptive.counts[i] <= 512);
         let floor = aov[i].normal[1] / aov[i].count as f64 > 0.9999;
-        // Every one of the 256 camera rays missed: all sky.
-        if aov[i].normal == [0.0; 3] && aov[i].depth.is_infinite() {
-            sky += 1;
-            assert_eq!(adaptive.counts[i], FIRST_DECISION, "sky pixel {i}");
+        if is_sky[i] {
+            // A sky pixel agrees with itself: only a neighbour that is
+            // not sky (the sphere's or the floor's edge) keeps it going.
+            if neighbours(i).all(|j| is_sky[j]) {
+                sky += 1;
+                assert_eq!(adaptive.counts[i], FIRST_DECISION, "sky pixel {i}");
+            } else if adaptive.counts[i] > FIRST_DECISION {
+                kept_by_neighbours += 1;
+            }
         } else if floor && p.y > 0.2 * without[i].y && p.y < 0.8 * without[i].y {
             penumbra.push(adaptive.counts[i]);
         }
     }
     assert!(sky > 48 && penumbra.len() > 5, "{sky} sky, {penumbra:?}");
+    assert!(
+        kept_by_neighbours > 5,
+        "{kept_by_neighbours} sky pixels beside an edge sampled on"
+    );
     penumbra.sort();
     let median = penumbra[penumbra.len() / 2];
     assert!(median >= 4 * FIRST_DECISION, "penumbra counts {penumbra:?}");
