@@ -625,8 +625,11 @@ impl Mesh {
         let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
         let mut out = vec![0i64; rays.len()];
         run::each(py, &threads, &rays, &mut out, |rays, out| {
-            for (o, ray) in out.iter_mut().zip(rays) {
-                *o = i64::from(self.0.count_hits(ray));
+            let mut counts = [0u32; TASK];
+            let counts = &mut counts[..rays.len()];
+            self.0.count_hits(rays, counts);
+            for (o, &n) in out.iter_mut().zip(counts.iter()) {
+                *o = i64::from(n);
             }
         })?;
         let n = out.len();
@@ -652,9 +655,9 @@ impl Mesh {
         let points = convert::points(&points, "points", self.0.centre(), &threads)?;
         let mut out = vec![false; points.len()];
         run::each(py, &threads, &points, &mut out, |points, out| {
-            for (o, &(_, near)) in out.iter_mut().zip(points) {
-                *o = self.0.contains(near);
-            }
+            let near: [glam::Vec3; TASK] =
+                std::array::from_fn(|i| points.get(i).map_or(glam::Vec3::ZERO, |p| p.1));
+            self.0.contains(&near[..points.len()], out);
         })?;
         let n = out.len();
         shaped(py, out, &lead, n, &[])

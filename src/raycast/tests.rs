@@ -105,11 +105,14 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
         .iter()
         .all(|c| c.u >= -1e-9 && c.v >= -1e-9 && c.u + c.v <= 1.0 + 1e-9));
     assert!(a.len() > 1000, "{} crossings", a.len());
-    for (ray, &n) in rays.iter().zip(&na) {
-        assert_eq!(placed.count_hits(ray), n);
-    }
+    let mut counts = vec![0; rays.len()];
+    placed.count_hits(&rays, &mut counts);
+    assert_eq!(counts, na);
+    let (mut ia, mut ib) = (vec![false; points.len()], vec![false; points.len()]);
+    placed.contains(&points, &mut ia);
+    copies.contains(&points, &mut ib);
+    assert_eq!(ia, ib);
     for &p in &points {
-        assert_eq!(placed.contains(p), copies.contains(p));
         for signed in [false, true] {
             let (x, y) = (
                 placed.closest_point(p.as_dvec3(), p, 1.5, signed),
@@ -203,7 +206,9 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
                     let mut found = Vec::new();
                     mesh.all_hits(&[ray], &mut found, &mut Vec::new(), false);
                     assert_eq!(found.first().map(|c| c.t) == Some(t), counts);
-                    assert_eq!(mesh.count_hits(&ray) > 0, counts);
+                    let mut n = [0];
+                    mesh.count_hits(&[ray], &mut n);
+                    assert_eq!(n[0] > 0, counts);
                 } else {
                     let mut hit = [FirstHit::MISS];
                     mesh.first_hits(&[ray], &mut hit, true);
@@ -242,7 +247,35 @@ fn a_mesh_without_faces_answers_nothing() {
     let near = empty.closest_point(glam::DVec3::ZERO, Vec3::ZERO, f32::INFINITY, true);
     assert_eq!((near.face, near.distance), (-1, f64::INFINITY));
     assert!(near.point.is_nan());
-    assert!(!empty.contains(Vec3::ZERO));
+    let mut inside = [true];
+    empty.contains(&[Vec3::ZERO], &mut inside);
+    assert!(!inside[0]);
     let err = Mesh::new(vec![Vec3::ZERO], vec![[0, 0, 1]], BuildQuality::Auto);
     assert!(err.is_err());
+}
+
+/// Crossings, counts and inside walk several rays in flight on a tree
+/// that prefetches, one at a time on one that does not: the same answers
+/// either way, on a placed mesh (instances) and a plain one.
+#[test]
+fn crossing_queries_answer_the_same_in_flight() {
+    let (placed, copies) = placed_and_copies();
+    let (rays, points) = rays_and_points(2000);
+    type Answers = (Vec<(f32, i64, u64, u64)>, Vec<u32>, Vec<u32>, Vec<bool>);
+    let answers = |m: &Mesh| -> Answers {
+        let (mut all, mut n) = (Vec::new(), Vec::new());
+        m.all_hits(&rays, &mut all, &mut n, true);
+        let mut counts = vec![0; rays.len()];
+        m.count_hits(&rays, &mut counts);
+        let mut inside = vec![false; points.len()];
+        m.contains(&points, &mut inside);
+        let key = |c: &Crossing| (c.t, c.face, c.u.to_bits(), c.v.to_bits());
+        (all.iter().map(key).collect(), n, counts, inside)
+    };
+    for mut mesh in [placed, copies] {
+        let alone = answers(&mesh);
+        assert!(alone.0.len() > 1000 && alone.3.contains(&true));
+        mesh.geometry.set_prefetch(true);
+        assert_eq!(answers(&mesh), alone);
+    }
 }
