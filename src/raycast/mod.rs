@@ -366,6 +366,14 @@ impl Mesh {
             let mut found = [None; SPAN];
             let found = &mut found[..rays.len()];
             self.geometry.intersect_stream(rays, found);
+            if surface && self.given.is_none() {
+                // The hit triangles' corners, read below, have mostly left
+                // the caches since the walk tested them: fetch them all at
+                // once rather than wait for each in turn.
+                for hit in found.iter().flatten() {
+                    self.geometry.prefetch_triangle(hit);
+                }
+            }
             for ((o, hit), ray) in out.iter_mut().zip(found.iter()).zip(rays) {
                 *o = match hit {
                     None => FirstHit::MISS,

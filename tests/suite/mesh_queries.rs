@@ -595,7 +595,10 @@ fn streams_of_crossings_equal_each_rays_own_walk_and_brute_force() {
                         assert_eq!(n, 2, "aimed ray {i}: {ray:?}");
                     }
                 }
-                assert_eq!(spans.iter().map(|s| s.1 as usize).sum::<usize>(), found.len());
+                assert_eq!(
+                    spans.iter().map(|s| s.1 as usize).sum::<usize>(),
+                    found.len()
+                );
                 let mut inside = vec![false; count];
                 g.contains_stream(&points[..count], &mut inside);
                 let own: Vec<bool> = points[..count].iter().map(|&p| g.contains(p)).collect();

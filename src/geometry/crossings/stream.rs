@@ -124,7 +124,10 @@ impl Geometry {
         let mut counts = [0u32; PART];
         for (points, out) in points.chunks(PART).zip(out.chunks_mut(PART)) {
             let rays: [Ray; PART] = std::array::from_fn(|i| {
-                Ray::new(points.get(i).copied().unwrap_or_default(), CONTAINS_DIRECTION)
+                Ray::new(
+                    points.get(i).copied().unwrap_or_default(),
+                    CONTAINS_DIRECTION,
+                )
             });
             let counts = &mut counts[..points.len()];
             self.count_crossings_stream(&rays[..points.len()], counts);
