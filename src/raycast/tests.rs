@@ -279,3 +279,43 @@ fn crossing_queries_answer_the_same_in_flight() {
         assert_eq!(answers(&mesh), alone);
     }
 }
+
+/// First hits and occlusion go through the stream walk (in flight where
+/// the tree prefetches): each ray's t, face and barycentrics are bit for
+/// bit its own single-ray walk's, prefetching on or off, and its point
+/// and normal are the same either way.
+#[test]
+fn first_hits_and_occlusion_equal_each_rays_single_walk() {
+    let (placed, copies) = placed_and_copies();
+    let (rays, _) = rays_and_points(2000);
+    let bits = |h: &FirstHit| {
+        let p = h.point.to_array().map(f64::to_bits);
+        (h.t.to_bits(), h.face, h.u.to_bits(), h.v.to_bits(), p)
+    };
+    for mut mesh in [placed, copies] {
+        let mut hits = 0;
+        for prefetch in [false, true] {
+            mesh.geometry.set_prefetch(prefetch);
+            let mut first = vec![FirstHit::MISS; rays.len()];
+            mesh.first_hits(&rays, &mut first, true);
+            let mut blocked = vec![false; rays.len()];
+            mesh.occluded(&rays, &mut blocked);
+            for (i, ray) in rays.iter().enumerate() {
+                let own = mesh.geometry.intersect(ray);
+                assert_eq!(
+                    own.map(|h| (h.t, h.u, h.v)),
+                    first[i]
+                        .t
+                        .is_finite()
+                        .then_some((first[i].t, first[i].u, first[i].v)),
+                    "ray {i}"
+                );
+                let want = own.map_or(FirstHit::MISS, |h| mesh.first_hit(ray, &h));
+                assert_eq!(bits(&first[i]), bits(&want), "ray {i}");
+                assert_eq!(blocked[i], mesh.geometry.occluded(ray), "ray {i}");
+                hits += own.is_some() as usize;
+            }
+        }
+        assert!(hits > 500, "{hits} hits");
+    }
+}
