@@ -120,7 +120,7 @@ impl Geometry {
     /// walked as [`Geometry::count_crossings_stream`] walks them.
     pub fn contains_stream(&self, points: &[glam::Vec3], out: &mut [bool]) {
         assert_eq!(points.len(), out.len(), "one answer per point");
-        const PART: usize = 64;
+        const PART: usize = 256;
         let mut counts = [0u32; PART];
         for (points, out) in points.chunks(PART).zip(out.chunks_mut(PART)) {
             let rays: [Ray; PART] = std::array::from_fn(|i| {
