@@ -3,7 +3,7 @@
 
     tools/.venv-bench/bin/python tools/bench_python.py [--mesh assets/dragon.ply]
         [--rays 1000000] [--list-rays 200000] [--points 200000] [--runs 3]
-        [--threads N] [--engines strata,embreex,open3d] [--csv FILE]
+        [--threads N] [--engines strata,embreex,open3d] [--write-rays RAYS.bin]
 
 The environment (once; strata_rt built from this checkout):
 
@@ -286,6 +286,9 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--threads", type=int, default=None, help="strata and Open3D threads (default: all)")
     ap.add_argument("--engines", default="strata,embreex,open3d")
+    ap.add_argument("--write-rays", metavar="RAYS.bin",
+                    help="write the --rays rays as a ray file for `strata trace` "
+                         "(8 float32 a ray: origin, direction, t_min 0, t_max inf) and stop")
     args = ap.parse_args()
 
     if not os.path.exists(args.mesh):
@@ -301,6 +304,12 @@ def main():
 
     v, f = load_mesh(args.mesh)
     o, d = random_rays(v, args.rays)
+    if args.write_rays:
+        records = np.zeros((len(o), 8), np.float32)
+        records[:, :3], records[:, 3:6], records[:, 7] = o, d, np.inf
+        records.tofile(args.write_rays)
+        print(f"{args.write_rays}: {len(o)} rays (strata trace {args.mesh} --rays {args.write_rays} ...)")
+        return
     p = random_points(v, args.points)
     lo, ld = o[: args.list_rays], d[: args.list_rays]
     inputs = {"rays": (o, d), "list": (lo, ld), "points": (p,)}

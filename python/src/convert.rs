@@ -301,6 +301,30 @@ pub fn points(
     }
 }
 
+/// `out` = `make(i)` for `i` in `range` (its old items dropped, its
+/// memory kept), on `threads`, and the first `i` whose answer came back
+/// marked bad.
+fn gather_into<T: Send>(
+    threads: &Threads,
+    range: std::ops::Range<usize>,
+    out: &mut Vec<T>,
+    make: impl Fn(usize) -> (T, bool) + Sync,
+) -> Option<usize> {
+    let first_bad = AtomicUsize::new(usize::MAX);
+    out.clear();
+    threads.install(|| {
+        out.par_extend(range.into_par_iter().map(|i| {
+            let (value, bad) = make(i);
+            if bad {
+                first_bad.fetch_min(i, Ordering::Relaxed);
+            }
+            value
+        }))
+    });
+    let bad = first_bad.into_inner();
+    (bad != usize::MAX).then_some(bad)
+}
+
 /// `make(i)` for `i` in `0..n`, on `threads`, and the first `i` whose
 /// answer came back marked bad.
 fn gather<T: Send>(
@@ -508,68 +532,115 @@ pub struct RaySpec<'a, 'py> {
     pub bad: BadRays,
 }
 
+/// The rays of a query, read from `origins` and `directions` a chunk at a
+/// time ([`RaySource::read`]) into one buffer the chunk's walks then take:
+/// not a vector of every ray first (32 bytes a ray, a million rays' worth
+/// of memory touched once more and out of the caches again before the
+/// walks read it).
+pub struct RaySource<'py> {
+    origins: Vec3Array<'py>,
+    directions: Vec3Array<'py>,
+    t_max: TMax,
+    t_min: f32,
+    bad: BadRays,
+    centre: DVec3,
+    n: usize,
+}
+
 /// Rays from `origins` and `directions` ((n, 3) each, finite, no zero
-/// direction, else per `spec.bad`), on `(t_min, t_max]`, read on `threads`
-/// (with the GIL held, so no Python code can change the arrays meanwhile).
+/// direction, else per `spec.bad`), on `(t_min, t_max]`: their shapes,
+/// lengths and intervals checked here, each ray when it is read.
 /// Origins are made relative to `centre` (in float64, then rounded) where
 /// the mesh is held relative to it.
-pub fn rays(
-    origins: &Bound<'_, PyAny>,
-    directions: &Bound<'_, PyAny>,
+pub fn ray_source<'py>(
+    origins: &Bound<'py, PyAny>,
+    directions: &Bound<'py, PyAny>,
     spec: &RaySpec<'_, '_>,
     centre: DVec3,
-    threads: &Threads,
-) -> PyResult<Vec<Ray>> {
-    let o = read_vec3s(origins, "origins")?;
-    let d = read_vec3s(directions, "directions")?;
-    let (o, d) = (o.rows()?, d.rows()?);
-    if o.len() != d.len() {
+) -> PyResult<RaySource<'py>> {
+    let origins = read_vec3s(origins, "origins")?;
+    let directions = read_vec3s(directions, "directions")?;
+    let (no, nd) = (origins.rows()?.len(), directions.rows()?.len());
+    if no != nd {
         return Err(error(format!(
-            "origins and directions must have the same length; got {} and {}",
-            o.len(),
-            d.len()
+            "origins and directions must have the same length; got {no} and {nd}"
         )));
     }
-    let t = t_maxes(spec.t_max, o.len())?;
-    let t_min = t_min_of(spec.t_min)?;
-    let n = o.len();
-    let bad =
-        |r: &Ray| !r.origin.is_finite() || !r.direction.is_finite() || r.direction == Vec3::ZERO;
-    let miss = spec.bad == BadRays::Miss;
-    let centred = centre != DVec3::ZERO;
-    let (rays, bad) = with_rows!(o, |ro| with_rows!(d, |rd| gather(threads, n, |i| {
-        // Without a centre, the row rounded once, as (row - 0) would be.
-        let origin = match centred {
-            true => (ro.row64(i) - centre).as_vec3(),
-            false => ro.row(i),
-        };
-        let ray = Ray {
-            origin,
-            direction: rd.row(i),
-            tmin: t_min,
-            tmax: t.get(i),
-        };
-        match bad(&ray) {
-            true if miss => (NO_RAY, false),
-            b => (ray, b),
-        }
-    })));
-    let Some(i) = bad else {
-        return Ok(rays);
-    };
-    let r = rays[i];
-    if !r.origin.is_finite() {
-        return Err(not_finite("origins", i, r.origin));
+    Ok(RaySource {
+        t_max: t_maxes(spec.t_max, no)?,
+        t_min: t_min_of(spec.t_min)?,
+        bad: spec.bad,
+        centre,
+        n: no,
+        origins,
+        directions,
+    })
+}
+
+impl RaySource<'_> {
+    /// The number of rays.
+    pub fn len(&self) -> usize {
+        self.n
     }
-    let what = if r.direction.is_finite() {
-        "is zero"
-    } else {
-        "is not finite (as float32)"
-    };
-    Err(error(format!(
-        "directions[{i}] {what}: {:?}; a direction must be a finite, non-zero vector",
-        r.direction.to_array()
-    )))
+
+    /// Rays `range` into `out` (its old rays dropped), read on `threads`
+    /// with the GIL held, so that no Python code changes the arrays
+    /// meanwhile. A bad ray raises `ValueError` naming its row (the first
+    /// of the range; chunks are read in order, so the first of all), or
+    /// becomes a miss under [`BadRays::Miss`].
+    pub fn read(
+        &self,
+        range: std::ops::Range<usize>,
+        threads: &Threads,
+        out: &mut Vec<Ray>,
+    ) -> PyResult<()> {
+        let (o, d) = (self.origins.rows()?, self.directions.rows()?);
+        let bad = |r: &Ray| {
+            !r.origin.is_finite() || !r.direction.is_finite() || r.direction == Vec3::ZERO
+        };
+        let miss = self.bad == BadRays::Miss;
+        let centred = self.centre != DVec3::ZERO;
+        let (centre, t, t_min) = (self.centre, &self.t_max, self.t_min);
+        let first = range.start;
+        let bad = with_rows!(o, |ro| with_rows!(d, |rd| gather_into(
+            threads,
+            range.clone(),
+            out,
+            |i| {
+                // Without a centre, the row rounded once, as (row - 0) would be.
+                let origin = match centred {
+                    true => (ro.row64(i) - centre).as_vec3(),
+                    false => ro.row(i),
+                };
+                let ray = Ray {
+                    origin,
+                    direction: rd.row(i),
+                    tmin: t_min,
+                    tmax: t.get(i),
+                };
+                match bad(&ray) {
+                    true if miss => (NO_RAY, false),
+                    b => (ray, b),
+                }
+            }
+        )));
+        let Some(i) = bad else {
+            return Ok(());
+        };
+        let r = out[i - first];
+        if !r.origin.is_finite() {
+            return Err(not_finite("origins", i, r.origin));
+        }
+        let what = if r.direction.is_finite() {
+            "is zero"
+        } else {
+            "is not finite (as float32)"
+        };
+        Err(error(format!(
+            "directions[{i}] {what}: {:?}; a direction must be a finite, non-zero vector",
+            r.direction.to_array()
+        )))
+    }
 }
 
 /// An (n, 3, 4) or (n, 4, 4) array of row-major object-to-world matrices

@@ -1,6 +1,6 @@
 //! `Mesh`: a triangle mesh with its BVH, and the queries on it.
 
-use crate::convert::{self, BadRays, RaySpec};
+use crate::convert::{self, BadRays, RaySource, RaySpec};
 use crate::results::{ClosestPoints, Crossings, Hits, HITS_KEYS};
 use crate::run::{self, Threads, CHUNK, TASK};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods};
@@ -228,17 +228,17 @@ impl Mesh {
         (vertices, faces)
     }
 
-    /// A ray query's rays: its arguments read and checked (``ValueError``
-    /// naming the argument), origins made relative to the mesh's centre.
-    fn rays(
+    /// A ray query's rays: its arguments checked (``ValueError`` naming
+    /// the argument), to be read a chunk at a time, origins relative to
+    /// the mesh's centre; and their leading shape.
+    fn rays<'py>(
         &self,
-        origins: &Bound<'_, PyAny>,
-        directions: &Bound<'_, PyAny>,
+        origins: &Bound<'py, PyAny>,
+        directions: &Bound<'py, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
         t_min: Option<f64>,
         bad_rays: &str,
-        threads: &Threads,
-    ) -> PyResult<(Vec<strata::math::Ray>, Vec<usize>)> {
+    ) -> PyResult<(RaySource<'py>, Vec<usize>)> {
         let spec = RaySpec {
             t_min,
             t_max,
@@ -266,7 +266,7 @@ impl Mesh {
             t_max: flat_t_max.as_ref().or(spec.t_max),
             ..spec
         };
-        let rays = convert::rays(&o, &d, &spec, self.0.centre(), threads)?;
+        let rays = convert::ray_source(&o, &d, &spec, self.0.centre())?;
         Ok((rays, lead))
     }
 }
@@ -480,9 +480,10 @@ impl Mesh {
         fields: Option<Vec<String>>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
-        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
         let n = rays.len();
         let fields = Fields::new(fields)?;
+        let mut chunk = Vec::with_capacity(n.min(CHUNK));
         let mut t = column::<f32>(fields.has("t"), n);
         let mut prim = column::<i64>(fields.has("prim"), n);
         let mut u = column::<f32>(fields.has("u"), n);
@@ -492,6 +493,7 @@ impl Mesh {
         let surface = fields.has("normal") || fields.has("point");
         for start in (0..n).step_by(CHUNK) {
             let r = start..(start + CHUNK).min(n);
+            rays.read(r.clone(), &threads, &mut chunk)?;
             let pieces = task_pieces(&mut t, 1, r.clone())
                 .into_iter()
                 .zip(task_pieces(&mut prim, 1, r.clone()))
@@ -508,7 +510,7 @@ impl Mesh {
                     point,
                 })
                 .collect::<Vec<_>>();
-            let work = rays[r.clone()].par_chunks(TASK).zip(pieces);
+            let work = chunk.par_chunks(TASK).zip(pieces);
             py.detach(|| {
                 threads.install(|| {
                     work.for_each(|(rays, out)| {
@@ -546,9 +548,9 @@ impl Mesh {
         bad_rays: &str,
     ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
-        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
         let mut out = vec![false; rays.len()];
-        run::each(py, &threads, &rays, &mut out, |rays, out| {
+        run::each_ray(py, &threads, &rays, &mut out, |rays, out| {
             self.0.occluded(rays, out)
         })?;
         let n = out.len();
@@ -579,7 +581,7 @@ impl Mesh {
         uv: bool,
     ) -> PyResult<Crossings> {
         let threads = Threads::new(threads)?;
-        let (rays, _) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, _) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
         let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
             self.0.all_hits(rays, found, counts, uv)
         })?;
@@ -622,11 +624,14 @@ impl Mesh {
         bad_rays: &str,
     ) -> PyResult<Py<PyArrayDyn<i64>>> {
         let threads = Threads::new(threads)?;
-        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays, &threads)?;
+        let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
         let mut out = vec![0i64; rays.len()];
-        run::each(py, &threads, &rays, &mut out, |rays, out| {
-            for (o, ray) in out.iter_mut().zip(rays) {
-                *o = i64::from(self.0.count_hits(ray));
+        run::each_ray(py, &threads, &rays, &mut out, |rays, out| {
+            let mut counts = [0u32; TASK];
+            let counts = &mut counts[..rays.len()];
+            self.0.count_hits(rays, counts);
+            for (o, &n) in out.iter_mut().zip(counts.iter()) {
+                *o = i64::from(n);
             }
         })?;
         let n = out.len();
@@ -652,9 +657,9 @@ impl Mesh {
         let points = convert::points(&points, "points", self.0.centre(), &threads)?;
         let mut out = vec![false; points.len()];
         run::each(py, &threads, &points, &mut out, |points, out| {
-            for (o, &(_, near)) in out.iter_mut().zip(points) {
-                *o = self.0.contains(near);
-            }
+            let near: [glam::Vec3; TASK] =
+                std::array::from_fn(|i| points.get(i).map_or(glam::Vec3::ZERO, |p| p.1));
+            self.0.contains(&near[..points.len()], out);
         })?;
         let n = out.len();
         shaped(py, out, &lead, n, &[])

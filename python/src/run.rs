@@ -6,6 +6,9 @@ use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
+use strata::math::Ray;
+
+use crate::convert::RaySource;
 
 /// Items between two checks for Ctrl-C: a few milliseconds of work on
 /// one core, so an interrupt lands at once and the checks cost nothing.
@@ -90,18 +93,48 @@ pub fn each<I: Sync, R: Send>(
     Ok(())
 }
 
-/// The answers of a query with any number of answers per item, in item
-/// order: `answer` appends a task's answers to its vector and returns how
-/// many each item had. Threads, GIL and Ctrl-C as for [`each`].
-pub fn flat<I: Sync, R: Send>(
+/// [`each`] of a query's rays, read a chunk at a time (with the GIL
+/// held) into one buffer that the chunk's tasks then walk
+/// ([`RaySource`]).
+pub fn each_ray<R: Send>(
     py: Python<'_>,
     threads: &Threads,
-    items: &[I],
-    answer: impl Fn(&[I], &mut Vec<R>, &mut Vec<u32>) + Sync,
+    rays: &RaySource<'_>,
+    out: &mut [R],
+    answer: impl Fn(&[Ray], &mut [R]) + Sync,
+) -> PyResult<()> {
+    debug_assert_eq!(rays.len(), out.len());
+    let mut buffer = Vec::with_capacity(rays.len().min(CHUNK));
+    for (k, out) in out.chunks_mut(CHUNK).enumerate() {
+        let start = k * CHUNK;
+        rays.read(start..start + out.len(), threads, &mut buffer)?;
+        py.detach(|| {
+            threads.install(|| {
+                buffer
+                    .par_chunks(TASK)
+                    .zip(out.par_chunks_mut(TASK))
+                    .for_each(|(rays, out)| answer(rays, out))
+            })
+        });
+        py.check_signals()?;
+    }
+    Ok(())
+}
+
+/// The answers of a query with any number of answers per ray, in ray
+/// order: `answer` appends a task's answers to its vector and returns how
+/// many each ray had. Rays, threads, GIL and Ctrl-C as for [`each_ray`].
+pub fn flat<R: Send>(
+    py: Python<'_>,
+    threads: &Threads,
+    rays: &RaySource<'_>,
+    answer: impl Fn(&[Ray], &mut Vec<R>, &mut Vec<u32>) + Sync,
 ) -> PyResult<(Vec<u32>, Vec<R>)> {
-    let mut counts = Vec::with_capacity(items.len());
+    let mut counts = Vec::with_capacity(rays.len());
     let mut answers = Vec::new();
-    for items in items.chunks(CHUNK) {
+    let mut items = Vec::with_capacity(rays.len().min(CHUNK));
+    for start in (0..rays.len()).step_by(CHUNK) {
+        rays.read(start..(start + CHUNK).min(rays.len()), threads, &mut items)?;
         let parts: Vec<(Vec<u32>, Vec<R>)> = py.detach(|| {
             threads.install(|| {
                 items

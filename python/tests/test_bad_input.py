@@ -82,6 +82,33 @@ def test_bad_rays_are_refused_by_name(query, name):
     raises(lambda: getattr(MESH, query)(args["origins"], args["directions"], **options), *words)
 
 
+@pytest.mark.parametrize("query", RAY_QUERIES)
+def test_the_first_bad_ray_is_named_past_the_first_chunk(query):
+    # Rays are read a chunk of 65,536 at a time as the walks go: the error
+    # still names the first bad row of all, not the first of a later chunk,
+    # and bad_rays="miss" makes exactly those rows misses.
+    n = 140_000
+    o = np.tile(O[:1], (n, 1))
+    d = np.tile(D[:1], (n, 1))
+    o[[70_001, 139_000], 2] = np.nan
+    d[100_000] = 0.0
+    raises(lambda: getattr(MESH, query)(o, d), "origins[70001]", "not finite")
+    d[5] = np.nan
+    raises(lambda: getattr(MESH, query)(o, d), "directions[5]", "not finite")
+    kept = getattr(MESH, query)(o, d, bad_rays="miss")
+    clean = getattr(MESH, query)(O[:1], D[:1])
+    if query == "all_hits":
+        counts = np.diff(kept.splits)
+        bad = np.zeros(n, bool)
+        bad[[5, 70_001, 100_000, 139_000]] = True
+        assert (counts[bad] == 0).all() and (counts[~bad] == len(clean.t)).all()
+    else:
+        answer = kept.prim if query == "intersect" else np.asarray(kept)
+        first = clean.prim if query == "intersect" else np.asarray(clean)
+        missed = np.flatnonzero(answer != first[0])
+        assert list(missed) == [5, 70_001, 100_000, 139_000]
+
+
 POINT_CASES = {
     "points of 2 columns": (dict(points=np.zeros((3, 2))), ["points", "(n, 3)", "(3, 2)"]),
     "a NaN point": (dict(points=np.array([[0, 0, 0], [0, 0, np.nan]])), ["points[1]", "not finite"]),

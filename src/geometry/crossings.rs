@@ -22,6 +22,7 @@
 //! on each side.
 
 mod placed;
+mod stream;
 
 use super::Geometry;
 use crate::accel::Query;
@@ -96,11 +97,15 @@ impl Geometry {
     pub fn crossings(&self, ray: &Ray, out: &mut Vec<Crossing>) {
         let first = out.len();
         self.walk_crossings(ray, |c| out.push(c));
-        out[first..].sort_unstable_by(|a, b| {
-            a.t.total_cmp(&b.t)
-                .then(a.prim.cmp(&b.prim))
-                .then_with(|| self.inner_prim(a).cmp(&self.inner_prim(b)))
-        });
+        out[first..].sort_unstable_by(|a, b| self.crossing_order(a, b));
+    }
+
+    /// The order of a ray's crossings: by t, then by primitive id, then
+    /// (an instance's) by its prototype's triangle id.
+    fn crossing_order(&self, a: &Crossing, b: &Crossing) -> std::cmp::Ordering {
+        a.t.total_cmp(&b.t)
+            .then(a.prim.cmp(&b.prim))
+            .then_with(|| self.inner_prim(a).cmp(&self.inner_prim(b)))
     }
 
     /// How many crossings [`Geometry::crossings`] would append, without

@@ -346,6 +346,23 @@ impl Geometry {
         }
     }
 
+    /// Asks the CPU to fetch the leaf block holding the triangle `found`
+    /// lies on (what [`Geometry::world_triangle`] reads), without waiting:
+    /// a caller about to read the triangles of many hits, each likely a
+    /// miss of every cache on a large mesh, issues every fetch first and
+    /// waits once.
+    #[inline(always)]
+    pub fn prefetch_triangle(&self, found: &impl Found) {
+        let tree = match self.placed_in(found) {
+            Some(k) => &self.prototypes[self.instances[k].prototype as usize],
+            None => self,
+        };
+        let slot = Geometry::slot_of(found) as usize;
+        if let Some(block) = tree.leaf_blocks.get(slot / crate::math::lanes::LANES) {
+            crate::accel::prefetch::prefetch(block);
+        }
+    }
+
     /// The vertices of a triangle found, in world space: an instance's
     /// moved by its map ([`Instance::affine`]'s `transform_point3`, vertex by
     /// vertex), as a mesh of the copies would hold them.

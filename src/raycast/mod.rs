@@ -366,6 +366,14 @@ impl Mesh {
             let mut found = [None; SPAN];
             let found = &mut found[..rays.len()];
             self.geometry.intersect_stream(rays, found);
+            if surface && self.given.is_none() {
+                // The hit triangles' corners, read below, have mostly left
+                // the caches since the walk tested them: fetch them all at
+                // once rather than wait for each in turn.
+                for hit in found.iter().flatten() {
+                    self.geometry.prefetch_triangle(hit);
+                }
+            }
             for ((o, hit), ray) in out.iter_mut().zip(found.iter()).zip(rays) {
                 *o = match hit {
                     None => FirstHit::MISS,
@@ -424,12 +432,14 @@ impl Mesh {
     /// `uv`: whether to find each crossing's barycentrics (a second look at
     /// the face's corners); without it they stay NaN.
     pub fn all_hits(&self, rays: &[Ray], out: &mut Vec<Crossing>, counts: &mut Vec<u32>, uv: bool) {
+        // Several rays in flight ([`Geometry::crossings_stream`]), each
+        // ray's list then copied out in ray order.
         let mut found = Vec::new();
-        for ray in rays {
-            found.clear();
-            self.geometry.crossings(ray, &mut found);
-            counts.push(found.len() as u32);
-            out.extend(found.iter().map(|c| {
+        let mut spans = vec![(0, 0); rays.len()];
+        self.geometry.crossings_stream(rays, &mut found, &mut spans);
+        for (ray, &(first, n)) in rays.iter().zip(&spans) {
+            counts.push(n);
+            out.extend(found[first..first + n as usize].iter().map(|c| {
                 let face = self.geometry.flat_prim(c, &self.flat) as i64;
                 let (u, v) = match uv {
                     true => self.plane_uv(ray, c, face),
@@ -453,16 +463,17 @@ impl Mesh {
         hit.map_or((f64::NAN, f64::NAN), |(_, u, v)| (u, v))
     }
 
-    /// How many crossings [`Mesh::all_hits`] would list for `ray`.
-    pub fn count_hits(&self, ray: &Ray) -> u32 {
-        self.geometry.count_crossings(ray)
+    /// `out[i]`: how many crossings [`Mesh::all_hits`] would list for
+    /// `rays[i]` (several in flight, [`Geometry::count_crossings_stream`]).
+    pub fn count_hits(&self, rays: &[Ray], out: &mut [u32]) {
+        self.geometry.count_crossings_stream(rays, out);
     }
 
-    /// Whether `point` (relative to [`Mesh::centre`]) is inside: the parity
-    /// of the crossings along one ray from it ([`Geometry::contains`]; meant
-    /// for closed meshes).
-    pub fn contains(&self, point: Vec3) -> bool {
-        self.geometry.contains(point)
+    /// `out[i]`: whether `points[i]` (relative to [`Mesh::centre`]) is
+    /// inside: the parity of the crossings along one ray from it
+    /// ([`Geometry::contains`]; meant for closed meshes).
+    pub fn contains(&self, points: &[Vec3], out: &mut [bool]) {
+        self.geometry.contains_stream(points, out);
     }
 
     /// The surface point nearest to `point` within `max_distance`

@@ -105,11 +105,14 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
         .iter()
         .all(|c| c.u >= -1e-9 && c.v >= -1e-9 && c.u + c.v <= 1.0 + 1e-9));
     assert!(a.len() > 1000, "{} crossings", a.len());
-    for (ray, &n) in rays.iter().zip(&na) {
-        assert_eq!(placed.count_hits(ray), n);
-    }
+    let mut counts = vec![0; rays.len()];
+    placed.count_hits(&rays, &mut counts);
+    assert_eq!(counts, na);
+    let (mut ia, mut ib) = (vec![false; points.len()], vec![false; points.len()]);
+    placed.contains(&points, &mut ia);
+    copies.contains(&points, &mut ib);
+    assert_eq!(ia, ib);
     for &p in &points {
-        assert_eq!(placed.contains(p), copies.contains(p));
         for signed in [false, true] {
             let (x, y) = (
                 placed.closest_point(p.as_dvec3(), p, 1.5, signed),
@@ -203,7 +206,9 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
                     let mut found = Vec::new();
                     mesh.all_hits(&[ray], &mut found, &mut Vec::new(), false);
                     assert_eq!(found.first().map(|c| c.t) == Some(t), counts);
-                    assert_eq!(mesh.count_hits(&ray) > 0, counts);
+                    let mut n = [0];
+                    mesh.count_hits(&[ray], &mut n);
+                    assert_eq!(n[0] > 0, counts);
                 } else {
                     let mut hit = [FirstHit::MISS];
                     mesh.first_hits(&[ray], &mut hit, true);
@@ -242,7 +247,75 @@ fn a_mesh_without_faces_answers_nothing() {
     let near = empty.closest_point(glam::DVec3::ZERO, Vec3::ZERO, f32::INFINITY, true);
     assert_eq!((near.face, near.distance), (-1, f64::INFINITY));
     assert!(near.point.is_nan());
-    assert!(!empty.contains(Vec3::ZERO));
+    let mut inside = [true];
+    empty.contains(&[Vec3::ZERO], &mut inside);
+    assert!(!inside[0]);
     let err = Mesh::new(vec![Vec3::ZERO], vec![[0, 0, 1]], BuildQuality::Auto);
     assert!(err.is_err());
+}
+
+/// Crossings, counts and inside walk several rays in flight on a tree
+/// that prefetches, one at a time on one that does not: the same answers
+/// either way, on a placed mesh (instances) and a plain one.
+#[test]
+fn crossing_queries_answer_the_same_in_flight() {
+    let (placed, copies) = placed_and_copies();
+    let (rays, points) = rays_and_points(2000);
+    type Answers = (Vec<(f32, i64, u64, u64)>, Vec<u32>, Vec<u32>, Vec<bool>);
+    let answers = |m: &Mesh| -> Answers {
+        let (mut all, mut n) = (Vec::new(), Vec::new());
+        m.all_hits(&rays, &mut all, &mut n, true);
+        let mut counts = vec![0; rays.len()];
+        m.count_hits(&rays, &mut counts);
+        let mut inside = vec![false; points.len()];
+        m.contains(&points, &mut inside);
+        let key = |c: &Crossing| (c.t, c.face, c.u.to_bits(), c.v.to_bits());
+        (all.iter().map(key).collect(), n, counts, inside)
+    };
+    for mut mesh in [placed, copies] {
+        let alone = answers(&mesh);
+        assert!(alone.0.len() > 1000 && alone.3.contains(&true));
+        mesh.geometry.set_prefetch(true);
+        assert_eq!(answers(&mesh), alone);
+    }
+}
+
+/// First hits and occlusion go through the stream walk (in flight where
+/// the tree prefetches): each ray's t, face and barycentrics are bit for
+/// bit its own single-ray walk's, prefetching on or off, and its point
+/// and normal are the same either way.
+#[test]
+fn first_hits_and_occlusion_equal_each_rays_single_walk() {
+    let (placed, copies) = placed_and_copies();
+    let (rays, _) = rays_and_points(2000);
+    let bits = |h: &FirstHit| {
+        let p = h.point.to_array().map(f64::to_bits);
+        (h.t.to_bits(), h.face, h.u.to_bits(), h.v.to_bits(), p)
+    };
+    for mut mesh in [placed, copies] {
+        let mut hits = 0;
+        for prefetch in [false, true] {
+            mesh.geometry.set_prefetch(prefetch);
+            let mut first = vec![FirstHit::MISS; rays.len()];
+            mesh.first_hits(&rays, &mut first, true);
+            let mut blocked = vec![false; rays.len()];
+            mesh.occluded(&rays, &mut blocked);
+            for (i, ray) in rays.iter().enumerate() {
+                let own = mesh.geometry.intersect(ray);
+                assert_eq!(
+                    own.map(|h| (h.t, h.u, h.v)),
+                    first[i]
+                        .t
+                        .is_finite()
+                        .then_some((first[i].t, first[i].u, first[i].v)),
+                    "ray {i}"
+                );
+                let want = own.map_or(FirstHit::MISS, |h| mesh.first_hit(ray, &h));
+                assert_eq!(bits(&first[i]), bits(&want), "ray {i}");
+                assert_eq!(blocked[i], mesh.geometry.occluded(ray), "ray {i}");
+                hits += own.is_some() as usize;
+            }
+        }
+        assert!(hits > 500, "{hits} hits");
+    }
 }

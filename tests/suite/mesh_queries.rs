@@ -526,3 +526,84 @@ fn axis_aligned_rays_through_a_pyramids_apex_cross_it_twice() {
         }
     }
 }
+
+/// Random rays through `g`'s box and rays aimed at `targets` through the
+/// origin, a third of the random ones clipped to a random interval.
+fn stream_rays(g: &Geometry, n: usize, targets: &[Vec3], seed: u64) -> Vec<Ray> {
+    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
+    let size = (hi - lo).length();
+    let mut rng = seeded(seed);
+    let mut rays: Vec<Ray> = (0..n)
+        .map(|i| {
+            let target = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit());
+            let origin = target + direction(&mut rng) * size * rng.range(0.0, 1.0);
+            let mut ray = Ray::new(origin, (target - origin) * rng.range(0.1, 2.0));
+            if i % 3 == 0 {
+                ray.tmin = rng.range(0.0, 1.0);
+                ray.tmax = ray.tmin + rng.range(0.0, 2.0);
+            }
+            ray
+        })
+        .collect();
+    rays.extend(targets.iter().map(|&p| Ray::new(p * 3.0, -p)));
+    rays
+}
+
+/// The stream forms (`count_crossings_stream`, `crossings_stream`,
+/// `contains_stream`, several rays in flight where the tree prefetches,
+/// one at a time where not) answer each ray as its own walk does and as
+/// brute force does, for any number of rays, and rays aimed at every
+/// vertex and edge midpoint of a closed icosphere still cross it twice.
+#[test]
+fn streams_of_crossings_equal_each_rays_own_walk_and_brute_force() {
+    let (v, f) = icosphere(3);
+    let mids: Vec<Vec3> = edges(&f)
+        .iter()
+        .map(|&(a, b)| (v[a as usize] + v[b as usize]) * 0.5)
+        .collect();
+    let (bv, mut bf) = bumpy();
+    // Two shells, one inside the other: rays cross four layers.
+    let n = bv.len() as u32;
+    let mut shells = bv.clone();
+    shells.extend(bv.iter().map(|&p| p * 0.3));
+    bf.extend(bf.clone().iter().map(|t| t.map(|k| k + n)));
+    let targets: Vec<Vec3> = v.iter().chain(&mids).copied().collect();
+    for (mut g, aimed) in [(build((v.clone(), f)), true), (build((shells, bf)), false)] {
+        let tris = g.file_order_triangles();
+        let all = stream_rays(&g, 1500, if aimed { &targets } else { &[] }, 6);
+        let points: Vec<Vec3> = all.iter().map(|r| r.origin * 0.4).collect();
+        for prefetch in [false, true] {
+            g.set_prefetch(prefetch);
+            for count in [0, 1, 5, all.len()] {
+                let rays = &all[..count];
+                let mut counts = vec![u32::MAX; count];
+                g.count_crossings_stream(rays, &mut counts);
+                let mut found = Vec::new();
+                let mut spans = vec![(usize::MAX, 0); count];
+                g.crossings_stream(rays, &mut found, &mut spans);
+                for (i, ray) in rays.iter().enumerate() {
+                    let mut own = Vec::new();
+                    g.crossings(ray, &mut own);
+                    let (first, n) = spans[i];
+                    let listed = &found[first..first + n as usize];
+                    assert_eq!(listed, own.as_slice(), "ray {i} (prefetch {prefetch})");
+                    assert_eq!(counts[i] as usize, own.len(), "ray {i}");
+                    let parts: Vec<Crossing> =
+                        own.iter().map(|&c| Crossing { part: 0, ..c }).collect();
+                    assert_eq!(parts, brute_crossings(&tris, ray), "ray {i}: {ray:?}");
+                    if aimed && i >= 1500 {
+                        assert_eq!(n, 2, "aimed ray {i}: {ray:?}");
+                    }
+                }
+                assert_eq!(
+                    spans.iter().map(|s| s.1 as usize).sum::<usize>(),
+                    found.len()
+                );
+                let mut inside = vec![false; count];
+                g.contains_stream(&points[..count], &mut inside);
+                let own: Vec<bool> = points[..count].iter().map(|&p| g.contains(p)).collect();
+                assert_eq!(inside, own, "prefetch {prefetch}");
+            }
+        }
+    }
+}
