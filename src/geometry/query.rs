@@ -39,7 +39,7 @@ use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
 use crate::accel::hit::tie_ray;
 use crate::accel::query::{keep_closer, ClosestState};
-use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
+use crate::accel::{Kernel, Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
@@ -256,7 +256,9 @@ impl<const CLOSED: bool> Query for Occlusion<'_, CLOSED> {
         }
     }
 
-    #[inline]
+    // Always inlined, so that the leaf test is compiled into each kernel's
+    // copy of the walk (`accel::kernel`), not left behind in the build's.
+    #[inline(always)]
     fn leaf(&mut self, state: &mut OcclusionState, start: u32, count: u32, ray: &mut Ray) -> bool {
         if !CLOSED {
             return self
@@ -356,9 +358,18 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
 }
 
 impl Geometry {
-    /// The closest hit in `(ray.tmin, ray.tmax]` (module docs).
+    /// The closest hit in `(ray.tmin, ray.tmax]` (module docs), walked
+    /// by the process's kernel ([`Kernel::selected`]).
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        self.one(ClosestHit::<true>(self), ray)
+        self.intersect_in(Kernel::selected(), ray)
+    }
+
+    /// [`Geometry::intersect`] walked by `kernel`: the same hit whichever.
+    pub fn intersect_in(&self, kernel: Kernel, ray: &Ray) -> Option<PrimHit> {
+        kernel.run(
+            #[inline(always)]
+            || self.one(ClosestHit::<true>(self), ray),
+        )
     }
 
     /// True if anything blocks the ray in `(ray.tmin, ray.tmax]`.
@@ -370,17 +381,33 @@ impl Geometry {
     /// True if anything other than primitive `except` blocks the ray in
     /// `(ray.tmin, ray.tmax]`.
     pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
-        self.one(self.occlusion(except), ray)
+        self.occluded_except_in(Kernel::selected(), ray, except)
+    }
+
+    /// [`Geometry::occluded_except`] walked by `kernel`: the same answer
+    /// whichever.
+    pub fn occluded_except_in(&self, kernel: Kernel, ray: &Ray, except: u32) -> bool {
+        kernel.run(
+            #[inline(always)]
+            || self.one(self.occlusion(except), ray),
+        )
     }
 
     /// The closest hit in `(ray.tmin, ray.tmax)`, its end left out: the
     /// walk of a prototype (no planes) with the ray an instance's leaf
     /// was tested with, whose end that test already closed (module docs).
+    /// In the process's kernel ([`Kernel::selected`]), whichever kernel
+    /// the scene's walk that reached the instance runs in.
     #[inline]
     pub(super) fn intersect_open_end(&self, ray: &Ray) -> Option<PrimHit> {
         debug_assert!(self.planes.is_empty());
-        self.bvh
-            .walk(ray, &self.leaf_blocks, &mut ClosestHit::<false>(self))
+        Kernel::selected().run(
+            #[inline(always)]
+            || {
+                self.bvh
+                    .walk(ray, &self.leaf_blocks, &mut ClosestHit::<false>(self))
+            },
+        )
     }
 
     /// [`Geometry::intersect_open_end`] for occlusion.
@@ -391,7 +418,10 @@ impl Geometry {
             geometry: self,
             except: u32::MAX,
         };
-        self.bvh.walk(ray, &self.leaf_blocks, &mut query)
+        Kernel::selected().run(
+            #[inline(always)]
+            || self.bvh.walk(ray, &self.leaf_blocks, &mut query),
+        )
     }
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
@@ -582,16 +612,22 @@ impl Geometry {
         out: &mut [Q::Answer],
         in_flight: bool,
     ) {
-        if in_flight {
-            self.bvh
-                .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
-            return;
-        }
-        for (o, r) in out.iter_mut().zip(rays) {
-            if !Q::done(o) {
-                *o = self.walk_closed(query, r);
-            }
-        }
+        // In the process's kernel, as a lone ray's walk.
+        Kernel::selected().run(
+            #[inline(always)]
+            || {
+                if in_flight {
+                    self.bvh
+                        .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
+                    return;
+                }
+                for (o, r) in out.iter_mut().zip(rays) {
+                    if !Q::done(o) {
+                        *o = self.walk_closed(query, r);
+                    }
+                }
+            },
+        )
     }
 
     /// Up to [`BUNDLE_SIZE`] alike rays walked as bundles.
