@@ -143,9 +143,16 @@ impl Kernel {
         }
     }
 
-    /// Runs `f` compiled for this kernel: directly, or inside a function
-    /// compiled for AVX-512 into which it is inlined. Whatever `f` calls
-    /// without inlining runs the build's code.
+    /// Runs `f` compiled for this kernel: inside a function of its own
+    /// compiled for the build's target or for AVX-512, into which `f`
+    /// (marked `#[inline(always)]`) is inlined. Whatever `f` calls without
+    /// inlining runs the build's code.
+    ///
+    /// Both copies are functions of their own, so the build's copy is
+    /// compiled as it was before there was a choice: with the AVX-512
+    /// call beside it in one function, the register allocation of the
+    /// build's walk changed and a random bunny ray took 30 more
+    /// instructions (docs/performance.md, "AVX-512 by runtime dispatch").
     #[inline(always)]
     pub fn run<R>(self, f: impl FnOnce() -> R) -> R {
         #[cfg(target_arch = "x86_64")]
@@ -155,11 +162,17 @@ impl Kernel {
             // every feature `in_avx512` is compiled for (module docs).
             return unsafe { in_avx512(f) };
         }
-        f()
+        in_build(f)
     }
 }
 
-/// `f`, compiled for AVX-512: LLVM inlines a callee whose features are a
+/// `f`, compiled for the build's target, in a function of its own.
+#[inline(never)]
+fn in_build<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
+/// `f`, compiled for AVX-512, in a function of its own: LLVM inlines a callee whose features are a
 /// subset of its caller's, so `f` and its `#[inline(always)]` callees are
 /// generated here with EVEX encodings available.
 ///

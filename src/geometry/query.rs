@@ -360,11 +360,15 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
 impl Geometry {
     /// The closest hit in `(ray.tmin, ray.tmax]` (module docs), walked
     /// by the process's kernel ([`Kernel::selected`]).
+    // Inlined into the caller: the choice of kernel is a load and a
+    // branch there, and the walk one call, as before there was a choice.
+    #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         self.intersect_in(Kernel::selected(), ray)
     }
 
     /// [`Geometry::intersect`] walked by `kernel`: the same hit whichever.
+    #[inline]
     pub fn intersect_in(&self, kernel: Kernel, ray: &Ray) -> Option<PrimHit> {
         kernel.run(
             #[inline(always)]
@@ -373,6 +377,9 @@ impl Geometry {
     }
 
     /// True if anything blocks the ray in `(ray.tmin, ray.tmax]`.
+    // Inlined into the caller: the choice of kernel is a load and a
+    // branch there, and the walk one call, as before there was a choice.
+    #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         // No primitive has id u32::MAX (planes count down from it, outside the BVH).
         self.occluded_except(ray, u32::MAX)
@@ -380,12 +387,16 @@ impl Geometry {
 
     /// True if anything other than primitive `except` blocks the ray in
     /// `(ray.tmin, ray.tmax]`.
+    // Inlined into the caller: the choice of kernel is a load and a
+    // branch there, and the walk one call, as before there was a choice.
+    #[inline]
     pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
         self.occluded_except_in(Kernel::selected(), ray, except)
     }
 
     /// [`Geometry::occluded_except`] walked by `kernel`: the same answer
     /// whichever.
+    #[inline]
     pub fn occluded_except_in(&self, kernel: Kernel, ray: &Ray, except: u32) -> bool {
         kernel.run(
             #[inline(always)]

@@ -126,3 +126,42 @@ fn every_kernel_gives_brute_forces_hits_bit_for_bit() {
     let (scene, _) = load_mesh_scene(&bunny, BuildQuality::Auto).unwrap();
     check(&scene.geometry, "bunny", 200);
 }
+
+/// `STRATA_SIMD` picks the kernel `strata trace` reports; a name it does
+/// not know is a one-line input error naming the variable, exit 2, before
+/// any work.
+#[test]
+fn strata_simd_picks_the_kernel_and_refuses_an_unknown_one() {
+    use crate::common::process::strata_command;
+    let dir = crate::common::temp_dir("kernels");
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let trace = |simd: &str, hits: &str| {
+        strata_command(&dir)
+            .env("STRATA_SIMD", simd)
+            .args([
+                "rays", "random", "tri.obj", "-n", "50", "-o", "r.rays", "--quiet",
+            ])
+            .output()
+            .unwrap();
+        strata_command(&dir)
+            .env("STRATA_SIMD", simd)
+            .args(["trace", "tri.obj", "--rays", "r.rays", "--hits", hits])
+            .output()
+            .unwrap()
+    };
+    for k in Kernel::available() {
+        let out = trace(k.name(), "h.hits");
+        assert!(out.status.success(), "{}", crate::common::stderr(&out));
+        let text = crate::common::stdout(&out);
+        assert!(text.contains(&format!("kernel {})", k.name())), "{text}");
+    }
+    let out = trace("avx9", "bad.hits");
+    assert_eq!(out.status.code(), Some(2));
+    let err = crate::common::stderr(&out);
+    assert!(
+        err.starts_with("error: <environment>: STRATA_SIMD: 'avx9' is not a kernel")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!dir.join("bad.hits").exists(), "no output before the check");
+}
