@@ -73,9 +73,16 @@ impl Kernel {
         None
     }
 
-    /// The fastest kernel this CPU runs.
+    /// The kernel `auto` picks: the AVX-512 copy where the CPU runs it,
+    /// except on AMD's, where it measured slower than the build's (Zen 4:
+    /// 0.96× over the dragon's ray kinds, docs/performance.md, "AVX-512
+    /// by runtime dispatch"; Zen 4 runs 512-bit work in two 256-bit
+    /// halves, and the walks' 8-wide lanes gain only the extra registers).
     pub fn detect() -> Self {
-        Self::avx512().unwrap_or(Self::build())
+        match Self::avx512() {
+            Some(k) if !amd() => k,
+            _ => Self::build(),
+        }
     }
 
     /// Every kernel this CPU runs, the build's first.
@@ -93,7 +100,7 @@ impl Kernel {
         }
     }
 
-    /// The kernel a name asks for (`auto`: [`Kernel::detect`]); an error
+    /// The kernel a name asks for (`auto`: [`Kernel::detect`]'s); an error
     /// names the accepted ones, or says that this CPU lacks AVX-512.
     pub fn parse(name: &str) -> Result<Self, String> {
         match name {
@@ -166,6 +173,18 @@ impl Kernel {
     }
 }
 
+/// Whether the CPU is AMD's (CPUID's vendor string "AuthenticAMD").
+fn amd() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let id = std::arch::x86_64::__cpuid(0);
+        // "Auth" "enti" "cAMD" in EBX, EDX, ECX.
+        id.ebx == 0x6874_7541 && id.edx == 0x6974_6e65 && id.ecx == 0x444d_4163
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
 /// `f`, compiled for the build's target, in a function of its own.
 #[inline(never)]
 fn in_build<R>(f: impl FnOnce() -> R) -> R {
@@ -197,8 +216,12 @@ mod tests {
         let e = Kernel::parse("avx9").unwrap_err();
         assert!(e.contains("'avx9'") && e.contains("avx512"), "{e}");
         match Kernel::avx512() {
-            Some(k) => assert_eq!(Kernel::detect(), k),
-            None => assert!(Kernel::parse("avx512").unwrap_err().contains("lacks")),
+            Some(k) if !amd() => assert_eq!(Kernel::detect(), k),
+            Some(_) => assert_eq!(Kernel::detect(), Kernel::build()),
+            None => {
+                assert_eq!(Kernel::detect(), Kernel::build());
+                assert!(Kernel::parse("avx512").unwrap_err().contains("lacks"));
+            }
         }
     }
 

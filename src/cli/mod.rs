@@ -25,7 +25,7 @@ use strata::error::InputError;
     version = strata::VERSION,
     about,
     long_about = None,
-    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: AVX-512 where the CPU has it)."
+    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: AVX-512 where the CPU has it, but for AMD's)."
 )]
 pub struct Cli {
     #[command(subcommand)]
