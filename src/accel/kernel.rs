@@ -1,11 +1,13 @@
 //! Which instruction set the hot walks run in: the build's own (AVX2 and
 //! FMA under the default x86-64-v3 target, SSE2 in the portable build), or
-//! a copy of the same code compiled for AVX-512 where the CPU has it,
-//! chosen once per process (runtime dispatch). The crate's one SIMD
-//! module with `unsafe`; the other is `prefetch`.
+//! a copy of the same code compiled for AVX-512 where the CPU has it
+//! (but for AMD's, where it measured slower), chosen once per process
+//! (runtime dispatch). The crate's one SIMD module with `unsafe`; the
+//! other is `prefetch`.
 //!
-//! A [`Kernel`] runs a closure: the build's kernel calls it, the AVX-512
-//! kernel calls it from inside a function compiled with
+//! A [`Kernel`] runs a closure inside a function of its own: the build's
+//! kernel in one compiled for the build's target, the AVX-512 kernel in
+//! one compiled with
 //! `#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq")]`.
 //! Everything the closure inlines (the walks, node tests and leaf tests
 //! are `#[inline(always)]`, so the whole lone walk) is then compiled a

@@ -372,7 +372,7 @@ impl Geometry {
     pub fn intersect_in(&self, kernel: Kernel, ray: &Ray) -> Option<PrimHit> {
         kernel.run(
             #[inline(always)]
-            || self.one(ClosestHit::<true>(self), ray),
+            move || self.one(ClosestHit::<true>(self), ray),
         )
     }
 
@@ -400,7 +400,7 @@ impl Geometry {
     pub fn occluded_except_in(&self, kernel: Kernel, ray: &Ray, except: u32) -> bool {
         kernel.run(
             #[inline(always)]
-            || self.one(self.occlusion(except), ray),
+            move || self.one(self.occlusion(except), ray),
         )
     }
 
@@ -414,7 +414,7 @@ impl Geometry {
         debug_assert!(self.planes.is_empty());
         Kernel::selected().run(
             #[inline(always)]
-            || {
+            move || {
                 self.bvh
                     .walk(ray, &self.leaf_blocks, &mut ClosestHit::<false>(self))
             },
@@ -431,7 +431,7 @@ impl Geometry {
         };
         Kernel::selected().run(
             #[inline(always)]
-            || self.bvh.walk(ray, &self.leaf_blocks, &mut query),
+            move || self.bvh.walk(ray, &self.leaf_blocks, &mut query),
         )
     }
 
@@ -623,22 +623,20 @@ impl Geometry {
         out: &mut [Q::Answer],
         in_flight: bool,
     ) {
-        // In the process's kernel, as a lone ray's walk.
-        Kernel::selected().run(
-            #[inline(always)]
-            || {
-                if in_flight {
-                    self.bvh
-                        .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
-                    return;
-                }
-                for (o, r) in out.iter_mut().zip(rays) {
-                    if !Q::done(o) {
-                        *o = self.walk_closed(query, r);
-                    }
-                }
-            },
-        )
+        // The build's code alone: run through `accel::kernel` (one
+        // kernel's function per way, or both in one) the loop one at a
+        // time took 5–6% more instructions per random bunny ray
+        // (docs/performance.md, "AVX-512 by runtime dispatch").
+        if in_flight {
+            self.bvh
+                .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);
+            return;
+        }
+        for (o, r) in out.iter_mut().zip(rays) {
+            if !Q::done(o) {
+                *o = self.walk_closed(query, r);
+            }
+        }
     }
 
     /// Up to [`BUNDLE_SIZE`] alike rays walked as bundles.
