@@ -26,8 +26,9 @@ How the rays are handed over (--mode):
 * `both`: each row measured both ways, one at a time and in streams, with
   a geometric mean per mode.
 
-Before its rows, each mesh gets a line saying which tree and which one-ray
-kernel Embree chose on this CPU (its verbose output: BVH8 or BVH4, and the
+Before its rows, a line names the kernel strata walks rays in (avx2 or
+avx512: `STRATA_SIMD`, docs/cli.md), and each mesh gets a line saying
+which tree and which one-ray kernel Embree chose on this CPU (its verbose output: BVH8 or BVH4, and the
 ISA of the kernel, avx2 or avx512), since a ratio is against that choice.
 
 The engines:
@@ -76,6 +77,7 @@ from validate_embree import InputError, load_mesh, read_groups, read_ray_file  #
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PASSES = 3
+KERNELS_SEEN = set()
 
 
 def build_harness():
@@ -166,6 +168,11 @@ def strata_rate(args, mesh, threads):
         raise InputError(mesh, f"strata trace did not run on {threads_word(threads)}: {out.stdout.strip()}")
     rate = float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
     build = float(out.stdout.split("BVH ")[1].split(" s")[0])
+    # "..., kernel avx2)": the instruction set strata walked in (STRATA_SIMD).
+    kernel = out.stdout.split("kernel ")[1].split(")")[0] if "kernel " in out.stdout else "?"
+    if kernel not in KERNELS_SEEN:
+        KERNELS_SEEN.add(kernel)
+        print(f"# strata walks rays with its {kernel} kernel (STRATA_SIMD picks another)", flush=True)
     return rate, build
 
 

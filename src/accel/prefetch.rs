@@ -1,4 +1,5 @@
-//! Software prefetch, the crate's one use of `unsafe`.
+//! Software prefetch, one of the crate's two uses of `unsafe` (the other is
+//! `accel::kernel`, runtime AVX-512 dispatch).
 //!
 //! A single ray's walk is a chain of dependent loads: the next node's
 //! address is known only once the current node's boxes are tested. On a

@@ -240,6 +240,10 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         std::fs::create_dir_all(&work).map_err(harness_error)?;
     }
     println!(
+        "# strata walks rays with its {} kernel (STRATA_SIMD picks another)",
+        strata::accel::Kernel::selected().name()
+    );
+    println!(
         "{:<22} {:>9} {:>8} {:>7} {:>8} {:>9} {:>10} {:>6} {:>3} {:>9} {:>9} {:>6}",
         "mesh",
         "tris",

@@ -12,6 +12,7 @@ pub mod scaling;
 pub mod trace;
 
 use clap::{Parser, Subcommand};
+use strata::accel::Kernel;
 use strata::error::InputError;
 
 /// strata: a Monte Carlo distribution ray tracer.
@@ -24,7 +25,7 @@ use strata::error::InputError;
     version = strata::VERSION,
     about,
     long_about = None,
-    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md."
+    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: AVX-512 where the CPU has it, but for AMD's)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -95,6 +96,7 @@ pub fn count(n: usize, one: &str, many: &str) -> String {
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
+    choose_kernel()?;
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Merge(args)) => merge::run(args),
@@ -105,4 +107,17 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Bench(args)) => bench::run(args),
         None => render::run(render::RenderArgs::default()),
     }
+}
+
+/// `STRATA_SIMD` (auto, avx2 or avx512): the instruction set the hot
+/// walks run in, for measuring one against the other; unset, the fastest
+/// this CPU runs (`strata::accel::Kernel`).
+fn choose_kernel() -> Result<(), CliError> {
+    if let Some(name) = std::env::var_os("STRATA_SIMD") {
+        let name = name.to_string_lossy();
+        let kernel = Kernel::parse(name.trim())
+            .map_err(|e| InputError::new("<environment>", "STRATA_SIMD", e))?;
+        kernel.set();
+    }
+    Ok(())
 }

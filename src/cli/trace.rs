@@ -188,7 +188,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
     if !args.quiet {
         let found = hits.iter().filter(|h| h.is_hit()).count();
         println!(
-            "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} (load {:.2} s, BVH {:.2} s) -> {}",
+            "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} (load {:.2} s, BVH {:.2} s, kernel {}) -> {}",
             rays.len(),
             if args.occlusion { "occlusion" } else { "closest hit" },
             scene.geometry.triangle_count(),
@@ -199,6 +199,7 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
             super::count(threads, "thread", "threads"),
             timings.load.as_secs_f64(),
             timings.bvh_build.as_secs_f64(),
+            strata::accel::Kernel::selected().name(),
             args.hits.display()
         );
     }

@@ -39,7 +39,7 @@ use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
 use crate::accel::hit::tie_ray;
 use crate::accel::query::{keep_closer, ClosestState};
-use crate::accel::{Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
+use crate::accel::{Kernel, Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
@@ -256,7 +256,9 @@ impl<const CLOSED: bool> Query for Occlusion<'_, CLOSED> {
         }
     }
 
-    #[inline]
+    // Always inlined, so that the leaf test is compiled into each kernel's
+    // copy of the walk (`accel::kernel`), not left behind in the build's.
+    #[inline(always)]
     fn leaf(&mut self, state: &mut OcclusionState, start: u32, count: u32, ray: &mut Ray) -> bool {
         if !CLOSED {
             return self
@@ -356,12 +358,28 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
 }
 
 impl Geometry {
-    /// The closest hit in `(ray.tmin, ray.tmax]` (module docs).
+    /// The closest hit in `(ray.tmin, ray.tmax]` (module docs), walked
+    /// by the process's kernel ([`Kernel::selected`]).
+    // Inlined into the caller: the choice of kernel is a load and a
+    // branch there, and the walk one call, as before there was a choice.
+    #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        self.one(ClosestHit::<true>(self), ray)
+        self.intersect_in(Kernel::selected(), ray)
+    }
+
+    /// [`Geometry::intersect`] walked by `kernel`: the same hit whichever.
+    #[inline]
+    pub fn intersect_in(&self, kernel: Kernel, ray: &Ray) -> Option<PrimHit> {
+        kernel.run(
+            #[inline(always)]
+            move || self.one(ClosestHit::<true>(self), ray),
+        )
     }
 
     /// True if anything blocks the ray in `(ray.tmin, ray.tmax]`.
+    // Inlined into the caller: the choice of kernel is a load and a
+    // branch there, and the walk one call, as before there was a choice.
+    #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         // No primitive has id u32::MAX (planes count down from it, outside the BVH).
         self.occluded_except(ray, u32::MAX)
@@ -369,18 +387,38 @@ impl Geometry {
 
     /// True if anything other than primitive `except` blocks the ray in
     /// `(ray.tmin, ray.tmax]`.
+    // Inlined into the caller: the choice of kernel is a load and a
+    // branch there, and the walk one call, as before there was a choice.
+    #[inline]
     pub fn occluded_except(&self, ray: &Ray, except: u32) -> bool {
-        self.one(self.occlusion(except), ray)
+        self.occluded_except_in(Kernel::selected(), ray, except)
+    }
+
+    /// [`Geometry::occluded_except`] walked by `kernel`: the same answer
+    /// whichever.
+    #[inline]
+    pub fn occluded_except_in(&self, kernel: Kernel, ray: &Ray, except: u32) -> bool {
+        kernel.run(
+            #[inline(always)]
+            move || self.one(self.occlusion(except), ray),
+        )
     }
 
     /// The closest hit in `(ray.tmin, ray.tmax)`, its end left out: the
     /// walk of a prototype (no planes) with the ray an instance's leaf
     /// was tested with, whose end that test already closed (module docs).
+    /// In the process's kernel ([`Kernel::selected`]), whichever kernel
+    /// the scene's walk that reached the instance runs in.
     #[inline]
     pub(super) fn intersect_open_end(&self, ray: &Ray) -> Option<PrimHit> {
         debug_assert!(self.planes.is_empty());
-        self.bvh
-            .walk(ray, &self.leaf_blocks, &mut ClosestHit::<false>(self))
+        Kernel::selected().run(
+            #[inline(always)]
+            move || {
+                self.bvh
+                    .walk(ray, &self.leaf_blocks, &mut ClosestHit::<false>(self))
+            },
+        )
     }
 
     /// [`Geometry::intersect_open_end`] for occlusion.
@@ -391,7 +429,10 @@ impl Geometry {
             geometry: self,
             except: u32::MAX,
         };
-        self.bvh.walk(ray, &self.leaf_blocks, &mut query)
+        Kernel::selected().run(
+            #[inline(always)]
+            move || self.bvh.walk(ray, &self.leaf_blocks, &mut query),
+        )
     }
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit
@@ -582,6 +623,10 @@ impl Geometry {
         out: &mut [Q::Answer],
         in_flight: bool,
     ) {
+        // The build's code alone: run through `accel::kernel` (one
+        // kernel's function per way, or both in one) the loop one at a
+        // time took 5–6% more instructions per random bunny ray
+        // (docs/performance.md, "AVX-512 by runtime dispatch").
         if in_flight {
             self.bvh
                 .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, Q::done);

@@ -39,6 +39,9 @@ pub struct RenderStats {
     pub crop: Option<[u32; 4]>,
     /// `--packets`: auto, on or off (the image does not depend on it).
     pub packets: PacketMode,
+    /// The instruction set rays were walked in (`STRATA_SIMD`): avx2
+    /// (sse2 in a portable build) or avx512.
+    pub kernel: &'static str,
     pub rays: RayCounts,
     pub rays_total: u64,
     pub mrays_per_s: f64,
@@ -131,6 +134,7 @@ impl RenderStats {
                 .as_ref()
                 .map(|w| [w.x.start, w.y.start, w.x.end, w.y.end]),
             packets: opts.packets,
+            kernel: crate::accel::Kernel::selected().name(),
             rays: outcome.counts,
             rays_total,
             mrays_per_s: rays_total as f64 / outcome.seconds.max(1e-9) / 1e6,

@@ -25,6 +25,7 @@ mod gltf_instances;
 mod input_files;
 mod instance_queries;
 mod instancing;
+mod kernels;
 mod memory;
 mod mesh_file_quirks;
 mod mesh_queries;
