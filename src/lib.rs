@@ -7,8 +7,8 @@
 // `!(x > 0.0)` is how this crate says "not positive, or NaN": rejecting NaN
 // is the point, so the partial-order lint would make the code wrong.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
-// `unsafe` lives in two modules, `accel::prefetch` and `accel::kernel` (runtime
-// AVX-512 dispatch), each allowing it for itself.
+// `unsafe` lives in one module, `accel::simd` (software prefetch and the
+// runtime AVX-512 dispatch), which allows it for itself.
 #![deny(unsafe_code)]
 
 /// This build: the package version, plus `+git.<commit>` when built from a

@@ -1,5 +1,5 @@
-//! Software prefetch, one of the crate's two uses of `unsafe` (the other is
-//! `accel::kernel`, runtime AVX-512 dispatch).
+//! Software prefetch, one of the two parts of [`super`], the crate's one
+//! module with `unsafe` (the other is the runtime AVX-512 dispatch).
 //!
 //! A single ray's walk is a chain of dependent loads: the next node's
 //! address is known only once the current node's boxes are tested. On a
@@ -21,8 +21,6 @@
 //! safe fallback does nothing; traversal with prefetching switched off
 //! ([`super::Bvh8::prefetch`]) is the same fallback on x86-64, and a test
 //! checks that both return the same hits.
-
-#![allow(unsafe_code)]
 
 crate::mode::mode_enum! {
     /// Whether traversal prefetches: `auto` decides by the scene's size.

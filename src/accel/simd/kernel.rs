@@ -2,8 +2,8 @@
 //! FMA under the default x86-64-v3 target, SSE2 in the portable build), or
 //! a copy of the same code compiled for AVX-512 where the CPU has it
 //! (but for AMD's, where it measured slower), chosen once per process
-//! (runtime dispatch). The crate's one SIMD module with `unsafe`; the
-//! other is `prefetch`.
+//! (runtime dispatch). One of the two parts of [`super`], the crate's one
+//! module with `unsafe`; the other is `prefetch`.
 //!
 //! A [`Kernel`] runs a closure inside a function of its own: the build's
 //! kernel in one compiled for the build's target, the AVX-512 kernel in
@@ -27,8 +27,6 @@
 //! system saves the AVX-512 state); so [`Kernel::run`] calls the AVX-512
 //! copy only on a CPU that runs it. The safe twin is the same closure
 //! called directly ([`Kernel::build`]).
-
-#![allow(unsafe_code)]
 
 use std::sync::atomic::{AtomicU8, Ordering};
 
