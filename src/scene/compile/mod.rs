@@ -28,6 +28,7 @@ use crate::material::Material;
 use crate::math::{Aabb, Transform};
 use crate::shape::plane::Plane;
 use crate::system::memory::PeakMeter;
+use crate::system::steps::Steps;
 use crate::texture::Textures;
 use glam::Affine3A;
 use mesh::{triangle_at, TriangleSource};
@@ -66,6 +67,11 @@ pub struct LoadTimings {
     pub bvh_choice: BuildChoice,
     pub load_peak_bytes: Option<u64>,
     pub build_peak_bytes: Option<u64>,
+    /// The load's steps (a model file's read and framing, the compile)
+    /// and the build's (the primitive boxes, each step of the BVH build,
+    /// the leaf blocks), each with its wall time.
+    pub load_steps: Steps,
+    pub build_steps: Steps,
 }
 
 impl LoadTimings {
@@ -272,8 +278,8 @@ pub fn compile_model(
     progress: &LoadProgress,
 ) -> InputResult<(Scene, LoadTimings)> {
     let path = model.path().to_path_buf();
-    let (desc, asset) = (model.description, model.asset);
-    compile_for(
+    let (desc, asset, steps) = (model.description, model.asset, model.steps);
+    let compiled = compile_for(
         &desc,
         &path,
         overrides,
@@ -282,7 +288,14 @@ pub fn compile_model(
         start,
         progress,
         Some((path.clone(), asset)),
-    )
+    );
+    compiled.map(|(scene, mut timings)| {
+        // The model's read and framing came before the compile.
+        let mut load_steps = steps;
+        load_steps.extend(&timings.load_steps);
+        timings.load_steps = load_steps;
+        (scene, timings)
+    })
 }
 
 // One argument a step of the load: what, from where, for what, since
@@ -299,6 +312,7 @@ fn compile_for(
     preloaded: Option<(PathBuf, LoadedAsset)>,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
+    let compile_start = Instant::now();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
     c.bake_shared = purpose == Purpose::MeshFile;
@@ -357,7 +371,10 @@ fn compile_for(
         source.release_file_positions();
     }
     let load = start.elapsed();
+    let mut load_steps = Steps::default();
+    load_steps.add("compile", compile_start.elapsed());
     let load_peak_bytes = memory.next_phase();
+    let mut build_steps = Steps::default();
 
     // Area lights were recorded by shape index; make them global primitive ids.
     let n_tris = c.meshes.last().map_or(0, |m| m.first + m.count);
@@ -398,7 +415,7 @@ fn compile_for(
             &file,
         )?);
     }
-    let mut boxes = c.primitive_boxes()?;
+    let mut boxes = build_steps.time("boxes", || c.primitive_boxes())?;
     for (k, inst) in c.instances.iter_mut().enumerate() {
         let b = inst.bounds(&prototypes[inst.prototype as usize]);
         if !b.is_finite() {
@@ -412,9 +429,10 @@ fn compile_for(
     c.warnings.extend(unreached);
     let bvh_choice = for_purpose(quality, boxes.len());
     let bvh_quality = bvh_choice.quality;
-    let mut bvh = Bvh8::build_from_with_others(boxes, bvh_quality, n_tris);
+    let mut bvh = Bvh8::build_timed(boxes, bvh_quality, n_tris, &mut build_steps);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.shrink_to_fit();
+    let leaves_start = Instant::now();
     // Store the vertices once, in the order the leaves read them, straight
     // from the (indexed) sources, with the leaf ids beside them: never two
     // copies of the triangles, and the BVH's own ids become redundant.
@@ -431,6 +449,7 @@ fn compile_for(
     };
     let mut geometry = Geometry::new(parts, bvh, vertices);
     drop(sources);
+    build_steps.add("leaves", leaves_start.elapsed());
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
@@ -438,6 +457,8 @@ fn compile_for(
         bvh_choice,
         load_peak_bytes,
         build_peak_bytes: memory.phase_peak(),
+        load_steps,
+        build_steps,
     };
     geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
     let emitters = emitters::emitters(&geometry, &c.materials, &c.lights);
