@@ -9,6 +9,7 @@
 //! its own file of `impl Compiler`: `material`, `light`, `object`
 //! (placement, shapes, groups), `mesh` (mesh files and the leaf blocks),
 //! `import` (a mesh file's lights and cameras), `csg`, `camera`; `validate` holds the number checks they share.
+//! `progress` is what a load is doing, for a display on another thread.
 //! This file holds the entry points and the order of the steps.
 
 use super::asset::{LoadedAsset, LoadedCamera};
@@ -34,12 +35,12 @@ use glam::Affine3A;
 use mesh::{triangle_at, TriangleSource};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, AtomicU8, Ordering::Relaxed};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
 pub use instance::{read_instances, PLACEMENT_BYTES};
+pub use progress::{LoadPhase, LoadProgress};
 pub use text::load_edited_text;
 
 mod arrays;
@@ -52,6 +53,7 @@ mod light;
 mod material;
 mod mesh;
 mod object;
+mod progress;
 mod text;
 mod validate;
 
@@ -113,50 +115,6 @@ pub fn load_edited_scene_with_progress(
     let start = Instant::now();
     let text = super::loaders::read_scene_file(path)?;
     text::compile_text(&text, path, edits, overrides, quality, start, progress)
-}
-
-/// What a load is doing, set by the compiler as it goes and read by a
-/// progress display on another thread (relaxed atomics: a display needs
-/// no order).
-#[derive(Debug, Default)]
-pub struct LoadProgress {
-    /// 0: loading, 1: building, 2: done.
-    phase: AtomicU8,
-    triangles: AtomicU64,
-}
-
-/// A phase of a load.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LoadPhase {
-    /// Reading the scene and its mesh files.
-    Loading,
-    /// Building the BVH over this many triangles.
-    Building {
-        triangles: u64,
-    },
-    Done,
-}
-
-impl LoadProgress {
-    pub fn phase(&self) -> LoadPhase {
-        match self.phase.load(Relaxed) {
-            0 => LoadPhase::Loading,
-            1 => LoadPhase::Building {
-                triangles: self.triangles.load(Relaxed),
-            },
-            _ => LoadPhase::Done,
-        }
-    }
-
-    /// The load is over (done or failed).
-    pub fn finish(&self) {
-        self.phase.store(2, Relaxed);
-    }
-
-    fn building(&self, triangles: u64) {
-        self.triangles.store(triangles, Relaxed);
-        self.phase.store(1, Relaxed);
-    }
 }
 
 /// Compile scene text as if read from `path` (meshes resolve relative to
