@@ -7,6 +7,7 @@ use super::cluster::{morton_order, Clusters};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
 use crate::math::Aabb;
+use crate::system::steps::Steps;
 use glam::{Vec3, Vec3A};
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
@@ -79,7 +80,7 @@ impl Bvh8 {
     /// Build over primitive boxes; primitive `i` is reported as id `i`.
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
-        match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality) {
+        match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality, &mut Steps::default()) {
             Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, u32::MAX),
             None => Self::empty(),
         }
@@ -103,8 +104,22 @@ impl Bvh8 {
         quality: BuildQuality,
         first_other: u32,
     ) -> Self {
-        match binary_tree_and_bounds(Boxes::Owned(boxes), quality) {
-            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, first_other),
+        Self::build_timed(boxes, quality, first_other, &mut Steps::default())
+    }
+
+    /// [`Bvh8::build_from_with_others`] that adds the wall time of each of
+    /// its steps to `steps` (bounds, clusters or Morton order, PLOC,
+    /// reinsertion, collapse), for `--stats`.
+    pub fn build_timed(
+        boxes: Vec<Aabb>,
+        quality: BuildQuality,
+        first_other: u32,
+        steps: &mut Steps,
+    ) -> Self {
+        match binary_tree_and_bounds(Boxes::Owned(boxes), quality, steps) {
+            Some((bvh2, bounds)) => {
+                steps.time("collapse", || Self::collapse(&bvh2, bounds, first_other))
+            }
             None => Self::empty(),
         }
     }
@@ -281,7 +296,11 @@ impl std::ops::Deref for Boxes<'_> {
 
 /// obvhs's binary tree over `boxes` and their union; `None` if there are
 /// no boxes.
-fn binary_tree_and_bounds(boxes: Boxes, quality: BuildQuality) -> Option<(Bvh2, Aabb)> {
+fn binary_tree_and_bounds(
+    boxes: Boxes,
+    quality: BuildQuality,
+    steps: &mut Steps,
+) -> Option<(Bvh2, Aabb)> {
     if boxes.is_empty() {
         return None;
     }
@@ -291,27 +310,29 @@ fn binary_tree_and_bounds(boxes: Boxes, quality: BuildQuality) -> Option<(Bvh2, 
         boxes.len()
     );
     // A union is exact, so any grouping gives the same box.
-    let bounds = boxes
-        .par_iter()
-        .with_min_len(1 << 14)
-        .copied()
-        .reduce(|| Aabb::EMPTY, Aabb::union);
-    Some((binary_tree(boxes, bounds, quality), bounds))
+    let bounds = steps.time("bounds", || {
+        boxes
+            .par_iter()
+            .with_min_len(1 << 14)
+            .copied()
+            .reduce(|| Aabb::EMPTY, Aabb::union)
+    });
+    Some((binary_tree(boxes, bounds, quality, steps), bounds))
 }
 
 /// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one
 /// primitive a leaf, or for the fastest preset one cluster of up to
 /// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
 /// ([`super::cluster`]).
-fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
+fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality, steps: &mut Steps) -> Bvh2 {
     let preset = quality.preset(boxes.len());
     let params = quality.params(boxes.len());
     let mut bvh2 = if preset == BuildQuality::Fastest {
-        let clusters = Clusters::new(&boxes, bounds);
+        let clusters = steps.time("clusters", || Clusters::new(&boxes, bounds));
         drop(boxes);
         // The clusters lie along the curve already: cluster c is leaf c.
         let along: Vec<u32> = (0..clusters.boxes.len() as u32).collect();
-        let mut bvh2 = ploc(&clusters.boxes, &along, &params);
+        let mut bvh2 = steps.time("ploc", || ploc(&clusters.boxes, &along, &params));
         drop(along);
         // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
         // from starts[c] to starts[c + 1].
@@ -327,13 +348,15 @@ fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality) -> Bvh2 {
         bvh2.primitive_indices = clusters.order;
         bvh2
     } else {
-        let order = morton_order(&boxes, bounds);
-        let bvh2 = ploc(&boxes, &order, &params);
+        let order = steps.time("morton", || morton_order(&boxes, bounds));
+        let bvh2 = steps.time("ploc", || ploc(&boxes, &order, &params));
         drop((boxes, order));
         bvh2
     };
     if params.reinsertion_batch_ratio > 0.0 {
-        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+        steps.time("reinsertion", || {
+            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None)
+        });
     }
     // The collapse reads nodes and primitive indices only: free the maps
     // reinsertion kept (parents: 8 bytes a primitive) before it.
@@ -404,7 +427,9 @@ pub(super) mod tests {
             (BuildQuality::High, 3),
         ] {
             let boxes = random_boxes(3000, seed);
-            let (bvh2, bounds) = binary_tree_and_bounds(Boxes::Borrowed(&boxes), quality).unwrap();
+            let (bvh2, bounds) =
+                binary_tree_and_bounds(Boxes::Borrowed(&boxes), quality, &mut Steps::default())
+                    .unwrap();
             for first_other in [u32::MAX, 1500, 0] {
                 let costs = CollapseCosts::new(&bvh2, first_other);
                 costs.assert_choices_match_tables();
@@ -426,8 +451,12 @@ pub(super) mod tests {
     #[test]
     fn primitives_tested_one_by_one_make_smaller_leaves() {
         let boxes = random_boxes(3000, 4);
-        let (bvh2, bounds) =
-            binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Medium).unwrap();
+        let (bvh2, bounds) = binary_tree_and_bounds(
+            Boxes::Borrowed(&boxes),
+            BuildQuality::Medium,
+            &mut Steps::default(),
+        )
+        .unwrap();
         let per_leaf = |first_other| {
             let s = Bvh8::collapse(&bvh2, bounds, first_other).stats();
             s.leaf_prims as f64 / s.leaves as f64
@@ -567,8 +596,12 @@ pub(super) mod tests {
     #[test]
     fn parallel_collapse_matches_the_sequential_walk_on_any_thread_count() {
         let boxes = random_boxes(200_000, 6);
-        let (bvh2, bounds) =
-            binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Fastest).unwrap();
+        let (bvh2, bounds) = binary_tree_and_bounds(
+            Boxes::Borrowed(&boxes),
+            BuildQuality::Fastest,
+            &mut Steps::default(),
+        )
+        .unwrap();
         // The second half charged as primitives tested one by one.
         let others = 100_000;
         let on = |threads: usize| on_threads(threads, || Bvh8::collapse(&bvh2, bounds, others));
@@ -670,7 +703,12 @@ pub(super) mod tests {
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
             for quality in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::High] {
                 let params = quality.params(boxes.len());
-                let ours = binary_tree(Boxes::Borrowed(&boxes), bounds, quality);
+                let ours = binary_tree(
+                    Boxes::Borrowed(&boxes),
+                    bounds,
+                    quality,
+                    &mut Steps::default(),
+                );
                 let mut theirs = obvhs_ploc(&boxes, &params);
                 ReinsertionOptimizer::default().run(
                     &mut theirs,
@@ -739,8 +777,12 @@ pub(super) mod tests {
     #[test]
     fn collapse_does_not_depend_on_the_scale_of_the_scene() {
         let boxes = random_boxes(2000, 4);
-        let (bvh2, bounds) =
-            binary_tree_and_bounds(Boxes::Borrowed(&boxes), BuildQuality::Medium).unwrap();
+        let (bvh2, bounds) = binary_tree_and_bounds(
+            Boxes::Borrowed(&boxes),
+            BuildQuality::Medium,
+            &mut Steps::default(),
+        )
+        .unwrap();
         let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
         let reference = Bvh8::collapse(&bvh2, bounds, u32::MAX).stats();
         for scale in [2f32.powi(60), 2f32.powi(-60)] {

@@ -167,7 +167,7 @@ impl<'a> CollapseCosts<'a> {
                 .collect(),
             ordered: Vec::new(),
         };
-        costs.ordered = costs.fill_tables(0, 0).concat();
+        costs.ordered = concat(costs.fill_tables(0, 0));
         costs
     }
 
@@ -603,6 +603,24 @@ impl Part {
         }
         depth
     }
+}
+
+/// The pieces one after another, copied in parallel (`concat` is one
+/// thread's copy, and its clears of a huge tree's fresh pages).
+fn concat(pieces: Vec<Vec<u32>>) -> Vec<u32> {
+    let mut all = vec![0u32; pieces.iter().map(Vec::len).sum()];
+    let mut parts = Vec::with_capacity(pieces.len());
+    let mut rest = &mut all[..];
+    for piece in &pieces {
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut(piece.len());
+        parts.push(part);
+        rest = tail;
+    }
+    parts
+        .into_par_iter()
+        .zip(&pieces)
+        .for_each(|(part, piece)| part.copy_from_slice(piece));
+    all
 }
 
 fn set_bounds(node: &mut Node8, slot: usize, b: &obvhs::aabb::Aabb) {

@@ -96,9 +96,21 @@ pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: us
             .map(|&i| i | LEAF)
             .collect(),
     };
+    // Copied in parallel: a clone is one thread's copy, and its clears of
+    // fresh pages (see `nodes` below).
     let mut next = Clusters {
-        bounds: current.bounds.clone(),
-        node: current.node.clone(),
+        bounds: current
+            .bounds
+            .par_iter()
+            .with_min_len(BLOCK)
+            .copied()
+            .collect(),
+        node: current
+            .node
+            .par_iter()
+            .with_min_len(BLOCK)
+            .copied()
+            .collect(),
     };
     let mut nearest = vec![0u32; n];
     let scale = unit_scale(&current.bounds);

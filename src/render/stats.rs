@@ -8,6 +8,7 @@ use crate::accel::BuildQuality;
 use crate::scene::{LoadTimings, Scene};
 use crate::shade::{PacketMode, RayCounts};
 use crate::system::memory::peak_rss_bytes;
+use crate::system::steps::Steps;
 use serde::Serialize;
 use std::path::Path;
 
@@ -16,6 +17,13 @@ pub struct PhaseTimes {
     pub load_s: f64,
     pub bvh_build_s: f64,
     pub render_s: f64,
+    /// The load's steps, seconds each: a model file's `read` and `frame`,
+    /// then `compile`.
+    pub load_steps: Steps,
+    /// The build's steps: the primitive `boxes`, the tree's (`bounds`,
+    /// `clusters` or `morton`, `ploc`, `reinsertion`, `collapse`) and the
+    /// `leaves` (the triangles written in leaf order).
+    pub build_steps: Steps,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -142,6 +150,8 @@ impl RenderStats {
                 load_s: timings.load.as_secs_f64(),
                 bvh_build_s: timings.bvh_build.as_secs_f64(),
                 render_s: outcome.seconds,
+                load_steps: timings.load_steps,
+                build_steps: timings.build_steps,
             },
             triangles: unique as usize,
             instances,

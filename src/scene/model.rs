@@ -26,9 +26,12 @@ use super::edit::{self, Edit};
 use super::loaders::load_mesh_file;
 use super::settings::{IntegratorKind, RenderOverrides, RenderSettings};
 use crate::error::{InputError, InputResult};
+use crate::system::steps::Steps;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::fmt::Write;
 use std::path::{Component, Path, PathBuf};
+use std::time::Instant;
 
 /// The field of view of the framing camera across the image's narrower
 /// side, in degrees: a normal lens, little perspective distortion.
@@ -89,6 +92,8 @@ pub struct ModelScene {
     /// One line for each thing made up rather than read from the file
     /// (the camera, the lights), for the user.
     pub notes: Vec<String>,
+    /// The wall time of reading the model and of framing it.
+    pub steps: Steps,
     model: PathBuf,
     parts: Parts,
     edits: Vec<Edit>,
@@ -118,7 +123,9 @@ pub fn model_scene(
     // The command line's values are its own: checked here, they are
     // never blamed on the scene text made from them.
     cli.check().map_err(|bad| bad.on_command_line())?;
-    let asset = load_mesh_file(model)?;
+    let mut steps = Steps::default();
+    let asset = steps.time("read", || load_mesh_file(model))?;
+    let frame_start = Instant::now();
     let mut notes = Vec::new();
     let name = model.display();
     let index = match camera {
@@ -142,7 +149,8 @@ pub fn model_scene(
         (n, count) if count > 0 => Some(&asset.cameras[n.unwrap_or(0)]),
         _ => None,
     };
-    let bounds = bounds(&asset);
+    let points = asset.framing_points(FRAMING_POINTS);
+    let bounds = bounds(&points);
     let (lights, own_lights) = if asset.lights.is_empty() {
         notes.push(format!(
             "{name} has no lights: lit by strata's studio, a dim sky, a key light from above left casting soft shadows and a grey ground under the model (--save-scene writes it out to edit)"
@@ -179,12 +187,7 @@ pub fn model_scene(
     loop {
         let camera = match chosen {
             Some(c) => c.to_desc(),
-            None => frame(
-                asset.framing_positions(FRAMING_POINTS),
-                bounds,
-                size.0,
-                size.1,
-            ),
+            None => frame(&points, bounds, size.0, size.1),
         };
         parts = Parts {
             render: RenderOverrides {
@@ -211,6 +214,7 @@ pub fn model_scene(
         }
         size = edited;
     }
+    drop(points);
     background_by_edit(model, &description, edits, own_lights)?;
     match (chosen, bounds) {
         (Some(_), _) => {}
@@ -223,7 +227,9 @@ pub fn model_scene(
             "{name} has no camera and no triangles to frame: looking at the box from -1 to 1"
         )),
     }
+    steps.add("frame", frame_start.elapsed());
     Ok(ModelScene {
+        steps,
         asset,
         description,
         notes,
@@ -371,13 +377,19 @@ fn image_size(cli: &RenderOverrides, file: &RenderOverrides, aspect: Option<f32>
 
 /// The box around every vertex a triangle uses (or, for a file of many
 /// shared placements, around their boxes), if there is one.
-fn bounds(asset: &LoadedAsset) -> Option<(Vec3, Vec3)> {
-    asset
-        .framing_positions(FRAMING_POINTS)
-        .fold(None, |b, p| match b {
-            None => Some((p, p)),
-            Some((lo, hi)) => Some((lo.min(p), hi.max(p))),
-        })
+/// (`points`: [`LoadedAsset::framing_points`]; min and max are exact, so
+/// any grouping of the parallel reduction gives the same box).
+fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let grow = |b: Option<(Vec3, Vec3)>, c: Option<(Vec3, Vec3)>| match (b, c) {
+        (Some((lo, hi)), Some((l, h))) => Some((lo.min(l), hi.max(h))),
+        (b, None) => b,
+        (None, c) => c,
+    };
+    points
+        .par_iter()
+        .with_min_len(1 << 14)
+        .map(|&p| Some((p, p)))
+        .reduce(|| None, grow)
 }
 
 /// A perspective camera looking at the centre of `bounds` from a
@@ -390,12 +402,7 @@ fn bounds(asset: &LoadedAsset) -> Option<(Vec3, Vec3)> {
 /// D ≥ z + |x| / (t·FILL): the largest such D over the points frames them
 /// all, and the one that sets it touches the margin. Every triangle lies
 /// within its vertices' projections, so none is cut.
-pub fn frame(
-    points: impl Iterator<Item = Vec3>,
-    bounds: Option<(Vec3, Vec3)>,
-    width: u32,
-    height: u32,
-) -> CameraDesc {
+pub fn frame(points: &[Vec3], bounds: Option<(Vec3, Vec3)>, width: u32, height: u32) -> CameraDesc {
     let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
     let centre = (lo + hi) * 0.5;
     let radius = (hi - lo).length() * 0.5;
@@ -416,15 +423,19 @@ pub fn frame(
     };
     let (fx, fy) = (tx * FRAMING_FILL, ty * FRAMING_FILL);
     // Never closer than a hair in front of the nearest point.
-    let mut distance = f32::MIN_POSITIVE;
-    for p in points {
-        let q = p - centre;
-        let z = q.dot(back);
-        let need = (z + q.dot(right).abs() / fx)
-            .max(z + q.dot(up).abs() / fy)
-            .max(z + 1e-3 * radius);
-        distance = distance.max(need);
-    }
+    // The greatest need over the points, in parallel: max is exact, so
+    // the camera is the same for any grouping.
+    let mut distance = points
+        .par_iter()
+        .with_min_len(1 << 14)
+        .map(|&p| {
+            let q = p - centre;
+            let z = q.dot(back);
+            (z + q.dot(right).abs() / fx)
+                .max(z + q.dot(up).abs() / fy)
+                .max(z + 1e-3 * radius)
+        })
+        .reduce(|| f32::MIN_POSITIVE, f32::max);
     if !(distance.is_finite() && distance > f32::MIN_POSITIVE) {
         // No points, or one point: stand back as from a unit box.
         distance = 3.0 * radius.max(1.0);
@@ -728,7 +739,7 @@ mod tests {
             let b = points.iter().fold((points[0], points[0]), |(lo, hi), p| {
                 (lo.min(*p), hi.max(*p))
             });
-            let c = frame(points.iter().copied(), Some(b), w, h);
+            let c = frame(&points, Some(b), w, h);
             let view =
                 View::look_at(c.position.into(), c.look_at.into(), c.up.into(), w, h).unwrap();
             let camera = Camera::Perspective(Perspective::new(view, c.fov.unwrap()));

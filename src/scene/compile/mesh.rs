@@ -326,6 +326,9 @@ pub(super) fn triangle_geometry(
     Ok(geometry)
 }
 
+/// Boxes a task of the search for a box that is not finite checks.
+const FINITE_BLOCK: usize = 1 << 14;
+
 /// Every triangle's box, mesh by mesh; the first that is not finite is an
 /// error naming its mesh and its index there.
 pub(super) fn triangle_boxes(
@@ -341,7 +344,16 @@ pub(super) fn triangle_boxes(
                 .into_par_iter()
                 .map(|i| Aabb::from_points(&source.get(i))),
         );
-        if let Some(i) = boxes[start..].iter().position(|b| !b.is_finite()) {
+        // Searched in parallel a block at a time (one thread scanned a
+        // huge mesh's boxes alone), the first block with one, then in it.
+        let own = &boxes[start..];
+        let bad = |b: &Aabb| !b.is_finite();
+        let block = own
+            .par_chunks(FINITE_BLOCK)
+            .position_first(|block| block.iter().any(bad));
+        if let Some(block) = block {
+            let at = block * FINITE_BLOCK;
+            let i = at + own[at..].iter().position(bad).expect("the block has one");
             return Err((mesh.name.clone(), i));
         }
     }
@@ -500,5 +512,40 @@ material = "grey"
         };
         let e = check_indices(&mesh, Path::new("m.obj")).unwrap_err();
         assert_eq!(e.location, "face 1");
+    }
+
+    /// The first box that is not finite is found wherever it lies: in
+    /// the first block of the parallel search, past it, in the last mesh.
+    #[test]
+    fn the_first_triangle_that_is_not_finite_is_named() {
+        let range = |name: &str, first: u32, count: u32| MeshRange {
+            name: name.into(),
+            first,
+            count,
+            material: 0,
+            mirrored: false,
+            normals: None,
+            uvs: None,
+        };
+        let tri = |k: usize| [Vec3::ZERO, Vec3::X, Vec3::new(0.0, k as f32, 1.0)];
+        let n = 3 * FINITE_BLOCK + 5;
+        for bad in [None, Some(3), Some(FINITE_BLOCK + 7), Some(n - 1)] {
+            let mut second: Vec<[Vec3; 3]> = (0..n).map(tri).collect();
+            if let Some(i) = bad {
+                second[i][1].y = f32::INFINITY;
+                second[n - 2][2].x = f32::NAN;
+            }
+            let meshes = [range("a", 0, 10), range("b", 10, n as u32)];
+            let sources = [
+                TriangleSource::Soup((0..10).map(tri).collect()),
+                TriangleSource::Soup(second),
+            ];
+            match (triangle_boxes(&meshes, &sources), bad) {
+                (Ok(boxes), None) => assert_eq!(boxes.len(), n + 10),
+                // The NaN at n - 2 comes after every other but the last.
+                (Err(e), Some(i)) => assert_eq!(e, ("b".to_string(), i.min(n - 2))),
+                (got, want) => panic!("{:?} for {want:?}", got.map(|b| b.len())),
+            }
+        }
     }
 }

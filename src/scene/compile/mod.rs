@@ -9,6 +9,7 @@
 //! its own file of `impl Compiler`: `material`, `light`, `object`
 //! (placement, shapes, groups), `mesh` (mesh files and the leaf blocks),
 //! `import` (a mesh file's lights and cameras), `csg`, `camera`; `validate` holds the number checks they share.
+//! `progress` is what a load is doing, for a display on another thread.
 //! This file holds the entry points and the order of the steps.
 
 use super::asset::{LoadedAsset, LoadedCamera};
@@ -28,17 +29,18 @@ use crate::material::Material;
 use crate::math::{Aabb, Transform};
 use crate::shape::plane::Plane;
 use crate::system::memory::PeakMeter;
+use crate::system::steps::Steps;
 use crate::texture::Textures;
 use glam::Affine3A;
 use mesh::{triangle_at, TriangleSource};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, AtomicU8, Ordering::Relaxed};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub use arrays::{mesh_geometry, MeshArraysError};
 pub use instance::{read_instances, PLACEMENT_BYTES};
+pub use progress::{LoadPhase, LoadProgress};
 pub use text::load_edited_text;
 
 mod arrays;
@@ -51,6 +53,7 @@ mod light;
 mod material;
 mod mesh;
 mod object;
+mod progress;
 mod text;
 mod validate;
 
@@ -66,6 +69,11 @@ pub struct LoadTimings {
     pub bvh_choice: BuildChoice,
     pub load_peak_bytes: Option<u64>,
     pub build_peak_bytes: Option<u64>,
+    /// The load's steps (a model file's read and framing, the compile)
+    /// and the build's (the primitive boxes, each step of the BVH build,
+    /// the leaf blocks), each with its wall time.
+    pub load_steps: Steps,
+    pub build_steps: Steps,
 }
 
 impl LoadTimings {
@@ -107,50 +115,6 @@ pub fn load_edited_scene_with_progress(
     let start = Instant::now();
     let text = super::loaders::read_scene_file(path)?;
     text::compile_text(&text, path, edits, overrides, quality, start, progress)
-}
-
-/// What a load is doing, set by the compiler as it goes and read by a
-/// progress display on another thread (relaxed atomics: a display needs
-/// no order).
-#[derive(Debug, Default)]
-pub struct LoadProgress {
-    /// 0: loading, 1: building, 2: done.
-    phase: AtomicU8,
-    triangles: AtomicU64,
-}
-
-/// A phase of a load.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LoadPhase {
-    /// Reading the scene and its mesh files.
-    Loading,
-    /// Building the BVH over this many triangles.
-    Building {
-        triangles: u64,
-    },
-    Done,
-}
-
-impl LoadProgress {
-    pub fn phase(&self) -> LoadPhase {
-        match self.phase.load(Relaxed) {
-            0 => LoadPhase::Loading,
-            1 => LoadPhase::Building {
-                triangles: self.triangles.load(Relaxed),
-            },
-            _ => LoadPhase::Done,
-        }
-    }
-
-    /// The load is over (done or failed).
-    pub fn finish(&self) {
-        self.phase.store(2, Relaxed);
-    }
-
-    fn building(&self, triangles: u64) {
-        self.triangles.store(triangles, Relaxed);
-        self.phase.store(1, Relaxed);
-    }
 }
 
 /// Compile scene text as if read from `path` (meshes resolve relative to
@@ -272,8 +236,8 @@ pub fn compile_model(
     progress: &LoadProgress,
 ) -> InputResult<(Scene, LoadTimings)> {
     let path = model.path().to_path_buf();
-    let (desc, asset) = (model.description, model.asset);
-    compile_for(
+    let (desc, asset, steps) = (model.description, model.asset, model.steps);
+    let compiled = compile_for(
         &desc,
         &path,
         overrides,
@@ -282,7 +246,14 @@ pub fn compile_model(
         start,
         progress,
         Some((path.clone(), asset)),
-    )
+    );
+    compiled.map(|(scene, mut timings)| {
+        // The model's read and framing came before the compile.
+        let mut load_steps = steps;
+        load_steps.extend(&timings.load_steps);
+        timings.load_steps = load_steps;
+        (scene, timings)
+    })
 }
 
 // One argument a step of the load: what, from where, for what, since
@@ -299,6 +270,7 @@ fn compile_for(
     preloaded: Option<(PathBuf, LoadedAsset)>,
 ) -> InputResult<(Scene, LoadTimings)> {
     let mut memory = PeakMeter::start();
+    let compile_start = Instant::now();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
     c.bake_shared = purpose == Purpose::MeshFile;
@@ -357,7 +329,10 @@ fn compile_for(
         source.release_file_positions();
     }
     let load = start.elapsed();
+    let mut load_steps = Steps::default();
+    load_steps.add("compile", compile_start.elapsed());
     let load_peak_bytes = memory.next_phase();
+    let mut build_steps = Steps::default();
 
     // Area lights were recorded by shape index; make them global primitive ids.
     let n_tris = c.meshes.last().map_or(0, |m| m.first + m.count);
@@ -398,7 +373,7 @@ fn compile_for(
             &file,
         )?);
     }
-    let mut boxes = c.primitive_boxes()?;
+    let mut boxes = build_steps.time("boxes", || c.primitive_boxes())?;
     for (k, inst) in c.instances.iter_mut().enumerate() {
         let b = inst.bounds(&prototypes[inst.prototype as usize]);
         if !b.is_finite() {
@@ -412,9 +387,10 @@ fn compile_for(
     c.warnings.extend(unreached);
     let bvh_choice = for_purpose(quality, boxes.len());
     let bvh_quality = bvh_choice.quality;
-    let mut bvh = Bvh8::build_from_with_others(boxes, bvh_quality, n_tris);
+    let mut bvh = Bvh8::build_timed(boxes, bvh_quality, n_tris, &mut build_steps);
     // The builder reserves room for more nodes than the collapse makes.
     bvh.shrink_to_fit();
+    let leaves_start = Instant::now();
     // Store the vertices once, in the order the leaves read them, straight
     // from the (indexed) sources, with the leaf ids beside them: never two
     // copies of the triangles, and the BVH's own ids become redundant.
@@ -431,6 +407,7 @@ fn compile_for(
     };
     let mut geometry = Geometry::new(parts, bvh, vertices);
     drop(sources);
+    build_steps.add("leaves", leaves_start.elapsed());
     let timings = LoadTimings {
         load,
         bvh_build: build_start.elapsed(),
@@ -438,6 +415,8 @@ fn compile_for(
         bvh_choice,
         load_peak_bytes,
         build_peak_bytes: memory.phase_peak(),
+        load_steps,
+        build_steps,
     };
     geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
     let emitters = emitters::emitters(&geometry, &c.materials, &c.lights);

@@ -86,26 +86,27 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     let bad = |e: &dyn std::fmt::Display| InputError::file(path, format!("invalid PLY: {e}"));
     // The whole file at once (one allocation of its size, one copy from
     // the page cache): the bodies are then plain byte slices, walked
-    // without a reader's per-value calls. The buffer is made in parallel
-    // before the copy: the first touch of a fresh page, which the kernel
-    // clears, costs more than copying it, and in the copy it would be
-    // one page at a time.
+    // without a reader's per-value calls. The buffer is filled in parallel,
+    // each part read at its offset: the first touch of a fresh page, which
+    // the kernel clears, costs more than copying it, and one reader would
+    // touch them and copy one page at a time.
     let size = file.metadata().map_or(0, |m| m.len());
-    let mut bytes: Vec<u8> = (0..usize::try_from(size).unwrap_or(0))
-        .into_par_iter()
-        .with_min_len(1 << 20)
-        .map(|_| 0)
-        .collect();
-    let mut filled = 0;
-    while filled < bytes.len() {
-        match file.read(&mut bytes[filled..]) {
-            Ok(0) => break,
-            Ok(k) => filled += k,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(bad(&e)),
-        }
-    }
-    bytes.truncate(filled);
+    let mut bytes = vec![0u8; usize::try_from(size).unwrap_or(0)];
+    let filled: Vec<usize> = bytes
+        .par_chunks_mut(READ_PART)
+        .enumerate()
+        .map(|(k, part)| read_at(&file, part, (k * READ_PART) as u64))
+        .collect::<std::io::Result<_>>()
+        .map_err(|e| bad(&e))?;
+    // A part short of its length ends the file (it shrank since its size
+    // was read).
+    let end = filled
+        .iter()
+        .enumerate()
+        .find(|&(k, &n)| n < bytes[k * READ_PART..].len().min(READ_PART))
+        .map_or(bytes.len(), |(k, &n)| k * READ_PART + n);
+    bytes.truncate(end);
+    std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(end as u64)).map_err(|e| bad(&e))?;
     // Whatever the file holds past the size it gave.
     file.read_to_end(&mut bytes).map_err(|e| bad(&e))?;
     let mut warnings = Vec::new();
@@ -131,6 +132,29 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     }
     let (positions, indices) = binary::read_body(path, &header, body, line)?;
     Ok(mesh_asset(path, positions, indices, warnings))
+}
+
+/// Bytes a task of the file's read copies: a few pages' clears and copies
+/// dwarf the hand-off.
+const READ_PART: usize = 1 << 22;
+
+/// Reads `part.len()` bytes of `file` from `offset`, fewer only at its end;
+/// returns how many.
+fn read_at(file: &std::fs::File, part: &mut [u8], offset: u64) -> std::io::Result<usize> {
+    #[cfg(unix)]
+    let read = |buf: &mut [u8], at: u64| std::os::unix::fs::FileExt::read_at(file, buf, at);
+    #[cfg(windows)]
+    let read = |buf: &mut [u8], at: u64| std::os::windows::fs::FileExt::seek_read(file, buf, at);
+    let mut filled = 0;
+    while filled < part.len() {
+        match read(&mut part[filled..], offset + filled as u64) {
+            Ok(0) => break,
+            Ok(k) => filled += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(filled)
 }
 
 /// One mesh of `positions` and triangles `indices`, named after the file,
