@@ -1,8 +1,8 @@
 //! Which instruction set the hot walks run in: the build's own (AVX2 and
 //! FMA under the default x86-64-v3 target, SSE2 in the portable build), or
-//! a copy of the same code compiled for AVX-512 where the CPU has it
-//! (but for AMD's, where it measured slower), chosen once per process
-//! (runtime dispatch). One of the two parts of [`super`], the crate's one
+//! a copy of the same code compiled for AVX-512 where the CPU has it and
+//! `STRATA_SIMD=avx512` asks for it (it measured slower than the build's
+//! on the CPUs tried), chosen once per process (runtime dispatch). One of the two parts of [`super`], the crate's one
 //! module with `unsafe`; the other is `prefetch`.
 //!
 //! A [`Kernel`] runs a closure inside a function of its own: the build's
@@ -73,16 +73,13 @@ impl Kernel {
         None
     }
 
-    /// The kernel `auto` picks: the AVX-512 copy where the CPU runs it,
-    /// except on AMD's, where it measured slower than the build's (Zen 4:
-    /// 0.96× over the dragon's ray kinds, docs/performance.md, "AVX-512
-    /// by runtime dispatch"; Zen 4 runs 512-bit work in two 256-bit
-    /// halves, and the walks' 8-wide lanes gain only the extra registers).
+    /// The kernel `auto` picks: the build's. The AVX-512 copy measured
+    /// slower on both CPUs it ran on, an AMD Zen 4 and an Intel Xeon (0.96×
+    /// the build's over the dragon's ray kinds on each, docs/performance.md,
+    /// "AVX-512 by runtime dispatch"): the walks' 8-wide lanes gain only
+    /// the extra registers, so it stays for `STRATA_SIMD=avx512` to measure.
     pub fn detect() -> Self {
-        match Self::avx512() {
-            Some(k) if !amd() => k,
-            _ => Self::build(),
-        }
+        Self::build()
     }
 
     /// Every kernel this CPU runs, the build's first.
@@ -173,18 +170,6 @@ impl Kernel {
     }
 }
 
-/// Whether the CPU is AMD's (CPUID's vendor string "AuthenticAMD").
-fn amd() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let id = std::arch::x86_64::__cpuid(0);
-        // "Auth" "enti" "cAMD" in EBX, EDX, ECX.
-        id.ebx == 0x6874_7541 && id.edx == 0x6974_6e65 && id.ecx == 0x444d_4163
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    false
-}
-
 /// `f`, compiled for the build's target, in a function of its own.
 #[inline(never)]
 fn in_build<R>(f: impl FnOnce() -> R) -> R {
@@ -215,13 +200,10 @@ mod tests {
         assert_eq!(Kernel::parse("auto"), Ok(Kernel::detect()));
         let e = Kernel::parse("avx9").unwrap_err();
         assert!(e.contains("'avx9'") && e.contains("avx512"), "{e}");
+        assert_eq!(Kernel::detect(), Kernel::build());
         match Kernel::avx512() {
-            Some(k) if !amd() => assert_eq!(Kernel::detect(), k),
-            Some(_) => assert_eq!(Kernel::detect(), Kernel::build()),
-            None => {
-                assert_eq!(Kernel::detect(), Kernel::build());
-                assert!(Kernel::parse("avx512").unwrap_err().contains("lacks"));
-            }
+            Some(k) => assert_eq!(Kernel::parse("avx512"), Ok(k)),
+            None => assert!(Kernel::parse("avx512").unwrap_err().contains("lacks")),
         }
     }
 
