@@ -234,10 +234,7 @@ fn the_command_line_writes_counts_and_refuses_what_cannot_work() {
             &["--noise", "0.05", "--passes", "4"][..],
             "--passes: --passes 4 with --noise",
         ),
-        (
-            &["--noise", "0"][..],
-            "--noise 0: must be a relative error above 0",
-        ),
+        (&["--noise", "0"][..], "--noise 0: must be an error above 0"),
         (&["--time", "0s"][..], "'0s' is not a duration above 0"),
         (&["--time", "3 weeks"][..], "unknown unit 'weeks'"),
         (
