@@ -25,7 +25,7 @@ use strata::error::InputError;
     version = strata::VERSION,
     about,
     long_about = None,
-    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: AVX-512 where the CPU has it, but for AMD's)."
+    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: the build's own; avx512, where the CPU has it, for measuring)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -110,8 +110,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
 }
 
 /// `STRATA_SIMD` (auto, avx2 or avx512): the instruction set the hot
-/// walks run in, for measuring one against the other; unset, the fastest
-/// this CPU runs (`strata::accel::Kernel`).
+/// walks run in, for measuring one against the other; unset, the build's
+/// own (`strata::accel::Kernel::detect`).
 fn choose_kernel() -> Result<(), CliError> {
     if let Some(name) = std::env::var_os("STRATA_SIMD") {
         let name = name.to_string_lossy();
