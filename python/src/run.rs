@@ -80,17 +80,29 @@ pub fn each<I: Sync, R: Send>(
 ) -> PyResult<()> {
     debug_assert_eq!(items.len(), out.len());
     for (items, out) in items.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
-        py.detach(|| {
-            threads.install(|| {
-                items
-                    .par_chunks(TASK)
-                    .zip(out.par_chunks_mut(TASK))
-                    .for_each(|(items, out)| answer(items, out))
-            })
-        });
-        py.check_signals()?;
+        answer_chunk(py, threads, items, out, &answer)?;
     }
     Ok(())
+}
+
+/// One chunk of [`each`] or [`each_ray`]: `answer` over its tasks on
+/// `threads` with the GIL released, then a pending Ctrl-C raised.
+fn answer_chunk<I: Sync, R: Send>(
+    py: Python<'_>,
+    threads: &Threads,
+    items: &[I],
+    out: &mut [R],
+    answer: &(impl Fn(&[I], &mut [R]) + Sync),
+) -> PyResult<()> {
+    py.detach(|| {
+        threads.install(|| {
+            items
+                .par_chunks(TASK)
+                .zip(out.par_chunks_mut(TASK))
+                .for_each(|(items, out)| answer(items, out))
+        })
+    });
+    py.check_signals()
 }
 
 /// [`each`] of a query's rays, read a chunk at a time (with the GIL
@@ -108,15 +120,7 @@ pub fn each_ray<R: Send>(
     for (k, out) in out.chunks_mut(CHUNK).enumerate() {
         let start = k * CHUNK;
         rays.read(start..start + out.len(), threads, &mut buffer)?;
-        py.detach(|| {
-            threads.install(|| {
-                buffer
-                    .par_chunks(TASK)
-                    .zip(out.par_chunks_mut(TASK))
-                    .for_each(|(rays, out)| answer(rays, out))
-            })
-        });
-        py.check_signals()?;
+        answer_chunk(py, threads, &buffer, out, &answer)?;
     }
     Ok(())
 }

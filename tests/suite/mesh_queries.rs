@@ -136,22 +136,32 @@ fn direction(rng: &mut StreamRng) -> Vec3 {
     }
 }
 
+/// `n` random rays through `g`'s box, a third of them clipped to a
+/// random interval.
+fn random_rays(g: &Geometry, n: usize, seed: u64) -> Vec<Ray> {
+    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
+    let size = (hi - lo).length();
+    let mut rng = seeded(seed);
+    (0..n)
+        .map(|i| {
+            let target = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit());
+            let origin = target + direction(&mut rng) * size * rng.range(0.0, 1.0);
+            let mut ray = Ray::new(origin, (target - origin) * rng.range(0.1, 2.0));
+            if i % 3 == 0 {
+                ray.tmin = rng.range(0.0, 1.0);
+                ray.tmax = ray.tmin + rng.range(0.0, 2.0);
+            }
+            ray
+        })
+        .collect()
+}
+
 /// Crossings and counts equal brute force on random rays, some clipped
 /// to a random interval.
 fn check_random_rays(g: &Geometry, rays: usize, seed: u64) -> usize {
     let tris = g.file_order_triangles();
-    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
-    let size = (hi - lo).length();
-    let mut rng = seeded(seed);
     let mut total = 0;
-    for i in 0..rays {
-        let target = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit());
-        let origin = target + direction(&mut rng) * size * rng.range(0.0, 1.0);
-        let mut ray = Ray::new(origin, (target - origin) * rng.range(0.1, 2.0));
-        if i % 3 == 0 {
-            ray.tmin = rng.range(0.0, 1.0);
-            ray.tmax = ray.tmin + rng.range(0.0, 2.0);
-        }
+    for (i, ray) in random_rays(g, rays, seed).into_iter().enumerate() {
         let got = crossings(g, &ray);
         assert_eq!(got, brute_crossings(&tris, &ray), "ray {i}: {ray:?}");
         assert_eq!(g.count_crossings(&ray) as usize, got.len(), "ray {i}");
@@ -530,21 +540,7 @@ fn axis_aligned_rays_through_a_pyramids_apex_cross_it_twice() {
 /// Random rays through `g`'s box and rays aimed at `targets` through the
 /// origin, a third of the random ones clipped to a random interval.
 fn stream_rays(g: &Geometry, n: usize, targets: &[Vec3], seed: u64) -> Vec<Ray> {
-    let (lo, hi) = (g.bvh().bounds.min, g.bvh().bounds.max);
-    let size = (hi - lo).length();
-    let mut rng = seeded(seed);
-    let mut rays: Vec<Ray> = (0..n)
-        .map(|i| {
-            let target = lo + (hi - lo) * Vec3::new(rng.unit(), rng.unit(), rng.unit());
-            let origin = target + direction(&mut rng) * size * rng.range(0.0, 1.0);
-            let mut ray = Ray::new(origin, (target - origin) * rng.range(0.1, 2.0));
-            if i % 3 == 0 {
-                ray.tmin = rng.range(0.0, 1.0);
-                ray.tmax = ray.tmin + rng.range(0.0, 2.0);
-            }
-            ray
-        })
-        .collect();
+    let mut rays = random_rays(g, n, seed);
     rays.extend(targets.iter().map(|&p| Ray::new(p * 3.0, -p)));
     rays
 }
