@@ -17,7 +17,7 @@
 use super::build::Bvh8;
 use super::node_test::RayPlanes;
 use super::query::Query;
-use super::walk::{NearestFirst, Walk};
+use super::walk::{NearestFirst, Walk, WalkOrder};
 use crate::math::Ray;
 
 /// Rays in flight at once: a batch's width; more would spend registers
@@ -39,6 +39,24 @@ impl Bvh8 {
         out: &mut [Q::Answer],
         done: impl Fn(&Q::Answer) -> bool,
     ) where
+        Q: Query,
+    {
+        self.walk_in_flight_by(rays, NearestFirst, leaf_data, query, out, done);
+    }
+
+    /// [`Bvh8::walk_in_flight`] in `order`: each ray's walk is
+    /// `walk_by(ray, RayPlanes, order, ..)`'s.
+    #[inline(always)]
+    pub fn walk_in_flight_by<O, Q, L>(
+        &self,
+        rays: &[Ray],
+        _order: O,
+        leaf_data: &[L],
+        query: &mut Q,
+        out: &mut [Q::Answer],
+        done: impl Fn(&Q::Answer) -> bool,
+    ) where
+        O: WalkOrder,
         Q: Query,
     {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
@@ -85,8 +103,7 @@ impl Bvh8 {
             while m != 0 {
                 let k = m.trailing_zeros() as usize % IN_FLIGHT;
                 m &= m - 1;
-                let step =
-                    walks[k].step::<NearestFirst, Q, L>(self, leaf_data, query, self.prefetch);
+                let step = walks[k].step::<O, Q, L>(self, leaf_data, query, self.prefetch);
                 if let Some(a) = step {
                     out[index[k]] = a;
                     match launch(&mut walks[k], query, out) {

@@ -25,7 +25,8 @@ mod placed;
 mod stream;
 
 use super::Geometry;
-use crate::accel::Query;
+use crate::accel::node_test::RayPlanes;
+use crate::accel::{AnyOrder, Query};
 use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
@@ -129,14 +130,23 @@ impl Geometry {
         self.count_crossings(&Ray::new(point, CONTAINS_DIRECTION)) % 2 == 1
     }
 
-    /// Walks the BVH for every crossing of the ray, in no order.
+    /// Walks the BVH for every crossing of the ray, in no order. The walk
+    /// never ends early and never shortens the ray, so it reaches the same
+    /// leaves in any order: children are taken as they come, unsorted
+    /// ([`AnyOrder`]), which saves the nearest-first sort at every node.
     #[inline(always)]
     fn walk_crossings(&self, ray: &Ray, found: impl FnMut(Crossing)) {
         let mut query = EveryCrossing {
             geometry: self,
             found,
         };
-        self.bvh.walk(ray, &self.leaf_blocks, &mut query);
+        self.bvh.walk_by(
+            ray,
+            RayPlanes::new(ray),
+            AnyOrder,
+            &self.leaf_blocks,
+            &mut query,
+        );
     }
 
     /// The crossings of leaf `start..start + count`: its triangles in one

@@ -9,14 +9,14 @@
 //! waits ([`crate::accel::in_flight`]; Kocberber, Falsafi and Grot 2015,
 //! "Asynchronous Memory Access Chaining"), as a stream's closest hits do.
 //! Each walk takes the steps of its ray's own walk (the same node test,
-//! the same order), so each ray meets the same leaves and the same
-//! crossings, bit for bit; a list is sorted as [`Geometry::crossings`]
-//! sorts it. On a tree that fits the caches there is no wait to overlap,
+//! the same order: any, unsorted), so each ray meets the same leaves and
+//! the same crossings, bit for bit; a list is sorted as
+//! [`Geometry::crossings`] sorts it. On a tree that fits the caches there is no wait to overlap,
 //! and rays walk one at a time, as a stream's do there
 //! ([`crate::geometry::travel`]).
 
 use super::{Crossing, CONTAINS_DIRECTION};
-use crate::accel::Query;
+use crate::accel::{AnyOrder, Query};
 use crate::geometry::Geometry;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
@@ -113,7 +113,9 @@ impl Geometry {
         }
         let mut query = CountCrossings { geometry: self };
         self.bvh
-            .walk_in_flight(rays, &self.leaf_blocks, &mut query, out, |_| false);
+            .walk_in_flight_by(rays, AnyOrder, &self.leaf_blocks, &mut query, out, |_| {
+                false
+            });
     }
 
     /// `out[i] = self.contains(points[i])`, the rays from the points
@@ -164,6 +166,8 @@ impl Geometry {
             out,
         };
         self.bvh
-            .walk_in_flight(rays, &self.leaf_blocks, &mut query, spans, |_| false);
+            .walk_in_flight_by(rays, AnyOrder, &self.leaf_blocks, &mut query, spans, |_| {
+                false
+            });
     }
 }
