@@ -163,26 +163,8 @@ impl Integrator<'_> {
             out[0] = self.trace_and_shade(&batch[0].ctx, &ray, 0, 1.0, 1.0, "camera", first);
             return;
         }
-        // The lens samples as `camera_ray` draws them, eight at a time.
-        let lens = if self.scene.camera.uses_lens() {
-            let at = |i: usize| (batch[i].ctx.sample, batch[i].ctx.spp);
-            draw_2d_lanes((1 << n) - 1, |i| &batch[i].ctx, Dim::LENS, at)
-        } else {
-            [Vec2::splat(0.5); PACKET_SIZE]
-        };
-        // (Lanes past `n` repeat the last sample, unused.)
-        let film = std::array::from_fn(|i| batch[i.min(n - 1)].film);
-        let rays = self.scene.camera.generate_rays(&film, &lens);
+        let (rays, hits) = self.camera_hits(batch);
         let rays = &rays[..n];
-        let mut hits = [None; PACKET_SIZE];
-        if self.packets.use_packet(BatchRays::Camera, n) {
-            self.scene.geometry.intersect_packet(rays, &mut hits[..n]);
-        } else {
-            for (h, r) in hits.iter_mut().zip(rays) {
-                *h = self.scene.geometry.intersect(r);
-            }
-        }
-        self.counts.camera += n as u64;
         // (Lanes past `n` repeat the last one, unused.)
         let mut lanes: [_; PACKET_SIZE] = std::array::from_fn(|i| {
             let i = i.min(n - 1);
@@ -199,6 +181,39 @@ impl Integrator<'_> {
             lane.slot = self.begin_record(0, "camera", &lane.ray);
         }
         self.shade::<PACKET_SIZE>(0, &lanes[..n], out, first);
+    }
+
+    /// The camera rays of a batch of two or more samples and their first
+    /// hits, each bit for bit what `camera_ray` and `intersect` give it
+    /// alone: the rays made eight at a time in lanes, traced as one packet
+    /// where [`PacketMode`] says a packet pays. Lanes past the batch
+    /// repeat its last sample, unused.
+    pub(super) fn camera_hits(
+        &mut self,
+        batch: &[CameraSample],
+    ) -> ([Ray; PACKET_SIZE], [Option<PrimHit>; PACKET_SIZE]) {
+        let n = batch.len();
+        // The lens samples as `camera_ray` draws them, eight at a time.
+        let lens = if self.scene.camera.uses_lens() {
+            let at = |i: usize| (batch[i].ctx.sample, batch[i].ctx.spp);
+            draw_2d_lanes((1 << n) - 1, |i| &batch[i].ctx, Dim::LENS, at)
+        } else {
+            [Vec2::splat(0.5); PACKET_SIZE]
+        };
+        let film = std::array::from_fn(|i| batch[i.min(n - 1)].film);
+        let rays = self.scene.camera.generate_rays(&film, &lens);
+        let mut hits = [None; PACKET_SIZE];
+        if self.packets.use_packet(BatchRays::Camera, n) {
+            self.scene
+                .geometry
+                .intersect_packet(&rays[..n], &mut hits[..n]);
+        } else {
+            for (h, r) in hits.iter_mut().zip(&rays[..n]) {
+                *h = self.scene.geometry.intersect(r);
+            }
+        }
+        self.counts.camera += n as u64;
+        (rays, hits)
     }
 
     /// Radiance arriving along `ray` at path depth `depth`.

@@ -73,19 +73,33 @@ impl Integrator<'_> {
         out: &mut [Vec3],
         mut first: Option<&mut [FirstHit]>,
     ) {
+        if batch.len() == 1 || self.trace.is_some() {
+            // One sample, or a replay, which records each path's
+            // vertices in turn: each camera ray traced alone.
+            for (i, sample) in batch.iter().enumerate() {
+                let ray = self.camera_ray(&sample.ctx, sample.film);
+                self.counts.camera += 1;
+                let first_i = first.as_deref_mut().map(|f| &mut f[i]);
+                out[i] = self.path(&sample.ctx, ray, None, first_i);
+            }
+            return;
+        }
+        // The camera rays together (coherent: one packet where it pays),
+        // then each path on its own from its first hit.
+        let (rays, hits) = self.camera_hits(batch);
         for (i, sample) in batch.iter().enumerate() {
-            let ray = self.camera_ray(&sample.ctx, sample.film);
-            self.counts.camera += 1;
             let first_i = first.as_deref_mut().map(|f| &mut f[i]);
-            out[i] = self.path(&sample.ctx, ray, first_i);
+            out[i] = self.path(&sample.ctx, rays[i], Some(hits[i]), first_i);
         }
     }
 
-    /// The radiance a camera path starting with `ray` brings back.
+    /// The radiance a camera path starting with `ray` brings back;
+    /// `camera_hit`, where given, is the ray's closest hit, already traced.
     fn path(
         &mut self,
         ctx: &SampleContext,
         mut ray: Ray,
+        mut camera_hit: Option<Option<PrimHit>>,
         mut first: Option<&mut FirstHit>,
     ) -> Vec3 {
         let scene = self.scene;
@@ -101,7 +115,10 @@ impl Integrator<'_> {
         let mut depth = 0;
         loop {
             let slot = self.begin_record(depth, if depth == 0 { "camera" } else { "bounce" }, &ray);
-            let hit = scene.geometry.intersect(&ray);
+            let hit = match camera_hit.take() {
+                Some(hit) => hit,
+                None => scene.geometry.intersect(&ray),
+            };
             let Some(hit) = hit else {
                 let le = self.escaped(&ray, &came);
                 l += beta * le;
