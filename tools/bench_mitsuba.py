@@ -16,7 +16,9 @@ directional lights, an environment light as a `constant` emitter or an
 nearest, Mitsuba bilinearly, so Mitsuba gets the map repeated 8x along
 each axis, on which its bilinear lookup is strata's nearest one but for a
 sixteenth of a texel at each edge), a plane as a large rectangle, spheres, PLY/OBJ meshes
-(flat-shaded, as strata shades meshes without normals), and the `direct`
+(flat-shaded, as strata shades meshes without normals; an ASCII PLY is given
+to Mitsuba as a binary copy, which it loads several times faster), a
+metallic-roughness metal (metallic = 1) as a `principled` BSDF, and the `direct`
 integrator (emitter_samples = strata's shadow_samples, bsdf_samples = 1) with the `independent`
 sampler; a scene with `integrator = "path"` gets Mitsuba's `path` integrator
 (max_depth = strata's + 2). strata's direct light has the same expectation (one light sample
@@ -67,7 +69,12 @@ DEFAULT_SCENES = ["scenes/large/dragon-rect.toml", "scenes/seed-mc.toml", "scene
 # axis for Mitsuba: its bilinear lookup on the repeated map is strata's
 # nearest lookup on the original but within 1/16 texel of each edge.
 ENVMAP_REPEAT = 8
-LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+# Dr.Jit's LLVM backend, first found: $DRJIT_LIBLLVM_PATH, the LLVM 22 the
+# Rust toolchain ships (LLVM 19 aborts in instruction selection on AVX-512
+# machines; 14 and 15 fail to load or compile kernels), Debian's LLVM 19.
+LLVM_CANDIDATES = ["~/.rustup/toolchains/stable-*/lib/libLLVM.so.*",
+                   "~/.rustup/toolchains/*/lib/libLLVM.so.*",
+                   "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"]
 # Seeds whose mean RMSE decides whether strata has reached Mitsuba's error.
 RMSE_SEEDS = 3
 
@@ -152,6 +159,24 @@ def translate(path, mi):
 
     bsdfs = {}
     for name, m in doc.get("materials", {}).items():
+        if "base_color" in m or "metallic" in m or "roughness" in m:
+            # glTF's metallic-roughness material. For a metal (metallic 1)
+            # Mitsuba's principled BSDF is the same model: GGX sampled by
+            # visible normals with Schlick's Fresnel from base_color, and no
+            # diffuse lobe (its weight is 1 - metallic). It differs in
+            # Smith's masking (separable; strata's is height-correlated),
+            # which matters little at low roughness. Dielectric ones differ
+            # (Disney's diffuse against Lambert's): not translated.
+            extra = [key for key in m if key not in ("base_color", "metallic", "roughness")]
+            if float(m.get("metallic", 0.0)) != 1.0 or extra:
+                problems.append(f"material {name!r}: metallic-roughness other than a metal "
+                                f"(metallic = 1, no other keys)")
+                continue
+            bsdfs[name] = {"type": "twosided", "material": {
+                "type": "principled", "metallic": 1.0,
+                "base_color": {"type": "rgb", "value": v3(m.get("base_color", [0.8] * 3))},
+                "roughness": float(m.get("roughness", 0.5))}}
+            continue
         # ior and fresnel are inactive without a glass layer; zeros are defaults.
         extra = [key for key, value in m.items() if key not in ("diffuse", "ior", "fresnel")
                  and not ((isinstance(value, list) and not any(value)) or value == 0)]
@@ -233,6 +258,8 @@ def translate(path, mi):
             ext = os.path.splitext(mesh)[1].lower()
             if ext not in (".ply", ".obj"):
                 problems.append(f"mesh {mesh}")
+            if ext == ".ply":
+                mesh = binary_ply(mi, mesh)
             shape = {"type": ext[1:], "filename": mesh, "face_normals": True, "bsdf": bsdf}
             if "instances" in obj:
                 # One shapegroup holding the mesh, one instance per line of
@@ -254,6 +281,22 @@ def translate(path, mi):
     if problems:
         raise Unsupported("; ".join(problems))
     return scene, settings
+
+
+def binary_ply(mi, path):
+    """`path`, or where it is ASCII a binary copy (under tools/.cache/),
+    which Mitsuba reads several times faster: its load at its best."""
+    with open(path, "rb") as f:
+        if b"format ascii" not in f.read(512):
+            return path
+    out = os.path.join(HERE, ".cache", f"{os.path.splitext(os.path.basename(path))[0]}-"
+                                       f"{os.path.getsize(path)}-binary.ply")
+    if not os.path.exists(out):
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        mesh = mi.load_dict({"type": "ply", "filename": path, "face_normals": True})
+        mesh.write_ply(out + ".tmp")
+        os.replace(out + ".tmp", out)
+    return out
 
 
 THREADS = 1
@@ -434,8 +477,11 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--variant", default="llvm_ad_rgb")
     args = ap.parse_args()
-    if os.path.exists(LLVM):
-        os.environ.setdefault("DRJIT_LIBLLVM_PATH", LLVM)
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        import glob
+        found = [f for pattern in LLVM_CANDIDATES for f in sorted(glob.glob(os.path.expanduser(pattern)))]
+        if found:
+            os.environ["DRJIT_LIBLLVM_PATH"] = found[0]
     import numpy as np
     import drjit as dr
     import mitsuba as mi
@@ -444,7 +490,7 @@ def main():
     global THREADS
     THREADS = args.threads
     dr.set_thread_count(args.threads)
-    print(f"mitsuba {mi.__version__} ({args.variant}), strata {args.strata}, {args.threads} thread(s), "
+    print(f"mitsuba {mi.__version__} ({args.variant}, LLVM {os.environ.get('DRJIT_LIBLLVM_PATH', 'none')}), strata {args.strata}, {args.threads} thread(s), "
           f"{args.runs} runs, reference {args.ref_spp} spp")
     with tempfile.TemporaryDirectory() as tmp:
         for path in args.scenes:
