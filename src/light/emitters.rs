@@ -24,7 +24,9 @@ use std::f32::consts::PI;
 pub enum Emitter {
     Triangle {
         v: [Vec3; 3],
+        /// The material's emission; times the texture where there is one.
         radiance: Vec3,
+        texture: Option<EmissionTexture>,
     },
     Sphere {
         center: Vec3,
@@ -41,11 +43,34 @@ impl Emitter {
         }
     }
 
+    /// The mean radiance the surface is weighed by: its emission, times
+    /// its texture's mean where it has one.
     pub fn radiance(&self) -> Vec3 {
         match *self {
+            Emitter::Triangle {
+                radiance,
+                texture: Some(t),
+                ..
+            } => radiance * t.mean,
             Emitter::Triangle { radiance, .. } | Emitter::Sphere { radiance, .. } => radiance,
         }
     }
+}
+
+/// An emissive texture over a triangle: the radiance at a point is the
+/// factor times the texture there, and the triangle's power is weighed by
+/// the factor times the texture's mean over its image (a guess at its mean
+/// over the triangle that costs nothing per sample; any positive weight
+/// keeps the estimate unbiased, as the chance drawn with is the chance
+/// the density reports).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EmissionTexture {
+    /// Index into the scene's textures.
+    pub texture: u32,
+    /// The texture coordinates of the corners.
+    pub uv: [Vec2; 3],
+    /// The texture's mean.
+    pub mean: Vec3,
 }
 
 /// A point drawn on a glowing surface as seen from a shading point.
@@ -54,7 +79,10 @@ pub struct EmitterSample {
     /// Unit direction from the shading point towards the surface.
     pub wi: Vec3,
     pub distance: f32,
+    /// The emission there, to be multiplied by `texture` where given.
     pub radiance: Vec3,
+    /// The emissive texture and the point's coordinates in it.
+    pub texture: Option<(u32, Vec2)>,
     /// Density per steradian, the choice of the surface included.
     pub pdf: f32,
     /// The primitive drawn on, which its shadow ray skips.
@@ -144,7 +172,11 @@ impl Emitters {
         let ux = ((u.x - below) / chance).clamp(0.0, 1.0 - f32::EPSILON);
         let u = Vec2::new(ux, u.y);
         let s = match self.emitters[i] {
-            Emitter::Triangle { v, radiance } => {
+            Emitter::Triangle {
+                v,
+                radiance,
+                texture,
+            } => {
                 // Uniform by area: the square-root warp of barycentrics.
                 let r = u.x.sqrt();
                 let (b1, b2) = (r * (1.0 - u.y), r * u.y);
@@ -160,6 +192,10 @@ impl Emitters {
                     wi,
                     distance,
                     radiance,
+                    texture: texture.map(|t| {
+                        let uv = t.uv[0] + b1 * (t.uv[1] - t.uv[0]) + b2 * (t.uv[2] - t.uv[0]);
+                        (t.texture, uv)
+                    }),
                     pdf: d2 / (cos_l * area),
                     prim: 0,
                 }
@@ -236,6 +272,7 @@ fn sphere_sample(
             wi,
             distance: b - disc.sqrt(),
             radiance,
+            texture: None,
             pdf: 1.0 / solid_angle,
             prim: 0,
         });
@@ -251,6 +288,7 @@ fn sphere_sample(
         wi,
         distance,
         radiance,
+        texture: None,
         pdf: d2 / (cos_l * 4.0 * PI * radius * radius),
         prim: 0,
     })
@@ -278,6 +316,7 @@ mod tests {
                 Vec3::new(0.0, 2.0, 1.0),
             ],
             radiance: Vec3::splat(2.0),
+            texture: None,
         };
         let sphere = Emitter::Sphere {
             center: Vec3::new(3.0, 1.0, 0.0),

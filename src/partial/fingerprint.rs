@@ -386,6 +386,7 @@ mod tests {
         scene.textures.add_texture(Texture {
             image: 0,
             wrap: [Wrap::Repeat; 2],
+            encoding: crate::texture::Encoding::Srgb,
         });
         let material = scene.geometry.meshes[0].material as usize;
         scene.materials[material].diffuse_texture = Some(0);

@@ -186,6 +186,7 @@ impl Compiler<'_> {
             for (name, mat) in &asset.materials {
                 self.materials.push(Material {
                     diffuse_texture: mat.diffuse_texture.map(|t| t + first_texture),
+                    maps: mat.maps.offset(first_texture),
                     ..*mat
                 });
                 self.material_ids
@@ -240,7 +241,7 @@ impl Compiler<'_> {
                 .unwrap_or(inherited);
             // UVs only where a texture will be looked up with them: a
             // scene-file material put on a textured mesh has none.
-            let textured = self.materials[material as usize].diffuse_texture.is_some();
+            let textured = self.materials[material as usize].is_textured();
             let uvs = mesh.uvs.clone().filter(|_| textured);
             let name = if mesh.name.is_empty() {
                 key.to_string()
