@@ -5,7 +5,7 @@ use crate::accel::PrimHit;
 use crate::math::offset::{barycentric_error, transformed_error};
 use crate::math::Ray;
 use crate::shape::triangle;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 /// The local geometry at a hit, in world space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -118,6 +118,31 @@ impl Geometry {
             let (du, dv) = prototype.uv_derivatives(&inner)?;
             let m = instance.affine().matrix3;
             return Some((m * du, m * dv));
+        }
+        None
+    }
+}
+
+impl Geometry {
+    /// The file's tangent (glTF `TANGENT`: xyz, w the handedness) at a
+    /// triangle hit, in world space; `None` where the mesh has none.
+    pub fn vertex_tangent(&self, hit: &PrimHit) -> Option<Vec4> {
+        if hit.prim < self.triangle_count {
+            let mesh = self.mesh_of(hit.prim);
+            let tangents = mesh.tangents.as_ref()?;
+            let tri = (hit.prim - mesh.first) as usize;
+            return Some(tangents.interpolate(tri, [1.0 - hit.u - hit.v, hit.u, hit.v]));
+        }
+        if hit.prim >= self.first_instance() {
+            let (instance, prototype) = self.instance(hit.prim);
+            let inner = PrimHit {
+                prim: prototype.slot_prim(hit.part),
+                ..*hit
+            };
+            let t = prototype.vertex_tangent(&inner)?;
+            let m = instance.affine().matrix3;
+            let xyz = Vec3::from(m * glam::Vec3A::from(t.truncate()));
+            return Some(xyz.extend(t.w * m.determinant().signum()));
         }
         None
     }

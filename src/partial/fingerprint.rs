@@ -205,6 +205,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
             mirrored,
             normals,
             uvs,
+            tangents,
         } = mesh;
         h.write_u32(*first);
         h.write_u32(*count);
@@ -212,6 +213,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         h.write_u32(u32::from(*mirrored));
         write_attribute(&mut h, normals.as_ref(), |v| v.to_array());
         write_attribute(&mut h, uvs.as_ref(), |v| v.to_array());
+        write_attribute(&mut h, tangents.as_ref(), |v| v.to_array());
     }
     let Textures {
         images,

@@ -7,9 +7,11 @@
 //! **Normal maps** (glTF `normalTexture`, MTL `norm`) hold a tangent-space
 //! normal as rgb = (n + 1)/2, +x along ∂p/∂u and +y along −∂p/∂v (up in
 //! the image, as glTF and OpenGL write them); glTF's `scale` multiplies
-//! x and y. The frame is the shading normal with the tangent ∂p/∂u made
-//! orthogonal to it (Gram–Schmidt), worked out per triangle at the hit
-//! from positions and texture coordinates (`Geometry::uv_derivatives`).
+//! x and y. The frame is the shading normal with a tangent made
+//! orthogonal to it (Gram–Schmidt): the file's (glTF `TANGENT`, its w the
+//! bitangent's sign, `b = w (n × t)`) where it has them, else ∂p/∂u worked
+//! out per triangle at the hit from positions and texture coordinates
+//! (`Geometry::uv_derivatives`), the bitangent's sign from −∂p/∂v.
 //! **Bump maps** (MTL `bump`/`map_Bump`, `-bm` the scale) hold a height
 //! h in their red channel, in world units times the scale; the normal is
 //! Blinn's (1978) `(∂p/∂u + h_u n) × (∂p/∂v + h_v n)`, the slopes h_u, h_v
@@ -57,19 +59,32 @@ fn mapped_normal(
     hit: &PrimHit,
     wo: Vec3,
 ) -> Option<Vec3> {
-    let (dpdu, dpdv) = scene.geometry.uv_derivatives(hit)?;
     let n = s.shading_normal;
     let textures = &scene.textures;
     let mapped = match map.kind {
         NormalMapKind::Normal => {
-            let t = (dpdu - n * n.dot(dpdu)).try_normalize()?;
-            let b = n.cross(t);
-            // +y of the map is −∂p/∂v (v runs down the image).
-            let b = if b.dot(dpdv) > 0.0 { -b } else { b };
+            let (t, b) = match scene.geometry.vertex_tangent(hit).and_then(|t| {
+                // The file's tangent, made orthogonal to the normal; the
+                // bitangent w (n × t), as glTF defines it.
+                let xyz = t.truncate();
+                let tangent = (xyz - n * n.dot(xyz)).try_normalize()?;
+                let w = if t.w < 0.0 { -1.0 } else { 1.0 };
+                Some((tangent, n.cross(tangent) * w))
+            }) {
+                Some(frame) => frame,
+                None => {
+                    let (dpdu, dpdv) = scene.geometry.uv_derivatives(hit)?;
+                    let t = (dpdu - n * n.dot(dpdu)).try_normalize()?;
+                    let b = n.cross(t);
+                    // +y of the map is −∂p/∂v (v runs down the image).
+                    (t, if b.dot(dpdv) > 0.0 { -b } else { b })
+                }
+            };
             let c = textures.sample(map.texture, uv) * 2.0 - Vec3::ONE;
             t * (c.x * map.scale) + b * (c.y * map.scale) + n * c.z
         }
         NormalMapKind::Height => {
+            let (dpdu, dpdv) = scene.geometry.uv_derivatives(hit)?;
             let (w, h) = textures.size(map.texture);
             let (du, dv) = (1.0 / w as f32, 1.0 / h as f32);
             let height = |d: Vec2| textures.sample(map.texture, uv + d).x * map.scale;

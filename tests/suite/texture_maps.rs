@@ -264,6 +264,17 @@ mesh = "quad.obj"
 /// v runs down the image), its material `material` (JSON), with `extra` top-level
 /// keys (textures, images).
 fn quad_gltf(z: f32, down: bool, material: &str, extra: &str) -> String {
+    quad_gltf_with(z, down, material, extra, None)
+}
+
+/// [`quad_gltf`] with the same `TANGENT` at every corner, if given.
+fn quad_gltf_with(
+    z: f32,
+    down: bool,
+    material: &str,
+    extra: &str,
+    tangent: Option<[f32; 4]>,
+) -> String {
     let positions = [
         [-1.0f32, -1.0, z],
         [3.0, -1.0, z],
@@ -284,15 +295,28 @@ fn quad_gltf(z: f32, down: bool, material: &str, extra: &str) -> String {
         bytes.extend(uv.iter().flat_map(|c| c.to_le_bytes()));
     }
     bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let (view, accessor, attribute) = match tangent {
+        Some(t) => {
+            for _ in 0..4 {
+                bytes.extend(t.iter().flat_map(|c| c.to_le_bytes()));
+            }
+            (
+                r#",{"buffer":0,"byteOffset":92,"byteLength":64}"#,
+                r#",{"bufferView":3,"componentType":5126,"count":4,"type":"VEC4"}"#,
+                r#","TANGENT":3"#,
+            )
+        }
+        None => ("", "", ""),
+    };
     format!(
         r#"{{"asset":{{"version":"2.0"}},
   "buffers":[{{"byteLength":{len},"uri":"data:application/octet-stream;base64,{data}"}}],
   "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":32}},
-                 {{"buffer":0,"byteOffset":80,"byteLength":12}}],
+                 {{"buffer":0,"byteOffset":80,"byteLength":12}}{view}],
   "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-1,-1,{z}],"max":[3,2,{z}]}},
                {{"bufferView":1,"componentType":5126,"count":4,"type":"VEC2"}},
-               {{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}],
-  "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"indices":2,"material":0}}]}}],
+               {{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}{accessor}],
+  "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1{attribute}}},"indices":2,"material":0}}]}}],
   "nodes":[{{"mesh":0}}],
   "materials":[{material}]{extra}}}"#,
         len = bytes.len(),
@@ -521,4 +545,85 @@ fn broken_maps_are_errors_naming_the_file_and_key() {
     .to_string();
     assert!(err.contains("quad.mtl") && err.contains("line 3"), "{err}");
     assert!(err.contains("not an image"), "{err}");
+}
+
+/// glTF's `TANGENT` and the tangent worked out from positions and UVs
+/// agree where both are known (u along +x, v down the image along −y:
+/// t = +x, w = +1), so a tilted normal map shades alike either way; the
+/// attribute is read, as w = −1 (the bitangent turned) and a tangent
+/// along +y show; a NaN tangent is an error naming the accessor.
+#[test]
+fn tangents_from_the_attribute_and_from_uvs_agree() {
+    let dir = crate::common::temp_dir("gltf-tangents");
+    let texel = [189u8, 173, 230];
+    let n = decoded(texel);
+    let material = r#"{"pbrMetallicRoughness":{"metallicFactor":0,"roughnessFactor":1},"normalTexture":{"index":0}}"#;
+    let extra = texture_json(&png_bytes(1, 1, &[texel]));
+    let to_light = Vec3::new(-0.5, -1.0, 1.0);
+    let radiance = |tangent: Option<[f32; 4]>| {
+        let name = format!(
+            "t{}.gltf",
+            tangent.map_or(0.0, |t| t[0] * 4.0 + t[1] * 2.0 + t[3])
+        );
+        std::fs::write(
+            dir.join(&name),
+            quad_gltf_with(0.0, false, material, &extra, tangent),
+        )
+        .unwrap();
+        let s = scene_in(&dir, &head_on(&name, to_light, "distribution"));
+        pixels(&s, 2)
+    };
+    let from_uvs = radiance(None);
+    let from_attribute = radiance(Some([1.0, 0.0, 0.0, 1.0]));
+    for (a, b) in from_uvs.iter().zip(&from_attribute) {
+        assert!((*a - *b).abs().max_element() < 1e-5, "{a} vs {b}");
+    }
+    // The Phong stand-in of a rough dielectric: its diffuse part 1 (white)
+    // follows the cosine; compare the cosines' order rather than values.
+    let l = to_light.normalize();
+    let flipped = radiance(Some([1.0, 0.0, 0.0, -1.0]));
+    let turned = radiance(Some([0.0, 1.0, 0.0, 1.0]));
+    let cos = |m: Vec3| m.dot(l);
+    // w = −1: y negated; t = +y (b = n × t = −x): (x, y) → (−y, x).
+    let want_flipped = cos(Vec3::new(n.x, -n.y, n.z));
+    let want_turned = cos(Vec3::new(-n.y, n.x, n.z));
+    let want = cos(n);
+    let ratio = |p: Vec3, w: f32| p.x / w;
+    let k = ratio(from_uvs[10], want);
+    assert!(
+        (ratio(flipped[10], want_flipped) - k).abs() < 0.02 * k,
+        "{} {}",
+        flipped[10],
+        from_uvs[10]
+    );
+    assert!(
+        (ratio(turned[10], want_turned) - k).abs() < 0.02 * k,
+        "{} {}",
+        turned[10],
+        from_uvs[10]
+    );
+
+    std::fs::write(
+        dir.join("nan.gltf"),
+        quad_gltf_with(
+            0.0,
+            false,
+            material,
+            &extra,
+            Some([f32::NAN, 0.0, 0.0, 1.0]),
+        ),
+    )
+    .unwrap();
+    let err = crate::common::checked::scene_from_str(
+        &head_on("nan.gltf", to_light, "path"),
+        &dir.join("scene.toml"),
+        &strata::scene::RenderOverrides::default(),
+    )
+    .err()
+    .expect("an error")
+    .to_string();
+    assert!(
+        err.contains("nan.gltf") && err.contains("accessors[3]"),
+        "{err}"
+    );
 }

@@ -4,7 +4,7 @@
 
 use super::Loader;
 use crate::error::InputResult;
-use crate::geometry::{MeshNormals, MeshUvs};
+use crate::geometry::{MeshNormals, MeshTangents, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use ::gltf::json;
 use glam::{Affine2, Mat2, Vec2};
@@ -135,7 +135,34 @@ impl Loader<'_> {
             }
             None => None,
         };
+        // Tangents only for a normal-mapped material; without them the
+        // frame comes from the UVs at the hit.
+        let mapped = material.is_some_and(|m| asset.materials[m].1.maps.normal.is_some());
+        let tangents = match primitive
+            .attributes
+            .get(&Checked::Valid(Semantic::Tangents))
+            .filter(|_| mapped && uvs.is_some())
+        {
+            Some(accessor) => {
+                let values = self.read_vec4(accessor.value(), "TANGENT")?;
+                if values.len() != vertex_count {
+                    return Err(self.error(
+                        location,
+                        format!(
+                            "TANGENT has {} elements but POSITION has {vertex_count}",
+                            values.len()
+                        ),
+                    ));
+                }
+                Some(MeshTangents {
+                    values,
+                    indices: indices.clone(),
+                })
+            }
+            None => None,
+        };
         Ok(Some(LoadedMesh {
+            tangents,
             name,
             positions,
             normals: normals.map(|values| MeshNormals {

@@ -221,6 +221,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             normals,
             material,
             uvs,
+            tangents: None,
             mirrored: false,
         });
     }
