@@ -5,11 +5,13 @@
 //! one: uniform by area on a triangle, uniform in the cone of directions
 //! that see a sphere from outside it (Shirley, Wang and Zimmerman 1996).
 //!
-//! Emitted radiance is two-sided, as the camera sees it. Emissive
-//! surfaces this table leaves out (instanced meshes, CSG solids,
-//! cylinders, transformed spheres, planes) still light the scene, found by
-//! the BSDF's own rays alone; the scene's `[[lights]]` surfaces are
-//! sampled as those lights and are not here.
+//! Emitted radiance is two-sided, as the camera sees it. A mesh placed
+//! more than once (an instance of a prototype) is here too, each
+//! placement's triangles in world space, named by the instance and the
+//! prototype's triangle ([`EmitterId`]). Emissive surfaces this table
+//! leaves out (CSG solids, cylinders, transformed spheres, planes) still
+//! light the scene, found by the BSDF's own rays alone; the scene's
+//! `[[lights]]` surfaces are sampled as those lights and are not here.
 //!
 //! The distribution integrator never reads this table: there, emission is
 //! seen and lights nothing, as it always has.
@@ -18,6 +20,13 @@ use crate::math::Frame;
 use crate::sampling::warp::uniform_cone;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+
+/// Which surface an emitter is: a primitive of the scene and, for an
+/// instance, the prototype's triangle ([`NO_PART`] otherwise).
+pub type EmitterId = (u32, u32);
+
+/// The part of an [`EmitterId`] that is a primitive of the scene itself.
+pub const NO_PART: u32 = u32::MAX;
 
 /// One glowing surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,29 +94,37 @@ pub struct EmitterSample {
     pub texture: Option<(u32, Vec2)>,
     /// Density per steradian, the choice of the surface included.
     pub pdf: f32,
-    /// The primitive drawn on, which its shadow ray skips.
+    /// The primitive drawn on, which its shadow ray skips; `u32::MAX` on
+    /// an instance, whose primitive is the whole placed mesh (which may
+    /// shadow itself): its shadow ray skips nothing and ends short
+    /// instead (`distance` is shortened by [`INSTANCE_SHADOW_GAP`]).
     pub prim: u32,
 }
+
+/// The fraction of the distance by which a shadow ray towards a point on
+/// an instanced emitter stops short of it, so that it does not find the
+/// emitter itself (no primitive id names one triangle of an instance).
+pub const INSTANCE_SHADOW_GAP: f32 = 1e-4;
 
 /// Every glowing surface the path integrator samples, and the primitive
 /// each one is.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Emitters {
     emitters: Vec<Emitter>,
-    /// `prims[i]` is the primitive `emitters[i]` is.
-    prims: Vec<u32>,
+    /// `prims[i]` is the surface `emitters[i]` is.
+    prims: Vec<EmitterId>,
     /// Cumulative power, normalised: `cdf[i]` is the chance of `0..=i`.
     cdf: Vec<f32>,
-    /// (primitive, index), sorted by primitive: a BSDF ray's hit to its
+    /// (surface, index), sorted by surface: a BSDF ray's hit to its
     /// emitter.
-    by_prim: Vec<(u32, u32)>,
+    by_prim: Vec<(EmitterId, u32)>,
 }
 
 impl Emitters {
-    /// The table of `(primitive, emitter)` pairs; surfaces that emit
+    /// The table of `(surface, emitter)` pairs; surfaces that emit
     /// nothing or have no area are left out.
-    pub fn new(list: Vec<(u32, Emitter)>) -> Self {
-        let list: Vec<(u32, Emitter)> = list
+    pub fn new(list: Vec<(EmitterId, Emitter)>) -> Self {
+        let list: Vec<(EmitterId, Emitter)> = list
             .into_iter()
             .filter(|(_, e)| {
                 let power = e.area() * luminance(e.radiance());
@@ -121,7 +138,7 @@ impl Emitters {
             cdf.push(running);
         }
         let cdf: Vec<f32> = cdf.iter().map(|c| (c / running) as f32).collect();
-        let mut by_prim: Vec<(u32, u32)> = list
+        let mut by_prim: Vec<(EmitterId, u32)> = list
             .iter()
             .enumerate()
             .map(|(i, (p, _))| (*p, i as u32))
@@ -207,18 +224,22 @@ impl Emitters {
             } => sphere_sample(p, center, radius, radiance, u)?,
         };
         let pdf = s.pdf * chance;
-        let prim = self.prims[i];
+        let (prim, distance) = match self.prims[i] {
+            (prim, NO_PART) => (prim, s.distance),
+            _ => (u32::MAX, s.distance * (1.0 - INSTANCE_SHADOW_GAP)),
+        };
         (pdf > 0.0 && pdf.is_finite() && s.distance > 0.0).then_some(EmitterSample {
             pdf,
             prim,
+            distance,
             ..s
         })
     }
 
     /// The density with which [`Emitters::sample`] draws the direction
-    /// from `p` to `q` on primitive `prim` (normal `n` there), or 0 where
+    /// from `p` to `q` on surface `prim` (normal `n` there), or 0 where
     /// `prim` is no emitter of this table.
-    pub fn pdf(&self, prim: u32, p: Vec3, q: Vec3, n: Vec3) -> f32 {
+    pub fn pdf(&self, prim: EmitterId, p: Vec3, q: Vec3, n: Vec3) -> f32 {
         let Ok(k) = self.by_prim.binary_search_by_key(&prim, |&(p, _)| p) else {
             return 0.0;
         };
@@ -247,8 +268,8 @@ impl Emitters {
         }
     }
 
-    /// The primitive emitter `i` is (for tests and reports).
-    pub fn prim(&self, i: usize) -> u32 {
+    /// The surface emitter `i` is (for tests and reports).
+    pub fn prim(&self, i: usize) -> EmitterId {
         self.prims[i]
     }
 }
@@ -323,7 +344,7 @@ mod tests {
             radius: 0.5,
             radiance: Vec3::new(1.0, 0.5, 0.25),
         };
-        let e = Emitters::new(vec![(7, tri), (3, sphere)]);
+        let e = Emitters::new(vec![((7, NO_PART), tri), ((3, NO_PART), sphere)]);
         assert_eq!(e.len(), 2);
         let p = Vec3::ZERO;
         for i in 0..64 {
@@ -336,10 +357,10 @@ mod tests {
                 } else {
                     (3, (q - Vec3::new(3.0, 1.0, 0.0)).normalize())
                 };
-                let pdf = e.pdf(prim, p, q, n);
+                let pdf = e.pdf((prim, NO_PART), p, q, n);
                 assert!((pdf - s.pdf).abs() <= 2e-3 * s.pdf, "{pdf} vs {}", s.pdf);
             }
         }
-        assert_eq!(e.pdf(99, p, Vec3::Y, Vec3::Y), 0.0);
+        assert_eq!(e.pdf((99, NO_PART), p, Vec3::Y, Vec3::Y), 0.0);
     }
 }

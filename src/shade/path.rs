@@ -32,7 +32,7 @@ use super::sample::{CameraSample, FirstHit, SampleContext};
 use super::scatter::Bsdf;
 use super::Integrator;
 use crate::accel::PrimHit;
-use crate::light::{Light, LightSampling};
+use crate::light::{Light, LightSampling, NO_PART};
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
 use crate::sampling::mis::power_heuristic;
@@ -226,7 +226,15 @@ impl Integrator<'_> {
         let method = scene.settings.light_sampling;
         let light_pdf = match scene.lights.iter().find(|l| l.prim() == Some(hit.prim)) {
             Some(light) => light.pdf(came.from, q, n, method),
-            None => scene.emitters.pdf(hit.prim, came.from, q, n),
+            None => {
+                // An instance's triangle is named by the prototype's.
+                let part = if hit.prim >= scene.geometry.first_instance() {
+                    scene.geometry.instance(hit.prim).1.slot_prim(hit.part)
+                } else {
+                    NO_PART
+                };
+                scene.emitters.pdf((hit.prim, part), came.from, q, n)
+            }
         };
         if light_pdf > 0.0 {
             power_heuristic(pdf, scene.settings.shadow_samples as f32 * light_pdf)
