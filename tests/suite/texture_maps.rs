@@ -104,6 +104,15 @@ fn scene_in(dir: &Path, toml: &str) -> Scene {
     scene_at(toml, &dir.join("scene.toml"))
 }
 
+/// The error reading the scene `toml` in `dir` gives.
+fn load_error(dir: &Path, toml: &str) -> String {
+    let overrides = strata::scene::RenderOverrides::default();
+    match crate::common::checked::scene_from_str(toml, &dir.join("scene.toml"), &overrides) {
+        Ok(_) => panic!("no error"),
+        Err(e) => e.to_string(),
+    }
+}
+
 /// What a normal map's texel decodes to: (2c/255 − 1), normalised.
 fn decoded(texel: [u8; 3]) -> Vec3 {
     (Vec3::from(texel.map(|c| c as f32)) * (2.0 / 255.0) - Vec3::ONE).normalize()
@@ -510,7 +519,6 @@ fn an_emissive_texture_multiplies_the_factor_also_as_a_light() {
 /// is no image, are errors naming the file and the key or line.
 #[test]
 fn broken_maps_are_errors_naming_the_file_and_key() {
-    use strata::scene::RenderOverrides;
     let dir = crate::common::temp_dir("broken-maps");
     std::fs::write(
         dir.join("bad.gltf"),
@@ -518,14 +526,7 @@ fn broken_maps_are_errors_naming_the_file_and_key() {
     )
     .unwrap();
     let toml = head_on("bad.gltf", Vec3::Z, "path");
-    let err = crate::common::checked::scene_from_str(
-        &toml,
-        &dir.join("scene.toml"),
-        &RenderOverrides::default(),
-    )
-    .err()
-    .expect("an error")
-    .to_string();
+    let err = load_error(&dir, &toml);
     assert!(
         err.contains("bad.gltf") && err.contains("materials[0].normalTexture"),
         "{err}"
@@ -535,14 +536,7 @@ fn broken_maps_are_errors_naming_the_file_and_key() {
     std::fs::write(dir.join("notes.png"), "not an image").unwrap();
     write_quad_obj(&dir, "bump -bm 0.5 notes.png");
     let toml = head_on("quad.obj", Vec3::Z, "distribution");
-    let err = crate::common::checked::scene_from_str(
-        &toml,
-        &dir.join("scene.toml"),
-        &RenderOverrides::default(),
-    )
-    .err()
-    .expect("an error")
-    .to_string();
+    let err = load_error(&dir, &toml);
     assert!(err.contains("quad.mtl") && err.contains("line 3"), "{err}");
     assert!(err.contains("not an image"), "{err}");
 }
@@ -614,14 +608,7 @@ fn tangents_from_the_attribute_and_from_uvs_agree() {
         ),
     )
     .unwrap();
-    let err = crate::common::checked::scene_from_str(
-        &head_on("nan.gltf", to_light, "path"),
-        &dir.join("scene.toml"),
-        &strata::scene::RenderOverrides::default(),
-    )
-    .err()
-    .expect("an error")
-    .to_string();
+    let err = load_error(&dir, &head_on("nan.gltf", to_light, "path"));
     assert!(
         err.contains("nan.gltf") && err.contains("accessors[3]"),
         "{err}"
