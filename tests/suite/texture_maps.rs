@@ -614,3 +614,36 @@ fn tangents_from_the_attribute_and_from_uvs_agree() {
         "{err}"
     );
 }
+
+/// Maps keep the image the same for any thread count: a normal-mapped,
+/// emissive-textured scene under the path integrator, on one thread and
+/// on three.
+#[test]
+fn mapped_scenes_are_bit_identical_across_thread_counts() {
+    let dir = crate::common::temp_dir("maps-threads");
+    write_png(
+        &dir.join("tilt.png"),
+        2,
+        1,
+        &[[189, 173, 230], [100, 140, 240]],
+    );
+    write_quad_obj(&dir, "norm tilt.png");
+    let glow = quad_gltf(
+        2.0,
+        true,
+        r#"{"emissiveFactor":[2,2,2],"emissiveTexture":{"index":0}}"#,
+        &texture_json(&png_bytes(2, 1, &[[255, 128, 64], [10, 200, 90]])),
+    );
+    std::fs::write(dir.join("glow.gltf"), glow).unwrap();
+    let toml = head_on("quad.obj", Vec3::new(0.2, 0.1, 1.0), "path")
+        .replace("max_depth = 0", "max_depth = 3")
+        // The camera under the glowing ceiling, which lights the floor.
+        .replace("position = [1.0, 0.5, 5.0]", "position = [1.0, 0.5, 1.0]")
+        + "[[objects]]\nmesh = \"glow.gltf\"\n";
+    let s = scene_in(&dir, &toml);
+    assert!(!s.emitters.is_empty());
+    let one = crate::common::render_rgb(&s, 1);
+    let three = crate::common::render_rgb(&s, 3);
+    assert!(one.iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(one, three);
+}
