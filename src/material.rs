@@ -56,6 +56,65 @@ pub struct Material {
     /// stand-in under the distribution integrator). The diffuse texture
     /// multiplies `base_color`.
     pub pbr: Option<MetallicRoughness>,
+    /// The texture maps mesh files give beyond the diffuse one; none from
+    /// the scene file.
+    pub maps: Maps,
+}
+
+/// Texture maps a material may read (indices into the scene's
+/// [`Textures`]), each where the surface has texture coordinates.
+///
+/// [`Textures`]: crate::texture::Textures
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Maps {
+    /// glTF's `metallicRoughnessTexture` (linear): blue multiplies
+    /// `metallic`, green `roughness`. The path integrator reads it.
+    pub metallic_roughness: Option<u32>,
+    /// glTF's `emissiveTexture` (sRGB): multiplies `emission`, in both
+    /// integrators and in the glowing surfaces' sampling.
+    pub emission: Option<u32>,
+    /// A normal or bump map (linear); both integrators shade with the
+    /// normal it gives.
+    pub normal: Option<NormalMap>,
+}
+
+/// A map that bends the shading normal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalMap {
+    pub texture: u32,
+    pub kind: NormalMapKind,
+    /// glTF `normalTexture.scale` (scales the map's x and y), or MTL
+    /// `-bm` (scales a height map's heights).
+    pub scale: f32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NormalMapKind {
+    /// A tangent-space normal, rgb = (n + 1)/2 (glTF `normalTexture`,
+    /// MTL `norm`).
+    Normal,
+    /// A height field, its red channel the height (MTL `bump`/`map_Bump`),
+    /// turned into a normal by Blinn's (1978) bump mapping.
+    Height,
+}
+
+impl Maps {
+    /// Whether any map needs the surface's texture coordinates.
+    pub fn any(&self) -> bool {
+        self.metallic_roughness.is_some() || self.emission.is_some() || self.normal.is_some()
+    }
+
+    /// The same maps with `offset` added to every texture index.
+    pub fn offset(self, offset: u32) -> Self {
+        Self {
+            metallic_roughness: self.metallic_roughness.map(|t| t + offset),
+            emission: self.emission.map(|t| t + offset),
+            normal: self.normal.map(|n| NormalMap {
+                texture: n.texture + offset,
+                ..n
+            }),
+        }
+    }
 }
 
 /// glTF 2.0's core material (Khronos, "glTF 2.0 Specification", Appendix
@@ -88,6 +147,7 @@ impl Default for Material {
             one_sided: false,
             diffuse_texture: None,
             pbr: None,
+            maps: Maps::default(),
         }
     }
 }
@@ -135,6 +195,11 @@ impl Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+
+    /// Whether a surface of this material needs texture coordinates.
+    pub fn is_textured(&self) -> bool {
+        self.diffuse_texture.is_some() || self.maps.any()
     }
 
     pub fn has_specular_lobe(&self) -> bool {

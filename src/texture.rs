@@ -69,13 +69,26 @@ impl fmt::Debug for Image {
     }
 }
 
-/// An image with the wrap modes of its `u` and `v` axes: what a material's
-/// texture index names.
+/// How a texture's bytes turn into numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Encoding {
+    /// Colour: the sRGB curve decodes each byte (base colour, emission).
+    #[default]
+    Srgb,
+    /// Data: byte / 255, no curve (metallic-roughness, normal and height
+    /// maps; glTF 2.0 says these are linear).
+    Linear,
+}
+
+/// An image with the wrap modes of its `u` and `v` axes and how its texels
+/// are read: what a material's texture index names. One image may be read
+/// as colour by one texture and as data by another.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Texture {
     /// Index into [`Textures::images`].
     pub image: u32,
     pub wrap: [Wrap; 2],
+    pub encoding: Encoding,
 }
 
 /// A scene's (or one mesh file's) images and textures.
@@ -187,20 +200,49 @@ impl Image {
 
     /// The linear colour of texel `(x, y)` (already wrapped into range).
     #[inline]
-    fn linear(&self, x: usize, y: usize) -> Vec3 {
+    fn linear(&self, x: usize, y: usize, encoding: Encoding) -> Vec3 {
         let [r, g, b] = self.texels[y * self.width as usize + x];
-        Vec3::new(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(b))
+        match encoding {
+            Encoding::Srgb => Vec3::new(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(b)),
+            Encoding::Linear => Vec3::new(r as f32, g as f32, b as f32) * (1.0 / 255.0),
+        }
     }
 
     /// The bilinearly filtered linear colour at `uv` (see the module docs
-    /// for the conventions).
+    /// for the conventions) of an sRGB-encoded image.
     #[inline]
     pub fn bilinear(&self, uv: Vec2, wrap: [Wrap; 2]) -> Vec3 {
+        self.bilinear_as(uv, wrap, Encoding::Srgb)
+    }
+
+    /// The bilinearly filtered value at `uv`, the texels read as `encoding`
+    /// says.
+    #[inline]
+    pub fn bilinear_as(&self, uv: Vec2, wrap: [Wrap; 2], encoding: Encoding) -> Vec3 {
         let (x0, x1, fx) = axis(uv.x, self.width, wrap[0]);
         let (y0, y1, fy) = axis(uv.y, self.height, wrap[1]);
-        let top = self.linear(x0, y0) * (1.0 - fx) + self.linear(x1, y0) * fx;
-        let bottom = self.linear(x0, y1) * (1.0 - fx) + self.linear(x1, y1) * fx;
+        let at = |x, y| self.linear(x, y, encoding);
+        let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
+        let bottom = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
         top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The mean of every texel, read as `encoding` says: what a glowing
+    /// texture's power is weighed by.
+    pub fn mean(&self, encoding: Encoding) -> Vec3 {
+        let sum = self
+            .texels
+            .iter()
+            .fold(glam::DVec3::ZERO, |sum, &[r, g, b]| {
+                let c = match encoding {
+                    Encoding::Srgb => {
+                        Vec3::new(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(b))
+                    }
+                    Encoding::Linear => Vec3::new(r as f32, g as f32, b as f32) / 255.0,
+                };
+                sum + c.as_dvec3()
+            });
+        (sum / self.texels.len() as f64).as_vec3()
     }
 }
 
@@ -284,11 +326,24 @@ fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
 }
 
 impl Textures {
-    /// The filtered linear colour of texture `texture` at `uv`.
+    /// The filtered value of texture `texture` at `uv`: linear colour, or
+    /// data in [0, 1] (as its [`Encoding`] says).
     #[inline]
     pub fn sample(&self, texture: u32, uv: Vec2) -> Vec3 {
         let t = &self.textures[texture as usize];
-        self.images[t.image as usize].bilinear(uv, t.wrap)
+        self.images[t.image as usize].bilinear_as(uv, t.wrap, t.encoding)
+    }
+
+    /// The width and height in texels of texture `texture`'s image.
+    pub fn size(&self, texture: u32) -> (u32, u32) {
+        let image = &self.images[self.textures[texture as usize].image as usize];
+        (image.width, image.height)
+    }
+
+    /// The mean of texture `texture` over its image.
+    pub fn mean(&self, texture: u32) -> Vec3 {
+        let t = &self.textures[texture as usize];
+        self.images[t.image as usize].mean(t.encoding)
     }
 
     pub fn add_image(&mut self, image: Image) -> u32 {
@@ -541,12 +596,14 @@ mod tests {
         let t = scene.add_texture(Texture {
             image: 0,
             wrap: [Wrap::Repeat; 2],
+            encoding: crate::texture::Encoding::Srgb,
         });
         assert_eq!(t, 0);
         assert_eq!(
             scene.add_texture(Texture {
                 image: 0,
-                wrap: [Wrap::Repeat; 2]
+                wrap: [Wrap::Repeat; 2],
+                encoding: crate::texture::Encoding::Srgb,
             }),
             0,
             "deduplicated"
@@ -556,6 +613,7 @@ mod tests {
         file.add_texture(Texture {
             image: 0,
             wrap: [Wrap::ClampToEdge; 2],
+            encoding: crate::texture::Encoding::Srgb,
         });
         let offset = scene.append(file);
         assert_eq!(offset, 1);

@@ -25,6 +25,7 @@ fn mesh(tris: &[[Vec3; 3]]) -> Geometry {
             mirrored: false,
             normals: None,
             uvs: None,
+            tangents: None,
         }],
         ..GeometryParts::default()
     };

@@ -56,7 +56,7 @@ use glam::Vec3;
 pub use instance::{Instance, NO_MATERIAL};
 pub use nearest::Nearest;
 pub use primitive::{
-    AnalyticPrim, MeshAttribute, MeshNormals, MeshRange, MeshUvs, Shape, NO_TRANSFORM,
+    AnalyticPrim, MeshAttribute, MeshNormals, MeshRange, MeshTangents, MeshUvs, Shape, NO_TRANSFORM,
 };
 use rayon::prelude::*;
 pub use surface::Surface;

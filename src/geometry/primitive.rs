@@ -116,6 +116,9 @@ pub struct MeshRange {
     /// Texture coordinates, only when the file had them and the mesh's
     /// material has a texture to look up with them.
     pub uvs: Option<MeshUvs>,
+    /// Tangents (xyz, and w the handedness ±1), only when the file had
+    /// them (glTF `TANGENT`) and the mesh's material has a normal map.
+    pub tangents: Option<MeshTangents>,
 }
 
 /// A per-corner attribute with its own per-triangle indexing (an OBJ may
@@ -134,6 +137,10 @@ pub type MeshNormals = MeshAttribute<Vec3>;
 /// Texture coordinates of a mesh's corners, in the texture space of
 /// [`crate::texture`] (`(0, 0)` the top-left of the image).
 pub type MeshUvs = MeshAttribute<Vec2>;
+
+/// Tangents of a mesh's corners: xyz along ∂p/∂u, w = ±1 the sign of the
+/// bitangent `w (n × t)` (glTF 2.0, `TANGENT`).
+pub type MeshTangents = MeshAttribute<glam::Vec4>;
 
 impl<T: Copy + Add<Output = T>> MeshAttribute<T>
 where

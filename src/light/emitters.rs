@@ -5,11 +5,13 @@
 //! one: uniform by area on a triangle, uniform in the cone of directions
 //! that see a sphere from outside it (Shirley, Wang and Zimmerman 1996).
 //!
-//! Emitted radiance is two-sided, as the camera sees it. Emissive
-//! surfaces this table leaves out (instanced meshes, CSG solids,
-//! cylinders, transformed spheres, planes) still light the scene, found by
-//! the BSDF's own rays alone; the scene's `[[lights]]` surfaces are
-//! sampled as those lights and are not here.
+//! Emitted radiance is two-sided, as the camera sees it. A mesh placed
+//! more than once (an instance of a prototype) is here too, each
+//! placement's triangles in world space, named by the instance and the
+//! prototype's triangle ([`EmitterId`]). Emissive surfaces this table
+//! leaves out (CSG solids, cylinders, transformed spheres, planes) still
+//! light the scene, found by the BSDF's own rays alone; the scene's
+//! `[[lights]]` surfaces are sampled as those lights and are not here.
 //!
 //! The distribution integrator never reads this table: there, emission is
 //! seen and lights nothing, as it always has.
@@ -19,12 +21,21 @@ use crate::sampling::warp::uniform_cone;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
+/// Which surface an emitter is: a primitive of the scene and, for an
+/// instance, the prototype's triangle ([`NO_PART`] otherwise).
+pub type EmitterId = (u32, u32);
+
+/// The part of an [`EmitterId`] that is a primitive of the scene itself.
+pub const NO_PART: u32 = u32::MAX;
+
 /// One glowing surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Emitter {
     Triangle {
         v: [Vec3; 3],
+        /// The material's emission; times the texture where there is one.
         radiance: Vec3,
+        texture: Option<EmissionTexture>,
     },
     Sphere {
         center: Vec3,
@@ -41,11 +52,34 @@ impl Emitter {
         }
     }
 
+    /// The mean radiance the surface is weighed by: its emission, times
+    /// its texture's mean where it has one.
     pub fn radiance(&self) -> Vec3 {
         match *self {
+            Emitter::Triangle {
+                radiance,
+                texture: Some(t),
+                ..
+            } => radiance * t.mean,
             Emitter::Triangle { radiance, .. } | Emitter::Sphere { radiance, .. } => radiance,
         }
     }
+}
+
+/// An emissive texture over a triangle: the radiance at a point is the
+/// factor times the texture there, and the triangle's power is weighed by
+/// the factor times the texture's mean over its image (a guess at its mean
+/// over the triangle that costs nothing per sample; any positive weight
+/// keeps the estimate unbiased, as the chance drawn with is the chance
+/// the density reports).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EmissionTexture {
+    /// Index into the scene's textures.
+    pub texture: u32,
+    /// The texture coordinates of the corners.
+    pub uv: [Vec2; 3],
+    /// The texture's mean.
+    pub mean: Vec3,
 }
 
 /// A point drawn on a glowing surface as seen from a shading point.
@@ -54,32 +88,43 @@ pub struct EmitterSample {
     /// Unit direction from the shading point towards the surface.
     pub wi: Vec3,
     pub distance: f32,
+    /// The emission there, to be multiplied by `texture` where given.
     pub radiance: Vec3,
+    /// The emissive texture and the point's coordinates in it.
+    pub texture: Option<(u32, Vec2)>,
     /// Density per steradian, the choice of the surface included.
     pub pdf: f32,
-    /// The primitive drawn on, which its shadow ray skips.
+    /// The primitive drawn on, which its shadow ray skips; `u32::MAX` on
+    /// an instance, whose primitive is the whole placed mesh (which may
+    /// shadow itself): its shadow ray skips nothing and ends short
+    /// instead (`distance` is shortened by [`INSTANCE_SHADOW_GAP`]).
     pub prim: u32,
 }
+
+/// The fraction of the distance by which a shadow ray towards a point on
+/// an instanced emitter stops short of it, so that it does not find the
+/// emitter itself (no primitive id names one triangle of an instance).
+pub const INSTANCE_SHADOW_GAP: f32 = 1e-4;
 
 /// Every glowing surface the path integrator samples, and the primitive
 /// each one is.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Emitters {
     emitters: Vec<Emitter>,
-    /// `prims[i]` is the primitive `emitters[i]` is.
-    prims: Vec<u32>,
+    /// `prims[i]` is the surface `emitters[i]` is.
+    prims: Vec<EmitterId>,
     /// Cumulative power, normalised: `cdf[i]` is the chance of `0..=i`.
     cdf: Vec<f32>,
-    /// (primitive, index), sorted by primitive: a BSDF ray's hit to its
+    /// (surface, index), sorted by surface: a BSDF ray's hit to its
     /// emitter.
-    by_prim: Vec<(u32, u32)>,
+    by_prim: Vec<(EmitterId, u32)>,
 }
 
 impl Emitters {
-    /// The table of `(primitive, emitter)` pairs; surfaces that emit
+    /// The table of `(surface, emitter)` pairs; surfaces that emit
     /// nothing or have no area are left out.
-    pub fn new(list: Vec<(u32, Emitter)>) -> Self {
-        let list: Vec<(u32, Emitter)> = list
+    pub fn new(list: Vec<(EmitterId, Emitter)>) -> Self {
+        let list: Vec<(EmitterId, Emitter)> = list
             .into_iter()
             .filter(|(_, e)| {
                 let power = e.area() * luminance(e.radiance());
@@ -93,7 +138,7 @@ impl Emitters {
             cdf.push(running);
         }
         let cdf: Vec<f32> = cdf.iter().map(|c| (c / running) as f32).collect();
-        let mut by_prim: Vec<(u32, u32)> = list
+        let mut by_prim: Vec<(EmitterId, u32)> = list
             .iter()
             .enumerate()
             .map(|(i, (p, _))| (*p, i as u32))
@@ -144,7 +189,11 @@ impl Emitters {
         let ux = ((u.x - below) / chance).clamp(0.0, 1.0 - f32::EPSILON);
         let u = Vec2::new(ux, u.y);
         let s = match self.emitters[i] {
-            Emitter::Triangle { v, radiance } => {
+            Emitter::Triangle {
+                v,
+                radiance,
+                texture,
+            } => {
                 // Uniform by area: the square-root warp of barycentrics.
                 let r = u.x.sqrt();
                 let (b1, b2) = (r * (1.0 - u.y), r * u.y);
@@ -160,6 +209,10 @@ impl Emitters {
                     wi,
                     distance,
                     radiance,
+                    texture: texture.map(|t| {
+                        let uv = t.uv[0] + b1 * (t.uv[1] - t.uv[0]) + b2 * (t.uv[2] - t.uv[0]);
+                        (t.texture, uv)
+                    }),
                     pdf: d2 / (cos_l * area),
                     prim: 0,
                 }
@@ -171,18 +224,22 @@ impl Emitters {
             } => sphere_sample(p, center, radius, radiance, u)?,
         };
         let pdf = s.pdf * chance;
-        let prim = self.prims[i];
+        let (prim, distance) = match self.prims[i] {
+            (prim, NO_PART) => (prim, s.distance),
+            _ => (u32::MAX, s.distance * (1.0 - INSTANCE_SHADOW_GAP)),
+        };
         (pdf > 0.0 && pdf.is_finite() && s.distance > 0.0).then_some(EmitterSample {
             pdf,
             prim,
+            distance,
             ..s
         })
     }
 
     /// The density with which [`Emitters::sample`] draws the direction
-    /// from `p` to `q` on primitive `prim` (normal `n` there), or 0 where
+    /// from `p` to `q` on surface `prim` (normal `n` there), or 0 where
     /// `prim` is no emitter of this table.
-    pub fn pdf(&self, prim: u32, p: Vec3, q: Vec3, n: Vec3) -> f32 {
+    pub fn pdf(&self, prim: EmitterId, p: Vec3, q: Vec3, n: Vec3) -> f32 {
         let Ok(k) = self.by_prim.binary_search_by_key(&prim, |&(p, _)| p) else {
             return 0.0;
         };
@@ -211,8 +268,8 @@ impl Emitters {
         }
     }
 
-    /// The primitive emitter `i` is (for tests and reports).
-    pub fn prim(&self, i: usize) -> u32 {
+    /// The surface emitter `i` is (for tests and reports).
+    pub fn prim(&self, i: usize) -> EmitterId {
         self.prims[i]
     }
 }
@@ -236,6 +293,7 @@ fn sphere_sample(
             wi,
             distance: b - disc.sqrt(),
             radiance,
+            texture: None,
             pdf: 1.0 / solid_angle,
             prim: 0,
         });
@@ -251,6 +309,7 @@ fn sphere_sample(
         wi,
         distance,
         radiance,
+        texture: None,
         pdf: d2 / (cos_l * 4.0 * PI * radius * radius),
         prim: 0,
     })
@@ -278,13 +337,14 @@ mod tests {
                 Vec3::new(0.0, 2.0, 1.0),
             ],
             radiance: Vec3::splat(2.0),
+            texture: None,
         };
         let sphere = Emitter::Sphere {
             center: Vec3::new(3.0, 1.0, 0.0),
             radius: 0.5,
             radiance: Vec3::new(1.0, 0.5, 0.25),
         };
-        let e = Emitters::new(vec![(7, tri), (3, sphere)]);
+        let e = Emitters::new(vec![((7, NO_PART), tri), ((3, NO_PART), sphere)]);
         assert_eq!(e.len(), 2);
         let p = Vec3::ZERO;
         for i in 0..64 {
@@ -297,10 +357,10 @@ mod tests {
                 } else {
                     (3, (q - Vec3::new(3.0, 1.0, 0.0)).normalize())
                 };
-                let pdf = e.pdf(prim, p, q, n);
+                let pdf = e.pdf((prim, NO_PART), p, q, n);
                 assert!((pdf - s.pdf).abs() <= 2e-3 * s.pdf, "{pdf} vs {}", s.pdf);
             }
         }
-        assert_eq!(e.pdf(99, p, Vec3::Y, Vec3::Y), 0.0);
+        assert_eq!(e.pdf((99, NO_PART), p, Vec3::Y, Vec3::Y), 0.0);
     }
 }

@@ -62,7 +62,7 @@ mod pdf;
 mod sample;
 mod spot;
 
-pub use emitters::{Emitter, Emitters};
+pub use emitters::{EmissionTexture, Emitter, EmitterId, Emitters, NO_PART};
 pub use environment::Environment;
 pub use lanes::LightLanes;
 pub use sample::{LightFrom, LightSample, LightSampling};

@@ -205,6 +205,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
             mirrored,
             normals,
             uvs,
+            tangents,
         } = mesh;
         h.write_u32(*first);
         h.write_u32(*count);
@@ -212,6 +213,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         h.write_u32(u32::from(*mirrored));
         write_attribute(&mut h, normals.as_ref(), |v| v.to_array());
         write_attribute(&mut h, uvs.as_ref(), |v| v.to_array());
+        write_attribute(&mut h, tangents.as_ref(), |v| v.to_array());
     }
     let Textures {
         images,
@@ -386,6 +388,7 @@ mod tests {
         scene.textures.add_texture(Texture {
             image: 0,
             wrap: [Wrap::Repeat; 2],
+            encoding: crate::texture::Encoding::Srgb,
         });
         let material = scene.geometry.meshes[0].material as usize;
         scene.materials[material].diffuse_texture = Some(0);

@@ -6,7 +6,7 @@
 
 use super::description::{CameraDesc, CameraType, LightDesc, LightType};
 use crate::error::InputError;
-use crate::geometry::{MeshNormals, MeshUvs};
+use crate::geometry::{MeshNormals, MeshTangents, MeshUvs};
 use crate::material::Material;
 use crate::math::{Aabb, Transform};
 use crate::texture::Textures;
@@ -29,6 +29,9 @@ pub struct LoadedMesh {
     /// Texture coordinates (in [`crate::texture`]'s space), only if the file
     /// has them for every triangle and the mesh's material has a texture.
     pub uvs: Option<MeshUvs>,
+    /// Tangents (glTF `TANGENT`), only if the file has them and the mesh's
+    /// material has a normal map.
+    pub tangents: Option<MeshTangents>,
     /// Index into [`LoadedAsset::materials`], if the file assigns one.
     pub material: Option<usize>,
     /// The file's placement of the mesh mirrors it (a glTF node whose
@@ -51,6 +54,9 @@ impl LoadedMesh {
             for n in &mut normals.values {
                 *n = (normal_matrix * *n).normalize_or_zero();
             }
+        }
+        if let Some(tangents) = &mut self.tangents {
+            *tangents = place_tangents(tangents, m);
         }
         self.mirrored ^= m.matrix3.determinant() < 0.0;
         self
@@ -107,6 +113,24 @@ pub struct SharedPlacement {
     /// Where its first part falls among [`LoadedAsset::baked_meshes`]: its
     /// parts follow one another from there.
     pub at: usize,
+}
+
+/// Tangents moved by `m`: xyz as directions (they lie along ∂p/∂u, which
+/// moves with the points), w turned where `m` mirrors, since the normal's
+/// cross product with the tangent turns then too.
+pub fn place_tangents(tangents: &MeshTangents, m: &Affine3A) -> MeshTangents {
+    let sign = m.matrix3.determinant().signum();
+    MeshTangents {
+        values: tangents
+            .values
+            .iter()
+            .map(|t| {
+                let xyz = (m.matrix3 * glam::Vec3A::from(t.truncate())).normalize_or_zero();
+                Vec3::from(xyz).extend(t.w * sign)
+            })
+            .collect(),
+        indices: tangents.indices.clone(),
+    }
 }
 
 /// A camera found in a glTF file, already placed in world space.

@@ -291,7 +291,14 @@ impl Integrator<'_> {
         let mut surfaces: [Option<Surface>; N] = [None; N];
         for (surface, lane) in surfaces.iter_mut().zip(lanes) {
             if let Some(hit) = &lane.hit {
-                *surface = Some(scene.geometry.surface(&lane.ray, hit));
+                let mut s = scene.geometry.surface(&lane.ray, hit);
+                // Only where a file gave a normal or bump map.
+                let m = &scene.materials[s.material as usize];
+                if m.maps.normal.is_some() {
+                    let wo = -lane.ray.direction.normalize();
+                    super::maps::apply_normal_map(scene, m, &mut s, hit, wo);
+                }
+                *surface = Some(s);
             }
         }
         let mut shadings: [Option<Shading>; N] = std::array::from_fn(|_| None);
@@ -325,7 +332,7 @@ impl Integrator<'_> {
             };
             let material = sh.material;
             let mut l = if sh.entering || !material.one_sided {
-                material.emission
+                super::maps::emission(scene, material, sh.surface.uv)
             } else {
                 Vec3::ZERO
             };

@@ -39,6 +39,7 @@
 //! | [`path`] | the path integrator (`integrator = "path"`): NEE with MIS, Russian roulette |
 //! | [`scatter`] | the path integrator's BSDFs: the Phong keys as lobes, metallic-roughness |
 //! | [`microfacet`] | GGX, Smith masking, visible-normal sampling, coloured Schlick |
+//! | [`maps`] | normal and bump maps, metallic-roughness and emissive textures (both integrators) |
 //!
 //! All of the above but the last three is the distribution ray tracer,
 //! the default for scene files; `integrator = "path"` ([`path`]) shares
@@ -47,6 +48,7 @@
 pub mod bsdf;
 pub mod direct;
 pub mod integrator;
+pub mod maps;
 pub mod microfacet;
 pub mod path;
 pub mod sample;

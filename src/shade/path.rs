@@ -27,11 +27,12 @@
 //! noise target. Escaping rays see the environment (sampled as a light)
 //! or the background (not sampled: it lights the scene as found).
 
+use super::maps;
 use super::sample::{CameraSample, FirstHit, SampleContext};
 use super::scatter::Bsdf;
 use super::Integrator;
 use crate::accel::PrimHit;
-use crate::light::{Light, LightSampling};
+use crate::light::{Light, LightSampling, NO_PART};
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
 use crate::sampling::mis::power_heuristic;
@@ -128,9 +129,18 @@ impl Integrator<'_> {
                 }
                 break;
             };
-            let s = scene.geometry.surface(&ray, &hit);
+            let mut s = scene.geometry.surface(&ray, &hit);
             let m = &scene.materials[s.material as usize];
             let wo = -ray.direction.normalize();
+            maps::apply_normal_map(scene, m, &mut s, &hit, wo);
+            let mapped;
+            let m = match maps::textured_pbr(scene, m, s.uv) {
+                Some(textured) => {
+                    mapped = textured;
+                    &mapped
+                }
+                None => m,
+            };
             let entering = s.geometric_normal.dot(wo) >= 0.0;
             let (ng, ns) = if entering {
                 (s.geometric_normal, s.shading_normal)
@@ -154,7 +164,8 @@ impl Integrator<'_> {
             }
             let mut vertex = Vec3::ZERO;
             if m.is_emissive() && (entering || !m.one_sided) {
-                vertex += m.emission * self.emission_weight(&hit, &came, s.p, s.geometric_normal);
+                vertex += maps::emission(scene, m, s.uv)
+                    * self.emission_weight(&hit, &came, s.p, s.geometric_normal);
             }
             // The vertex past the last bounce: only its emission, the
             // BSDF's half of the previous vertex's direct light.
@@ -232,7 +243,15 @@ impl Integrator<'_> {
         let method = scene.settings.light_sampling;
         let light_pdf = match scene.lights.iter().find(|l| l.prim() == Some(hit.prim)) {
             Some(light) => light.pdf(came.from, q, n, method),
-            None => scene.emitters.pdf(hit.prim, came.from, q, n),
+            None => {
+                // An instance's triangle is named by the prototype's.
+                let part = if hit.prim >= scene.geometry.first_instance() {
+                    scene.geometry.instance(hit.prim).1.slot_prim(hit.part)
+                } else {
+                    NO_PART
+                };
+                scene.emitters.pdf((hit.prim, part), came.from, q, n)
+            }
         };
         if light_pdf > 0.0 {
             power_heuristic(pdf, scene.settings.shadow_samples as f32 * light_pdf)
@@ -351,7 +370,11 @@ impl Integrator<'_> {
             return None;
         }
         let w = power_heuristic(samples as f32 * e.pdf, bsdf_pdf);
-        let value = f * e.radiance * (cos * w / e.pdf);
+        let radiance = match e.texture {
+            Some((t, uv)) => e.radiance * self.scene.textures.sample(t, uv),
+            None => e.radiance,
+        };
+        let value = f * radiance * (cos * w / e.pdf);
         value.is_finite().then_some(Contribution {
             wi: e.wi,
             distance: e.distance,

@@ -46,5 +46,6 @@ mod self_intersection;
 mod sizes;
 mod slices;
 mod slurm;
+mod texture_maps;
 mod textures;
 mod timeline_picture;

@@ -261,3 +261,75 @@ fn paths_are_bit_identical_across_threads_slices_and_noise_targets() {
         film_of(&noisy, SliceSpec::WHOLE, 3)
     );
 }
+
+/// A glowing mesh placed twice is stored once, as two instances, and is a
+/// light like the same mesh read from two files (each baked into world
+/// space): both put each placement's triangles in the glowing table, and
+/// the floor under them is lit alike, within noise.
+#[test]
+fn an_instanced_glowing_mesh_lights_the_floor_as_the_same_mesh_baked() {
+    let dir = crate::common::temp_dir("instanced-emitter");
+    // A small glowing panel facing down (two-sided emission anyway).
+    let panel = "mtllib panel.mtl\nv -0.3 -0.3 0\nv 0.3 -0.3 0\nv 0.3 0.3 0\nv -0.3 0.3 0\n\
+                 usemtl glow\nf 1 4 3 2\n";
+    for name in ["panel.obj", "panel-a.obj", "panel-b.obj"] {
+        std::fs::write(dir.join(name), panel).unwrap();
+    }
+    std::fs::write(dir.join("panel.mtl"), "newmtl glow\nKd 0 0 0\nKe 6 5 4\n").unwrap();
+    let scene_with = |a: &str, b: &str| {
+        let toml = format!(
+            r#"
+[render]
+width = 8
+height = 6
+spp = 64
+integrator = "path"
+max_depth = 2
+[camera]
+position = [0.0, -3.0, 2.5]
+look_at = [0.0, 0.0, 0.0]
+fov = 50.0
+[materials.white]
+diffuse = [0.8, 0.8, 0.8]
+[[objects]]
+plane = {{ normal = [0.0, 0.0, 1.0] }}
+material = "white"
+[[objects]]
+mesh = "{a}"
+transform = {{ translate = [-0.6, 0.0, 1.5], rotate = [0.0, 1.0, 0.0, 20.0] }}
+[[objects]]
+mesh = "{b}"
+transform = {{ translate = [0.7, 0.2, 1.2] }}
+"#
+        );
+        crate::common::scene_at(&toml, &dir.join("scene.toml"))
+    };
+    let instanced = scene_with("panel.obj", "panel.obj");
+    let baked = scene_with("panel-a.obj", "panel-b.obj");
+    assert_eq!(
+        instanced.geometry.instances().len(),
+        2,
+        "placed twice: instances"
+    );
+    assert_eq!(baked.geometry.instances().len(), 0);
+    assert_eq!(
+        instanced.emitters.len(),
+        4,
+        "each placement's two triangles"
+    );
+    assert_eq!(baked.emitters.len(), 4);
+    let mean = |s: &Scene, seed| {
+        let p = pixels(s, seed, 64);
+        p.iter().map(|c| c.x as f64).sum::<f64>() / p.len() as f64
+    };
+    let runs = |s: &Scene, first: u32| -> Vec<f64> {
+        (first..first + 6).map(|seed| mean(s, seed)).collect()
+    };
+    let (a, sa) = mean_and_se(&runs(&instanced, 1));
+    let (b, sb) = mean_and_se(&runs(&baked, 11));
+    assert!(b > 0.05, "{b}");
+    assert!(
+        (a - b).abs() < 4.0 * (sa * sa + sb * sb).sqrt(),
+        "instanced {a} ± {sa} vs baked {b} ± {sb}"
+    );
+}

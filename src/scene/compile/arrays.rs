@@ -66,6 +66,7 @@ pub fn mesh_geometry(
         mirrored: false,
         normals: None,
         uvs: None,
+        tangents: None,
     }];
     let source = TriangleSource::Indexed {
         positions: vertices,

@@ -372,6 +372,9 @@ fn prototype_parts<'a>(
         if let Some(uvs) = &mesh.uvs {
             check_attribute(uvs, mesh, path, "texture coordinates")?;
         }
+        if let Some(tangents) = &mesh.tangents {
+            check_attribute(tangents, mesh, path, "tangents")?;
+        }
         if mesh.indices.is_empty() {
             continue;
         }
@@ -391,6 +394,7 @@ fn prototype_parts<'a>(
             mirrored: mesh.mirrored,
             normals: mesh.normals.clone(),
             uvs: mesh.uvs.clone(),
+            tangents: mesh.tangents.clone(),
         });
     }
     Ok(parts)

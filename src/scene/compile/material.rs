@@ -31,6 +31,7 @@ impl Compiler<'_> {
             one_sided: false,
             diffuse_texture: None,
             pbr: None,
+            maps: crate::material::Maps::default(),
         })
     }
 

@@ -8,11 +8,11 @@ use crate::accel::{BuildQuality, Bvh8};
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::{Geometry, GeometryParts};
-use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshUvs};
+use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshTangents, MeshUvs};
 use crate::material::Material;
 use crate::math::Aabb;
 use crate::math::Transform;
-use crate::scene::asset::{LoadedAsset, LoadedMesh};
+use crate::scene::asset::{place_tangents, LoadedAsset, LoadedMesh};
 use crate::scene::loaders::{self, load_mesh_file};
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
@@ -131,7 +131,7 @@ impl Compiler<'_> {
         tris: TriangleSource,
         material: u32,
         normals: Option<MeshNormals>,
-        uvs: Option<MeshUvs>,
+        (uvs, tangents): (Option<MeshUvs>, Option<MeshTangents>),
         mirrored: bool,
     ) {
         if tris.len() == 0 {
@@ -148,6 +148,7 @@ impl Compiler<'_> {
             mirrored,
             normals,
             uvs,
+            tangents,
         });
     }
 
@@ -186,6 +187,7 @@ impl Compiler<'_> {
             for (name, mat) in &asset.materials {
                 self.materials.push(Material {
                     diffuse_texture: mat.diffuse_texture.map(|t| t + first_texture),
+                    maps: mat.maps.offset(first_texture),
                     ..*mat
                 });
                 self.material_ids
@@ -226,6 +228,9 @@ impl Compiler<'_> {
             if let Some(uvs) = &mesh.uvs {
                 check_attribute(uvs, mesh, &path, "texture coordinates")?;
             }
+            if let Some(tangents) = &mesh.tangents {
+                check_attribute(tangents, mesh, &path, "tangents")?;
+            }
             let tris = TriangleSource::File {
                 positions: mesh.positions.par_iter().map(|&p| t.point(p)).collect(),
                 asset: asset.clone(),
@@ -240,15 +245,21 @@ impl Compiler<'_> {
                 .unwrap_or(inherited);
             // UVs only where a texture will be looked up with them: a
             // scene-file material put on a textured mesh has none.
-            let textured = self.materials[material as usize].diffuse_texture.is_some();
+            let textured = self.materials[material as usize].is_textured();
             let uvs = mesh.uvs.clone().filter(|_| textured);
+            let mapped = self.materials[material as usize].maps.normal.is_some();
+            let tangents = mesh
+                .tangents
+                .as_ref()
+                .filter(|_| mapped)
+                .map(|tangents| place_tangents(tangents, &m));
             let name = if mesh.name.is_empty() {
                 key.to_string()
             } else {
                 mesh.name.clone()
             };
             let mirrored = (m.matrix3.determinant() < 0.0) != mesh.mirrored;
-            self.push_mesh(name, tris, material, normals, uvs, mirrored);
+            self.push_mesh(name, tris, material, normals, (uvs, tangents), mirrored);
         }
         Ok(())
     }
@@ -526,6 +537,7 @@ material = "grey"
             mirrored: false,
             normals: None,
             uvs: None,
+            tangents: None,
         };
         let tri = |k: usize| [Vec3::ZERO, Vec3::X, Vec3::new(0.0, k as f32, 1.0)];
         let n = 3 * FINITE_BLOCK + 5;

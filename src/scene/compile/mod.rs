@@ -419,7 +419,7 @@ fn compile_for(
         build_steps,
     };
     geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
-    let emitters = emitters::emitters(&geometry, &c.materials, &c.lights);
+    let emitters = emitters::emitters(&geometry, &c.materials, &c.textures, &c.lights);
     let scene = Scene {
         geometry,
         materials: c.materials,

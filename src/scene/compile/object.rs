@@ -232,7 +232,7 @@ impl Compiler<'_> {
                 TriangleSource::Soup(vec![v]),
                 material,
                 None,
-                None,
+                (None, None),
                 m.matrix3.determinant() < 0.0,
             );
         } else if let Some(file) = &obj.mesh {

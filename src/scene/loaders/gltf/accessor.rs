@@ -156,6 +156,17 @@ impl Loader<'_> {
     /// Texture coordinates: `FLOAT`, or normalized `UNSIGNED_BYTE` or
     /// `UNSIGNED_SHORT` (read as n/255, n/65535), `VEC2`, as the glTF
     /// specification allows for `TEXCOORD_n`.
+    /// A `VEC4` float accessor (glTF `TANGENT`), every value finite.
+    pub(super) fn read_vec4(&self, index: usize, what: &str) -> InputResult<Vec<glam::Vec4>> {
+        let (data, _) = self.accessor(index, what, |c, t| {
+            c == ComponentType::F32 && t == AccessorType::Vec4
+        })?;
+        self.finite_elements(index, what, &data, |e| {
+            let f = |k: usize| f32::from_le_bytes([e[k], e[k + 1], e[k + 2], e[k + 3]]);
+            glam::Vec4::new(f(0), f(4), f(8), f(12))
+        })
+    }
+
     pub(super) fn read_uvs(&self, index: usize, what: &str) -> InputResult<Vec<Vec2>> {
         let (data, component) = self.accessor(index, what, |c, t| {
             matches!(
@@ -234,6 +245,12 @@ trait FiniteValue: std::fmt::Display {
 }
 
 impl FiniteValue for Vec3 {
+    fn finite(&self) -> bool {
+        self.is_finite()
+    }
+}
+
+impl FiniteValue for glam::Vec4 {
     fn finite(&self) -> bool {
         self.is_finite()
     }

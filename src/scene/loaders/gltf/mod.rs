@@ -48,6 +48,8 @@
 //! | `roughnessFactor` `r`                              | `shininess = n(r)` (`r = 0` gives the maximum, 10⁶)  |
 //! | `emissiveFactor` `e` × `KHR_materials_emissive_strength` `s` | `emission = e · s`                         |
 //! | `baseColorTexture`                                 | `diffuse_texture`: the image multiplies `diffuse` |
+//! | `metallicRoughnessTexture`, `emissiveTexture`, `normalTexture` (`scale`) | `maps` (read as data but the emissive one; see `shade::maps`) |
+//! | `occlusionTexture`                                 | ignored, with a warning                           |
 //! | everything else                                    | [`Material::default`] (`transparency = 0`, `ior = 1.5`, no Fresnel) |
 //!
 //! where `n(r) = 2/α² − 2` with `α = r²` (the usual Phong-exponent equivalent
@@ -69,10 +71,11 @@
 //! not `mimeType`. Its sampler's `wrapS`/`wrapT` become the wrap modes
 //! (repeat without a sampler); its filters are ignored, lookups are always
 //! bilinear (see [`crate::texture`]). Each image is decoded once however
-//! many textures use it, and only images a base colour texture uses are
-//! read. `KHR_texture_transform` on the base colour texture moves its UVs
-//! as they are read (scale, rotation, offset; its `texCoord` picks the
-//! set); on other textures it does nothing, as they are not read. A missing or undecodable image is an error at `images[j]` that
+//! many textures use it, and only images a material's map uses are read.
+//! A mesh has one set of UVs, the first map's (base colour,
+//! metallic-roughness, emissive, normal): its `KHR_texture_transform`
+//! moves them as they are read (scale, rotation, offset; its `texCoord`
+//! picks the set); another map's own set or transform is warned of. A missing or undecodable image is an error at `images[j]` that
 //! names the file and the texture using it: `cannot read texture
 //! dir/crate.png: No such file or directory (used by textures[0])`.
 //!

@@ -4,7 +4,7 @@
 
 use super::Loader;
 use crate::error::InputResult;
-use crate::geometry::{MeshNormals, MeshUvs};
+use crate::geometry::{MeshNormals, MeshTangents, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use ::gltf::json;
 use glam::{Affine2, Mat2, Vec2};
@@ -89,17 +89,15 @@ impl Loader<'_> {
             }
             other => other,
         };
-        // UVs only for a textured material, from the set its texture names;
-        // a primitive without that set gets none.
-        let info = material
-            .filter(|&m| asset.materials[m].1.diffuse_texture.is_some())
+        // UVs only for a textured material, from the set its first map
+        // names (KHR_texture_transform's texCoord overrides the texture's
+        // own); a primitive without that set gets none.
+        let source = material
+            .filter(|&m| asset.materials[m].1.is_textured())
             .and_then(|m| self.root.materials.get(m))
-            .and_then(|m| m.pbr_metallic_roughness.base_color_texture.as_ref());
-        let transform = info
-            .and_then(|i| i.extensions.as_ref())
-            .and_then(|e| e.texture_transform.as_ref());
-        // KHR_texture_transform's texCoord overrides the texture's own.
-        let uv_set = info.map(|i| transform.and_then(|t| t.tex_coord).unwrap_or(i.tex_coord));
+            .and_then(super::material::uv_source);
+        let transform = source.and_then(|(_, t, _)| t);
+        let uv_set = source.map(|(set, _, _)| set);
         let uv_accessor = uv_set.and_then(|set| {
             primitive
                 .attributes
@@ -111,9 +109,8 @@ impl Loader<'_> {
                 let mut values = self.read_uvs(accessor, &format!("TEXCOORD_{set}"))?;
                 if let Some(t) = transform {
                     let m = material.unwrap_or_default();
-                    let at = format!(
-                        "materials[{m}].pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform"
-                    );
+                    let key = source.map_or("", |(_, _, key)| key);
+                    let at = format!("materials[{m}].{key}.extensions.KHR_texture_transform");
                     let uv = uv_transform(t.offset.0, t.rotation.0, t.scale.0);
                     for v in &mut values {
                         *v = uv.transform_point2(*v);
@@ -138,7 +135,34 @@ impl Loader<'_> {
             }
             None => None,
         };
+        // Tangents only for a normal-mapped material; without them the
+        // frame comes from the UVs at the hit.
+        let mapped = material.is_some_and(|m| asset.materials[m].1.maps.normal.is_some());
+        let tangents = match primitive
+            .attributes
+            .get(&Checked::Valid(Semantic::Tangents))
+            .filter(|_| mapped && uvs.is_some())
+        {
+            Some(accessor) => {
+                let values = self.read_vec4(accessor.value(), "TANGENT")?;
+                if values.len() != vertex_count {
+                    return Err(self.error(
+                        location,
+                        format!(
+                            "TANGENT has {} elements but POSITION has {vertex_count}",
+                            values.len()
+                        ),
+                    ));
+                }
+                Some(MeshTangents {
+                    values,
+                    indices: indices.clone(),
+                })
+            }
+            None => None,
+        };
         Ok(Some(LoadedMesh {
+            tangents,
             name,
             positions,
             normals: normals.map(|values| MeshNormals {

@@ -1,4 +1,4 @@
-//! Base colour textures: a material's `baseColorTexture` resolved to its
+//! Textures: a material's `baseColorTexture` (or any other map) resolved to its
 //! `textures[i]`, that texture's sampler (wrap modes) and image, the image
 //! read from a file beside the glTF, a base64 `data:` URI or a buffer view
 //! (GLB), and decoded once however many textures use it.
@@ -7,7 +7,7 @@ use super::buffer::{decode_base64, uri_file};
 use super::Loader;
 use crate::error::InputResult;
 use crate::scene::loaders::io_message;
-use crate::texture::{Image, Texture, Textures, Wrap};
+use crate::texture::{Encoding, Image, Texture, Textures, Wrap};
 use ::gltf::json;
 use json::texture::WrappingMode;
 use json::validation::Checked;
@@ -17,13 +17,13 @@ use json::validation::Checked;
 #[derive(Default)]
 pub(super) struct TextureCache {
     pub(super) textures: Textures,
-    /// Ours for each `textures[i]` read so far.
-    by_texture: Vec<(usize, u32)>,
+    /// Ours for each `textures[i]` read so far, as colour or as data.
+    by_texture: Vec<((usize, Encoding), u32)>,
     /// Ours for each `images[j]` decoded so far.
     by_image: Vec<(usize, u32)>,
 }
 
-fn find(list: &[(usize, u32)], key: usize) -> Option<u32> {
+fn find<K: PartialEq>(list: &[(K, u32)], key: K) -> Option<u32> {
     list.iter().find(|(k, _)| *k == key).map(|(_, v)| *v)
 }
 
@@ -34,9 +34,10 @@ impl Loader<'_> {
         &self,
         cache: &mut TextureCache,
         index: usize,
+        encoding: Encoding,
         referrer: &str,
     ) -> InputResult<u32> {
-        if let Some(ours) = find(&cache.by_texture, index) {
+        if let Some(ours) = find(&cache.by_texture, (index, encoding)) {
             return Ok(ours);
         }
         let location = format!("textures[{index}]");
@@ -73,8 +74,12 @@ impl Loader<'_> {
                 ours
             }
         };
-        let ours = cache.textures.add_texture(Texture { image, wrap });
-        cache.by_texture.push((index, ours));
+        let ours = cache.textures.add_texture(Texture {
+            image,
+            wrap,
+            encoding,
+        });
+        cache.by_texture.push(((index, encoding), ours));
         Ok(ours)
     }
 

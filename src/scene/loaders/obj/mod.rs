@@ -55,8 +55,10 @@
 //! | `illum 3`, `5` or `7`     | `reflectivity = max(Ks r, g, b)`, `glossiness = 0` (mirror) |
 //! | `illum 5` or `7`          | also `fresnel = true`                                      |
 //! | `map_Kd [-clamp on] file` | `diffuse_texture`: the image multiplies `Kd`                |
+//! | `norm file` (`map_Norm`)  | `maps.normal`: a tangent-space normal map (linear)          |
+//! | `bump [-bm s] file` (`map_Bump`) | `maps.normal`: a height map (red, linear), heights × `s` in world units |
 //! | `Ka` (ambient)            | ignored: strata computes the light that arrives            |
-//! | `Tf`, other `map_*`, `bump`, `norm`, `disp`, others | ignored, with a warning (see `ignored.rs`) |
+//! | `Tf`, other `map_*`, `disp`, others | ignored, with a warning (see `ignored.rs`) |
 //!
 //! A colour given as one number (`Kd 0.5`) is a grey. Every other field keeps
 //! its [`Material::default`] value.
@@ -73,7 +75,7 @@
 //! texels instead (see [`crate::texture`] for filtering and colour). Other
 //! `map_Kd` options (`-o`, `-s`, `-mm`, ...) are read past with their
 //! values, with a warning, and so is every statement strata does not map
-//! to its material (`map_Bump`, `norm`, `Tf`, ...): one warning per kind
+//! to its material (`map_Ks`, `disp`, `Tf`, ...): one warning per kind
 //! and library, at its first line. Each image file is decoded once however
 //! many materials name it. A texture that is missing, unreadable or not a
 //! PNG, JPEG, BMP or TGA image is an error at its `map_Kd` line:
@@ -196,7 +198,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
         });
         let material = mesh.material_id.filter(|&i| i < asset.materials.len());
         // UVs only for a mesh whose material has a texture to look up.
-        let textured = material.is_some_and(|i| asset.materials[i].1.diffuse_texture.is_some());
+        let textured = material.is_some_and(|i| asset.materials[i].1.is_textured());
         let uvs = (textured
             && all_have_texcoords
             && covered == triangle_count
@@ -219,6 +221,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             normals,
             material,
             uvs,
+            tangents: None,
             mirrored: false,
         });
     }

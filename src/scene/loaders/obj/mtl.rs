@@ -12,8 +12,8 @@ use super::super::text::decode_text;
 use super::ignored::{map_kd_option, why_statement_is_ignored, Ignored, Values};
 use super::parse_finite;
 use crate::error::{InputError, InputResult};
-use crate::material::Material;
-use crate::texture::{Image, Texture, Textures, Wrap};
+use crate::material::{Maps, Material, NormalMap, NormalMapKind};
+use crate::texture::{Encoding, Image, Texture, Textures, Wrap};
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -32,7 +32,7 @@ pub(super) struct TextureFiles {
 impl TextureFiles {
     /// The index of the texture of `file` with `wrap`, the file read and
     /// decoded the first time it is named.
-    fn load(&mut self, file: &Path, wrap: Wrap) -> Result<u32, String> {
+    fn load(&mut self, file: &Path, wrap: Wrap, encoding: Encoding) -> Result<u32, String> {
         let image = match self.images.get(file) {
             Some(&image) => image,
             None => {
@@ -49,6 +49,7 @@ impl TextureFiles {
         Ok(self.textures.add_texture(Texture {
             image,
             wrap: [wrap; 2],
+            encoding,
         }))
     }
 }
@@ -175,19 +176,48 @@ fn parse_mtl(
                     wrap,
                     file,
                     ignored: options,
-                } = parse_map_kd(after_keyword).map_err(&at)?;
+                    ..
+                } = parse_map_kd(keyword, after_keyword).map_err(&at)?;
                 for (option, why) in options {
                     ignored.note(&format!("map_Kd option {option}"), why, number + 1);
                 }
                 let dir = path.parent().unwrap_or(Path::new(""));
-                let texture = textures.load(&resolve(dir, file), wrap).map_err(&at)?;
+                let texture = textures
+                    .load(&resolve(dir, file), wrap, Encoding::Srgb)
+                    .map_err(&at)?;
                 // tobj keeps the rest of the line as the texture's name: hand
                 // it the index of the decoded texture, which
                 // `mtl_to_material` reads back.
                 normalized.push_str(&format!("map_Kd {texture}"));
             }
-            "map_Ka" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" | "map_d" | "map_Bump"
-            | "map_bump" | "bump" => {
+            "map_Bump" | "map_bump" | "bump" | "norm" | "map_Norm" => {
+                let MapKd {
+                    wrap,
+                    file,
+                    ignored: options,
+                    bump_multiplier,
+                } = parse_map_kd(keyword, after_keyword).map_err(&at)?;
+                for (option, why) in options {
+                    ignored.note(&format!("{keyword} option {option}"), why, number + 1);
+                }
+                let dir = path.parent().unwrap_or(Path::new(""));
+                // Heights and normals are data: no sRGB curve.
+                let texture = textures
+                    .load(&resolve(dir, file), wrap, Encoding::Linear)
+                    .map_err(&at)?;
+                let kind = if keyword.eq_ignore_ascii_case("norm") || keyword == "map_Norm" {
+                    "normal"
+                } else {
+                    "height"
+                };
+                // Handed to tobj as an unknown statement, which
+                // `mtl_to_material` reads back.
+                normalized.push_str(&format!(
+                    "{NORMAL_MAP_KEY} {texture} {kind} {}",
+                    bump_multiplier.unwrap_or(1.0)
+                ));
+            }
+            "map_Ka" | "map_Ks" | "map_Ns" | "map_ns" | "map_NS" | "map_d" => {
                 // tobj reads these, and would misread one without a name.
                 if after_keyword.is_empty() {
                     return Err(at(format!("{keyword} needs a file name")));
@@ -207,14 +237,20 @@ fn parse_mtl(
         .map_err(|e| InputError::file(path, format!("cannot parse MTL: {e}")))
 }
 
-/// The wrap mode and file name of a `map_Kd` statement (the text after the
-/// keyword): `[options] file name`, the name being the rest of the line
-/// (it may contain spaces). `-clamp on|off` is read; the other options
-/// (`-o`, `-s`, `-mm`, ...) are read past with their values, and come back
-/// with why, to be warned about.
-fn parse_map_kd(text: &str) -> Result<MapKd<'_>, String> {
+/// The statement `parse_mtl` puts in place of a normal or bump map, for
+/// tobj to keep as an unknown one: `texture-index normal|height scale`.
+const NORMAL_MAP_KEY: &str = "strata_normal_map";
+
+/// The wrap mode and file name of a `map_Kd` statement, or of a bump or
+/// normal map's (`keyword`; the text after it): `[options] file name`,
+/// the name being the rest of the line (it may contain spaces).
+/// `-clamp on|off` is read, and `-bm` on a bump or normal map; the other
+/// options (`-o`, `-s`, `-mm`, ...) are read past with their values, and
+/// come back with why, to be warned about.
+fn parse_map_kd<'a>(keyword: &str, text: &'a str) -> Result<MapKd<'a>, String> {
     let mut wrap = Wrap::Repeat;
     let mut ignored = Vec::new();
+    let mut bump_multiplier = None;
     let mut rest = text.trim();
     while rest.starts_with('-') {
         let (option, mut after) = first_word(rest);
@@ -223,8 +259,14 @@ fn parse_map_kd(text: &str) -> Result<MapKd<'_>, String> {
             wrap = match value {
                 "on" => Wrap::ClampToEdge,
                 "off" => Wrap::Repeat,
-                _ => return Err(format!("map_Kd -clamp needs on or off, found '{value}'")),
+                _ => return Err(format!("{keyword} -clamp needs on or off, found '{value}'")),
             };
+            rest = after;
+            continue;
+        }
+        if option == "-bm" && keyword != "map_Kd" {
+            let (value, after) = first_word(after);
+            bump_multiplier = Some(parse_finite(value, "-bm")?);
             rest = after;
             continue;
         }
@@ -249,21 +291,23 @@ fn parse_map_kd(text: &str) -> Result<MapKd<'_>, String> {
         rest = after;
     }
     if rest.is_empty() {
-        return Err("map_Kd needs a file name".to_string());
+        return Err(format!("{keyword} needs a file name"));
     }
     Ok(MapKd {
         wrap,
         file: rest,
         ignored,
+        bump_multiplier,
     })
 }
 
-/// A `map_Kd` statement as read: its wrap mode and file name, and the
-/// options read past with why.
+/// A `map_Kd` (or bump or normal map) statement as read: its wrap mode and
+/// file name, `-bm`, and the options read past with why.
 struct MapKd<'a> {
     wrap: Wrap,
     file: &'a str,
     ignored: Vec<(&'a str, &'static str)>,
+    bump_multiplier: Option<f32>,
 }
 
 /// The first word of `text` and the rest after it, both trimmed.
@@ -331,6 +375,23 @@ pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
         emission: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
         // `parse_mtl` put the texture's index in place of the file name.
         diffuse_texture: m.diffuse_texture.as_deref().and_then(|t| t.parse().ok()),
+        maps: Maps {
+            normal: m.unknown_param.get(NORMAL_MAP_KEY).and_then(|v| {
+                let mut words = v.split_whitespace();
+                let texture = words.next()?.parse().ok()?;
+                let kind = match words.next()? {
+                    "normal" => NormalMapKind::Normal,
+                    _ => NormalMapKind::Height,
+                };
+                let scale = words.next()?.parse().ok()?;
+                Some(NormalMap {
+                    texture,
+                    kind,
+                    scale,
+                })
+            }),
+            ..Maps::default()
+        },
         ..defaults
     }
 }
@@ -502,6 +563,13 @@ mod tests {
             "ok.png",
             &crate::scene::loaders::test_files::png(1, 1, &[[9, 9, 9]]),
         );
+        for name in ["bump.png", "n.png"] {
+            write(
+                &dir,
+                name,
+                &crate::scene::loaders::test_files::png(1, 1, &[[128, 128, 255]]),
+            );
+        }
         write(
             &dir,
             "looks.mtl",
@@ -518,11 +586,22 @@ mod tests {
             [
                 at(4, "map_Kd option -s is ignored (and on 1 more line): the texture is looked up where the file's texture coordinates say, unmoved and unscaled"),
                 at(4, "map_Kd option -o is ignored: the texture is looked up where the file's texture coordinates say, unmoved and unscaled"),
-                at(5, "map_Bump is ignored (and on 1 more line): strata has no bump or normal mapping"),
-                at(6, "norm is ignored: strata has no bump or normal mapping"),
                 at(7, "Tf is ignored: strata's glass has no colour filter (only d or Tr)"),
-                at(10, "bump is ignored: strata has no bump or normal mapping"),
             ]
+        );
+        // Bump and normal maps are read, as data; the last one counts.
+        use crate::material::NormalMapKind;
+        let map = |name: &str| {
+            let m = asset.materials.iter().find(|(n, _)| n == name).unwrap().1;
+            m.maps.normal.map(|n| (n.kind, n.scale))
+        };
+        assert_eq!(map("a"), Some((NormalMapKind::Normal, 1.0)));
+        assert_eq!(map("b"), Some((NormalMapKind::Height, 1.0)));
+        assert_eq!(map("c"), None);
+        let height = asset.materials[1].1.maps.normal.unwrap().texture;
+        assert_eq!(
+            asset.textures.textures[height as usize].encoding,
+            crate::texture::Encoding::Linear
         );
         // -clamp after the ignored options is still read; the image loads.
         let a = asset.materials.iter().find(|(n, _)| n == "a").unwrap().1;

@@ -176,6 +176,7 @@ fn mesh_asset(
             normals: None,
             material: None,
             uvs: None,
+            tangents: None,
             mirrored: false,
         }],
         warnings,
