@@ -4,6 +4,7 @@
 //! 2018; Bittner, Hapala and Havran 2013).
 
 use super::build::BuildQuality;
+pub(super) use super::cluster::Boxes;
 use super::cluster::{morton_order, Clusters};
 use super::node::MAX_PRIMS;
 use crate::math::Aabb;
@@ -21,22 +22,6 @@ impl obvhs::Boundable for Aabb {
         obvhs::aabb::Aabb {
             min: Vec3A::from(self.min),
             max: Vec3A::from(self.max),
-        }
-    }
-}
-
-/// Primitive boxes a build reads, and frees when done if it owns them.
-pub(super) enum Boxes<'a> {
-    Borrowed(&'a [Aabb]),
-    Owned(Vec<Aabb>),
-}
-
-impl std::ops::Deref for Boxes<'_> {
-    type Target = [Aabb];
-    fn deref(&self) -> &[Aabb] {
-        match self {
-            Boxes::Borrowed(b) => b,
-            Boxes::Owned(b) => b,
         }
     }
 }
@@ -80,24 +65,31 @@ pub(super) fn binary_tree(
     let preset = quality.preset(boxes.len());
     let params = quality.params(boxes.len());
     let mut bvh2 = if preset == BuildQuality::Fastest {
-        let clusters = steps.time("clusters", || Clusters::new(&boxes, bounds));
-        drop(boxes);
-        // The clusters lie along the curve already: cluster c is leaf c.
-        let along: Vec<u32> = (0..clusters.boxes.len() as u32).collect();
-        let mut bvh2 = steps.time("ploc", || ploc(&clusters.boxes, &along, &params));
-        drop(along);
-        // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
-        // from starts[c] to starts[c + 1].
+        // The clusters free the boxes once their first round has read them.
+        let clusters = steps.time("clusters", || Clusters::new(boxes, bounds));
+        let Clusters {
+            order,
+            starts,
+            boxes,
+            spare,
+        } = clusters;
+        // The clusters lie along the curve already: cluster c is leaf c,
+        // and its primitives are `order`'s ids from starts[c] to
+        // starts[c + 1]. PLOC takes the clusters' boxes and the rounds'
+        // other buffer as its own clusters.
+        let (radius, near) = (radius(&params), params.search_depth_threshold);
+        let mut bvh2 = steps.time("ploc", || {
+            super::ploc::ploc_in_order(boxes, spare, order, radius, near)
+        });
         bvh2.nodes
             .par_iter_mut()
             .with_min_len(1 << 14)
             .filter(|node| node.prim_count > 0)
             .for_each(|node| {
                 let c = node.first_index as usize;
-                node.first_index = clusters.starts[c];
-                node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
+                node.first_index = starts[c];
+                node.prim_count = starts[c + 1] - starts[c];
             });
-        bvh2.primitive_indices = clusters.order;
         bvh2
     } else {
         let order = steps.time("morton", || morton_order(&boxes, bounds));
@@ -121,15 +113,20 @@ pub(super) fn binary_tree(
 /// ([`super::ploc`]: parallel, the same tree on any thread count), one
 /// leaf each, leaf `i` holding id `i`, with the preset's search radius.
 fn ploc(boxes: &[Aabb], order: &[u32], params: &BvhBuildParams) -> Bvh2 {
-    let radius = match params.ploc_search_distance {
+    super::ploc::ploc(boxes, order, radius(params), params.search_depth_threshold)
+}
+
+/// How many places of the curve each way a cluster looks for its nearest
+/// neighbour, for the preset `params`.
+fn radius(params: &BvhBuildParams) -> usize {
+    match params.ploc_search_distance {
         PlocSearchDistance::Minimum => 1,
         PlocSearchDistance::VeryLow => 2,
         PlocSearchDistance::Low => 6,
         PlocSearchDistance::Medium => 14,
         PlocSearchDistance::High => 24,
         PlocSearchDistance::VeryHigh => 32,
-    };
-    super::ploc::ploc(boxes, order, radius, params.search_depth_threshold)
+    }
 }
 
 /// obvhs's own PLOC tree over `boxes` (sequential merges), one leaf

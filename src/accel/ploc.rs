@@ -76,42 +76,65 @@ const BLOCK: usize = 1 << 14;
 /// are many and their neighbours on the curve already near. Children come
 /// after their parents.
 pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: usize) -> Bvh2 {
-    let n = order.len();
+    let bounds: Vec<Box3A> = order
+        .par_iter()
+        .with_min_len(BLOCK)
+        .map(|&i| {
+            let b = boxes[i as usize];
+            Box3A {
+                min: b.min.into(),
+                max: b.max.into(),
+            }
+        })
+        .collect();
+    let leaf = |i: usize| order[i];
+    let ids = (0..order.len() as u32).into_par_iter().collect();
+    ploc_over(bounds, Vec::new(), leaf, ids, radius, near_passes)
+}
+
+/// [`ploc`]'s tree over boxes already in curve order, leaf `i` holding
+/// `bounds[i]` and `first_index` `i`, and `primitive_indices` those the
+/// caller gives: the fastest preset's clusters ([`super::cluster`]).
+/// `spare` is a buffer the clusters of the next pass may take (its
+/// pages, touched already, rather than fresh ones; its contents are not
+/// read).
+pub(super) fn ploc_in_order(
+    bounds: Vec<Box3A>,
+    spare: Vec<Box3A>,
+    primitive_indices: Vec<u32>,
+    radius: usize,
+    near_passes: usize,
+) -> Bvh2 {
+    let leaf = |i: usize| i as u32;
+    ploc_over(bounds, spare, leaf, primitive_indices, radius, near_passes)
+}
+
+/// PLOC over clusters `bounds` in curve order, cluster `i` the leaf of
+/// primitive `leaf(i)`.
+fn ploc_over(
+    bounds: Vec<Box3A>,
+    mut spare: Vec<Box3A>,
+    leaf: impl Fn(usize) -> u32 + Sync,
+    primitive_indices: Vec<u32>,
+    radius: usize,
+    near_passes: usize,
+) -> Bvh2 {
+    let n = bounds.len();
     assert!(n > 0 && n < LEAF as usize && radius >= 1);
-    let mut current = Clusters {
-        bounds: order
-            .par_iter()
-            .with_min_len(BLOCK)
-            .map(|&i| {
-                let b = boxes[i as usize];
-                Box3A {
-                    min: b.min.into(),
-                    max: b.max.into(),
-                }
-            })
-            .collect(),
-        node: order
-            .par_iter()
-            .with_min_len(BLOCK)
-            .map(|&i| i | LEAF)
-            .collect(),
-    };
+    let node: Vec<u32> = (0..n)
+        .into_par_iter()
+        .with_min_len(BLOCK)
+        .map(|i| leaf(i) | LEAF)
+        .collect();
     // Copied in parallel: a clone is one thread's copy, and its clears of
-    // fresh pages (see `nodes` below).
+    // fresh pages (see `nodes` below), where `spare` cannot hold them.
+    spare.clear();
+    spare.par_extend(bounds.par_iter().with_min_len(BLOCK).copied());
     let mut next = Clusters {
-        bounds: current
-            .bounds
-            .par_iter()
-            .with_min_len(BLOCK)
-            .copied()
-            .collect(),
-        node: current
-            .node
-            .par_iter()
-            .with_min_len(BLOCK)
-            .copied()
-            .collect(),
+        bounds: spare,
+        node: node.par_iter().with_min_len(BLOCK).copied().collect(),
     };
+    let mut current = Clusters { bounds, node };
     let mut nearest = vec![0u32; n];
     let scale = unit_scale(&current.bounds);
     // The nodes, made in parallel (the first write to a fresh page costs
@@ -138,7 +161,7 @@ pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: us
     nodes[0] = tree_node(current.bounds[0], current.node[0]);
     Bvh2 {
         nodes,
-        primitive_indices: (0..n as u32).collect(),
+        primitive_indices,
         max_depth: DEFAULT_MAX_STACK_DEPTH.max(passes + 1),
         children_are_ordered_after_parents: true,
         ..Bvh2::default()
