@@ -364,7 +364,13 @@ impl LoadedAsset {
             let own: Vec<Vec3> = own
                 .filter_map(|(&p, u)| u.load(Relaxed).then_some(p))
                 .collect();
-            points.extend_from_slice(&own);
+            // The first mesh's points are the list (a copy of a huge
+            // mesh's would be one thread's, onto fresh pages).
+            if points.is_empty() {
+                points = own;
+            } else {
+                points.extend_from_slice(&own);
+            }
         }
         points.extend(self.shared_framing_positions(budget));
         points
