@@ -223,9 +223,9 @@ fn nearest_within<const R: usize>(bounds: &[Box3A], nearest: &mut [u32], scale: 
             for i in lo..hi {
                 let mut own = best[i - lo];
                 if i + R < count {
-                    for k in 1..=R {
-                        own = pair(&mut best, i, i + k, own);
-                    }
+                    let right = &bounds[i + 1..=i + R];
+                    let theirs = &mut best[i + 1 - lo..=i + R - lo];
+                    own = weigh_right::<R>(i, &bounds[i], right, theirs, own, scale);
                 } else {
                     for j in i + 1..count {
                         own = pair(&mut best, i, j, own);
@@ -234,6 +234,40 @@ fn nearest_within<const R: usize>(bounds: &[Box3A], nearest: &mut [u32], scale: 
                 nearest[i - lo] = own.1;
             }
         });
+}
+
+/// Cluster `i` (box `own_box`, its best so far `own`) weighed against
+/// its `R` right neighbours (boxes `right`, bests `theirs`): the same
+/// comparisons in the same order as one pair at a time, in a loop of a
+/// constant length over arrays, so that it unrolls with no bounds checks
+/// and no call (the pair closure it replaces was not inlined: 14% of a
+/// medium build's samples on the dragon went to its calls).
+#[inline(always)]
+fn weigh_right<const R: usize>(
+    i: usize,
+    own_box: &Box3A,
+    right: &[Box3A],
+    theirs: &mut [(f32, u32)],
+    mut own: (f32, u32),
+    scale: Vec3A,
+) -> (f32, u32) {
+    let right: &[Box3A; R] = right.try_into().unwrap();
+    let theirs: &mut [(f32, u32); R] = theirs.try_into().unwrap();
+    for k in 0..R {
+        let cost = union_area(own_box, &right[k], scale);
+        let other = &mut theirs[k];
+        *other = if cost < other.0 {
+            (cost, i as u32)
+        } else {
+            *other
+        };
+        own = if cost < own.0 {
+            (cost, (i + 1 + k) as u32)
+        } else {
+            own
+        };
+    }
+    own
 }
 
 /// One pass's merge of the first `count` clusters of `current`: clusters
