@@ -93,9 +93,8 @@ pub(super) fn binary_tree(
         bvh2
     } else {
         let order = steps.time("morton", || morton_order(&boxes, bounds));
-        let bvh2 = steps.time("ploc", || ploc(&boxes, &order, &params));
-        drop((boxes, order));
-        bvh2
+        // PLOC frees the boxes and the order before its passes.
+        steps.time("ploc", || ploc(boxes, order, &params))
     };
     if params.reinsertion_batch_ratio > 0.0 {
         steps.time("reinsertion", || {
@@ -112,7 +111,7 @@ pub(super) fn binary_tree(
 /// PLOC's tree over `boxes` sorted along the curve as `order` lists them
 /// ([`super::ploc`]: parallel, the same tree on any thread count), one
 /// leaf each, leaf `i` holding id `i`, with the preset's search radius.
-fn ploc(boxes: &[Aabb], order: &[u32], params: &BvhBuildParams) -> Bvh2 {
+fn ploc(boxes: Boxes, order: Vec<u32>, params: &BvhBuildParams) -> Bvh2 {
     super::ploc::ploc(boxes, order, radius(params), params.search_depth_threshold)
 }
 

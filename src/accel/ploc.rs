@@ -18,7 +18,7 @@
 //! function of the boxes alone and the tree is the same for any thread
 //! count and any blocking.
 
-use crate::math::Aabb;
+use super::cluster::Boxes;
 use glam::Vec3A;
 use obvhs::aabb::Aabb as Box3A;
 use obvhs::bvh2::node::Bvh2Node;
@@ -75,7 +75,11 @@ const BLOCK: usize = 1 << 14;
 /// `near_passes` passes (obvhs's `search_depth_threshold`), when clusters
 /// are many and their neighbours on the curve already near. Children come
 /// after their parents.
-pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: usize) -> Bvh2 {
+///
+/// Takes the boxes and the order and frees them once its first clusters
+/// are made of them: before its passes, where a build of a primitive a
+/// leaf peaks (28 bytes a primitive less there).
+pub(super) fn ploc(boxes: Boxes, order: Vec<u32>, radius: usize, near_passes: usize) -> Bvh2 {
     let bounds: Vec<Box3A> = order
         .par_iter()
         .with_min_len(BLOCK)
@@ -87,9 +91,15 @@ pub(super) fn ploc(boxes: &[Aabb], order: &[u32], radius: usize, near_passes: us
             }
         })
         .collect();
-    let leaf = |i: usize| order[i];
-    let ids = (0..order.len() as u32).into_par_iter().collect();
-    ploc_over(bounds, Vec::new(), leaf, ids, radius, near_passes)
+    drop(boxes);
+    let node = order
+        .par_iter()
+        .with_min_len(BLOCK)
+        .map(|&i| i | LEAF)
+        .collect();
+    drop(order);
+    let ids = (0..bounds.len() as u32).into_par_iter().collect();
+    ploc_over(bounds, Vec::new(), node, ids, radius, near_passes)
 }
 
 /// [`ploc`]'s tree over boxes already in curve order, leaf `i` holding
@@ -105,27 +115,26 @@ pub(super) fn ploc_in_order(
     radius: usize,
     near_passes: usize,
 ) -> Bvh2 {
-    let leaf = |i: usize| i as u32;
-    ploc_over(bounds, spare, leaf, primitive_indices, radius, near_passes)
+    let node = (0..bounds.len() as u32)
+        .into_par_iter()
+        .with_min_len(BLOCK)
+        .map(|i| i | LEAF)
+        .collect();
+    ploc_over(bounds, spare, node, primitive_indices, radius, near_passes)
 }
 
-/// PLOC over clusters `bounds` in curve order, cluster `i` the leaf of
-/// primitive `leaf(i)`.
+/// PLOC over clusters `bounds` in curve order, cluster `i` the tree's
+/// `node[i]` (a leaf: its primitive with [`LEAF`] set).
 fn ploc_over(
     bounds: Vec<Box3A>,
     mut spare: Vec<Box3A>,
-    leaf: impl Fn(usize) -> u32 + Sync,
+    node: Vec<u32>,
     primitive_indices: Vec<u32>,
     radius: usize,
     near_passes: usize,
 ) -> Bvh2 {
     let n = bounds.len();
     assert!(n > 0 && n < LEAF as usize && radius >= 1);
-    let node: Vec<u32> = (0..n)
-        .into_par_iter()
-        .with_min_len(BLOCK)
-        .map(|i| leaf(i) | LEAF)
-        .collect();
     // Copied in parallel: a clone is one thread's copy, and its clears of
     // fresh pages (see `nodes` below), where `spare` cannot hold them.
     spare.clear();
@@ -358,6 +367,7 @@ fn merge(
 mod tests {
     use super::super::build::tests::on_threads;
     use super::*;
+    use crate::math::Aabb;
     use crate::sampling::stream::{seeded, Draw};
     use glam::Vec3;
 
@@ -402,7 +412,11 @@ mod tests {
         let order = super::super::cluster::morton_order(&boxes, bounds);
         for (radius, near) in [(1, 0), (6, 2), (14, 3)] {
             let trees: Vec<_> = [1, 2, 3]
-                .map(|t| on_threads(t, || node_bits(&ploc(&boxes, &order, radius, near))))
+                .map(|t| {
+                    on_threads(t, || {
+                        node_bits(&ploc(Boxes::Borrowed(&boxes), order.clone(), radius, near))
+                    })
+                })
                 .into();
             assert_eq!(trees[0], trees[1], "radius {radius}: 1 and 2 threads");
             assert_eq!(trees[0], trees[2], "radius {radius}: 1 and 3 threads");
@@ -418,7 +432,7 @@ mod tests {
             let boxes = surface_boxes(n, 3);
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
             let order = super::super::cluster::morton_order(&boxes, bounds);
-            let bvh = ploc(&boxes, &order, 6, 2);
+            let bvh = ploc(Boxes::Borrowed(&boxes), order, 6, 2);
             assert_eq!(bvh.nodes.len(), 2 * n - 1);
             let as_box = |k: usize| {
                 let a = bvh.nodes[k].aabb;
