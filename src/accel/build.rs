@@ -1,19 +1,16 @@
-//! Building: PLOC ([`super::ploc`]) and obvhs's reinsertion into a
-//! binary tree, then a collapse into 8-wide
-//! nodes chosen by the surface area heuristic over the whole subtree
-//! (Ylitie, Karras and Laine 2017), see [`super::collapse`].
+//! The 8-wide BVH and its build: the binary tree ([`super::binary`]:
+//! PLOC and obvhs's reinsertion), then a collapse into 8-wide nodes chosen
+//! by the surface area heuristic over the whole subtree (Ylitie, Karras
+//! and Laine 2017), see [`super::collapse`].
 
-use super::cluster::{morton_order, Clusters};
+use super::binary::{binary_tree_and_bounds, Boxes};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
-use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_PRIMS};
+use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
-use glam::{Vec3, Vec3A};
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use glam::Vec3;
 use obvhs::bvh2::Bvh2;
-use obvhs::ploc::PlocSearchDistance;
 use obvhs::BvhBuildParams;
-use rayon::prelude::*;
 
 crate::mode::mode_enum! {
     /// Build effort. `auto` picks by primitive count, and for a render by
@@ -38,7 +35,7 @@ impl BuildQuality {
         self.choose(prim_count, None).quality
     }
 
-    fn params(self, prim_count: usize) -> BvhBuildParams {
+    pub(super) fn params(self, prim_count: usize) -> BvhBuildParams {
         match self.preset(prim_count) {
             Self::Fastest => BvhBuildParams::fastest_build(),
             Self::Fast => BvhBuildParams::fast_build(),
@@ -125,7 +122,7 @@ impl Bvh8 {
     }
 
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
-    fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Self {
+    pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Self {
         super::collapse::collapse(bvh2, bounds, first_other)
             .debug_validated(bvh2.primitive_indices.len())
     }
@@ -268,143 +265,16 @@ impl std::fmt::Display for TreeStats {
     }
 }
 
-impl obvhs::Boundable for Aabb {
-    #[inline]
-    fn aabb(&self) -> obvhs::aabb::Aabb {
-        obvhs::aabb::Aabb {
-            min: Vec3A::from(self.min),
-            max: Vec3A::from(self.max),
-        }
-    }
-}
-
-/// Primitive boxes a build reads, and frees when done if it owns them.
-enum Boxes<'a> {
-    Borrowed(&'a [Aabb]),
-    Owned(Vec<Aabb>),
-}
-
-impl std::ops::Deref for Boxes<'_> {
-    type Target = [Aabb];
-    fn deref(&self) -> &[Aabb] {
-        match self {
-            Boxes::Borrowed(b) => b,
-            Boxes::Owned(b) => b,
-        }
-    }
-}
-
-/// obvhs's binary tree over `boxes` and their union; `None` if there are
-/// no boxes.
-fn binary_tree_and_bounds(
-    boxes: Boxes,
-    quality: BuildQuality,
-    steps: &mut Steps,
-) -> Option<(Bvh2, Aabb)> {
-    if boxes.is_empty() {
-        return None;
-    }
-    assert!(
-        boxes.len() <= MAX_PRIMS,
-        "too many primitives for one BVH: {}",
-        boxes.len()
-    );
-    // A union is exact, so any grouping gives the same box.
-    let bounds = steps.time("bounds", || {
-        boxes
-            .par_iter()
-            .with_min_len(1 << 14)
-            .copied()
-            .reduce(|| Aabb::EMPTY, Aabb::union)
-    });
-    Some((binary_tree(boxes, bounds, quality, steps), bounds))
-}
-
-/// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one
-/// primitive a leaf, or for the fastest preset one cluster of up to
-/// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
-/// ([`super::cluster`]).
-fn binary_tree(boxes: Boxes, bounds: Aabb, quality: BuildQuality, steps: &mut Steps) -> Bvh2 {
-    let preset = quality.preset(boxes.len());
-    let params = quality.params(boxes.len());
-    let mut bvh2 = if preset == BuildQuality::Fastest {
-        let clusters = steps.time("clusters", || Clusters::new(&boxes, bounds));
-        drop(boxes);
-        // The clusters lie along the curve already: cluster c is leaf c.
-        let along: Vec<u32> = (0..clusters.boxes.len() as u32).collect();
-        let mut bvh2 = steps.time("ploc", || ploc(&clusters.boxes, &along, &params));
-        drop(along);
-        // PLOC's leaf `c` is cluster `c`: it holds the ids `order` lists
-        // from starts[c] to starts[c + 1].
-        bvh2.nodes
-            .par_iter_mut()
-            .with_min_len(1 << 14)
-            .filter(|node| node.prim_count > 0)
-            .for_each(|node| {
-                let c = node.first_index as usize;
-                node.first_index = clusters.starts[c];
-                node.prim_count = clusters.starts[c + 1] - clusters.starts[c];
-            });
-        bvh2.primitive_indices = clusters.order;
-        bvh2
-    } else {
-        let order = steps.time("morton", || morton_order(&boxes, bounds));
-        let bvh2 = steps.time("ploc", || ploc(&boxes, &order, &params));
-        drop((boxes, order));
-        bvh2
-    };
-    if params.reinsertion_batch_ratio > 0.0 {
-        steps.time("reinsertion", || {
-            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None)
-        });
-    }
-    // The collapse reads nodes and primitive indices only: free the maps
-    // reinsertion kept (parents: 8 bytes a primitive) before it.
-    bvh2.parents = Vec::new();
-    bvh2.primitives_to_nodes = Vec::new();
-    bvh2
-}
-
-/// PLOC's tree over `boxes` sorted along the curve as `order` lists them
-/// ([`super::ploc`]: parallel, the same tree on any thread count), one
-/// leaf each, leaf `i` holding id `i`, with the preset's search radius.
-fn ploc(boxes: &[Aabb], order: &[u32], params: &BvhBuildParams) -> Bvh2 {
-    let radius = match params.ploc_search_distance {
-        PlocSearchDistance::Minimum => 1,
-        PlocSearchDistance::VeryLow => 2,
-        PlocSearchDistance::Low => 6,
-        PlocSearchDistance::Medium => 14,
-        PlocSearchDistance::High => 24,
-        PlocSearchDistance::VeryHigh => 32,
-    };
-    super::ploc::ploc(boxes, order, radius, params.search_depth_threshold)
-}
-
-/// obvhs's own PLOC tree over `boxes` (sequential merges), one leaf
-/// each, leaf `i` holding id `i`: what [`ploc`] replaced, kept to hold it
-/// to the same quality.
-#[cfg(test)]
-fn obvhs_ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
-    let mut bvh2 = Bvh2::default();
-    obvhs::ploc::PlocBuilder::with_capacity(boxes.len()).build_with_bvh(
-        &mut bvh2,
-        params.ploc_search_distance,
-        boxes,
-        (0..boxes.len() as u32).collect(),
-        params.sort_precision,
-        params.search_depth_threshold,
-    );
-    bvh2
-}
-
 #[cfg(test)]
 pub(super) mod tests {
+    use super::super::binary::binary_tree_and_bounds;
     use super::super::collapse::CollapseCosts;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
-    use glam::Vec3;
+    use glam::{Vec3, Vec3A};
 
-    fn random_boxes(n: usize, seed: u32) -> Vec<Aabb> {
+    /// `n` boxes of random sizes scattered through a cube.
+    pub(in crate::accel) fn random_boxes(n: usize, seed: u32) -> Vec<Aabb> {
         let mut rng = seeded(seed.into());
         (0..n)
             .map(|_| {
@@ -682,47 +552,6 @@ pub(super) mod tests {
         assert_eq!(leaf_sets(&parallel), leaf_sets(&sequential));
         assert_eq!(leaf_sets(&parallel).concat().len(), n as usize);
         assert_eq!(parallel.stats().nodes, sequential.stats().nodes);
-    }
-
-    /// The parallel PLOC ([`super::ploc`]) makes trees as good as obvhs's
-    /// sequential one did, through reinsertion and the collapse: SAH cost
-    /// within 2% for each preset with a primitive a leaf, over boxes in a
-    /// volume and boxes on a surface (the dragon's figures are in
-    /// docs/performance.md).
-    #[test]
-    fn parallel_ploc_keeps_the_tree_quality_of_obvhs() {
-        let mut rng = seeded(12);
-        let surface: Vec<Aabb> = (0..150_000)
-            .map(|_| {
-                let d = rng.cube(1.0).normalize_or(Vec3::Y);
-                let c = d * (10.0 + (4.0 * d.x).sin() * (3.0 * d.y).cos());
-                Aabb::new(c - 0.03, c + 0.03)
-            })
-            .collect();
-        for boxes in [random_boxes(150_000, 9), surface] {
-            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-            for quality in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::High] {
-                let params = quality.params(boxes.len());
-                let ours = binary_tree(
-                    Boxes::Borrowed(&boxes),
-                    bounds,
-                    quality,
-                    &mut Steps::default(),
-                );
-                let mut theirs = obvhs_ploc(&boxes, &params);
-                ReinsertionOptimizer::default().run(
-                    &mut theirs,
-                    params.reinsertion_batch_ratio,
-                    None,
-                );
-                let cost = |b: &Bvh2| Bvh8::collapse(b, bounds, u32::MAX).stats().sah_cost;
-                let (ours, theirs) = (cost(&ours), cost(&theirs));
-                assert!(
-                    ours < 1.02 * theirs,
-                    "{quality:?}: SAH cost {ours} against obvhs's {theirs}"
-                );
-            }
-        }
     }
 
     /// Taking the boxes (and freeing them before the collapse) builds the

@@ -19,6 +19,7 @@
 use super::collapse::LEAF_PRIMS;
 use crate::math::Aabb;
 use glam::{UVec3, Vec3};
+use obvhs::aabb::Aabb as Box3A;
 use obvhs::ploc::morton::morton_encode_u32;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
@@ -29,35 +30,107 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 const ROUNDS: u32 = 3;
 const _: () = assert!(1 << ROUNDS <= LEAF_PRIMS);
 
+/// Primitive boxes a build reads, and frees when done if it owns them.
+pub(super) enum Boxes<'a> {
+    Borrowed(&'a [Aabb]),
+    Owned(Vec<Aabb>),
+}
+
+impl std::ops::Deref for Boxes<'_> {
+    type Target = [Aabb];
+    fn deref(&self) -> &[Aabb] {
+        match self {
+            Boxes::Borrowed(b) => b,
+            Boxes::Owned(b) => b,
+        }
+    }
+}
+
 /// Primitives grouped into clusters: `order` lists primitive ids along the
 /// curve, cluster `c` holds `order[starts[c]..starts[c + 1]]` and has box
-/// `boxes[c]`.
+/// `boxes[c]`, in SIMD lanes as PLOC reads them.
 pub(super) struct Clusters {
     pub order: Vec<u32>,
     pub starts: Vec<u32>,
-    pub boxes: Vec<Aabb>,
+    pub boxes: Vec<Box3A>,
+    /// The other buffer of the rounds' boxes, done with: PLOC's clusters
+    /// of its next pass take it, and its pages, already touched, rather
+    /// than fresh ones (docs/performance.md, "Fewer fresh pages").
+    pub spare: Vec<Box3A>,
 }
 
 impl Clusters {
     /// The clusters of primitives with boxes `boxes` inside `bounds`. Ties
     /// in Morton code keep id order (the sort is stable), so the clusters
-    /// are the same on any thread count.
-    pub(super) fn new(boxes: &[Aabb], bounds: Aabb) -> Self {
-        let order = morton_order(boxes, bounds);
+    /// are the same on any thread count. The rounds write their starts
+    /// and boxes into two buffers each, in turn: a round's output is the
+    /// next one's input, and the round after overwrites the buffer the
+    /// one before read. Owned boxes are freed once the first round has
+    /// read them.
+    pub(super) fn new(boxes: Boxes, bounds: Aabb) -> Self {
+        let order = morton_order(&boxes, bounds);
+        let (mut pairs, mut starts, mut merged) = (Vec::new(), Vec::new(), Vec::new());
         // The first round reads the boxes through `order` rather than from
         // a sorted copy (24 bytes a primitive, written and read once).
-        let (mut starts, mut merged) =
-            pair_round(order.len(), |i| i as u32, |i| boxes[order[i] as usize]);
+        let first = |i: usize| lanes(boxes[order[i] as usize]);
+        pair_round(
+            order.len(),
+            |i| i as u32,
+            first,
+            (&mut pairs, &mut starts, &mut merged),
+        );
+        drop(boxes);
+        let (mut spare_starts, mut spare) = (Vec::new(), Vec::new());
         for _ in 1..ROUNDS {
-            (starts, merged) = pair_round(merged.len(), |i| starts[i], |i| merged[i]);
+            pair_round(
+                merged.len(),
+                |i| starts[i],
+                |i| merged[i],
+                (&mut pairs, &mut spare_starts, &mut spare),
+            );
+            std::mem::swap(&mut starts, &mut spare_starts);
+            std::mem::swap(&mut merged, &mut spare);
         }
         starts.push(order.len() as u32);
         Self {
             order,
             starts,
             boxes: merged,
+            spare,
         }
     }
+}
+
+/// An [`Aabb`] in SIMD lanes.
+pub(super) fn lanes(b: Aabb) -> Box3A {
+    Box3A {
+        min: b.min.into(),
+        max: b.max.into(),
+    }
+}
+
+/// [`Aabb::half_area`] of a box in lanes, the same operations in the same
+/// order (so the same bits, and the same clusters).
+fn half_area(b: &Box3A) -> f32 {
+    let d = b.max - b.min;
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// The buffers a round writes: whether each cluster pairs with the next,
+/// and the merged clusters' starts (without the end) and boxes. Each is
+/// cleared and filled to its length in parallel; one whose capacity
+/// holds the round's output keeps its pages.
+type RoundOut<'a> = (&'a mut Vec<bool>, &'a mut Vec<u32>, &'a mut Vec<Box3A>);
+
+/// `buffer` cleared and filled with `n` copies of `value`, in parallel.
+fn refill<T: Copy + Send + Sync>(buffer: &mut Vec<T>, n: usize, value: T) {
+    buffer.clear();
+    buffer.par_extend(
+        (0..n)
+            .into_par_iter()
+            .with_min_len(PAIR_BLOCK)
+            .map(|_| value),
+    );
 }
 
 /// One round of pairing over `len` clusters in curve order, cluster `i`
@@ -69,14 +142,15 @@ impl Clusters {
 /// the curve find their pairs in parallel, then write their merged
 /// clusters, also in parallel, where the blocks before them end: no
 /// per-block buffers that would outlive the round in the allocator.
-/// Returns the merged clusters' starts (without the end) and boxes.
+/// Writes the merged clusters into `out` ([`RoundOut`]).
 fn pair_round(
     len: usize,
     start: impl Fn(usize) -> u32 + Sync,
-    bounds: impl Fn(usize) -> Aabb + Sync,
-) -> (Vec<u32>, Vec<Aabb>) {
+    bounds: impl Fn(usize) -> Box3A + Sync,
+    (pairs, starts, boxes): RoundOut,
+) {
     // Whether each cluster pairs with the next.
-    let mut pairs = vec![false; len];
+    refill(pairs, len, false);
     pairs
         .par_chunks_mut(PAIR_BLOCK)
         .enumerate()
@@ -86,10 +160,10 @@ fn pair_round(
             // Whether i pairs reads the areas of i - 1, i and i + 1,
             // whose boxes are i - 1 to i + 2: each read once here.
             let first = lo.saturating_sub(1);
-            let boxes: Vec<Aabb> = (first..(hi + 2).min(len)).map(&bounds).collect();
+            let boxes: Vec<Box3A> = (first..(hi + 2).min(len)).map(&bounds).collect();
             let area: Vec<f32> = boxes
                 .windows(2)
-                .map(|w| w[0].union(w[1]).half_area())
+                .map(|w| half_area(&w[0].union(&w[1])))
                 .collect();
             let area_of = |i: usize| area[i - first];
             for (i, pair) in (lo..hi).zip(pairs.iter_mut()) {
@@ -98,6 +172,7 @@ fn pair_round(
                     && (i + 2 == len || area_of(i) < area_of(i + 1));
             }
         });
+    let pairs = &pairs[..];
     // Clusters start after no pair: each block's, in parallel, where the
     // blocks before it end.
     let heads = |b: usize| {
@@ -111,8 +186,8 @@ fn pair_round(
         .map(|b| heads(b).count())
         .collect();
     let total = counts.iter().sum();
-    let mut starts = vec![0u32; total];
-    let mut boxes: Vec<Aabb> = (0..total).into_par_iter().map(|_| Aabb::EMPTY).collect();
+    refill(starts, total, 0);
+    refill(boxes, total, Box3A::empty());
     let mut parts = Vec::with_capacity(blocks);
     let (mut s_rest, mut b_rest) = (&mut starts[..], &mut boxes[..]);
     for &n in &counts {
@@ -126,13 +201,12 @@ fn pair_round(
             *s = start(i);
             let own = bounds(i);
             *out = if pairs[i] {
-                own.union(bounds(i + 1))
+                own.union(&bounds(i + 1))
             } else {
                 own
             };
         }
     });
-    (starts, boxes)
 }
 
 /// Clusters a pairing task takes: enough that a task's work (a fraction of
@@ -145,19 +219,24 @@ pub(super) fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
     let extent = bounds.max - bounds.min;
     // Centres map to [0, 1023] on each axis; a flat axis maps to 0.
     let scale = Vec3::select(extent.cmpgt(Vec3::ZERO), 1023.0 / extent, Vec3::ZERO);
-    let keys: Vec<u64> = boxes
+    let keys: Vec<AtomicU64> = boxes
         .par_iter()
         .enumerate()
         .map(|(i, b)| {
             let c = ((b.min + b.max) * 0.5 - bounds.min) * scale;
             let q = c.clamp(Vec3::ZERO, Vec3::splat(1023.0)).as_uvec3();
-            (morton_code(q) as u64) << 32 | i as u64
+            AtomicU64::new((morton_code(q) as u64) << 32 | i as u64)
         })
         .collect();
-    radix_sort_by_high_30_bits(keys)
-        .into_par_iter()
-        .map(|k| k as u32)
-        .collect()
+    // The ids written over the sorted keys, in their allocation (a u32
+    // fits where a u64 was: the standard library collects in place), then
+    // its second half handed back: no fresh pages for the order.
+    let mut order: Vec<u32> = radix_sort_by_high_30_bits(keys)
+        .into_iter()
+        .map(|k| k.into_inner() as u32)
+        .collect();
+    order.shrink_to_fit();
+    order
 }
 
 /// The 30-bit Morton code of a cell (ten bits an axis): bit k of z, y
@@ -174,8 +253,7 @@ fn morton_code(q: UVec3) -> u32 {
 /// The order is that of one sequential pass whatever the blocks. The
 /// keys live in atomics (relaxed: plain loads and stores) so that blocks
 /// can write their keys into one array where they interleave.
-fn radix_sort_by_high_30_bits(keys: Vec<u64>) -> Vec<u64> {
-    let mut keys: Vec<AtomicU64> = keys.into_iter().map(AtomicU64::new).collect();
+fn radix_sort_by_high_30_bits(mut keys: Vec<AtomicU64>) -> Vec<AtomicU64> {
     let mut other: Vec<AtomicU64> = (0..keys.len())
         .into_par_iter()
         .map(|_| AtomicU64::new(0))
@@ -219,7 +297,7 @@ fn radix_sort_by_high_30_bits(keys: Vec<u64>) -> Vec<u64> {
         std::mem::swap(&mut keys, &mut other);
     }
     drop(other);
-    keys.into_iter().map(AtomicU64::into_inner).collect()
+    keys
 }
 
 #[cfg(test)]
@@ -247,7 +325,12 @@ mod tests {
             .collect();
         let mut want = keys.clone();
         want.sort_by_key(|k| k >> 32);
-        assert_eq!(radix_sort_by_high_30_bits(keys), want);
+        let atomic = keys.into_iter().map(AtomicU64::new).collect();
+        let sorted: Vec<u64> = radix_sort_by_high_30_bits(atomic)
+            .into_iter()
+            .map(AtomicU64::into_inner)
+            .collect();
+        assert_eq!(sorted, want);
     }
 
     #[test]
@@ -261,7 +344,7 @@ mod tests {
                 })
                 .collect();
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-            let clusters = Clusters::new(&boxes, bounds);
+            let clusters = Clusters::new(Boxes::Borrowed(&boxes), bounds);
             let mut seen = clusters.order.clone();
             seen.sort_unstable();
             assert_eq!(seen, (0..n as u32).collect::<Vec<u32>>());
@@ -275,7 +358,7 @@ mod tests {
                 let union = members
                     .iter()
                     .fold(Aabb::EMPTY, |a, &id| a.union(boxes[id as usize]));
-                assert_eq!(*c, union, "a cluster's box is its members' union");
+                assert_eq!(*c, lanes(union), "a cluster's box is its members' union");
             }
             if n >= 1001 {
                 // Pairing merges: far fewer clusters than primitives.
@@ -315,6 +398,19 @@ mod tests {
             (starts, merged)
         }
         let mut rng = seeded(3);
+        // Into buffers that hold other clusters already, as the rounds
+        // after the first write.
+        let mut stale = (vec![true; 9], vec![7u32; 3 * PAIR_BLOCK], Vec::new());
+        let mut round = |boxes: &[Aabb]| {
+            let (pairs, starts, merged) = &mut stale;
+            let out = (&mut *pairs, &mut *starts, &mut *merged);
+            pair_round(boxes.len(), |i| i as u32, |i| lanes(boxes[i]), out);
+            let merged: Vec<Aabb> = merged
+                .iter()
+                .map(|b| Aabb::new(b.min.into(), b.max.into()))
+                .collect();
+            (starts.clone(), merged)
+        };
         for n in [
             1usize,
             2,
@@ -336,7 +432,7 @@ mod tests {
                     .num_threads(threads)
                     .build()
                     .unwrap();
-                let got = pool.install(|| pair_round(n, |i| i as u32, |i| boxes[i]));
+                let got = pool.install(|| round(&boxes));
                 assert_eq!(got, want, "{n} clusters, {threads} threads");
             }
         }
@@ -348,8 +444,13 @@ mod tests {
     fn a_box_pairs_with_its_nearer_neighbour() {
         let unit = |x: f32| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
         let boxes = [unit(0.0), unit(3.0), unit(4.5)];
-        let (starts, merged) = pair_round(3, |i| i as u32, |i| boxes[i]);
+        let (mut pairs, mut starts, mut merged) = (Vec::new(), Vec::new(), Vec::new());
+        let out = (&mut pairs, &mut starts, &mut merged);
+        pair_round(3, |i| i as u32, |i| lanes(boxes[i]), out);
         assert_eq!(starts, vec![0, 1]);
-        assert_eq!(merged, vec![boxes[0], boxes[1].union(boxes[2])]);
+        assert_eq!(
+            merged,
+            vec![lanes(boxes[0]), lanes(boxes[1].union(boxes[2]))]
+        );
     }
 }

@@ -384,11 +384,14 @@ impl LoadedAsset {
                     }
                 }
             });
-            let own = m.positions.par_iter().zip(&used).with_min_len(1 << 14);
-            let own: Vec<Vec3> = own
-                .filter_map(|(&p, u)| u.load(Relaxed).then_some(p))
-                .collect();
-            points.extend_from_slice(&own);
+            let own = marked(&m.positions, &used);
+            // The first mesh's points are the list (a copy of a huge
+            // mesh's would be one thread's, onto fresh pages).
+            if points.is_empty() {
+                points = own;
+            } else {
+                points.extend_from_slice(&own);
+            }
         }
         points.extend(self.shared_framing_positions(budget));
         points
@@ -468,9 +471,63 @@ fn bake(own: impl Iterator<Item = LoadedMesh>, shared: &[SharedMesh]) -> Vec<Loa
     out
 }
 
+/// The positions whose mark is set, in order, in a list of exactly their
+/// number: each block of the marks counts its own, and then copies them
+/// where the blocks before it end, all in parallel (a filtered collect
+/// grows pieces and joins them on one thread, twice the fresh pages).
+fn marked(positions: &[Vec3], used: &[AtomicBool]) -> Vec<Vec3> {
+    const BLOCK: usize = 1 << 16;
+    let counts: Vec<usize> = used
+        .par_chunks(BLOCK)
+        .map(|u| u.iter().filter(|u| u.load(Relaxed)).count())
+        .collect();
+    let total = counts.iter().sum();
+    let mut out: Vec<Vec3> = (0..total)
+        .into_par_iter()
+        .with_min_len(BLOCK)
+        .map(|_| Vec3::ZERO)
+        .collect();
+    let mut parts = Vec::with_capacity(counts.len());
+    let mut rest = &mut out[..];
+    for &n in &counts {
+        let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
+        parts.push(part);
+        rest = tail;
+    }
+    let blocks = positions.par_chunks(BLOCK).zip(used.par_chunks(BLOCK));
+    parts
+        .into_par_iter()
+        .zip(blocks)
+        .for_each(|(part, (p, u))| {
+            let kept = p.iter().zip(u).filter(|(_, u)| u.load(Relaxed));
+            for (slot, (&p, _)) in part.iter_mut().zip(kept) {
+                *slot = p;
+            }
+        });
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The marked positions, in order, as a filter finds them, over many
+    /// blocks and with blocks that keep none or all, on 1 and 3 threads.
+    #[test]
+    fn marked_positions_are_the_filtered_ones_in_order() {
+        let n = 5 * (1 << 16) + 77;
+        let positions: Vec<Vec3> = (0..n).map(|i| Vec3::splat(i as f32)).collect();
+        let keep = |i: usize| (i / (1 << 16) == 1) || (i / (1 << 16) != 2 && i % 7 == 3);
+        let used: Vec<AtomicBool> = (0..n).map(|i| AtomicBool::new(keep(i))).collect();
+        let want: Vec<Vec3> = (0..n).filter(|&i| keep(i)).map(|i| positions[i]).collect();
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            assert_eq!(pool.install(|| marked(&positions, &used)), want);
+        }
+    }
 
     /// A one-triangle mesh shared by three placements (one mirroring),
     /// beside a mesh placed once.
