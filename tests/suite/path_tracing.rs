@@ -4,33 +4,18 @@
 //! integrator lacks and that converges as 1/N, and images bit-identical
 //! across threads, slices and noise targets.
 
-use crate::common::films::{film_of, part};
+use crate::common::films::{film_of, part, pixel_means};
 use crate::common::scene;
 use glam::Vec3;
 use strata::partial::merge::{merge_partials, MergeRules};
-use strata::render::film::{PixelSum, FIXED_SCALE};
-use strata::render::schedule::render_pixel;
 use strata::render::SliceSpec;
 use strata::scene::settings::IntegratorKind;
 use strata::scene::Scene;
-use strata::shade::Integrator;
 
 /// Each pixel's mean of `spp` samples of `scene` (one seed), linear RGB,
 /// pixel by pixel, with no sample dropped as NaN.
 fn pixels(scene: &Scene, seed: u32, spp: u32) -> Vec<Vec3> {
-    let mut s = scene.clone();
-    s.settings.seed = seed;
-    s.settings.spp = spp;
-    let mut integrator = Integrator::new(&s);
-    let n = (s.settings.width * s.settings.height) as usize;
-    (0..n)
-        .map(|i| {
-            let mut acc = PixelSum::default();
-            render_pixel(&mut integrator, &s, i, 0..spp, &mut acc);
-            assert_eq!(acc.invalid, 0, "no NaN or infinite samples");
-            Vec3::from(acc.sum.map(|c| c as f32)) / (FIXED_SCALE as f32 * acc.count as f32)
-        })
-        .collect()
+    pixel_means(scene, seed, spp)
 }
 
 fn mean_and_se(values: &[f64]) -> (f64, f64) {

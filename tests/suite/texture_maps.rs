@@ -7,29 +7,16 @@
 //! directional light of irradiance π, so a white Lambertian surface shows
 //! exactly the cosine between its shading normal and the light.
 
+use crate::common::films::pixel_means;
 use crate::common::meshes::base64;
 use crate::common::scene_at;
 use glam::Vec3;
 use std::path::Path;
-use strata::render::film::{PixelSum, FIXED_SCALE};
-use strata::render::schedule::render_pixel;
 use strata::scene::Scene;
-use strata::shade::Integrator;
 
 /// Each pixel's mean of `spp` samples, with no sample dropped as NaN.
 fn pixels(scene: &Scene, spp: u32) -> Vec<Vec3> {
-    let mut s = scene.clone();
-    s.settings.spp = spp;
-    let mut integrator = Integrator::new(&s);
-    let n = (s.settings.width * s.settings.height) as usize;
-    (0..n)
-        .map(|i| {
-            let mut acc = PixelSum::default();
-            render_pixel(&mut integrator, &s, i, 0..spp, &mut acc);
-            assert_eq!(acc.invalid, 0, "no NaN or infinite samples");
-            Vec3::from(acc.sum.map(|c| c as f32)) / (FIXED_SCALE as f32 * acc.count as f32)
-        })
-        .collect()
+    pixel_means(scene, scene.settings.seed, spp)
 }
 
 fn write_png(path: &Path, width: u32, height: u32, texels: &[[u8; 3]]) {
