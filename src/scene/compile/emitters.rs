@@ -4,18 +4,44 @@
 //! the untransformed spheres whose material emits, besides the surfaces of
 //! `[[lights]]`, which are sampled as those lights.
 
-use crate::geometry::{Geometry, MeshRange, Shape, NO_MATERIAL, NO_TRANSFORM};
+use crate::geometry::{Geometry, Instance, MeshRange, Shape, NO_MATERIAL, NO_TRANSFORM};
 use crate::light::{EmissionTexture, Emitter, EmitterId, Emitters, Light, NO_PART};
 use crate::material::Material;
 use crate::texture::Textures;
 use glam::{Affine3A, Vec3};
 
+/// The most triangles the placements of instanced glowing meshes may add
+/// to the table (about 120 bytes each): a prototype placed many times is
+/// stored once, and its emitters are one copy a placement. Past this the
+/// placements are left to the BSDF's rays (unbiased, noisier) and a
+/// warning says so.
+pub(super) const INSTANCED_EMITTERS_MAX: usize = 1 << 20;
+
+/// The table, and a warning where instanced glowing meshes were left out
+/// of it ([`INSTANCED_EMITTERS_MAX`]).
 pub(super) fn emitters(
     geometry: &Geometry,
     materials: &[Material],
     textures: &Textures,
     lights: &[Light],
-) -> Emitters {
+) -> (Emitters, Option<String>) {
+    emitters_within(
+        geometry,
+        materials,
+        textures,
+        lights,
+        INSTANCED_EMITTERS_MAX,
+    )
+}
+
+/// [`emitters`] with at most `most` triangles of placements.
+fn emitters_within(
+    geometry: &Geometry,
+    materials: &[Material],
+    textures: &Textures,
+    lights: &[Light],
+    most: usize,
+) -> (Emitters, Option<String>) {
     let glows = |m: u32| m != NO_MATERIAL && materials[m as usize].is_emissive();
     let light_prims: Vec<u32> = lights.iter().filter_map(Light::prim).collect();
     let mut list = Vec::new();
@@ -51,18 +77,31 @@ pub(super) fn emitters(
     // world space; the material is the instance's, else the mesh's, else
     // the inherited one, as the instance's surface picks it.
     let first = geometry.first_instance();
+    let placed: usize = geometry
+        .instances()
+        .iter()
+        .map(|instance| {
+            let prototype = &geometry.prototypes()[instance.prototype as usize];
+            prototype
+                .meshes()
+                .iter()
+                .filter(|mesh| glows(instance_material(instance, mesh)))
+                .map(|mesh| mesh.count as usize)
+                .sum::<usize>()
+        })
+        .sum();
+    if placed > most {
+        let note = format!(
+            "instanced glowing meshes have {placed} triangles in all their placements, over the \
+             {most} sampled as lights: they light the scene through the path's own bounces \
+             alone (the same image on average, noisier)"
+        );
+        return (Emitters::new(list), Some(note));
+    }
     let mut object_triangles: Vec<Option<Vec<[Vec3; 3]>>> = vec![None; geometry.prototypes().len()];
     for (k, instance) in geometry.instances().iter().enumerate() {
         let prototype = &geometry.prototypes()[instance.prototype as usize];
-        let material_of = |mesh: &MeshRange| {
-            if instance.material != NO_MATERIAL {
-                instance.material
-            } else if mesh.material != NO_MATERIAL {
-                mesh.material
-            } else {
-                instance.inherited
-            }
-        };
+        let material_of = |mesh: &MeshRange| instance_material(instance, mesh);
         if !prototype.meshes().iter().any(|m| glows(material_of(m))) {
             continue;
         }
@@ -87,7 +126,19 @@ pub(super) fn emitters(
             );
         }
     }
-    Emitters::new(list)
+    (Emitters::new(list), None)
+}
+
+/// The material a placement's mesh shows: the instance's, else the
+/// mesh's, else the inherited one, as the instance's surface picks it.
+fn instance_material(instance: &Instance, mesh: &MeshRange) -> u32 {
+    if instance.material != NO_MATERIAL {
+        instance.material
+    } else if mesh.material != NO_MATERIAL {
+        mesh.material
+    } else {
+        instance.inherited
+    }
 }
 
 /// Every triangle of `mesh` (glowing with `m`), its id and corners from
@@ -121,5 +172,44 @@ fn push_mesh(
                 texture,
             },
         ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn placements_past_the_limit_are_left_to_the_bsdf_with_a_warning() {
+        let dir = std::env::temp_dir().join(format!("strata-emitters-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let panel =
+            "mtllib panel.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl glow\nf 1 2 3 4\n";
+        std::fs::write(dir.join("panel.obj"), panel).unwrap();
+        std::fs::write(dir.join("panel.mtl"), "newmtl glow\nKd 0 0 0\nKe 1 1 1\n").unwrap();
+        let text = "[render]\nintegrator = \"path\"\n\
+                    [[objects]]\nmesh = \"panel.obj\"\ntransform = { translate = [0.0, 0.0, 1.0] }\n\
+                    [[objects]]\nmesh = \"panel.obj\"\ntransform = { translate = [2.0, 0.0, 1.0] }\n";
+        let scene =
+            crate::scene::scene_from_str(text, &dir.join("scene.toml"), &Default::default())
+                .unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(scene.geometry.instances().len(), 2);
+        assert_eq!(scene.emitters.len(), 4, "two triangles a placement");
+        let (s, m, t, l) = (
+            &scene.geometry,
+            &scene.materials,
+            &scene.textures,
+            &scene.lights,
+        );
+        let (within, note) = emitters_within(s, m, t, l, 4);
+        assert_eq!((within.len(), note), (4, None));
+        let (past, note) = emitters_within(s, m, t, l, 3);
+        assert_eq!(past.len(), 0, "the placements left out");
+        let note = note.expect("a warning");
+        assert!(
+            note.contains("4 triangles") && note.contains("over the 3"),
+            "{note}"
+        );
     }
 }

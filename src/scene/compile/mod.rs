@@ -419,7 +419,9 @@ fn compile_for(
         build_steps,
     };
     geometry.set_prefetch(Prefetch::Auto.enabled(geometry.traversal_bytes()));
-    let emitters = emitters::emitters(&geometry, &c.materials, &c.textures, &c.lights);
+    let (emitters, left_out) = emitters::emitters(&geometry, &c.materials, &c.textures, &c.lights);
+    c.warnings
+        .extend(left_out.map(|note| InputError::new(path, "objects", note)));
     let scene = Scene {
         geometry,
         materials: c.materials,
