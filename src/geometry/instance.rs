@@ -46,6 +46,19 @@ pub struct Instance {
 }
 
 impl Instance {
+    /// The material this placement shows where its prototype's mesh
+    /// has `mesh_material` ([`NO_MATERIAL`]: none): its own, else the
+    /// mesh's, else the inherited one.
+    pub fn material_of(&self, mesh_material: u32) -> u32 {
+        if self.material != NO_MATERIAL {
+            self.material
+        } else if mesh_material != NO_MATERIAL {
+            mesh_material
+        } else {
+            self.inherited
+        }
+    }
+
     /// `None` where `to_world` is singular or not finite (as
     /// [`Transform::new`] decides: the inverse is computed in f64, so it
     /// is the correctly rounded inverse of the f32 map).
@@ -152,14 +165,7 @@ impl Instance {
         let normal_to_world = self.to_object.transpose();
         let ng = (normal_to_world * local.geometric_normal).normalize_or(Vec3::Z);
         let ns = (normal_to_world * local.shading_normal).normalize_or(ng);
-        let mesh_material = local.material;
-        let material = if self.material != NO_MATERIAL {
-            self.material
-        } else if mesh_material != NO_MATERIAL {
-            mesh_material
-        } else {
-            self.inherited
-        };
+        let material = self.material_of(local.material);
         Surface {
             p,
             p_error,

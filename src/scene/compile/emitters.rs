@@ -4,7 +4,7 @@
 //! the untransformed spheres whose material emits, besides the surfaces of
 //! `[[lights]]`, which are sampled as those lights.
 
-use crate::geometry::{Geometry, Instance, MeshRange, Shape, NO_MATERIAL, NO_TRANSFORM};
+use crate::geometry::{Geometry, MeshRange, Shape, NO_MATERIAL, NO_TRANSFORM};
 use crate::light::{EmissionTexture, Emitter, EmitterId, Emitters, Light, NO_PART};
 use crate::material::Material;
 use crate::texture::Textures;
@@ -75,7 +75,7 @@ fn emitters_within(
     }
     // Each placement of a glowing prototype mesh, its triangles moved to
     // world space; the material is the instance's, else the mesh's, else
-    // the inherited one, as the instance's surface picks it.
+    // the inherited one (`Instance::material_of`, as its surface picks it).
     let first = geometry.first_instance();
     let placed: usize = geometry
         .instances()
@@ -85,7 +85,7 @@ fn emitters_within(
             prototype
                 .meshes()
                 .iter()
-                .filter(|mesh| glows(instance_material(instance, mesh)))
+                .filter(|mesh| glows(instance.material_of(mesh.material)))
                 .map(|mesh| mesh.count as usize)
                 .sum::<usize>()
         })
@@ -101,8 +101,11 @@ fn emitters_within(
     let mut object_triangles: Vec<Option<Vec<[Vec3; 3]>>> = vec![None; geometry.prototypes().len()];
     for (k, instance) in geometry.instances().iter().enumerate() {
         let prototype = &geometry.prototypes()[instance.prototype as usize];
-        let material_of = |mesh: &MeshRange| instance_material(instance, mesh);
-        if !prototype.meshes().iter().any(|m| glows(material_of(m))) {
+        if !prototype
+            .meshes()
+            .iter()
+            .any(|m| glows(instance.material_of(m.material)))
+        {
             continue;
         }
         let triangles = object_triangles[instance.prototype as usize]
@@ -110,7 +113,7 @@ fn emitters_within(
         let to_world: Affine3A = instance.affine();
         let prim = first + k as u32;
         for mesh in prototype.meshes() {
-            let material = material_of(mesh);
+            let material = instance.material_of(mesh.material);
             if !glows(material) {
                 continue;
             }
@@ -127,18 +130,6 @@ fn emitters_within(
         }
     }
     (Emitters::new(list), None)
-}
-
-/// The material a placement's mesh shows: the instance's, else the
-/// mesh's, else the inherited one, as the instance's surface picks it.
-fn instance_material(instance: &Instance, mesh: &MeshRange) -> u32 {
-    if instance.material != NO_MATERIAL {
-        instance.material
-    } else if mesh.material != NO_MATERIAL {
-        mesh.material
-    } else {
-        instance.inherited
-    }
 }
 
 /// Every triangle of `mesh` (glowing with `m`), its id and corners from
