@@ -466,6 +466,25 @@ impl Geometry {
         self.stream(self.occlusion(except), rays, out);
     }
 
+    /// Closest hits of a few rays a caller traces together (a path
+    /// batch's bounce rays, up to a packet's worth of unlike directions):
+    /// `out[i]` is bit for bit `self.intersect(&rays[i])`. Each ray walks
+    /// alone, several in flight where the tree is past the caches
+    /// ([`Bvh8::prefetch`](crate::accel::Bvh8)), else one after another:
+    /// no span sorting, bundles or packets, which cost more than they save
+    /// on a handful of incoherent rays (docs/mitsuba.md, "Path-traced
+    /// scenes").
+    pub fn intersect_few(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        self.few(ClosestHit::<true>(self), rays, out);
+    }
+
+    /// Occlusion of a few rays, ignoring primitive `except` (`u32::MAX`:
+    /// none): `out[i]` is exactly `self.occluded_except(&rays[i], except)`;
+    /// the rays walk as for [`Geometry::intersect_few`].
+    pub fn occluded_few(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        self.few(self.occlusion(except), rays, out);
+    }
+
     fn occlusion(&self, except: u32) -> Occlusion<'_, true> {
         Occlusion {
             geometry: self,
@@ -534,6 +553,14 @@ impl Geometry {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         self.planes_before(query, rays, out);
         self.travel_stream(rays, |how| self.travel(query, rays, out, how));
+        self.planes_after(query, rays, out);
+    }
+
+    /// Rays walked alone ([`Geometry::intersect_few`]).
+    fn few<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray");
+        self.planes_before(query, rays, out);
+        self.alone(query, rays, out, self.bvh.prefetch);
         self.planes_after(query, rays, out);
     }
 
