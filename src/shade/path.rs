@@ -162,7 +162,9 @@ impl Integrator<'_> {
             self.finish_record(slot, record.map(|(t, prim)| (t, prim, v.p)), vertex);
             let choice = ctx.sampler.get_1d(Dim::lobe(depth), index, count);
             let u = ctx.sampler.get_2d(Dim::bounce(depth), index, count);
-            let Some((next, next_came)) = self.bounce(ctx, depth, &v, choice, u, &mut beta) else {
+            let roulette = || ctx.sampler.get_1d(Dim::roulette(depth), index, count);
+            let Some((next, next_came)) = self.bounce(depth, &v, (choice, u), roulette, &mut beta)
+            else {
                 break;
             };
             ray = next;
@@ -246,26 +248,23 @@ impl Integrator<'_> {
 
     /// The path's next ray from vertex `v` at depth `depth`, drawn with
     /// `choice` and `u` (the draws of [`Dim::lobe`] and [`Dim::bounce`]),
-    /// its throughput `beta` updated (Russian roulette included), and
-    /// what the ray was drawn with; `None` where the path ends.
+    /// its throughput `beta` updated (Russian roulette, with the draw of
+    /// [`Dim::roulette`] that `roulette` gives, included), and what the
+    /// ray was drawn with; `None` where the path ends.
     #[inline(always)]
     pub(super) fn bounce(
         &mut self,
-        ctx: &SampleContext,
         depth: u32,
         v: &Vertex,
-        choice: f32,
-        u: Vec2,
+        (choice, u): (f32, Vec2),
+        roulette: impl FnOnce() -> f32,
         beta: &mut Vec3,
     ) -> Option<(Ray, Came)> {
         let b = v.bsdf.sample(choice, u)?;
         *beta *= b.weight;
         if depth + 1 >= ROULETTE_DEPTH {
             let survive = beta.max_element().min(0.95);
-            let roulette = ctx
-                .sampler
-                .get_1d(Dim::roulette(depth), ctx.index(), ctx.count());
-            if !(roulette < survive) {
+            if !(roulette() < survive) {
                 return None;
             }
             *beta /= survive;

@@ -15,8 +15,10 @@
 //! bit what tracing it alone gives, so the image does not depend on how
 //! samples are batched (threads, slices, crops, noise targets).
 
-use super::path::{env_drawn, light_drawn, shadow_ray, weigh, Arrival, Came, Contribution, Vertex};
-use super::sample::draw_2d_lanes;
+use super::path::{
+    env_drawn, light_drawn, shadow_ray, weigh, Arrival, Came, Contribution, Vertex, ROULETTE_DEPTH,
+};
+use super::sample::{draw_1d_lanes, draw_2d_lanes};
 use super::{CameraSample, FirstHit, Integrator};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::math::lanes::{mask_lanes, LANES};
@@ -94,16 +96,24 @@ impl Integrator<'_> {
                 }
                 l[i] += beta[i] * vertex;
             }
-            // The next directions, drawn in lanes.
+            // The next directions, drawn in lanes; Russian roulette's
+            // draws too where it may end a path (drawn for every path
+            // that scatters: the draws are counter-based, so a draw not
+            // used changes no other).
+            let ctx_of = |i: usize| &batch[i].ctx;
             let at = |i: usize| (batch[i].ctx.index(), batch[i].ctx.count());
-            let u = draw_2d_lanes(scatter, |i| &batch[i].ctx, Dim::bounce(depth), at);
+            let choice = draw_1d_lanes(scatter, ctx_of, Dim::lobe(depth), at);
+            let u = draw_2d_lanes(scatter, ctx_of, Dim::bounce(depth), at);
+            let roulette = if depth + 1 >= ROULETTE_DEPTH {
+                draw_1d_lanes(scatter, ctx_of, Dim::roulette(depth), at)
+            } else {
+                [0.0; LANES]
+            };
             alive = 0;
             for i in mask_lanes(scatter) {
-                let ctx = &batch[i].ctx;
-                let choice = ctx
-                    .sampler
-                    .get_1d(Dim::lobe(depth), ctx.index(), ctx.count());
-                if let Some((r, c)) = self.bounce(ctx, depth, &v[i], choice, u[i], &mut beta[i]) {
+                let draws = (choice[i], u[i]);
+                let bounced = self.bounce(depth, &v[i], draws, || roulette[i], &mut beta[i]);
+                if let Some((r, c)) = bounced {
                     ray[i] = r;
                     came[i] = c;
                     alive |= 1 << i;
