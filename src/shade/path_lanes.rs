@@ -74,13 +74,12 @@ impl Integrator<'_> {
             if scatter == 0 {
                 break;
             }
-            let v: [Vertex; LANES] = std::array::from_fn(|i| match vertices[i] {
-                Some(v) if scatter >> i & 1 != 0 => v,
-                _ => vertices[scatter.trailing_zeros() as usize].expect("a scattering lane"),
-            });
+            // Read in place: a vertex (its BSDF) is large, and copies of
+            // the batch's vertices were a tenth of the dragon's render.
+            let v = &vertices;
             let mut lit = 0u32;
             for i in mask_lanes(scatter) {
-                if v[i].bsdf.has_smooth_lobe() {
+                if vertex(v, i).bsdf.has_smooth_lobe() {
                     lit |= 1 << i;
                 }
             }
@@ -90,11 +89,11 @@ impl Integrator<'_> {
                 [Vec3::ZERO; LANES]
             };
             for i in mask_lanes(scatter) {
-                let mut vertex = v[i].emitted;
+                let mut radiance = vertex(v, i).emitted;
                 if lit >> i & 1 != 0 {
-                    vertex += direct[i];
+                    radiance += direct[i];
                 }
-                l[i] += beta[i] * vertex;
+                l[i] += beta[i] * radiance;
             }
             // The next directions, drawn in lanes; Russian roulette's
             // draws too where it may end a path (drawn for every path
@@ -112,7 +111,7 @@ impl Integrator<'_> {
             alive = 0;
             for i in mask_lanes(scatter) {
                 let draws = (choice[i], u[i]);
-                let bounced = self.bounce(depth, &v[i], draws, || roulette[i], &mut beta[i]);
+                let bounced = self.bounce(depth, vertex(v, i), draws, || roulette[i], &mut beta[i]);
                 if let Some((r, c)) = bounced {
                     ray[i] = r;
                     came[i] = c;
@@ -156,12 +155,13 @@ impl Integrator<'_> {
         &mut self,
         batch: &[CameraSample],
         depth: u32,
-        v: &[Vertex; LANES],
+        v: &[Option<Vertex>; LANES],
         lit: u32,
     ) -> [Vec3; LANES] {
         let scene = self.scene;
         let method = scene.settings.light_sampling;
-        let points: [Vec3; LANES] = std::array::from_fn(|i| v[i].p);
+        let points: [Vec3; LANES] =
+            std::array::from_fn(|i| v[i].as_ref().map_or(Vec3::ZERO, |v| v.p));
         let mut l = [Vec3::ZERO; LANES];
         for source in 0..self.sources() {
             let light = scene.lights.get(source);
@@ -173,7 +173,7 @@ impl Integrator<'_> {
             let mut active = lit;
             if let Some(light) = light {
                 for i in mask_lanes(lit) {
-                    if light.hidden_from(points[i], v[i].ng) {
+                    if light.hidden_from(points[i], vertex(v, i).ng) {
                         active &= !(1 << i);
                     }
                 }
@@ -199,19 +199,24 @@ impl Integrator<'_> {
                             let s = seen.sample(active, &u);
                             for i in mask_lanes(active) {
                                 c[i] = light_drawn(light, s[i])
-                                    .and_then(|d| weigh(light, &v[i].bsdf, d, samples));
+                                    .and_then(|d| weigh(light, &vertex(v, i).bsdf, d, samples));
                             }
                         }
                         (Some(light), None) => {
                             let env = light.environment().expect("a light seen alone");
                             for i in mask_lanes(active) {
-                                c[i] = env_drawn(env.sample(Some(v[i].ng), u[i], method))
-                                    .and_then(|d| weigh(light, &v[i].bsdf, d, samples));
+                                c[i] = env_drawn(env.sample(Some(vertex(v, i).ng), u[i], method))
+                                    .and_then(|d| weigh(light, &vertex(v, i).bsdf, d, samples));
                             }
                         }
                         (None, _) => {
                             for i in mask_lanes(active) {
-                                c[i] = self.emitter_sample(&v[i].bsdf, points[i], u[i], samples);
+                                c[i] = self.emitter_sample(
+                                    &vertex(v, i).bsdf,
+                                    points[i],
+                                    u[i],
+                                    samples,
+                                );
                             }
                         }
                     }
@@ -230,7 +235,7 @@ impl Integrator<'_> {
     /// value to `sum[i]`.
     fn shadow_lanes(
         &mut self,
-        v: &[Vertex; LANES],
+        v: &[Option<Vertex>; LANES],
         c: &[Option<Contribution>; LANES],
         active: u32,
         sum: &mut [Vec3; LANES],
@@ -245,7 +250,8 @@ impl Integrator<'_> {
         let mut one_except = true;
         for i in mask_lanes(active) {
             let Some(c) = &c[i] else { continue };
-            rays[len] = shadow_ray(v[i].p, v[i].p_error, v[i].ng, c);
+            let v = vertex(v, i);
+            rays[len] = shadow_ray(v.p, v.p_error, v.ng, c);
             lane[len] = i as u8;
             len += 1;
             match except {
@@ -274,4 +280,10 @@ impl Integrator<'_> {
             }
         }
     }
+}
+
+/// Lane `i`'s vertex (a lane that scatters has one).
+#[inline(always)]
+fn vertex(v: &[Option<Vertex>; LANES], i: usize) -> &Vertex {
+    v[i].as_ref().expect("a scattering lane's vertex")
 }
