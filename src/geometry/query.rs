@@ -467,13 +467,13 @@ impl Geometry {
     }
 
     /// Closest hits of a few rays a caller traces together (a path
-    /// batch's bounce rays, up to a packet's worth of unlike directions):
-    /// `out[i]` is bit for bit `self.intersect(&rays[i])`. Each ray walks
-    /// alone, several in flight where the tree is past the caches
-    /// ([`Bvh8::prefetch`](crate::accel::Bvh8)), else one after another:
-    /// no span sorting, bundles or packets, which cost more than they save
-    /// on a handful of incoherent rays (docs/mitsuba.md, "Path-traced
-    /// scenes").
+    /// batch's bounce rays, up to a packet's worth of unlike directions
+    /// from nearby points): `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. The rays walk one after another: a
+    /// stream's span sorting and bundles cost more than they saved on
+    /// eight such rays (cornell-planes: 31% more instructions), and so did
+    /// walks in flight, whose rays here share cached nodes anyway (the
+    /// dragon's render 4% slower; docs/mitsuba.md, "Path-traced scenes").
     pub fn intersect_few(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
         self.few(ClosestHit::<true>(self), rays, out);
     }
@@ -556,11 +556,11 @@ impl Geometry {
         self.planes_after(query, rays, out);
     }
 
-    /// Rays walked alone ([`Geometry::intersect_few`]).
+    /// Rays walked one after another ([`Geometry::intersect_few`]).
     fn few<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         self.planes_before(query, rays, out);
-        self.alone(query, rays, out, self.bvh.prefetch);
+        self.alone(query, rays, out, false);
         self.planes_after(query, rays, out);
     }
 

@@ -2,11 +2,14 @@
 //! of camera samples (up to [`PACKET_SIZE`], one pixel's) advance bounce
 //! by bounce together, as the distribution integrator lights its camera
 //! hits (`direct.rs`). At each depth the batch's continuation rays are
-//! traced together, then every vertex is lit: each light's spherical
+//! traced back to back, then every vertex is lit: each light's spherical
 //! rectangles built and its samples drawn in SIMD lanes (one lane a
-//! path), the shadow rays towards one sample of every lane traced
-//! together; then every path draws its next direction, the draws again in
-//! lanes.
+//! path), the shadow rays towards one sample of every lane traced back
+//! to back; then every path draws its next direction, the draws again in
+//! lanes. The rays walk one after another
+//! ([`crate::geometry::Geometry::intersect_few`]): a batch's rays leave
+//! from one pixel's hits and share cached nodes, and neither walks in
+//! flight nor a stream's bundles paid for eight of them.
 //!
 //! Each path's arithmetic is the one of [`Integrator::arrive`],
 //! [`Integrator::bounce`] and the weighing of its light samples, which
