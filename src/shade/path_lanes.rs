@@ -87,7 +87,7 @@ impl Integrator<'_> {
                 }
             }
             let direct = if lit != 0 {
-                self.next_event_lanes(batch, depth, &v, lit)
+                self.next_event_lanes(batch, depth, v, lit)
             } else {
                 [Vec3::ZERO; LANES]
             };
