@@ -330,10 +330,7 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
 
     #[inline(always)]
     fn planes_first(self, ray: &Ray) -> bool {
-        self.geometry
-            .planes
-            .iter()
-            .any(|p| p.intersect(&closed_end(ray)).is_some())
+        self.geometry.plane_lanes.any_hit(&closed_end(ray))
     }
 
     #[inline(always)]
@@ -494,23 +491,22 @@ impl Geometry {
 
     /// `best`, or a plane hit nearer than it (or, without one, in
     /// `(ray.tmin, ray.tmax)`).
+    /// The planes are tested eight at a time
+    /// ([`PlaneLanes`](crate::shape::plane_lanes::PlaneLanes)), with the
+    /// scalar loop's answer.
     #[inline]
-    fn closest_plane(&self, ray: &Ray, mut best: Option<PrimHit>) -> Option<PrimHit> {
-        let mut tmax = best.map_or(ray.tmax, |h| h.t);
-        for (i, plane) in self.planes.iter().enumerate() {
-            let r = Ray { tmax, ..*ray };
-            if let Some(t) = plane.intersect(&r) {
-                tmax = t;
-                best = Some(PrimHit {
-                    t,
-                    prim: u32::MAX - i as u32,
-                    u: 0.0,
-                    v: 0.0,
-                    part: 0,
-                });
-            }
+    fn closest_plane(&self, ray: &Ray, best: Option<PrimHit>) -> Option<PrimHit> {
+        let tmax = best.map_or(ray.tmax, |h| h.t);
+        match self.plane_lanes.closest(&Ray { tmax, ..*ray }) {
+            Some((t, i)) => Some(PrimHit {
+                t,
+                prim: u32::MAX - i as u32,
+                u: 0.0,
+                v: 0.0,
+                part: 0,
+            }),
+            None => best,
         }
-        best
     }
 
     /// One ray: the planes, the BVH's walk unless they settle it, the
