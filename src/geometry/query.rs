@@ -42,6 +42,7 @@ use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Kernel, Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
+use crate::shape::plane_lanes::LANES_FROM;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle_lanes::ShearedRays;
 
@@ -330,7 +331,13 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
 
     #[inline(always)]
     fn planes_first(self, ray: &Ray) -> bool {
-        self.geometry.plane_lanes.any_hit(&closed_end(ray))
+        let planes = &self.geometry.planes;
+        if planes.len() >= LANES_FROM {
+            return self.geometry.plane_lanes.any_hit(&closed_end(ray));
+        }
+        planes
+            .iter()
+            .any(|p| p.intersect(&closed_end(ray)).is_some())
     }
 
     #[inline(always)]
@@ -490,23 +497,34 @@ impl Geometry {
     }
 
     /// `best`, or a plane hit nearer than it (or, without one, in
-    /// `(ray.tmin, ray.tmax)`).
-    /// The planes are tested eight at a time
+    /// `(ray.tmin, ray.tmax)`). From [`LANES_FROM`] planes on they are
+    /// tested eight at a time
     /// ([`PlaneLanes`](crate::shape::plane_lanes::PlaneLanes)), with the
-    /// scalar loop's answer.
+    /// scalar loop's answer; fewer one by one.
     #[inline]
-    fn closest_plane(&self, ray: &Ray, best: Option<PrimHit>) -> Option<PrimHit> {
-        let tmax = best.map_or(ray.tmax, |h| h.t);
-        match self.plane_lanes.closest(&Ray { tmax, ..*ray }) {
-            Some((t, i)) => Some(PrimHit {
-                t,
-                prim: u32::MAX - i as u32,
-                u: 0.0,
-                v: 0.0,
-                part: 0,
-            }),
-            None => best,
+    fn closest_plane(&self, ray: &Ray, mut best: Option<PrimHit>) -> Option<PrimHit> {
+        let plane_hit = |t, i: usize| PrimHit {
+            t,
+            prim: u32::MAX - i as u32,
+            u: 0.0,
+            v: 0.0,
+            part: 0,
+        };
+        let mut tmax = best.map_or(ray.tmax, |h| h.t);
+        if self.planes.len() >= LANES_FROM {
+            return match self.plane_lanes.closest(&Ray { tmax, ..*ray }) {
+                Some((t, i)) => Some(plane_hit(t, i)),
+                None => best,
+            };
         }
+        for (i, plane) in self.planes.iter().enumerate() {
+            let r = Ray { tmax, ..*ray };
+            if let Some(t) = plane.intersect(&r) {
+                tmax = t;
+                best = Some(plane_hit(t, i));
+            }
+        }
+        best
     }
 
     /// One ray: the planes, the BVH's walk unless they settle it, the
