@@ -49,6 +49,7 @@ use crate::accel::{Bvh8, PrimHit};
 use crate::math::lanes::LANES;
 use crate::math::{Ray, Transform};
 use crate::shape::plane::Plane;
+use crate::shape::plane_lanes::PlaneLanes;
 use crate::shape::triangle_lanes::TriangleBlock;
 pub use crossings::Crossing;
 use csg::Csg;
@@ -85,6 +86,9 @@ pub struct Geometry {
     pub(crate) csg: Csg,
     /// Unbounded, outside the BVH.
     pub(crate) planes: Vec<Plane>,
+    /// The same planes eight to a SIMD chunk, which every ray is tested
+    /// against.
+    pub(crate) plane_lanes: PlaneLanes,
     /// Primitives `first_instance()..`: placements of the prototypes.
     pub(crate) instances: Vec<Instance>,
     /// Meshes stored once in their own object space, each with its own
@@ -177,6 +181,7 @@ impl Geometry {
             shapes,
             transforms,
             csg,
+            plane_lanes: PlaneLanes::new(&planes),
             planes,
             instances,
             prototypes,

@@ -42,6 +42,7 @@ use crate::accel::query::{keep_closer, ClosestState};
 use crate::accel::{Kernel, Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
+use crate::shape::plane_lanes::LANES_FROM;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle_lanes::ShearedRays;
 
@@ -330,8 +331,11 @@ impl<'g> SceneQuery<'g> for Occlusion<'g, true> {
 
     #[inline(always)]
     fn planes_first(self, ray: &Ray) -> bool {
-        self.geometry
-            .planes
+        let planes = &self.geometry.planes;
+        if planes.len() >= LANES_FROM {
+            return self.geometry.plane_lanes.any_hit(&closed_end(ray));
+        }
+        planes
             .iter()
             .any(|p| p.intersect(&closed_end(ray)).is_some())
     }
@@ -466,6 +470,25 @@ impl Geometry {
         self.stream(self.occlusion(except), rays, out);
     }
 
+    /// Closest hits of a few rays a caller traces together (a path
+    /// batch's bounce rays, up to a packet's worth of unlike directions
+    /// from nearby points): `out[i]` is bit for bit
+    /// `self.intersect(&rays[i])`. The rays walk one after another: a
+    /// stream's span sorting and bundles cost more than they saved on
+    /// eight such rays (cornell-planes: 31% more instructions), and so did
+    /// walks in flight, whose rays here share cached nodes anyway (the
+    /// dragon's render 4% slower; docs/mitsuba.md, "Path-traced scenes").
+    pub fn intersect_few(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        self.few(ClosestHit::<true>(self), rays, out);
+    }
+
+    /// Occlusion of a few rays, ignoring primitive `except` (`u32::MAX`:
+    /// none): `out[i]` is exactly `self.occluded_except(&rays[i], except)`;
+    /// the rays walk as for [`Geometry::intersect_few`].
+    pub fn occluded_few(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
+        self.few(self.occlusion(except), rays, out);
+    }
+
     fn occlusion(&self, except: u32) -> Occlusion<'_, true> {
         Occlusion {
             geometry: self,
@@ -474,21 +497,31 @@ impl Geometry {
     }
 
     /// `best`, or a plane hit nearer than it (or, without one, in
-    /// `(ray.tmin, ray.tmax)`).
+    /// `(ray.tmin, ray.tmax)`). From [`LANES_FROM`] planes on they are
+    /// tested eight at a time
+    /// ([`PlaneLanes`](crate::shape::plane_lanes::PlaneLanes)), with the
+    /// scalar loop's answer; fewer one by one.
     #[inline]
     fn closest_plane(&self, ray: &Ray, mut best: Option<PrimHit>) -> Option<PrimHit> {
+        let plane_hit = |t, i: usize| PrimHit {
+            t,
+            prim: u32::MAX - i as u32,
+            u: 0.0,
+            v: 0.0,
+            part: 0,
+        };
         let mut tmax = best.map_or(ray.tmax, |h| h.t);
+        if self.planes.len() >= LANES_FROM {
+            return match self.plane_lanes.closest(&Ray { tmax, ..*ray }) {
+                Some((t, i)) => Some(plane_hit(t, i)),
+                None => best,
+            };
+        }
         for (i, plane) in self.planes.iter().enumerate() {
             let r = Ray { tmax, ..*ray };
             if let Some(t) = plane.intersect(&r) {
                 tmax = t;
-                best = Some(PrimHit {
-                    t,
-                    prim: u32::MAX - i as u32,
-                    u: 0.0,
-                    v: 0.0,
-                    part: 0,
-                });
+                best = Some(plane_hit(t, i));
             }
         }
         best
@@ -534,6 +567,14 @@ impl Geometry {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         self.planes_before(query, rays, out);
         self.travel_stream(rays, |how| self.travel(query, rays, out, how));
+        self.planes_after(query, rays, out);
+    }
+
+    /// Rays walked one after another ([`Geometry::intersect_few`]).
+    fn few<'g, Q: SceneQuery<'g>>(&'g self, query: Q, rays: &[Ray], out: &mut [Q::Answer]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray");
+        self.planes_before(query, rays, out);
+        self.alone(query, rays, out, false);
         self.planes_after(query, rays, out);
     }
 

@@ -268,10 +268,15 @@ impl CmjSet {
     }
 }
 
+/// What a 1D set's pattern is multiplied by for its permutation of the
+/// strata and for its jitter.
+pub(super) const STRATA_PATTERN: u32 = 0x2d2a_8cd3;
+pub(super) const JITTER_PATTERN: u32 = 0x7a3f_c10b;
+
 /// Sample `s` of an `n`-sample stratified (jittered) set in [0,1).
 pub fn stratified_1d(s: u32, n: u32, pattern: u32) -> f32 {
-    let stratum = permute(s, n, pattern.wrapping_mul(0x2d2a_8cd3));
-    let j = rand_float(s, pattern.wrapping_mul(0x7a3f_c10b));
+    let stratum = permute(s, n, pattern.wrapping_mul(STRATA_PATTERN));
+    let j = rand_float(s, pattern.wrapping_mul(JITTER_PATTERN));
     ((stratum as f32 + j) / n as f32).min(ONE_MINUS_EPSILON)
 }
 

@@ -20,7 +20,9 @@
 //! and exact integer-to-float conversions, so every lane is bit for bit
 //! [`super::cmj::cmj_2d`]; the tests check that.
 
-use super::cmj::{mask_of, sample_patterns, CmjSet, ONE_MINUS_EPSILON};
+use super::cmj::{
+    mask_of, sample_patterns, CmjSet, JITTER_PATTERN, ONE_MINUS_EPSILON, STRATA_PATTERN,
+};
 use super::hash::unit_float_lanes;
 use crate::math::lanes::LANES;
 use glam::Vec2;
@@ -183,6 +185,45 @@ impl CmjLanes {
     }
 }
 
+/// What the draws of one stratified 1D set of `n` samples under one
+/// pattern share, for drawing eight samples at a time: lane by lane
+/// exactly [`super::cmj::stratified_1d`] (a permutation of the strata and
+/// a hashed jitter, in the scalar code's order).
+#[derive(Debug, Clone, Copy)]
+pub struct StratifiedLanes {
+    n: u32,
+    strata: PermuteLanes,
+    jitter: u32,
+}
+
+impl StratifiedLanes {
+    /// The lanes of the `n`-sample set under `pattern`, or `None` for an
+    /// empty set or one of [`MAX_CELLS`] samples or more (whose strata
+    /// are not all exact floats).
+    pub fn new(n: u32, pattern: u32) -> Option<Self> {
+        if n == 0 || n >= MAX_CELLS {
+            return None;
+        }
+        let p = pattern.wrapping_mul(STRATA_PATTERN);
+        let two32_mod = ((1u64 << 32) % n as u64) as u32;
+        Some(Self {
+            n,
+            strata: PermuteLanes::new(n, p, p % n, two32_mod),
+            jitter: pattern.wrapping_mul(JITTER_PATTERN),
+        })
+    }
+
+    /// Samples `s[i]` of the set (each below its size).
+    pub fn sample(&self, s: [u32; LANES]) -> [f32; LANES] {
+        debug_assert!(s.iter().all(|&s| s < self.n));
+        let s = u32x8::new(s);
+        let stratum = self.strata.apply(s);
+        let j = rand_float(s, self.jitter);
+        let x = (to_f32(stratum) + j) / f32x8::splat(self.n as f32);
+        x.fast_min(f32x8::splat(ONE_MINUS_EPSILON)).to_array()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -215,6 +256,27 @@ mod tests {
     /// sizes whose cycle walking takes several steps) under hashed
     /// patterns, and under patterns that make one permutation's pattern
     /// just below 2³², so that its final `i + p` wraps.
+    #[test]
+    fn stratified_lanes_are_the_scalar_samples_bit_for_bit() {
+        use crate::sampling::cmj::stratified_1d;
+        for n in [1u32, 2, 3, 7, 16, 17, 48, 100, 1000, 65_537, (1 << 22) - 1] {
+            for pattern in [0u32, 1, 0xdead_beef, u32::MAX, hash_u32(n)] {
+                let lanes = StratifiedLanes::new(n, pattern).expect("fits");
+                let s: [u32; LANES] = std::array::from_fn(|k| hash_u32(k as u32 ^ pattern) % n);
+                let got = lanes.sample(s);
+                for (lane, &s) in s.iter().enumerate() {
+                    assert_eq!(
+                        got[lane].to_bits(),
+                        stratified_1d(s, n, pattern).to_bits(),
+                        "n {n} pattern {pattern:#x} sample {s}"
+                    );
+                }
+            }
+        }
+        assert!(StratifiedLanes::new(0, 1).is_none());
+        assert!(StratifiedLanes::new(MAX_CELLS, 1).is_none());
+    }
+
     #[test]
     fn lanes_are_the_scalar_samples_bit_for_bit() {
         let multipliers = sample_patterns(1);

@@ -6,7 +6,7 @@
 //! form one stratified set, and sample `i` depends on nothing but `i`.
 
 use super::cmj::{cmj_2d, stratified_1d, CmjSet};
-use super::cmj_lanes::CmjLanes;
+use super::cmj_lanes::{CmjLanes, StratifiedLanes};
 use super::hash::{hash_step, hash_step_lanes, unit_float, unit_float_lanes, HASH_WORDS_INIT};
 use super::sobol::{sobol_1d, sobol_2d};
 use crate::math::lanes::{mask_lanes, LANES};
@@ -143,6 +143,31 @@ impl PixelSampler {
             SamplerKind::Random => unit_float(hash_step(random_prefix(p, index), 2)),
             SamplerKind::Sobol => sobol_1d(index, p),
         }
+    }
+
+    /// Points `index[i]` of `count`-point 1D sets of dimension `dim` for
+    /// the lanes `i` in mask `wanted` (zero in the others): exactly
+    /// [`PixelSampler::get_1d`] of each. Where two or more lanes are wanted
+    /// the stratified sampler draws all eight at once in SIMD lanes, so
+    /// every `index[i]` must then be below `count`, wanted or not.
+    #[inline]
+    pub fn get_1d_lanes(
+        &self,
+        dim: Dim,
+        index: [u32; LANES],
+        count: u32,
+        wanted: u32,
+    ) -> [f32; LANES] {
+        if wanted.count_ones() > 1 && self.kind == SamplerKind::Stratified {
+            if let Some(lanes) = StratifiedLanes::new(count, self.pattern(dim)) {
+                return lanes.sample(index);
+            }
+        }
+        let mut out = [0.0; LANES];
+        for i in mask_lanes(wanted) {
+            out[i] = self.get_1d(dim, index[i], count);
+        }
+        out
     }
 
     /// Whether `other` draws exactly the numbers `self` draws (the same

@@ -37,6 +37,7 @@
 //! | [`bsdf`] | the Phong BRDF, Snell's law and Schlick's Fresnel |
 //! | [`sample`] | what identifies a sample, ray counts, replay events |
 //! | [`path`] | the path integrator (`integrator = "path"`): NEE with MIS, Russian roulette |
+//! | `path_lanes` | the path integrator's batches bounce by bounce: rays traced together, light samples in SIMD lanes |
 //! | [`scatter`] | the path integrator's BSDFs: the Phong keys as lobes, metallic-roughness |
 //! | [`microfacet`] | GGX, Smith masking, visible-normal sampling, coloured Schlick |
 //! | [`maps`] | normal and bump maps, metallic-roughness and emissive textures (both integrators) |
@@ -51,6 +52,7 @@ pub mod integrator;
 pub mod maps;
 pub mod microfacet;
 pub mod path;
+mod path_lanes;
 pub mod sample;
 pub mod scatter;
 #[cfg(test)]

@@ -32,7 +32,8 @@ use super::sample::{CameraSample, FirstHit, SampleContext};
 use super::scatter::Bsdf;
 use super::Integrator;
 use crate::accel::PrimHit;
-use crate::light::{Light, LightSampling, NO_PART};
+use crate::light::environment::EnvSample;
+use crate::light::{Light, LightSample, NO_PART};
 use crate::math::offset::spawn_origin;
 use crate::math::Ray;
 use crate::sampling::mis::power_heuristic;
@@ -45,7 +46,7 @@ pub const ROULETTE_DEPTH: u32 = 3;
 /// What the BSDF ray that reached a vertex was drawn with: what light
 /// found along it is weighed by.
 #[derive(Clone, Copy)]
-struct Came {
+pub(super) struct Came {
     /// The BSDF's density for the ray; `None` for the camera's ray and
     /// delta lobes, which no light sample can find.
     pdf: Option<f32>,
@@ -55,14 +56,46 @@ struct Came {
     ng: Vec3,
 }
 
+impl Came {
+    /// The camera's ray from `origin`.
+    pub(super) fn camera(origin: Vec3) -> Self {
+        Self {
+            pdf: None,
+            from: origin,
+            ng: Vec3::ZERO,
+        }
+    }
+}
+
+/// A vertex to scatter from: its BSDF, its point with the point's
+/// rounding bound, its geometric normal faced towards the viewer, and
+/// the radiance it emits towards the viewer (MIS-weighed).
+#[derive(Clone, Copy)]
+pub(super) struct Vertex {
+    pub(super) bsdf: Bsdf,
+    pub(super) p: Vec3,
+    pub(super) p_error: Vec3,
+    pub(super) ng: Vec3,
+    pub(super) emitted: Vec3,
+}
+
+/// What a path finds where its ray ends ([`Integrator::arrive`]).
+pub(super) enum Arrival {
+    /// The path ends there, bringing this radiance: an escaped ray (no
+    /// point), or the vertex past the last bounce (its point).
+    End(Vec3, Option<Vec3>),
+    /// A vertex to light and scatter from.
+    Scatter(Vertex),
+}
+
 /// One vertex's light sample, before its shadow ray.
-struct Contribution {
+pub(super) struct Contribution {
     wi: Vec3,
     /// To the point sampled (∞ for light from infinity).
     distance: f32,
     /// The primitive of the light's surface, which the shadow ray skips.
-    except: u32,
-    value: Vec3,
+    pub(super) except: u32,
+    pub(super) value: Vec3,
 }
 
 impl Integrator<'_> {
@@ -86,12 +119,9 @@ impl Integrator<'_> {
             return;
         }
         // The camera rays together (coherent: one packet where it pays),
-        // then each path on its own from its first hit.
+        // then the paths bounce by bounce together (`path_lanes`).
         let (rays, hits) = self.camera_hits(batch);
-        for (i, sample) in batch.iter().enumerate() {
-            let first_i = first.as_deref_mut().map(|f| &mut f[i]);
-            out[i] = self.path(&sample.ctx, rays[i], Some(hits[i]), first_i);
-        }
+        self.path_lanes(batch, rays, hits, out, first);
     }
 
     /// The radiance a camera path starting with `ray` brings back;
@@ -104,15 +134,10 @@ impl Integrator<'_> {
         mut first: Option<&mut FirstHit>,
     ) -> Vec3 {
         let scene = self.scene;
-        let settings = &scene.settings;
         let (index, count) = (ctx.index(), ctx.count());
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
-        let mut came = Came {
-            pdf: None,
-            from: ray.origin,
-            ng: Vec3::ZERO,
-        };
+        let mut came = Came::camera(ray.origin);
         let mut depth = 0;
         loop {
             let slot = self.begin_record(depth, if depth == 0 { "camera" } else { "bounce" }, &ray);
@@ -120,97 +145,146 @@ impl Integrator<'_> {
                 Some(hit) => hit,
                 None => scene.geometry.intersect(&ray),
             };
-            let Some(hit) = hit else {
-                let le = self.escaped(&ray, &came);
-                l += beta * le;
-                self.finish_record(slot, None, le);
-                if let Some(f) = first.take() {
-                    *f = FirstHit::MISS;
-                }
-                break;
-            };
-            let mut s = scene.geometry.surface(&ray, &hit);
-            let m = &scene.materials[s.material as usize];
-            let wo = -ray.direction.normalize();
-            maps::apply_normal_map(scene, m, &mut s, &hit, wo);
-            let mapped;
-            let m = match maps::textured_pbr(scene, m, s.uv) {
-                Some(textured) => {
-                    mapped = textured;
-                    &mapped
-                }
-                None => m,
-            };
-            let entering = s.geometric_normal.dot(wo) >= 0.0;
-            let (ng, ns) = if entering {
-                (s.geometric_normal, s.shading_normal)
-            } else {
-                (-s.geometric_normal, -s.shading_normal)
-            };
-            let texel = match (m.diffuse_texture, s.uv) {
-                (Some(t), Some(uv)) => scene.textures.sample(t, uv),
-                _ => Vec3::ONE,
-            };
-            if let Some(f) = first.take() {
-                let albedo = match m.pbr {
-                    Some(pbr) => pbr.base_color * texel,
-                    None => m.diffuse * texel,
-                };
-                *f = FirstHit {
-                    albedo,
-                    normal: s.shading_normal,
-                    depth: hit.t * ray.direction.length(),
-                };
-            }
-            let mut vertex = Vec3::ZERO;
-            if m.is_emissive() && (entering || !m.one_sided) {
-                vertex += maps::emission(scene, m, s.uv)
-                    * self.emission_weight(&hit, &came, s.p, s.geometric_normal);
-            }
-            // The vertex past the last bounce: only its emission, the
-            // BSDF's half of the previous vertex's direct light.
-            if depth > settings.max_depth {
-                l += beta * vertex;
-                self.finish_record(slot, Some((hit.t, hit.prim, s.p)), vertex);
-                break;
-            }
-            let bsdf = Bsdf::new(m, texel, wo, ng, ns, entering);
-            if bsdf.has_smooth_lobe() {
-                vertex += self.next_event(ctx, depth, &bsdf, s.p, s.p_error, ng);
-            }
-            l += beta * vertex;
-            self.finish_record(slot, Some((hit.t, hit.prim, s.p)), vertex);
-            let choice = ctx.sampler.get_1d(Dim::lobe(depth), index, count);
-            let u = ctx.sampler.get_2d(Dim::bounce(depth), index, count);
-            let Some(b) = bsdf.sample(choice, u) else {
-                break;
-            };
-            beta *= b.weight;
-            if depth + 1 >= ROULETTE_DEPTH {
-                let survive = beta.max_element().min(0.95);
-                if !(ctx.sampler.get_1d(Dim::roulette(depth), index, count) < survive) {
+            let record = hit.map(|h| (h.t, h.prim));
+            let v = match self.arrive(&ray, hit, &came, depth, first.take()) {
+                Arrival::End(le, p) => {
+                    l += beta * le;
+                    self.finish_record(slot, record.zip(p).map(|((t, prim), p)| (t, prim, p)), le);
                     break;
                 }
-                beta /= survive;
-            }
-            if !(beta.max_element() > 0.0 && beta.is_finite()) {
-                break;
-            }
-            let through = ng.dot(b.wi) < 0.0;
-            if through {
-                self.counts.refraction += 1;
-            } else {
-                self.counts.reflection += 1;
-            }
-            ray = Ray::new(spawn_origin(s.p, s.p_error, ng, b.wi), b.wi);
-            came = Came {
-                pdf: (!b.delta).then_some(b.pdf),
-                from: s.p,
-                ng,
+                Arrival::Scatter(v) => v,
             };
+            let mut vertex = v.emitted;
+            if v.bsdf.has_smooth_lobe() {
+                vertex += self.next_event(ctx, depth, &v.bsdf, v.p, v.p_error, v.ng);
+            }
+            l += beta * vertex;
+            self.finish_record(slot, record.map(|(t, prim)| (t, prim, v.p)), vertex);
+            let choice = ctx.sampler.get_1d(Dim::lobe(depth), index, count);
+            let u = ctx.sampler.get_2d(Dim::bounce(depth), index, count);
+            let roulette = || ctx.sampler.get_1d(Dim::roulette(depth), index, count);
+            let Some((next, next_came)) = self.bounce(depth, &v, (choice, u), roulette, &mut beta)
+            else {
+                break;
+            };
+            ray = next;
+            came = next_came;
             depth += 1;
         }
         l
+    }
+
+    /// What a path finds where `ray` (which reached `hit`, drawn as
+    /// `came` says) ends at path depth `depth`: the radiance it brings and
+    /// the end of the path (an escaped ray; the vertex past the last
+    /// bounce, which adds only its emission, the BSDF's half of the
+    /// previous vertex's direct light), or the vertex to scatter from.
+    /// With `first`, what the ray hit into it.
+    #[inline(always)]
+    pub(super) fn arrive(
+        &self,
+        ray: &Ray,
+        hit: Option<PrimHit>,
+        came: &Came,
+        depth: u32,
+        first: Option<&mut FirstHit>,
+    ) -> Arrival {
+        let scene = self.scene;
+        let Some(hit) = hit else {
+            if let Some(f) = first {
+                *f = FirstHit::MISS;
+            }
+            return Arrival::End(self.escaped(ray, came), None);
+        };
+        let mut s = scene.geometry.surface(ray, &hit);
+        let m = &scene.materials[s.material as usize];
+        let wo = -ray.direction.normalize();
+        maps::apply_normal_map(scene, m, &mut s, &hit, wo);
+        let mapped;
+        let m = match maps::textured_pbr(scene, m, s.uv) {
+            Some(textured) => {
+                mapped = textured;
+                &mapped
+            }
+            None => m,
+        };
+        let entering = s.geometric_normal.dot(wo) >= 0.0;
+        let (ng, ns) = if entering {
+            (s.geometric_normal, s.shading_normal)
+        } else {
+            (-s.geometric_normal, -s.shading_normal)
+        };
+        let texel = match (m.diffuse_texture, s.uv) {
+            (Some(t), Some(uv)) => scene.textures.sample(t, uv),
+            _ => Vec3::ONE,
+        };
+        if let Some(f) = first {
+            let albedo = match m.pbr {
+                Some(pbr) => pbr.base_color * texel,
+                None => m.diffuse * texel,
+            };
+            *f = FirstHit {
+                albedo,
+                normal: s.shading_normal,
+                depth: hit.t * ray.direction.length(),
+            };
+        }
+        let mut emitted = Vec3::ZERO;
+        if m.is_emissive() && (entering || !m.one_sided) {
+            emitted += maps::emission(scene, m, s.uv)
+                * self.emission_weight(&hit, came, s.p, s.geometric_normal);
+        }
+        if depth > scene.settings.max_depth {
+            return Arrival::End(emitted, Some(s.p));
+        }
+        Arrival::Scatter(Vertex {
+            bsdf: Bsdf::new(m, texel, wo, ng, ns, entering),
+            p: s.p,
+            p_error: s.p_error,
+            ng,
+            emitted,
+        })
+    }
+
+    /// The path's next ray from vertex `v` at depth `depth`, drawn with
+    /// `choice` and `u` (the draws of [`Dim::lobe`] and [`Dim::bounce`]),
+    /// its throughput `beta` updated (Russian roulette, with the draw of
+    /// [`Dim::roulette`] that `roulette` gives, included), and what the
+    /// ray was drawn with; `None` where the path ends.
+    #[inline(always)]
+    pub(super) fn bounce(
+        &mut self,
+        depth: u32,
+        v: &Vertex,
+        (choice, u): (f32, Vec2),
+        roulette: impl FnOnce() -> f32,
+        beta: &mut Vec3,
+    ) -> Option<(Ray, Came)> {
+        let b = v.bsdf.sample(choice, u)?;
+        *beta *= b.weight;
+        if depth + 1 >= ROULETTE_DEPTH {
+            let survive = beta.max_element().min(0.95);
+            if !(roulette() < survive) {
+                return None;
+            }
+            *beta /= survive;
+        }
+        if !(beta.max_element() > 0.0 && beta.is_finite()) {
+            return None;
+        }
+        let through = v.ng.dot(b.wi) < 0.0;
+        if through {
+            self.counts.refraction += 1;
+        } else {
+            self.counts.reflection += 1;
+        }
+        let ray = Ray::new(spawn_origin(v.p, v.p_error, v.ng, b.wi), b.wi);
+        let came = Came {
+            pdf: (!b.delta).then_some(b.pdf),
+            from: v.p,
+            ng: v.ng,
+        };
+        Some((ray, came))
     }
 
     /// What a ray that hits nothing brings: the environment, weighed
@@ -274,16 +348,10 @@ impl Integrator<'_> {
     ) -> Vec3 {
         let scene = self.scene;
         let method = scene.settings.light_sampling;
-        let m_samples = scene.settings.shadow_samples;
         let mut l = Vec3::ZERO;
-        let lights = scene.lights.len();
-        let sources = lights + usize::from(!scene.emitters.is_empty());
-        for source in 0..sources {
+        for source in 0..self.sources() {
             let light = scene.lights.get(source);
-            let samples = match light {
-                Some(light) if !light.is_area() => 1,
-                _ => m_samples,
-            };
+            let samples = self.samples_of(light);
             let dim = Dim::light(depth, source as u32);
             let mut sum = Vec3::ZERO;
             for j in 0..samples {
@@ -295,17 +363,17 @@ impl Integrator<'_> {
                     ctx.sampler.get_2d(dim, at.0, at.1)
                 };
                 let c = match light {
-                    Some(light) => self.light_sample(light, bsdf, p, ng, u, method, samples),
+                    Some(light) => {
+                        let drawn = match light.environment() {
+                            Some(env) => env_drawn(env.sample(Some(ng), u, method)),
+                            None => light_drawn(light, light.sample(p, u, method)),
+                        };
+                        drawn.and_then(|d| weigh(light, bsdf, d, samples))
+                    }
                     None => self.emitter_sample(bsdf, p, u, samples),
                 };
                 let Some(c) = c else { continue };
-                let origin = spawn_origin(p, p_error, ng, c.wi);
-                let tmax = if c.distance.is_finite() {
-                    (c.distance - (origin - p).length()).max(0.0)
-                } else {
-                    f32::INFINITY
-                };
-                let ray = Ray::segment(origin, c.wi, tmax);
+                let ray = shadow_ray(p, p_error, ng, &c);
                 self.counts.shadow += 1;
                 if !scene.geometry.occluded_except(&ray, c.except) {
                     sum += c.value;
@@ -316,53 +384,30 @@ impl Integrator<'_> {
         l
     }
 
-    /// One sample of `light` from `p`: f · L · cos / pdf times its MIS
-    /// weight against the BSDF (`samples` light samples a vertex), with the
-    /// direction and distance of its shadow ray (origin still `p`).
-    #[allow(clippy::too_many_arguments)]
-    fn light_sample(
-        &self,
-        light: &Light,
-        bsdf: &Bsdf,
-        p: Vec3,
-        ng: Vec3,
-        u: Vec2,
-        method: LightSampling,
-        samples: u32,
-    ) -> Option<Contribution> {
-        let (wi, distance, le_over_pdf, light_pdf) = match light.environment() {
-            Some(env) => {
-                let e = env.sample(Some(ng), u, method)?;
-                (e.wi, f32::INFINITY, e.radiance / e.pdf, Some(e.pdf))
-            }
-            None => {
-                let s = light.sample(p, u, method)?;
-                let pdf = light
-                    .is_area()
-                    .then(|| light.surface_radiance().max_element() / s.weight.max_element());
-                (s.wi, s.distance, s.weight, pdf)
-            }
-        };
-        let (f, bsdf_pdf) = bsdf.eval(wi);
-        let cos = bsdf.cos(wi);
-        if f.max_element() <= 0.0 || cos <= 0.0 {
-            return None;
-        }
-        let w = match light_pdf {
-            Some(pdf) => power_heuristic(samples as f32 * pdf, bsdf_pdf),
-            None => 1.0,
-        };
-        let value = f * le_over_pdf * (cos * w);
-        value.is_finite().then_some(Contribution {
-            wi,
-            distance,
-            except: light.prim().unwrap_or(u32::MAX),
-            value,
-        })
+    /// The light sources of next-event estimation: the scene's lights,
+    /// and the glowing surfaces as one more where there are any.
+    pub(super) fn sources(&self) -> usize {
+        self.scene.lights.len() + usize::from(!self.scene.emitters.is_empty())
     }
 
-    /// One sample of the glowing surfaces from `p`, as [`Self::light_sample`].
-    fn emitter_sample(&self, bsdf: &Bsdf, p: Vec3, u: Vec2, samples: u32) -> Option<Contribution> {
+    /// Samples a vertex takes of `light` (`None`: the glowing surfaces):
+    /// one of a delta light, `shadow_samples` of any other.
+    pub(super) fn samples_of(&self, light: Option<&Light>) -> u32 {
+        match light {
+            Some(light) if !light.is_area() => 1,
+            _ => self.scene.settings.shadow_samples,
+        }
+    }
+
+    /// One sample of the glowing surfaces from `p`, as [`weigh`] weighs a
+    /// light's.
+    pub(super) fn emitter_sample(
+        &self,
+        bsdf: &Bsdf,
+        p: Vec3,
+        u: Vec2,
+        samples: u32,
+    ) -> Option<Contribution> {
         let e = self.scene.emitters.sample(p, u)?;
         let (f, bsdf_pdf) = bsdf.eval(e.wi);
         let cos = bsdf.cos(e.wi);
@@ -382,4 +427,69 @@ impl Integrator<'_> {
             value,
         })
     }
+}
+
+/// A light's sample as [`weigh`] takes it: the direction, the distance
+/// (∞ for light from infinity), radiance over density, and the density
+/// per steradian where an area light or the environment has one.
+pub(super) type Drawn = (Vec3, f32, Vec3, Option<f32>);
+
+/// An environment's sample as [`weigh`] takes it.
+#[inline(always)]
+pub(super) fn env_drawn(e: Option<EnvSample>) -> Option<Drawn> {
+    let e = e?;
+    Some((e.wi, f32::INFINITY, e.radiance / e.pdf, Some(e.pdf)))
+}
+
+/// Any other light's sample as [`weigh`] takes it: an area light's
+/// density is its radiance over the sample's weight.
+#[inline(always)]
+pub(super) fn light_drawn(light: &Light, s: Option<LightSample>) -> Option<Drawn> {
+    let s = s?;
+    let pdf = light
+        .is_area()
+        .then(|| light.surface_radiance().max_element() / s.weight.max_element());
+    Some((s.wi, s.distance, s.weight, pdf))
+}
+
+/// One sample of `light`: f · L · cos / pdf times its MIS weight against
+/// the BSDF (`samples` light samples a vertex), with the direction and
+/// distance of its shadow ray (origin still the vertex).
+#[inline(always)]
+pub(super) fn weigh(
+    light: &Light,
+    bsdf: &Bsdf,
+    (wi, distance, le_over_pdf, light_pdf): Drawn,
+    samples: u32,
+) -> Option<Contribution> {
+    let (f, bsdf_pdf) = bsdf.eval(wi);
+    let cos = bsdf.cos(wi);
+    if f.max_element() <= 0.0 || cos <= 0.0 {
+        return None;
+    }
+    let w = match light_pdf {
+        Some(pdf) => power_heuristic(samples as f32 * pdf, bsdf_pdf),
+        None => 1.0,
+    };
+    let value = f * le_over_pdf * (cos * w);
+    value.is_finite().then_some(Contribution {
+        wi,
+        distance,
+        except: light.prim().unwrap_or(u32::MAX),
+        value,
+    })
+}
+
+/// The shadow ray of contribution `c` from a vertex (`p`, its rounding
+/// bound, `ng` faced towards the viewer), ending short of the point
+/// sampled.
+#[inline(always)]
+pub(super) fn shadow_ray(p: Vec3, p_error: Vec3, ng: Vec3, c: &Contribution) -> Ray {
+    let origin = spawn_origin(p, p_error, ng, c.wi);
+    let tmax = if c.distance.is_finite() {
+        (c.distance - (origin - p).length()).max(0.0)
+    } else {
+        f32::INFINITY
+    };
+    Ray::segment(origin, c.wi, tmax)
 }

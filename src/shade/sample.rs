@@ -100,7 +100,38 @@ pub(super) fn draw_2d_lanes<'c>(
     dim: Dim,
     at: impl Fn(usize) -> (u32, u32),
 ) -> [Vec2; LANES] {
-    let mut points = [Vec2::ZERO; LANES];
+    draw_lanes(wanted, ctx_of, at, |sampler, index, count, sharing| {
+        sampler.dim_2d(dim, count).get_2d_lanes(index, sharing)
+    })
+}
+
+/// The 1D draws of dimension `dim` for the lanes `i` in mask `wanted`, as
+/// [`draw_2d_lanes`] draws 2D points
+/// ([`crate::sampling::PixelSampler::get_1d_lanes`]).
+#[inline]
+pub(super) fn draw_1d_lanes<'c>(
+    wanted: u32,
+    ctx_of: impl Fn(usize) -> &'c SampleContext,
+    dim: Dim,
+    at: impl Fn(usize) -> (u32, u32),
+) -> [f32; LANES] {
+    draw_lanes(wanted, ctx_of, at, |sampler, index, count, sharing| {
+        sampler.get_1d_lanes(dim, index, count, sharing)
+    })
+}
+
+/// The lanes of `wanted` grouped by the numbers they share (sampler and
+/// set size), each group drawn by `draw(sampler, index, count, lanes)`
+/// with every lane's index valid (the group's first index where a lane
+/// is not in it).
+#[inline(always)]
+fn draw_lanes<'c, T: Copy + Default>(
+    wanted: u32,
+    ctx_of: impl Fn(usize) -> &'c SampleContext,
+    at: impl Fn(usize) -> (u32, u32),
+    draw: impl Fn(&PixelSampler, [u32; LANES], u32, u32) -> [T; LANES],
+) -> [T; LANES] {
+    let mut points = [T::default(); LANES];
     let mut left = wanted;
     while left != 0 {
         let first_lane = left.trailing_zeros() as usize;
@@ -115,10 +146,7 @@ pub(super) fn draw_2d_lanes<'c>(
                 index[i] = i_index;
             }
         }
-        let drawn = first
-            .sampler
-            .dim_2d(dim, count)
-            .get_2d_lanes(index, sharing);
+        let drawn = draw(&first.sampler, index, count, sharing);
         for i in mask_lanes(sharing) {
             points[i] = drawn[i];
         }
@@ -188,6 +216,20 @@ mod tests {
             let dim = [Dim::LENS, Dim::light(1, 2)][round / 4 % 2];
             let at = |i: usize| (contexts[i].sample, contexts[i].spp);
             let drawn = draw_2d_lanes(wanted, |i| &contexts[i], dim, at);
+            let drawn_1d = draw_1d_lanes(wanted, |i| &contexts[i], dim, at);
+            for (i, x) in drawn_1d.iter().enumerate() {
+                let expected = if wanted >> i & 1 == 1 {
+                    let (index, count) = at(i);
+                    contexts[i].sampler.get_1d(dim, index, count)
+                } else {
+                    0.0
+                };
+                assert_eq!(
+                    x.to_bits(),
+                    expected.to_bits(),
+                    "round {round}, 1D lane {i}"
+                );
+            }
             for (i, point) in drawn.iter().enumerate() {
                 let expected = if wanted >> i & 1 == 1 {
                     let (index, count) = at(i);

@@ -9,6 +9,7 @@
 pub mod cylinder;
 pub mod disk;
 pub mod plane;
+pub mod plane_lanes;
 pub mod rect;
 pub mod sphere;
 pub mod triangle;

@@ -244,7 +244,8 @@ fn alternating_fan() -> Vec<Ray> {
 /// packets, the rest several in flight at once where
 /// the tree prefetches and one at a time where it does not) gets exactly
 /// the single rays' closest hits and occlusion answers, with a plane
-/// outside the BVH and a sphere as the excepted primitive.
+/// outside the BVH and a sphere as the excepted primitive; so do the same
+/// rays a few at a time (`intersect_few`, `occluded_few`).
 #[test]
 fn streams_and_single_rays_return_identical_hits() {
     for (quality, mut scene) in scenes() {
@@ -320,6 +321,23 @@ fn streams_and_single_rays_return_identical_hits() {
                     scene.geometry.occluded_except(ray, except),
                     "{label}"
                 );
+            }
+            // A few at a time, as a path batch traces its bounce and
+            // shadow rays: the same answers.
+            for (k, few) in rays.chunks(PACKET_SIZE - 1).enumerate() {
+                let at = k * (PACKET_SIZE - 1);
+                let mut few_hits = [None; PACKET_SIZE];
+                let mut few_blocked = [true; PACKET_SIZE];
+                let n = few.len();
+                scene.geometry.intersect_few(few, &mut few_hits[..n]);
+                scene
+                    .geometry
+                    .occluded_few(few, except, &mut few_blocked[..n]);
+                for j in 0..n {
+                    let label = format!("{quality:?} prefetch {prefetch}: ray {} of a few", at + j);
+                    assert_eq!(hit_bits(few_hits[j]), hit_bits(hits[at + j]), "{label}");
+                    assert_eq!(few_blocked[j], blocked[at + j], "{label}");
+                }
             }
             let found = hits.iter().filter(|h| h.is_some()).count();
             let open = blocked.iter().filter(|&&b| !b).count();

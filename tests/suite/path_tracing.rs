@@ -318,3 +318,82 @@ transform = {{ translate = [0.7, 0.2, 1.2] }}
         "instanced {a} ± {sa} vs baked {b} ± {sb}"
     );
 }
+
+/// A rect light sampled 3 times a vertex (its spherical rectangles built
+/// in SIMD lanes, and skipped where a vertex is behind it), a glowing
+/// sphere (the glowing surfaces as a source, each shadow ray skipping its
+/// own primitive), a spot and a mirror, traced by paths deep enough for
+/// Russian roulette.
+const LIT: &str = "[render]\nwidth = 10\nheight = 8\nspp = 8\nshadow_samples = 3\n\
+    integrator = \"path\"\nmax_depth = 7\n\
+    [camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.8, 0.0]\n\
+    [materials.white]\ndiffuse = [0.8, 0.8, 0.8]\n\
+    [materials.mirror]\ndiffuse = [0.0, 0.0, 0.0]\nreflectivity = 1.0\n\
+    [materials.glow]\nemission = [2.0, 3.0, 4.0]\n\
+    [[lights]]\ntype = \"rect\"\ncorner = [-0.3, 2.0, -0.3]\nedge_u = [0.6, 0.0, 0.0]\n\
+    edge_v = [0.0, 0.0, 0.6]\nradiance = [9.0, 8.0, 7.0]\n\
+    [[lights]]\ntype = \"spot\"\nposition = [1.0, 1.5, 1.0]\ndirection = [-1.0, -1.0, -1.0]\n\
+    intensity = [3.0, 3.0, 3.0]\ninner_angle = 20.0\nouter_angle = 40.0\n\
+    [[objects]]\nplane = { normal = [0.0, 1.0, 0.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nplane = { point = [0.0, 2.5, 0.0], normal = [0.0, -1.0, 0.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nplane = { point = [0.0, 0.0, -1.5], normal = [0.0, 0.0, 1.0] }\nmaterial = \"white\"\n\
+    [[objects]]\nsphere = { center = [-0.6, 0.4, -0.3], radius = 0.4 }\nmaterial = \"mirror\"\n\
+    [[objects]]\nsphere = { center = [0.7, 0.3, 0.2], radius = 0.15 }\nmaterial = \"glow\"\n";
+
+/// A batch of paths (up to eight, bounce by bounce together: their rays
+/// traced together, their light samples in SIMD lanes) brings back, bit
+/// for bit, what each path traced alone brings, whichever samples share a
+/// batch: one pixel's, or several pixels' (the batches of a pass of one
+/// sample a pixel), with the AOVs of its first hits.
+#[test]
+fn a_batch_of_paths_brings_back_what_each_path_alone_does() {
+    use strata::sampling::{Dim, PixelSampler};
+    use strata::shade::{CameraSample, FirstHit, Integrator, SampleContext};
+    for text in [BUSY, LIT] {
+        let s = scene(text);
+        let st = &s.settings;
+        let mut samples = Vec::new();
+        for pixel in 0..st.width * st.height {
+            let sampler = PixelSampler::new(st.sampler, 11, pixel);
+            let corner = glam::Vec2::new((pixel % st.width) as f32, (pixel / st.width) as f32);
+            for i in 0..st.spp {
+                let ctx = SampleContext::new(sampler, i, st.spp);
+                let film = corner + sampler.get_2d(Dim::PIXEL, i, st.spp);
+                samples.push(CameraSample { ctx, film });
+            }
+        }
+        let mut alone = Integrator::new(&s);
+        let one: Vec<(Vec3, FirstHit)> = samples
+            .iter()
+            .map(|c| {
+                let (mut out, mut first) = ([Vec3::ZERO], [FirstHit::MISS]);
+                alone.camera_batch(std::slice::from_ref(c), &mut out, Some(&mut first));
+                (out[0], first[0])
+            })
+            .collect();
+        assert!(one.iter().any(|(l, _)| l.max_element() > 0.0));
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        // Batches of one pixel's samples (8 and 8), then of samples across
+        // pixels: every seventh sample (a permutation: no count here is a
+        // multiple of 7), in batches of seven.
+        let across: Vec<usize> = (0..samples.len()).map(|k| k * 7 % samples.len()).collect();
+        for (order, size) in [((0..samples.len()).collect::<Vec<_>>(), 8), (across, 7)] {
+            let mut batched = Integrator::new(&s);
+            for chunk in order.chunks(size) {
+                let batch: Vec<CameraSample> = chunk.iter().map(|&k| samples[k]).collect();
+                let mut out = vec![Vec3::ZERO; batch.len()];
+                let mut first = vec![FirstHit::MISS; batch.len()];
+                batched.camera_batch(&batch, &mut out, Some(&mut first));
+                for (j, &k) in chunk.iter().enumerate() {
+                    assert_eq!(
+                        bits(out[j]),
+                        bits(one[k].0),
+                        "sample {k} in a batch of {size}"
+                    );
+                    assert_eq!(first[j], one[k].1, "sample {k}'s first hit");
+                }
+            }
+            assert_eq!(batched.counts, alone.counts, "the same rays");
+        }
+    }
+}
