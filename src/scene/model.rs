@@ -46,7 +46,7 @@ pub const FRAMING_POINTS: usize = 1 << 24;
 /// The noise target of a model's first picture when the command line
 /// asks for no sample count: little grain at a glance, in seconds. On the
 /// bunny it takes the samples the previous measure's 0.05 took (about
-/// 26 a pixel) to a tenth less RMSE (the timings are in
+/// 26 a pixel) to 11% less RMSE (the timings are in
 /// docs/model-pictures.md).
 pub const DEFAULT_NOISE: f32 = 0.07;
 /// The ceiling of samples per pixel under [`DEFAULT_NOISE`].
