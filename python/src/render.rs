@@ -267,10 +267,10 @@ impl Observer for Interrupt {
 /// window (each pixel as in the whole image). ``aovs=True`` (or a list of
 /// ``"albedo"``, ``"normal"``, ``"depth"``, ``"spp"``) also returns a dict
 /// of the AOVs: albedo and normal (height, width, 3), depth and spp (the
-/// samples each pixel took) (height, width). ``noise=0.02`` stops each
-/// pixel at that estimated error, the standard error over the square root
-/// of the luminance (``spp`` the ceiling, default
-/// 1024). ``exposure`` and ``tonemap`` are what an 8-bit file shows: the
+/// samples each pixel took) (height, width). ``noise=0.02`` samples
+/// adaptively: each pixel takes s/0.02² samples, s the estimated standard
+/// deviation of its samples' luminance, while its neighbours go on
+/// (``spp`` the ceiling, default 1024). ``exposure`` and ``tonemap`` are what an 8-bit file shows: the
 /// array stays linear radiance (exposure only scales what the noise
 /// target judges). ``integrator="path"`` traces light past the first
 /// bounce (``"distribution"``, the seed's ray tracer, is the default for
@@ -352,7 +352,7 @@ pub fn render(
     let passes = count(passes, "passes", 1)?;
     if let (Some(p), Some(e)) = (passes, noise) {
         return Err(error(format!(
-            "passes={p} with noise={e}: a noise target's passes are its decision points (after 16, 24, 32, 48, … samples); leave passes out"
+            "passes={p} with noise={e}: a noise target's passes are its decision points (after 8, 12, 16, 24, … samples); leave passes out"
         )));
     }
     let packets = mode(packets, "packets")?.unwrap_or_default();

@@ -22,9 +22,12 @@ pub struct Method {
 }
 
 /// Random; stratified; stratified plus importance sampling (lobe-sampled
-/// glossy rays, solid-angle light samples); and the same with area light
-/// sampling, to isolate what solid-angle sampling buys.
-pub const METHODS: [Method; 4] = [
+/// glossy rays, solid-angle light samples); the same with area light
+/// sampling, to isolate what solid-angle sampling buys; and importance
+/// sampling drawn from the Sobol sequence, the adaptive method's own
+/// sampling at a fixed count, so that what a noise target saves is
+/// measured against the best uniform setting, its own included.
+pub const METHODS: [Method; 5] = [
     Method {
         name: "random",
         sampler: SamplerKind::Random,
@@ -47,6 +50,12 @@ pub const METHODS: [Method; 4] = [
         name: "stratified+is/area-lights",
         sampler: SamplerKind::Stratified,
         light: LightSampling::Area,
+        glossy: GlossySampling::Lobe,
+    },
+    Method {
+        name: "sobol+is",
+        sampler: SamplerKind::Sobol,
+        light: LightSampling::SolidAngle,
         glossy: GlossySampling::Lobe,
     },
 ];
@@ -305,11 +314,16 @@ mod tests {
 
     #[test]
     fn chart_panels_plot_each_method_and_name_those_that_coincide() {
-        // The last method's errors equal the second's (as on a scene with
-        // nothing for its importance sampling to change), at other times.
+        // The fourth method's errors equal the second's (as on a scene
+        // with nothing for its importance sampling to change), and the
+        // fifth's the first's, at other times.
         let mut points = Vec::new();
         for (k, m) in METHODS.iter().enumerate() {
-            let rmse_of = if k == 3 { 1 } else { k };
+            let rmse_of = match k {
+                3 => 1,
+                4 => 0,
+                _ => k,
+            };
             for spp in [1u32, 2, 4, 8] {
                 points.push(Point {
                     method: m.name,
@@ -328,9 +342,9 @@ mod tests {
         assert!(spp.log_x && spp.log_y && spp.integer_x);
         assert_eq!(spp.series.len(), METHODS.len());
         assert_eq!(spp.series[0].label, "random (slope -0.50)");
-        assert_eq!(same_as(time), [None; 4], "times differ");
+        assert_eq!(same_as(time), [None; 5], "times differ");
         let same = same_as(spp);
-        assert_eq!(same, [None, None, None, Some(1)]);
+        assert_eq!(same, [None, None, None, Some(1), Some(0)]);
         assert_eq!(
             legend_text(spp, 3, &same),
             "stratified+is/area-lights (slope -0.50) (same as stratified (slope -0.50))"

@@ -1,53 +1,61 @@
-//! Adaptive sampling to a noise target (`--noise E`, `[render] noise`).
+//! Adaptive sampling to a noise target (`--noise`, `[render] noise`).
 //!
-//! A pixel stops taking samples once the estimated relative error of its
-//! luminance is at most E; `spp` is the ceiling. Decisions are made at
-//! pass boundaries, from the film alone: a pixel's record (its sums, its
-//! sum of squared luminance and its count) says whether it goes on. A
-//! stopped pixel's record no longer changes, so the decision is the same
-//! at every later boundary, and a render resumed from a checkpoint (which
-//! holds the film) decides as the uninterrupted one did. The image is
-//! therefore the same for any thread count, checkpoint and resume.
+//! A pixel stops taking samples once it has taken σ/E² of them, σ the
+//! estimated standard deviation of its samples' displayed luminance and E
+//! the target; `spp` is the ceiling. Decisions are made at pass
+//! boundaries, from the film alone: a pixel's record (its sums, its sum
+//! of squared luminance and its count) says whether it goes on. A stopped
+//! pixel's record no longer changes, so the decision is the same at every
+//! later boundary, and a render resumed from a checkpoint (which holds the
+//! film) decides as the uninterrupted one did. The image is therefore the
+//! same for any thread count, checkpoint and resume.
 //!
 //! **The estimate.** With n samples of luminance Yᵢ, mean Ȳ and sample
 //! variance s² = (ΣYᵢ² − nȲ²)/(n − 1), the standard error of the mean is
-//! s/√n, and a pixel's error is s/√n · k ÷ √max(Ȳ·k, F), where k =
-//! 2^exposure (what the output shows) and F = [`DARK_FLOOR`]: the standard
-//! error over the square root of the displayed luminance, the measure of
-//! Dammertz et al. 2010 (section 3) that Cycles' adaptive threshold also
-//! uses. Where Ȳ·k = 1 it is the relative error; a darker pixel may keep a
-//! larger relative error and a smaller absolute one. Against the relative
-//! error s/√n ÷ Ȳ this measure spends fewer samples on dark pixels, whose
-//! noise is small in absolute terms, and more on bright noisy ones (a lit
-//! penumbra): on the dragon under an area light the relative measure took
-//! 0.8 of the uniform samples to a given RMSE, this one 0.3 to 0.5
-//! (docs/converge.md). s/√n is the error of n independent samples; a
-//! pixel's samples are part of one stratified set, whose error is smaller
-//! where the integrand is smooth, so the estimate errs on the side of more
-//! samples there (the factor is measured in tests/suite/adaptive.rs).
+//! s/√n. A pixel's error is that standard error over the square root of
+//! its samples' standard deviation, both as displayed (times k =
+//! 2^exposure): s·k/√n ÷ √(s·k) = √(s·k/n), at most E once n ≥ s·k/E².
 //!
-//! **Neighbours.** A pixel whose first samples all agree (16 shadow rays
-//! that all missed the light's edge) estimates an error of 0 though its
-//! own is not; alone it would stop, and such pixels set a floor under the
-//! image's error. So a pixel keeps sampling while any pixel of its 3 × 3
-//! neighbourhood does (Cycles dilates its active pixels the same way):
-//! noise is rarely a single pixel wide. The decision still reads the film
-//! alone, so threads, checkpoints and resumes do not change it; a crop is
-//! rendered with a margin of one pixel per decision
+//! **Why samples in proportion to s.** For a given number of samples, the
+//! image's mean squared error, the mean over pixels of s²/n, is least
+//! when each pixel's n is proportional to its s (Neyman 1934's optimal
+//! allocation of a stratified survey; a Lagrange multiplier gives it in a
+//! line), and then it is E² times the mean of s·k: the image's RMSE is
+//! about E·√mean(s·k). A pixel whose samples agree (s = 0) is done; a
+//! dark pixel, whose deviation is small, is done soon. Stopping at a
+//! relative error (s/√n ÷ Ȳ) gives n ∝ s²/Ȳ², and the standard error over
+//! √Ȳ (Dammertz et al. 2010, Cycles' measure) n ∝ s²/Ȳ: both spend most
+//! on the noisiest bright pixels, past where their samples lower the
+//! image's error most. Measured on the dragon under an area light at
+//! equal RMSE, the relative measure took 0.8 of the uniform samples,
+//! over √Ȳ 0.3, this one about 0.2 (docs/converge.md). s/√n is the error
+//! of n independent samples; a pixel's samples are part of one stratified
+//! set, whose error is smaller where the integrand is smooth, so the
+//! estimate errs on the side of more samples there (the factor is
+//! measured in tests/suite/adaptive.rs).
+//!
+//! **Neighbours.** A pixel whose first samples all agree (eight shadow
+//! rays that all missed the light's edge) estimates a deviation of 0
+//! though its own is not; alone it would stop, and such pixels set a floor
+//! under the image's error. So a pixel keeps sampling while any pixel of
+//! its 3 × 3 neighbourhood does (Cycles dilates its active pixels the same
+//! way): noise is rarely a single pixel wide. The decision still reads the
+//! film alone, so threads, checkpoints and resumes do not change it; a
+//! crop is rendered with a margin of one pixel per decision
 //! ([`crop_margin`]: how far a neighbour's influence can travel), so it
 //! still equals the same window of the whole render.
 //!
 //! **The passes** are the decision points: the first after
 //! [`FIRST_DECISION`] samples, then each ×1.5 or ×4/3 of the one before
-//! (16, 24, 32, 48, 64, 96, …) up to `spp`, whatever `--passes` says, so
+//! (8, 12, 16, 24, 32, 48, …) up to `spp`, whatever `--passes` says, so
 //! that a checkpoint taken at any of them resumes on the same plan.
 //!
 //! **What a stopped pixel used:** under the Sobol sampler (the default
 //! with a noise target), a prefix of one sequence that is stratified at
 //! every power of two (`sampling::sobol`). Under the multi-jittered
 //! sampler each pass's samples are a stratified set of their own
-//! (`schedule::SampleSet::of`): the first pass a set of 16 samples, the
-//! next ones sets of 8, 8, 16, 16, 32, 32, … each scrambled apart from the
+//! (`schedule::SampleSet::of`): the first pass a set of 8 samples, the
+//! next ones sets of 4, 4, 8, 8, 16, 16, … each scrambled apart from the
 //! others, so a pixel stopped after any pass has used whole sets, never
 //! part of one, and a pixel that reaches the ceiling has used those sets,
 //! not the one set of spp a render without a noise target uses. (A time
@@ -55,26 +63,29 @@
 //!
 //! The approach is Dammertz, Hanika, Keller and Lensch 2010, "A
 //! Hierarchical Automatic Stopping Condition for Monte Carlo Global
-//! Illumination" (per-pixel error from the samples so far, over the
-//! square root of the luminance), with a neighbourhood of 3 × 3 pixels in
-//! place of their hierarchy of blocks.
+//! Illumination" (per-pixel error from the samples so far, judged at
+//! pass ends), with Neyman's allocation for the measure and a
+//! neighbourhood of 3 × 3 pixels in place of their hierarchy of blocks.
 
 use super::film::{Film, FIXED_SCALE, LUMINANCE};
 use crate::scene::settings::RenderSettings;
 use std::ops::Range;
 
-/// Samples every pixel takes before the first decision: enough for a
-/// variance of 15 degrees of freedom, two batches of eight lanes.
-pub const FIRST_DECISION: u32 = 16;
+/// Samples every pixel takes before the first decision: one batch of
+/// eight SIMD lanes, a power of two of the Sobol sequence (stratified),
+/// and a variance of 7 degrees of freedom. A later first decision costs
+/// the pixels that need few samples most: after 16, the dragon under an
+/// area light took 1.1 to 1.5 times the samples to the same RMSE
+/// (docs/converge.md); the neighbourhood guards what so few samples miss.
+pub const FIRST_DECISION: u32 = 8;
 
-/// Displayed luminance (linear, after exposure) below which the target is
-/// absolute: a pixel of mean Y·k < F stops when its standard error (times
-/// k) is at most E·√F, a tenth of E. Only a floor, so that black pixels
-/// whose samples differ converge; Cycles' is 10⁻⁴ added to √Y.
-pub const DARK_FLOOR: f64 = 0.01;
+/// The share of Ȳ² that the f32 rounding of each sample's Y² can leave
+/// as variance where samples agree (`standard_error`): a relative
+/// deviation below 0.1% counts as none.
+pub const ROUNDING: f64 = 1e-6;
 
-/// The noise target of a render: the relative error `error`, judged on
-/// luminance times `scale` (2^exposure).
+/// The noise target of a render: the error `error` (module docs), judged
+/// on luminance times `scale` (2^exposure).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseTarget {
     pub error: f32,
@@ -93,13 +104,13 @@ impl NoiseTarget {
 }
 
 /// The sample counts at which pixels are judged, for a ceiling of `spp`:
-/// 16, 24, 32, 48, 64, … (powers of two and 1.5 times them), then `spp`.
+/// 8, 12, 16, 24, 32, … (powers of two and 1.5 times them), then `spp`.
 pub fn decision_points(spp: u32) -> Vec<u32> {
     let mut points = Vec::new();
     let mut p = FIRST_DECISION;
     while p < spp {
         points.push(p);
-        // 16 → 24 → 32 → 48 → 64: alternately ×1.5 and ×4/3.
+        // 8 → 12 → 16 → 24 → 32: alternately ×1.5 and ×4/3.
         p = if p.is_power_of_two() {
             p + p / 2
         } else {
@@ -134,26 +145,32 @@ pub fn standard_error(film: &Film, index: usize) -> Option<(f64, f64)> {
     }
     let n = n as f64;
     let s = &film.sums[index];
-    // Ȳ from the channel sums, in f64 (the squares were rounded from f32,
-    // so samples that agree leave a variance of about 10⁻⁷ Ȳ², or 0).
+    // Ȳ from the channel sums, in f64. The squares were rounded from f32
+    // (Y and Y² each to a few units of 2⁻²⁴), so samples that agree leave
+    // up to about 7·10⁻⁷ Ȳ² of variance: [`ROUNDING`] Ȳ² is taken off, or
+    // the square root in the error would show a bright pixel's rounding as
+    // noise (3·10⁻⁴ Ȳ of deviation at Ȳ = 40 is an error of 0.04 at 8
+    // samples).
     let w = LUMINANCE;
     let y = w[0] * s[0] as f64 + w[1] * s[1] as f64 + w[2] * s[2] as f64;
     let mean = y / (FIXED_SCALE * n);
     let mean_square = film.square(index) as f64 / (FIXED_SCALE * n);
-    let variance = ((mean_square - mean * mean) * n / (n - 1.0)).max(0.0);
+    let spread = mean_square - mean * mean * (1.0 + ROUNDING);
+    let variance = (spread * n / (n - 1.0)).max(0.0);
     Some((mean, (variance / n).sqrt()))
 }
 
 /// The estimated error of pixel `index` of `film`, as the module docs
-/// define it (the standard error over the square root of the displayed
-/// luminance), with luminance scaled by `scale`; infinite with fewer than
-/// two valid samples or no squares kept.
+/// define it (the standard error over the square root of the samples'
+/// standard deviation, √(s/n)), with luminance scaled by `scale`; infinite
+/// with fewer than two valid samples or no squares kept.
 pub fn pixel_error(film: &Film, index: usize, scale: f32) -> f64 {
-    let Some((mean, error)) = standard_error(film, index) else {
+    let Some((_, error)) = standard_error(film, index) else {
         return f64::INFINITY;
     };
-    let scale = scale as f64;
-    error * scale / (mean * scale).max(DARK_FLOOR).sqrt()
+    // s/√n · k over √(s·k), with s = error·√n: √(error · k / √n).
+    let n = film.counts[index] as f64;
+    (error * scale as f64 / n.sqrt()).sqrt()
 }
 
 /// Whether pixel `index` of `film` has met `target` on its own samples.
@@ -204,12 +221,12 @@ mod tests {
     fn decision_points_grow_by_half_and_third_and_end_at_the_ceiling() {
         assert_eq!(
             decision_points(200),
-            [16, 24, 32, 48, 64, 96, 128, 192, 200]
+            [8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 200]
         );
-        assert_eq!(decision_points(16), [16]);
+        assert_eq!(decision_points(8), [8]);
         assert_eq!(decision_points(4), [4]);
         assert_eq!(decision_points(1024).last(), Some(&1024));
-        assert_eq!(passes(0, 40), [0..16, 16..24, 24..32, 32..40]);
+        assert_eq!(passes(0, 40), [0..8, 8..12, 12..16, 16..24, 24..32, 32..40]);
         assert_eq!(passes(24, 40), [24..32, 32..40]);
         assert_eq!(passes(40, 40), Vec::<Range<u32>>::new());
     }
@@ -226,11 +243,18 @@ mod tests {
     }
 
     /// Samples that agree have no error; two values a and b, half each,
-    /// have s = |a − b|/2 · √(n/(n−1)), judged over √Ȳ.
+    /// have s = |a − b|/2 · √(n/(n−1)), and an error √(s·k/n).
     #[test]
-    fn the_estimate_is_the_standard_error_over_the_root_of_the_mean() {
+    fn the_estimate_is_the_root_of_the_deviation_over_the_count() {
+        // However bright: f32's rounding of the squares is no deviation.
+        for v in [
+            Vec3::new(0.3, 0.2, 0.7),
+            Vec3::new(40.3, 40.2, 39.7),
+            Vec3::splat(1e4),
+        ] {
+            assert_eq!(pixel_error(&film_of(&[v; 16]), 0, 1.0), 0.0, "{v}");
+        }
         let same = film_of(&[Vec3::new(0.3, 0.2, 0.7); 16]);
-        assert!(pixel_error(&same, 0, 1.0) < 1e-3);
         let target = NoiseTarget {
             error: 1e-3,
             scale: 1.0,
@@ -241,25 +265,31 @@ mod tests {
             .collect();
         let film = film_of(&values);
         let s = (16.0f64 / 15.0).sqrt();
-        let expected = s / 4.0 / 2.0f64.sqrt();
+        let expected = (s / 16.0).sqrt();
         let e = pixel_error(&film, 0, 1.0);
         assert!((e - expected).abs() < 1e-5, "{e} vs {expected}");
-        // Four times the exposure shows four times the error over twice
-        // the root of the mean, above the floor.
+        // Four times the exposure shows four times the deviation: twice
+        // the error, so four times the samples to the same target.
         assert!((pixel_error(&film, 0, 4.0) - 2.0 * expected).abs() < 1e-5);
     }
 
-    /// A dark pixel is judged against the floor: its error is its
-    /// absolute error over √F.
+    /// Neyman's allocation: a pixel whose samples deviate a hundredth as
+    /// much (however dark or bright it is) meets a target with a
+    /// hundredth of the samples, so its error at the same count is a
+    /// tenth; with fewer than two samples, or no squares kept, the error
+    /// is unknown.
     #[test]
-    fn dark_pixels_meet_an_absolute_target() {
-        let values: Vec<Vec3> = (0..16)
-            .map(|i| Vec3::splat(if i % 2 == 0 { 0.0 } else { 0.002 }))
-            .collect();
-        let film = film_of(&values);
-        let absolute = 0.001 * (16.0f64 / 15.0).sqrt() / 4.0;
-        let e = pixel_error(&film, 0, 1.0);
-        assert!((e - absolute / DARK_FLOOR.sqrt()).abs() < 1e-4, "{e}");
+    fn the_samples_a_pixel_needs_are_in_proportion_to_its_deviation() {
+        let spread = |low: f32, high: f32| {
+            let values: Vec<Vec3> = (0..16)
+                .map(|i| Vec3::splat(if i % 2 == 0 { low } else { high }))
+                .collect();
+            pixel_error(&film_of(&values), 0, 1.0)
+        };
+        let (wide, narrow) = (spread(0.0, 2.0), spread(0.0, 0.02));
+        assert!((narrow / wide - 0.1).abs() < 1e-4, "{narrow} / {wide}");
+        // The level does not count, only the spread.
+        assert!((spread(5.0, 5.2) / spread(0.0, 0.2) - 1.0).abs() < 1e-2);
         assert_eq!(pixel_error(&film_of(&[Vec3::ONE]), 0, 1.0), f64::INFINITY);
         assert_eq!(pixel_error(&Film::new(1, 1), 0, 1.0), f64::INFINITY);
     }
@@ -289,8 +319,8 @@ mod tests {
     /// margin covers every step a neighbour's influence can take.
     #[test]
     fn the_crop_margin_is_the_decisions_after_the_first() {
-        assert_eq!(crop_margin(16), 0);
-        assert_eq!(crop_margin(24), 1);
+        assert_eq!(crop_margin(8), 0);
+        assert_eq!(crop_margin(12), 1);
         assert_eq!(crop_margin(200), decision_points(200).len() as u32 - 1);
     }
 }

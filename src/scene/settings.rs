@@ -19,7 +19,7 @@
 //! background = [0.0, 0.0, 0.0]   # radiance of rays that hit nothing
 //! light_sampling = "solid_angle" # or "area"
 //! glossy_sampling = "lobe"       # or "uniform"
-//! noise = 0.02           # stop each pixel at 2% estimated error (spp the ceiling)
+//! noise = 0.02           # adaptive: samples where the noise is, to this target (spp the ceiling)
 //! exposure = 0.0         # stops, for 8-bit outputs (and the noise target's floor)
 //! tonemap = "clamp"      # or "filmic", for 8-bit outputs
 //! integrator = "distribution"    # or "path": light past the first bounce
@@ -106,11 +106,13 @@ pub struct RenderOverrides {
     /// baseline [render.glossy_sampling; default lobe]
     #[arg(long)]
     pub glossy_sampling: Option<GlossySampling>,
-    /// Adaptive sampling: stop each pixel once the estimated standard error
-    /// of its luminance, over the square root of that luminance, is at most
-    /// E (for a pixel of luminance 1, 0.02 is 2%), and its 3x3 neighbours
-    /// have stopped too; judged at pass boundaries (after 16, 24, 32, 48,
-    /// 64, … samples); --spp is the ceiling (default 1024 with --noise).
+    /// Adaptive sampling: each pixel takes s/E² samples, s the estimated
+    /// standard deviation of its samples' luminance (Neyman's allocation,
+    /// which gives the least image error for the samples), and goes on
+    /// while any of its 3x3 neighbours does; the image's RMSE is then
+    /// about E times the root of the mean s. Judged at pass boundaries
+    /// (after 8, 12, 16, 24, 32, … samples); --spp is the ceiling (default
+    /// 1024 with --noise).
     /// See docs/cli.md, "Noise target". The image is the same for any
     /// thread count, crop, checkpoint and resume [render.noise; default
     /// none: every pixel takes spp samples]

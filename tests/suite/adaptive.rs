@@ -38,7 +38,8 @@ fn film(s: &Scene, threads: usize) -> Film {
 }
 
 /// Pixels whose samples all agree (sky) stop at the first decision, but
-/// for those beside a pixel that samples on (the horizon); the penumbra (floor pixels, by their normal, at a fifth to four fifths of
+/// for those beside a pixel that samples on (the horizon); a pixel that
+/// stops has met the target; the penumbra (floor pixels, by their normal, at a fifth to four fifths of
 /// the light the floor gets without the sphere, in uniform renders)
 /// keeps sampling; and no pixel passes the ceiling.
 #[test]
@@ -68,8 +69,17 @@ fn agreeing_pixels_stop_at_the_first_decision_unless_a_neighbour_samples_on() {
     };
     let (mut sky, mut kept_by_neighbours) = (0, 0);
     let mut penumbra = Vec::new();
+    let target = adaptive::NoiseTarget {
+        error: 0.02,
+        scale: 1.0,
+    };
     for (i, p) in with.film.to_rgb().iter().enumerate() {
         assert!(adaptive.counts[i] >= FIRST_DECISION && adaptive.counts[i] <= 512);
+        // A pixel that stopped short of the ceiling met the target: its
+        // samples number at least s/E².
+        if adaptive.counts[i] < 512 {
+            assert!(adaptive::converged(&adaptive, i, target), "pixel {i}");
+        }
         let floor = aov[i].normal[1] / aov[i].count as f64 > 0.9999;
         if is_sky[i] {
             // A sky pixel agrees with itself: only a neighbour that is
