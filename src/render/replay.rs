@@ -167,8 +167,14 @@ mod tests {
         assert!(plain.sums != film.sums, "the sets differ");
         scene.settings.noise = Some(0.05);
         let film = super::super::render(&scene, &Default::default(), None, ()).film;
-        // Some of these pixels stopped at the first decision, some went on.
-        assert_eq!(check(&scene, &film, false), [16, 20].into());
+        // Some of these pixels stopped at the first decision, some went on
+        // to the ceiling.
+        let counts = check(&scene, &film, false);
+        let first = crate::render::adaptive::FIRST_DECISION;
+        assert!(
+            counts.contains(&first) && counts.contains(&20),
+            "{counts:?}"
+        );
     }
 
     #[test]

@@ -326,13 +326,14 @@ fn render_window(
     let mut stopped = false;
     let mut done = start_sample;
     // Which pixels take this pass's samples, under a noise target.
-    let mut active = Vec::new();
+    let mut decisions = adaptive::Decisions::default();
     // The last pass's seconds per pixel sample, for the time budget.
     let mut pace: Option<f64> = None;
     for (pass_index, samples) in passes.iter().enumerate() {
         if let Some(t) = target {
-            adaptive::active_pixels(&film, t, &mut active);
+            decisions.update(&film, t);
         }
+        let active = decisions.active();
         let live = match target {
             Some(_) => active.iter().filter(|&&a| a).count(),
             None => n,
@@ -363,7 +364,7 @@ fn render_window(
             None => (0..n.div_ceil(chunk)).map(|_| None).collect(),
         };
         let watching = &observer;
-        let active = (!active.is_empty()).then_some(&active[..]);
+        let active = (!active.is_empty()).then_some(active);
         let set = SampleSet::of(s, target.is_some() || opts.budget.is_some(), samples);
         // Each chunk's rays are counted by its own integrator and the
         // pass sums the counts.
@@ -413,8 +414,11 @@ fn render_window(
                 .reduce(RayCounts::default, |a, b| a + b)
         });
         let film_start = timeline.map(Timeline::now);
+        // A pixel that took no samples has nothing to add.
         for (i, acc) in scratch.iter().enumerate() {
-            film.add_pixel(i, acc);
+            if active.is_none_or(|a| a[i]) {
+                film.add_pixel(i, acc);
+            }
         }
         cpu.pass(&pool);
         done = samples.end;
@@ -588,6 +592,17 @@ pub fn render_pixels(
     if samples.is_empty() || accs.is_empty() {
         return;
     }
+    // The next pixel from `j` on that takes samples.
+    let live = |mut j: usize| {
+        while run.active.is_some_and(|a| j < a.len() && !a[j]) {
+            j += 1;
+        }
+        j
+    };
+    let (mut j, mut next) = (live(0), samples.start);
+    if j == accs.len() {
+        return;
+    }
     let mut out = [Vec3::ZERO; PACKET_SIZE];
     let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
     // The common set sizes, prepared once for all these pixels: camera
@@ -603,17 +618,6 @@ pub fn render_pixels(
         let jitter = sampler.dim_2d(Dim::PIXEL, set.count);
         (Vec2::new(x as f32, y as f32), sampler, jitter)
     };
-    // The next pixel from `j` on that takes samples.
-    let live = |mut j: usize| {
-        while run.active.is_some_and(|a| j < a.len() && !a[j]) {
-            j += 1;
-        }
-        j
-    };
-    let (mut j, mut next) = (live(0), samples.start);
-    if j == accs.len() {
-        return;
-    }
     let (mut corner, mut sampler, mut jitter) = setup(j);
     let mut batch = [CameraSample {
         ctx: SampleContext::new(sampler, 0, set.count),

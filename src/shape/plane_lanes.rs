@@ -38,16 +38,16 @@ impl PlaneLanes {
         let chunks = planes
             .chunks(LANES)
             .map(|part| {
-                let axis = |f: &dyn Fn(&Plane) -> [f32; 3], k: usize| {
+                let axis = |f: fn(&Plane) -> [f32; 3], k: usize| {
                     f32x8::new(std::array::from_fn(|i| {
                         part.get(i).map_or(0.0, |p| f(p)[k])
                     }))
                 };
-                let point = |p: &Plane| p.point.to_array();
-                let normal = |p: &Plane| p.normal.to_array();
+                let point: fn(&Plane) -> [f32; 3] = |p| p.point.to_array();
+                let normal: fn(&Plane) -> [f32; 3] = |p| p.normal.to_array();
                 Chunk {
-                    point: [0, 1, 2].map(|k| axis(&point, k)),
-                    normal: [0, 1, 2].map(|k| axis(&normal, k)),
+                    point: [0, 1, 2].map(|k| axis(point, k)),
+                    normal: [0, 1, 2].map(|k| axis(normal, k)),
                     live: u32::MAX >> (32 - part.len()),
                 }
             })
