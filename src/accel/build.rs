@@ -115,7 +115,11 @@ impl Bvh8 {
     ) -> Self {
         match binary_tree_and_bounds(Boxes::Owned(boxes), quality, steps) {
             Some((bvh2, bounds)) => {
-                steps.time("collapse", || Self::collapse(&bvh2, bounds, first_other))
+                let prims = bvh2.primitive_indices.len();
+                steps.time("collapse", || {
+                    super::collapse::collapse_owned(bvh2, bounds, first_other)
+                        .debug_validated(prims)
+                })
             }
             None => Self::empty(),
         }

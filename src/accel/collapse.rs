@@ -68,9 +68,23 @@ const PARALLEL_DEPTH: u32 = 10;
 /// Primitives from `first_other` on are tested one by one in a leaf
 /// ([`OTHER_COST`]); those before it are triangles.
 pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
-    CollapseCosts::new(bvh2, first_other)
-        .emit(0, 0, 0)
-        .into_bvh(bounds)
+    parts(bvh2, first_other).into_bvh(bounds)
+}
+
+/// [`collapse`] that takes the binary tree and frees it, with the cost
+/// tables' choices, before the 8-wide tree's parts are copied into one:
+/// the copy is the collapse's second peak, and the binary tree (96 bytes
+/// a primitive) dwarfs what it copies.
+pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
+    let part = parts(&bvh2, first_other);
+    drop(bvh2);
+    part.into_bvh(bounds)
+}
+
+/// The 8-wide tree over `bvh2` in parts made in parallel; the choices
+/// are freed when it returns.
+fn parts(bvh2: &Bvh2, first_other: u32) -> Part {
+    CollapseCosts::new(bvh2, first_other).emit(0, 0, 0)
 }
 
 /// [`collapse`] by one sequential walk from the root, for tests of the
@@ -96,7 +110,11 @@ pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -
 ///   `i` slots between `n`'s two children.
 ///
 /// Costs are areas times the constants above, all relative to one tree, so
-/// no division by the root's area is needed. The greedy collapse this
+/// no division by the root's area is needed. A node's table is read only
+/// by its parent's, once: the walk that fills them keeps them on a stack
+/// (children before parents), and only each node's count and choices are
+/// kept for the emission, 8 bytes an inner node, not the 32 bytes of a
+/// table as well, at the build's peak. The greedy collapse this
 /// replaces (open the largest child until there are eight) filled every
 /// node and made leaves of 2.3 (dragon) to 2.5 (bunny) triangles, paying an 8-wide
 /// leaf test for each; the tables instead weigh a bigger leaf's larger box
@@ -108,19 +126,17 @@ pub(super) struct CollapseCosts<'a> {
     /// nor flush to zero (near 1e-20), and the choices do not depend on
     /// the scene's scale.
     unit: f32,
-    /// Per inner node, at [`CollapseCosts::slot`]: only inner nodes have
-    /// tables (a leaf's is its leaf cost in every entry), which halves
-    /// their memory (36 bytes a primitive at the build's peak, not 72).
-    /// f32 bits in atomics (relaxed: plain loads and stores) so that
-    /// parallel tasks can fill disjoint subtrees' entries; `rayon::join`
-    /// orders a parent's read after its children's writes.
-    cost: Vec<[AtomicU32; 8]>,
+    /// Per inner node, at [`CollapseCosts::slot`] (leaves hold theirs):
+    /// how many primitives its subtree holds. In atomics (relaxed: plain
+    /// loads and stores) so that parallel tasks can fill disjoint
+    /// subtrees' entries; `rayon::join` orders a parent's work after its
+    /// children's.
     counts: Vec<AtomicU32>,
     /// The first primitive id tested one by one ([`OTHER_COST`]).
     first_other: u32,
-    /// Per inner node, how many of its primitives are tested one by one;
-    /// empty where the tree holds none (a mesh's), which costs nothing.
-    others: Vec<AtomicU32>,
+    /// Whether the tree holds any primitive tested one by one (a mesh's
+    /// holds none, and its leaves need not look).
+    any_other: bool,
     /// Per inner node, the choices its table made ([`Choices`]), so that
     /// the emission follows them without recomputing any split.
     choices: Vec<AtomicU32>,
@@ -144,30 +160,19 @@ impl<'a> CollapseCosts<'a> {
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
             // Made in parallel: the first touch of a fresh page is the
             // cost of making a large array (see `super::build::ploc`).
-            cost: (0..inner)
-                .into_par_iter()
-                .map(|_| Default::default())
-                .collect(),
             counts: (0..inner)
                 .into_par_iter()
                 .map(|_| AtomicU32::new(0))
                 .collect(),
             first_other,
-            others: if any_other {
-                (0..inner)
-                    .into_par_iter()
-                    .map(|_| AtomicU32::new(0))
-                    .collect()
-            } else {
-                Vec::new()
-            },
+            any_other,
             choices: (0..inner)
                 .into_par_iter()
                 .map(|_| AtomicU32::new(0))
                 .collect(),
             ordered: Vec::new(),
         };
-        costs.ordered = concat(costs.fill_tables(0, 0));
+        costs.ordered = concat(costs.fill_tables(0, 0).0);
         costs
     }
 
@@ -177,35 +182,48 @@ impl<'a> CollapseCosts<'a> {
     /// children's tables in cache when it reads them; filling level by
     /// level, in parallel, took three times as long on the dragon).
     /// Returns the subtree's primitive ids in leaf order, in pieces (one
-    /// per walk) that the caller joins once.
-    fn fill_tables(&self, i: usize, depth: u32) -> Vec<Vec<u32>> {
+    /// per walk) that the caller joins once, and the subtree's table.
+    fn fill_tables(&self, i: usize, depth: u32) -> (Vec<Vec<u32>>, Table) {
         let node = &self.bvh2.nodes[i];
         if node.prim_count > 0 {
-            return vec![self.leaf_prims(node).to_vec()];
+            return (vec![self.leaf_prims(node).to_vec()], self.leaf_table(i));
         }
         if depth < PARALLEL_DEPTH {
             let (l, r) = children(node);
-            let (mut left, right) = rayon::join(
+            let ((mut left, left_table), (right, right_table)) = rayon::join(
                 || self.fill_tables(l, depth + 1),
                 || self.fill_tables(r, depth + 1),
             );
-            self.store_table(i);
             left.extend(right);
-            return left;
+            return (left, self.store_table(i, &left_table, &right_table));
         }
-        let order = post_order(self.bvh2, i);
+        let (prims, table) = self.walk_tables(i);
+        (vec![prims], table)
+    }
+
+    /// Fills the tables of BVH2 node `root`'s subtree in one post-order
+    /// walk, each table on a stack until its parent's reads it (the left
+    /// subtree's is then below the right one's); returns the subtree's
+    /// primitive ids in leaf order and its table.
+    fn walk_tables(&self, root: usize) -> (Vec<u32>, Table) {
+        let order = post_order(self.bvh2, root);
         // A tree of n leaves has 2n - 1 nodes; leaves hold one primitive
         // or more.
         let mut prims = Vec::with_capacity(order.len().div_ceil(2));
+        let mut tables: Vec<Table> = Vec::new();
         for n in order {
             let node = &self.bvh2.nodes[n as usize];
-            if node.prim_count == 0 {
-                self.store_table(n as usize);
+            let table = if node.prim_count == 0 {
+                let right = tables.pop().expect("a right child's table");
+                let left = tables.pop().expect("a left child's table");
+                self.store_table(n as usize, &left, &right)
             } else {
                 prims.extend_from_slice(self.leaf_prims(node));
-            }
+                self.leaf_table(n as usize)
+            };
+            tables.push(table);
         }
-        vec![prims]
+        (prims, tables.pop().expect("the root's table"))
     }
 
     /// The primitive ids of BVH2 leaf `node`.
@@ -214,33 +232,44 @@ impl<'a> CollapseCosts<'a> {
         &self.bvh2.primitive_indices[first..first + node.prim_count as usize]
     }
 
-    /// Computes and stores inner node `i`'s table from its children's.
-    fn store_table(&self, i: usize) {
+    /// The table of BVH2 leaf `i`: its leaf cost for any number of slots.
+    fn leaf_table(&self, i: usize) -> Table {
+        let others = self.leaf_others(&self.bvh2.nodes[i]);
+        ([leaf_cost(self.area(i), others); 8], others)
+    }
+
+    /// Computes inner node `i`'s table from its children's, stores its
+    /// count and choices, and returns the table.
+    fn store_table(&self, i: usize, left: &Table, right: &Table) -> Table {
         let slot = Self::slot(&self.bvh2.nodes[i]);
-        if !self.others.is_empty() {
-            let (l, r) = children(&self.bvh2.nodes[i]);
-            let others = self.others(l) + self.others(r);
-            self.others[slot].store(others, Relaxed);
-        }
-        let (table, count, choices) = self.node_table(i);
-        for (entry, c) in self.cost[slot].iter().zip(table) {
-            entry.store(c.to_bits(), Relaxed);
-        }
+        let others = left.1 + right.1;
+        let (table, count, choices) = self.node_table(i, &left.0, &right.0, others);
         self.counts[slot].store(count, Relaxed);
         self.choices[slot].store(choices.0, Relaxed);
+        (table, others)
     }
 
     /// The table, primitive count and choices of inner node `i`, from its
-    /// children's tables.
-    fn node_table(&self, i: usize) -> ([f32; 8], u32, Choices) {
+    /// children's tables; `others` of its primitives are tested one by one.
+    fn node_table(
+        &self,
+        i: usize,
+        left: &[f32; 8],
+        right: &[f32; 8],
+        others: u32,
+    ) -> ([f32; 8], u32, Choices) {
         let (l, r) = children(&self.bvh2.nodes[i]);
         let count = self.count(l) + self.count(r);
         let area = self.area(i);
-        let (left, right) = (self.table(l), self.table(r));
-        let splits = split_costs(&left, &right);
+        let splits = split_costs(left, right);
         let mut choices = Choices::default();
         let as_node = NODE_COST * area + splits[8].0;
-        let leaf = leaf_cost(area, self.others(i));
+        let leaf = leaf_cost(area, others);
+        // As the 8-wide tree's root (its own only child, see
+        // `node_children`), a leaf against the node's split alone.
+        if count <= LEAF_PRIMS && leaf <= splits[8].0 {
+            choices.set_root_leaf();
+        }
         let mut c = [0.0f32; 8];
         // `leaf <= as_node` is what `as_node.min(leaf) == leaf` tests: a
         // tie goes to the leaf.
@@ -287,21 +316,16 @@ impl<'a> CollapseCosts<'a> {
         }
     }
 
-    /// How many of BVH2 node `i`'s primitives are tested one by one.
-    fn others(&self, i: usize) -> u32 {
-        if self.others.is_empty() {
+    /// How many of BVH2 leaf `node`'s primitives are tested one by one.
+    fn leaf_others(&self, node: &Bvh2Node) -> u32 {
+        if !self.any_other {
             return 0;
         }
-        let node = &self.bvh2.nodes[i];
-        if node.prim_count > 0 {
-            let first = self.first_other;
-            self.leaf_prims(node)
-                .iter()
-                .filter(|&&p| p >= first)
-                .count() as u32
-        } else {
-            self.others[Self::slot(node)].load(Relaxed)
-        }
+        let first = self.first_other;
+        self.leaf_prims(node)
+            .iter()
+            .filter(|&&p| p >= first)
+            .count() as u32
     }
 
     /// The choices of inner BVH2 node `node`'s table.
@@ -309,14 +333,13 @@ impl<'a> CollapseCosts<'a> {
         Choices(self.choices[Self::slot(node)].load(Relaxed))
     }
 
-    fn table(&self, i: usize) -> [f32; 8] {
-        let node = &self.bvh2.nodes[i];
-        if node.prim_count > 0 {
-            [leaf_cost(self.area(i), self.others(i)); 8]
-        } else {
-            self.cost[Self::slot(node)]
-                .each_ref()
-                .map(|c| f32::from_bits(c.load(Relaxed)))
+    /// BVH2 node `i`'s table, computed again from its subtree's leaves
+    /// (the build keeps none), for tests.
+    #[cfg(test)]
+    fn table(&self, i: usize) -> Table {
+        match self.bvh2.nodes[i].prim_count {
+            0 => self.walk_tables(i).1,
+            _ => self.leaf_table(i),
         }
     }
 
@@ -325,7 +348,7 @@ impl<'a> CollapseCosts<'a> {
     #[cfg(test)]
     pub(super) fn split(&self, i: usize, slots: usize) -> (f32, usize) {
         let (l, r) = children(&self.bvh2.nodes[i]);
-        split_costs(&self.table(l), &self.table(r))[slots]
+        split_costs(&self.table(l).0, &self.table(r).0)[slots]
     }
 
     /// Checks, for every inner node, that the recorded choices are the
@@ -339,10 +362,13 @@ impl<'a> CollapseCosts<'a> {
             if node.prim_count > 0 {
                 continue;
             }
-            let (table, choices) = (self.table(i), self.choices(node));
-            let leaf_cost = leaf_cost(self.area(i), self.others(i));
-            let leaf = self.count(i) <= LEAF_PRIMS && table[0] == leaf_cost;
+            let ((table, others), choices) = (self.table(i), self.choices(node));
+            let leaf_cost = leaf_cost(self.area(i), others);
+            let small = self.count(i) <= LEAF_PRIMS;
+            let leaf = small && table[0] == leaf_cost;
             assert_eq!(choices.leaf(), leaf, "node {i}");
+            let root_leaf = small && leaf_cost <= self.split(i, 8).0;
+            assert_eq!(choices.root_leaf(), root_leaf, "node {i}");
             assert_eq!(choices.open_split(), self.split(i, 8).1, "node {i}");
             for slots in 2..=8 {
                 let (split, k) = self.split(i, slots);
@@ -373,15 +399,11 @@ impl<'a> CollapseCosts<'a> {
             out.push((i, first));
             return;
         }
-        // Only the root is tested here: any other node made a node was
+        // Only the root can take this: any other node made a node was
         // cheaper opened, and its leaf cost exceeds its split's.
-        if self.count(i) <= LEAF_PRIMS {
-            let (l, r) = children(node);
-            let split = split_costs(&self.table(l), &self.table(r))[8].0;
-            if leaf_cost(self.area(i), self.others(i)) <= split {
-                out.push((i, first));
-                return;
-            }
+        if self.choices(node).root_leaf() {
+            out.push((i, first));
+            return;
         }
         let k = self.choices(node).open_split();
         let (l, r) = children(node);
@@ -500,6 +522,10 @@ type Child = (usize, u32);
 /// A subtree waiting in [`CollapseCosts::distribute`]: a BVH2 node, the
 /// slots it may fill, and where its primitives start.
 type Work = (usize, usize, u32);
+
+/// A subtree's table (see [`CollapseCosts`]) and how many of its
+/// primitives are tested one by one.
+type Table = ([f32; 8], u32);
 
 /// Buffers the emission reuses from node to node, so that making a node
 /// allocates nothing.
@@ -679,7 +705,8 @@ fn split_costs(left: &[f32; 8], right: &[f32; 8]) -> [(f32, usize); 9] {
 }
 
 /// What an inner node's table chose, packed in a u32: bit 0, a leaf for
-/// one slot; bits 3(j − 1) to 3j − 1 for `j` in 2..=8, the left child's
+/// one slot; bit 1, a leaf rather than an 8-wide node of its own as the
+/// tree's root (its leaf cost at most its split's into eight); bits 3(j − 1) to 3j − 1 for `j` in 2..=8, the left child's
 /// share when `j` slots split between the children (0: one slot fewer
 /// was as cheap); bits 24 to 26, the left child's share of 8 slots when
 /// the node is opened as an 8-wide node of its own.
@@ -695,6 +722,14 @@ impl Choices {
 
     fn leaf(self) -> bool {
         self.0 & 1 != 0
+    }
+
+    fn set_root_leaf(&mut self) {
+        self.0 |= 2;
+    }
+
+    fn root_leaf(self) -> bool {
+        self.0 & 2 != 0
     }
 
     /// Records the left child's share of `slots`, 0 for one slot fewer.
