@@ -36,6 +36,16 @@ struct Clusters {
 
 const LEAF: u32 = 1 << 31;
 
+impl Clusters {
+    /// Keeps the first `count` clusters and frees the room for the rest.
+    fn shrink_to(&mut self, count: usize) {
+        self.bounds.truncate(count);
+        self.bounds.shrink_to_fit();
+        self.node.truncate(count);
+        self.node.shrink_to_fit();
+    }
+}
+
 /// The tree's node for a cluster of box `aabb` and `node`.
 fn tree_node(aabb: Box3A, node: u32) -> Bvh2Node {
     match node & LEAF {
@@ -146,16 +156,14 @@ fn ploc_over(
     let mut current = Clusters { bounds, node };
     let mut nearest = vec![0u32; n];
     let scale = unit_scale(&current.bounds);
-    // The nodes, made in parallel (the first write to a fresh page costs
-    // the kernel a clear, which one thread would do for all of them).
-    let mut nodes: Vec<Bvh2Node> = (0..2 * n - 1)
-        .into_par_iter()
-        .with_min_len(BLOCK)
-        .map(|_| Bvh2Node::default())
-        .collect();
+    // The nodes, zeroed by the allocator: fresh pages, which the kernel
+    // maps (and clears) only when a merge first writes them, in parallel.
+    // So the tree's memory grows as the clusters' shrinks, and the two
+    // are never both whole (96 and 72 bytes a primitive).
+    let mut nodes: Vec<Bvh2Node> = wide::bytemuck::zeroed_vec(2 * n - 1);
     // Pairs are written down from the end, so children follow parents.
     let mut insert = nodes.len();
-    let (mut count, mut passes) = (n, 0);
+    let (mut count, mut passes, mut held) = (n, 0, n);
     while count > 1 {
         let r = if passes < near_passes { 1 } else { radius };
         find_nearest(&current.bounds[..count], &mut nearest[..count], r, scale);
@@ -165,6 +173,16 @@ fn ploc_over(
         count = kept;
         insert -= 2 * merged;
         passes += 1;
+        // Hand back the clusters' buffers past what the passes to come
+        // can use whenever they have halved (a shrink in place, by whole
+        // pages: no copy), so that they shrink as the tree grows.
+        if count <= held / 2 {
+            held = count;
+            current.shrink_to(count);
+            next.shrink_to(count);
+            nearest.truncate(count);
+            nearest.shrink_to_fit();
+        }
     }
     debug_assert_eq!(insert, 1);
     nodes[0] = tree_node(current.bounds[0], current.node[0]);
