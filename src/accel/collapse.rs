@@ -76,8 +76,18 @@ pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
 /// the copy is the collapse's second peak, and the binary tree (96 bytes
 /// a primitive) dwarfs what it copies.
 pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
-    let part = parts(&bvh2, first_other);
-    drop(bvh2);
+    let Bvh2 {
+        nodes,
+        primitive_indices,
+        ..
+    } = bvh2;
+    // The tables' walk copies the ids into leaf order; the emission reads
+    // that copy and the nodes only (4 bytes a primitive less).
+    let costs = CollapseCosts::over(&nodes, &primitive_indices, first_other).without_ids();
+    drop(primitive_indices);
+    let part = costs.emit(0, 0, 0);
+    drop(costs);
+    drop(nodes);
     part.into_bvh(bounds)
 }
 
@@ -119,8 +129,11 @@ pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -
 /// node and made leaves of 2.3 (dragon) to 2.5 (bunny) triangles, paying an 8-wide
 /// leaf test for each; the tables instead weigh a bigger leaf's larger box
 /// against the node tests it saves.
-pub(super) struct CollapseCosts<'a> {
-    bvh2: &'a Bvh2,
+pub(super) struct CollapseCosts<'a, 'i> {
+    /// The binary tree's nodes, and its primitive ids (which only the
+    /// tables' walk reads).
+    nodes: &'a [Bvh2Node],
+    ids: &'i [u32],
     /// Areas are measured in units of the largest coordinate, so they
     /// neither overflow (coordinates near 1e20 have areas past f32::MAX)
     /// nor flush to zero (near 1e-20), and the choices do not depend on
@@ -149,14 +162,20 @@ pub(super) struct CollapseCosts<'a> {
     ordered: Vec<u32>,
 }
 
-impl<'a> CollapseCosts<'a> {
-    pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> Self {
-        let inner = bvh2.nodes.len() / 2;
-        let any_other = (first_other as usize) < bvh2.primitive_indices.len();
-        let root = &bvh2.nodes[0].aabb;
+impl<'a, 'i> CollapseCosts<'a, 'i> {
+    pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> CollapseCosts<'a, 'a> {
+        CollapseCosts::over(&bvh2.nodes, &bvh2.primitive_indices, first_other)
+    }
+
+    /// The tables over a binary tree's `nodes` and primitive `ids`.
+    fn over(nodes: &'a [Bvh2Node], ids: &'i [u32], first_other: u32) -> Self {
+        let inner = nodes.len() / 2;
+        let any_other = (first_other as usize) < ids.len();
+        let root = &nodes[0].aabb;
         let largest = root.min.abs().max(root.max.abs()).max_element();
         let mut costs = Self {
-            bvh2,
+            nodes,
+            ids,
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
             // Made in parallel: the first touch of a fresh page is the
             // cost of making a large array (see `super::build::ploc`).
@@ -184,7 +203,7 @@ impl<'a> CollapseCosts<'a> {
     /// Returns the subtree's primitive ids in leaf order, in pieces (one
     /// per walk) that the caller joins once, and the subtree's table.
     fn fill_tables(&self, i: usize, depth: u32) -> (Vec<Vec<u32>>, Table) {
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         if node.prim_count > 0 {
             return (vec![self.leaf_prims(node).to_vec()], self.leaf_table(i));
         }
@@ -206,13 +225,13 @@ impl<'a> CollapseCosts<'a> {
     /// subtree's is then below the right one's); returns the subtree's
     /// primitive ids in leaf order and its table.
     fn walk_tables(&self, root: usize) -> (Vec<u32>, Table) {
-        let order = post_order(self.bvh2, root);
+        let order = post_order(self.nodes, root);
         // A tree of n leaves has 2n - 1 nodes; leaves hold one primitive
         // or more.
         let mut prims = Vec::with_capacity(order.len().div_ceil(2));
         let mut tables: Vec<Table> = Vec::new();
         for n in order {
-            let node = &self.bvh2.nodes[n as usize];
+            let node = &self.nodes[n as usize];
             let table = if node.prim_count == 0 {
                 let right = tables.pop().expect("a right child's table");
                 let left = tables.pop().expect("a left child's table");
@@ -229,19 +248,35 @@ impl<'a> CollapseCosts<'a> {
     /// The primitive ids of BVH2 leaf `node`.
     fn leaf_prims(&self, node: &Bvh2Node) -> &[u32] {
         let first = node.first_index as usize;
-        &self.bvh2.primitive_indices[first..first + node.prim_count as usize]
+        &self.ids[first..first + node.prim_count as usize]
     }
 
     /// The table of BVH2 leaf `i`: its leaf cost for any number of slots.
     fn leaf_table(&self, i: usize) -> Table {
-        let others = self.leaf_others(&self.bvh2.nodes[i]);
+        let others = self.leaf_others(&self.nodes[i]);
         ([leaf_cost(self.area(i), others); 8], others)
+    }
+
+    /// The same choices, no longer reading the primitive ids (which
+    /// [`CollapseCosts::ordered`] holds in leaf order), so that they can
+    /// be freed before the emission: it reads no table.
+    fn without_ids(self) -> CollapseCosts<'a, 'static> {
+        CollapseCosts {
+            nodes: self.nodes,
+            ids: &[],
+            unit: self.unit,
+            counts: self.counts,
+            first_other: self.first_other,
+            any_other: self.any_other,
+            choices: self.choices,
+            ordered: self.ordered,
+        }
     }
 
     /// Computes inner node `i`'s table from its children's, stores its
     /// count and choices, and returns the table.
     fn store_table(&self, i: usize, left: &Table, right: &Table) -> Table {
-        let slot = Self::slot(&self.bvh2.nodes[i]);
+        let slot = Self::slot(&self.nodes[i]);
         let others = left.1 + right.1;
         let (table, count, choices) = self.node_table(i, &left.0, &right.0, others);
         self.counts[slot].store(count, Relaxed);
@@ -258,7 +293,7 @@ impl<'a> CollapseCosts<'a> {
         right: &[f32; 8],
         others: u32,
     ) -> ([f32; 8], u32, Choices) {
-        let (l, r) = children(&self.bvh2.nodes[i]);
+        let (l, r) = children(&self.nodes[i]);
         let count = self.count(l) + self.count(r);
         let area = self.area(i);
         let splits = split_costs(left, right);
@@ -302,13 +337,13 @@ impl<'a> CollapseCosts<'a> {
 
     /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
     pub(super) fn area(&self, i: usize) -> f32 {
-        let b = &self.bvh2.nodes[i].aabb;
+        let b = &self.nodes[i].aabb;
         let d = b.max * self.unit - b.min * self.unit;
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 
     fn count(&self, i: usize) -> u32 {
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         if node.prim_count > 0 {
             node.prim_count
         } else {
@@ -337,7 +372,7 @@ impl<'a> CollapseCosts<'a> {
     /// (the build keeps none), for tests.
     #[cfg(test)]
     fn table(&self, i: usize) -> Table {
-        match self.bvh2.nodes[i].prim_count {
+        match self.nodes[i].prim_count {
             0 => self.walk_tables(i).1,
             _ => self.leaf_table(i),
         }
@@ -347,7 +382,7 @@ impl<'a> CollapseCosts<'a> {
     /// `i`'s two children, and the left one's share.
     #[cfg(test)]
     pub(super) fn split(&self, i: usize, slots: usize) -> (f32, usize) {
-        let (l, r) = children(&self.bvh2.nodes[i]);
+        let (l, r) = children(&self.nodes[i]);
         split_costs(&self.table(l).0, &self.table(r).0)[slots]
     }
 
@@ -357,8 +392,8 @@ impl<'a> CollapseCosts<'a> {
     /// otherwise the split's share.
     #[cfg(test)]
     pub(super) fn assert_choices_match_tables(&self) {
-        for i in post_order(self.bvh2, 0) {
-            let (i, node) = (i as usize, &self.bvh2.nodes[i as usize]);
+        for i in post_order(self.nodes, 0) {
+            let (i, node) = (i as usize, &self.nodes[i as usize]);
             if node.prim_count > 0 {
                 continue;
             }
@@ -381,7 +416,7 @@ impl<'a> CollapseCosts<'a> {
     /// True if BVH2 node `i`, as one child slot, is best a leaf: its
     /// one-slot cost is the leaf's.
     fn is_leaf(&self, i: usize) -> bool {
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         node.prim_count > 0 || self.choices(node).leaf()
     }
 
@@ -394,7 +429,7 @@ impl<'a> CollapseCosts<'a> {
     /// scratch space.
     fn node_children(&self, i: usize, first: u32, out: &mut Vec<Child>, work: &mut Vec<Work>) {
         out.clear();
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         if node.prim_count > 0 {
             out.push((i, first));
             return;
@@ -425,7 +460,7 @@ impl<'a> CollapseCosts<'a> {
         work.clear();
         work.push((i, slots, first));
         while let Some((i, slots, first)) = work.pop() {
-            let node = &self.bvh2.nodes[i];
+            let node = &self.nodes[i];
             if slots == 1 || node.prim_count > 0 {
                 out.push((i, first));
                 continue;
@@ -457,7 +492,7 @@ impl<'a> CollapseCosts<'a> {
         self.node_children(src, first, &mut scratch.children, &mut scratch.work);
         let mut inner = Vec::with_capacity(8);
         for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-            set_bounds(&mut part.nodes[0], slot, &self.bvh2.nodes[c].aabb);
+            set_bounds(&mut part.nodes[0], slot, &self.nodes[c].aabb);
             if self.is_leaf(c) {
                 part.nodes[0].child[slot] = self.place_leaf(c, first, &mut part);
             } else {
@@ -489,7 +524,7 @@ impl<'a> CollapseCosts<'a> {
             part.depth = part.depth.max(depth);
             self.node_children(src, first, &mut scratch.children, &mut scratch.work);
             for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-                set_bounds(&mut part.nodes[dst], slot, &self.bvh2.nodes[c].aabb);
+                set_bounds(&mut part.nodes[dst], slot, &self.nodes[c].aabb);
                 part.nodes[dst].child[slot] = if self.is_leaf(c) {
                     self.place_leaf(c, first, &mut part)
                 } else {
@@ -658,12 +693,12 @@ fn set_bounds(node: &mut Node8, slot: usize, b: &obvhs::aabb::Aabb) {
 
 /// Post-order of BVH2 node `root`'s subtree (children before parents),
 /// by an explicit stack: trees can be deep.
-fn post_order(bvh2: &Bvh2, root: usize) -> Vec<u32> {
+fn post_order(nodes: &[Bvh2Node], root: usize) -> Vec<u32> {
     let mut order = Vec::new();
     let mut stack = vec![root as u32];
     while let Some(i) = stack.pop() {
         order.push(i);
-        let node = &bvh2.nodes[i as usize];
+        let node = &nodes[i as usize];
         if node.prim_count == 0 {
             stack.push(node.first_index);
             stack.push(node.first_index + 1);

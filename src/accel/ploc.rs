@@ -174,9 +174,10 @@ fn ploc_over(
         insert -= 2 * merged;
         passes += 1;
         // Hand back the clusters' buffers past what the passes to come
-        // can use whenever they have halved (a shrink in place, by whole
-        // pages: no copy), so that they shrink as the tree grows.
-        if count <= held / 2 {
+        // can use whenever an eighth of them is spare (a shrink in place,
+        // by whole pages: no copy), so that they shrink as the tree grows:
+        // the first passes merge a third of the clusters each.
+        if count <= held - held / 8 {
             held = count;
             current.shrink_to(count);
             next.shrink_to(count);
