@@ -621,8 +621,10 @@ pub(super) mod tests {
         for scale in [2f32.powi(60), 2f32.powi(-60)] {
             let mut scaled = bvh2.clone();
             for node in &mut scaled.nodes {
-                node.aabb.min *= scale;
-                node.aabb.max *= scale;
+                let mut b = *node.aabb();
+                b.min *= scale;
+                b.max *= scale;
+                node.set_aabb(b);
             }
             let bounds = Aabb::new(bounds.min * scale, bounds.max * scale);
             let stats = Bvh8::collapse(&scaled, bounds, u32::MAX).stats();

@@ -14,6 +14,7 @@ use super::build::Bvh8;
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS};
 use crate::math::lanes::LANES;
 use crate::math::Aabb;
+use glam::Vec3;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
@@ -171,8 +172,9 @@ impl<'a, 'i> CollapseCosts<'a, 'i> {
     fn over(nodes: &'a [Bvh2Node], ids: &'i [u32], first_other: u32) -> Self {
         let inner = nodes.len() / 2;
         let any_other = (first_other as usize) < ids.len();
-        let root = &nodes[0].aabb;
-        let largest = root.min.abs().max(root.max.abs()).max_element();
+        let root = nodes[0].aabb();
+        let (min, max) = (Vec3::from(root.min), Vec3::from(root.max));
+        let largest = min.abs().max(max.abs()).max_element();
         let mut costs = Self {
             nodes,
             ids,
@@ -337,8 +339,10 @@ impl<'a, 'i> CollapseCosts<'a, 'i> {
 
     /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
     pub(super) fn area(&self, i: usize) -> f32 {
-        let b = &self.nodes[i].aabb;
-        let d = b.max * self.unit - b.min * self.unit;
+        // Three lanes: a node's box shares its fourth lanes with its counts.
+        let b = self.nodes[i].aabb();
+        let (min, max) = (Vec3::from(b.min), Vec3::from(b.max));
+        let d = max * self.unit - min * self.unit;
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 
@@ -492,7 +496,7 @@ impl<'a, 'i> CollapseCosts<'a, 'i> {
         self.node_children(src, first, &mut scratch.children, &mut scratch.work);
         let mut inner = Vec::with_capacity(8);
         for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-            set_bounds(&mut part.nodes[0], slot, &self.nodes[c].aabb);
+            set_bounds(&mut part.nodes[0], slot, self.nodes[c].aabb());
             if self.is_leaf(c) {
                 part.nodes[0].child[slot] = self.place_leaf(c, first, &mut part);
             } else {
@@ -524,7 +528,7 @@ impl<'a, 'i> CollapseCosts<'a, 'i> {
             part.depth = part.depth.max(depth);
             self.node_children(src, first, &mut scratch.children, &mut scratch.work);
             for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-                set_bounds(&mut part.nodes[dst], slot, &self.nodes[c].aabb);
+                set_bounds(&mut part.nodes[dst], slot, self.nodes[c].aabb());
                 part.nodes[dst].child[slot] = if self.is_leaf(c) {
                     self.place_leaf(c, first, &mut part)
                 } else {

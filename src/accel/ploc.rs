@@ -408,7 +408,7 @@ mod tests {
         bvh.nodes
             .iter()
             .map(|n| {
-                let (a, b) = (n.aabb.min, n.aabb.max);
+                let (a, b) = (n.aabb().min, n.aabb().max);
                 [a.x, a.y, a.z, b.x, b.y, b.z]
                     .map(f32::to_bits)
                     .iter()
@@ -454,7 +454,7 @@ mod tests {
             let bvh = ploc(Boxes::Borrowed(&boxes), order, 6, 2);
             assert_eq!(bvh.nodes.len(), 2 * n - 1);
             let as_box = |k: usize| {
-                let a = bvh.nodes[k].aabb;
+                let a = *bvh.nodes[k].aabb();
                 Aabb::new(a.min.into(), a.max.into())
             };
             assert_eq!(as_box(0), bounds, "{n}: the root is the union");
