@@ -145,13 +145,12 @@ fn ploc_over(
 ) -> Bvh2 {
     let n = bounds.len();
     assert!(n > 0 && n < LEAF as usize && radius >= 1);
-    // Copied in parallel: a clone is one thread's copy, and its clears of
-    // fresh pages (see `nodes` below), where `spare` cannot hold them.
+    // The next pass's clusters are made as long as the first merge keeps
+    // (a third fewer), not a copy of the first pass's: `merge` grows them.
     spare.clear();
-    spare.par_extend(bounds.par_iter().with_min_len(BLOCK).copied());
     let mut next = Clusters {
         bounds: spare,
-        node: node.par_iter().with_min_len(BLOCK).copied().collect(),
+        node: Vec::new(),
     };
     let mut current = Clusters { bounds, node };
     let mut nearest = vec![0u32; n];
@@ -335,6 +334,8 @@ fn merge(
     let (kept, pairs) = tallies
         .iter()
         .fold((0, 0), |(k, p), &(bk, bp)| (k + bk, p + bp));
+    grow_to(&mut next.bounds, kept);
+    grow_to(&mut next.node, kept);
     // Each block's share of `next` (in order) and of `nodes` (from the
     // end down: the first block's pairs last), and where its nodes start.
     let mut parts = Vec::with_capacity(blocks);
@@ -380,6 +381,21 @@ fn merge(
             }
         });
     (kept, pairs)
+}
+
+/// Lengthens `v` to `len` items (their values are written over before
+/// they are read), in parallel: the first touch of a fresh page is its
+/// clear, which one thread would do for all of them.
+fn grow_to<T: Copy + Default + Send>(v: &mut Vec<T>, len: usize) {
+    if v.len() < len {
+        let more = len - v.len();
+        v.par_extend(
+            (0..more)
+                .into_par_iter()
+                .with_min_len(BLOCK)
+                .map(|_| T::default()),
+        );
+    }
 }
 
 #[cfg(test)]
