@@ -115,7 +115,11 @@ impl Bvh8 {
     ) -> Self {
         match binary_tree_and_bounds(Boxes::Owned(boxes), quality, steps) {
             Some((bvh2, bounds)) => {
-                steps.time("collapse", || Self::collapse(&bvh2, bounds, first_other))
+                let prims = bvh2.primitive_indices.len();
+                steps.time("collapse", || {
+                    super::collapse::collapse_owned(bvh2, bounds, first_other)
+                        .debug_validated(prims)
+                })
             }
             None => Self::empty(),
         }
@@ -617,8 +621,10 @@ pub(super) mod tests {
         for scale in [2f32.powi(60), 2f32.powi(-60)] {
             let mut scaled = bvh2.clone();
             for node in &mut scaled.nodes {
-                node.aabb.min *= scale;
-                node.aabb.max *= scale;
+                let mut b = *node.aabb();
+                b.min *= scale;
+                b.max *= scale;
+                node.set_aabb(b);
             }
             let bounds = Aabb::new(bounds.min * scale, bounds.max * scale);
             let stats = Bvh8::collapse(&scaled, bounds, u32::MAX).stats();

@@ -1,6 +1,7 @@
 //! The collapse of obvhs's binary tree into 8-wide nodes, chosen by the
 //! surface area heuristic over the whole subtree (Ylitie, Karras and Laine
-//! 2017), and the packing of its leaves into blocks of [`LANES`] slots.
+//! 2017), in parts that [`super::assemble`] joins into one tree, its
+//! leaves packed into blocks of [`LANES`] slots.
 //!
 //! Both passes run in parallel: the cost tables over the subtrees of the
 //! top [`PARALLEL_DEPTH`] levels, and the emission of 8-wide nodes over
@@ -10,10 +11,12 @@
 //! are filled ([`Choices`]), so the emission follows them without
 //! recomputing a split: the same tree, built faster.
 
+use super::assemble::Part;
 use super::build::Bvh8;
-use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY, MAX_LEAF_PRIMS};
+use super::node::{encode_leaf, Node8, EMPTY, MAX_LEAF_PRIMS};
 use crate::math::lanes::LANES;
 use crate::math::Aabb;
+use glam::Vec3;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
@@ -68,9 +71,33 @@ const PARALLEL_DEPTH: u32 = 10;
 /// Primitives from `first_other` on are tested one by one in a leaf
 /// ([`OTHER_COST`]); those before it are triangles.
 pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
-    CollapseCosts::new(bvh2, first_other)
-        .emit(0, 0, 0)
-        .into_bvh(bounds)
+    parts(bvh2, first_other).into_bvh(bounds)
+}
+
+/// [`collapse`] that takes the binary tree and frees it, with the cost
+/// tables' choices, before the 8-wide tree's parts are copied into one:
+/// the copy is the collapse's second peak, and the binary tree (96 bytes
+/// a primitive) dwarfs what it copies.
+pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
+    let Bvh2 {
+        nodes,
+        primitive_indices,
+        ..
+    } = bvh2;
+    // The tables' walk copies the ids into leaf order; the emission reads
+    // that copy and the nodes only (4 bytes a primitive less).
+    let costs = CollapseCosts::over(&nodes, &primitive_indices, first_other).without_ids();
+    drop(primitive_indices);
+    let part = costs.emit(0, 0, 0);
+    drop(costs);
+    drop(nodes);
+    part.into_bvh(bounds)
+}
+
+/// The 8-wide tree over `bvh2` in parts made in parallel; the choices
+/// are freed when it returns.
+fn parts(bvh2: &Bvh2, first_other: u32) -> Part {
+    CollapseCosts::new(bvh2, first_other).emit(0, 0, 0)
 }
 
 /// [`collapse`] by one sequential walk from the root, for tests of the
@@ -96,31 +123,36 @@ pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -
 ///   `i` slots between `n`'s two children.
 ///
 /// Costs are areas times the constants above, all relative to one tree, so
-/// no division by the root's area is needed. The greedy collapse this
+/// no division by the root's area is needed. A node's table is read only
+/// by its parent's, once: the walk that fills them keeps them on a stack
+/// (children before parents), and only each node's count and choices are
+/// kept for the emission, 8 bytes an inner node, not the 32 bytes of a
+/// table as well, at the build's peak. The greedy collapse this
 /// replaces (open the largest child until there are eight) filled every
 /// node and made leaves of 2.3 (dragon) to 2.5 (bunny) triangles, paying an 8-wide
 /// leaf test for each; the tables instead weigh a bigger leaf's larger box
 /// against the node tests it saves.
-pub(super) struct CollapseCosts<'a> {
-    bvh2: &'a Bvh2,
+pub(super) struct CollapseCosts<'a, 'i> {
+    /// The binary tree's nodes, and its primitive ids (which only the
+    /// tables' walk reads).
+    nodes: &'a [Bvh2Node],
+    ids: &'i [u32],
     /// Areas are measured in units of the largest coordinate, so they
     /// neither overflow (coordinates near 1e20 have areas past f32::MAX)
     /// nor flush to zero (near 1e-20), and the choices do not depend on
     /// the scene's scale.
     unit: f32,
-    /// Per inner node, at [`CollapseCosts::slot`]: only inner nodes have
-    /// tables (a leaf's is its leaf cost in every entry), which halves
-    /// their memory (36 bytes a primitive at the build's peak, not 72).
-    /// f32 bits in atomics (relaxed: plain loads and stores) so that
-    /// parallel tasks can fill disjoint subtrees' entries; `rayon::join`
-    /// orders a parent's read after its children's writes.
-    cost: Vec<[AtomicU32; 8]>,
+    /// Per inner node, at [`CollapseCosts::slot`] (leaves hold theirs):
+    /// how many primitives its subtree holds. In atomics (relaxed: plain
+    /// loads and stores) so that parallel tasks can fill disjoint
+    /// subtrees' entries; `rayon::join` orders a parent's work after its
+    /// children's.
     counts: Vec<AtomicU32>,
     /// The first primitive id tested one by one ([`OTHER_COST`]).
     first_other: u32,
-    /// Per inner node, how many of its primitives are tested one by one;
-    /// empty where the tree holds none (a mesh's), which costs nothing.
-    others: Vec<AtomicU32>,
+    /// Whether the tree holds any primitive tested one by one (a mesh's
+    /// holds none, and its leaves need not look).
+    any_other: bool,
     /// Per inner node, the choices its table made ([`Choices`]), so that
     /// the emission follows them without recomputing any split.
     choices: Vec<AtomicU32>,
@@ -133,41 +165,37 @@ pub(super) struct CollapseCosts<'a> {
     ordered: Vec<u32>,
 }
 
-impl<'a> CollapseCosts<'a> {
-    pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> Self {
-        let inner = bvh2.nodes.len() / 2;
-        let any_other = (first_other as usize) < bvh2.primitive_indices.len();
-        let root = &bvh2.nodes[0].aabb;
-        let largest = root.min.abs().max(root.max.abs()).max_element();
+impl<'a, 'i> CollapseCosts<'a, 'i> {
+    pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> CollapseCosts<'a, 'a> {
+        CollapseCosts::over(&bvh2.nodes, &bvh2.primitive_indices, first_other)
+    }
+
+    /// The tables over a binary tree's `nodes` and primitive `ids`.
+    fn over(nodes: &'a [Bvh2Node], ids: &'i [u32], first_other: u32) -> Self {
+        let inner = nodes.len() / 2;
+        let any_other = (first_other as usize) < ids.len();
+        let root = nodes[0].aabb();
+        let (min, max) = (Vec3::from(root.min), Vec3::from(root.max));
+        let largest = min.abs().max(max.abs()).max_element();
         let mut costs = Self {
-            bvh2,
+            nodes,
+            ids,
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
             // Made in parallel: the first touch of a fresh page is the
             // cost of making a large array (see `super::build::ploc`).
-            cost: (0..inner)
-                .into_par_iter()
-                .map(|_| Default::default())
-                .collect(),
             counts: (0..inner)
                 .into_par_iter()
                 .map(|_| AtomicU32::new(0))
                 .collect(),
             first_other,
-            others: if any_other {
-                (0..inner)
-                    .into_par_iter()
-                    .map(|_| AtomicU32::new(0))
-                    .collect()
-            } else {
-                Vec::new()
-            },
+            any_other,
             choices: (0..inner)
                 .into_par_iter()
                 .map(|_| AtomicU32::new(0))
                 .collect(),
             ordered: Vec::new(),
         };
-        costs.ordered = concat(costs.fill_tables(0, 0));
+        costs.ordered = concat(costs.fill_tables(0, 0).0);
         costs
     }
 
@@ -177,70 +205,110 @@ impl<'a> CollapseCosts<'a> {
     /// children's tables in cache when it reads them; filling level by
     /// level, in parallel, took three times as long on the dragon).
     /// Returns the subtree's primitive ids in leaf order, in pieces (one
-    /// per walk) that the caller joins once.
-    fn fill_tables(&self, i: usize, depth: u32) -> Vec<Vec<u32>> {
-        let node = &self.bvh2.nodes[i];
+    /// per walk) that the caller joins once, and the subtree's table.
+    fn fill_tables(&self, i: usize, depth: u32) -> (Vec<Vec<u32>>, Table) {
+        let node = &self.nodes[i];
         if node.prim_count > 0 {
-            return vec![self.leaf_prims(node).to_vec()];
+            return (vec![self.leaf_prims(node).to_vec()], self.leaf_table(i));
         }
         if depth < PARALLEL_DEPTH {
             let (l, r) = children(node);
-            let (mut left, right) = rayon::join(
+            let ((mut left, left_table), (right, right_table)) = rayon::join(
                 || self.fill_tables(l, depth + 1),
                 || self.fill_tables(r, depth + 1),
             );
-            self.store_table(i);
             left.extend(right);
-            return left;
+            return (left, self.store_table(i, &left_table, &right_table));
         }
-        let order = post_order(self.bvh2, i);
+        let (prims, table) = self.walk_tables(i);
+        (vec![prims], table)
+    }
+
+    /// Fills the tables of BVH2 node `root`'s subtree in one post-order
+    /// walk, each table on a stack until its parent's reads it (the left
+    /// subtree's is then below the right one's); returns the subtree's
+    /// primitive ids in leaf order and its table.
+    fn walk_tables(&self, root: usize) -> (Vec<u32>, Table) {
+        let order = post_order(self.nodes, root);
         // A tree of n leaves has 2n - 1 nodes; leaves hold one primitive
         // or more.
         let mut prims = Vec::with_capacity(order.len().div_ceil(2));
+        let mut tables: Vec<Table> = Vec::new();
         for n in order {
-            let node = &self.bvh2.nodes[n as usize];
-            if node.prim_count == 0 {
-                self.store_table(n as usize);
+            let node = &self.nodes[n as usize];
+            let table = if node.prim_count == 0 {
+                let right = tables.pop().expect("a right child's table");
+                let left = tables.pop().expect("a left child's table");
+                self.store_table(n as usize, &left, &right)
             } else {
                 prims.extend_from_slice(self.leaf_prims(node));
-            }
+                self.leaf_table(n as usize)
+            };
+            tables.push(table);
         }
-        vec![prims]
+        (prims, tables.pop().expect("the root's table"))
     }
 
     /// The primitive ids of BVH2 leaf `node`.
     fn leaf_prims(&self, node: &Bvh2Node) -> &[u32] {
         let first = node.first_index as usize;
-        &self.bvh2.primitive_indices[first..first + node.prim_count as usize]
+        &self.ids[first..first + node.prim_count as usize]
     }
 
-    /// Computes and stores inner node `i`'s table from its children's.
-    fn store_table(&self, i: usize) {
-        let slot = Self::slot(&self.bvh2.nodes[i]);
-        if !self.others.is_empty() {
-            let (l, r) = children(&self.bvh2.nodes[i]);
-            let others = self.others(l) + self.others(r);
-            self.others[slot].store(others, Relaxed);
+    /// The table of BVH2 leaf `i`: its leaf cost for any number of slots.
+    fn leaf_table(&self, i: usize) -> Table {
+        let others = self.leaf_others(&self.nodes[i]);
+        ([leaf_cost(self.area(i), others); 8], others)
+    }
+
+    /// The same choices, no longer reading the primitive ids (which
+    /// [`CollapseCosts::ordered`] holds in leaf order), so that they can
+    /// be freed before the emission: it reads no table.
+    fn without_ids(self) -> CollapseCosts<'a, 'static> {
+        CollapseCosts {
+            nodes: self.nodes,
+            ids: &[],
+            unit: self.unit,
+            counts: self.counts,
+            first_other: self.first_other,
+            any_other: self.any_other,
+            choices: self.choices,
+            ordered: self.ordered,
         }
-        let (table, count, choices) = self.node_table(i);
-        for (entry, c) in self.cost[slot].iter().zip(table) {
-            entry.store(c.to_bits(), Relaxed);
-        }
+    }
+
+    /// Computes inner node `i`'s table from its children's, stores its
+    /// count and choices, and returns the table.
+    fn store_table(&self, i: usize, left: &Table, right: &Table) -> Table {
+        let slot = Self::slot(&self.nodes[i]);
+        let others = left.1 + right.1;
+        let (table, count, choices) = self.node_table(i, &left.0, &right.0, others);
         self.counts[slot].store(count, Relaxed);
         self.choices[slot].store(choices.0, Relaxed);
+        (table, others)
     }
 
     /// The table, primitive count and choices of inner node `i`, from its
-    /// children's tables.
-    fn node_table(&self, i: usize) -> ([f32; 8], u32, Choices) {
-        let (l, r) = children(&self.bvh2.nodes[i]);
+    /// children's tables; `others` of its primitives are tested one by one.
+    fn node_table(
+        &self,
+        i: usize,
+        left: &[f32; 8],
+        right: &[f32; 8],
+        others: u32,
+    ) -> ([f32; 8], u32, Choices) {
+        let (l, r) = children(&self.nodes[i]);
         let count = self.count(l) + self.count(r);
         let area = self.area(i);
-        let (left, right) = (self.table(l), self.table(r));
-        let splits = split_costs(&left, &right);
+        let splits = split_costs(left, right);
         let mut choices = Choices::default();
         let as_node = NODE_COST * area + splits[8].0;
-        let leaf = leaf_cost(area, self.others(i));
+        let leaf = leaf_cost(area, others);
+        // As the 8-wide tree's root (its own only child, see
+        // `node_children`), a leaf against the node's split alone.
+        if count <= LEAF_PRIMS && leaf <= splits[8].0 {
+            choices.set_root_leaf();
+        }
         let mut c = [0.0f32; 8];
         // `leaf <= as_node` is what `as_node.min(leaf) == leaf` tests: a
         // tie goes to the leaf.
@@ -273,13 +341,15 @@ impl<'a> CollapseCosts<'a> {
 
     /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
     pub(super) fn area(&self, i: usize) -> f32 {
-        let b = &self.bvh2.nodes[i].aabb;
-        let d = b.max * self.unit - b.min * self.unit;
+        // Three lanes: a node's box shares its fourth lanes with its counts.
+        let b = self.nodes[i].aabb();
+        let (min, max) = (Vec3::from(b.min), Vec3::from(b.max));
+        let d = max * self.unit - min * self.unit;
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 
     fn count(&self, i: usize) -> u32 {
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         if node.prim_count > 0 {
             node.prim_count
         } else {
@@ -287,21 +357,16 @@ impl<'a> CollapseCosts<'a> {
         }
     }
 
-    /// How many of BVH2 node `i`'s primitives are tested one by one.
-    fn others(&self, i: usize) -> u32 {
-        if self.others.is_empty() {
+    /// How many of BVH2 leaf `node`'s primitives are tested one by one.
+    fn leaf_others(&self, node: &Bvh2Node) -> u32 {
+        if !self.any_other {
             return 0;
         }
-        let node = &self.bvh2.nodes[i];
-        if node.prim_count > 0 {
-            let first = self.first_other;
-            self.leaf_prims(node)
-                .iter()
-                .filter(|&&p| p >= first)
-                .count() as u32
-        } else {
-            self.others[Self::slot(node)].load(Relaxed)
-        }
+        let first = self.first_other;
+        self.leaf_prims(node)
+            .iter()
+            .filter(|&&p| p >= first)
+            .count() as u32
     }
 
     /// The choices of inner BVH2 node `node`'s table.
@@ -309,14 +374,13 @@ impl<'a> CollapseCosts<'a> {
         Choices(self.choices[Self::slot(node)].load(Relaxed))
     }
 
-    fn table(&self, i: usize) -> [f32; 8] {
-        let node = &self.bvh2.nodes[i];
-        if node.prim_count > 0 {
-            [leaf_cost(self.area(i), self.others(i)); 8]
-        } else {
-            self.cost[Self::slot(node)]
-                .each_ref()
-                .map(|c| f32::from_bits(c.load(Relaxed)))
+    /// BVH2 node `i`'s table, computed again from its subtree's leaves
+    /// (the build keeps none), for tests.
+    #[cfg(test)]
+    fn table(&self, i: usize) -> Table {
+        match self.nodes[i].prim_count {
+            0 => self.walk_tables(i).1,
+            _ => self.leaf_table(i),
         }
     }
 
@@ -324,8 +388,8 @@ impl<'a> CollapseCosts<'a> {
     /// `i`'s two children, and the left one's share.
     #[cfg(test)]
     pub(super) fn split(&self, i: usize, slots: usize) -> (f32, usize) {
-        let (l, r) = children(&self.bvh2.nodes[i]);
-        split_costs(&self.table(l), &self.table(r))[slots]
+        let (l, r) = children(&self.nodes[i]);
+        split_costs(&self.table(l).0, &self.table(r).0)[slots]
     }
 
     /// Checks, for every inner node, that the recorded choices are the
@@ -334,15 +398,18 @@ impl<'a> CollapseCosts<'a> {
     /// otherwise the split's share.
     #[cfg(test)]
     pub(super) fn assert_choices_match_tables(&self) {
-        for i in post_order(self.bvh2, 0) {
-            let (i, node) = (i as usize, &self.bvh2.nodes[i as usize]);
+        for i in post_order(self.nodes, 0) {
+            let (i, node) = (i as usize, &self.nodes[i as usize]);
             if node.prim_count > 0 {
                 continue;
             }
-            let (table, choices) = (self.table(i), self.choices(node));
-            let leaf_cost = leaf_cost(self.area(i), self.others(i));
-            let leaf = self.count(i) <= LEAF_PRIMS && table[0] == leaf_cost;
+            let ((table, others), choices) = (self.table(i), self.choices(node));
+            let leaf_cost = leaf_cost(self.area(i), others);
+            let small = self.count(i) <= LEAF_PRIMS;
+            let leaf = small && table[0] == leaf_cost;
             assert_eq!(choices.leaf(), leaf, "node {i}");
+            let root_leaf = small && leaf_cost <= self.split(i, 8).0;
+            assert_eq!(choices.root_leaf(), root_leaf, "node {i}");
             assert_eq!(choices.open_split(), self.split(i, 8).1, "node {i}");
             for slots in 2..=8 {
                 let (split, k) = self.split(i, slots);
@@ -355,7 +422,7 @@ impl<'a> CollapseCosts<'a> {
     /// True if BVH2 node `i`, as one child slot, is best a leaf: its
     /// one-slot cost is the leaf's.
     fn is_leaf(&self, i: usize) -> bool {
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         node.prim_count > 0 || self.choices(node).leaf()
     }
 
@@ -368,20 +435,16 @@ impl<'a> CollapseCosts<'a> {
     /// scratch space.
     fn node_children(&self, i: usize, first: u32, out: &mut Vec<Child>, work: &mut Vec<Work>) {
         out.clear();
-        let node = &self.bvh2.nodes[i];
+        let node = &self.nodes[i];
         if node.prim_count > 0 {
             out.push((i, first));
             return;
         }
-        // Only the root is tested here: any other node made a node was
+        // Only the root can take this: any other node made a node was
         // cheaper opened, and its leaf cost exceeds its split's.
-        if self.count(i) <= LEAF_PRIMS {
-            let (l, r) = children(node);
-            let split = split_costs(&self.table(l), &self.table(r))[8].0;
-            if leaf_cost(self.area(i), self.others(i)) <= split {
-                out.push((i, first));
-                return;
-            }
+        if self.choices(node).root_leaf() {
+            out.push((i, first));
+            return;
         }
         let k = self.choices(node).open_split();
         let (l, r) = children(node);
@@ -403,7 +466,7 @@ impl<'a> CollapseCosts<'a> {
         work.clear();
         work.push((i, slots, first));
         while let Some((i, slots, first)) = work.pop() {
-            let node = &self.bvh2.nodes[i];
+            let node = &self.nodes[i];
             if slots == 1 || node.prim_count > 0 {
                 out.push((i, first));
                 continue;
@@ -435,7 +498,7 @@ impl<'a> CollapseCosts<'a> {
         self.node_children(src, first, &mut scratch.children, &mut scratch.work);
         let mut inner = Vec::with_capacity(8);
         for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-            set_bounds(&mut part.nodes[0], slot, &self.bvh2.nodes[c].aabb);
+            set_bounds(&mut part.nodes[0], slot, self.nodes[c].aabb());
             if self.is_leaf(c) {
                 part.nodes[0].child[slot] = self.place_leaf(c, first, &mut part);
             } else {
@@ -467,7 +530,7 @@ impl<'a> CollapseCosts<'a> {
             part.depth = part.depth.max(depth);
             self.node_children(src, first, &mut scratch.children, &mut scratch.work);
             for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-                set_bounds(&mut part.nodes[dst], slot, &self.bvh2.nodes[c].aabb);
+                set_bounds(&mut part.nodes[dst], slot, self.nodes[c].aabb());
                 part.nodes[dst].child[slot] = if self.is_leaf(c) {
                     self.place_leaf(c, first, &mut part)
                 } else {
@@ -501,108 +564,16 @@ type Child = (usize, u32);
 /// slots it may fill, and where its primitives start.
 type Work = (usize, usize, u32);
 
+/// A subtree's table (see [`CollapseCosts`]) and how many of its
+/// primitives are tested one by one.
+type Table = ([f32; 8], u32);
+
 /// Buffers the emission reuses from node to node, so that making a node
 /// allocates nothing.
 #[derive(Default)]
 struct Scratch {
     children: Vec<Child>,
     work: Vec<Work>,
-}
-
-/// A subtree of the 8-wide tree: its nodes, the first its root, with
-/// child references local to it, and its leaves' slots; and the subtrees
-/// made in parallel under its root's slots, each a part of its own.
-#[derive(Default)]
-struct Part {
-    nodes: Vec<Node8>,
-    prim_ids: Vec<u32>,
-    depth: u32,
-    packer: LanePacker,
-    subs: Vec<(usize, Part)>,
-}
-
-/// Where a part's nodes and slots start in the whole tree, and the root
-/// slots that refer to its subtrees' roots there.
-struct Placed<'p> {
-    part: &'p Part,
-    node_base: u32,
-    slot_base: u32,
-    links: Vec<(usize, u32)>,
-}
-
-impl Part {
-    /// The whole tree, whose root box is `bounds`: every part in the
-    /// order of nested appends (a part's nodes, then each of its subtrees
-    /// in slot order, likewise), its references moved by where its nodes
-    /// and slots start, each copied once and all in parallel. Slots move
-    /// by whole blocks: every part's `prim_ids` is a whole number of them.
-    fn into_bvh(self, bounds: Aabb) -> Bvh8 {
-        let mut placed = Vec::new();
-        let (mut nodes, mut slots) = (0, 0);
-        let depth = self.place(&mut nodes, &mut slots, &mut placed);
-        let mut all_nodes: Vec<Node8> = (0..nodes).into_par_iter().map(|_| Node8::EMPTY).collect();
-        let mut prim_ids = vec![0u32; slots as usize];
-        let mut pieces = Vec::with_capacity(placed.len());
-        let (mut node_rest, mut slot_rest) = (&mut all_nodes[..], &mut prim_ids[..]);
-        for p in &placed {
-            let (n, tail) = std::mem::take(&mut node_rest).split_at_mut(p.part.nodes.len());
-            node_rest = tail;
-            let (s, tail) = std::mem::take(&mut slot_rest).split_at_mut(p.part.prim_ids.len());
-            slot_rest = tail;
-            pieces.push((n, s));
-        }
-        placed
-            .par_iter()
-            .zip(pieces)
-            .for_each(|(p, (nodes, slots))| {
-                for (out, node) in nodes.iter_mut().zip(&p.part.nodes) {
-                    *out = *node;
-                    for c in &mut out.child {
-                        if *c == EMPTY {
-                            continue;
-                        }
-                        *c = if is_leaf(*c) {
-                            let (start, count) = leaf_range(*c);
-                            encode_leaf(start + p.slot_base, count)
-                        } else {
-                            *c + p.node_base
-                        };
-                    }
-                }
-                for &(slot, root) in &p.links {
-                    nodes[0].child[slot] = root;
-                }
-                slots.copy_from_slice(&p.part.prim_ids);
-            });
-        Bvh8 {
-            nodes: all_nodes,
-            prim_ids,
-            bounds,
-            depth,
-            prefetch: true,
-        }
-    }
-
-    /// Lays this part out from node `nodes` and slot `slots` (moved past
-    /// it and its subtrees) into `placed`; returns its depth.
-    fn place<'p>(&'p self, nodes: &mut u32, slots: &mut u32, placed: &mut Vec<Placed<'p>>) -> u32 {
-        let at = placed.len();
-        placed.push(Placed {
-            part: self,
-            node_base: *nodes,
-            slot_base: *slots,
-            links: Vec::new(),
-        });
-        *nodes += self.nodes.len() as u32;
-        *slots += self.prim_ids.len() as u32;
-        let mut depth = self.depth;
-        for (slot, sub) in &self.subs {
-            let root = *nodes;
-            depth = depth.max(sub.place(nodes, slots, placed) + 1);
-            placed[at].links.push((*slot, root));
-        }
-        depth
-    }
 }
 
 /// The pieces one after another, copied in parallel (`concat` is one
@@ -632,12 +603,12 @@ fn set_bounds(node: &mut Node8, slot: usize, b: &obvhs::aabb::Aabb) {
 
 /// Post-order of BVH2 node `root`'s subtree (children before parents),
 /// by an explicit stack: trees can be deep.
-fn post_order(bvh2: &Bvh2, root: usize) -> Vec<u32> {
+fn post_order(nodes: &[Bvh2Node], root: usize) -> Vec<u32> {
     let mut order = Vec::new();
     let mut stack = vec![root as u32];
     while let Some(i) = stack.pop() {
         order.push(i);
-        let node = &bvh2.nodes[i as usize];
+        let node = &nodes[i as usize];
         if node.prim_count == 0 {
             stack.push(node.first_index);
             stack.push(node.first_index + 1);
@@ -679,7 +650,8 @@ fn split_costs(left: &[f32; 8], right: &[f32; 8]) -> [(f32, usize); 9] {
 }
 
 /// What an inner node's table chose, packed in a u32: bit 0, a leaf for
-/// one slot; bits 3(j − 1) to 3j − 1 for `j` in 2..=8, the left child's
+/// one slot; bit 1, a leaf rather than an 8-wide node of its own as the
+/// tree's root (its leaf cost at most its split's into eight); bits 3(j − 1) to 3j − 1 for `j` in 2..=8, the left child's
 /// share when `j` slots split between the children (0: one slot fewer
 /// was as cheap); bits 24 to 26, the left child's share of 8 slots when
 /// the node is opened as an 8-wide node of its own.
@@ -695,6 +667,14 @@ impl Choices {
 
     fn leaf(self) -> bool {
         self.0 & 1 != 0
+    }
+
+    fn set_root_leaf(&mut self) {
+        self.0 |= 2;
+    }
+
+    fn root_leaf(self) -> bool {
+        self.0 & 2 != 0
     }
 
     /// Records the left child's share of `slots`, 0 for one slot fewer.
@@ -718,47 +698,5 @@ impl Choices {
 
     fn open_split(self) -> usize {
         ((self.0 >> Self::OPEN_SHIFT) & 7) as usize
-    }
-}
-
-/// Places leaves into blocks of [`LANES`] slots so that no leaf
-/// straddles two blocks: a leaf is then one 8-wide triangle test over one
-/// contiguous block (see `shape::triangle_lanes`). First fit among the last few
-/// blocks that still have room keeps the padding small (a fraction of a
-/// percent on scanned meshes) and keeps leaves that are near in the tree
-/// near in memory.
-#[derive(Default)]
-struct LanePacker {
-    /// Blocks with free slots: (first free slot, end of block).
-    open: Vec<(u32, u32)>,
-}
-
-impl LanePacker {
-    /// Blocks kept open for first fit.
-    const OPEN_BLOCKS: usize = 8;
-
-    /// Writes `prims` into free slots of `prim_ids` (growing it by whole
-    /// blocks padded with [`NO_PRIM`]) and returns the first slot.
-    fn place(&mut self, prims: &[u32], prim_ids: &mut Vec<u32>) -> u32 {
-        let n = prims.len() as u32;
-        let i = match self.open.iter().position(|&(free, end)| end - free >= n) {
-            Some(i) => i,
-            None => {
-                let start = prim_ids.len() as u32;
-                prim_ids.resize(prim_ids.len() + LANES, NO_PRIM);
-                if self.open.len() == Self::OPEN_BLOCKS {
-                    self.open.remove(0);
-                }
-                self.open.push((start, start + LANES as u32));
-                self.open.len() - 1
-            }
-        };
-        let start = self.open[i].0;
-        prim_ids[start as usize..(start + n) as usize].copy_from_slice(prims);
-        self.open[i].0 += n;
-        if self.open[i].0 == self.open[i].1 {
-            self.open.remove(i);
-        }
-        start
     }
 }

@@ -24,6 +24,7 @@
 //! the eight consecutive rays of a stream `narrow` enough to share a
 //! walk; a `bundle` of up to 64 alike rays, node by node.
 
+mod assemble;
 mod binary;
 pub mod build;
 pub mod bundle;

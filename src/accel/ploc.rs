@@ -36,6 +36,16 @@ struct Clusters {
 
 const LEAF: u32 = 1 << 31;
 
+impl Clusters {
+    /// Keeps the first `count` clusters and frees the room for the rest.
+    fn shrink_to(&mut self, count: usize) {
+        self.bounds.truncate(count);
+        self.bounds.shrink_to_fit();
+        self.node.truncate(count);
+        self.node.shrink_to_fit();
+    }
+}
+
 /// The tree's node for a cluster of box `aabb` and `node`.
 fn tree_node(aabb: Box3A, node: u32) -> Bvh2Node {
     match node & LEAF {
@@ -135,27 +145,24 @@ fn ploc_over(
 ) -> Bvh2 {
     let n = bounds.len();
     assert!(n > 0 && n < LEAF as usize && radius >= 1);
-    // Copied in parallel: a clone is one thread's copy, and its clears of
-    // fresh pages (see `nodes` below), where `spare` cannot hold them.
+    // The next pass's clusters are made as long as the first merge keeps
+    // (a third fewer), not a copy of the first pass's: `merge` grows them.
     spare.clear();
-    spare.par_extend(bounds.par_iter().with_min_len(BLOCK).copied());
     let mut next = Clusters {
         bounds: spare,
-        node: node.par_iter().with_min_len(BLOCK).copied().collect(),
+        node: Vec::new(),
     };
     let mut current = Clusters { bounds, node };
     let mut nearest = vec![0u32; n];
     let scale = unit_scale(&current.bounds);
-    // The nodes, made in parallel (the first write to a fresh page costs
-    // the kernel a clear, which one thread would do for all of them).
-    let mut nodes: Vec<Bvh2Node> = (0..2 * n - 1)
-        .into_par_iter()
-        .with_min_len(BLOCK)
-        .map(|_| Bvh2Node::default())
-        .collect();
+    // The nodes, zeroed by the allocator: fresh pages, which the kernel
+    // maps (and clears) only when a merge first writes them, in parallel.
+    // So the tree's memory grows as the clusters' shrinks, and the two
+    // are never both whole (96 and 72 bytes a primitive).
+    let mut nodes: Vec<Bvh2Node> = wide::bytemuck::zeroed_vec(2 * n - 1);
     // Pairs are written down from the end, so children follow parents.
     let mut insert = nodes.len();
-    let (mut count, mut passes) = (n, 0);
+    let (mut count, mut passes, mut held) = (n, 0, n);
     while count > 1 {
         let r = if passes < near_passes { 1 } else { radius };
         find_nearest(&current.bounds[..count], &mut nearest[..count], r, scale);
@@ -165,6 +172,17 @@ fn ploc_over(
         count = kept;
         insert -= 2 * merged;
         passes += 1;
+        // Hand back the clusters' buffers past what the passes to come
+        // can use whenever an eighth of them is spare (a shrink in place,
+        // by whole pages: no copy), so that they shrink as the tree grows:
+        // the first passes merge a third of the clusters each.
+        if count <= held - held / 8 {
+            held = count;
+            current.shrink_to(count);
+            next.shrink_to(count);
+            nearest.truncate(count);
+            nearest.shrink_to_fit();
+        }
     }
     debug_assert_eq!(insert, 1);
     nodes[0] = tree_node(current.bounds[0], current.node[0]);
@@ -316,6 +334,8 @@ fn merge(
     let (kept, pairs) = tallies
         .iter()
         .fold((0, 0), |(k, p), &(bk, bp)| (k + bk, p + bp));
+    grow_to(&mut next.bounds, kept);
+    grow_to(&mut next.node, kept);
     // Each block's share of `next` (in order) and of `nodes` (from the
     // end down: the first block's pairs last), and where its nodes start.
     let mut parts = Vec::with_capacity(blocks);
@@ -363,6 +383,21 @@ fn merge(
     (kept, pairs)
 }
 
+/// Lengthens `v` to `len` items (their values are written over before
+/// they are read), in parallel: the first touch of a fresh page is its
+/// clear, which one thread would do for all of them.
+fn grow_to<T: Copy + Default + Send>(v: &mut Vec<T>, len: usize) {
+    if v.len() < len {
+        let more = len - v.len();
+        v.par_extend(
+            (0..more)
+                .into_par_iter()
+                .with_min_len(BLOCK)
+                .map(|_| T::default()),
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::build::tests::on_threads;
@@ -389,7 +424,7 @@ mod tests {
         bvh.nodes
             .iter()
             .map(|n| {
-                let (a, b) = (n.aabb.min, n.aabb.max);
+                let (a, b) = (n.aabb().min, n.aabb().max);
                 [a.x, a.y, a.z, b.x, b.y, b.z]
                     .map(f32::to_bits)
                     .iter()
@@ -435,7 +470,7 @@ mod tests {
             let bvh = ploc(Boxes::Borrowed(&boxes), order, 6, 2);
             assert_eq!(bvh.nodes.len(), 2 * n - 1);
             let as_box = |k: usize| {
-                let a = bvh.nodes[k].aabb;
+                let a = *bvh.nodes[k].aabb();
                 Aabb::new(a.min.into(), a.max.into())
             };
             assert_eq!(as_box(0), bounds, "{n}: the root is the union");
