@@ -381,7 +381,8 @@ mod tests {
         for pass in 0..6u32 {
             let active: Vec<bool> = kept.active().to_vec();
             for i in 0..film.pixel_count() {
-                if pass == 0 || active[i] {
+                // Every pixel before the first decision.
+                if active.get(i).copied().unwrap_or(true) {
                     let mut p = PixelSum::default();
                     for k in 0..8 {
                         p.add(sample(i, pass * 8 + k), k);
