@@ -190,7 +190,7 @@ pub fn active_pixels(film: &Film, target: NoiseTarget, active: &mut Vec<bool>) {
 /// the next: a pixel's own verdict is worked out again only when it took
 /// samples in the pass before, as no other pixel's record has changed.
 /// The same answer as [`active_pixels`] at every decision, without
-/// reading every pixel's record at every pass (a tenth of a short
+/// reading every pixel's record at every pass (a sixth of a short
 /// render's time on the dragon under an area light, where most pixels
 /// stop at the first decision).
 #[derive(Debug, Default)]
