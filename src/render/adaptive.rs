@@ -77,7 +77,7 @@ use std::ops::Range;
 /// the pixels that need few samples most: after 16, the dragon under an
 /// area light took 1.1 to 1.5 times the samples to the same RMSE
 /// (docs/converge.md); the neighbourhood guards what so few samples miss.
-pub const FIRST_DECISION: u32 = 8;
+pub const FIRST_DECISION: u32 = crate::scene::settings::NOISE_FIRST_DECISION;
 
 /// The share of Ȳ² that the f32 rounding of each sample's Y² can leave
 /// as variance where samples agree (`standard_error`): a relative
