@@ -25,7 +25,9 @@
 //! dark pixel, whose deviation is small, is done soon. Stopping at a
 //! relative error (s/√n ÷ Ȳ) gives n ∝ s²/Ȳ², and the standard error over
 //! √Ȳ (Dammertz et al. 2010, Cycles' measure) n ∝ s²/Ȳ: both spend most
-//! on the noisiest bright pixels, past where their samples lower the
+//! where the deviation is large beside the mean (the dark side of a
+//! penumbra: with a share p of a light's rays unblocked, n ∝ 1 − p under
+//! √Ȳ, against Neyman's √(p(1 − p))), past where those samples lower the
 //! image's error most. Measured on the dragon under an area light at
 //! equal RMSE, the relative measure took 0.8 of the uniform samples,
 //! over √Ȳ 0.3, this one about 0.2 (docs/converge.md). s/√n is the error
