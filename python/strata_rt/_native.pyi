@@ -236,7 +236,7 @@ def render(
     passes: Optional[int] = None,
     packets: Optional[Literal["auto", "on", "off"]] = None,
     schedule: Optional[Literal["slices", "regions"]] = None,
-    bvh_quality: Optional[Literal["fastest", "fast", "auto", "medium", "high"]] = None,
+    bvh_quality: Optional[Literal["preview", "fastest", "fast", "auto", "medium", "high"]] = None,
     crop: Union[Tuple[int, int, int, int], str, None] = None,
     aovs: Literal[False, None] = None,
 ) -> NDArray[np.float32]:
@@ -265,7 +265,7 @@ def render(
     passes: Optional[int] = None,
     packets: Optional[Literal["auto", "on", "off"]] = None,
     schedule: Optional[Literal["slices", "regions"]] = None,
-    bvh_quality: Optional[Literal["fastest", "fast", "auto", "medium", "high"]] = None,
+    bvh_quality: Optional[Literal["preview", "fastest", "fast", "auto", "medium", "high"]] = None,
     crop: Union[Tuple[int, int, int, int], str, None] = None,
     aovs: Union[Literal[True], Sequence[Literal["albedo", "normal", "depth", "spp"]]] = ...,
 ) -> Tuple[NDArray[np.float32], Dict[str, NDArray[np.float32]]]:

@@ -41,15 +41,18 @@ pub(super) fn binary_tree_and_bounds(
         "too many primitives for one BVH: {}",
         boxes.len()
     );
-    // A union is exact, so any grouping gives the same box.
-    let bounds = steps.time("bounds", || {
-        boxes
-            .par_iter()
-            .with_min_len(1 << 14)
-            .copied()
-            .reduce(|| Aabb::EMPTY, Aabb::union)
-    });
+    let bounds = steps.time("bounds", || union(&boxes));
     Some((binary_tree(boxes, bounds, quality, steps), bounds))
+}
+
+/// The union of `boxes`, in parallel: a union is exact, so any grouping
+/// gives the same box.
+pub(super) fn union(boxes: &[Aabb]) -> Aabb {
+    boxes
+        .par_iter()
+        .with_min_len(1 << 14)
+        .copied()
+        .reduce(|| Aabb::EMPTY, Aabb::union)
 }
 
 /// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one

@@ -18,6 +18,7 @@ crate::mode::mode_enum! {
     /// ([`BuildQuality::choose`], [`super::choice`]).
     #[derive(Default)]
     pub enum BuildQuality("BVH quality") {
+        Preview = "preview",
         Fastest = "fastest",
         Fast = "fast",
         #[default]
@@ -37,7 +38,8 @@ impl BuildQuality {
 
     pub(super) fn params(self, prim_count: usize) -> BvhBuildParams {
         match self.preset(prim_count) {
-            Self::Fastest => BvhBuildParams::fastest_build(),
+            // The preview tree has no binary tree: these go unread.
+            Self::Preview | Self::Fastest => BvhBuildParams::fastest_build(),
             Self::Fast => BvhBuildParams::fast_build(),
             Self::High => BvhBuildParams::slow_build(),
             Self::Medium | Self::Auto => BvhBuildParams::medium_build(),
@@ -77,6 +79,9 @@ impl Bvh8 {
     /// Build over primitive boxes; primitive `i` is reported as id `i`.
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
+        if quality.preset(boxes.len()) == BuildQuality::Preview {
+            return Self::preview(Boxes::Borrowed(boxes), &mut Steps::default());
+        }
         match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality, &mut Steps::default()) {
             Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, u32::MAX),
             None => Self::empty(),
@@ -113,6 +118,9 @@ impl Bvh8 {
         first_other: u32,
         steps: &mut Steps,
     ) -> Self {
+        if quality.preset(boxes.len()) == BuildQuality::Preview {
+            return Self::preview(Boxes::Owned(boxes), steps);
+        }
         match binary_tree_and_bounds(Boxes::Owned(boxes), quality, steps) {
             Some((bvh2, bounds)) => {
                 let prims = bvh2.primitive_indices.len();
@@ -123,6 +131,21 @@ impl Bvh8 {
             }
             None => Self::empty(),
         }
+    }
+
+    /// The preview tree over `boxes` ([`super::lbvh`]), cut from their
+    /// Morton order.
+    fn preview(boxes: Boxes, steps: &mut Steps) -> Self {
+        let prims = boxes.len();
+        if prims == 0 {
+            return Self::empty();
+        }
+        assert!(
+            prims <= super::node::MAX_PRIMS,
+            "too many primitives for one BVH: {prims}"
+        );
+        let bounds = steps.time("bounds", || super::binary::union(&boxes));
+        super::lbvh::build(boxes, bounds, steps).debug_validated(prims)
     }
 
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
@@ -365,6 +388,7 @@ pub(super) mod tests {
     fn every_leaf_holds_the_primitives_of_its_subtree() {
         let boxes = random_boxes(150_000, 8);
         for quality in [
+            BuildQuality::Preview,
             BuildQuality::Fastest,
             BuildQuality::Fast,
             BuildQuality::High,

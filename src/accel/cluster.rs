@@ -216,6 +216,21 @@ const PAIR_BLOCK: usize = 1 << 15;
 /// Primitive ids sorted by the Morton code of their boxes' centres, ties
 /// by id.
 pub(super) fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
+    // The ids written over the sorted keys, in their allocation (a u32
+    // fits where a u64 was: the standard library collects in place), then
+    // its second half handed back: no fresh pages for the order.
+    let mut order: Vec<u32> = morton_keys(boxes, bounds)
+        .into_iter()
+        .map(|k| k as u32)
+        .collect();
+    order.shrink_to_fit();
+    order
+}
+
+/// Each primitive's key, its box centre's 30-bit Morton code
+/// ([`morton_code`]) above its id (`code << 32 | id`), sorted: ids in
+/// Morton order, ties by id.
+pub(super) fn morton_keys(boxes: &[Aabb], bounds: Aabb) -> Vec<u64> {
     let extent = bounds.max - bounds.min;
     // Centres map to [0, 1023] on each axis; a flat axis maps to 0.
     let scale = Vec3::select(extent.cmpgt(Vec3::ZERO), 1023.0 / extent, Vec3::ZERO);
@@ -228,20 +243,17 @@ pub(super) fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
             AtomicU64::new((morton_code(q) as u64) << 32 | i as u64)
         })
         .collect();
-    // The ids written over the sorted keys, in their allocation (a u32
-    // fits where a u64 was: the standard library collects in place), then
-    // its second half handed back: no fresh pages for the order.
-    let mut order: Vec<u32> = radix_sort_by_high_30_bits(keys)
+    // In place: an atomic has its value's layout.
+    radix_sort_by_high_30_bits(keys)
         .into_iter()
-        .map(|k| k.into_inner() as u32)
-        .collect();
-    order.shrink_to_fit();
-    order
+        .map(AtomicU64::into_inner)
+        .collect()
 }
 
 /// The 30-bit Morton code of a cell (ten bits an axis): bit k of z, y
 /// and x at bits 3k, 3k + 1 and 3k + 2 (obvhs's interleave, which puts
-/// its first argument lowest).
+/// its first argument lowest), so bits 3k to 3k + 2 say which octant of
+/// its level-(9 − k) cell a centre lies in.
 fn morton_code(q: UVec3) -> u32 {
     morton_encode_u32(q.z as u16, q.y as u16, q.x as u16)
 }

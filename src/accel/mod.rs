@@ -34,6 +34,7 @@ mod collapse;
 mod descend;
 pub mod hit;
 pub mod in_flight;
+mod lbvh;
 pub mod narrow;
 mod nearest;
 mod node;

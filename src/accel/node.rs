@@ -1,5 +1,7 @@
 //! The 8-wide node layout.
 
+use crate::math::Aabb;
+
 /// Child slot encoding in [`Node8::child`].
 pub const EMPTY: u32 = u32::MAX;
 const LEAF_BIT: u32 = 1 << 31;
@@ -33,6 +35,15 @@ impl Node8 {
         ],
         child: [EMPTY; 8],
     };
+
+    /// Sets child `slot`'s box in the rows.
+    #[inline]
+    pub fn set_box(&mut self, slot: usize, b: Aabb) {
+        for axis in 0..3 {
+            self.bounds[2 * axis][slot] = b.min[axis];
+            self.bounds[2 * axis + 1][slot] = b.max[axis];
+        }
+    }
 }
 
 /// What a child slot refers to.

@@ -385,6 +385,7 @@ pub(super) mod tests {
         }
         let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
         for quality in [
+            BuildQuality::Preview,
             BuildQuality::Fastest,
             BuildQuality::Fast,
             BuildQuality::Medium,

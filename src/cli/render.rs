@@ -93,7 +93,7 @@ pub struct RenderArgs {
     /// bit-identical in every mode.
     #[arg(long, default_value = "auto")]
     pub packets: strata::shade::PacketMode,
-    /// BVH build effort: fastest, fast, auto, medium or high. Auto estimates the rays the render traces (pixels × samples × rays a sample) and builds the preset whose build plus trace time is least (fastest for a preview of a big mesh, high for a long render); --stats and the summary say which and why.
+    /// BVH build effort: preview, fastest, fast, auto, medium or high. Auto estimates the rays the render traces (pixels × samples × rays a sample) and builds the preset whose build plus trace time is least (preview, cut straight from the Morton order, for a quick look at a big mesh; high for a long render); --stats and the summary say which and why.
     #[arg(long, default_value = "auto")]
     pub bvh_quality: strata::accel::BuildQuality,
     /// Write statistics (rays by kind, Mrays/s, phase times, peak RSS) as JSON.

@@ -91,11 +91,15 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
         }
         chosen.push(want);
     }
-    assert_eq!(chosen[0], BuildQuality::Fastest, "a preview builds fastest");
-    assert_ne!(
-        chosen[1],
-        BuildQuality::Fastest,
-        "a long render builds more"
+    assert_eq!(
+        chosen[0],
+        BuildQuality::Preview,
+        "a preview builds the preview tree"
+    );
+    assert!(
+        !matches!(chosen[1], BuildQuality::Preview | BuildQuality::Fastest),
+        "a long render builds more: {:?}",
+        chosen[1]
     );
 }
 
@@ -106,7 +110,7 @@ fn a_named_preset_overrides_auto() {
     std::fs::write(dir.join("ball.obj"), bumpy_sphere_obj(320, 200, 1.0, 0.05)).unwrap();
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, SCENE).unwrap();
-    for q in ["high", "fastest"] {
+    for q in ["high", "fastest", "preview"] {
         let json = dir.join("s.json");
         let out = dir.join("o.png");
         let summary = strata_ok(

@@ -641,7 +641,7 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
-    /// A render's `auto` build is the fastest preset's tree when the render
+    /// A render's `auto` build is the preview tree when the render
     /// traces few rays per triangle and a better one's when it traces
     /// many; tracing a mesh file keeps the default whatever the settings.
     #[test]
@@ -677,24 +677,24 @@ mod tests {
             let (s, timings) = load_scene(&scene, &overrides, quality).unwrap();
             (s.geometry.bvh.stats(), timings.bvh_quality)
         };
-        let (fastest, medium) = (
-            tree(1, BuildQuality::Fastest),
+        let (preview, medium) = (
+            tree(1, BuildQuality::Preview),
             tree(1, BuildQuality::Medium),
         );
         assert_ne!(
-            fastest.0, medium.0,
+            preview.0, medium.0,
             "the presets must differ for the test to mean anything"
         );
         assert_eq!(
-            (fastest.1, medium.1),
-            (BuildQuality::Fastest, BuildQuality::Medium)
+            (preview.1, medium.1),
+            (BuildQuality::Preview, BuildQuality::Medium)
         );
         // 64·64·1·2 rays, 0.08 a triangle; 64·64·4096·2, 317 a triangle,
         // pay for a better tree (`accel::choice`). The timings name the
         // preset used.
-        assert_eq!(tree(1, BuildQuality::Auto), fastest);
+        assert_eq!(tree(1, BuildQuality::Auto), preview);
         let many = BuildQuality::Auto.choose(105_800, Some(64 * 64 * 4096 * 2));
-        assert_ne!(many.quality, BuildQuality::Fastest);
+        assert_ne!(many.quality, BuildQuality::Preview);
         assert_eq!(tree(4096, BuildQuality::Auto), tree(1, many.quality));
         let (traced, timings) = load_mesh_scene(&mesh, BuildQuality::Auto).unwrap();
         assert_eq!((traced.geometry.bvh.stats(), timings.bvh_quality), medium);
