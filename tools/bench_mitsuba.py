@@ -45,6 +45,13 @@ Per scene:
      doubling from 1 spp and then bisecting; the whole strata process
      (wall, including load and BVH build) against Mitsuba's load_dict
      (median of --runs loads) + warm render.
+  5. Equal RMSE with strata's noise target (--noise E, ceiling
+     --noise-spp): the largest E whose RMSE (mean over three seeds) is at
+     most Mitsuba's, found by halving or doubling E from 0.5 and then
+     bisecting between the last two in log space (four steps); timed as
+     in 4 (every pixel takes 8 samples before the first decision). Mitsuba
+     has no noise target of its own, so this compares strata at its best
+     with Mitsuba's uniform sampling (--noise-spp 0 skips it).
 
 Run on a quiet machine: these are wall-clock figures.
 """
@@ -322,10 +329,12 @@ def region_means(np, img, k=3):
             for i in range(k) for j in range(k)]
 
 
-def run_strata(args, scene, spp, sampler, out, seed=0):
+def run_strata(args, scene, spp, sampler, out, seed=0, noise=None):
     stats = out + ".json"
     cmd = [args.strata, "render", scene, "-q", "--threads", str(args.threads), "--spp", str(spp),
-           "--sampler", sampler, "--seed", str(seed), "-o", out, "--stats", stats]
+           "--seed", str(seed), "-o", out, "--stats", stats]
+    # The noise target samples as it must (its own sampler); else the one asked.
+    cmd += ["--noise", str(noise)] if noise is not None else ["--sampler", sampler]
     t = time.perf_counter()
     subprocess.run(cmd, check=True, cwd=ROOT)
     wall = time.perf_counter() - t
@@ -464,7 +473,62 @@ def bench_scene(args, mi, dr, np, path, tmp):
     print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
           f"load_dict {load_med:.3f} s (median of {len(loads)}: {min(loads):.3f} to {max(loads):.3f} s) "
           f"+ warm render {med(m_times):.3f} s = {mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
+    if args.noise_spp > 0:
+        noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_times)
     return True
+
+
+def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_times):
+    """Step 5: the largest noise target whose RMSE is at most Mitsuba's."""
+    med = statistics.median
+    out = os.path.join(tmp, f"{name}-noise.exr")
+
+    def noise_rmse(e):
+        errs = []
+        for seed in range(RMSE_SEEDS):
+            run_strata(args, path, args.noise_spp, None, out, seed=seed, noise=f"{e:.5g}")
+            errs.append(rmse(np, read_exr(mi, np, out), ref))
+        return statistics.mean(errs)
+
+    # Bracket: lo meets Mitsuba's RMSE, hi (larger) does not.
+    lo, hi, found = None, None, None
+    e = 0.5
+    while 1e-3 < e < 64:
+        err = noise_rmse(e)
+        if err <= m_rmse:
+            lo, found = e, (e, err)
+            if hi is not None:
+                break
+            e *= 2
+        else:
+            hi = e
+            if lo is not None:
+                break
+            e /= 2
+    if found is None:
+        print(f"  noise target: no E down to 1e-3 reached Mitsuba's RMSE {m_rmse:.5f}")
+        return
+    if hi is not None:
+        for _ in range(4):
+            mid = math.sqrt(lo * hi)
+            err = noise_rmse(mid)
+            if err <= m_rmse:
+                lo, found = mid, (mid, err)
+            else:
+                hi = mid
+    e, err = found
+    walls, renders, spp = [], [], []
+    for _ in range(args.runs):
+        wall, render_s, _ = run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}")
+        walls.append(wall)
+        renders.append(render_s)
+        with open(out + ".json") as f:
+            spp.append(json.load(f).get("mean_spp", float("nan")))
+    mitsuba_total = med(loads) + med(m_times)
+    print(f"  equal RMSE, noise target: strata --noise {e:.4g} (ceiling {args.noise_spp} spp, "
+          f"{med(spp):.1f} spp on average): RMSE {err:.5f} <= mitsuba's {m_rmse:.5f}")
+    print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
+          f"{mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
 
 
 def main():
@@ -476,6 +540,8 @@ def main():
     ap.add_argument("--spp", type=int, default=0, help="equal-spp sample count (default: the scene's)")
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--noise-spp", type=int, default=4096,
+                    help="step 5's sample ceiling for strata's noise target (0: skip step 5)")
     args = ap.parse_args()
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         import glob
