@@ -26,6 +26,7 @@
 
 mod assemble;
 mod binary;
+mod binary_tree;
 pub mod build;
 pub mod bundle;
 pub mod choice;
