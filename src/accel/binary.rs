@@ -1,10 +1,8 @@
 //! The binary tree a build collapses: PLOC ([`super::ploc`]) over
-//! primitives sorted along a Morton curve, then obvhs's reinsertion
-//! (Meister and Bittner 2018; Bittner, Hapala and Havran 2013); or, for
-//! the fastest preset, PLOC over [`super::cluster`]s into strata's own
-//! compact tree ([`BinaryTree`]), which nothing reinserts.
+//! primitives sorted along a Morton curve, or over [`super::cluster`]s
+//! for the fastest preset, then obvhs's reinsertion (Meister and Bittner
+//! 2018; Bittner, Hapala and Havran 2013).
 
-use super::binary_tree::BinaryTree;
 use super::build::BuildQuality;
 pub(super) use super::cluster::Boxes;
 use super::cluster::{morton_order, Clusters};
@@ -28,33 +26,13 @@ impl obvhs::Boundable for Aabb {
     }
 }
 
-/// A binary tree in one of the two layouts the collapse reads
-/// ([`super::binary_tree::Binary`]).
-#[derive(Clone)]
-pub(super) enum Tree {
-    /// obvhs's, which its reinsertion has optimised (fast, medium, high).
-    Obvhs(Bvh2),
-    /// strata's own, over clusters (fastest).
-    Own(BinaryTree),
-}
-
-impl Tree {
-    /// How many primitives the tree holds.
-    pub(super) fn prim_count(&self) -> usize {
-        match self {
-            Tree::Obvhs(bvh2) => bvh2.primitive_indices.len(),
-            Tree::Own(tree) => tree.ids.len(),
-        }
-    }
-}
-
-/// The binary tree over `boxes` and their union; `None` if there are no
-/// boxes.
+/// obvhs's binary tree over `boxes` and their union; `None` if there are
+/// no boxes.
 pub(super) fn binary_tree_and_bounds(
     boxes: Boxes,
     quality: BuildQuality,
     steps: &mut Steps,
-) -> Option<(Tree, Aabb)> {
+) -> Option<(Bvh2, Aabb)> {
     if boxes.is_empty() {
         return None;
     }
@@ -74,19 +52,19 @@ pub(super) fn binary_tree_and_bounds(
     Some((binary_tree(boxes, bounds, quality, steps), bounds))
 }
 
-/// The binary tree over `boxes` (not empty, inside `bounds`): obvhs's,
-/// one primitive a leaf, or for the fastest preset strata's own, one
-/// cluster of up to [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS)
-/// primitives a leaf ([`super::cluster`]).
+/// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one
+/// primitive a leaf, or for the fastest preset one cluster of up to
+/// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
+/// ([`super::cluster`]).
 pub(super) fn binary_tree(
     boxes: Boxes,
     bounds: Aabb,
     quality: BuildQuality,
     steps: &mut Steps,
-) -> Tree {
+) -> Bvh2 {
     let preset = quality.preset(boxes.len());
     let params = quality.params(boxes.len());
-    if preset == BuildQuality::Fastest {
+    let mut bvh2 = if preset == BuildQuality::Fastest {
         // The clusters free the boxes once their first round has read them.
         let clusters = steps.time("clusters", || Clusters::new(boxes, bounds));
         let Clusters {
@@ -100,14 +78,24 @@ pub(super) fn binary_tree(
         // starts[c + 1]. PLOC takes the clusters' boxes and the rounds'
         // other buffer as its own clusters.
         let (radius, near) = (radius(&params), params.search_depth_threshold);
-        debug_assert_eq!(params.reinsertion_batch_ratio, 0.0);
-        return Tree::Own(steps.time("ploc", || {
-            super::ploc::ploc_tree(boxes, spare, starts, order, radius, near)
-        }));
-    }
-    let order = steps.time("morton", || morton_order(&boxes, bounds));
-    // PLOC frees the boxes and the order before its passes.
-    let mut bvh2 = steps.time("ploc", || ploc(boxes, order, &params));
+        let mut bvh2 = steps.time("ploc", || {
+            super::ploc::ploc_in_order(boxes, spare, order, radius, near)
+        });
+        bvh2.nodes
+            .par_iter_mut()
+            .with_min_len(1 << 14)
+            .filter(|node| node.prim_count > 0)
+            .for_each(|node| {
+                let c = node.first_index as usize;
+                node.first_index = starts[c];
+                node.prim_count = starts[c + 1] - starts[c];
+            });
+        bvh2
+    } else {
+        let order = steps.time("morton", || morton_order(&boxes, bounds));
+        // PLOC frees the boxes and the order before its passes.
+        steps.time("ploc", || ploc(boxes, order, &params))
+    };
     if params.reinsertion_batch_ratio > 0.0 {
         steps.time("reinsertion", || {
             ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None)
@@ -117,7 +105,7 @@ pub(super) fn binary_tree(
     // reinsertion kept (parents: 8 bytes a primitive) before it.
     bvh2.parents = Vec::new();
     bvh2.primitives_to_nodes = Vec::new();
-    Tree::Obvhs(bvh2)
+    bvh2
 }
 
 /// PLOC's tree over `boxes` sorted along the curve as `order` lists them
@@ -165,60 +153,6 @@ mod tests {
     use crate::sampling::stream::{seeded, Draw};
     use glam::Vec3;
 
-    /// The fastest preset's tree in strata's own layout collapses to the
-    /// same 8-wide tree, bit for bit, as the same merges written as
-    /// obvhs's tree (what it built before): the layout changes the
-    /// build's memory, not its tree; on one thread and on three.
-    #[test]
-    fn the_own_layout_collapses_to_the_tree_obvhs_layout_did() {
-        use super::super::build::tests::on_threads;
-        let boxes = random_boxes(200_000, 21);
-        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-        let params = BuildQuality::Fastest.params(boxes.len());
-        let (radius, near) = (radius(&params), params.search_depth_threshold);
-        let obvhs_layout = {
-            let c = Clusters::new(Boxes::Borrowed(&boxes), bounds);
-            let mut bvh2 = super::super::ploc::ploc_in_order(c.boxes, c.order, radius, near);
-            for node in bvh2.nodes.iter_mut().filter(|n| n.prim_count > 0) {
-                let j = node.first_index as usize;
-                node.first_index = c.starts[j];
-                node.prim_count = c.starts[j + 1] - c.starts[j];
-            }
-            Bvh8::collapse(&Tree::Obvhs(bvh2), bounds, u32::MAX)
-        };
-        let bits = |b: &Bvh8| -> Vec<u32> {
-            b.nodes
-                .iter()
-                .flat_map(|n| {
-                    n.child
-                        .into_iter()
-                        .chain(n.bounds.as_flattened().iter().map(|x| x.to_bits()))
-                })
-                .collect()
-        };
-        for threads in [1, 3] {
-            let own = on_threads(threads, || {
-                let tree = binary_tree(
-                    Boxes::Borrowed(&boxes),
-                    bounds,
-                    BuildQuality::Fastest,
-                    &mut Steps::default(),
-                );
-                let Tree::Own(own) = &tree else {
-                    panic!("fastest builds strata's own tree")
-                };
-                assert_eq!(own.nodes.len() + 1, own.leaves.len());
-                Bvh8::collapse(&tree, bounds, u32::MAX)
-            });
-            assert!(bits(&own) == bits(&obvhs_layout), "{threads} threads");
-            assert_eq!(own.prim_ids, obvhs_layout.prim_ids);
-            assert_eq!(
-                (own.depth, own.bounds),
-                (obvhs_layout.depth, obvhs_layout.bounds)
-            );
-        }
-    }
-
     /// The parallel PLOC ([`super::ploc`]) makes trees as good as obvhs's
     /// sequential one did, through reinsertion and the collapse: SAH cost
     /// within 2% for each preset with a primitive a leaf, over boxes in a
@@ -238,25 +172,20 @@ mod tests {
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
             for quality in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::High] {
                 let params = quality.params(boxes.len());
-                let Tree::Obvhs(ours) = binary_tree(
+                let ours = binary_tree(
                     Boxes::Borrowed(&boxes),
                     bounds,
                     quality,
                     &mut Steps::default(),
-                ) else {
-                    panic!("{quality:?} reinserts in obvhs's tree");
-                };
+                );
                 let mut theirs = obvhs_ploc(&boxes, &params);
                 ReinsertionOptimizer::default().run(
                     &mut theirs,
                     params.reinsertion_batch_ratio,
                     None,
                 );
-                let cost = |b: Bvh2| {
-                    let tree = Tree::Obvhs(b);
-                    Bvh8::collapse(&tree, bounds, u32::MAX).stats().sah_cost
-                };
-                let (ours, theirs) = (cost(ours), cost(theirs));
+                let cost = |b: &Bvh2| Bvh8::collapse(b, bounds, u32::MAX).stats().sah_cost;
+                let (ours, theirs) = (cost(&ours), cost(&theirs));
                 assert!(
                     ours < 1.02 * theirs,
                     "{quality:?}: SAH cost {ours} against obvhs's {theirs}"

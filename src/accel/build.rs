@@ -3,12 +3,13 @@
 //! by the surface area heuristic over the whole subtree (Ylitie, Karras
 //! and Laine 2017), see [`super::collapse`].
 
-use super::binary::{binary_tree_and_bounds, Boxes, Tree};
+use super::binary::{binary_tree_and_bounds, Boxes};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3;
+use obvhs::bvh2::Bvh2;
 use obvhs::BvhBuildParams;
 
 crate::mode::mode_enum! {
@@ -77,7 +78,7 @@ impl Bvh8 {
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
         match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality, &mut Steps::default()) {
-            Some((tree, bounds)) => Self::collapse(&tree, bounds, u32::MAX),
+            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, u32::MAX),
             None => Self::empty(),
         }
     }
@@ -113,27 +114,21 @@ impl Bvh8 {
         steps: &mut Steps,
     ) -> Self {
         match binary_tree_and_bounds(Boxes::Owned(boxes), quality, steps) {
-            Some((tree, bounds)) => {
-                let prims = tree.prim_count();
+            Some((bvh2, bounds)) => {
+                let prims = bvh2.primitive_indices.len();
                 steps.time("collapse", || {
-                    match tree {
-                        Tree::Obvhs(bvh2) => {
-                            super::collapse::collapse_owned(bvh2, bounds, first_other)
-                        }
-                        Tree::Own(tree) => {
-                            super::collapse::collapse_tree(tree, bounds, first_other)
-                        }
-                    }
-                    .debug_validated(prims)
+                    super::collapse::collapse_owned(bvh2, bounds, first_other)
+                        .debug_validated(prims)
                 })
             }
             None => Self::empty(),
         }
     }
 
-    /// The 8-wide tree over a binary one, whose root box is `bounds`.
-    pub(super) fn collapse(tree: &Tree, bounds: Aabb, first_other: u32) -> Self {
-        super::collapse::collapse(tree, bounds, first_other).debug_validated(tree.prim_count())
+    /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
+    pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Self {
+        super::collapse::collapse(bvh2, bounds, first_other)
+            .debug_validated(bvh2.primitive_indices.len())
     }
 
     /// True for a tree of no node (built over no primitive), which every
@@ -277,12 +272,10 @@ impl std::fmt::Display for TreeStats {
 #[cfg(test)]
 pub(super) mod tests {
     use super::super::binary::binary_tree_and_bounds;
-    use super::super::binary_tree::{Binary, BinaryTree};
     use super::super::collapse::CollapseCosts;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
     use glam::{Vec3, Vec3A};
-    use obvhs::bvh2::Bvh2;
 
     /// `n` boxes of random sizes scattered through a cube.
     pub(in crate::accel) fn random_boxes(n: usize, seed: u32) -> Vec<Aabb> {
@@ -296,19 +289,9 @@ pub(super) mod tests {
             .collect()
     }
 
-    /// The root's cost the collapse's tables promise for `tree` (with
-    /// primitive `ids`), once their recorded choices are checked.
-    fn promised<T: Binary>(tree: T, ids: &[u32], first_other: u32) -> f64 {
-        let costs = CollapseCosts::over(tree, ids, first_other);
-        costs.assert_choices_match_tables();
-        let root = tree.root();
-        NODE_COST as f64 + costs.split(root, 8).0 as f64 / costs.area(root) as f64
-    }
-
     /// The tree the collapse writes has exactly the cost its tables
     /// promised for the root: the reconstruction follows the choices the
-    /// dynamic programme made, for every preset (fastest's over strata's
-    /// own binary tree, the others' over obvhs's), and whether it charges
+    /// dynamic programme made, for every preset, and whether it charges
     /// no primitive, some or all as tested one by one.
     #[test]
     fn collapse_builds_the_tree_its_cost_tables_chose() {
@@ -318,23 +301,14 @@ pub(super) mod tests {
             (BuildQuality::High, 3),
         ] {
             let boxes = random_boxes(3000, seed);
-            let (tree, bounds) =
+            let (bvh2, bounds) =
                 binary_tree_and_bounds(Boxes::Borrowed(&boxes), quality, &mut Steps::default())
                     .unwrap();
-            assert_eq!(
-                matches!(tree, Tree::Own(_)),
-                quality == BuildQuality::Fastest,
-                "{quality:?}"
-            );
             for first_other in [u32::MAX, 1500, 0] {
-                let promised = match &tree {
-                    Tree::Obvhs(b) => promised(&b.nodes[..], &b.primitive_indices, first_other),
-                    Tree::Own(t) => {
-                        let view = BinaryTree::view_of(&t.nodes, &t.leaves, &t.starts);
-                        promised(view, &t.ids, first_other)
-                    }
-                };
-                let stats = Bvh8::collapse(&tree, bounds, first_other).stats_charging(first_other);
+                let costs = CollapseCosts::new(&bvh2, first_other);
+                costs.assert_choices_match_tables();
+                let promised = NODE_COST as f64 + costs.split(0, 8).0 as f64 / costs.area(0) as f64;
+                let stats = Bvh8::collapse(&bvh2, bounds, first_other).stats_charging(first_other);
                 assert!(
                     (stats.sah_cost - promised).abs() < 1e-4 * promised,
                     "{quality:?}, others from {first_other}: built {} promised {promised}",
@@ -561,11 +535,11 @@ pub(super) mod tests {
             nodes.push(Bvh2Node::new(boxed(n - 1 - j), 1, j));
         }
         nodes.push(Bvh2Node::new(boxed(0), 1, n - 1));
-        let bvh2 = Tree::Obvhs(Bvh2 {
+        let bvh2 = Bvh2 {
             nodes,
             primitive_indices: (0..n).collect(),
             ..Default::default()
-        });
+        };
         let bounds = Aabb::new(glam::Vec3::ZERO, glam::Vec3::splat(n as f32));
         let tree = std::thread::Builder::new()
             .stack_size(1 << 20)
@@ -644,11 +618,8 @@ pub(super) mod tests {
         .unwrap();
         let shape = |s: &TreeStats| (s.nodes, s.children, s.leaves, s.leaf_prims);
         let reference = Bvh8::collapse(&bvh2, bounds, u32::MAX).stats();
-        let Tree::Obvhs(medium) = &bvh2 else {
-            panic!("medium reinserts in obvhs's tree")
-        };
         for scale in [2f32.powi(60), 2f32.powi(-60)] {
-            let mut scaled = medium.clone();
+            let mut scaled = bvh2.clone();
             for node in &mut scaled.nodes {
                 let mut b = *node.aabb();
                 b.min *= scale;
@@ -656,7 +627,7 @@ pub(super) mod tests {
                 node.set_aabb(b);
             }
             let bounds = Aabb::new(bounds.min * scale, bounds.max * scale);
-            let stats = Bvh8::collapse(&Tree::Obvhs(scaled), bounds, u32::MAX).stats();
+            let stats = Bvh8::collapse(&scaled, bounds, u32::MAX).stats();
             assert_eq!(shape(&stats), shape(&reference), "scale {scale}");
         }
     }

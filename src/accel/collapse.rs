@@ -1,5 +1,4 @@
-//! The collapse of a binary tree ([`Binary`]: obvhs's or strata's own)
-//! into 8-wide nodes, chosen by the
+//! The collapse of obvhs's binary tree into 8-wide nodes, chosen by the
 //! surface area heuristic over the whole subtree (Ylitie, Karras and Laine
 //! 2017), in parts that [`super::assemble`] joins into one tree, its
 //! leaves packed into blocks of [`LANES`] slots.
@@ -13,13 +12,12 @@
 //! recomputing a split: the same tree, built faster.
 
 use super::assemble::Part;
-use super::binary::Tree;
-use super::binary_tree::{Binary, BinaryTree};
 use super::build::Bvh8;
 use super::node::{encode_leaf, Node8, EMPTY, MAX_LEAF_PRIMS};
 use crate::math::lanes::LANES;
 use crate::math::Aabb;
 use glam::Vec3;
+use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 use std::hint::select_unpredictable;
@@ -69,29 +67,11 @@ const PARALLEL_LEVELS: u32 = 16;
 /// for their hand-offs to count.
 const PARALLEL_DEPTH: u32 = 10;
 
-/// The 8-wide tree over a binary one, whose root box is `bounds`.
+/// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
 /// Primitives from `first_other` on are tested one by one in a leaf
 /// ([`OTHER_COST`]); those before it are triangles.
-pub(super) fn collapse(tree: &Tree, bounds: Aabb, first_other: u32) -> Bvh8 {
-    parts(tree, first_other, false).into_bvh(bounds)
-}
-
-/// [`collapse_owned`] over strata's own binary tree: its ids and then its
-/// nodes and leaf boxes are freed as obvhs's are.
-pub(super) fn collapse_tree(tree: BinaryTree, bounds: Aabb, first_other: u32) -> Bvh8 {
-    let BinaryTree {
-        nodes,
-        leaves,
-        starts,
-        ids,
-    } = tree;
-    let view = BinaryTree::view_of(&nodes, &leaves, &starts);
-    let costs = CollapseCosts::over(view, &ids, first_other).without_ids();
-    drop(ids);
-    let part = costs.emit(view.root(), 0, 0);
-    drop(costs);
-    drop((nodes, leaves, starts));
-    part.into_bvh(bounds)
+pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
+    parts(bvh2, first_other).into_bvh(bounds)
 }
 
 /// [`collapse`] that takes the binary tree and frees it, with the cost
@@ -106,7 +86,7 @@ pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8
     } = bvh2;
     // The tables' walk copies the ids into leaf order; the emission reads
     // that copy and the nodes only (4 bytes a primitive less).
-    let costs = CollapseCosts::over(&nodes[..], &primitive_indices, first_other).without_ids();
+    let costs = CollapseCosts::over(&nodes, &primitive_indices, first_other).without_ids();
     drop(primitive_indices);
     let part = costs.emit(0, 0, 0);
     drop(costs);
@@ -114,31 +94,19 @@ pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8
     part.into_bvh(bounds)
 }
 
-/// The 8-wide tree over `tree` in parts made in parallel, or by one
-/// sequential walk from the root (for tests of the parallel emission);
-/// the choices are freed when it returns.
-fn parts(tree: &Tree, first_other: u32, sequential: bool) -> Part {
-    fn over<T: Binary>(tree: T, ids: &[u32], first_other: u32, sequential: bool) -> Part {
-        let costs = CollapseCosts::over(tree, ids, first_other);
-        match sequential {
-            false => costs.emit(tree.root(), 0, 0),
-            true => costs.emit_sequential(tree.root(), 0),
-        }
-    }
-    match tree {
-        Tree::Obvhs(b) => over(&b.nodes[..], &b.primitive_indices, first_other, sequential),
-        Tree::Own(t) => {
-            let view = BinaryTree::view_of(&t.nodes, &t.leaves, &t.starts);
-            over(view, &t.ids, first_other, sequential)
-        }
-    }
+/// The 8-wide tree over `bvh2` in parts made in parallel; the choices
+/// are freed when it returns.
+fn parts(bvh2: &Bvh2, first_other: u32) -> Part {
+    CollapseCosts::new(bvh2, first_other).emit(0, 0, 0)
 }
 
 /// [`collapse`] by one sequential walk from the root, for tests of the
 /// parallel emission.
 #[cfg(test)]
-pub(super) fn collapse_sequential(tree: &Tree, bounds: Aabb, first_other: u32) -> Bvh8 {
-    parts(tree, first_other, true).into_bvh(bounds)
+pub(super) fn collapse_sequential(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
+    CollapseCosts::new(bvh2, first_other)
+        .emit_sequential(0, 0)
+        .into_bvh(bounds)
 }
 
 /// The SAH cost tables of the collapse (Ylitie, Karras and Laine 2017,
@@ -164,10 +132,10 @@ pub(super) fn collapse_sequential(tree: &Tree, bounds: Aabb, first_other: u32) -
 /// node and made leaves of 2.3 (dragon) to 2.5 (bunny) triangles, paying an 8-wide
 /// leaf test for each; the tables instead weigh a bigger leaf's larger box
 /// against the node tests it saves.
-pub(super) struct CollapseCosts<'i, T: Binary> {
-    /// The binary tree, and its primitive ids (which only the tables'
-    /// walk reads).
-    tree: T,
+pub(super) struct CollapseCosts<'a, 'i> {
+    /// The binary tree's nodes, and its primitive ids (which only the
+    /// tables' walk reads).
+    nodes: &'a [Bvh2Node],
     ids: &'i [u32],
     /// Areas are measured in units of the largest coordinate, so they
     /// neither overflow (coordinates near 1e20 have areas past f32::MAX)
@@ -197,15 +165,20 @@ pub(super) struct CollapseCosts<'i, T: Binary> {
     ordered: Vec<u32>,
 }
 
-impl<'i, T: Binary> CollapseCosts<'i, T> {
-    /// The tables over binary tree `tree` and its primitive `ids`.
-    pub(super) fn over(tree: T, ids: &'i [u32], first_other: u32) -> Self {
-        let inner = tree.inner_count();
+impl<'a, 'i> CollapseCosts<'a, 'i> {
+    pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> CollapseCosts<'a, 'a> {
+        CollapseCosts::over(&bvh2.nodes, &bvh2.primitive_indices, first_other)
+    }
+
+    /// The tables over a binary tree's `nodes` and primitive `ids`.
+    fn over(nodes: &'a [Bvh2Node], ids: &'i [u32], first_other: u32) -> Self {
+        let inner = nodes.len() / 2;
         let any_other = (first_other as usize) < ids.len();
-        let (min, max) = tree.bounds(tree.root());
+        let root = nodes[0].aabb();
+        let (min, max) = (Vec3::from(root.min), Vec3::from(root.max));
         let largest = min.abs().max(max.abs()).max_element();
         let mut costs = Self {
-            tree,
+            nodes,
             ids,
             unit: if largest > 0.0 { 1.0 / largest } else { 1.0 },
             // Made in parallel: the first touch of a fresh page is the
@@ -222,7 +195,7 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
                 .collect(),
             ordered: Vec::new(),
         };
-        costs.ordered = concat(costs.fill_tables(tree.root(), 0).0);
+        costs.ordered = concat(costs.fill_tables(0, 0).0);
         costs
     }
 
@@ -234,11 +207,12 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// Returns the subtree's primitive ids in leaf order, in pieces (one
     /// per walk) that the caller joins once, and the subtree's table.
     fn fill_tables(&self, i: usize, depth: u32) -> (Vec<Vec<u32>>, Table) {
-        if self.tree.is_leaf(i) {
-            return (vec![self.leaf_prims(i).to_vec()], self.leaf_table(i));
+        let node = &self.nodes[i];
+        if node.prim_count > 0 {
+            return (vec![self.leaf_prims(node).to_vec()], self.leaf_table(i));
         }
         if depth < PARALLEL_DEPTH {
-            let (l, r) = self.tree.children(i);
+            let (l, r) = children(node);
             let ((mut left, left_table), (right, right_table)) = rayon::join(
                 || self.fill_tables(l, depth + 1),
                 || self.fill_tables(r, depth + 1),
@@ -255,18 +229,19 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// subtree's is then below the right one's); returns the subtree's
     /// primitive ids in leaf order and its table.
     fn walk_tables(&self, root: usize) -> (Vec<u32>, Table) {
-        let order = post_order(self.tree, root);
+        let order = post_order(self.nodes, root);
         // A tree of n leaves has 2n - 1 nodes; leaves hold one primitive
         // or more.
         let mut prims = Vec::with_capacity(order.len().div_ceil(2));
         let mut tables: Vec<Table> = Vec::new();
         for n in order {
-            let table = if !self.tree.is_leaf(n as usize) {
+            let node = &self.nodes[n as usize];
+            let table = if node.prim_count == 0 {
                 let right = tables.pop().expect("a right child's table");
                 let left = tables.pop().expect("a left child's table");
                 self.store_table(n as usize, &left, &right)
             } else {
-                prims.extend_from_slice(self.leaf_prims(n as usize));
+                prims.extend_from_slice(self.leaf_prims(node));
                 self.leaf_table(n as usize)
             };
             tables.push(table);
@@ -274,24 +249,24 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
         (prims, tables.pop().expect("the root's table"))
     }
 
-    /// The primitive ids of BVH2 leaf `i`.
-    fn leaf_prims(&self, i: usize) -> &[u32] {
-        let (first, count) = self.tree.leaf_range(i);
-        &self.ids[first..first + count]
+    /// The primitive ids of BVH2 leaf `node`.
+    fn leaf_prims(&self, node: &Bvh2Node) -> &[u32] {
+        let first = node.first_index as usize;
+        &self.ids[first..first + node.prim_count as usize]
     }
 
     /// The table of BVH2 leaf `i`: its leaf cost for any number of slots.
     fn leaf_table(&self, i: usize) -> Table {
-        let others = self.leaf_others(i);
+        let others = self.leaf_others(&self.nodes[i]);
         ([leaf_cost(self.area(i), others); 8], others)
     }
 
     /// The same choices, no longer reading the primitive ids (which
     /// [`CollapseCosts::ordered`] holds in leaf order), so that they can
     /// be freed before the emission: it reads no table.
-    fn without_ids(self) -> CollapseCosts<'static, T> {
+    fn without_ids(self) -> CollapseCosts<'a, 'static> {
         CollapseCosts {
-            tree: self.tree,
+            nodes: self.nodes,
             ids: &[],
             unit: self.unit,
             counts: self.counts,
@@ -305,7 +280,7 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// Computes inner node `i`'s table from its children's, stores its
     /// count and choices, and returns the table.
     fn store_table(&self, i: usize, left: &Table, right: &Table) -> Table {
-        let slot = self.tree.slot(i);
+        let slot = Self::slot(&self.nodes[i]);
         let others = left.1 + right.1;
         let (table, count, choices) = self.node_table(i, &left.0, &right.0, others);
         self.counts[slot].store(count, Relaxed);
@@ -322,7 +297,7 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
         right: &[f32; 8],
         others: u32,
     ) -> ([f32; 8], u32, Choices) {
-        let (l, r) = self.tree.children(i);
+        let (l, r) = children(&self.nodes[i]);
         let count = self.count(l) + self.count(r);
         let area = self.area(i);
         let splits = split_costs(left, right);
@@ -356,42 +331,56 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
         (c, count, choices)
     }
 
+    /// Where an inner node's table is kept: obvhs stores the two children
+    /// of a node side by side with the left one at an odd index, so half
+    /// of it numbers the inner nodes from 0.
+    #[inline]
+    fn slot(node: &Bvh2Node) -> usize {
+        node.first_index as usize / 2
+    }
+
     /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
     pub(super) fn area(&self, i: usize) -> f32 {
-        let (min, max) = self.tree.bounds(i);
+        // Three lanes: a node's box shares its fourth lanes with its counts.
+        let b = self.nodes[i].aabb();
+        let (min, max) = (Vec3::from(b.min), Vec3::from(b.max));
         let d = max * self.unit - min * self.unit;
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 
     fn count(&self, i: usize) -> u32 {
-        if self.tree.is_leaf(i) {
-            self.tree.leaf_range(i).1 as u32
+        let node = &self.nodes[i];
+        if node.prim_count > 0 {
+            node.prim_count
         } else {
-            self.counts[self.tree.slot(i)].load(Relaxed)
+            self.counts[Self::slot(node)].load(Relaxed)
         }
     }
 
-    /// How many of BVH2 leaf `i`'s primitives are tested one by one.
-    fn leaf_others(&self, i: usize) -> u32 {
+    /// How many of BVH2 leaf `node`'s primitives are tested one by one.
+    fn leaf_others(&self, node: &Bvh2Node) -> u32 {
         if !self.any_other {
             return 0;
         }
         let first = self.first_other;
-        self.leaf_prims(i).iter().filter(|&&p| p >= first).count() as u32
+        self.leaf_prims(node)
+            .iter()
+            .filter(|&&p| p >= first)
+            .count() as u32
     }
 
-    /// The choices of inner BVH2 node `i`'s table.
-    fn choices(&self, i: usize) -> Choices {
-        Choices(self.choices[self.tree.slot(i)].load(Relaxed))
+    /// The choices of inner BVH2 node `node`'s table.
+    fn choices(&self, node: &Bvh2Node) -> Choices {
+        Choices(self.choices[Self::slot(node)].load(Relaxed))
     }
 
     /// BVH2 node `i`'s table, computed again from its subtree's leaves
     /// (the build keeps none), for tests.
     #[cfg(test)]
     fn table(&self, i: usize) -> Table {
-        match self.tree.is_leaf(i) {
-            false => self.walk_tables(i).1,
-            true => self.leaf_table(i),
+        match self.nodes[i].prim_count {
+            0 => self.walk_tables(i).1,
+            _ => self.leaf_table(i),
         }
     }
 
@@ -399,7 +388,7 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// `i`'s two children, and the left one's share.
     #[cfg(test)]
     pub(super) fn split(&self, i: usize, slots: usize) -> (f32, usize) {
-        let (l, r) = self.tree.children(i);
+        let (l, r) = children(&self.nodes[i]);
         split_costs(&self.table(l).0, &self.table(r).0)[slots]
     }
 
@@ -409,12 +398,12 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// otherwise the split's share.
     #[cfg(test)]
     pub(super) fn assert_choices_match_tables(&self) {
-        for i in post_order(self.tree, self.tree.root()) {
-            let i = i as usize;
-            if self.tree.is_leaf(i) {
+        for i in post_order(self.nodes, 0) {
+            let (i, node) = (i as usize, &self.nodes[i as usize]);
+            if node.prim_count > 0 {
                 continue;
             }
-            let ((table, others), choices) = (self.table(i), self.choices(i));
+            let ((table, others), choices) = (self.table(i), self.choices(node));
             let leaf_cost = leaf_cost(self.area(i), others);
             let small = self.count(i) <= LEAF_PRIMS;
             let leaf = small && table[0] == leaf_cost;
@@ -433,7 +422,8 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// True if BVH2 node `i`, as one child slot, is best a leaf: its
     /// one-slot cost is the leaf's.
     fn is_leaf(&self, i: usize) -> bool {
-        self.tree.is_leaf(i) || self.choices(i).leaf()
+        let node = &self.nodes[i];
+        node.prim_count > 0 || self.choices(node).leaf()
     }
 
     /// The children of BVH2 node `i` made an 8-wide node: its two children
@@ -445,18 +435,19 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
     /// scratch space.
     fn node_children(&self, i: usize, first: u32, out: &mut Vec<Child>, work: &mut Vec<Work>) {
         out.clear();
-        if self.tree.is_leaf(i) {
+        let node = &self.nodes[i];
+        if node.prim_count > 0 {
             out.push((i, first));
             return;
         }
         // Only the root can take this: any other node made a node was
         // cheaper opened, and its leaf cost exceeds its split's.
-        if self.choices(i).root_leaf() {
+        if self.choices(node).root_leaf() {
             out.push((i, first));
             return;
         }
-        let k = self.choices(i).open_split();
-        let (l, r) = self.tree.children(i);
+        let k = self.choices(node).open_split();
+        let (l, r) = children(node);
         self.distribute(l, k, first, out, work);
         self.distribute(r, 8 - k, first + self.count(l), out, work);
     }
@@ -475,14 +466,15 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
         work.clear();
         work.push((i, slots, first));
         while let Some((i, slots, first)) = work.pop() {
-            if slots == 1 || self.tree.is_leaf(i) {
+            let node = &self.nodes[i];
+            if slots == 1 || node.prim_count > 0 {
                 out.push((i, first));
                 continue;
             }
-            match self.choices(i).split(slots) {
+            match self.choices(node).split(slots) {
                 None => work.push((i, slots - 1, first)),
                 Some(k) => {
-                    let (l, r) = self.tree.children(i);
+                    let (l, r) = children(node);
                     work.push((r, slots - k, first + self.count(l)));
                     work.push((l, k, first));
                 }
@@ -506,7 +498,7 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
         self.node_children(src, first, &mut scratch.children, &mut scratch.work);
         let mut inner = Vec::with_capacity(8);
         for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-            set_bounds(&mut part.nodes[0], slot, self.tree.bounds(c));
+            set_bounds(&mut part.nodes[0], slot, self.nodes[c].aabb());
             if self.is_leaf(c) {
                 part.nodes[0].child[slot] = self.place_leaf(c, first, &mut part);
             } else {
@@ -538,7 +530,7 @@ impl<'i, T: Binary> CollapseCosts<'i, T> {
             part.depth = part.depth.max(depth);
             self.node_children(src, first, &mut scratch.children, &mut scratch.work);
             for (slot, &(c, first)) in scratch.children.iter().enumerate() {
-                set_bounds(&mut part.nodes[dst], slot, self.tree.bounds(c));
+                set_bounds(&mut part.nodes[dst], slot, self.nodes[c].aabb());
                 part.nodes[dst].child[slot] = if self.is_leaf(c) {
                     self.place_leaf(c, first, &mut part)
                 } else {
@@ -602,28 +594,34 @@ fn concat(pieces: Vec<Vec<u32>>) -> Vec<u32> {
     all
 }
 
-fn set_bounds(node: &mut Node8, slot: usize, (min, max): (Vec3, Vec3)) {
+fn set_bounds(node: &mut Node8, slot: usize, b: &obvhs::aabb::Aabb) {
     for axis in 0..3 {
-        node.bounds[2 * axis][slot] = min[axis];
-        node.bounds[2 * axis + 1][slot] = max[axis];
+        node.bounds[2 * axis][slot] = b.min[axis];
+        node.bounds[2 * axis + 1][slot] = b.max[axis];
     }
 }
 
 /// Post-order of BVH2 node `root`'s subtree (children before parents),
 /// by an explicit stack: trees can be deep.
-fn post_order(tree: impl Binary, root: usize) -> Vec<u32> {
+fn post_order(nodes: &[Bvh2Node], root: usize) -> Vec<u32> {
     let mut order = Vec::new();
     let mut stack = vec![root as u32];
     while let Some(i) = stack.pop() {
         order.push(i);
-        if !tree.is_leaf(i as usize) {
-            let (l, r) = tree.children(i as usize);
-            stack.push(l as u32);
-            stack.push(r as u32);
+        let node = &nodes[i as usize];
+        if node.prim_count == 0 {
+            stack.push(node.first_index);
+            stack.push(node.first_index + 1);
         }
     }
     order.reverse();
     order
+}
+
+/// An inner BVH2 node's two children.
+#[inline]
+fn children(node: &Bvh2Node) -> (usize, usize) {
+    (node.first_index as usize, node.first_index as usize + 1)
 }
 
 #[inline]

@@ -26,7 +26,6 @@
 
 mod assemble;
 mod binary;
-mod binary_tree;
 pub mod build;
 pub mod bundle;
 pub mod choice;

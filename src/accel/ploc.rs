@@ -18,9 +18,7 @@
 //! function of the boxes alone and the tree is the same for any thread
 //! count and any blocking.
 
-use super::binary_tree::{BinaryNode, BinaryTree, LEAF};
 use super::cluster::Boxes;
-use crate::math::Aabb;
 use glam::Vec3A;
 use obvhs::aabb::Aabb as Box3A;
 use obvhs::bvh2::node::Bvh2Node;
@@ -29,85 +27,14 @@ use rayon::prelude::*;
 
 /// The clusters of a pass, in curve order: their boxes (in SIMD lanes,
 /// where the neighbour search spends its time) and what each is in the
-/// tree, a leaf (its index with [`LEAF`] set) or an inner node (as the
-/// tree's [`Layout`] refers to it).
+/// tree, a leaf (its primitive with [`LEAF`] set) or an inner node (its
+/// first child's index).
 struct Clusters {
     bounds: Vec<Box3A>,
     node: Vec<u32>,
 }
 
-/// How a tree's nodes are laid out, which PLOC writes as it merges:
-/// obvhs's (a merge writes its two children side by side, and the merged
-/// cluster is their first's index) or strata's [`BinaryNode`]s (a merge
-/// writes one inner node, which the merged cluster is).
-trait Layout {
-    type Node: Copy + Default + Send + Sync;
-    /// Nodes a merge writes.
-    const PER_MERGE: usize;
-    /// Nodes written after the passes, before every merge's (the root).
-    const AFTER: usize;
-    /// The nodes of a tree over `n` clusters, all written before read.
-    fn nodes(n: usize) -> Vec<Self::Node>;
-    /// Writes the merge of clusters `a` and `b` (boxes and references)
-    /// into `out`, [`Layout::PER_MERGE`] nodes.
-    fn merge(out: &mut [Self::Node], a: (&Box3A, u32), b: (&Box3A, u32));
-    /// Writes the root, cluster `root`, into `nodes` once the passes end.
-    fn finish(nodes: &mut [Self::Node], root: (&Box3A, u32));
-}
-
-/// obvhs's `Bvh2`: leaves among the nodes, the root at 0.
-struct Obvhs;
-
-impl Layout for Obvhs {
-    type Node = Bvh2Node;
-    const PER_MERGE: usize = 2;
-    const AFTER: usize = 1;
-
-    fn nodes(n: usize) -> Vec<Bvh2Node> {
-        // Zeroed by the allocator: fresh pages, which the kernel maps (and
-        // clears) only when a merge first writes them, in parallel. So the
-        // tree's memory grows as the clusters' shrinks, and the two are
-        // never both whole (96 and 72 bytes a primitive).
-        wide::bytemuck::zeroed_vec(2 * n - 1)
-    }
-
-    #[inline]
-    fn merge(out: &mut [Bvh2Node], a: (&Box3A, u32), b: (&Box3A, u32)) {
-        out[0] = tree_node(*a.0, a.1);
-        out[1] = tree_node(*b.0, b.1);
-    }
-
-    fn finish(nodes: &mut [Bvh2Node], root: (&Box3A, u32)) {
-        nodes[0] = tree_node(*root.0, root.1);
-    }
-}
-
-/// strata's [`BinaryTree`]: inner nodes alone, the last merge (the root)
-/// at 0; leaves stay references.
-struct Own;
-
-impl Layout for Own {
-    type Node = BinaryNode;
-    const PER_MERGE: usize = 1;
-    const AFTER: usize = 0;
-
-    fn nodes(n: usize) -> Vec<BinaryNode> {
-        let mut nodes = Vec::with_capacity(n - 1);
-        grow_to(&mut nodes, n - 1);
-        nodes
-    }
-
-    #[inline]
-    fn merge(out: &mut [BinaryNode], a: (&Box3A, u32), b: (&Box3A, u32)) {
-        let union = a.0.union(b.0);
-        out[0] = BinaryNode {
-            bounds: Aabb::new(union.min.into(), union.max.into()),
-            child: [a.1, b.1],
-        };
-    }
-
-    fn finish(_: &mut [BinaryNode], _: (&Box3A, u32)) {}
-}
+const LEAF: u32 = 1 << 31;
 
 impl Clusters {
     /// Keeps the first `count` clusters and frees the room for the rest.
@@ -182,81 +109,40 @@ pub(super) fn ploc(boxes: Boxes, order: Vec<u32>, radius: usize, near_passes: us
         .collect();
     drop(order);
     let ids = (0..bounds.len() as u32).into_par_iter().collect();
-    let (nodes, passes) = ploc_over::<Obvhs>(bounds, Vec::new(), node, radius, near_passes);
-    Bvh2 {
-        nodes,
-        primitive_indices: ids,
-        max_depth: DEFAULT_MAX_STACK_DEPTH.max(passes + 1),
-        children_are_ordered_after_parents: true,
-        ..Bvh2::default()
-    }
+    ploc_over(bounds, Vec::new(), node, ids, radius, near_passes)
 }
 
-/// strata's own [`BinaryTree`] over clusters already in curve order: leaf
-/// `j` has box `bounds[j]` and holds primitives from `ids[starts[j]]` to
-/// `ids[starts[j + 1]]` (the fastest preset's clusters, [`super::cluster`]). `spare` is
-/// a buffer the clusters of the next pass may take (its pages, touched
-/// already, rather than fresh ones; its contents are not read). No
-/// obvhs `Bvh2` is made: 32 bytes an inner node and 24 a leaf, not 48
-/// each.
-pub(super) fn ploc_tree(
+/// [`ploc`]'s tree over boxes already in curve order, leaf `i` holding
+/// `bounds[i]` and `first_index` `i`, and `primitive_indices` those the
+/// caller gives: the fastest preset's clusters ([`super::cluster`]).
+/// `spare` is a buffer the clusters of the next pass may take (its
+/// pages, touched already, rather than fresh ones; its contents are not
+/// read).
+pub(super) fn ploc_in_order(
     bounds: Vec<Box3A>,
     spare: Vec<Box3A>,
-    starts: Vec<u32>,
-    ids: Vec<u32>,
+    primitive_indices: Vec<u32>,
     radius: usize,
     near_passes: usize,
-) -> BinaryTree {
-    let leaves = bounds
-        .par_iter()
-        .with_min_len(BLOCK)
-        .map(|b| Aabb::new(b.min.into(), b.max.into()))
-        .collect();
+) -> Bvh2 {
     let node = (0..bounds.len() as u32)
         .into_par_iter()
         .with_min_len(BLOCK)
         .map(|i| i | LEAF)
         .collect();
-    let (nodes, _) = ploc_over::<Own>(bounds, spare, node, radius, near_passes);
-    BinaryTree {
-        nodes,
-        leaves,
-        starts,
-        ids,
-    }
+    ploc_over(bounds, spare, node, primitive_indices, radius, near_passes)
 }
 
-/// [`ploc_tree`]'s merges written as obvhs's tree, leaf `i` holding
-/// `bounds[i]` and `first_index` `i`: what the fastest preset built
-/// before, for tests that the two trees are one.
-#[cfg(test)]
-pub(super) fn ploc_in_order(
+/// PLOC over clusters `bounds` in curve order, cluster `i` the tree's
+/// `node[i]` (a leaf: its primitive with [`LEAF`] set).
+fn ploc_over(
     bounds: Vec<Box3A>,
+    mut spare: Vec<Box3A>,
+    node: Vec<u32>,
     primitive_indices: Vec<u32>,
     radius: usize,
     near_passes: usize,
 ) -> Bvh2 {
-    let node = (0..bounds.len() as u32).map(|i| i | LEAF).collect();
-    let (nodes, passes) = ploc_over::<Obvhs>(bounds, Vec::new(), node, radius, near_passes);
-    Bvh2 {
-        nodes,
-        primitive_indices,
-        max_depth: DEFAULT_MAX_STACK_DEPTH.max(passes + 1),
-        children_are_ordered_after_parents: true,
-        ..Bvh2::default()
-    }
-}
-
-/// PLOC over clusters `bounds` in curve order, cluster `i` the tree's
-/// `node[i]` (a leaf: its index with [`LEAF`] set): the tree's nodes in
-/// layout `L`, and the passes it took.
-fn ploc_over<L: Layout>(
-    bounds: Vec<Box3A>,
-    mut spare: Vec<Box3A>,
-    node: Vec<u32>,
-    radius: usize,
-    near_passes: usize,
-) -> (Vec<L::Node>, usize) {
     let n = bounds.len();
     assert!(n > 0 && n < LEAF as usize && radius >= 1);
     // The next pass's clusters are made as long as the first merge keeps
@@ -269,18 +155,22 @@ fn ploc_over<L: Layout>(
     let mut current = Clusters { bounds, node };
     let mut nearest = vec![0u32; n];
     let scale = unit_scale(&current.bounds);
-    let mut nodes = L::nodes(n);
-    // Merges are written down from the end, so children follow parents.
+    // The nodes, zeroed by the allocator: fresh pages, which the kernel
+    // maps (and clears) only when a merge first writes them, in parallel.
+    // So the tree's memory grows as the clusters' shrinks, and the two
+    // are never both whole (96 and 72 bytes a primitive).
+    let mut nodes: Vec<Bvh2Node> = wide::bytemuck::zeroed_vec(2 * n - 1);
+    // Pairs are written down from the end, so children follow parents.
     let mut insert = nodes.len();
     let (mut count, mut passes, mut held) = (n, 0, n);
     while count > 1 {
         let r = if passes < near_passes { 1 } else { radius };
         find_nearest(&current.bounds[..count], &mut nearest[..count], r, scale);
-        let (kept, merged) = merge::<L>(&current, count, &nearest, &mut next, &mut nodes[..insert]);
+        let (kept, merged) = merge(&current, count, &nearest, &mut next, &mut nodes[..insert]);
         debug_assert!(merged > 0, "a pass merges the closest pair at least");
         std::mem::swap(&mut current, &mut next);
         count = kept;
-        insert -= L::PER_MERGE * merged;
+        insert -= 2 * merged;
         passes += 1;
         // Hand back the clusters' buffers past what the passes to come
         // can use whenever an eighth of them is spare (a shrink in place,
@@ -294,9 +184,15 @@ fn ploc_over<L: Layout>(
             nearest.shrink_to_fit();
         }
     }
-    debug_assert_eq!(insert, L::AFTER);
-    L::finish(&mut nodes, (&current.bounds[0], current.node[0]));
-    (nodes, passes)
+    debug_assert_eq!(insert, 1);
+    nodes[0] = tree_node(current.bounds[0], current.node[0]);
+    Bvh2 {
+        nodes,
+        primitive_indices,
+        max_depth: DEFAULT_MAX_STACK_DEPTH.max(passes + 1),
+        children_are_ordered_after_parents: true,
+        ..Bvh2::default()
+    }
 }
 
 /// `nearest[i]`: the index of the cluster within `r` places of `i` whose
@@ -403,17 +299,16 @@ fn weigh_right<const R: usize>(
 
 /// One pass's merge of the first `count` clusters of `current`: clusters
 /// that are each other's nearest become one in `next`, where the first of
-/// them was, their nodes written at the end of `nodes` (the first pair
+/// them was, their two nodes written at the end of `nodes` (the first pair
 /// last); the rest are copied. Returns the clusters in `next` and the
 /// pairs merged.
-fn merge<L: Layout>(
+fn merge(
     current: &Clusters,
     count: usize,
     nearest: &[u32],
     next: &mut Clusters,
-    nodes: &mut [L::Node],
+    nodes: &mut [Bvh2Node],
 ) -> (usize, usize) {
-    let per = L::PER_MERGE;
     // What cluster i becomes: 0 merged into an earlier one, 1 kept, 2 the
     // first of a pair.
     let fate = |i: usize| {
@@ -445,16 +340,16 @@ fn merge<L: Layout>(
     // end down: the first block's pairs last), and where its nodes start.
     let mut parts = Vec::with_capacity(blocks);
     let mut node_start = nodes.len();
-    let first_pair = node_start - per * pairs;
+    let first_pair = node_start - 2 * pairs;
     let mut bounds_rest = &mut next.bounds[..kept];
     let mut node_rest = &mut next.node[..kept];
     let mut nodes_rest = &mut nodes[first_pair..];
     for &(bk, bp) in &tallies {
         let (bounds_out, b_rest) = std::mem::take(&mut bounds_rest).split_at_mut(bk);
         let (node_out, n_rest) = std::mem::take(&mut node_rest).split_at_mut(bk);
-        let below = nodes_rest.len() - per * bp;
+        let below = nodes_rest.len() - 2 * bp;
         let (rest_nodes, mine) = std::mem::take(&mut nodes_rest).split_at_mut(below);
-        node_start -= per * bp;
+        node_start -= 2 * bp;
         parts.push((bounds_out, node_out, mine, node_start));
         (bounds_rest, node_rest, nodes_rest) = (b_rest, n_rest, rest_nodes);
     }
@@ -476,12 +371,9 @@ fn merge<L: Layout>(
                     _ => {
                         let j = nearest[i] as usize;
                         let other = current.bounds[j];
-                        slot -= per;
-                        L::merge(
-                            &mut mine[slot..slot + per],
-                            (&own, node),
-                            (&other, current.node[j]),
-                        );
+                        slot -= 2;
+                        mine[slot] = tree_node(own, node);
+                        mine[slot + 1] = tree_node(other, current.node[j]);
                         let (b, n) = out.next().unwrap();
                         (*b, *n) = (own.union(&other), (start + slot) as u32);
                     }
