@@ -397,3 +397,74 @@ fn a_batch_of_paths_brings_back_what_each_path_alone_does() {
         }
     }
 }
+
+/// A wave of batches (up to `WAVE_BATCHES`, their paths bounce by bounce
+/// together: each bounce's rays and each light sample's shadow rays of
+/// the whole wave traced together) brings back, bit for bit, what each
+/// path traced alone brings, and traces the same rays, whatever the
+/// batches' sizes (one to eight samples, across pixels) and however many
+/// batches a wave holds (one, a few, a full wave).
+#[test]
+fn a_wave_of_batches_brings_back_what_each_path_alone_does() {
+    use strata::sampling::{Dim, PixelSampler};
+    use strata::shade::{CameraSample, FirstHit, Integrator, SampleContext, WAVE_BATCHES};
+    for text in [BUSY, LIT] {
+        let s = scene(text);
+        let st = &s.settings;
+        let mut samples = Vec::new();
+        for pixel in 0..st.width * st.height {
+            let sampler = PixelSampler::new(st.sampler, 5, pixel);
+            let corner = glam::Vec2::new((pixel % st.width) as f32, (pixel / st.width) as f32);
+            for i in 0..st.spp {
+                let ctx = SampleContext::new(sampler, i, st.spp);
+                let film = corner + sampler.get_2d(Dim::PIXEL, i, st.spp);
+                samples.push(CameraSample { ctx, film });
+            }
+        }
+        let mut alone = Integrator::new(&s);
+        let one: Vec<(Vec3, FirstHit)> = samples
+            .iter()
+            .map(|c| {
+                let (mut out, mut first) = ([Vec3::ZERO], [FirstHit::MISS]);
+                alone.camera_batch(std::slice::from_ref(c), &mut out, Some(&mut first));
+                (out[0], first[0])
+            })
+            .collect();
+        assert!(one.iter().any(|(l, _)| l.max_element() > 0.0));
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        // Batches of 8, 3, 1, 5, 8, 2, ... samples, every seventh sample
+        // next (a permutation: no count here is a multiple of 7).
+        let order: Vec<usize> = (0..samples.len()).map(|k| k * 7 % samples.len()).collect();
+        let mut batches = Vec::new();
+        let mut at = 0;
+        for size in [8usize, 3, 1, 5, 8, 2, 7, 4].into_iter().cycle() {
+            if at == order.len() {
+                break;
+            }
+            let end = (at + size).min(order.len());
+            batches.push(&order[at..end]);
+            at = end;
+        }
+        for per_wave in [1, 3, WAVE_BATCHES] {
+            let mut waved = Integrator::new(&s);
+            for wave in batches.chunks(per_wave) {
+                let samples_of: Vec<Vec<CameraSample>> = wave
+                    .iter()
+                    .map(|b| b.iter().map(|&k| samples[k]).collect())
+                    .collect();
+                let slices: Vec<&[CameraSample]> = samples_of.iter().map(Vec::as_slice).collect();
+                let mut out = vec![[Vec3::ZERO; 8]; wave.len()];
+                let mut first = vec![[FirstHit::MISS; 8]; wave.len()];
+                waved.camera_wave(&slices, &mut out, Some(&mut first));
+                for (w, batch) in wave.iter().enumerate() {
+                    for (j, &k) in batch.iter().enumerate() {
+                        let what = format!("sample {k}, waves of {per_wave} batches");
+                        assert_eq!(bits(out[w][j]), bits(one[k].0), "{what}");
+                        assert_eq!(first[w][j], one[k].1, "{what}: first hit");
+                    }
+                }
+            }
+            assert_eq!(waved.counts, alone.counts, "the same rays");
+        }
+    }
+}
