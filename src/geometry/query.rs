@@ -489,19 +489,6 @@ impl Geometry {
         self.few(self.occlusion(except), rays, out);
     }
 
-    /// Closest hits of a path-tracing wave's rays (a bounce's rays of up
-    /// to a few hundred paths, unlike directions from many points):
-    /// `out[i]` is bit for bit `self.intersect(&rays[i])`.
-    pub fn intersect_wave(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        self.few(ClosestHit::<true>(self), rays, out);
-    }
-
-    /// Occlusion of a wave's shadow rays, ignoring primitive `except`:
-    /// `out[i]` is exactly `self.occluded_except(&rays[i], except)`.
-    pub fn occluded_wave(&self, rays: &[Ray], except: u32, out: &mut [bool]) {
-        self.few(self.occlusion(except), rays, out);
-    }
-
     fn occlusion(&self, except: u32) -> Occlusion<'_, true> {
         Occlusion {
             geometry: self,

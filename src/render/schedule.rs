@@ -20,9 +20,7 @@ use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler, SamplerKind};
 use crate::scene::settings::RenderSettings;
 use crate::scene::Scene;
-use crate::shade::{
-    CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext, WAVE_BATCHES,
-};
+use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::{ControlFlow, Range};
@@ -605,8 +603,8 @@ pub fn render_pixels(
     if j == accs.len() {
         return;
     }
-    let mut out = [[Vec3::ZERO; PACKET_SIZE]; WAVE_BATCHES];
-    let mut first_hits = [[FirstHit::MISS; PACKET_SIZE]; WAVE_BATCHES];
+    let mut out = [Vec3::ZERO; PACKET_SIZE];
+    let mut first_hits = [FirstHit::MISS; PACKET_SIZE];
     // The common set sizes, prepared once for all these pixels: camera
     // samples, and first-hit light samples.
     let set = run.set;
@@ -621,68 +619,55 @@ pub fn render_pixels(
         (Vec2::new(x as f32, y as f32), sampler, jitter)
     };
     let (mut corner, mut sampler, mut jitter) = setup(j);
-    let mut wave = [[CameraSample {
+    let mut batch = [CameraSample {
         ctx: SampleContext::new(sampler, 0, set.count),
         film: Vec2::ZERO,
-    }; PACKET_SIZE]; WAVE_BATCHES];
+    }; PACKET_SIZE];
     // Each lane's pixel: a lane that stays with its pixel from one batch
     // to the next keeps its sample context and changes only the index.
     // (Written whole per sample, the 168-byte contexts were copied through
     // the stack with wide loads that stalled on narrower stores; see
     // docs/mitsuba.md, "What was tried for the render".)
-    let mut pixel_of = [[usize::MAX; PACKET_SIZE]; WAVE_BATCHES];
-    let mut sizes = [0; WAVE_BATCHES];
+    let mut pixel_of = [usize::MAX; PACKET_SIZE];
     while j < accs.len() {
-        // A wave of batches (the integrator may advance their paths
-        // together), each batch's samples one pixel's at a time.
-        let mut batches = 0;
-        while batches < WAVE_BATCHES && j < accs.len() {
-            let (batch, pixel_of) = (&mut wave[batches], &mut pixel_of[batches]);
-            let mut n = 0;
-            while n < PACKET_SIZE && j < accs.len() {
-                let end = samples.end.min(next + (PACKET_SIZE - n) as u32);
-                let len = (end - next) as usize;
-                // This pixel's share of the batch: its pixel samples in SIMD
-                // lanes (unused lanes repeat the last sample).
-                let index = std::array::from_fn(|i| (next + i as u32).min(end - 1) - set.first);
-                let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
-                let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);
-                for ((camera, pixel), (sample, offset)) in lanes.zip((next..end).zip(offsets)) {
-                    let sample = sample - set.first;
-                    if *pixel == j {
-                        camera.ctx.sample = sample;
-                    } else {
-                        camera.ctx = SampleContext::new(sampler, sample, set.count);
-                        *pixel = j;
-                    }
-                    camera.film = corner + offset;
+        // The batch's samples, one pixel's at a time.
+        let mut n = 0;
+        while n < PACKET_SIZE && j < accs.len() {
+            let end = samples.end.min(next + (PACKET_SIZE - n) as u32);
+            let len = (end - next) as usize;
+            // This pixel's share of the batch: its pixel samples in SIMD
+            // lanes (unused lanes repeat the last sample).
+            let index = std::array::from_fn(|i| (next + i as u32).min(end - 1) - set.first);
+            let offsets = jitter.get_2d_lanes(index, (1 << len) - 1);
+            let lanes = batch[n..n + len].iter_mut().zip(&mut pixel_of[n..n + len]);
+            for ((camera, pixel), (sample, offset)) in lanes.zip((next..end).zip(offsets)) {
+                let sample = sample - set.first;
+                if *pixel == j {
+                    camera.ctx.sample = sample;
+                } else {
+                    camera.ctx = SampleContext::new(sampler, sample, set.count);
+                    *pixel = j;
                 }
-                n += len;
-                next = end;
-                if next == samples.end {
-                    j = live(j + 1);
-                    next = samples.start;
-                    if j < accs.len() {
-                        (corner, sampler, jitter) = setup(j);
-                    }
+                camera.film = corner + offset;
+            }
+            n += len;
+            next = end;
+            if next == samples.end {
+                j = live(j + 1);
+                next = samples.start;
+                if j < accs.len() {
+                    (corner, sampler, jitter) = setup(j);
                 }
             }
-            sizes[batches] = n;
-            batches += 1;
         }
-        let slices: [&[CameraSample]; WAVE_BATCHES] =
-            std::array::from_fn(|w| &wave[w][..if w < batches { sizes[w] } else { 0 }]);
         let first = aov.is_some().then_some(&mut first_hits[..]);
-        integrator.camera_wave(&slices[..batches], &mut out, first);
-        for w in 0..batches {
-            let n = sizes[w];
-            for ((v, camera), &pixel) in out[w].iter().zip(&wave[w][..n]).zip(&pixel_of[w]) {
-                accs[pixel].add(*v, camera.ctx.sample + set.first);
-            }
-            if let Some(aov) = aov.as_deref_mut() {
-                for (hit, &j) in first_hits[w][..n].iter().zip(&pixel_of[w]) {
-                    aov[j].add(hit);
-                }
+        integrator.camera_batch(&batch[..n], &mut out, first);
+        for ((v, camera), &pixel) in out.iter().zip(&batch[..n]).zip(&pixel_of) {
+            accs[pixel].add(*v, camera.ctx.sample + set.first);
+        }
+        if let Some(aov) = aov.as_deref_mut() {
+            for (hit, &j) in first_hits[..n].iter().zip(&pixel_of) {
+                aov[j].add(hit);
             }
         }
     }

@@ -1,7 +1,6 @@
 //! The [`Integrator`]: camera samples (alone or in packets), and the
 //! recursion from a hit to its emitted, direct and specular light.
 
-use super::path_lanes::{WaveScratch, WAVE_BATCHES};
 use super::sample::draw_2d_lanes;
 use super::{BatchRays, CameraSample, FirstHit, PacketMode, PathEvent, RayCounts, SampleContext};
 use crate::accel::{PrimHit, PACKET_SIZE};
@@ -73,8 +72,6 @@ pub struct Integrator<'a> {
     /// The scene's environment light, if it has one: what rays that hit
     /// nothing see instead of the background.
     pub(super) environment: Option<&'a Environment>,
-    /// The path integrator's arrays for a wave, reused.
-    pub(super) wave: WaveScratch,
 }
 
 /// One ray to shade, with its closest hit: a lane of [`Integrator::shade`].
@@ -100,7 +97,6 @@ impl<'a> Integrator<'a> {
             packets: PacketMode::Auto,
             trace: None,
             environment: scene.lights.iter().find_map(|l| l.environment()),
-            wave: WaveScratch::default(),
         }
     }
 
@@ -185,36 +181,6 @@ impl Integrator<'_> {
             lane.slot = self.begin_record(0, "camera", &lane.ray);
         }
         self.shade::<PACKET_SIZE>(0, &lanes[..n], out, first);
-    }
-
-    /// Radiance of a wave of up to [`WAVE_BATCHES`] batches (each as
-    /// [`Integrator::camera_batch`] takes one), `out[w][i]` for sample `i`
-    /// of `batches[w]`: exactly what [`Integrator::camera_batch`] gives
-    /// each batch. The path integrator advances the wave's paths bounce by
-    /// bounce together, tracing each bounce's rays, and each light
-    /// sample's shadow rays, together; the others shade batch by batch.
-    /// With `first`, `first[w][i]` receives what sample `i` of batch `w`
-    /// hit first.
-    pub fn camera_wave(
-        &mut self,
-        batches: &[&[CameraSample]],
-        out: &mut [[Vec3; PACKET_SIZE]],
-        mut first: Option<&mut [[FirstHit; PACKET_SIZE]]>,
-    ) {
-        assert!(batches.len() <= WAVE_BATCHES && out.len() >= batches.len());
-        assert!(batches.iter().all(|b| b.len() <= PACKET_SIZE));
-        let batches = match batches.iter().rposition(|b| !b.is_empty()) {
-            Some(last) => &batches[..=last],
-            None => return,
-        };
-        let path = self.scene.settings.integrator == IntegratorKind::Path;
-        if path && self.trace.is_none() && batches.iter().all(|b| !b.is_empty()) {
-            return self.path_wave(batches, out, first);
-        }
-        for (w, batch) in batches.iter().enumerate() {
-            let first_w = first.as_deref_mut().map(|f| &mut f[w][..]);
-            self.camera_batch(batch, &mut out[w], first_w);
-        }
     }
 
     /// The camera rays of a batch of two or more samples and their first

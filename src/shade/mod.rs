@@ -61,5 +61,4 @@ pub mod specular;
 
 pub use crate::geometry::travel::{BatchRays, PacketMode, CAMERA_PACKET_MIN};
 pub use integrator::Integrator;
-pub use path_lanes::WAVE_BATCHES;
 pub use sample::{CameraSample, FirstHit, PathEvent, RayCounts, SampleContext};

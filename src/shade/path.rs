@@ -31,7 +31,7 @@ use super::maps;
 use super::sample::{CameraSample, FirstHit, SampleContext};
 use super::scatter::Bsdf;
 use super::Integrator;
-use crate::accel::{PrimHit, PACKET_SIZE};
+use crate::accel::PrimHit;
 use crate::light::environment::EnvSample;
 use crate::light::{Light, LightSample, NO_PART};
 use crate::math::offset::spawn_origin;
@@ -89,7 +89,6 @@ pub(super) enum Arrival {
 }
 
 /// One vertex's light sample, before its shadow ray.
-#[derive(Clone, Copy)]
 pub(super) struct Contribution {
     wi: Vec3,
     /// To the point sampled (∞ for light from infinity).
@@ -119,19 +118,10 @@ impl Integrator<'_> {
             }
             return;
         }
-        // The paths bounce by bounce together: a wave of one batch
-        // (`path_lanes`).
-        let n = batch.len();
-        let mut radiance = [[Vec3::ZERO; PACKET_SIZE]];
-        match first {
-            Some(first) => {
-                let mut hits = [[FirstHit::MISS; PACKET_SIZE]];
-                self.path_wave(&[batch], &mut radiance, Some(&mut hits));
-                first[..n].copy_from_slice(&hits[0][..n]);
-            }
-            None => self.path_wave(&[batch], &mut radiance, None),
-        }
-        out[..n].copy_from_slice(&radiance[0][..n]);
+        // The camera rays together (coherent: one packet where it pays),
+        // then the paths bounce by bounce together (`path_lanes`).
+        let (rays, hits) = self.camera_hits(batch);
+        self.path_lanes(batch, rays, hits, out, first);
     }
 
     /// The radiance a camera path starting with `ray` brings back;
