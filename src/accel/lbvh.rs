@@ -82,68 +82,78 @@ impl Cut<'_> {
         (self.keys[i] >> 32) as u32
     }
 
-    /// The subtree over `range` (more than [`LEAF_PRIMS`] primitives, or
-    /// the whole tree) as a part whose root is its first node, with the
-    /// large children's subtrees made in parallel as parts of their own;
-    /// and its box.
+    /// The subtree over `range` as a part whose root is its first node,
+    /// with the large children's subtrees made in parallel as parts of
+    /// their own; and its box.
     fn part(&self, range: Range<usize>) -> (Part, Aabb) {
         let mut part = Part::default();
+        part.nodes.push(Node8::EMPTY);
+        part.depth = 1;
         if range.len() <= LEAF_PRIMS {
             // A tree of one leaf still has a root node.
-            part.nodes.push(Node8::EMPTY);
-            part.depth = 1;
             let b = self.leaf(&mut part, range, 0, 0);
             part.nodes[0].set_box(0, b);
             return (part, b);
         }
         let children = self.children(range);
-        part.nodes.push(Node8::EMPTY);
-        part.depth = 1;
-        let big: Vec<(usize, Range<usize>)> = (0..children.len)
-            .map(|slot| (slot, children.get(slot)))
-            .filter(|(_, r)| r.len() > PART_PRIMS)
+        let big: Vec<Range<usize>> = (0..children.len)
+            .map(|slot| children.get(slot))
+            .filter(|r| r.len() > PART_PRIMS)
             .collect();
-        let subs: Vec<(Part, Aabb)> = big.par_iter().map(|(_, r)| self.part(r.clone())).collect();
+        let subs: Vec<(Part, Aabb)> = big.into_par_iter().map(|r| self.part(r)).collect();
+        let bounds = self.fill(&mut part, 0, children, 1, &mut subs.into_iter());
+        (part, bounds)
+    }
+
+    /// Fills node `node` of `part` (at level `level`) with `children`:
+    /// its leaves, then its inner children's nodes side by side, then
+    /// their subtrees in turn; a child of more than [`PART_PRIMS`] (the
+    /// root's alone) is the next of `subs`, made in parallel. Returns the
+    /// node's box.
+    fn fill(
+        &self,
+        part: &mut Part,
+        node: usize,
+        children: Runs,
+        level: u32,
+        subs: &mut std::vec::IntoIter<(Part, Aabb)>,
+    ) -> Aabb {
         let mut bounds = Aabb::EMPTY;
-        let mut subs = subs.into_iter();
+        let mut inner = [(0usize, 0usize); 8];
+        let mut n_inner = 0;
         for slot in 0..children.len {
             let r = children.get(slot);
-            let b = if r.len() > PART_PRIMS {
+            let b = if r.len() <= LEAF_PRIMS {
+                self.leaf(part, r, node, slot)
+            } else if r.len() > PART_PRIMS {
                 let (sub, b) = subs.next().expect("a part for each large child");
                 part.subs.push((slot, sub));
                 b
             } else {
-                self.child(&mut part, r.clone(), 0, slot, 1)
+                let new = part.nodes.len();
+                part.nodes.push(Node8::EMPTY);
+                part.nodes[node].child[slot] = new as u32;
+                inner[n_inner] = (slot, new);
+                n_inner += 1;
+                continue;
             };
-            part.nodes[0].set_box(slot, b);
+            part.nodes[node].set_box(slot, b);
             bounds = bounds.union(b);
         }
-        (part, bounds)
-    }
-
-    /// Child `slot` of node `node` of `part` (at level `level`), over
-    /// `range`: a leaf, or a node whose subtree is made here. Returns its
-    /// box.
-    fn child(
-        &self,
-        part: &mut Part,
-        range: Range<usize>,
-        node: usize,
-        slot: usize,
-        level: u32,
-    ) -> Aabb {
-        if range.len() <= LEAF_PRIMS {
-            return self.leaf(part, range, node, slot);
+        if n_inner > 0 {
+            part.depth = part.depth.max(level + 1);
         }
-        let new = part.nodes.len();
-        part.nodes.push(Node8::EMPTY);
-        part.nodes[node].child[slot] = new as u32;
-        part.depth = part.depth.max(level + 1);
-        let mut bounds = Aabb::EMPTY;
-        let children = self.children(range);
-        for s in 0..children.len {
-            let b = self.child(part, children.get(s), new, s, level + 1);
-            part.nodes[new].set_box(s, b);
+        for &(slot, new) in &inner[..n_inner] {
+            let grandchildren = self.children(children.get(slot));
+            // Below a part's root every child is smaller than a part.
+            let b = self.fill(
+                part,
+                new,
+                grandchildren,
+                level + 1,
+                &mut Vec::new().into_iter(),
+            );
+            part.nodes[node].set_box(slot, b);
             bounds = bounds.union(b);
         }
         bounds
