@@ -216,15 +216,12 @@ const PAIR_BLOCK: usize = 1 << 15;
 /// Primitive ids sorted by the Morton code of their boxes' centres, ties
 /// by id.
 pub(super) fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
-    // The ids written over the sorted keys, in their allocation (a u32
-    // fits where a u64 was: the standard library collects in place), then
-    // its second half handed back: no fresh pages for the order.
-    let mut order: Vec<u32> = morton_keys(boxes, bounds)
+    // A new array: a u32 is aligned as a u64 is not, so the standard
+    // library cannot collect into the keys' allocation (checked).
+    morton_keys(boxes, bounds)
         .into_iter()
         .map(|k| k as u32)
-        .collect();
-    order.shrink_to_fit();
-    order
+        .collect()
 }
 
 /// Each primitive's key, its box centre's 30-bit Morton code
