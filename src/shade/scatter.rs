@@ -150,16 +150,21 @@ impl Bsdf {
     ) -> Self {
         let frame = Frame::from_z(ns);
         let wo_local = to_local(&frame, wo);
-        let lobes = match m.pbr {
-            Some(pbr) => Lobes::MetallicRoughness(Microfacet::new(&pbr, texel, wo_local)),
-            None if lambert && Lambert::fits(m) => Lobes::Lambert(Lambert::new(m, texel)),
-            None => Lobes::Phong(Phong::new(m, texel, wo, ns, entering)),
-        };
-        Self {
+        // Each kind of lobes writes only its own fields: one write of
+        // the whole enum after the match wrote every Phong field, a
+        // Lambertian BSDF's too.
+        let with = |lobes| Self {
             frame,
             ng,
             wo: wo_local,
             lobes,
+        };
+        match m.pbr {
+            Some(pbr) => with(Lobes::MetallicRoughness(Microfacet::new(
+                &pbr, texel, wo_local,
+            ))),
+            None if lambert && Lambert::fits(m) => with(Lobes::Lambert(Lambert::new(m, texel))),
+            None => with(Lobes::Phong(Phong::new(m, texel, wo, ns, entering))),
         }
     }
 
