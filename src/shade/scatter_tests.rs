@@ -258,7 +258,11 @@ fn a_lambertian_phong_material_is_sampled_and_evaluated_bit_for_bit_as_the_phong
             } else {
                 Vec3::ZERO
             },
-            shininess: if case % 3 == 0 { -1.0 } else { 30.0 * rng.next() },
+            shininess: if case % 3 == 0 {
+                -1.0
+            } else {
+                30.0 * rng.next()
+            },
             glossiness: 100.0 * rng.next(),
             ..Material::default()
         };
