@@ -114,6 +114,7 @@ impl Bsdf {
     /// surface), with normals `ng`, `ns` turned towards `wo`; `entering`
     /// when wo is on the outside; `texel` what the texture says there (1
     /// without one): it multiplies ρ, or the base colour.
+    #[inline(always)]
     pub fn new(m: &Material, texel: Vec3, wo: Vec3, ng: Vec3, ns: Vec3, entering: bool) -> Self {
         Self::build(m, texel, wo, ng, ns, entering, true)
     }
