@@ -60,8 +60,24 @@ pub struct Bsdf {
 
 #[derive(Debug, Clone, Copy)]
 enum Lobes {
+    /// A Phong material with no lobe but the diffuse one (every wall of
+    /// cornell-planes, dragon-gold's floor): the few numbers that
+    /// [`Phong`]'s sample and eval read of it, worked out as it would.
+    Lambert(Lambert),
     Phong(Phong),
     MetallicRoughness(Microfacet),
+}
+
+/// What a [`Phong`] whose weights other than ρ are all zero reads: ρ
+/// after the energy scale, and the sum of its weights (its `cdf`'s every
+/// entry). Built, sampled and evaluated with the same operations in the
+/// same order as [`Phong`], so every number is bit for bit the same
+/// (`scatter_tests`), with a fifth of the bytes to write: the vertex's
+/// BSDF was the largest part of building a vertex.
+#[derive(Debug, Clone, Copy)]
+struct Lambert {
+    diffuse: Vec3,
+    total: f32,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -98,24 +114,65 @@ impl Bsdf {
     /// surface), with normals `ng`, `ns` turned towards `wo`; `entering`
     /// when wo is on the outside; `texel` what the texture says there (1
     /// without one): it multiplies ρ, or the base colour.
+    #[inline(always)]
     pub fn new(m: &Material, texel: Vec3, wo: Vec3, ng: Vec3, ns: Vec3, entering: bool) -> Self {
+        Self::build(m, texel, wo, ng, ns, entering, true)
+    }
+
+    /// [`Bsdf::new`] with a Lambertian Phong material held as the general
+    /// Phong mix: what the tests compare [`Lambert`] with.
+    #[cfg(test)]
+    pub(super) fn new_general(
+        m: &Material,
+        texel: Vec3,
+        wo: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+        entering: bool,
+    ) -> Self {
+        Self::build(m, texel, wo, ng, ns, entering, false)
+    }
+
+    /// Whether this BSDF holds its lobes as [`Lambert`].
+    #[cfg(test)]
+    pub(super) fn is_lambert(&self) -> bool {
+        matches!(self.lobes, Lobes::Lambert(_))
+    }
+
+    #[inline(always)]
+    fn build(
+        m: &Material,
+        texel: Vec3,
+        wo: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+        entering: bool,
+        lambert: bool,
+    ) -> Self {
         let frame = Frame::from_z(ns);
         let wo_local = to_local(&frame, wo);
-        let lobes = match m.pbr {
-            Some(pbr) => Lobes::MetallicRoughness(Microfacet::new(&pbr, texel, wo_local)),
-            None => Lobes::Phong(Phong::new(m, texel, wo, ns, entering)),
-        };
-        Self {
+        // Each kind of lobes writes only its own fields: one write of
+        // the whole enum after the match wrote every Phong field, a
+        // Lambertian BSDF's too.
+        let with = |lobes| Self {
             frame,
             ng,
             wo: wo_local,
             lobes,
+        };
+        match m.pbr {
+            Some(pbr) => with(Lobes::MetallicRoughness(Microfacet::new(
+                &pbr, texel, wo_local,
+            ))),
+            None if lambert && Lambert::fits(m) => with(Lobes::Lambert(Lambert::new(m, texel))),
+            None => with(Lobes::Phong(Phong::new(m, texel, wo, ns, entering))),
         }
     }
 
     /// Whether any lobe can be lit by a light sample (not only mirror or glass).
     pub fn has_smooth_lobe(&self) -> bool {
         match &self.lobes {
+            Lobes::Lambert(l) => l.total > 0.0,
             Lobes::Phong(p) => p.cdf[2] > 0.0,
             Lobes::MetallicRoughness(_) => true,
         }
@@ -138,6 +195,7 @@ impl Bsdf {
             return (Vec3::ZERO, 0.0);
         }
         match &self.lobes {
+            Lobes::Lambert(l) => l.eval(wi),
             Lobes::Phong(p) => p.eval(self.wo, wi),
             Lobes::MetallicRoughness(m) => m.eval(self.wo, wi),
         }
@@ -148,6 +206,19 @@ impl Bsdf {
     /// or nothing scatters.
     pub fn sample(&self, choice: f32, u: Vec2) -> Option<BsdfSample> {
         match &self.lobes {
+            Lobes::Lambert(l) => {
+                // Phong's draw of its first lobe; x past it (a choice
+                // that rounds up to the total) finds no other lobe.
+                let total = l.total;
+                if !(total > 0.0) {
+                    return None;
+                }
+                let x = choice * total;
+                if !(x < total) {
+                    return None;
+                }
+                self.smooth_sample(self.frame.to_world(cosine_hemisphere(u)))
+            }
             Lobes::Phong(p) => self.sample_phong(p, choice, u),
             Lobes::MetallicRoughness(m) => {
                 if self.wo.z <= 0.0 {
@@ -220,6 +291,39 @@ impl Bsdf {
             pdf: 0.0,
             delta: true,
         })
+    }
+}
+
+impl Lambert {
+    /// Whether [`Phong::new`] would give `m` no weight but ρ's: no
+    /// highlight, reflection or glass.
+    fn fits(m: &Material) -> bool {
+        (m.specular == Vec3::ZERO || m.shininess < 0.0)
+            && m.reflectivity == 0.0
+            && m.transparency == 0.0
+    }
+
+    /// [`Phong::new`]'s arithmetic for such a material: its energy scale
+    /// and its cumulative weights, every one of which is ρ's mean.
+    fn new(m: &Material, texel: Vec3) -> Self {
+        let diffuse = m.diffuse * texel;
+        let sum =
+            (diffuse + m.specular + Vec3::splat(m.reflectivity + m.transparency)).max_element();
+        let scale = if sum > 1.0 { 1.0 / sum } else { 1.0 };
+        // Phong's running sum: 0 + max(w, 0), then + 0 four times.
+        let total = 0.0 + mean(diffuse * scale).max(0.0);
+        Self {
+            diffuse: diffuse * scale,
+            total,
+        }
+    }
+
+    /// [`Phong::eval`] with its highlight and glossy lobes of no chance.
+    fn eval(&self, wi: Vec3) -> (Vec3, f32) {
+        let total = self.total;
+        let f = self.diffuse * FRAC_1_PI;
+        let pdf = total * wi.z * FRAC_1_PI;
+        (f, if total > 0.0 { pdf / total } else { 0.0 })
     }
 }
 

@@ -223,3 +223,107 @@ fn samples_follow_the_density_they_report() {
         }
     }
 }
+
+/// A unit vector from three of the tests' numbers.
+fn unit(rng: &mut Numbers) -> Vec3 {
+    let z = 2.0 * rng.next() - 1.0;
+    let phi = 2.0 * PI * rng.next();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+fn same(a: Vec3, b: Vec3) -> bool {
+    a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+}
+
+/// The Lambertian BSDF a diffuse-only Phong material is held as gives bit
+/// for bit what the general Phong mix gives: the same sampled direction,
+/// weight, density and delta flag, the same value and density for any
+/// direction (above and below the surface), over random materials (ρ
+/// past 1 too, scaled; a highlight with a negative exponent, which
+/// switches it off), textures, views and normals.
+#[test]
+fn a_lambertian_phong_material_is_sampled_and_evaluated_bit_for_bit_as_the_phong_mix() {
+    let mut rng = Numbers(0x5eed_61f0);
+    let mut lambert_draws = 0;
+    for case in 0..4000 {
+        // ρ up to 1.4 (past 1 the weights are scaled), a little below 0 now and then.
+        let below = 0.1 * (case % 7 == 0) as u32 as f32;
+        let mut rho = || 1.4 * rng.next() - below;
+        let diffuse = Vec3::new(rho(), rho(), rho());
+        let m = Material {
+            diffuse,
+            specular: if case % 3 == 0 {
+                Vec3::splat(rng.next())
+            } else {
+                Vec3::ZERO
+            },
+            shininess: if case % 3 == 0 {
+                -1.0
+            } else {
+                30.0 * rng.next()
+            },
+            glossiness: 100.0 * rng.next(),
+            ..Material::default()
+        };
+        let texel = if case % 2 == 0 {
+            Vec3::ONE
+        } else {
+            Vec3::new(rng.next(), rng.next(), rng.next())
+        };
+        let wo = unit(&mut rng);
+        let mut ng = unit(&mut rng);
+        let entering = ng.dot(wo) >= 0.0;
+        if !entering {
+            ng = -ng;
+        }
+        // A shading normal tilted off the geometric one, as interpolated
+        // normals and normal maps tilt it (wo may fall below it).
+        let ns = (ng + 0.4 * unit(&mut rng)).normalize();
+        let fast = Bsdf::new(&m, texel, wo, ng, ns, entering);
+        let general = Bsdf::new_general(&m, texel, wo, ng, ns, entering);
+        assert!(fast.is_lambert() && !general.is_lambert(), "case {case}");
+        assert_eq!(fast.has_smooth_lobe(), general.has_smooth_lobe());
+        for k in 0..8 {
+            // The lobe choice at its extremes too: one that rounds up to
+            // the total finds no lobe.
+            let choice = match k {
+                0 => 0.0,
+                1 => 1.0 - f32::EPSILON / 2.0,
+                _ => rng.next(),
+            };
+            let u = Vec2::new(rng.next(), rng.next());
+            let (a, b) = (fast.sample(choice, u), general.sample(choice, u));
+            match (a, b) {
+                (None, None) => {}
+                (Some(a), Some(b)) => {
+                    lambert_draws += 1;
+                    assert!(
+                        same(a.wi, b.wi)
+                            && same(a.weight, b.weight)
+                            && a.pdf.to_bits() == b.pdf.to_bits()
+                            && a.delta == b.delta,
+                        "case {case}: {a:?} against {b:?}"
+                    );
+                }
+                _ => panic!("case {case}, choice {choice}: {a:?} against {b:?}"),
+            }
+            let wi = unit(&mut rng);
+            let ((fa, pa), (fb, pb)) = (fast.eval(wi), general.eval(wi));
+            assert!(
+                same(fa, fb) && pa.to_bits() == pb.to_bits(),
+                "case {case}: eval({wi}) {fa} {pa} against {fb} {pb}"
+            );
+        }
+    }
+    assert!(lambert_draws > 10_000, "{lambert_draws} directions drawn");
+}
+
+/// Only a material with no lobe but ρ's is held as Lambert's.
+#[test]
+fn materials_with_other_lobes_keep_the_phong_mix() {
+    for (name, m) in materials() {
+        let lambert = bsdf(&m, view(30.0)).is_lambert();
+        assert_eq!(lambert, name.ends_with("lambert"), "{name}");
+    }
+}
