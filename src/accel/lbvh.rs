@@ -21,7 +21,7 @@
 //! count.
 //!
 //! It builds in about two thirds of the fastest SAH preset's time (less
-//! than half its instructions) and traces 5 to 30% slower, so `auto`
+//! than half its instructions) and traces 5 to 10% slower, so `auto`
 //! takes it where the build would outweigh the trace: a preview of a
 //! large mesh (docs/performance.md, "The preview tree").
 
