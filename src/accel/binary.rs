@@ -27,12 +27,21 @@ impl obvhs::Boundable for Aabb {
 }
 
 /// obvhs's binary tree over `boxes` and their union; `None` if there are
-/// no boxes.
+/// no boxes. For tests, which keep the binary tree to look at; a build
+/// goes through [`bounds`] and [`binary_tree`] itself.
+#[cfg(test)]
 pub(super) fn binary_tree_and_bounds(
     boxes: Boxes,
     quality: BuildQuality,
     steps: &mut Steps,
 ) -> Option<(Bvh2, Aabb)> {
+    let bounds = bounds(&boxes, steps)?;
+    Some((binary_tree(boxes, bounds, quality, steps), bounds))
+}
+
+/// The union of `boxes`, timed as the build's `bounds` step; `None` if
+/// there are none. Every preset's build starts here.
+pub(super) fn bounds(boxes: &[Aabb], steps: &mut Steps) -> Option<Aabb> {
     if boxes.is_empty() {
         return None;
     }
@@ -41,18 +50,14 @@ pub(super) fn binary_tree_and_bounds(
         "too many primitives for one BVH: {}",
         boxes.len()
     );
-    let bounds = steps.time("bounds", || union(&boxes));
-    Some((binary_tree(boxes, bounds, quality, steps), bounds))
-}
-
-/// The union of `boxes`, in parallel: a union is exact, so any grouping
-/// gives the same box.
-pub(super) fn union(boxes: &[Aabb]) -> Aabb {
-    boxes
-        .par_iter()
-        .with_min_len(1 << 14)
-        .copied()
-        .reduce(|| Aabb::EMPTY, Aabb::union)
+    // A union is exact, so any grouping gives the same box.
+    Some(steps.time("bounds", || {
+        boxes
+            .par_iter()
+            .with_min_len(1 << 14)
+            .copied()
+            .reduce(|| Aabb::EMPTY, Aabb::union)
+    }))
 }
 
 /// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one

@@ -3,12 +3,13 @@
 //! by the surface area heuristic over the whole subtree (Ylitie, Karras
 //! and Laine 2017), see [`super::collapse`].
 
-use super::binary::{binary_tree_and_bounds, Boxes};
+use super::binary::{binary_tree, Boxes};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3;
+#[cfg(test)]
 use obvhs::bvh2::Bvh2;
 use obvhs::BvhBuildParams;
 
@@ -79,13 +80,12 @@ impl Bvh8 {
     /// Build over primitive boxes; primitive `i` is reported as id `i`.
     /// Boxes must be finite (the scene compiler rejects the rest).
     pub fn build(boxes: &[Aabb], quality: BuildQuality) -> Self {
-        if quality.preset(boxes.len()) == BuildQuality::Preview {
-            return Self::preview(Boxes::Borrowed(boxes), &mut Steps::default());
-        }
-        match binary_tree_and_bounds(Boxes::Borrowed(boxes), quality, &mut Steps::default()) {
-            Some((bvh2, bounds)) => Self::collapse(&bvh2, bounds, u32::MAX),
-            None => Self::empty(),
-        }
+        Self::build_boxes(
+            Boxes::Borrowed(boxes),
+            quality,
+            u32::MAX,
+            &mut Steps::default(),
+        )
     }
 
     /// [`Bvh8::build`] that takes the boxes and frees them as soon as the
@@ -111,44 +111,41 @@ impl Bvh8 {
 
     /// [`Bvh8::build_from_with_others`] that adds the wall time of each of
     /// its steps to `steps` (bounds, clusters or Morton order, PLOC,
-    /// reinsertion, collapse), for `--stats`.
+    /// reinsertion, collapse; for the preview preset morton, cut and
+    /// assemble), for `--stats`.
     pub fn build_timed(
         boxes: Vec<Aabb>,
         quality: BuildQuality,
         first_other: u32,
         steps: &mut Steps,
     ) -> Self {
-        if quality.preset(boxes.len()) == BuildQuality::Preview {
-            return Self::preview(Boxes::Owned(boxes), steps);
-        }
-        match binary_tree_and_bounds(Boxes::Owned(boxes), quality, steps) {
-            Some((bvh2, bounds)) => {
-                let prims = bvh2.primitive_indices.len();
-                steps.time("collapse", || {
-                    super::collapse::collapse_owned(bvh2, bounds, first_other)
-                        .debug_validated(prims)
-                })
-            }
-            None => Self::empty(),
-        }
+        Self::build_boxes(Boxes::Owned(boxes), quality, first_other, steps)
     }
 
-    /// The preview tree over `boxes` ([`super::lbvh`]), cut from their
-    /// Morton order.
-    fn preview(boxes: Boxes, steps: &mut Steps) -> Self {
+    /// Every build: the preview tree cut from the boxes' Morton order
+    /// ([`super::lbvh`]), or the binary tree collapsed into 8-wide nodes.
+    fn build_boxes(
+        boxes: Boxes,
+        quality: BuildQuality,
+        first_other: u32,
+        steps: &mut Steps,
+    ) -> Self {
         let prims = boxes.len();
-        if prims == 0 {
+        let Some(bounds) = super::binary::bounds(&boxes, steps) else {
             return Self::empty();
+        };
+        if quality.preset(prims) == BuildQuality::Preview {
+            return super::lbvh::build(boxes, bounds, steps).debug_validated(prims);
         }
-        assert!(
-            prims <= super::node::MAX_PRIMS,
-            "too many primitives for one BVH: {prims}"
-        );
-        let bounds = steps.time("bounds", || super::binary::union(&boxes));
-        super::lbvh::build(boxes, bounds, steps).debug_validated(prims)
+        let bvh2 = binary_tree(boxes, bounds, quality, steps);
+        steps.time("collapse", || {
+            super::collapse::collapse_owned(bvh2, bounds, first_other).debug_validated(prims)
+        })
     }
 
-    /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
+    /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`,
+    /// the binary tree kept: for tests (a build frees it as it collapses).
+    #[cfg(test)]
     pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Self {
         super::collapse::collapse(bvh2, bounds, first_other)
             .debug_validated(bvh2.primitive_indices.len())
@@ -591,6 +588,17 @@ pub(super) mod tests {
         let owned = Bvh8::build_from(boxes.clone(), BuildQuality::Medium);
         assert_eq!(owned.stats(), borrowed.stats());
         assert_eq!(owned.prim_ids, borrowed.prim_ids);
+        // The build frees the binary tree as it collapses; the tests'
+        // collapse keeps it, to the same tree.
+        let (bvh2, bounds) = binary_tree_and_bounds(
+            Boxes::Borrowed(&boxes),
+            BuildQuality::Medium,
+            &mut Steps::default(),
+        )
+        .unwrap();
+        let kept = Bvh8::collapse(&bvh2, bounds, u32::MAX);
+        assert_eq!(kept.stats(), borrowed.stats());
+        assert_eq!(kept.prim_ids, borrowed.prim_ids);
         assert_eq!(
             (owned.bounds, owned.depth),
             (borrowed.bounds, borrowed.depth)

@@ -69,7 +69,9 @@ const PARALLEL_DEPTH: u32 = 10;
 
 /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`.
 /// Primitives from `first_other` on are tested one by one in a leaf
-/// ([`OTHER_COST`]); those before it are triangles.
+/// ([`OTHER_COST`]); those before it are triangles. The binary tree is
+/// kept: for tests ([`collapse_owned`] is the build's).
+#[cfg(test)]
 pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
     parts(bvh2, first_other).into_bvh(bounds)
 }
@@ -96,6 +98,7 @@ pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8
 
 /// The 8-wide tree over `bvh2` in parts made in parallel; the choices
 /// are freed when it returns.
+#[cfg(test)]
 fn parts(bvh2: &Bvh2, first_other: u32) -> Part {
     CollapseCosts::new(bvh2, first_other).emit(0, 0, 0)
 }
@@ -166,6 +169,9 @@ pub(super) struct CollapseCosts<'a, 'i> {
 }
 
 impl<'a, 'i> CollapseCosts<'a, 'i> {
+    /// The tables over `bvh2`, for tests; the build's are [`CollapseCosts::over`]
+    /// its nodes and ids, which it frees apart.
+    #[cfg(test)]
     pub(super) fn new(bvh2: &'a Bvh2, first_other: u32) -> CollapseCosts<'a, 'a> {
         CollapseCosts::over(&bvh2.nodes, &bvh2.primitive_indices, first_other)
     }
