@@ -24,6 +24,21 @@ pub struct Surface {
     pub uv: Option<Vec2>,
 }
 
+impl Surface {
+    /// Whether `wo` (unit, towards the viewer) leaves the outside, and the
+    /// geometric and shading normals turned towards it: the side both
+    /// integrators shade.
+    #[inline(always)]
+    pub fn facing(&self, wo: Vec3) -> (bool, Vec3, Vec3) {
+        let entering = self.geometric_normal.dot(wo) >= 0.0;
+        if entering {
+            (true, self.geometric_normal, self.shading_normal)
+        } else {
+            (false, -self.geometric_normal, -self.shading_normal)
+        }
+    }
+}
+
 impl Geometry {
     /// Full geometry of a hit, computed once per closest hit.
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> Surface {

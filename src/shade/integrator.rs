@@ -39,12 +39,7 @@ impl<'s> Shading<'s> {
     fn new(scene: &'s Scene, surface: &'s Surface, ray: &Ray) -> Self {
         let material = &scene.materials[surface.material as usize];
         let wo = -ray.direction.normalize();
-        let entering = surface.geometric_normal.dot(wo) >= 0.0;
-        let (ng, ns) = if entering {
-            (surface.geometric_normal, surface.shading_normal)
-        } else {
-            (-surface.geometric_normal, -surface.shading_normal)
-        };
+        let (entering, ng, ns) = surface.facing(wo);
         // One texture lookup per hit, and none on untextured surfaces.
         let diffuse = match (material.diffuse_texture, surface.uv) {
             (Some(texture), Some(uv)) => material.diffuse * scene.textures.sample(texture, uv),

@@ -208,12 +208,7 @@ impl Integrator<'_> {
             }
             None => m,
         };
-        let entering = s.geometric_normal.dot(wo) >= 0.0;
-        let (ng, ns) = if entering {
-            (s.geometric_normal, s.shading_normal)
-        } else {
-            (-s.geometric_normal, -s.shading_normal)
-        };
+        let (entering, ng, ns) = s.facing(wo);
         let texel = match (m.diffuse_texture, s.uv) {
             (Some(t), Some(uv)) => scene.textures.sample(t, uv),
             _ => Vec3::ONE,
