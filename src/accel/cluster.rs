@@ -231,20 +231,16 @@ pub(super) fn morton_keys(boxes: &[Aabb], bounds: Aabb) -> Vec<u64> {
     let extent = bounds.max - bounds.min;
     // Centres map to [0, 1023] on each axis; a flat axis maps to 0.
     let scale = Vec3::select(extent.cmpgt(Vec3::ZERO), 1023.0 / extent, Vec3::ZERO);
-    let keys: Vec<AtomicU64> = boxes
+    let keys: Vec<u64> = boxes
         .par_iter()
         .enumerate()
         .map(|(i, b)| {
             let c = ((b.min + b.max) * 0.5 - bounds.min) * scale;
             let q = c.clamp(Vec3::ZERO, Vec3::splat(1023.0)).as_uvec3();
-            AtomicU64::new((morton_code(q) as u64) << 32 | i as u64)
+            (morton_code(q) as u64) << 32 | i as u64
         })
         .collect();
-    // In place: an atomic has its value's layout.
-    radix_sort_by_high_30_bits(keys)
-        .into_iter()
-        .map(AtomicU64::into_inner)
-        .collect()
+    sort_keys(keys)
 }
 
 /// The 30-bit Morton code of a cell (ten bits an axis): bit k of z, y
@@ -255,58 +251,120 @@ fn morton_code(q: UVec3) -> u32 {
     morton_encode_u32(q.z as u16, q.y as u16, q.x as u16)
 }
 
-/// `keys` sorted stably by bits 32..62 (the Morton code above the id): an
-/// LSD radix sort, three passes of ten bits, each in parallel: every
-/// block of the keys counts its digits, and then writes each key where
-/// the keys of smaller digits, and of its digit in earlier blocks, end.
-/// The order is that of one sequential pass whatever the blocks. The
-/// keys live in atomics (relaxed: plain loads and stores) so that blocks
-/// can write their keys into one array where they interleave.
-fn radix_sort_by_high_30_bits(mut keys: Vec<AtomicU64>) -> Vec<AtomicU64> {
-    let mut other: Vec<AtomicU64> = (0..keys.len())
-        .into_par_iter()
-        .map(|_| AtomicU64::new(0))
-        .collect();
+/// Bits of the code the first pass of [`sort_keys`] buckets by: four
+/// octree levels, 4096 cells, each a few thousand primitives of a large
+/// mesh, which the cache holds while they are sorted.
+const TOP_BITS: u32 = 12;
+
+/// Keys below which [`sort_keys`] sorts by comparison, in one piece.
+const SMALL_SORT: usize = 1 << 12;
+
+/// `keys` (`code << 32 | id`, the ids distinct and rising) sorted by
+/// code, ties by id: ascending, as the keys are distinct. A radix sort
+/// whose first pass, in parallel, moves each key to the bucket of its
+/// code's top [`TOP_BITS`] (every block of the keys counts its digits,
+/// then writes each key where the keys of smaller digits, and of its digit
+/// in earlier blocks, end: the order of one sequential pass whatever the
+/// blocks); the buckets are then sorted each on its own, in parallel, by
+/// the code's other 18 bits in two passes of nine, in the caches. One pass
+/// over the whole array rather than three (the sort before: 30 bits in
+/// three passes of ten, each reading and writing every key). The keys of
+/// the first pass live in atomics (relaxed: plain loads and stores) so
+/// that blocks can write theirs into one array where they interleave.
+fn sort_keys(mut keys: Vec<u64>) -> Vec<u64> {
+    if keys.len() <= SMALL_SORT {
+        keys.sort_unstable();
+        return keys;
+    }
+    let shift = 62 - TOP_BITS;
+    let digit = |k: u64| (k >> shift) as usize & ((1 << TOP_BITS) - 1);
     let block = keys
         .len()
         .div_ceil(4 * rayon::current_num_threads())
-        .max(1 << 14);
-    for pass in 0..3 {
-        let shift = 32 + 10 * pass;
-        let digit = |k: u64| ((k >> shift) & 0x3ff) as usize;
-        let counts: Vec<Vec<usize>> = keys
-            .par_chunks(block)
-            .map(|keys| {
-                let mut count = vec![0usize; 1024];
-                for k in keys {
-                    count[digit(k.load(Relaxed))] += 1;
-                }
-                count
-            })
-            .collect();
-        // Where each block's keys of each digit start: digit-major order.
-        let mut starts = vec![vec![0usize; 1024]; counts.len()];
-        let mut sum = 0;
-        for d in 0..1024 {
-            for (start, count) in starts.iter_mut().zip(&counts) {
-                start[d] = sum;
-                sum += count[d];
+        .max(1 << 16);
+    let counts: Vec<Vec<usize>> = keys
+        .par_chunks(block)
+        .map(|keys| {
+            let mut count = vec![0usize; 1 << TOP_BITS];
+            for &k in keys {
+                count[digit(k)] += 1;
             }
+            count
+        })
+        .collect();
+    // Where each block's keys of each digit start (digit-major order), and
+    // where each bucket ends.
+    let mut starts = vec![vec![0usize; 1 << TOP_BITS]; counts.len()];
+    let mut ends = Vec::with_capacity(1 << TOP_BITS);
+    let mut sum = 0;
+    for d in 0..1 << TOP_BITS {
+        for (start, count) in starts.iter_mut().zip(&counts) {
+            start[d] = sum;
+            sum += count[d];
         }
-        keys.par_chunks(block)
-            .zip(starts)
-            .for_each(|(keys, mut start)| {
-                for k in keys {
-                    let k = k.load(Relaxed);
-                    let d = digit(k);
-                    other[start[d]].store(k, Relaxed);
-                    start[d] += 1;
-                }
-            });
-        std::mem::swap(&mut keys, &mut other);
+        ends.push(sum);
     }
-    drop(other);
-    keys
+    let bucketed: Vec<AtomicU64> = (0..keys.len())
+        .into_par_iter()
+        .map(|_| AtomicU64::new(0))
+        .collect();
+    keys.par_chunks(block)
+        .zip(starts)
+        .for_each(|(keys, mut start)| {
+            for &k in keys {
+                let d = digit(k);
+                bucketed[start[d]].store(k, Relaxed);
+                start[d] += 1;
+            }
+        });
+    // The keys' own allocation is the buckets' scratch from here on.
+    let mut scratch = keys;
+    // In place: an atomic has its value's layout.
+    let mut sorted: Vec<u64> = bucketed.into_iter().map(AtomicU64::into_inner).collect();
+    let mut buckets = Vec::with_capacity(ends.len());
+    let (mut rest, mut rest_scratch) = (&mut sorted[..], &mut scratch[..]);
+    let mut at = 0;
+    for end in ends {
+        let (bucket, r) = rest.split_at_mut(end - at);
+        let (bucket_scratch, rs) = rest_scratch.split_at_mut(end - at);
+        if bucket.len() > 1 {
+            buckets.push((bucket, bucket_scratch));
+        }
+        (rest, rest_scratch, at) = (r, rs, end);
+    }
+    buckets
+        .into_par_iter()
+        .for_each(|(bucket, scratch)| sort_bucket(bucket, scratch));
+    sorted
+}
+
+/// One bucket of [`sort_keys`] (keys whose codes agree in their top
+/// [`TOP_BITS`]) sorted by the code's lower 18 bits, stably, in two passes
+/// of nine bits through `scratch` (as long); a small one by comparison.
+fn sort_bucket(bucket: &mut [u64], scratch: &mut [u64]) {
+    if bucket.len() <= 64 {
+        bucket.sort_unstable();
+        return;
+    }
+    const BITS: u32 = (30 - TOP_BITS) / 2;
+    let pass = |from: &[u64], to: &mut [u64], shift: u32| {
+        let digit = |k: u64| (k >> shift) as usize & ((1 << BITS) - 1);
+        let mut start = [0usize; 1 << BITS];
+        for &k in from.iter() {
+            start[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for s in &mut start {
+            (*s, sum) = (sum, sum + *s);
+        }
+        for &k in from {
+            let d = digit(k);
+            to[start[d]] = k;
+            start[d] += 1;
+        }
+    };
+    pass(bucket, scratch, 32);
+    pass(scratch, bucket, 32 + BITS);
 }
 
 #[cfg(test)]
@@ -325,21 +383,27 @@ mod tests {
         assert_eq!(morton_code(UVec3::splat(0x3ff)), (1 << 30) - 1);
     }
 
+    /// The sort orders keys by code, ties by id, whatever their spread:
+    /// few distinct codes (ties in every bucket), codes spread over every
+    /// bucket, and codes crowded into one bucket of the first pass (its
+    /// own two passes do all the work); below and above the size it
+    /// sorts in one piece.
     #[test]
-    fn radix_sort_is_a_stable_sort_by_the_code() {
+    fn sort_keys_sorts_by_code_then_id() {
         let mut rng = seeded(5);
-        // Few distinct codes, so that ties are many and order among them shows.
-        let keys: Vec<u64> = (0..20_000u64)
-            .map(|i| (((rng.unit() * 300.0) as u64 * 0x0123_4567) % (1 << 30)) << 32 | i)
-            .collect();
-        let mut want = keys.clone();
-        want.sort_by_key(|k| k >> 32);
-        let atomic = keys.into_iter().map(AtomicU64::new).collect();
-        let sorted: Vec<u64> = radix_sort_by_high_30_bits(atomic)
-            .into_iter()
-            .map(AtomicU64::into_inner)
-            .collect();
-        assert_eq!(sorted, want);
+        let code = |spread: usize, u: f32| match spread {
+            0 => ((u * 300.0) as u64 * 0x0123_4567) % (1 << 30),
+            1 => (u * (1u64 << 30) as f32) as u64 % (1 << 30),
+            _ => 0x2aa << 18 | (u * (1 << 18) as f32) as u64 % (1 << 18),
+        };
+        for spread in 0..3 {
+            for n in [1000u64, 20_000, 300_000] {
+                let keys: Vec<u64> = (0..n).map(|i| code(spread, rng.unit()) << 32 | i).collect();
+                let mut want = keys.clone();
+                want.sort_by_key(|k| k >> 32);
+                assert_eq!(sort_keys(keys), want, "{n} keys");
+            }
+        }
     }
 
     #[test]
