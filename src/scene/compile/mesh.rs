@@ -55,35 +55,49 @@ pub(super) enum TriangleSource {
     },
 }
 
-impl TriangleSource {
-    pub(super) fn len(&self) -> usize {
-        match self {
-            Self::Soup(t) => t.len(),
-            Self::Indexed { indices, .. } => indices.len(),
-            Self::File { asset, mesh, .. } | Self::FileSpace { asset, mesh } => {
-                asset.meshes[*mesh].indices.len()
-            }
-            Self::Shared {
-                asset,
-                shared,
-                part,
-            } => asset.shared[*shared].parts[*part].indices.len(),
-        }
-    }
+/// A [`TriangleSource`]'s triangles, borrowed where they are held.
+#[derive(Clone, Copy)]
+pub(super) enum Triangles<'a> {
+    Soup(&'a [[Vec3; 3]]),
+    /// Indices checked against the positions when made.
+    Indexed {
+        positions: &'a [Vec3],
+        indices: &'a [[u32; 3]],
+    },
+}
 
+impl Triangles<'_> {
     #[inline]
-    pub(super) fn get(&self, i: usize) -> [Vec3; 3] {
+    pub(super) fn get(self, i: usize) -> [Vec3; 3] {
         match self {
             Self::Soup(t) => t[i],
             Self::Indexed { positions, indices } => indices[i].map(|k| positions[k as usize]),
+        }
+    }
+}
+
+impl TriangleSource {
+    pub(super) fn len(&self) -> usize {
+        match self.triangles() {
+            Triangles::Soup(t) => t.len(),
+            Triangles::Indexed { indices, .. } => indices.len(),
+        }
+    }
+
+    /// The triangles as arrays, wherever they are held: resolved once for
+    /// a loop over many of them, rather than once a triangle.
+    pub(super) fn triangles(&self) -> Triangles<'_> {
+        let (positions, indices) = match self {
+            Self::Soup(t) => return Triangles::Soup(t),
+            Self::Indexed { positions, indices } => (positions, indices),
             Self::File {
                 positions,
                 asset,
                 mesh,
-            } => asset.meshes[*mesh].indices[i].map(|k| positions[k as usize]),
+            } => (positions, &asset.meshes[*mesh].indices),
             Self::FileSpace { asset, mesh } => {
                 let m = &asset.meshes[*mesh];
-                m.indices[i].map(|k| m.positions[k as usize])
+                (&m.positions, &m.indices)
             }
             Self::Shared {
                 asset,
@@ -91,9 +105,15 @@ impl TriangleSource {
                 part,
             } => {
                 let m = &asset.shared[*shared].parts[*part];
-                m.indices[i].map(|k| m.positions[k as usize])
+                (&m.positions, &m.indices)
             }
-        }
+        };
+        Triangles::Indexed { positions, indices }
+    }
+
+    #[cfg(test)]
+    pub(super) fn get(&self, i: usize) -> [Vec3; 3] {
+        self.triangles().get(i)
     }
 
     /// Frees what the file's asset holds beside the indices (its file-space
@@ -118,9 +138,10 @@ pub(super) fn triangle_at<'a>(
 ) -> impl Fn(u32) -> [Vec3; 3] + Sync + 'a {
     // Each mesh's first triangle, so the meshes themselves can move on.
     let firsts: Vec<u32> = meshes.iter().map(|m| m.first).collect();
+    let triangles: Vec<Triangles> = sources.iter().map(TriangleSource::triangles).collect();
     move |id| {
         let k = firsts.partition_point(|&first| first <= id) - 1;
-        sources[k].get((id - firsts[k]) as usize)
+        triangles[k].get((id - firsts[k]) as usize)
     }
 }
 
@@ -350,11 +371,14 @@ pub(super) fn triangle_boxes(
     let mut boxes = Vec::with_capacity(n);
     for (mesh, source) in meshes.iter().zip(sources) {
         let start = boxes.len();
-        boxes.par_extend(
-            (0..source.len())
-                .into_par_iter()
-                .map(|i| Aabb::from_points(&source.get(i))),
-        );
+        match source.triangles() {
+            Triangles::Soup(t) => boxes.par_extend(t.par_iter().map(|t| Aabb::from_points(t))),
+            Triangles::Indexed { positions, indices } => boxes.par_extend(
+                indices
+                    .par_iter()
+                    .map(|t| Aabb::from_points(&t.map(|k| positions[k as usize]))),
+            ),
+        }
         // Searched in parallel a block at a time (one thread scanned a
         // huge mesh's boxes alone), the first block with one, then in it.
         let own = &boxes[start..];
