@@ -358,37 +358,36 @@ pub(super) fn triangle_geometry(
     Ok(geometry)
 }
 
-/// Boxes a task of the search for a box that is not finite checks.
-const FINITE_BLOCK: usize = 1 << 14;
-
-/// Every triangle's box, mesh by mesh; the first that is not finite is an
-/// error naming its mesh and its index there.
+/// Every triangle's box, mesh by mesh; the first triangle with a vertex
+/// that is not finite is an error naming its mesh and its index there.
+/// (Its box would not say: a box's min and max pass a NaN by.)
 pub(super) fn triangle_boxes(
     meshes: &[MeshRange],
     sources: &[TriangleSource],
 ) -> Result<Vec<Aabb>, (String, usize)> {
     let n = meshes.last().map_or(0, |m| (m.first + m.count) as usize);
     let mut boxes = Vec::with_capacity(n);
+    let not_finite = |t: &[Vec3; 3]| !t.iter().all(|p| p.is_finite());
     for (mesh, source) in meshes.iter().zip(sources) {
-        let start = boxes.len();
-        match source.triangles() {
-            Triangles::Soup(t) => boxes.par_extend(t.par_iter().map(|t| Aabb::from_points(t))),
-            Triangles::Indexed { positions, indices } => boxes.par_extend(
-                indices
-                    .par_iter()
-                    .map(|t| Aabb::from_points(&t.map(|k| positions[k as usize]))),
-            ),
-        }
-        // Searched in parallel a block at a time (one thread scanned a
-        // huge mesh's boxes alone), the first block with one, then in it.
-        let own = &boxes[start..];
-        let bad = |b: &Aabb| !b.is_finite();
-        let block = own
-            .par_chunks(FINITE_BLOCK)
-            .position_first(|block| block.iter().any(bad));
-        if let Some(block) = block {
-            let at = block * FINITE_BLOCK;
-            let i = at + own[at..].iter().position(bad).expect("the block has one");
+        let first_bad = match source.triangles() {
+            Triangles::Soup(t) => {
+                boxes.par_extend(t.par_iter().map(|t| Aabb::from_points(t)));
+                loaders::first_where(t, not_finite)
+            }
+            Triangles::Indexed { positions, indices } => {
+                let points = |t: &[u32; 3]| t.map(|k| positions[k as usize]);
+                boxes.par_extend(indices.par_iter().map(|t| Aabb::from_points(&points(t))));
+                // The points first: about half as many as the triangles,
+                // so a finite mesh's check reads a sixth of what checking
+                // its triangles would.
+                if positions.par_iter().all(|p| p.is_finite()) {
+                    None
+                } else {
+                    loaders::first_where(indices, |t| not_finite(&points(t)))
+                }
+            }
+        };
+        if let Some(i) = first_bad {
             return Err((mesh.name.clone(), i));
         }
     }
@@ -403,6 +402,37 @@ mod tests {
     use crate::scene::{scene_from_str, RenderOverrides};
 
     const TWO_QUADS: &str = "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nusemtl a\nf 1 2 3 4\nusemtl b\nf 5 6 7\n";
+
+    /// An indexed mesh, whose points are checked rather than its boxes:
+    /// the first triangle with a vertex that is not finite (infinite or
+    /// NaN) is named, in its own mesh; a vertex no triangle uses is no
+    /// error.
+    #[test]
+    fn an_indexed_mesh_names_its_first_triangle_with_a_vertex_not_finite() {
+        let mesh = |name: &str, first, count| MeshRange {
+            name: name.into(),
+            first,
+            count,
+            material: 0,
+            mirrored: false,
+            normals: None,
+            uvs: None,
+            tangents: None,
+        };
+        let p = |x: f32| Vec3::new(x, 0.0, 1.0);
+        let indexed = |bad: u32| TriangleSource::Indexed {
+            positions: vec![p(0.0), p(1.0), p(2.0), p(f32::INFINITY), p(f32::NAN)],
+            indices: vec![[0, 1, 2], [1, 2, 0], [2, bad, 0], [bad, 1, 2]],
+        };
+        let meshes = [mesh("a", 0, 1), mesh("b", 1, 4)];
+        let soup = || TriangleSource::Soup(vec![[p(0.0), p(1.0), p(2.0)]]);
+        for bad in [3, 4] {
+            let got = triangle_boxes(&meshes, &[soup(), indexed(bad)]).map(|b| b.len());
+            assert_eq!(got, Err(("b".into(), 2)), "vertex {bad}");
+        }
+        let unused = triangle_boxes(&meshes, &[soup(), indexed(1)]).map(|b| b.len());
+        assert_eq!(unused, Ok(5));
+    }
 
     #[test]
     fn mesh_files_are_baked_read_once_and_stored_in_leaf_order() {
@@ -564,8 +594,10 @@ material = "grey"
             tangents: None,
         };
         let tri = |k: usize| [Vec3::ZERO, Vec3::X, Vec3::new(0.0, k as f32, 1.0)];
-        let n = 3 * FINITE_BLOCK + 5;
-        for bad in [None, Some(3), Some(FINITE_BLOCK + 7), Some(n - 1)] {
+        // Long enough for several of the parallel search's blocks.
+        let block = 1 << 14;
+        let n = 3 * block + 5;
+        for bad in [None, Some(3), Some(block + 7), Some(n - 1)] {
             let mut second: Vec<[Vec3; 3]> = (0..n).map(tri).collect();
             if let Some(i) = bad {
                 second[i][1].y = f32::INFINITY;
