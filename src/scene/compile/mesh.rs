@@ -111,11 +111,6 @@ impl TriangleSource {
         Triangles::Indexed { positions, indices }
     }
 
-    #[cfg(test)]
-    pub(super) fn get(&self, i: usize) -> [Vec3; 3] {
-        self.triangles().get(i)
-    }
-
     /// Frees what the file's asset holds beside the indices (its file-space
     /// positions) once this source is its only holder: the scene keeps
     /// nothing else of it, and the build runs beside less.
