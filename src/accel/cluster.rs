@@ -394,7 +394,7 @@ mod tests {
         let code = |spread: usize, u: f32| match spread {
             0 => ((u * 300.0) as u64 * 0x0123_4567) % (1 << 30),
             1 => (u * (1u64 << 30) as f32) as u64 % (1 << 30),
-            _ => 0x2aa << 18 | (u * (1 << 18) as f32) as u64 % (1 << 18),
+            _ => (0x2aa << 18) | ((u * (1 << 18) as f32) as u64 % (1 << 18)),
         };
         for spread in 0..3 {
             for n in [1000u64, 20_000, 300_000] {
