@@ -21,7 +21,7 @@
 //! [`super::cmj::cmj_2d`]; the tests check that.
 
 use super::cmj::{
-    mask_of, sample_patterns, CmjSet, JITTER_PATTERN, ONE_MINUS_EPSILON, STRATA_PATTERN,
+    sample_patterns, CmjSet, FastDiv, JITTER_PATTERN, ONE_MINUS_EPSILON, STRATA_PATTERN,
 };
 use super::hash::unit_float_lanes;
 use crate::math::lanes::LANES;
@@ -46,17 +46,38 @@ struct PermuteLanes {
     wrap_add: u32,
 }
 
-impl PermuteLanes {
-    fn new(len: u32, p: u32, p_mod: u32, two32_mod: u32) -> Self {
+/// What a permutation of `0..len` shares under every pattern: the
+/// length as a prepared divisor (its cycle-walking mask, and the
+/// remainder of a pattern by multiplications) and `len − 2³² mod len`.
+#[derive(Debug, Clone, Copy)]
+struct LenLanes {
+    len: FastDiv,
+    wrap_add: u32,
+}
+
+impl LenLanes {
+    /// `two32_mod` is 2³² mod the length.
+    fn new(len: FastDiv, two32_mod: u32) -> Self {
         Self {
             len,
-            w: mask_of(len),
-            p,
-            p_mod,
-            wrap_add: len - two32_mod,
+            wrap_add: len.divisor() - two32_mod,
         }
     }
 
+    /// The permutation under pattern `p`.
+    #[inline(always)]
+    fn with_pattern(&self, p: u32) -> PermuteLanes {
+        PermuteLanes {
+            len: self.len.divisor(),
+            w: self.len.walk_mask(),
+            p,
+            p_mod: self.len.remainder(p),
+            wrap_add: self.wrap_add,
+        }
+    }
+}
+
+impl PermuteLanes {
     /// `permute(i, len, p)` of [`super::cmj`] in each lane (every `i < len`).
     #[inline(always)]
     fn apply(&self, i: u32x8) -> u32x8 {
@@ -141,25 +162,56 @@ pub struct CmjLanes {
     jitter_y: u32,
 }
 
+/// What the draws of one CMJ set share under every pattern (every
+/// dimension of a pixel): its grid's permutation lengths with their
+/// masks and remainders prepared, so that a dimension's [`CmjLanes`]
+/// (from [`CmjGrid::lanes`]) does only what its pattern changes.
+#[derive(Debug, Clone, Copy)]
+pub struct CmjGrid {
+    n: u32,
+    cells: LenLanes,
+    columns: LenLanes,
+    rows: LenLanes,
+}
+
+impl CmjGrid {
+    /// The grid of `set`, or `None` for an empty set or one of
+    /// [`MAX_CELLS`] cells or more.
+    pub fn new(set: &CmjSet) -> Option<Self> {
+        let (_, _, cells) = set.grid();
+        if set.n == 0 || cells >= MAX_CELLS {
+            return None;
+        }
+        let [m, rows, cells] = set.divisors();
+        let [m_wrap, rows_wrap, cells_wrap] = set.two32_mods();
+        Some(Self {
+            n: set.n,
+            cells: LenLanes::new(cells, cells_wrap),
+            columns: LenLanes::new(m, m_wrap),
+            rows: LenLanes::new(rows, rows_wrap),
+        })
+    }
+
+    /// The set's draws under `pattern`: exactly [`CmjLanes::new`]'s.
+    #[inline]
+    pub fn lanes(&self, pattern: u32) -> CmjLanes {
+        let [p_cells, p_columns, p_rows, jitter_x, jitter_y] = sample_patterns(pattern);
+        CmjLanes {
+            n: self.n,
+            cells: self.cells.with_pattern(p_cells),
+            columns: self.columns.with_pattern(p_columns),
+            rows: self.rows.with_pattern(p_rows),
+            jitter_x,
+            jitter_y,
+        }
+    }
+}
+
 impl CmjLanes {
     /// The lanes of `set` under `pattern`, or `None` for an empty set or
     /// one of [`MAX_CELLS`] cells or more.
     pub fn new(set: &CmjSet, pattern: u32) -> Option<Self> {
-        let (m, rows, cells) = set.grid();
-        if set.n == 0 || cells >= MAX_CELLS {
-            return None;
-        }
-        let [p_cells, p_columns, p_rows, jitter_x, jitter_y] = sample_patterns(pattern);
-        let [m_mod, rows_mod, cells_mod] = set.grid_mods([p_columns, p_rows, p_cells]);
-        let [m_wrap, rows_wrap, cells_wrap] = set.two32_mods();
-        Some(Self {
-            n: set.n,
-            cells: PermuteLanes::new(cells, p_cells, cells_mod, cells_wrap),
-            columns: PermuteLanes::new(m, p_columns, m_mod, m_wrap),
-            rows: PermuteLanes::new(rows, p_rows, rows_mod, rows_wrap),
-            jitter_x,
-            jitter_y,
-        })
+        CmjGrid::new(set).map(|grid| grid.lanes(pattern))
     }
 
     /// Samples `s[i]` of the set (each below its size), lane by lane
@@ -196,21 +248,48 @@ pub struct StratifiedLanes {
     jitter: u32,
 }
 
+/// What the draws of one stratified 1D set of `n` samples share under
+/// every pattern, as [`CmjGrid`] for 2D sets.
+#[derive(Debug, Clone, Copy)]
+pub struct StrataGrid {
+    n: u32,
+    strata: LenLanes,
+}
+
+impl StrataGrid {
+    /// The `n`-sample set, or `None` for an empty set or one of
+    /// [`MAX_CELLS`] samples or more (whose strata are not all exact
+    /// floats).
+    pub fn new(n: u32) -> Option<Self> {
+        if n == 0 || n >= MAX_CELLS {
+            return None;
+        }
+        let two32_mod = ((1u64 << 32) % n as u64) as u32;
+        Some(Self {
+            n,
+            strata: LenLanes::new(FastDiv::new(n), two32_mod),
+        })
+    }
+
+    /// The set's draws under `pattern`: exactly [`StratifiedLanes::new`]'s.
+    #[inline]
+    pub fn lanes(&self, pattern: u32) -> StratifiedLanes {
+        StratifiedLanes {
+            n: self.n,
+            strata: self
+                .strata
+                .with_pattern(pattern.wrapping_mul(STRATA_PATTERN)),
+            jitter: pattern.wrapping_mul(JITTER_PATTERN),
+        }
+    }
+}
+
 impl StratifiedLanes {
     /// The lanes of the `n`-sample set under `pattern`, or `None` for an
     /// empty set or one of [`MAX_CELLS`] samples or more (whose strata
     /// are not all exact floats).
     pub fn new(n: u32, pattern: u32) -> Option<Self> {
-        if n == 0 || n >= MAX_CELLS {
-            return None;
-        }
-        let p = pattern.wrapping_mul(STRATA_PATTERN);
-        let two32_mod = ((1u64 << 32) % n as u64) as u32;
-        Some(Self {
-            n,
-            strata: PermuteLanes::new(n, p, p % n, two32_mod),
-            jitter: pattern.wrapping_mul(JITTER_PATTERN),
-        })
+        StrataGrid::new(n).map(|grid| grid.lanes(pattern))
     }
 
     /// Samples `s[i]` of the set (each below its size).
