@@ -85,31 +85,22 @@ impl PermuteLanes {
             return u32x8::ZERO;
         }
         let (p, w) = (self.p, u32x8::splat(self.w));
-        let len = u32x8::splat(self.len);
         let splat = u32x8::splat;
+        if self.w.wrapping_add(1) == self.len {
+            // A power of two (a pixel's usual sample counts and their
+            // grids): the hash, masked to the length's bits, lands in
+            // 0..len at once (`x ^ x >> 5` keeps within the mask), so no
+            // lane walks a second step; and 2³² is a multiple of the
+            // length, so the wrapping (i + p) mod len is its low bits.
+            return (self.hash(i) + splat(p)) & w;
+        }
+        let len = u32x8::splat(self.len);
         let mut i = i;
         // Cycle walking: each lane steps until it lands in 0..len; lanes
         // that have landed keep their value while the others walk on.
         let mut walking = u32x8::splat(u32::MAX);
         loop {
-            let mut x = i ^ splat(p);
-            x *= splat(0xe170_893d);
-            x ^= splat(p >> 16);
-            x ^= (x & w) >> 4;
-            x ^= splat(p >> 8);
-            x *= splat(0x0929_eb3f);
-            x ^= splat(p >> 23);
-            x ^= (x & w) >> 1;
-            x *= splat(1 | p >> 27);
-            x *= splat(0x6935_fa69);
-            x ^= (x & w) >> 11;
-            x *= splat(0x74dc_b303);
-            x ^= (x & w) >> 2;
-            x *= splat(0x9e50_1cc3);
-            x ^= (x & w) >> 2;
-            x *= splat(0xc860_a3df);
-            x &= w;
-            x ^= x >> 5;
+            let x = self.hash(i);
             i = walking.select(x, i);
             walking &= !x.simd_lt(len);
             if !walking.any() {
@@ -124,6 +115,32 @@ impl PermuteLanes {
             r = r - (r.simd_ge(len) & len);
         }
         r
+    }
+
+    /// One step of the permutation's hash in each lane, masked to the
+    /// length's bits (Kensler 2013, listing 3).
+    #[inline(always)]
+    fn hash(&self, i: u32x8) -> u32x8 {
+        let (p, w) = (self.p, u32x8::splat(self.w));
+        let splat = u32x8::splat;
+        let mut x = i ^ splat(p);
+        x *= splat(0xe170_893d);
+        x ^= splat(p >> 16);
+        x ^= (x & w) >> 4;
+        x ^= splat(p >> 8);
+        x *= splat(0x0929_eb3f);
+        x ^= splat(p >> 23);
+        x ^= (x & w) >> 1;
+        x *= splat(1 | p >> 27);
+        x *= splat(0x6935_fa69);
+        x ^= (x & w) >> 11;
+        x *= splat(0x74dc_b303);
+        x ^= (x & w) >> 2;
+        x *= splat(0x9e50_1cc3);
+        x ^= (x & w) >> 2;
+        x *= splat(0xc860_a3df);
+        x &= w;
+        x ^ (x >> 5)
     }
 }
 
