@@ -73,6 +73,24 @@ impl FastDiv {
     }
 }
 
+impl FastDiv {
+    /// The divisor.
+    pub(super) fn divisor(self) -> u32 {
+        self.d
+    }
+
+    /// `n mod d`, exactly `n % d`.
+    #[inline(always)]
+    pub(super) fn remainder(self, n: u32) -> u32 {
+        Divisor::rem(self, n)
+    }
+
+    /// The cycle-walking mask of a permutation of `0..d` (see [`mask_of`]).
+    pub(super) fn walk_mask(self) -> u32 {
+        self.w
+    }
+}
+
 impl Divisor for FastDiv {
     #[inline(always)]
     fn get(self) -> u32 {
@@ -242,6 +260,11 @@ impl CmjSet {
         (self.m.d, self.rows.d, self.cells.d)
     }
 
+    /// The grid's columns, rows and cells as prepared divisors.
+    pub(super) fn divisors(&self) -> [FastDiv; 3] {
+        [self.m, self.rows, self.cells]
+    }
+
     /// 2³² modulo the grid's columns, rows and cells (from 2³² − 1's
     /// remainders, which multiplications give).
     pub(super) fn two32_mods(&self) -> [u32; 3] {
@@ -253,11 +276,6 @@ impl CmjSet {
                 r
             }
         })
-    }
-
-    /// `[a, b, c]` modulo the grid's columns, rows and cells.
-    pub(super) fn grid_mods(&self, [a, b, c]: [u32; 3]) -> [u32; 3] {
-        [self.m.rem(a), self.rows.rem(b), self.cells.rem(c)]
     }
 
     /// Exactly `cmj_2d(s, self.n, pattern)`.

@@ -21,7 +21,7 @@
 //! [`super::cmj::cmj_2d`]; the tests check that.
 
 use super::cmj::{
-    mask_of, sample_patterns, CmjSet, JITTER_PATTERN, ONE_MINUS_EPSILON, STRATA_PATTERN,
+    sample_patterns, CmjSet, FastDiv, JITTER_PATTERN, ONE_MINUS_EPSILON, STRATA_PATTERN,
 };
 use super::hash::unit_float_lanes;
 use crate::math::lanes::LANES;
@@ -46,17 +46,38 @@ struct PermuteLanes {
     wrap_add: u32,
 }
 
-impl PermuteLanes {
-    fn new(len: u32, p: u32, p_mod: u32, two32_mod: u32) -> Self {
+/// What a permutation of `0..len` shares under every pattern: the
+/// length as a prepared divisor (its cycle-walking mask, and the
+/// remainder of a pattern by multiplications) and `len − 2³² mod len`.
+#[derive(Debug, Clone, Copy)]
+struct LenLanes {
+    len: FastDiv,
+    wrap_add: u32,
+}
+
+impl LenLanes {
+    /// `two32_mod` is 2³² mod the length.
+    fn new(len: FastDiv, two32_mod: u32) -> Self {
         Self {
             len,
-            w: mask_of(len),
-            p,
-            p_mod,
-            wrap_add: len - two32_mod,
+            wrap_add: len.divisor() - two32_mod,
         }
     }
 
+    /// The permutation under pattern `p`.
+    #[inline(always)]
+    fn with_pattern(&self, p: u32) -> PermuteLanes {
+        PermuteLanes {
+            len: self.len.divisor(),
+            w: self.len.walk_mask(),
+            p,
+            p_mod: self.len.remainder(p),
+            wrap_add: self.wrap_add,
+        }
+    }
+}
+
+impl PermuteLanes {
     /// `permute(i, len, p)` of [`super::cmj`] in each lane (every `i < len`).
     #[inline(always)]
     fn apply(&self, i: u32x8) -> u32x8 {
@@ -64,31 +85,22 @@ impl PermuteLanes {
             return u32x8::ZERO;
         }
         let (p, w) = (self.p, u32x8::splat(self.w));
-        let len = u32x8::splat(self.len);
         let splat = u32x8::splat;
+        if self.w.wrapping_add(1) == self.len {
+            // A power of two (a pixel's usual sample counts and their
+            // grids): the hash, masked to the length's bits, lands in
+            // 0..len at once (`x ^ x >> 5` keeps within the mask), so no
+            // lane walks a second step; and 2³² is a multiple of the
+            // length, so the wrapping (i + p) mod len is its low bits.
+            return (self.hash(i) + splat(p)) & w;
+        }
+        let len = u32x8::splat(self.len);
         let mut i = i;
         // Cycle walking: each lane steps until it lands in 0..len; lanes
         // that have landed keep their value while the others walk on.
         let mut walking = u32x8::splat(u32::MAX);
         loop {
-            let mut x = i ^ splat(p);
-            x *= splat(0xe170_893d);
-            x ^= splat(p >> 16);
-            x ^= (x & w) >> 4;
-            x ^= splat(p >> 8);
-            x *= splat(0x0929_eb3f);
-            x ^= splat(p >> 23);
-            x ^= (x & w) >> 1;
-            x *= splat(1 | p >> 27);
-            x *= splat(0x6935_fa69);
-            x ^= (x & w) >> 11;
-            x *= splat(0x74dc_b303);
-            x ^= (x & w) >> 2;
-            x *= splat(0x9e50_1cc3);
-            x ^= (x & w) >> 2;
-            x *= splat(0xc860_a3df);
-            x &= w;
-            x ^= x >> 5;
+            let x = self.hash(i);
             i = walking.select(x, i);
             walking &= !x.simd_lt(len);
             if !walking.any() {
@@ -103,6 +115,32 @@ impl PermuteLanes {
             r = r - (r.simd_ge(len) & len);
         }
         r
+    }
+
+    /// One step of the permutation's hash in each lane, masked to the
+    /// length's bits (Kensler 2013, listing 3).
+    #[inline(always)]
+    fn hash(&self, i: u32x8) -> u32x8 {
+        let (p, w) = (self.p, u32x8::splat(self.w));
+        let splat = u32x8::splat;
+        let mut x = i ^ splat(p);
+        x *= splat(0xe170_893d);
+        x ^= splat(p >> 16);
+        x ^= (x & w) >> 4;
+        x ^= splat(p >> 8);
+        x *= splat(0x0929_eb3f);
+        x ^= splat(p >> 23);
+        x ^= (x & w) >> 1;
+        x *= splat(1 | p >> 27);
+        x *= splat(0x6935_fa69);
+        x ^= (x & w) >> 11;
+        x *= splat(0x74dc_b303);
+        x ^= (x & w) >> 2;
+        x *= splat(0x9e50_1cc3);
+        x ^= (x & w) >> 2;
+        x *= splat(0xc860_a3df);
+        x &= w;
+        x ^ (x >> 5)
     }
 }
 
@@ -141,25 +179,56 @@ pub struct CmjLanes {
     jitter_y: u32,
 }
 
+/// What the draws of one CMJ set share under every pattern (every
+/// dimension of a pixel): its grid's permutation lengths with their
+/// masks and remainders prepared, so that a dimension's [`CmjLanes`]
+/// (from [`CmjGrid::lanes`]) does only what its pattern changes.
+#[derive(Debug, Clone, Copy)]
+pub struct CmjGrid {
+    n: u32,
+    cells: LenLanes,
+    columns: LenLanes,
+    rows: LenLanes,
+}
+
+impl CmjGrid {
+    /// The grid of `set`, or `None` for an empty set or one of
+    /// [`MAX_CELLS`] cells or more.
+    pub fn new(set: &CmjSet) -> Option<Self> {
+        let (_, _, cells) = set.grid();
+        if set.n == 0 || cells >= MAX_CELLS {
+            return None;
+        }
+        let [m, rows, cells] = set.divisors();
+        let [m_wrap, rows_wrap, cells_wrap] = set.two32_mods();
+        Some(Self {
+            n: set.n,
+            cells: LenLanes::new(cells, cells_wrap),
+            columns: LenLanes::new(m, m_wrap),
+            rows: LenLanes::new(rows, rows_wrap),
+        })
+    }
+
+    /// The set's draws under `pattern`: exactly [`CmjLanes::new`]'s.
+    #[inline]
+    pub fn lanes(&self, pattern: u32) -> CmjLanes {
+        let [p_cells, p_columns, p_rows, jitter_x, jitter_y] = sample_patterns(pattern);
+        CmjLanes {
+            n: self.n,
+            cells: self.cells.with_pattern(p_cells),
+            columns: self.columns.with_pattern(p_columns),
+            rows: self.rows.with_pattern(p_rows),
+            jitter_x,
+            jitter_y,
+        }
+    }
+}
+
 impl CmjLanes {
     /// The lanes of `set` under `pattern`, or `None` for an empty set or
     /// one of [`MAX_CELLS`] cells or more.
     pub fn new(set: &CmjSet, pattern: u32) -> Option<Self> {
-        let (m, rows, cells) = set.grid();
-        if set.n == 0 || cells >= MAX_CELLS {
-            return None;
-        }
-        let [p_cells, p_columns, p_rows, jitter_x, jitter_y] = sample_patterns(pattern);
-        let [m_mod, rows_mod, cells_mod] = set.grid_mods([p_columns, p_rows, p_cells]);
-        let [m_wrap, rows_wrap, cells_wrap] = set.two32_mods();
-        Some(Self {
-            n: set.n,
-            cells: PermuteLanes::new(cells, p_cells, cells_mod, cells_wrap),
-            columns: PermuteLanes::new(m, p_columns, m_mod, m_wrap),
-            rows: PermuteLanes::new(rows, p_rows, rows_mod, rows_wrap),
-            jitter_x,
-            jitter_y,
-        })
+        CmjGrid::new(set).map(|grid| grid.lanes(pattern))
     }
 
     /// Samples `s[i]` of the set (each below its size), lane by lane
@@ -196,21 +265,48 @@ pub struct StratifiedLanes {
     jitter: u32,
 }
 
+/// What the draws of one stratified 1D set of `n` samples share under
+/// every pattern, as [`CmjGrid`] for 2D sets.
+#[derive(Debug, Clone, Copy)]
+pub struct StrataGrid {
+    n: u32,
+    strata: LenLanes,
+}
+
+impl StrataGrid {
+    /// The `n`-sample set, or `None` for an empty set or one of
+    /// [`MAX_CELLS`] samples or more (whose strata are not all exact
+    /// floats).
+    pub fn new(n: u32) -> Option<Self> {
+        if n == 0 || n >= MAX_CELLS {
+            return None;
+        }
+        let two32_mod = ((1u64 << 32) % n as u64) as u32;
+        Some(Self {
+            n,
+            strata: LenLanes::new(FastDiv::new(n), two32_mod),
+        })
+    }
+
+    /// The set's draws under `pattern`: exactly [`StratifiedLanes::new`]'s.
+    #[inline]
+    pub fn lanes(&self, pattern: u32) -> StratifiedLanes {
+        StratifiedLanes {
+            n: self.n,
+            strata: self
+                .strata
+                .with_pattern(pattern.wrapping_mul(STRATA_PATTERN)),
+            jitter: pattern.wrapping_mul(JITTER_PATTERN),
+        }
+    }
+}
+
 impl StratifiedLanes {
     /// The lanes of the `n`-sample set under `pattern`, or `None` for an
     /// empty set or one of [`MAX_CELLS`] samples or more (whose strata
     /// are not all exact floats).
     pub fn new(n: u32, pattern: u32) -> Option<Self> {
-        if n == 0 || n >= MAX_CELLS {
-            return None;
-        }
-        let p = pattern.wrapping_mul(STRATA_PATTERN);
-        let two32_mod = ((1u64 << 32) % n as u64) as u32;
-        Some(Self {
-            n,
-            strata: PermuteLanes::new(n, p, p % n, two32_mod),
-            jitter: pattern.wrapping_mul(JITTER_PATTERN),
-        })
+        StrataGrid::new(n).map(|grid| grid.lanes(pattern))
     }
 
     /// Samples `s[i]` of the set (each below its size).

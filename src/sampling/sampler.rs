@@ -6,7 +6,7 @@
 //! form one stratified set, and sample `i` depends on nothing but `i`.
 
 use super::cmj::{cmj_2d, stratified_1d, CmjSet};
-use super::cmj_lanes::{CmjLanes, StratifiedLanes};
+use super::cmj_lanes::{CmjGrid, CmjLanes, StrataGrid, StratifiedLanes};
 use super::hash::{hash_step, hash_step_lanes, unit_float, unit_float_lanes, HASH_WORDS_INIT};
 use super::sobol::{sobol_1d, sobol_2d};
 use crate::math::lanes::{mask_lanes, LANES};
@@ -283,6 +283,99 @@ impl DimSampler {
     }
 }
 
+/// One pixel's sets of `count` points, prepared for drawing eight points
+/// of any dimension at once ([`PixelSampler::set_lanes`]): what every
+/// draw of a batch of the pixel's camera samples shares whatever its
+/// dimension (the set's grids, their masks and divisors), worked out
+/// once per batch rather than once per draw. Each point is exactly
+/// [`PixelSampler::get_2d`]'s or [`PixelSampler::get_1d`]'s.
+#[derive(Debug, Clone, Copy)]
+pub struct SetLanes {
+    sampler: PixelSampler,
+    count: u32,
+    /// The stratified sampler's 2D set (prepared), and its grids in lanes
+    /// where the set is drawn in lanes.
+    set: CmjSet,
+    cmj: Option<CmjGrid>,
+    strata: Option<StrataGrid>,
+}
+
+impl PixelSampler {
+    /// The pixel's sets of `count` points, prepared for [`SetLanes`].
+    pub fn set_lanes(&self, count: u32) -> SetLanes {
+        let (set, cmj, strata) = match self.kind {
+            SamplerKind::Stratified if count > 0 => {
+                let set = match self.sets.iter().find(|set| set.n == count) {
+                    Some(set) => *set,
+                    None => CmjSet::new(count),
+                };
+                (set, CmjGrid::new(&set), StrataGrid::new(count))
+            }
+            _ => (CmjSet::EMPTY, None, None),
+        };
+        SetLanes {
+            sampler: *self,
+            count,
+            set,
+            cmj,
+            strata,
+        }
+    }
+}
+
+impl SetLanes {
+    /// Points `index[i]` of dimension `dim`'s set for the lanes `i` of
+    /// `wanted`: exactly [`PixelSampler::get_2d`] of each. Where two or
+    /// more lanes are wanted all eight may be drawn at once, so every
+    /// `index[i]` must be below the set's size, wanted or not; the lanes
+    /// not wanted hold no promised value.
+    #[inline]
+    pub fn get_2d(&self, dim: Dim, index: &[u32; LANES], wanted: u32) -> [Vec2; LANES] {
+        let sampler = &self.sampler;
+        if sampler.kind != SamplerKind::Stratified {
+            return sampler.dim_2d(dim, self.count).get_2d_lanes(*index, wanted);
+        }
+        let pattern = sampler.pattern(dim);
+        if wanted.count_ones() > 1 {
+            if let Some(grid) = &self.cmj {
+                return grid.lanes(pattern).sample(*index);
+            }
+        }
+        let mut points = [Vec2::ZERO; LANES];
+        for i in mask_lanes(wanted) {
+            // `CmjSet::sample` is `cmj_2d` of a prepared set.
+            points[i] = if self.set.n == self.count {
+                self.set.sample(index[i], pattern)
+            } else {
+                cmj_2d(index[i], self.count, pattern)
+            };
+        }
+        points
+    }
+
+    /// Points `index[i]` of dimension `dim`'s 1D set for the lanes `i`
+    /// of `wanted`, as [`SetLanes::get_2d`] draws 2D points: exactly
+    /// [`PixelSampler::get_1d`] of each.
+    #[inline]
+    pub fn get_1d(&self, dim: Dim, index: &[u32; LANES], wanted: u32) -> [f32; LANES] {
+        let sampler = &self.sampler;
+        if sampler.kind != SamplerKind::Stratified {
+            return sampler.get_1d_lanes(dim, *index, self.count, wanted);
+        }
+        let pattern = sampler.pattern(dim);
+        if wanted.count_ones() > 1 {
+            if let Some(grid) = &self.strata {
+                return grid.lanes(pattern).sample(*index);
+            }
+        }
+        let mut out = [0.0; LANES];
+        for i in mask_lanes(wanted) {
+            out[i] = stratified_1d(index[i], self.count, pattern);
+        }
+        out
+    }
+}
+
 /// The random sampler's `hash_words(&[p, index, k])` state before `k`, which
 /// a sample's coordinates (k = 0, 1 in 2D, 2 in 1D) share.
 #[inline]
@@ -306,6 +399,57 @@ mod tests {
                 unit_float(hash_words(&[p, i, 1])),
             ),
             SamplerKind::Sobol => sobol_2d(i, p),
+        }
+    }
+
+    /// A [`SetLanes`] draws exactly the plain formulas' numbers in every
+    /// wanted lane, for each kind of sampler, prepared and unprepared set
+    /// sizes, one lane or many, and every lane's own index.
+    #[test]
+    fn set_lanes_draw_the_plain_numbers() {
+        let mut state = 99u32;
+        let mut next = |n: u32| {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (state >> 8) % n
+        };
+        let kinds = [
+            SamplerKind::Stratified,
+            SamplerKind::Random,
+            SamplerKind::Sobol,
+        ];
+        for round in 0..3000u32 {
+            let kind = kinds[round as usize % 3];
+            let (seed, pixel) = (next(1 << 20), next(1 << 20));
+            let n = [1u32, 2, 5, 16, 17, 64, 100, 4096][next(8) as usize];
+            let plain = PixelSampler::new(kind, seed, pixel);
+            let sampler = if round % 2 == 0 {
+                plain.with_sets(PixelSampler::prepare_sets([n, 2 * n]))
+            } else {
+                plain
+            };
+            let lanes = sampler.set_lanes(n);
+            let dim = Dim(next(0x8_0000));
+            let index: [u32; LANES] = std::array::from_fn(|_| next(n));
+            let wanted = [1 << next(8), next(256), 0xff][next(3) as usize];
+            let (two, one) = (
+                lanes.get_2d(dim, &index, wanted),
+                lanes.get_1d(dim, &index, wanted),
+            );
+            let p = hash_words(&[seed, pixel, dim.0]);
+            for i in mask_lanes(wanted) {
+                let want_2d = plain_2d(kind, seed, pixel, dim, index[i], n);
+                let want_1d = match kind {
+                    SamplerKind::Stratified => stratified_1d(index[i], n, p),
+                    SamplerKind::Random => unit_float(hash_words(&[p, index[i], 2])),
+                    SamplerKind::Sobol => sobol_1d(index[i], p),
+                };
+                assert_eq!(
+                    two[i].to_array().map(f32::to_bits),
+                    want_2d.to_array().map(f32::to_bits),
+                    "round {round}, lane {i}"
+                );
+                assert_eq!(one[i].to_bits(), want_1d.to_bits(), "round {round}");
+            }
         }
     }
 

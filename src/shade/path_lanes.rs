@@ -21,7 +21,7 @@
 use super::path::{
     env_drawn, light_drawn, shadow_ray, weigh, Arrival, Came, Contribution, Vertex, ROULETTE_DEPTH,
 };
-use super::sample::{draw_1d_lanes, draw_2d_lanes};
+use super::sample::BatchDraws;
 use super::{CameraSample, FirstHit, Integrator};
 use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::math::lanes::{mask_lanes, LANES};
@@ -53,6 +53,7 @@ impl Integrator<'_> {
         let mut came: [Came; LANES] = std::array::from_fn(|i| Came::camera(rays[i].origin));
         let mut vertices: [Option<Vertex>; LANES] = [None; LANES];
         let mut alive = u32::MAX >> (32 - n);
+        let draws = BatchDraws::new(batch, self.scene.settings.shadow_samples);
         let mut depth = 0;
         while alive != 0 {
             if depth > 0 {
@@ -87,7 +88,7 @@ impl Integrator<'_> {
                 }
             }
             let direct = if lit != 0 {
-                self.next_event_lanes(batch, depth, v, lit)
+                self.next_event_lanes(&draws, depth, v, lit)
             } else {
                 [Vec3::ZERO; LANES]
             };
@@ -102,12 +103,10 @@ impl Integrator<'_> {
             // draws too where it may end a path (drawn for every path
             // that scatters: the draws are counter-based, so a draw not
             // used changes no other).
-            let ctx_of = |i: usize| &batch[i].ctx;
-            let at = |i: usize| (batch[i].ctx.index(), batch[i].ctx.count());
-            let choice = draw_1d_lanes(scatter, ctx_of, Dim::lobe(depth), at);
-            let u = draw_2d_lanes(scatter, ctx_of, Dim::bounce(depth), at);
+            let choice = draws.get_1d(Dim::lobe(depth), scatter);
+            let u = draws.get_2d(Dim::bounce(depth), scatter);
             let roulette = if depth + 1 >= ROULETTE_DEPTH {
-                draw_1d_lanes(scatter, ctx_of, Dim::roulette(depth), at)
+                draws.get_1d(Dim::roulette(depth), scatter)
             } else {
                 [0.0; LANES]
             };
@@ -156,7 +155,7 @@ impl Integrator<'_> {
     /// [`Integrator::next_event`] gives its vertex alone.
     fn next_event_lanes(
         &mut self,
-        batch: &[CameraSample],
+        draws: &BatchDraws,
         depth: u32,
         v: &[Option<Vertex>; LANES],
         lit: u32,
@@ -190,11 +189,7 @@ impl Integrator<'_> {
                     let u = if light.is_some_and(|l| !l.is_area()) {
                         [Vec2::splat(0.5); LANES]
                     } else {
-                        let at = |i: usize| {
-                            let ctx = &batch[i].ctx;
-                            (ctx.index() * samples + j, ctx.count() * samples)
-                        };
-                        draw_2d_lanes(active, |i| &batch[i].ctx, dim, at)
+                        draws.light_2d(dim, samples, j, active)
                     };
                     let mut c: [Option<Contribution>; LANES] = [const { None }; LANES];
                     match (light, &seen) {

@@ -2,6 +2,7 @@
 
 use crate::math::lanes::{mask_lanes, LANES};
 use crate::math::Ray;
+use crate::sampling::sampler::SetLanes;
 use crate::sampling::{Dim, PixelSampler};
 use glam::{Vec2, Vec3};
 
@@ -155,6 +156,102 @@ fn draw_lanes<'c, T: Copy + Default>(
     points
 }
 
+/// The draws of one batch of camera samples (one lane a sample), for the
+/// path integrator's every bounce: exactly what [`draw_1d_lanes`] and
+/// [`draw_2d_lanes`] give at the point (index, count) of each lane's
+/// context (a light's `samples` draws a vertex at index · samples + j of
+/// count · samples). Where every sample of the batch draws from one
+/// pixel's numbers with one set size (a batch is one pixel's samples),
+/// the lanes' indices and the sets' grids are worked out once here, not
+/// again at every draw: a draw then only hashes its dimension's pattern
+/// and permutes.
+pub(super) struct BatchDraws<'c> {
+    batch: &'c [CameraSample],
+    shared: Option<SharedDraws>,
+}
+
+/// What a batch's draws share where its samples share their numbers.
+struct SharedDraws {
+    /// Each lane's index (lane 0's past the batch's end).
+    index: [u32; LANES],
+    /// The sets of the samples' count, and of count · `samples`.
+    sets: SetLanes,
+    samples: u32,
+    light_sets: SetLanes,
+}
+
+impl<'c> BatchDraws<'c> {
+    /// The draws of `batch` (one to [`LANES`] samples), whose light
+    /// draws take `samples` points a vertex.
+    pub(super) fn new(batch: &'c [CameraSample], samples: u32) -> Self {
+        debug_assert!((1..=LANES).contains(&batch.len()));
+        let first = &batch[0].ctx;
+        let count = first.count();
+        let shares = batch[1..]
+            .iter()
+            .all(|s| s.ctx.count() == count && s.ctx.sampler.same_numbers(&first.sampler));
+        let shared = shares.then(|| {
+            let mut index = [first.index(); LANES];
+            for (i, s) in batch.iter().enumerate() {
+                index[i] = s.ctx.index();
+            }
+            SharedDraws {
+                index,
+                sets: first.sampler.set_lanes(count),
+                samples,
+                // Wrapping as the scalar count · samples does in a
+                // release build.
+                light_sets: first.sampler.set_lanes(count.wrapping_mul(samples)),
+            }
+        });
+        Self { batch, shared }
+    }
+
+    /// The 1D draws of dimension `dim` for the lanes of `wanted` (each
+    /// lane's own; the others hold no promised value).
+    #[inline]
+    pub(super) fn get_1d(&self, dim: Dim, wanted: u32) -> [f32; LANES] {
+        match &self.shared {
+            Some(s) => s.sets.get_1d(dim, &s.index, wanted),
+            None => draw_1d_lanes(wanted, |i| &self.batch[i].ctx, dim, |i| self.at(i)),
+        }
+    }
+
+    /// The 2D draws of dimension `dim` for the lanes of `wanted`.
+    #[inline]
+    pub(super) fn get_2d(&self, dim: Dim, wanted: u32) -> [Vec2; LANES] {
+        match &self.shared {
+            Some(s) => s.sets.get_2d(dim, &s.index, wanted),
+            None => draw_2d_lanes(wanted, |i| &self.batch[i].ctx, dim, |i| self.at(i)),
+        }
+    }
+
+    /// Draw `j` of a light's `samples` a vertex, of dimension `dim`, for
+    /// the lanes of `wanted`.
+    #[inline]
+    pub(super) fn light_2d(&self, dim: Dim, samples: u32, j: u32, wanted: u32) -> [Vec2; LANES] {
+        match &self.shared {
+            Some(s) if s.samples == samples => {
+                let index = s.index.map(|index| index * samples + j);
+                s.light_sets.get_2d(dim, &index, wanted)
+            }
+            _ => {
+                let at = |i: usize| {
+                    let ctx = &self.batch[i].ctx;
+                    (ctx.index() * samples + j, ctx.count() * samples)
+                };
+                draw_2d_lanes(wanted, |i| &self.batch[i].ctx, dim, at)
+            }
+        }
+    }
+
+    /// Lane `i`'s (index, count).
+    fn at(&self, i: usize) -> (u32, u32) {
+        let ctx = &self.batch[i].ctx;
+        (ctx.index(), ctx.count())
+    }
+}
+
 /// One path vertex, for `--debug-sample` replays.
 #[derive(Debug, Clone)]
 pub struct PathEvent {
@@ -188,6 +285,69 @@ impl FirstHit {
 mod tests {
     use super::*;
     use crate::sampling::SamplerKind;
+
+    /// A batch's draws are each lane's own sampler's, bit for bit, for
+    /// batches of one pixel's samples (drawn from the sets prepared once)
+    /// and batches that mix pixels or set sizes (drawn as
+    /// [`draw_2d_lanes`] draws them), every dimension and light sample.
+    #[test]
+    fn a_batch_draws_what_each_sample_draws_alone() {
+        let mut state = 777u32;
+        let mut next = |n: u32| {
+            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            (state >> 8) % n
+        };
+        let kinds = [
+            SamplerKind::Stratified,
+            SamplerKind::Random,
+            SamplerKind::Sobol,
+        ];
+        for round in 0..3000 {
+            let kind = kinds[round % 3];
+            let len = 1 + next(LANES as u32) as usize;
+            let mixed = round % 4 == 3;
+            let spp = [1u32, 4, 16, 35][next(4) as usize];
+            let samples = 1 + next(3);
+            let batch: Vec<CameraSample> = (0..len)
+                .map(|_| {
+                    let pixel = if mixed { next(2) } else { 5 };
+                    let spp = if mixed && next(2) == 0 { spp + 1 } else { spp };
+                    let sampler = PixelSampler::new(kind, 3, pixel)
+                        .with_sets(PixelSampler::prepare_sets([spp, spp * samples]));
+                    CameraSample {
+                        ctx: SampleContext::new(sampler, next(spp), spp),
+                        film: Vec2::ZERO,
+                    }
+                })
+                .collect();
+            let draws = BatchDraws::new(&batch, samples);
+            let wanted = next(1 << len).max(1);
+            let depth = next(8);
+            let j = next(samples);
+            let dims = [Dim::lobe(depth), Dim::bounce(depth), Dim::light(depth, 1)];
+            for dim in dims {
+                let (one, two) = (draws.get_1d(dim, wanted), draws.get_2d(dim, wanted));
+                let light = draws.light_2d(dim, samples, j, wanted);
+                for i in mask_lanes(wanted) {
+                    let ctx = &batch[i].ctx;
+                    let (index, count) = (ctx.index(), ctx.count());
+                    let s = &ctx.sampler;
+                    let want_light = s.get_2d(dim, index * samples + j, count * samples);
+                    assert_eq!(one[i].to_bits(), s.get_1d(dim, index, count).to_bits());
+                    let want = s.get_2d(dim, index, count);
+                    assert_eq!(
+                        two[i].to_array().map(f32::to_bits),
+                        want.to_array().map(f32::to_bits)
+                    );
+                    assert_eq!(
+                        light[i].to_array().map(f32::to_bits),
+                        want_light.to_array().map(f32::to_bits),
+                        "round {round} lane {i}"
+                    );
+                }
+            }
+        }
+    }
 
     /// Every wanted lane gets exactly its own sampler's draw, whatever mix
     /// of pixels, sample indices and set sizes the lanes hold, and the
