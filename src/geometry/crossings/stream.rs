@@ -103,6 +103,13 @@ impl Query for ListCrossings<'_, '_> {
 impl Geometry {
     /// `out[i] = self.count_crossings(&rays[i])`, the rays several in
     /// flight where the tree prefetches (module docs).
+    ///
+    /// Never inlined: compiled here, once, as the library's own callers
+    /// run it. Small at its source, it was otherwise compiled again inside
+    /// each crate that calls it, and the Python package's copy, inlined
+    /// into its thread pool's closure, walked the dragon's rays 1.8 times
+    /// slower than this one (docs/python.md, "Against embreex and Open3D").
+    #[inline(never)]
     pub fn count_crossings_stream(&self, rays: &[Ray], out: &mut [u32]) {
         assert_eq!(rays.len(), out.len(), "one count per ray");
         if !self.bvh.prefetch {
@@ -143,7 +150,9 @@ impl Geometry {
     /// lists it, appended to `out`: ray `i`'s are `out[first..first + n]`
     /// for `(first, n) = spans[i]`, sorted as that function sorts them (the
     /// rays' lists themselves lie in `out` in the order their walks end).
-    /// Several in flight where the tree prefetches (module docs).
+    /// Several in flight where the tree prefetches (module docs). Never
+    /// inlined, as [`Geometry::count_crossings_stream`].
+    #[inline(never)]
     pub fn crossings_stream(
         &self,
         rays: &[Ray],
