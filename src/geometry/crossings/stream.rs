@@ -21,6 +21,14 @@ use crate::geometry::Geometry;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 
+/// Crossing walks in flight at once: twice a closest hit's
+/// [`crate::accel::IN_FLIGHT`]. A crossing walk never ends early, so no
+/// walk's slot idles on a ray that finished after a few nodes, and more
+/// waits overlap: `count_hits` on the dragon (200,000 random rays, one
+/// thread) took 5% less time than with 8 (medians of six interleaved runs
+/// of 15; 12 gained less, 20 no more).
+const CROSSINGS_IN_FLIGHT: usize = 16;
+
 /// The walk's question for a count: the crossings of each leaf, counted
 /// in the walk's own state.
 struct CountCrossings<'g> {
@@ -119,10 +127,14 @@ impl Geometry {
             return;
         }
         let mut query = CountCrossings { geometry: self };
-        self.bvh
-            .walk_in_flight_by(rays, AnyOrder, &self.leaf_blocks, &mut query, out, |_| {
-                false
-            });
+        self.bvh.walk_in_flight_by::<_, _, _, CROSSINGS_IN_FLIGHT>(
+            rays,
+            AnyOrder,
+            &self.leaf_blocks,
+            &mut query,
+            out,
+            |_| false,
+        );
     }
 
     /// `out[i] = self.contains(points[i])`, the rays from the points
@@ -174,9 +186,13 @@ impl Geometry {
             free: Vec::new(),
             out,
         };
-        self.bvh
-            .walk_in_flight_by(rays, AnyOrder, &self.leaf_blocks, &mut query, spans, |_| {
-                false
-            });
+        self.bvh.walk_in_flight_by::<_, _, _, CROSSINGS_IN_FLIGHT>(
+            rays,
+            AnyOrder,
+            &self.leaf_blocks,
+            &mut query,
+            spans,
+            |_| false,
+        );
     }
 }
