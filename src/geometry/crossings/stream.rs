@@ -5,9 +5,11 @@
 //!
 //! A crossing walk never ends early, so it reads every node its ray
 //! passes, and on a tree the caches do not hold (the dragon) most of
-//! those reads wait for memory. Eight walks in flight overlap those
-//! waits ([`crate::accel::in_flight`]; Kocberber, Falsafi and Grot 2015,
-//! "Asynchronous Memory Access Chaining"), as a stream's closest hits do.
+//! those reads wait for memory. Sixteen walks in flight
+//! ([`CROSSINGS_IN_FLIGHT`]) overlap those waits
+//! ([`crate::accel::in_flight`]; Kocberber, Falsafi and Grot 2015,
+//! "Asynchronous Memory Access Chaining"), as a stream's closest hits'
+//! eight do.
 //! Each walk takes the steps of its ray's own walk (the same node test,
 //! the same order: any, unsorted), so each ray meets the same leaves and
 //! the same crossings, bit for bit; a list is sorted as
