@@ -41,13 +41,22 @@ impl Bvh8 {
     ) where
         Q: Query,
     {
-        self.walk_in_flight_by(rays, NearestFirst, leaf_data, query, out, done);
+        self.walk_in_flight_by::<_, _, _, IN_FLIGHT>(
+            rays,
+            NearestFirst,
+            leaf_data,
+            query,
+            out,
+            done,
+        );
     }
 
-    /// [`Bvh8::walk_in_flight`] in `order`: each ray's walk is
-    /// `walk_by(ray, RayPlanes, order, ..)`'s.
+    /// [`Bvh8::walk_in_flight`] in `order`, with `W` rays in flight (1 to
+    /// 32): each ray's walk is `walk_by(ray, RayPlanes, order, ..)`'s.
+    /// Walks that never end early (every crossing) take more than
+    /// [`IN_FLIGHT`] (`geometry::crossings`).
     #[inline(always)]
-    pub fn walk_in_flight_by<O, Q, L>(
+    pub fn walk_in_flight_by<O, Q, L, const W: usize>(
         &self,
         rays: &[Ray],
         _order: O,
@@ -59,6 +68,7 @@ impl Bvh8 {
         O: WalkOrder,
         Q: Query,
     {
+        const { assert!(W >= 1 && W <= 32, "the live walks are the bits of a u32") };
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         if rays.is_empty() {
             return;
@@ -88,9 +98,9 @@ impl Bvh8 {
                 None
             };
         let boxes = RayPlanes::new(&rays[0]);
-        let mut walks: [Walk<RayPlanes, Q::State>; IN_FLIGHT] =
+        let mut walks: [Walk<RayPlanes, Q::State>; W] =
             std::array::from_fn(|_| Walk::new(&rays[0], boxes, query.start(&rays[0])));
-        let mut index = [0; IN_FLIGHT];
+        let mut index = [0; W];
         let mut live = 0u32;
         for (k, (walk, i)) in walks.iter_mut().zip(&mut index).enumerate() {
             if let Some(first) = launch(walk, query, out) {
@@ -101,7 +111,7 @@ impl Bvh8 {
         while live != 0 {
             let mut m = live;
             while m != 0 {
-                let k = m.trailing_zeros() as usize % IN_FLIGHT;
+                let k = m.trailing_zeros() as usize % W;
                 m &= m - 1;
                 let step = walks[k].step::<O, Q, L>(self, leaf_data, query, self.prefetch);
                 if let Some(a) = step {
@@ -122,6 +132,7 @@ mod tests {
     use super::super::hit::PrimHit;
     use super::super::query::{ClosestHit, Occlusion};
     use super::super::walk::tests::{sphere_cloud, sphere_hit, spheres_block};
+    use super::super::walk::AnyOrder;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
     use crate::shape::sphere::Sphere;
@@ -205,6 +216,47 @@ mod tests {
             assert_eq!(got, expected, "{n} rays");
             assert_eq!(in_flight.into_inner(), single.into_inner(), "{n} rays");
         }
+    }
+
+    /// Any number of walks in flight (one, a few, more than the default,
+    /// the most) answers and visits as single rays do, in either order.
+    #[test]
+    fn every_width_answers_and_visits_what_single_rays_do() {
+        fn check<const W: usize, O: WalkOrder + Default>(bvh: &Bvh8, spheres: &[Sphere]) {
+            let rays = rays(301);
+            let hit = |id: u32, r: &Ray| sphere_hit(spheres, id, r);
+            let (single, in_flight): (Visits, Visits) = Default::default();
+            let expected: Vec<Option<PrimHit>> = rays
+                .iter()
+                .map(|ray| {
+                    let mut query = ClosestHit::new(|_: &mut (), start, count, r: &Ray| {
+                        record(&single, r, start, count);
+                        bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
+                    });
+                    bvh.walk_by(ray, RayPlanes::new(ray), O::default(), NO_DATA, &mut query)
+                })
+                .collect();
+            let mut got = vec![None; rays.len()];
+            let mut query = ClosestHit::new(|_: &mut (), start, count, r: &Ray| {
+                record(&in_flight, r, start, count);
+                bvh.closest_in_leaf(start, count, r, |_, id, r| hit(id, r))
+            });
+            bvh.walk_in_flight_by::<O, _, _, W>(
+                &rays,
+                O::default(),
+                NO_DATA,
+                &mut query,
+                &mut got,
+                |_| false,
+            );
+            assert_eq!(got, expected, "{W} in flight");
+            assert_eq!(in_flight.into_inner(), single.into_inner(), "{W} in flight");
+        }
+        let (spheres, bvh) = cloud();
+        check::<1, NearestFirst>(&bvh, &spheres);
+        check::<3, NearestFirst>(&bvh, &spheres);
+        check::<16, AnyOrder>(&bvh, &spheres);
+        check::<32, AnyOrder>(&bvh, &spheres);
     }
 
     /// Occlusion likewise, with rays already answered (`out` true) left

@@ -360,6 +360,11 @@ impl Mesh {
     ///
     /// `surface`: whether to find the face's normal and the hit point (a
     /// second look at the face's corners); without it they stay NaN.
+    ///
+    /// Never inlined, as the binding's other walks
+    /// ([`Geometry::count_crossings_stream`]): compiled in the library,
+    /// not again in the crate that calls it.
+    #[inline(never)]
     pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit], surface: bool) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         for (rays, out) in rays.chunks(SPAN).zip(out.chunks_mut(SPAN)) {
@@ -418,6 +423,8 @@ impl Mesh {
     }
 
     /// `out[i]`: whether anything blocks `rays[i]` in `(tmin, tmax]`.
+    /// Never inlined, as [`Mesh::first_hits`].
+    #[inline(never)]
     pub fn occluded(&self, rays: &[Ray], out: &mut [bool]) {
         self.geometry.occluded_stream(rays, u32::MAX, out);
     }
