@@ -99,8 +99,9 @@ pub struct AnalyticPrim {
     pub material: u32,
 }
 
-/// A run of triangles from one mesh, sharing one material.
-#[derive(Debug, Clone, PartialEq)]
+/// A run of triangles from one mesh, sharing one material. The default
+/// is empty, of material 0, with no attributes.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshRange {
     pub name: String,
     pub first: u32,

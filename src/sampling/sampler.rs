@@ -387,6 +387,7 @@ fn random_prefix(p: u32, index: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::sampling::hash::hash_words;
+    use rand::RngExt;
 
     /// The numbers of the plain formulas: a pattern hashed from (seed,
     /// pixel, dim), then CMJ or hashed floats.
@@ -407,18 +408,11 @@ mod tests {
     /// sizes, one lane or many, and every lane's own index.
     #[test]
     fn set_lanes_draw_the_plain_numbers() {
-        let mut state = 99u32;
-        let mut next = |n: u32| {
-            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-            (state >> 8) % n
-        };
-        let kinds = [
-            SamplerKind::Stratified,
-            SamplerKind::Random,
-            SamplerKind::Sobol,
-        ];
+        let mut rng = crate::sampling::stream::seeded(99);
+        let mut next = |n: u32| rng.random_range(0..n);
+        let kinds = SamplerKind::ALL;
         for round in 0..3000u32 {
-            let kind = kinds[round as usize % 3];
+            let kind = kinds[round as usize % kinds.len()];
             let (seed, pixel) = (next(1 << 20), next(1 << 20));
             let n = [1u32, 2, 5, 16, 17, 64, 100, 4096][next(8) as usize];
             let plain = PixelSampler::new(kind, seed, pixel);

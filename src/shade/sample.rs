@@ -285,6 +285,7 @@ impl FirstHit {
 mod tests {
     use super::*;
     use crate::sampling::SamplerKind;
+    use rand::RngExt;
 
     /// A batch's draws are each lane's own sampler's, bit for bit, for
     /// batches of one pixel's samples (drawn from the sets prepared once)
@@ -292,18 +293,11 @@ mod tests {
     /// [`draw_2d_lanes`] draws them), every dimension and light sample.
     #[test]
     fn a_batch_draws_what_each_sample_draws_alone() {
-        let mut state = 777u32;
-        let mut next = |n: u32| {
-            state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-            (state >> 8) % n
-        };
-        let kinds = [
-            SamplerKind::Stratified,
-            SamplerKind::Random,
-            SamplerKind::Sobol,
-        ];
+        let mut rng = crate::sampling::stream::seeded(777);
+        let mut next = |n: u32| rng.random_range(0..n);
+        let kinds = SamplerKind::ALL;
         for round in 0..3000 {
-            let kind = kinds[round % 3];
+            let kind = kinds[round % kinds.len()];
             let len = 1 + next(LANES as u32) as usize;
             let mixed = round % 4 == 3;
             let spp = [1u32, 4, 16, 35][next(4) as usize];

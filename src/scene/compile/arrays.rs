@@ -60,13 +60,8 @@ pub fn mesh_geometry(
     let count = faces.len() as u32;
     let meshes = vec![MeshRange {
         name: "mesh".into(),
-        first: 0,
         count,
-        material: 0,
-        mirrored: false,
-        normals: None,
-        uvs: None,
-        tangents: None,
+        ..MeshRange::default()
     }];
     let source = TriangleSource::Indexed {
         positions: vertices,

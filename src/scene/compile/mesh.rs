@@ -398,28 +398,28 @@ mod tests {
 
     const TWO_QUADS: &str = "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nusemtl a\nf 1 2 3 4\nusemtl b\nf 5 6 7\n";
 
+    /// A mesh of `count` triangles from `first` with nothing but a name.
+    fn range(name: &str, first: u32, count: u32) -> MeshRange {
+        MeshRange {
+            name: name.into(),
+            first,
+            count,
+            ..MeshRange::default()
+        }
+    }
+
     /// An indexed mesh, whose points are checked rather than its boxes:
     /// the first triangle with a vertex that is not finite (infinite or
     /// NaN) is named, in its own mesh; a vertex no triangle uses is no
     /// error.
     #[test]
     fn an_indexed_mesh_names_its_first_triangle_with_a_vertex_not_finite() {
-        let mesh = |name: &str, first, count| MeshRange {
-            name: name.into(),
-            first,
-            count,
-            material: 0,
-            mirrored: false,
-            normals: None,
-            uvs: None,
-            tangents: None,
-        };
         let p = |x: f32| Vec3::new(x, 0.0, 1.0);
         let indexed = |bad: u32| TriangleSource::Indexed {
             positions: vec![p(0.0), p(1.0), p(2.0), p(f32::INFINITY), p(f32::NAN)],
             indices: vec![[0, 1, 2], [1, 2, 0], [2, bad, 0], [bad, 1, 2]],
         };
-        let meshes = [mesh("a", 0, 1), mesh("b", 1, 4)];
+        let meshes = [range("a", 0, 1), range("b", 1, 4)];
         let soup = || TriangleSource::Soup(vec![[p(0.0), p(1.0), p(2.0)]]);
         for bad in [3, 4] {
             let got = triangle_boxes(&meshes, &[soup(), indexed(bad)]).map(|b| b.len());
@@ -578,16 +578,6 @@ material = "grey"
     /// the first block of the parallel search, past it, in the last mesh.
     #[test]
     fn the_first_triangle_that_is_not_finite_is_named() {
-        let range = |name: &str, first: u32, count: u32| MeshRange {
-            name: name.into(),
-            first,
-            count,
-            material: 0,
-            mirrored: false,
-            normals: None,
-            uvs: None,
-            tangents: None,
-        };
         let tri = |k: usize| [Vec3::ZERO, Vec3::X, Vec3::new(0.0, k as f32, 1.0)];
         // Long enough for several of the parallel search's blocks.
         let block = 1 << 14;
