@@ -119,28 +119,17 @@ impl Bsdf {
         Self::build(m, texel, wo, ng, ns, entering, true)
     }
 
-    /// [`Bsdf::new`] with a Lambertian Phong material held as the general
-    /// Phong mix: what the tests compare [`Lambert`] with.
-    #[cfg(test)]
-    pub(super) fn new_general(
-        m: &Material,
-        texel: Vec3,
-        wo: Vec3,
-        ng: Vec3,
-        ns: Vec3,
-        entering: bool,
-    ) -> Self {
-        Self::build(m, texel, wo, ng, ns, entering, false)
-    }
-
     /// Whether this BSDF holds its lobes as [`Lambert`].
     #[cfg(test)]
     pub(super) fn is_lambert(&self) -> bool {
         matches!(self.lobes, Lobes::Lambert(_))
     }
 
+    /// [`Bsdf::new`], with a Lambertian Phong material held as [`Lambert`]
+    /// where `lambert` says so, else as the general Phong mix (what the
+    /// tests compare [`Lambert`] with).
     #[inline(always)]
-    fn build(
+    pub(super) fn build(
         m: &Material,
         texel: Vec3,
         wo: Vec3,
