@@ -52,10 +52,12 @@ pub(super) fn bounds(boxes: &[Aabb], steps: &mut Steps) -> Option<Aabb> {
     );
     // A union is exact, so any grouping gives the same box.
     Some(steps.time("bounds", || {
+        // A plain loop over each chunk: rayon's per-item folding was
+        // compiled well or not (0.01 or 0.045 s on 13.9M boxes) as the
+        // inlining around it changed.
         boxes
-            .par_iter()
-            .with_min_len(1 << 14)
-            .copied()
+            .par_chunks(1 << 14)
+            .map(|chunk| chunk.iter().fold(Aabb::EMPTY, |a, b| a.union(*b)))
             .reduce(|| Aabb::EMPTY, Aabb::union)
     }))
 }
