@@ -97,6 +97,27 @@ pub struct Geometry {
     pub(crate) bvh: Bvh8,
 }
 
+/// Where [`Geometry::new`] reads each triangle's vertices, by primitive
+/// id: a closure, or a store that can also be asked ahead for the memory
+/// a triangle's read will touch, in two steps (its indices, then, once
+/// those are near, its vertices).
+pub trait TriangleVertices: Sync {
+    fn vertices(&self, id: u32) -> [Vec3; 3];
+    /// Asks for triangle `id`'s indices (where it has any) without waiting.
+    #[inline(always)]
+    fn prefetch_indices(&self, _id: u32) {}
+    /// Asks for triangle `id`'s vertices without waiting.
+    #[inline(always)]
+    fn prefetch_vertices(&self, _id: u32) {}
+}
+
+impl<F: Fn(u32) -> [Vec3; 3] + Sync> TriangleVertices for F {
+    #[inline(always)]
+    fn vertices(&self, id: u32) -> [Vec3; 3] {
+        self(id)
+    }
+}
+
 /// What a [`Geometry`] holds besides its tree and its leaf store, as the
 /// scene's compiler gathers it ([`Geometry::new`]).
 #[derive(Debug, Default)]
@@ -143,20 +164,28 @@ impl Geometry {
     /// stores `vertices(id)`, read straight from the caller's sources, so
     /// the triangles are never held twice; other slots keep their id alone.
     /// The tree's own `prim_ids` is emptied.
-    pub fn new(
-        parts: GeometryParts,
-        mut bvh: Bvh8,
-        vertices: impl Fn(u32) -> [Vec3; 3] + Sync,
-    ) -> Self {
+    pub fn new(parts: GeometryParts, mut bvh: Bvh8, vertices: impl TriangleVertices) -> Self {
         let triangle_count = parts.meshes.last().map_or(0, |m| m.first + m.count);
-        let leaf_blocks = bvh
-            .prim_ids
+        // Slots in leaf order are triangles in no order of their sources,
+        // so each read would wait for memory: a block asks ahead for the
+        // indices of the triangles two blocks on (where they are indexed)
+        // and for the vertices of those one block on, whose indices the
+        // block before asked for.
+        let prim_ids = &bvh.prim_ids;
+        let ahead = |b: usize| {
+            let slots = prim_ids.get(b * LANES..(b + 1) * LANES).unwrap_or(&[]);
+            slots.iter().copied().filter(|&id| id < triangle_count)
+        };
+        let leaf_blocks = prim_ids
             .par_chunks(LANES)
-            .map(|ids| {
+            .enumerate()
+            .map(|(b, ids)| {
+                ahead(b + 4).for_each(|id| vertices.prefetch_indices(id));
+                ahead(b + 2).for_each(|id| vertices.prefetch_vertices(id));
                 let mut block = TriangleBlock::EMPTY;
                 for (lane, &id) in ids.iter().enumerate() {
                     if id < triangle_count {
-                        block.set(lane, &vertices(id), id);
+                        block.set(lane, &vertices.vertices(id), id);
                     } else {
                         block.id[lane] = id;
                     }

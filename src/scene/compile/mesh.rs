@@ -3,11 +3,12 @@
 //! written once, in leaf order, into the scene's leaf blocks.
 
 use super::Compiler;
+use crate::accel::prefetch::prefetch;
 use crate::accel::prefetch::Prefetch;
 use crate::accel::{BuildQuality, Bvh8};
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
-use crate::geometry::{Geometry, GeometryParts};
+use crate::geometry::{Geometry, GeometryParts, TriangleVertices};
 use crate::geometry::{MeshAttribute, MeshNormals, MeshRange, MeshTangents, MeshUvs};
 use crate::material::Material;
 use crate::math::Aabb;
@@ -130,13 +131,50 @@ impl TriangleSource {
 pub(super) fn triangle_at<'a>(
     meshes: &[MeshRange],
     sources: &'a [TriangleSource],
-) -> impl Fn(u32) -> [Vec3; 3] + Sync + 'a {
-    // Each mesh's first triangle, so the meshes themselves can move on.
-    let firsts: Vec<u32> = meshes.iter().map(|m| m.first).collect();
-    let triangles: Vec<Triangles> = sources.iter().map(TriangleSource::triangles).collect();
-    move |id| {
-        let k = firsts.partition_point(|&first| first <= id) - 1;
-        triangles[k].get((id - firsts[k]) as usize)
+) -> TrianglesById<'a> {
+    TrianglesById {
+        firsts: meshes.iter().map(|m| m.first).collect(),
+        triangles: sources.iter().map(TriangleSource::triangles).collect(),
+    }
+}
+
+/// Every mesh's triangles by primitive id (see [`triangle_at`]).
+pub(super) struct TrianglesById<'a> {
+    /// Each mesh's first triangle, so the meshes themselves can move on.
+    firsts: Vec<u32>,
+    triangles: Vec<Triangles<'a>>,
+}
+
+impl TrianglesById<'_> {
+    #[inline(always)]
+    fn find(&self, id: u32) -> (Triangles<'_>, usize) {
+        let k = self.firsts.partition_point(|&first| first <= id) - 1;
+        (self.triangles[k], (id - self.firsts[k]) as usize)
+    }
+}
+
+impl TriangleVertices for TrianglesById<'_> {
+    #[inline(always)]
+    fn vertices(&self, id: u32) -> [Vec3; 3] {
+        let (triangles, i) = self.find(id);
+        triangles.get(i)
+    }
+
+    #[inline(always)]
+    fn prefetch_indices(&self, id: u32) {
+        match self.find(id) {
+            (Triangles::Soup(t), i) => prefetch(&t[i]),
+            (Triangles::Indexed { indices, .. }, i) => prefetch(&indices[i]),
+        }
+    }
+
+    #[inline(always)]
+    fn prefetch_vertices(&self, id: u32) {
+        if let (Triangles::Indexed { positions, indices }, i) = self.find(id) {
+            for k in indices[i] {
+                prefetch(&positions[k as usize]);
+            }
+        }
     }
 }
 
@@ -371,7 +409,16 @@ pub(super) fn triangle_boxes(
             }
             Triangles::Indexed { positions, indices } => {
                 let points = |t: &[u32; 3]| t.map(|k| positions[k as usize]);
-                boxes.par_extend(indices.par_iter().map(|t| Aabb::from_points(&points(t))));
+                // A file's triangles reach back to vertices far from their
+                // neighbours' (a subdivided mesh's new vertices come after
+                // the old): each triangle's asked for a few dozen ahead.
+                const AHEAD: usize = 32;
+                boxes.par_extend(indices.par_iter().enumerate().map(|(i, t)| {
+                    for k in indices.get(i + AHEAD).into_iter().flatten() {
+                        prefetch(&positions[*k as usize]);
+                    }
+                    Aabb::from_points(&points(t))
+                }));
                 // The points first: about half as many as the triangles,
                 // so a finite mesh's check reads a sixth of what checking
                 // its triangles would.
