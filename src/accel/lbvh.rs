@@ -29,6 +29,7 @@ use super::assemble::Part;
 use super::build::Bvh8;
 use super::cluster::{morton_keys, Boxes};
 use super::node::{encode_leaf, Node8, MAX_LEAF_PRIMS};
+use super::simd::prefetch::prefetch;
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use rayon::prelude::*;
@@ -49,30 +50,27 @@ const MERGE_PRIMS: usize = 4;
 const PART_PRIMS: usize = 1 << 15;
 
 /// The preview tree over `boxes` (not empty), whose union is `bounds`;
-/// owned boxes are freed once they are copied in curve order, and the
-/// copy and the keys before the tree's parts are joined.
+/// owned boxes and the keys are freed before the tree's parts are joined.
+/// The cut reads the boxes by id, each asked for ahead ([`AHEAD`]): a
+/// copy in curve order cost a third of the step before the cut, and its
+/// 24 bytes a primitive of fresh pages (docs/performance.md, "Memory asked
+/// for ahead").
 pub(super) fn build(boxes: Boxes, bounds: Aabb, steps: &mut Steps) -> Bvh8 {
     let keys = steps.time("morton", || morton_keys(&boxes, bounds));
-    // The boxes in curve order, so that the leaves read them in turn: the
-    // reads out of order happen here, in one loop whose loads overlap.
-    let sorted: Vec<Aabb> = steps.time("morton", || {
-        keys.par_iter()
-            .with_min_len(1 << 12)
-            .map(|&k| boxes[k as u32 as usize])
-            .collect()
-    });
-    drop(boxes);
     let cut = Cut {
-        boxes: &sorted,
+        boxes: &boxes,
         keys: &keys,
     };
     let part = steps.time("cut", || cut.part(0..keys.len()).0);
-    drop((sorted, keys));
+    drop((boxes, keys));
     steps.time("assemble", || part.into_bvh(bounds))
 }
 
-/// The sorted keys (`code << 32 | id`) and the primitives' boxes in the
-/// same order.
+/// How many primitives along the curve ahead of a leaf its cut asks for
+/// the boxes of.
+const AHEAD: usize = 32;
+
+/// The sorted keys (`code << 32 | id`) and the primitives' boxes by id.
 struct Cut<'a> {
     boxes: &'a [Aabb],
     keys: &'a [u64],
@@ -165,9 +163,19 @@ impl Cut<'_> {
     fn leaf(&self, part: &mut Part, range: Range<usize>, node: usize, slot: usize) -> Aabb {
         let mut ids = [0u32; LEAF_PRIMS];
         let mut bounds = Aabb::EMPTY;
+        // The boxes are in the order of their ids, not the curve's: each
+        // is asked for a few leaves before its leaf reads it, as leaves
+        // are cut along the curve.
+        for k in self
+            .keys
+            .get(range.start + AHEAD..range.end + AHEAD)
+            .unwrap_or(&[])
+        {
+            prefetch(&self.boxes[*k as u32 as usize]);
+        }
         for (i, id) in range.clone().zip(&mut ids) {
             *id = self.keys[i] as u32;
-            bounds = bounds.union(self.boxes[i]);
+            bounds = bounds.union(self.boxes[*id as usize]);
         }
         let ids = &ids[..range.len()];
         let start = part.packer.place(ids, &mut part.prim_ids);
