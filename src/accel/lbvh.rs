@@ -30,6 +30,7 @@ use super::build::Bvh8;
 use super::cluster::{morton_keys, Boxes};
 use super::node::{encode_leaf, Node8, MAX_LEAF_PRIMS};
 use super::simd::prefetch::prefetch;
+use crate::math::lanes::LANES;
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use rayon::prelude::*;
@@ -62,7 +63,10 @@ pub(super) fn build(boxes: Boxes, bounds: Aabb, steps: &mut Steps) -> Bvh8 {
         keys: &keys,
     };
     let part = steps.time("cut", || cut.part(0..keys.len()).0);
-    drop((boxes, keys));
+    if let Boxes::Owned(boxes) = boxes {
+        crate::system::memory::drop_aside(boxes);
+    }
+    crate::system::memory::drop_aside(keys);
     steps.time("assemble", || part.into_bvh(bounds))
 }
 
@@ -95,10 +99,15 @@ impl Cut<'_> {
             return (part, b);
         }
         let children = self.children(range);
-        let big: Vec<Range<usize>> = (0..children.len)
+        let (big, small): (Vec<Range<usize>>, Vec<Range<usize>>) = (0..children.len)
             .map(|slot| children.get(slot))
-            .filter(|r| r.len() > PART_PRIMS)
-            .collect();
+            .partition(|r| r.len() > PART_PRIMS);
+        // Room for the nodes and slots of the children built here, so that
+        // the arrays are not copied as they grow: about one node per
+        // sixteen primitives, and a slot per primitive with some padding.
+        let here: usize = small.iter().map(|r| r.len()).sum();
+        part.nodes.reserve(here / 12 + 1);
+        part.prim_ids.reserve(here + here / 4 + LANES);
         let subs: Vec<(Part, Aabb)> = big.into_par_iter().map(|r| self.part(r)).collect();
         let bounds = self.fill(&mut part, 0, children, 1, &mut subs.into_iter());
         (part, bounds)

@@ -406,7 +406,7 @@ fn compile_for(
         prototypes,
     };
     let mut geometry = Geometry::new(parts, bvh, vertices);
-    drop(sources);
+    crate::system::memory::drop_aside(sources);
     build_steps.add("leaves", leaves_start.elapsed());
     let timings = LoadTimings {
         load,
