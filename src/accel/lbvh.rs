@@ -74,6 +74,12 @@ pub(super) fn build(boxes: Boxes, bounds: Aabb, steps: &mut Steps) -> Bvh8 {
 /// the boxes of.
 const AHEAD: usize = 32;
 
+/// How many keys ahead of a leaf its cut asks for (32 KB): the binary
+/// searches of the nodes that follow read them, and three quarters of
+/// their time went to waiting for keys (`perf annotate`); 512 took 6% off
+/// the cut, 4096 13%, 16384 no more.
+const KEYS_AHEAD: usize = 4096;
+
 /// The sorted keys (`code << 32 | id`) and the primitives' boxes by id.
 struct Cut<'a> {
     boxes: &'a [Aabb],
@@ -181,6 +187,9 @@ impl Cut<'_> {
             .unwrap_or(&[])
         {
             prefetch(&self.boxes[*k as u32 as usize]);
+        }
+        if let Some(k) = self.keys.get(range.end + KEYS_AHEAD) {
+            prefetch(k);
         }
         for (i, id) in range.clone().zip(&mut ids) {
             *id = self.keys[i] as u32;
