@@ -72,9 +72,13 @@ impl PeakMeter {
 /// once: glibc hands every block over 32 MB back to the kernel when it is
 /// freed, and unmapping a large mesh's arrays took 30 to 45 ms a build on
 /// the thread that would go on to the next step (docs/performance.md,
-/// "Memory asked for ahead"). Where no thread can be started, the value is
-/// freed here.
+/// "Memory asked for ahead"). A caller in a pool of one thread (a run told
+/// to use one core), or one where no thread can be started, frees it
+/// here.
 pub fn drop_aside<T: Send + 'static>(value: T) {
+    if rayon::current_num_threads() <= 1 {
+        return drop(value);
+    }
     let _ = std::thread::Builder::new()
         .name("strata-free".into())
         .spawn(move || drop(value));
