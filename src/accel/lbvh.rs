@@ -109,8 +109,9 @@ impl Cut<'_> {
             .map(|slot| children.get(slot))
             .partition(|r| r.len() > PART_PRIMS);
         // Room for the nodes and slots of the children built here, so that
-        // the arrays are not copied as they grow: about one node per
-        // sixteen primitives, and a slot per primitive with some padding.
+        // the arrays are not copied as they grow: a node per twelve
+        // primitives (the dragon's tree has one per 17) and a slot per
+        // primitive with room for padding.
         let here: usize = small.iter().map(|r| r.len()).sum();
         part.nodes.reserve(here / 12 + 1);
         part.prim_ids.reserve(here + here / 4 + LANES);

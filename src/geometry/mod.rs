@@ -103,7 +103,8 @@ pub struct Geometry {
 /// those are near, its vertices).
 pub trait TriangleVertices: Sync {
     fn vertices(&self, id: u32) -> [Vec3; 3];
-    /// Asks for triangle `id`'s indices (where it has any) without waiting.
+    /// Asks for the first memory triangle `id`'s read touches (its
+    /// indices, or a soup's vertices) without waiting.
     #[inline(always)]
     fn prefetch_indices(&self, _id: u32) {}
     /// Asks for triangle `id`'s vertices without waiting.
