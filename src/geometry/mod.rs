@@ -169,9 +169,9 @@ impl Geometry {
         let triangle_count = parts.meshes.last().map_or(0, |m| m.first + m.count);
         // Slots in leaf order are triangles in no order of their sources,
         // so each read would wait for memory: a block asks ahead for the
-        // indices of the triangles two blocks on (where they are indexed)
-        // and for the vertices of those one block on, whose indices the
-        // block before asked for.
+        // indices of the triangles four blocks on (where they are indexed)
+        // and for the vertices of those two blocks on, whose indices the
+        // blocks before asked for.
         let prim_ids = &bvh.prim_ids;
         let ahead = |b: usize| {
             let slots = prim_ids.get(b * LANES..(b + 1) * LANES).unwrap_or(&[]);
