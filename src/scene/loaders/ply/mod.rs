@@ -131,6 +131,9 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
         return Ok(mesh_asset(path, body.positions, indices, warnings));
     }
     let (positions, indices) = binary::read_body(path, &header, body, line)?;
+    // The file's bytes are not needed past here; unmapping a large mesh's
+    // (264 MB for the 13.9M-triangle dragon) took 20 ms on this thread.
+    crate::system::memory::drop_aside(bytes);
     Ok(mesh_asset(path, positions, indices, warnings))
 }
 
