@@ -17,7 +17,9 @@ nearest, Mitsuba bilinearly, so Mitsuba gets the map repeated 8x along
 each axis, on which its bilinear lookup is strata's nearest one but for a
 sixteenth of a texel at each edge), a plane as a large rectangle, spheres, PLY/OBJ meshes
 (flat-shaded, as strata shades meshes without normals; an ASCII PLY is given
-to Mitsuba as a binary copy, which it loads several times faster), a
+to Mitsuba as a binary copy, which it loads several times faster, and strata
+renders a copy of the scene file, beside it, that names the same binary
+copy), a
 metallic-roughness metal (metallic = 1) as a `principled` BSDF, and the `direct`
 integrator (emitter_samples = strata's shadow_samples, bsdf_samples = 1) with the `independent`
 sampler; a scene with `integrator = "path"` gets Mitsuba's `path` integrator
@@ -131,7 +133,7 @@ def translate(path, mi):
     if any(c != 0 for c in r.get("background", [0, 0, 0])):
         problems.append("a background radiance (Mitsuba's constant emitter would also light the scene)")
     settings = {"width": r.get("width", 640), "height": r.get("height", 480), "spp": r.get("spp", 1),
-                "inputs": []}
+                "inputs": [], "binary_copies": {}}
 
     cam = doc.get("camera", {})
     kind = cam.get("type", "perspective")
@@ -266,7 +268,10 @@ def translate(path, mi):
             if ext not in (".ply", ".obj"):
                 problems.append(f"mesh {mesh}")
             if ext == ".ply":
-                mesh = binary_ply(mi, mesh)
+                copy = binary_ply(mi, mesh)
+                if copy != mesh:
+                    settings["binary_copies"][obj["mesh"]] = copy
+                mesh = copy
             shape = {"type": ext[1:], "filename": mesh, "face_normals": True, "bsdf": bsdf}
             if "instances" in obj:
                 # One shapegroup holding the mesh, one instance per line of
@@ -308,6 +313,26 @@ def binary_ply(mi, path):
 
 THREADS = 1
 
+# The scene strata renders for each scene file: the file itself, or a copy
+# beside it that names the binary copies Mitsuba reads (`same_meshes`).
+STRATA_SCENES = {}
+
+
+def same_meshes(path, copies):
+    """A copy of scene `path` beside it (so its other relative paths still
+    hold) whose meshes are `copies`' binary PLYs: strata reads the same
+    files Mitsuba does, not the slower ASCII originals."""
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    for original, copy in copies.items():
+        for quote in ('"', "'"):
+            text = text.replace(f"{quote}{original}{quote}", json.dumps(os.path.abspath(copy)))
+    base, name = os.path.split(os.path.abspath(path))
+    out = os.path.join(base, f".{os.path.splitext(name)[0]}-bench-binary.toml")
+    with open(out, "w", encoding="utf-8") as f:
+        f.write(text)
+    return out
+
 
 def read_exr(mi, np, path):
     import drjit as dr
@@ -331,7 +356,7 @@ def region_means(np, img, k=3):
 
 def run_strata(args, scene, spp, sampler, out, seed=0, noise=None):
     stats = out + ".json"
-    cmd = [args.strata, "render", scene, "-q", "--threads", str(args.threads), "--spp", str(spp),
+    cmd = [args.strata, "render", STRATA_SCENES.get(scene, scene), "-q", "--threads", str(args.threads), "--spp", str(spp),
            "--seed", str(seed), "-o", out, "--stats", stats]
     # The noise target samples as it must (its own sampler); else the one asked.
     cmd += ["--noise", str(noise)] if noise is not None else ["--sampler", sampler]
@@ -351,6 +376,8 @@ def bench_scene(args, mi, dr, np, path, tmp):
         print(f"{name}: skipped: the Mitsuba translation cannot express {e}")
         return None
     spp = args.spp or settings["spp"]
+    if settings["binary_copies"]:
+        STRATA_SCENES[path] = same_meshes(path, settings["binary_copies"])
 
     def load():
         t = time.perf_counter()
@@ -558,9 +585,13 @@ def main():
     dr.set_thread_count(args.threads)
     print(f"mitsuba {mi.__version__} ({args.variant}, LLVM {os.environ.get('DRJIT_LIBLLVM_PATH', 'none')}), strata {args.strata}, {args.threads} thread(s), "
           f"{args.runs} runs, reference {args.ref_spp} spp")
-    with tempfile.TemporaryDirectory() as tmp:
-        for path in args.scenes:
-            bench_scene(args, mi, dr, np, path, tmp)
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            for path in args.scenes:
+                bench_scene(args, mi, dr, np, path, tmp)
+    finally:
+        for copy in STRATA_SCENES.values():
+            os.remove(copy)
 
 
 if __name__ == "__main__":
