@@ -327,6 +327,11 @@ def same_meshes(path, copies):
     for original, copy in copies.items():
         for quote in ('"', "'"):
             text = text.replace(f"{quote}{original}{quote}", json.dumps(os.path.abspath(copy)))
+    left = [o.get("mesh") for o in tomllib.loads(text).get("objects", []) if o.get("mesh") in copies]
+    if left:
+        print(f"bench_mitsuba.py: {path}: cannot point strata at the binary copies of "
+              f"{', '.join(left)} (write the mesh path as a plain quoted string)", file=sys.stderr)
+        sys.exit(2)
     base, name = os.path.split(os.path.abspath(path))
     out = os.path.join(base, f".{os.path.splitext(name)[0]}-bench-binary.toml")
     with open(out, "w", encoding="utf-8") as f:
