@@ -75,6 +75,27 @@ impl Triangles<'_> {
             Self::Indexed { positions, indices } => indices[i].map(|k| positions[k as usize]),
         }
     }
+
+    /// Asks, without waiting, for the first memory triangle `i`'s read
+    /// touches: its indices, or a soup's vertices.
+    #[inline(always)]
+    fn prefetch_first(self, i: usize) {
+        match self {
+            Self::Soup(t) => prefetch(&t[i]),
+            Self::Indexed { indices, .. } => prefetch(&indices[i]),
+        }
+    }
+
+    /// Asks, without waiting, for an indexed triangle `i`'s vertices
+    /// (a soup's are its first memory).
+    #[inline(always)]
+    fn prefetch_vertices(self, i: usize) {
+        if let Self::Indexed { positions, indices } = self {
+            for k in indices[i] {
+                prefetch(&positions[k as usize]);
+            }
+        }
+    }
 }
 
 impl TriangleSource {
@@ -162,19 +183,14 @@ impl TriangleVertices for TrianglesById<'_> {
 
     #[inline(always)]
     fn prefetch_indices(&self, id: u32) {
-        match self.find(id) {
-            (Triangles::Soup(t), i) => prefetch(&t[i]),
-            (Triangles::Indexed { indices, .. }, i) => prefetch(&indices[i]),
-        }
+        let (triangles, i) = self.find(id);
+        triangles.prefetch_first(i);
     }
 
     #[inline(always)]
     fn prefetch_vertices(&self, id: u32) {
-        if let (Triangles::Indexed { positions, indices }, i) = self.find(id) {
-            for k in indices[i] {
-                prefetch(&positions[k as usize]);
-            }
-        }
+        let (triangles, i) = self.find(id);
+        triangles.prefetch_vertices(i);
     }
 }
 
@@ -402,7 +418,8 @@ pub(super) fn triangle_boxes(
     let mut boxes = Vec::with_capacity(n);
     let not_finite = |t: &[Vec3; 3]| !t.iter().all(|p| p.is_finite());
     for (mesh, source) in meshes.iter().zip(sources) {
-        let first_bad = match source.triangles() {
+        let triangles = source.triangles();
+        let first_bad = match triangles {
             Triangles::Soup(t) => {
                 boxes.par_extend(t.par_iter().map(|t| Aabb::from_points(t)));
                 loaders::first_where(t, not_finite)
@@ -414,8 +431,8 @@ pub(super) fn triangle_boxes(
                 // the old): each triangle's asked for a few dozen ahead.
                 const AHEAD: usize = 32;
                 boxes.par_extend(indices.par_iter().enumerate().map(|(i, t)| {
-                    for k in indices.get(i + AHEAD).into_iter().flatten() {
-                        prefetch(&positions[*k as usize]);
+                    if i + AHEAD < indices.len() {
+                        triangles.prefetch_vertices(i + AHEAD);
                     }
                     Aabb::from_points(&points(t))
                 }));
