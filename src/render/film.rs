@@ -77,6 +77,102 @@ impl PixelSum {
     }
 }
 
+/// Adds one pixel's accumulator to its sums, count and (where kept) sum
+/// of squares.
+#[inline]
+fn fold(sums: &mut [i128; 3], count: &mut u32, square: Option<&mut i128>, p: &PixelSum) {
+    for (s, add) in sums.iter_mut().zip(p.sum) {
+        *s += add;
+    }
+    *count += p.count;
+    if let Some(q) = square {
+        *q += p.square;
+    }
+}
+
+/// What samples lost: those dropped (NaN, infinite or negative) and
+/// those clamped at [`MAX_SAMPLE_VALUE`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Losses {
+    pub invalid: u64,
+    /// The first dropped sample in (row, column, sample) order.
+    pub first_invalid: Option<BadSample>,
+    pub clamped: u64,
+}
+
+impl Losses {
+    /// Counts in what pixel `index` (of an image `width` wide) lost.
+    fn note(&mut self, index: usize, width: u32, p: &PixelSum) {
+        self.clamped += p.clamped as u64;
+        if p.invalid > 0 {
+            let bad = BadSample {
+                x: index as u32 % width,
+                y: index as u32 / width,
+                sample: p.first_invalid.unwrap_or(0),
+            };
+            self.merge_in(p.invalid as u64, Some(bad));
+        }
+    }
+
+    /// Both parts' losses. The first dropped sample is the earlier in
+    /// (row, column, sample) order whichever part it came from, so the
+    /// sum of many parts does not depend on the order they are added in.
+    pub fn merge(mut self, other: Self) -> Self {
+        self.clamped += other.clamped;
+        self.merge_in(other.invalid, other.first_invalid);
+        self
+    }
+
+    fn merge_in(&mut self, invalid: u64, first: Option<BadSample>) {
+        self.invalid += invalid;
+        if let Some(b) = first {
+            let key = |f: BadSample| (f.y, f.x, f.sample);
+            if self.first_invalid.is_none_or(|f| key(f) > key(b)) {
+                self.first_invalid = Some(b);
+            }
+        }
+    }
+}
+
+/// A run of a film's consecutive pixels ([`Film::runs_mut`]), which one
+/// worker adds its pixels' samples to while others add to theirs.
+#[derive(Debug)]
+pub struct FilmRun<'a> {
+    /// The index of the run's first pixel in the film.
+    first: usize,
+    width: u32,
+    sums: &'a mut [[i128; 3]],
+    counts: &'a mut [u32],
+    /// Empty where the film keeps no squares.
+    squares: &'a mut [i128],
+    /// What the samples added so far lost.
+    pub losses: Losses,
+}
+
+impl FilmRun<'_> {
+    /// The run's pixels.
+    pub fn len(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// Whether the run has no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.counts.is_empty()
+    }
+
+    /// Fold the accumulator of the run's pixel `k` in.
+    #[inline]
+    pub fn add_pixel(&mut self, k: usize, p: &PixelSum) {
+        fold(
+            &mut self.sums[k],
+            &mut self.counts[k],
+            self.squares.get_mut(k),
+            p,
+        );
+        self.losses.note(self.first + k, self.width, p);
+    }
+}
+
 /// Rec. 709 luminance Y of linear RGB (ITU-R BT.709 primaries): the one
 /// number a pixel's noise is judged by.
 #[inline]
@@ -119,13 +215,14 @@ fn fixed(v: f32) -> i128 {
 pub const FILM_PIXEL_BYTES: u64 = (size_of::<[i128; 3]>() + size_of::<u32>()) as u64;
 
 /// Bytes a render holds at once per pixel of its window: the film's sums
-/// and a pass's ([`PixelSum`]); with `aovs`, their sums
+/// (a pass's, [`PixelSum`], are held a work item at a time); with `aovs`,
+/// their sums
 /// ([`AovSum`](super::aov::AovSum)) and seven channels of f32, made and
 /// encoded; with `image`, the image made from the film (linear RGB, its
 /// channels or 8-bit texels, and its encoding), which a `.strata` output
 /// streams instead. What [`check_memory`] weighs.
 pub fn render_bytes_per_pixel(aovs: bool, image: bool) -> u64 {
-    let sums = FILM_PIXEL_BYTES + size_of::<PixelSum>() as u64;
+    let sums = FILM_PIXEL_BYTES;
     let rgb = size_of::<Vec3>() as u64;
     let aov = size_of::<super::aov::AovSum>() as u64 + rgb + 2 * 7 * 4;
     sums + if aovs { aov } else { 0 } + if image { 3 * rgb } else { 0 }
@@ -228,29 +325,49 @@ impl Film {
 
     /// Fold one pixel's accumulator in.
     pub fn add_pixel(&mut self, index: usize, p: &PixelSum) {
-        for c in 0..3 {
-            self.sums[index][c] += p.sum[c];
+        let square = self.squares.get_mut(index);
+        fold(&mut self.sums[index], &mut self.counts[index], square, p);
+        let mut losses = Losses::default();
+        losses.note(index, self.width, p);
+        self.add_losses(losses);
+    }
+
+    /// The film in runs of `len` consecutive pixels (the last shorter),
+    /// for workers to add their pixels to at once; what each run's samples
+    /// lost comes back through [`Film::add_losses`].
+    pub fn runs_mut(&mut self, len: usize) -> Vec<FilmRun<'_>> {
+        let len = len.max(1);
+        let width = self.width;
+        let mut squares = self.squares.chunks_mut(len);
+        self.sums
+            .chunks_mut(len)
+            .zip(self.counts.chunks_mut(len))
+            .enumerate()
+            .map(|(k, (sums, counts))| FilmRun {
+                first: k * len,
+                width,
+                sums,
+                counts,
+                squares: squares.next().unwrap_or_default(),
+                losses: Losses::default(),
+            })
+            .collect()
+    }
+
+    /// What the film's samples lost.
+    pub fn losses(&self) -> Losses {
+        Losses {
+            invalid: self.invalid,
+            first_invalid: self.first_invalid,
+            clamped: self.clamped,
         }
-        self.counts[index] += p.count;
-        if let Some(q) = self.squares.get_mut(index) {
-            *q += p.square;
-        }
-        self.clamped += p.clamped as u64;
-        if p.invalid > 0 {
-            self.invalid += p.invalid as u64;
-            let bad = BadSample {
-                x: index as u32 % self.width,
-                y: index as u32 / self.width,
-                sample: p.first_invalid.unwrap_or(0),
-            };
-            // Keep the first in (pixel, sample) order, so the report is deterministic.
-            if self
-                .first_invalid
-                .is_none_or(|f| (f.y, f.x, f.sample) > (bad.y, bad.x, bad.sample))
-            {
-                self.first_invalid = Some(bad);
-            }
-        }
+    }
+
+    /// Count in what another part of the render's samples lost.
+    pub fn add_losses(&mut self, other: Losses) {
+        let all = self.losses().merge(other);
+        (self.invalid, self.first_invalid, self.clamped) =
+            (all.invalid, all.first_invalid, all.clamped);
     }
 
     /// Add another film of the same size (another slice of the same render).
@@ -270,16 +387,7 @@ impl Film {
         } else {
             self.squares.clear();
         }
-        self.invalid += other.invalid;
-        self.clamped += other.clamped;
-        if let Some(b) = other.first_invalid {
-            if self
-                .first_invalid
-                .is_none_or(|f| (f.y, f.x, f.sample) > (b.y, b.x, b.sample))
-            {
-                self.first_invalid = Some(b);
-            }
-        }
+        self.add_losses(other.losses());
     }
 
     /// Mean radiance of pixel `index` (black if it has no valid sample).
@@ -379,6 +487,62 @@ mod tests {
         assert_eq!(f1, f2);
         let exact: f64 = values.iter().map(|v| v.x as f64).sum::<f64>() / 1000.0;
         assert!((f1.mean(0).x as f64 - exact).abs() < 1e-6);
+    }
+
+    /// Runs of a film added to in any order, their losses summed in any
+    /// order, make the film that adding each pixel in turn makes: the same
+    /// sums, counts and squares, the same counts of dropped and clamped
+    /// samples, and the same first dropped sample (the earliest in row,
+    /// column and sample order, whichever run it is in).
+    #[test]
+    fn runs_added_in_any_order_make_the_same_film() {
+        let (w, h) = (7u32, 5u32);
+        let pixel = |i: usize| {
+            let mut p = PixelSum::default();
+            for k in 0..3u32 {
+                let v = (i as u32 * 31 + k * 7) % 11;
+                match v {
+                    0 if i % 4 == 1 => p.add(Vec3::new(f32::NAN, 0.0, 0.0), k),
+                    1 => p.add(Vec3::splat(1e30), k),
+                    _ => p.add(Vec3::new(v as f32, 0.5, 0.25 * k as f32), k),
+                }
+            }
+            p
+        };
+        let mut each = Film::new(w, h);
+        each.track_squares();
+        for i in 0..each.pixel_count() {
+            each.add_pixel(i, &pixel(i));
+        }
+        assert!(each.invalid >= 2 && each.clamped > 0, "{each:?}");
+        let first = (0..each.pixel_count()).find_map(|i| {
+            let p = pixel(i);
+            (p.invalid > 0).then(|| BadSample {
+                x: i as u32 % w,
+                y: i as u32 / w,
+                sample: p.first_invalid.unwrap(),
+            })
+        });
+        assert_eq!(each.first_invalid, first);
+        for len in [1, 3, 8, 64] {
+            let mut film = Film::new(w, h);
+            film.track_squares();
+            let mut runs = film.runs_mut(len);
+            // Last run first, as a thief might take it.
+            let losses = runs
+                .iter_mut()
+                .rev()
+                .map(|run| {
+                    let first = run.first;
+                    for k in 0..run.len() {
+                        run.add_pixel(k, &pixel(first + k));
+                    }
+                    run.losses
+                })
+                .fold(Losses::default(), Losses::merge);
+            film.add_losses(losses);
+            assert_eq!(film, each, "runs of {len}");
+        }
     }
 
     /// A render's pixels are weighed before its film is made, and a film

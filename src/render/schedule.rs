@@ -11,7 +11,7 @@
 
 use super::adaptive;
 use super::aov::AovSum;
-use super::film::{Film, PixelSum};
+use super::film::{Film, Losses, PixelSum};
 use super::progress::{Observer, Pass, PassDone};
 use super::timeline::{ItemLists, ItemSpan, Phase, Timeline};
 use super::warning::Warning;
@@ -304,7 +304,6 @@ fn render_window(
     }
     let n = film.pixel_count();
     let mut counts = RayCounts::default();
-    let mut scratch = vec![PixelSum::default(); n];
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
     let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
     let start = Instant::now();
@@ -366,32 +365,47 @@ fn render_window(
         let watching = &observer;
         let active = (!active.is_empty()).then_some(active);
         let set = SampleSet::of(s, target.is_some() || opts.budget.is_some(), samples);
-        // Each chunk's rays are counted by its own integrator and the
-        // pass sums the counts.
-        counts += pool.install(|| {
-            scratch
-                .par_chunks_mut(chunk)
+        // Each chunk adds its pixels to its own run of the film as each
+        // work item ends, while the item's sums are in the caches (added
+        // after the pass on one thread, they took 20 ns a pixel: 1.5 ms of
+        // each 320 × 240 pass, 40 ms of a 1080p one). Its rays are counted
+        // by its own integrator; the pass sums the counts and the losses.
+        let runs = film.runs_mut(chunk);
+        let (pass_counts, losses) = pool.install(|| {
+            runs.into_par_iter()
                 .zip(aov_chunks.into_par_iter())
                 .enumerate()
-                .map(|(b, (pixels, mut aov_pixels))| {
+                .with_max_len(1)
+                .map(|(b, (mut run, mut aov_pixels))| {
                     // A clock read where the chunk starts (its integrator's
                     // setup counted in its first work item) and one where
                     // each work item ends, the next one's start.
                     let mut item_start = timeline.map(Timeline::now);
                     let mut integrator = Integrator::with_packets(scene, opts.packets);
-                    for (k, accs) in pixels.chunks_mut(WORK_ITEM_PIXELS).enumerate() {
+                    let mut sums = [PixelSum::default(); WORK_ITEM_PIXELS];
+                    let len = run.len();
+                    for at in (0..len).step_by(WORK_ITEM_PIXELS) {
+                        let accs = &mut sums[..(len - at).min(WORK_ITEM_PIXELS)];
                         accs.fill(PixelSum::default());
-                        let first = b * chunk + k * WORK_ITEM_PIXELS;
-                        let range = k * WORK_ITEM_PIXELS..k * WORK_ITEM_PIXELS + accs.len();
-                        let aov = aov_pixels.as_deref_mut().map(|a| &mut a[range]);
+                        let first = b * chunk + at;
+                        let aov = aov_pixels
+                            .as_deref_mut()
+                            .map(|a| &mut a[at..at + accs.len()]);
+                        let active = active.map(|a| &a[first..first + accs.len()]);
                         let pixels = PixelRun {
                             window: &window,
                             first,
-                            active: active.map(|a| &a[first..first + accs.len()]),
+                            active,
                             set,
                         };
                         let rays_before = integrator.counts.total();
                         render_pixels(&mut integrator, scene, pixels, accs, aov, samples.clone());
+                        // A pixel that took no samples has nothing to add.
+                        for (i, acc) in accs.iter().enumerate() {
+                            if active.is_none_or(|a| a[i]) {
+                                run.add_pixel(at + i, acc);
+                            }
+                        }
                         if let (Some(t), Some(lists), Some(start_ns)) =
                             (timeline, &item_lists, item_start)
                         {
@@ -409,17 +423,16 @@ fn render_window(
                         }
                         watching.item_done();
                     }
-                    integrator.counts
+                    (integrator.counts, run.losses)
                 })
-                .reduce(RayCounts::default, |a, b| a + b)
+                .reduce(
+                    || (RayCounts::default(), Losses::default()),
+                    |a, b| (a.0 + b.0, a.1.merge(b.1)),
+                )
         });
+        counts += pass_counts;
         let film_start = timeline.map(Timeline::now);
-        // A pixel that took no samples has nothing to add.
-        for (i, acc) in scratch.iter().enumerate() {
-            if active.is_none_or(|a| a[i]) {
-                film.add_pixel(i, acc);
-            }
-        }
+        film.add_losses(losses);
         cpu.pass(&pool);
         done = samples.end;
         pace = Some(pass_clock.elapsed().as_secs_f64() / work);
