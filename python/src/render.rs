@@ -352,7 +352,7 @@ pub fn render(
     let passes = count(passes, "passes", 1)?;
     if let (Some(p), Some(e)) = (passes, noise) {
         return Err(error(format!(
-            "passes={p} with noise={e}: a noise target's passes are its decision points (after 8, 12, 16, 24, … samples); leave passes out"
+            "passes={p} with noise={e}: a noise target's passes are its decision points (after 4, 8, 12, 16, … samples); leave passes out"
         )));
     }
     let packets = mode(packets, "packets")?.unwrap_or_default();

@@ -78,7 +78,7 @@ pub struct RenderArgs {
     pub passes: Option<u32>,
     /// Render passes until this much time is spent (30s, 2m, 1.5h, or
     /// seconds), then write the image and say how many samples per pixel
-    /// it reached: passes of 8, 12, 16, 24, … samples, up to --spp
+    /// it reached: passes of 4, 8, 12, 16, … samples, up to --spp
     /// (default 65536 with --time). Not bit-identical by nature: the
     /// samples reached depend on the machine and its load.
     #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
@@ -439,7 +439,7 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
         }
         if let Some(p) = args.passes {
             return Err(flag("--passes")(format!(
-                "--passes {p} with --noise {noise}: a noise target's passes are its decision points (after 8, 12, 16, 24, … samples); leave --passes out"
+                "--passes {p} with --noise {noise}: a noise target's passes are its decision points (after 4, 8, 12, 16, … samples); leave --passes out"
             ))
             .into());
         }
@@ -453,7 +453,7 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
         }
         if args.passes.is_some() {
             return Err(flag("--passes")(
-                "--time renders passes of 8, 12, 16, 24, … samples until the budget is spent; leave --passes out".into(),
+                "--time renders passes of 4, 8, 12, 16, … samples until the budget is spent; leave --passes out".into(),
             )
             .into());
         }

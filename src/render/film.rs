@@ -12,6 +12,19 @@ use super::window::Window;
 use glam::Vec3;
 
 pub const FIXED_SCALE: f64 = 4_294_967_296.0; // 2^32
+
+/// A fixed-point sum as f64, the same value `x as f64` gives: through i64
+/// where it fits (one instruction, against a library call of some 25
+/// cycles for i128, which was most of a noise render's decisions: 2.6 ms
+/// of the dragon's 105 at E = 0.2), as every sum of fewer than 2³¹
+/// samples at most 1 does.
+#[inline]
+pub fn fixed_to_f64(x: i128) -> f64 {
+    match i64::try_from(x) {
+        Ok(small) => small as f64,
+        Err(_) => x as f64,
+    }
+}
 /// Largest radiance one sample may carry before it is clamped.
 pub const MAX_SAMPLE_VALUE: f64 = 281_474_976_710_656.0; // 2^48
 
@@ -399,9 +412,9 @@ impl Film {
         let s = &self.sums[index];
         let k = 1.0 / (FIXED_SCALE * n as f64);
         Vec3::new(
-            (s[0] as f64 * k) as f32,
-            (s[1] as f64 * k) as f32,
-            (s[2] as f64 * k) as f32,
+            (fixed_to_f64(s[0]) * k) as f32,
+            (fixed_to_f64(s[1]) * k) as f32,
+            (fixed_to_f64(s[2]) * k) as f32,
         )
     }
 

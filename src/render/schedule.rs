@@ -330,7 +330,7 @@ fn render_window(
     let mut pace: Option<f64> = None;
     for (pass_index, samples) in passes.iter().enumerate() {
         if let Some(t) = target {
-            decisions.update(&film, t);
+            pool.install(|| decisions.update(&film, t));
         }
         let active = decisions.active();
         let live = match target {

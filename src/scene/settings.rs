@@ -111,7 +111,7 @@ pub struct RenderOverrides {
     /// which gives the least image error for the samples), and goes on
     /// while any of its 3x3 neighbours does; the image's RMSE is then
     /// about E times the root of the mean s. Judged at pass boundaries
-    /// (after 8, 12, 16, 24, 32, … samples); --spp is the ceiling (default
+    /// (after 4, 8, 12, 16, 24, … samples); --spp is the ceiling (default
     /// 1024 with --noise).
     /// See docs/cli.md, "Noise target". The image is the same for any
     /// thread count, crop, checkpoint and resume [render.noise; default
@@ -177,7 +177,14 @@ pub struct RenderSettings {
 
 /// Samples every pixel of a `--noise` render takes before the first
 /// decision (`render::adaptive::FIRST_DECISION`, where it is explained).
-pub const NOISE_FIRST_DECISION: u32 = 8;
+pub const NOISE_FIRST_DECISION: u32 = 4;
+
+/// The low end of a noise render's expected samples
+/// ([`RenderSettings::estimated_spp`]): 8, as when the first decision
+/// came after 8 samples and the estimate was measured against the
+/// dragon's renders; the earlier first decision stops only cheap pixels
+/// sooner, which changes the rays a tree is built for little.
+pub const NOISE_ESTIMATE_LOW: u32 = 8;
 
 /// The ceiling of a `--noise` render's samples when no layer gives `spp`.
 pub const NOISE_SPP: u32 = 1024;
@@ -227,15 +234,15 @@ impl RenderSettings {
 
     /// The samples per pixel a render is expected to take: `spp`, or
     /// under a noise target, which stops most pixels long before its
-    /// ceiling, the geometric mean of its first decision and the ceiling
-    /// (91 of 1024): the dragon under an area light took 18 to 59 a pixel
+    /// ceiling, the geometric mean of [`NOISE_ESTIMATE_LOW`] and the
+    /// ceiling (91 of 1024): the dragon under an area light took 18 to 59 a pixel
     /// at targets 0.1 to 0.05, and a tree built for 1024 cost twice the
     /// build time for no faster a render (docs/performance.md).
     pub fn estimated_spp(&self) -> u32 {
         match self.noise {
             Some(_) => {
-                let geometric = ((NOISE_FIRST_DECISION as f64) * self.spp as f64).sqrt();
-                (geometric.round() as u32).clamp(self.spp.min(NOISE_FIRST_DECISION), self.spp)
+                let geometric = ((NOISE_ESTIMATE_LOW as f64) * self.spp as f64).sqrt();
+                (geometric.round() as u32).clamp(self.spp.min(NOISE_ESTIMATE_LOW), self.spp)
             }
             None => self.spp,
         }
@@ -404,7 +411,7 @@ mod tests {
     use super::*;
 
     /// A render's expected samples: its count, or under a noise target the
-    /// geometric mean of the first decision and the ceiling, never past
+    /// geometric mean of 8 and the ceiling, never past
     /// the ceiling; the rays auto's tree is chosen for follow it.
     #[test]
     fn a_noise_render_is_expected_to_stop_between_its_first_decision_and_its_ceiling() {
