@@ -145,26 +145,32 @@ pub fn passes(start: u32, spp: u32) -> Vec<Range<u32>> {
     out
 }
 
-/// Pixel `index`'s mean luminance Ȳ and the estimated standard error of
-/// that mean, s/√n (module docs); `None` with fewer than two valid
-/// samples or no squares kept.
-pub fn standard_error(film: &Film, index: usize) -> Option<(f64, f64)> {
+/// Pixel `index`'s count n and its fixed-point sums of luminance,
+/// F·ΣY (from the channel sums), and of squared luminance, F·ΣY², in f64;
+/// `None` with fewer than two valid samples or no squares kept.
+fn luminance_sums(film: &Film, index: usize) -> Option<(f64, f64, f64)> {
     let n = film.counts[index];
     if n < 2 || film.squares.is_empty() {
         return None;
     }
-    let n = n as f64;
     let s = &film.sums[index];
-    // Ȳ from the channel sums, in f64. The squares were rounded from f32
-    // (Y and Y² each to a few units of 2⁻²⁴), so samples that agree leave
-    // up to about 7·10⁻⁷ Ȳ² of variance: [`ROUNDING`] Ȳ² is taken off, or
-    // the square root in the error would show a bright pixel's rounding as
-    // noise (3·10⁻⁴ Ȳ of deviation at Ȳ = 40 is an error of 0.04 at 8
-    // samples).
     let w = LUMINANCE;
-    let y = w[0] * fixed_to_f64(s[0]) + w[1] * fixed_to_f64(s[1]) + w[2] * fixed_to_f64(s[2]);
-    let mean = y / (FIXED_SCALE * n);
-    let mean_square = fixed_to_f64(film.square(index)) / (FIXED_SCALE * n);
+    let sum = w[0] * fixed_to_f64(s[0]) + w[1] * fixed_to_f64(s[1]) + w[2] * fixed_to_f64(s[2]);
+    Some((n as f64, sum, fixed_to_f64(film.square(index))))
+}
+
+/// Pixel `index`'s mean luminance Ȳ and the estimated standard error of
+/// that mean, s/√n (module docs); `None` with fewer than two valid
+/// samples or no squares kept.
+pub fn standard_error(film: &Film, index: usize) -> Option<(f64, f64)> {
+    let (n, sum, squares) = luminance_sums(film, index)?;
+    // The squares were rounded from f32 (Y and Y² each to a few units of
+    // 2⁻²⁴), so samples that agree leave up to about 7·10⁻⁷ Ȳ² of
+    // variance: [`ROUNDING`] Ȳ² is taken off, or the square root in the
+    // error would show a bright pixel's rounding as noise (3·10⁻⁴ Ȳ of
+    // deviation at Ȳ = 40 is an error of 0.04 at 8 samples).
+    let mean = sum / (FIXED_SCALE * n);
+    let mean_square = squares / (FIXED_SCALE * n);
     let spread = mean_square - mean * mean * (1.0 + ROUNDING);
     let variance = (spread * n / (n - 1.0)).max(0.0);
     Some((mean, (variance / n).sqrt()))
@@ -193,15 +199,9 @@ pub fn pixel_error(film: &Film, index: usize, scale: f32) -> f64 {
 /// √(s·k/n) ≤ E is s² ≤ E⁴·n²/k², so: (F·n·Q − S²·(1 + ROUNDING))·k² ≤
 /// E⁴·F²·n³·(n − 1), a negative left side being no variance.
 pub fn converged(film: &Film, index: usize, target: NoiseTarget) -> bool {
-    let n = film.counts[index];
-    if n < 2 || film.squares.is_empty() {
+    let Some((n, sum, squares)) = luminance_sums(film, index) else {
         return false;
-    }
-    let n = n as f64;
-    let s = &film.sums[index];
-    let w = LUMINANCE;
-    let sum = w[0] * fixed_to_f64(s[0]) + w[1] * fixed_to_f64(s[1]) + w[2] * fixed_to_f64(s[2]);
-    let squares = fixed_to_f64(film.square(index));
+    };
     let k = target.scale as f64;
     let e2 = target.error as f64 * target.error as f64;
     let spread = FIXED_SCALE * n * squares - sum * sum * (1.0 + ROUNDING);
