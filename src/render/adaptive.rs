@@ -80,9 +80,10 @@ use std::ops::Range;
 /// freedom; the neighbourhood guards what so few samples miss. Most of an
 /// image's pixels need no more (the dragon under an area light: 80% of
 /// them at E = 0.2), and those pixels' first samples are most of a coarse
-/// target's time. After 8 in place of 4, that scene's coarse targets took
-/// 1.1 to 1.2 times the time to the same RMSE, after 16 1.1 to 1.5 times
-/// the samples; after 2 no less time than after 4 (docs/converge.md).
+/// target's time. After 8 in place of 4, that scene's targets 0.3 and 0.2
+/// took 1.2 to 1.3 times the time to the same RMSE (0.14 and 0.1 about
+/// the same); after 16, 1.1 to 1.5 times the samples of after 8; after 2,
+/// more time than after 4 (docs/converge.md).
 pub const FIRST_DECISION: u32 = crate::scene::settings::NOISE_FIRST_DECISION;
 
 /// The share of Ȳ² that the f32 rounding of each sample's Y² can leave
@@ -191,8 +192,8 @@ pub fn pixel_error(film: &Film, index: usize, scale: f32) -> f64 {
 
 /// Whether pixel `index` of `film` has met `target` on its own samples:
 /// [`pixel_error`] ≤ E, tested without a division or a root, as every
-/// decision reads every pixel that took samples (the tested form took
-/// 35 ns a pixel, 2.7 ms of a coarse target's 105 on the dragon).
+/// decision reads every pixel that took samples (through `pixel_error`
+/// it took 35 ns a pixel, 2.7 ms of a coarse target's 105 on the dragon).
 ///
 /// With the fixed-point sums S = F·ΣY and Q = F·ΣY² of n samples, the
 /// variance is s² = (F·n·Q − S²·(1 + [`ROUNDING`])) / (F²·n·(n − 1)), and

@@ -15,9 +15,8 @@ pub const FIXED_SCALE: f64 = 4_294_967_296.0; // 2^32
 
 /// A fixed-point sum as f64, the same value `x as f64` gives: through i64
 /// where it fits (one instruction, against a library call of some 25
-/// cycles for i128, which was most of a noise render's decisions: 2.6 ms
-/// of the dragon's 105 at E = 0.2), as every sum of fewer than 2³¹
-/// samples at most 1 does.
+/// cycles for i128), as every sum under 2³¹ does (two billion samples of
+/// radiance 1). Noise decisions convert four sums a pixel.
 #[inline]
 pub fn fixed_to_f64(x: i128) -> f64 {
     match i64::try_from(x) {
@@ -25,6 +24,7 @@ pub fn fixed_to_f64(x: i128) -> f64 {
         Err(_) => x as f64,
     }
 }
+
 /// Largest radiance one sample may carry before it is clamped.
 pub const MAX_SAMPLE_VALUE: f64 = 281_474_976_710_656.0; // 2^48
 
@@ -229,9 +229,8 @@ pub const FILM_PIXEL_BYTES: u64 = (size_of::<[i128; 3]>() + size_of::<u32>()) as
 
 /// Bytes a render holds at once per pixel of its window: the film's sums
 /// (a pass's, [`PixelSum`], are held a work item at a time); with `aovs`,
-/// their sums
-/// ([`AovSum`](super::aov::AovSum)) and seven channels of f32, made and
-/// encoded; with `image`, the image made from the film (linear RGB, its
+/// their sums ([`AovSum`](super::aov::AovSum)) and seven channels of f32,
+/// made and encoded; with `image`, the image made from the film (linear RGB, its
 /// channels or 8-bit texels, and its encoding), which a `.strata` output
 /// streams instead. What [`check_memory`] weighs.
 pub fn render_bytes_per_pixel(aovs: bool, image: bool) -> u64 {

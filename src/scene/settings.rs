@@ -235,9 +235,9 @@ impl RenderSettings {
     /// The samples per pixel a render is expected to take: `spp`, or
     /// under a noise target, which stops most pixels long before its
     /// ceiling, the geometric mean of [`NOISE_ESTIMATE_LOW`] and the
-    /// ceiling (91 of 1024): the dragon under an area light took 18 to 59 a pixel
-    /// at targets 0.1 to 0.05, and a tree built for 1024 cost twice the
-    /// build time for no faster a render (docs/performance.md).
+    /// ceiling (91 of 1024): the dragon under an area light took 18 to 59
+    /// a pixel at targets 0.1 to 0.05, and a tree built for 1024 cost
+    /// twice the build time for no faster a render (docs/performance.md).
     pub fn estimated_spp(&self) -> u32 {
         match self.noise {
             Some(_) => {
@@ -411,10 +411,10 @@ mod tests {
     use super::*;
 
     /// A render's expected samples: its count, or under a noise target the
-    /// geometric mean of 8 and the ceiling, never past
-    /// the ceiling; the rays auto's tree is chosen for follow it.
+    /// geometric mean of 8 and the ceiling, never past the ceiling; the
+    /// rays auto's tree is chosen for follow it.
     #[test]
-    fn a_noise_render_is_expected_to_stop_between_its_first_decision_and_its_ceiling() {
+    fn a_noise_render_is_expected_to_stop_between_8_samples_and_its_ceiling() {
         let mut s = RenderSettings {
             spp: 1024,
             ..RenderSettings::default()
