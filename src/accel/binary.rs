@@ -1,9 +1,10 @@
 //! The binary tree a build collapses: PLOC ([`super::ploc`]) over
-//! primitives sorted along a Morton curve, or over [`super::cluster`]s
-//! for the fastest preset, then obvhs's reinsertion (Meister and Bittner
-//! 2018; Bittner, Hapala and Havran 2013).
+//! primitives sorted along a Morton curve, or over [`super::cluster`]s of
+//! them, then obvhs's reinsertion (Meister and Bittner 2018; Bittner,
+//! Hapala and Havran 2013), as each preset's [`Recipe`] says.
 
 use super::build::BuildQuality;
+use super::choice::MODEL_MIN_PRIMS;
 pub(super) use super::cluster::Boxes;
 use super::cluster::{morton_order, Clusters};
 use super::node::MAX_PRIMS;
@@ -12,9 +13,77 @@ use crate::system::steps::Steps;
 use glam::Vec3A;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
-use obvhs::ploc::PlocSearchDistance;
-use obvhs::BvhBuildParams;
 use rayon::prelude::*;
+
+/// How a preset builds its binary tree.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Recipe {
+    /// Rounds of pairing into [`Clusters`] before PLOC, each cluster a
+    /// leaf of up to 2^rounds primitives; 0: one primitive a leaf.
+    pub cluster_rounds: u32,
+    /// How many places of the curve each way a cluster looks for its
+    /// nearest neighbour: 1, 2, 6, 14, 24 or 32 (obvhs's distances, for
+    /// each of which `super::ploc` compiles a search).
+    pub radius: usize,
+    /// PLOC's first passes that look one place each way only (obvhs's
+    /// `search_depth_threshold`), while clusters are many and their
+    /// neighbours on the curve near.
+    pub near_passes: usize,
+    /// The share of nodes obvhs's reinsertion moves in a batch (obvhs's
+    /// `reinsertion_batch_ratio`); 0: none.
+    pub reinsertion: f32,
+}
+
+impl Recipe {
+    /// The recipe of `preset` (not `auto`) for `prims` primitives.
+    ///
+    /// From [`MODEL_MIN_PRIMS`] primitives on, `fast` and `medium` build
+    /// over clusters: two rounds, then PLOC with a window of two and
+    /// reinsertion of 2%, is `medium`, the full-quality tree, within 1.3%
+    /// of the SAH cost of PLOC over single primitives with a window of 14
+    /// and reinsertion of 5% (the recipe below that size) in less than
+    /// half its time (docs/performance.md, "The full-quality build from
+    /// clusters"). Below it every build takes milliseconds, and a leaf of
+    /// clustered instances or shapes would test them one by one where a
+    /// node tests their boxes together, so those presets keep one
+    /// primitive a leaf; `fastest` clusters at any size, as asked.
+    pub(super) fn of(preset: BuildQuality, prims: usize) -> Self {
+        let large = prims >= MODEL_MIN_PRIMS;
+        let recipe = |cluster_rounds, radius, near_passes, reinsertion| Self {
+            cluster_rounds,
+            radius,
+            near_passes,
+            reinsertion,
+        };
+        match preset {
+            // The preview tree is cut from the curve, not built: unread.
+            BuildQuality::Preview | BuildQuality::Fastest => recipe(3, 1, 0, 0.0),
+            BuildQuality::Fast if large => recipe(3, 2, 0, 0.01),
+            BuildQuality::Medium | BuildQuality::Auto if large => recipe(2, 2, 0, 0.02),
+            BuildQuality::Fast => Self::one_a_leaf(BuildQuality::Fast),
+            BuildQuality::Medium | BuildQuality::Auto => Self::one_a_leaf(BuildQuality::Medium),
+            BuildQuality::High => Self::one_a_leaf(BuildQuality::High),
+        }
+    }
+
+    /// The recipe of `preset` over one primitive a leaf: obvhs's
+    /// parameters of the same name (`fast_build`, `medium_build`,
+    /// `slow_build` for `high`; `fastest_build` otherwise).
+    pub(super) fn one_a_leaf(preset: BuildQuality) -> Self {
+        let (radius, near_passes, reinsertion) = match preset {
+            BuildQuality::Fast => (6, 2, 0.02),
+            BuildQuality::Medium | BuildQuality::Auto => (14, 3, 0.05),
+            BuildQuality::High => (24, 2, 0.2),
+            BuildQuality::Preview | BuildQuality::Fastest => (1, 0, 0.0),
+        };
+        Self {
+            cluster_rounds: 0,
+            radius,
+            near_passes,
+            reinsertion,
+        }
+    }
+}
 
 impl obvhs::Boundable for Aabb {
     #[inline]
@@ -62,21 +131,31 @@ pub(super) fn bounds(boxes: &[Aabb], steps: &mut Steps) -> Option<Aabb> {
     }))
 }
 
-/// obvhs's binary tree over `boxes` (not empty, inside `bounds`): one
-/// primitive a leaf, or for the fastest preset one cluster of up to
-/// [`LEAF_PRIMS`](super::collapse::LEAF_PRIMS) primitives a leaf
-/// ([`super::cluster`]).
+/// The binary tree over `boxes` (not empty, inside `bounds`) that
+/// `quality`'s [`Recipe`] builds: one primitive a leaf, or one cluster of
+/// up to 2^rounds primitives a leaf ([`super::cluster`]).
 pub(super) fn binary_tree(
     boxes: Boxes,
     bounds: Aabb,
     quality: BuildQuality,
     steps: &mut Steps,
 ) -> Bvh2 {
-    let preset = quality.preset(boxes.len());
-    let params = quality.params(boxes.len());
-    let mut bvh2 = if preset == BuildQuality::Fastest {
+    let recipe = Recipe::of(quality.preset(boxes.len()), boxes.len());
+    binary_tree_by(boxes, bounds, recipe, steps)
+}
+
+/// [`binary_tree`] by `recipe`.
+pub(super) fn binary_tree_by(
+    boxes: Boxes,
+    bounds: Aabb,
+    recipe: Recipe,
+    steps: &mut Steps,
+) -> Bvh2 {
+    let (radius, near) = (recipe.radius, recipe.near_passes);
+    let mut bvh2 = if recipe.cluster_rounds > 0 {
         // The clusters free the boxes once their first round has read them.
-        let clusters = steps.time("clusters", || Clusters::new(boxes, bounds));
+        let rounds = recipe.cluster_rounds;
+        let clusters = steps.time("clusters", || Clusters::new(boxes, bounds, rounds));
         let Clusters {
             order,
             starts,
@@ -87,7 +166,6 @@ pub(super) fn binary_tree(
         // and its primitives are `order`'s ids from starts[c] to
         // starts[c + 1]. PLOC takes the clusters' boxes and the rounds'
         // other buffer as its own clusters.
-        let (radius, near) = (radius(&params), params.search_depth_threshold);
         let mut bvh2 = steps.time("ploc", || {
             super::ploc::ploc_in_order(boxes, spare, order, radius, near)
         });
@@ -104,11 +182,11 @@ pub(super) fn binary_tree(
     } else {
         let order = steps.time("morton", || morton_order(&boxes, bounds));
         // PLOC frees the boxes and the order before its passes.
-        steps.time("ploc", || ploc(boxes, order, &params))
+        steps.time("ploc", || super::ploc::ploc(boxes, order, radius, near))
     };
-    if params.reinsertion_batch_ratio > 0.0 {
+    if recipe.reinsertion > 0.0 {
         steps.time("reinsertion", || {
-            ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None)
+            ReinsertionOptimizer::default().run(&mut bvh2, recipe.reinsertion, None)
         });
     }
     // The collapse reads nodes and primitive indices only: free the maps
@@ -118,31 +196,11 @@ pub(super) fn binary_tree(
     bvh2
 }
 
-/// PLOC's tree over `boxes` sorted along the curve as `order` lists them
-/// ([`super::ploc`]: parallel, the same tree on any thread count), one
-/// leaf each, leaf `i` holding id `i`, with the preset's search radius.
-fn ploc(boxes: Boxes, order: Vec<u32>, params: &BvhBuildParams) -> Bvh2 {
-    super::ploc::ploc(boxes, order, radius(params), params.search_depth_threshold)
-}
-
-/// How many places of the curve each way a cluster looks for its nearest
-/// neighbour, for the preset `params`.
-fn radius(params: &BvhBuildParams) -> usize {
-    match params.ploc_search_distance {
-        PlocSearchDistance::Minimum => 1,
-        PlocSearchDistance::VeryLow => 2,
-        PlocSearchDistance::Low => 6,
-        PlocSearchDistance::Medium => 14,
-        PlocSearchDistance::High => 24,
-        PlocSearchDistance::VeryHigh => 32,
-    }
-}
-
 /// obvhs's own PLOC tree over `boxes` (sequential merges), one leaf
 /// each, leaf `i` holding id `i`: what [`ploc`] replaced, kept to hold it
 /// to the same quality.
 #[cfg(test)]
-fn obvhs_ploc(boxes: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
+fn obvhs_ploc(boxes: &[Aabb], params: &obvhs::BvhBuildParams) -> Bvh2 {
     let mut bvh2 = Bvh2::default();
     obvhs::ploc::PlocBuilder::with_capacity(boxes.len()).build_with_bvh(
         &mut bvh2,
@@ -163,6 +221,62 @@ mod tests {
     use crate::sampling::stream::{seeded, Draw};
     use glam::Vec3;
 
+    /// Boxes of a closed, wrinkled surface (a mesh's triangles), and
+    /// their union.
+    fn surface_boxes(n: usize, seed: u64) -> (Vec<Aabb>, Aabb) {
+        let mut rng = seeded(seed);
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|_| {
+                let d = rng.cube(1.0).normalize_or(Vec3::Y);
+                let c = d * (10.0 + (4.0 * d.x).sin() * (3.0 * d.y).cos());
+                Aabb::new(c - 0.03, c + 0.03)
+            })
+            .collect();
+        let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+        (boxes, bounds)
+    }
+
+    /// The SAH cost of the 8-wide tree `recipe` builds over `boxes`.
+    fn cost_by(boxes: &[Aabb], bounds: Aabb, recipe: Recipe) -> f64 {
+        let bvh2 = binary_tree_by(
+            Boxes::Borrowed(boxes),
+            bounds,
+            recipe,
+            &mut Steps::default(),
+        );
+        Bvh8::collapse(&bvh2, bounds, u32::MAX).stats().sah_cost
+    }
+
+    /// From `MODEL_MIN_PRIMS` primitives on, `medium` builds over
+    /// clusters, and its tree costs at most 2% more than the one over
+    /// single primitives it replaced (the issue's bound; 1.3% on the
+    /// dragon); `fast`'s over bigger clusters costs more than
+    /// `medium`'s, and `fastest`'s more again. Below that size both keep
+    /// one primitive a leaf.
+    #[test]
+    fn the_medium_tree_over_clusters_costs_little_more_than_over_primitives() {
+        let (boxes, bounds) = surface_boxes(MODEL_MIN_PRIMS + 50_000, 21);
+        let n = boxes.len();
+        let medium = Recipe::of(BuildQuality::Medium, n);
+        assert!(medium.cluster_rounds > 0, "{medium:?}");
+        let single = cost_by(&boxes, bounds, Recipe::one_a_leaf(BuildQuality::Medium));
+        let clustered = cost_by(&boxes, bounds, medium);
+        assert!(
+            clustered <= 1.02 * single,
+            "medium over clusters {clustered}, over primitives {single}"
+        );
+        let fast = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fast, n));
+        let fastest = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fastest, n));
+        assert!(
+            clustered < fast && fast < fastest,
+            "medium {clustered}, fast {fast}, fastest {fastest}"
+        );
+        for quality in [BuildQuality::Fast, BuildQuality::Medium] {
+            let small = Recipe::of(quality, MODEL_MIN_PRIMS - 1);
+            assert_eq!(small, Recipe::one_a_leaf(quality), "{quality:?}");
+        }
+    }
+
     /// The parallel PLOC ([`super::ploc`]) makes trees as good as obvhs's
     /// sequential one did, through reinsertion and the collapse: SAH cost
     /// within 2% for each preset with a primitive a leaf, over boxes in a
@@ -170,22 +284,27 @@ mod tests {
     /// docs/performance.md).
     #[test]
     fn parallel_ploc_keeps_the_tree_quality_of_obvhs() {
-        let mut rng = seeded(12);
-        let surface: Vec<Aabb> = (0..150_000)
-            .map(|_| {
-                let d = rng.cube(1.0).normalize_or(Vec3::Y);
-                let c = d * (10.0 + (4.0 * d.x).sin() * (3.0 * d.y).cos());
-                Aabb::new(c - 0.03, c + 0.03)
-            })
-            .collect();
+        let (surface, _) = surface_boxes(150_000, 12);
         for boxes in [random_boxes(150_000, 9), surface] {
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-            for quality in [BuildQuality::Fast, BuildQuality::Medium, BuildQuality::High] {
-                let params = quality.params(boxes.len());
-                let ours = binary_tree(
+            for (quality, params) in [
+                (BuildQuality::Fast, obvhs::BvhBuildParams::fast_build()),
+                (BuildQuality::Medium, obvhs::BvhBuildParams::medium_build()),
+                (BuildQuality::High, obvhs::BvhBuildParams::slow_build()),
+            ] {
+                let recipe = Recipe::one_a_leaf(quality);
+                assert_eq!(
+                    (recipe.reinsertion, recipe.near_passes),
+                    (
+                        params.reinsertion_batch_ratio,
+                        params.search_depth_threshold
+                    ),
+                    "{quality:?} is obvhs's preset of its name"
+                );
+                let ours = binary_tree_by(
                     Boxes::Borrowed(&boxes),
                     bounds,
-                    quality,
+                    recipe,
                     &mut Steps::default(),
                 );
                 let mut theirs = obvhs_ploc(&boxes, &params);

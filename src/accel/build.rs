@@ -11,7 +11,6 @@ use crate::system::steps::Steps;
 use glam::Vec3;
 #[cfg(test)]
 use obvhs::bvh2::Bvh2;
-use obvhs::BvhBuildParams;
 
 crate::mode::mode_enum! {
     /// Build effort. `auto` picks by primitive count, and for a render by
@@ -31,20 +30,9 @@ crate::mode::mode_enum! {
 
 impl BuildQuality {
     /// The preset a build over `prim_count` primitives uses when no render
-    /// says how many rays it will trace: `auto` is `fast` above 2 million
-    /// primitives and `medium` up to them.
+    /// says how many rays it will trace: `auto` is `medium`.
     pub fn preset(self, prim_count: usize) -> Self {
         self.choose(prim_count, None).quality
-    }
-
-    pub(super) fn params(self, prim_count: usize) -> BvhBuildParams {
-        match self.preset(prim_count) {
-            // The preview tree has no binary tree: these go unread.
-            Self::Preview | Self::Fastest => BvhBuildParams::fastest_build(),
-            Self::Fast => BvhBuildParams::fast_build(),
-            Self::High => BvhBuildParams::slow_build(),
-            Self::Medium | Self::Auto => BvhBuildParams::medium_build(),
-        }
     }
 }
 

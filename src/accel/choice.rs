@@ -31,18 +31,19 @@ const PRESETS: [BuildQuality; 5] = [
 
 /// Build time a primitive, in nanoseconds, of each preset of [`PRESETS`]
 /// (two threads, AMD EPYC; docs/performance.md: the dragon and its two
-/// subdivisions, 0.9 to 14 million triangles; the preview tree's from
-/// its build time over the fastest preset's, alternating on the quiet
-/// machine: 0.64 on the dragon, 0.59 on its 13.9-million-triangle
-/// subdivision).
-const BUILD_NS: [f64; 5] = [120.0, 195.0, 410.0, 530.0, 1280.0];
+/// subdivisions, 0.9 to 14 million triangles, for `fastest` and `high`;
+/// the others from their build time over the fastest preset's,
+/// alternating on the quiet machine: `preview` 0.64 on the dragon, 0.59
+/// on its 13.9-million-triangle subdivision; `fast` and `medium` over
+/// clusters 1.13 and 1.38, "The full-quality build from clusters").
+const BUILD_NS: [f64; 5] = [120.0, 195.0, 220.0, 270.0, 1280.0];
 
 /// Trace time a ray relative to the medium tree's, of each preset of
 /// [`PRESETS`]: one plus 0.6 times the tree's SAH cost over the medium
-/// tree's, less one, on the dragon (20.9, 19.0, 17.8, 17.8, 17.4); 0.6 is
+/// tree's, less one, on the dragon (20.9, 19.0, 18.3, 18.1, 17.4); 0.6 is
 /// the share of a render's time that moves with the tree
 /// (docs/performance.md).
-const TRACE_FACTOR: [f64; 5] = [1.105, 1.04, 1.0, 1.0, 0.987];
+const TRACE_FACTOR: [f64; 5] = [1.094, 1.031, 1.007, 1.0, 0.978];
 
 /// Where the medium preset is in [`PRESETS`]: the estimate shows its
 /// time beside the chosen one's.
@@ -64,10 +65,6 @@ fn trace_ns(prims: usize) -> f64 {
 /// preset's clusters would put up to eight instances or shapes in a leaf).
 pub const MODEL_MIN_PRIMS: usize = 100_000;
 
-/// Above this many primitives a tree built for tracing ray files (no
-/// render settings to weigh) is `fast`, up to it `medium`.
-const TRACING_FAST_ABOVE: usize = 2_000_000;
-
 /// What was built and why.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BuildChoice {
@@ -84,7 +81,7 @@ pub enum Reason {
     Asked,
     /// `auto` under [`MODEL_MIN_PRIMS`] primitives: the medium tree.
     Small { prims: usize },
-    /// `auto` for tracing ray files: by primitive count alone.
+    /// `auto` for tracing ray files: the medium tree, whatever their count.
     Count { prims: usize },
     /// `auto` for a render: the least estimated build plus trace time.
     Fits(Estimate),
@@ -109,9 +106,6 @@ impl BuildQuality {
     pub fn choose(self, prims: usize, rays: Option<u64>) -> BuildChoice {
         let (quality, reason) = match (self, rays) {
             (Self::Auto, _) if prims < MODEL_MIN_PRIMS => (Self::Medium, Reason::Small { prims }),
-            (Self::Auto, None) if prims > TRACING_FAST_ABOVE => {
-                (Self::Fast, Reason::Count { prims })
-            }
             (Self::Auto, None) => (Self::Medium, Reason::Count { prims }),
             (Self::Auto, Some(rays)) => {
                 let (k, estimate) = fit(prims, rays);
@@ -228,7 +222,7 @@ mod tests {
         let auto = BuildQuality::Auto;
         assert_eq!(auto.choose(50_000, Some(1)).quality, BuildQuality::Medium);
         assert_eq!(auto.choose(50_000, None).quality, BuildQuality::Medium);
-        assert_eq!(auto.choose(3_000_000, None).quality, BuildQuality::Fast);
+        assert_eq!(auto.choose(30_000_000, None).quality, BuildQuality::Medium);
         assert_eq!(auto.choose(1_000_000, None).quality, BuildQuality::Medium);
         assert_eq!(
             auto.choose(1_000_000, Some(1)).quality,

@@ -1,22 +1,26 @@
 //! Clusters of primitives near each other on a Morton curve, as the leaves
-//! the fastest preset hands to PLOC.
+//! the fastest, fast and medium presets hand to PLOC over large trees.
 //!
 //! PLOC (Meister and Bittner 2018) sorts its leaves along a Morton curve and
 //! merges nodes that are each other's nearest neighbour within a window of
-//! the sorted order; the fastest preset's window is one node to each side.
-//! Its first iterations spend most of its time and memory pairing
-//! primitives that are neighbours on the curve. Here [`ROUNDS`] rounds of
-//! that merge run first, over a radix sort of 30-bit Morton codes, and PLOC
-//! starts from the clusters they make (a quarter as many as primitives on
-//! the dragon). That shrinks what PLOC sorts and merges, the binary tree it
-//! writes and the cost tables the collapse fills over that tree. A cluster
-//! holds at most 2^ROUNDS primitives, which the 8-wide leaves hold whole.
+//! the sorted order. Its first iterations spend most of its time and memory
+//! pairing primitives that are neighbours on the curve. Here a few rounds
+//! of that merge (a window of one) run first, over a radix sort of 30-bit
+//! Morton codes, and PLOC starts from the clusters they make: two rounds
+//! leave under half as many clusters as primitives (0.45 on the
+//! 13.9M-triangle dragon), three about a quarter (the dragon). That shrinks what PLOC sorts and merges, the binary tree it
+//! writes, what reinsertion searches and the cost tables the collapse fills
+//! over that tree. A cluster of `rounds` rounds holds at most 2^rounds
+//! primitives, which the 8-wide leaves hold whole ([`MAX_ROUNDS`]).
 //!
-//! Only the fastest preset starts from clusters: the others' wider windows
-//! and reinsertion make better trees than the clusters allow
-//! (docs/embree.md, "Build and collapse").
+//! What a cluster costs is the freedom to split it: its primitives share
+//! a leaf. Two rounds, then PLOC with a window of two and a little
+//! reinsertion, build a tree within 1.3% of the SAH cost of PLOC over
+//! single primitives with a window of 14 in less than half its time
+//! (docs/performance.md, "The full-quality build from clusters").
 
 use super::collapse::LEAF_PRIMS;
+use super::simd::prefetch::prefetch;
 use crate::math::Aabb;
 use glam::{UVec3, Vec3};
 use obvhs::aabb::Aabb as Box3A;
@@ -24,11 +28,17 @@ use obvhs::ploc::morton::morton_encode_u32;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
-/// Rounds of pairing: clusters hold up to 2^ROUNDS primitives; three
-/// built fastest for the same SAH cost (docs/embree.md, "Build and
-/// collapse").
-const ROUNDS: u32 = 3;
-const _: () = assert!(1 << ROUNDS <= LEAF_PRIMS);
+/// The most rounds of pairing: clusters of up to 2^MAX_ROUNDS primitives
+/// fit one leaf.
+const MAX_ROUNDS: u32 = 3;
+const _: () = assert!(1 << MAX_ROUNDS <= LEAF_PRIMS);
+
+/// How many primitives along the curve the first round asks for a box
+/// ahead of reading it: the boxes are in the mesh's order, not the
+/// curve's, so each read is a jump (on the 13.9M-triangle dragon the
+/// first round took 0.29 s on two threads, 0.22 s with the boxes
+/// prefetched 32 ahead; 8 and 16 gained less, 64 and 128 no more).
+const BOXES_AHEAD: usize = 32;
 
 /// Primitive boxes a build reads, and frees when done if it owns them.
 pub(super) enum Boxes<'a> {
@@ -60,28 +70,38 @@ pub(super) struct Clusters {
 }
 
 impl Clusters {
-    /// The clusters of primitives with boxes `boxes` inside `bounds`. Ties
-    /// in Morton code keep id order (the sort is stable), so the clusters
-    /// are the same on any thread count. The rounds write their starts
-    /// and boxes into two buffers each, in turn: a round's output is the
-    /// next one's input, and the round after overwrites the buffer the
-    /// one before read. Owned boxes are freed once the first round has
-    /// read them.
-    pub(super) fn new(boxes: Boxes, bounds: Aabb) -> Self {
+    /// The clusters of `rounds` rounds of pairing (1 to [`MAX_ROUNDS`])
+    /// over primitives with boxes `boxes` inside `bounds`. Ties in Morton
+    /// code keep id order (the sort is stable), so the clusters are the
+    /// same on any thread count. The rounds write their starts and boxes
+    /// into two buffers each, in turn: a round's output is the next one's
+    /// input, and the round after overwrites the buffer the one before
+    /// read. Owned boxes are freed once the first round has read them.
+    pub(super) fn new(boxes: Boxes, bounds: Aabb, rounds: u32) -> Self {
+        assert!((1..=MAX_ROUNDS).contains(&rounds), "{rounds} rounds");
         let order = morton_order(&boxes, bounds);
         let (mut pairs, mut starts, mut merged) = (Vec::new(), Vec::new(), Vec::new());
         // The first round reads the boxes through `order` rather than from
-        // a sorted copy (24 bytes a primitive, written and read once).
-        let first = |i: usize| lanes(boxes[order[i] as usize]);
+        // a sorted copy (24 bytes a primitive, written and read once); both
+        // of its passes read them in curve order, so a read asks for the
+        // box it will need `BOXES_AHEAD` places on.
+        let first = |i: usize| {
+            if let Some(&ahead) = order.get(i + BOXES_AHEAD) {
+                prefetch(&boxes[ahead as usize]);
+            }
+            lanes(boxes[order[i] as usize])
+        };
         pair_round(
             order.len(),
             |i| i as u32,
             first,
             (&mut pairs, &mut starts, &mut merged),
         );
-        drop(boxes);
+        if let Boxes::Owned(boxes) = boxes {
+            crate::system::memory::drop_aside(boxes);
+        }
         let (mut spare_starts, mut spare) = (Vec::new(), Vec::new());
-        for _ in 1..ROUNDS {
+        for _ in 1..rounds {
             pair_round(
                 merged.len(),
                 |i| starts[i],
@@ -417,29 +437,33 @@ mod tests {
                 })
                 .collect();
             let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-            let clusters = Clusters::new(Boxes::Borrowed(&boxes), bounds);
-            let mut seen = clusters.order.clone();
-            seen.sort_unstable();
-            assert_eq!(seen, (0..n as u32).collect::<Vec<u32>>());
-            assert_eq!(clusters.starts.len(), clusters.boxes.len() + 1);
-            assert_eq!(clusters.starts[0], 0);
-            assert_eq!(*clusters.starts.last().unwrap(), n as u32);
-            for (c, w) in clusters.boxes.iter().zip(clusters.starts.windows(2)) {
-                let size = w[1] - w[0];
-                assert!((1..=1 << ROUNDS).contains(&size), "a cluster of {size}");
-                let members = &clusters.order[w[0] as usize..w[1] as usize];
-                let union = members
-                    .iter()
-                    .fold(Aabb::EMPTY, |a, &id| a.union(boxes[id as usize]));
-                assert_eq!(*c, lanes(union), "a cluster's box is its members' union");
-            }
-            if n >= 1001 {
-                // Pairing merges: far fewer clusters than primitives.
-                assert!(
-                    clusters.boxes.len() < n / 2,
-                    "{} clusters",
-                    clusters.boxes.len()
-                );
+            for rounds in 1..=MAX_ROUNDS {
+                let clusters = Clusters::new(Boxes::Borrowed(&boxes), bounds, rounds);
+                let mut seen = clusters.order.clone();
+                seen.sort_unstable();
+                assert_eq!(seen, (0..n as u32).collect::<Vec<u32>>());
+                assert_eq!(clusters.starts.len(), clusters.boxes.len() + 1);
+                assert_eq!(clusters.starts[0], 0);
+                assert_eq!(*clusters.starts.last().unwrap(), n as u32);
+                for (c, w) in clusters.boxes.iter().zip(clusters.starts.windows(2)) {
+                    let size = w[1] - w[0];
+                    assert!((1..=1 << rounds).contains(&size), "a cluster of {size}");
+                    let members = &clusters.order[w[0] as usize..w[1] as usize];
+                    let union = members
+                        .iter()
+                        .fold(Aabb::EMPTY, |a, &id| a.union(boxes[id as usize]));
+                    assert_eq!(*c, lanes(union), "a cluster's box is its members' union");
+                }
+                if n >= 1001 {
+                    // Each round merges: about a third of the clusters are
+                    // a local minimum of area and pair with the next.
+                    let most = n as f64 * 0.75f64.powi(rounds as i32);
+                    assert!(
+                        (clusters.boxes.len() as f64) < most,
+                        "{} clusters after {rounds} rounds",
+                        clusters.boxes.len()
+                    );
+                }
             }
         }
     }

@@ -92,7 +92,10 @@ pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8
     drop(primitive_indices);
     let part = costs.emit(0, 0, 0);
     drop(costs);
-    drop(nodes);
+    // 48 bytes a node, 600 MB on the 13.9M-triangle dragon's medium tree:
+    // unmapped on a thread of its own, it costs the copy below nothing
+    // (0.05 s on the build's thread).
+    crate::system::memory::drop_aside(nodes);
     part.into_bvh(bounds)
 }
 
