@@ -35,20 +35,22 @@ pub(super) struct Recipe {
 }
 
 impl Recipe {
-    /// The recipe of `preset` (not `auto`) for `prims` primitives.
+    /// The recipe of `preset` (not `auto`) for `prims` primitives, of
+    /// which some are tested one by one in a leaf (instances or analytic
+    /// shapes) if `others`.
     ///
-    /// From [`MODEL_MIN_PRIMS`] primitives on, `fast` and `medium` build
+    /// From [`MODEL_MIN_PRIMS`] triangles on, `fast` and `medium` build
     /// over clusters: two rounds, then PLOC with a window of two and
     /// reinsertion of 2%, is `medium`, the full-quality tree, within 1.3%
     /// of the SAH cost of PLOC over single primitives with a window of 14
     /// and reinsertion of 5% (the recipe below that size) in less than
     /// half its time (docs/performance.md, "The full-quality build from
-    /// clusters"). Below it every build takes milliseconds, and a leaf of
-    /// clustered instances or shapes would test them one by one where a
-    /// node tests their boxes together, so those presets keep one
-    /// primitive a leaf; `fastest` clusters at any size, as asked.
-    pub(super) fn of(preset: BuildQuality, prims: usize) -> Self {
-        let large = prims >= MODEL_MIN_PRIMS;
+    /// clusters"). Below that size every build takes milliseconds, and a
+    /// leaf of clustered instances or shapes would test them one by one
+    /// where a node tests their boxes together, so those keep one
+    /// primitive a leaf; `fastest` clusters whatever it holds, as asked.
+    pub(super) fn of(preset: BuildQuality, prims: usize, others: bool) -> Self {
+        let large = prims >= MODEL_MIN_PRIMS && !others;
         let recipe = |cluster_rounds, radius, near_passes, reinsertion| Self {
             cluster_rounds,
             radius,
@@ -95,9 +97,10 @@ impl obvhs::Boundable for Aabb {
     }
 }
 
-/// obvhs's binary tree over `boxes` and their union; `None` if there are
-/// no boxes. For tests, which keep the binary tree to look at; a build
-/// goes through [`bounds`] and [`binary_tree`] itself.
+/// The binary tree of `quality` over `boxes` (triangles' or the like:
+/// none tested one by one) and their union; `None` if there are no boxes.
+/// For tests, which keep the binary tree to look at; a build goes through
+/// [`bounds`] and [`binary_tree`] itself.
 #[cfg(test)]
 pub(super) fn binary_tree_and_bounds(
     boxes: Boxes,
@@ -105,7 +108,8 @@ pub(super) fn binary_tree_and_bounds(
     steps: &mut Steps,
 ) -> Option<(Bvh2, Aabb)> {
     let bounds = bounds(&boxes, steps)?;
-    Some((binary_tree(boxes, bounds, quality, steps), bounds))
+    let recipe = Recipe::of(quality.preset(boxes.len()), boxes.len(), false);
+    Some((binary_tree(boxes, bounds, recipe, steps), bounds))
 }
 
 /// The union of `boxes`, timed as the build's `bounds` step; `None` if
@@ -132,25 +136,9 @@ pub(super) fn bounds(boxes: &[Aabb], steps: &mut Steps) -> Option<Aabb> {
 }
 
 /// The binary tree over `boxes` (not empty, inside `bounds`) that
-/// `quality`'s [`Recipe`] builds: one primitive a leaf, or one cluster of
-/// up to 2^rounds primitives a leaf ([`super::cluster`]).
-pub(super) fn binary_tree(
-    boxes: Boxes,
-    bounds: Aabb,
-    quality: BuildQuality,
-    steps: &mut Steps,
-) -> Bvh2 {
-    let recipe = Recipe::of(quality.preset(boxes.len()), boxes.len());
-    binary_tree_by(boxes, bounds, recipe, steps)
-}
-
-/// [`binary_tree`] by `recipe`.
-pub(super) fn binary_tree_by(
-    boxes: Boxes,
-    bounds: Aabb,
-    recipe: Recipe,
-    steps: &mut Steps,
-) -> Bvh2 {
+/// `recipe` builds: one primitive a leaf, or one cluster of up to
+/// 2^rounds primitives a leaf ([`super::cluster`]).
+pub(super) fn binary_tree(boxes: Boxes, bounds: Aabb, recipe: Recipe, steps: &mut Steps) -> Bvh2 {
     let (radius, near) = (recipe.radius, recipe.near_passes);
     let mut bvh2 = if recipe.cluster_rounds > 0 {
         // The clusters free the boxes once their first round has read them.
@@ -238,7 +226,7 @@ mod tests {
 
     /// The SAH cost of the 8-wide tree `recipe` builds over `boxes`.
     fn cost_by(boxes: &[Aabb], bounds: Aabb, recipe: Recipe) -> f64 {
-        let bvh2 = binary_tree_by(
+        let bvh2 = binary_tree(
             Boxes::Borrowed(boxes),
             bounds,
             recipe,
@@ -257,7 +245,7 @@ mod tests {
     fn the_medium_tree_over_clusters_costs_little_more_than_over_primitives() {
         let (boxes, bounds) = surface_boxes(MODEL_MIN_PRIMS + 50_000, 21);
         let n = boxes.len();
-        let medium = Recipe::of(BuildQuality::Medium, n);
+        let medium = Recipe::of(BuildQuality::Medium, n, false);
         assert!(medium.cluster_rounds > 0, "{medium:?}");
         let single = cost_by(&boxes, bounds, Recipe::one_a_leaf(BuildQuality::Medium));
         let clustered = cost_by(&boxes, bounds, medium);
@@ -265,15 +253,17 @@ mod tests {
             clustered <= 1.02 * single,
             "medium over clusters {clustered}, over primitives {single}"
         );
-        let fast = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fast, n));
-        let fastest = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fastest, n));
+        let fast = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fast, n, false));
+        let fastest = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fastest, n, false));
         assert!(
             clustered < fast && fast < fastest,
             "medium {clustered}, fast {fast}, fastest {fastest}"
         );
+        // Small trees, and trees of instances or shapes, keep one a leaf.
         for quality in [BuildQuality::Fast, BuildQuality::Medium] {
-            let small = Recipe::of(quality, MODEL_MIN_PRIMS - 1);
-            assert_eq!(small, Recipe::one_a_leaf(quality), "{quality:?}");
+            let single = Recipe::one_a_leaf(quality);
+            assert_eq!(Recipe::of(quality, MODEL_MIN_PRIMS - 1, false), single);
+            assert_eq!(Recipe::of(quality, n, true), single, "{quality:?}");
         }
     }
 
@@ -301,7 +291,7 @@ mod tests {
                     ),
                     "{quality:?} is obvhs's preset of its name"
                 );
-                let ours = binary_tree_by(
+                let ours = binary_tree(
                     Boxes::Borrowed(&boxes),
                     bounds,
                     recipe,

@@ -3,7 +3,7 @@
 //! by the surface area heuristic over the whole subtree (Ylitie, Karras
 //! and Laine 2017), see [`super::collapse`].
 
-use super::binary::{binary_tree, Boxes};
+use super::binary::{binary_tree, Boxes, Recipe};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
 use crate::math::Aabb;
@@ -125,7 +125,9 @@ impl Bvh8 {
         if quality.preset(prims) == BuildQuality::Preview {
             return super::lbvh::build(boxes, bounds, steps).debug_validated(prims);
         }
-        let bvh2 = binary_tree(boxes, bounds, quality, steps);
+        let others = (first_other as usize) < prims;
+        let recipe = Recipe::of(quality.preset(prims), prims, others);
+        let bvh2 = binary_tree(boxes, bounds, recipe, steps);
         steps.time("collapse", || {
             super::collapse::collapse_owned(bvh2, bounds, first_other).debug_validated(prims)
         })

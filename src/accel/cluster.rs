@@ -1,5 +1,5 @@
 //! Clusters of primitives near each other on a Morton curve, as the leaves
-//! the fastest, fast and medium presets hand to PLOC over large trees.
+//! the fastest, fast and medium presets hand to PLOC over large meshes.
 //!
 //! PLOC (Meister and Bittner 2018) sorts its leaves along a Morton curve and
 //! merges nodes that are each other's nearest neighbour within a window of
