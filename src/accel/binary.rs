@@ -36,8 +36,8 @@ pub(super) struct Recipe {
 
 impl Recipe {
     /// The recipe of `preset` (not `auto`) for `prims` primitives, of
-    /// which some are tested one by one in a leaf (instances or analytic
-    /// shapes) if `others`.
+    /// which `others` are tested one by one in a leaf (instances or
+    /// analytic shapes).
     ///
     /// From [`MODEL_MIN_PRIMS`] triangles on, `fast` and `medium` build
     /// over clusters: two rounds, then PLOC with a window of two and
@@ -45,12 +45,14 @@ impl Recipe {
     /// of the SAH cost of PLOC over single primitives with a window of 14
     /// and reinsertion of 5% (the recipe below that size) in less than
     /// half its time (docs/performance.md, "The full-quality build from
-    /// clusters"). Below that size every build takes milliseconds, and a
+    /// clusters"). Below that size every build takes milliseconds; and a
     /// leaf of clustered instances or shapes would test them one by one
-    /// where a node tests their boxes together, so those keep one
-    /// primitive a leaf; `fastest` clusters whatever it holds, as asked.
-    pub(super) fn of(preset: BuildQuality, prims: usize, others: bool) -> Self {
-        let large = prims >= MODEL_MIN_PRIMS && !others;
+    /// where a node tests their boxes together, so a tree of which they
+    /// are more than 1% keeps one primitive a leaf (a mesh's scene with a
+    /// sphere or two does not); `fastest` clusters whatever it holds, as
+    /// asked.
+    pub(super) fn of(preset: BuildQuality, prims: usize, others: usize) -> Self {
+        let large = prims - others.min(prims) >= MODEL_MIN_PRIMS && others * 100 <= prims;
         let recipe = |cluster_rounds, radius, near_passes, reinsertion| Self {
             cluster_rounds,
             radius,
@@ -108,7 +110,7 @@ pub(super) fn binary_tree_and_bounds(
     steps: &mut Steps,
 ) -> Option<(Bvh2, Aabb)> {
     let bounds = bounds(&boxes, steps)?;
-    let recipe = Recipe::of(quality.preset(boxes.len()), boxes.len(), false);
+    let recipe = Recipe::of(quality.preset(boxes.len()), boxes.len(), 0);
     Some((binary_tree(boxes, bounds, recipe, steps), bounds))
 }
 
@@ -245,7 +247,7 @@ mod tests {
     fn the_medium_tree_over_clusters_costs_little_more_than_over_primitives() {
         let (boxes, bounds) = surface_boxes(MODEL_MIN_PRIMS + 50_000, 21);
         let n = boxes.len();
-        let medium = Recipe::of(BuildQuality::Medium, n, false);
+        let medium = Recipe::of(BuildQuality::Medium, n, 0);
         assert!(medium.cluster_rounds > 0, "{medium:?}");
         let single = cost_by(&boxes, bounds, Recipe::one_a_leaf(BuildQuality::Medium));
         let clustered = cost_by(&boxes, bounds, medium);
@@ -253,17 +255,20 @@ mod tests {
             clustered <= 1.02 * single,
             "medium over clusters {clustered}, over primitives {single}"
         );
-        let fast = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fast, n, false));
-        let fastest = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fastest, n, false));
+        let fast = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fast, n, 0));
+        let fastest = cost_by(&boxes, bounds, Recipe::of(BuildQuality::Fastest, n, 0));
         assert!(
             clustered < fast && fast < fastest,
             "medium {clustered}, fast {fast}, fastest {fastest}"
         );
-        // Small trees, and trees of instances or shapes, keep one a leaf.
+        // Small trees, and trees of which instances or shapes are more
+        // than 1%, keep one a leaf; a sphere among the triangles clusters.
         for quality in [BuildQuality::Fast, BuildQuality::Medium] {
             let single = Recipe::one_a_leaf(quality);
-            assert_eq!(Recipe::of(quality, MODEL_MIN_PRIMS - 1, false), single);
-            assert_eq!(Recipe::of(quality, n, true), single, "{quality:?}");
+            assert_eq!(Recipe::of(quality, MODEL_MIN_PRIMS - 1, 0), single);
+            assert_eq!(Recipe::of(quality, n, n / 100 + 1), single, "{quality:?}");
+            assert_eq!(Recipe::of(quality, MODEL_MIN_PRIMS + 1, 2), single);
+            assert_ne!(Recipe::of(quality, n, 1), single, "{quality:?}");
         }
     }
 

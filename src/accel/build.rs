@@ -125,7 +125,7 @@ impl Bvh8 {
         if quality.preset(prims) == BuildQuality::Preview {
             return super::lbvh::build(boxes, bounds, steps).debug_validated(prims);
         }
-        let others = (first_other as usize) < prims;
+        let others = prims.saturating_sub(first_other as usize);
         let recipe = Recipe::of(quality.preset(prims), prims, others);
         let bvh2 = binary_tree(boxes, bounds, recipe, steps);
         steps.time("collapse", || {
