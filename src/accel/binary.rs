@@ -241,8 +241,9 @@ mod tests {
     /// clusters, and its tree costs at most 2% more than the one over
     /// single primitives it replaced (the bound; 1.3% on the
     /// dragon); `fast`'s over bigger clusters costs more than
-    /// `medium`'s, and `fastest`'s more again. Below that size both keep
-    /// one primitive a leaf.
+    /// `medium`'s, and `fastest`'s more again. Below that size, or with
+    /// more than 1% of instances or shapes, both keep one primitive a
+    /// leaf.
     #[test]
     fn the_medium_tree_over_clusters_costs_little_more_than_over_primitives() {
         let (boxes, bounds) = surface_boxes(MODEL_MIN_PRIMS + 50_000, 21);

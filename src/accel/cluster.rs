@@ -8,9 +8,10 @@
 //! of that merge (a window of one) run first, over a radix sort of 30-bit
 //! Morton codes, and PLOC starts from the clusters they make: two rounds
 //! leave under half as many clusters as primitives (0.45 on the
-//! 13.9M-triangle dragon), three about a quarter (the dragon). That shrinks what PLOC sorts and merges, the binary tree it
-//! writes, what reinsertion searches and the cost tables the collapse fills
-//! over that tree. A cluster of `rounds` rounds holds at most 2^rounds
+//! 13.9M-triangle dragon), three about a quarter (the dragon). That
+//! shrinks what PLOC sorts and merges, the binary tree it writes, what
+//! reinsertion searches and the cost tables the collapse fills over that
+//! tree. A cluster of `rounds` rounds holds at most 2^rounds
 //! primitives, which the 8-wide leaves hold whole ([`MAX_ROUNDS`]).
 //!
 //! What a cluster costs is the freedom to split it: its primitives share
