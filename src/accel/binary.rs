@@ -226,6 +226,12 @@ mod tests {
         (boxes, bounds)
     }
 
+    /// The SAH cost of the 8-wide tree collapsed from `bvh2`, whose root
+    /// box is `bounds`.
+    fn sah_cost(bvh2: &Bvh2, bounds: Aabb) -> f64 {
+        Bvh8::collapse(bvh2, bounds, u32::MAX).stats().sah_cost
+    }
+
     /// The SAH cost of the 8-wide tree `recipe` builds over `boxes`.
     fn cost_by(boxes: &[Aabb], bounds: Aabb, recipe: Recipe) -> f64 {
         let bvh2 = binary_tree(
@@ -234,7 +240,7 @@ mod tests {
             recipe,
             &mut Steps::default(),
         );
-        Bvh8::collapse(&bvh2, bounds, u32::MAX).stats().sah_cost
+        sah_cost(&bvh2, bounds)
     }
 
     /// From `MODEL_MIN_PRIMS` primitives on, `medium` builds over
@@ -309,8 +315,7 @@ mod tests {
                     params.reinsertion_batch_ratio,
                     None,
                 );
-                let cost = |b: &Bvh2| Bvh8::collapse(b, bounds, u32::MAX).stats().sah_cost;
-                let (ours, theirs) = (cost(&ours), cost(&theirs));
+                let (ours, theirs) = (sah_cost(&ours, bounds), sah_cost(&theirs, bounds));
                 assert!(
                     ours < 1.02 * theirs,
                     "{quality:?}: SAH cost {ours} against obvhs's {theirs}"

@@ -122,11 +122,12 @@ impl Bvh8 {
         let Some(bounds) = super::binary::bounds(&boxes, steps) else {
             return Self::empty();
         };
-        if quality.preset(prims) == BuildQuality::Preview {
+        let preset = quality.preset(prims);
+        if preset == BuildQuality::Preview {
             return super::lbvh::build(boxes, bounds, steps).debug_validated(prims);
         }
         let others = prims.saturating_sub(first_other as usize);
-        let recipe = Recipe::of(quality.preset(prims), prims, others);
+        let recipe = Recipe::of(preset, prims, others);
         let bvh2 = binary_tree(boxes, bounds, recipe, steps);
         steps.time("collapse", || {
             super::collapse::collapse_owned(bvh2, bounds, first_other).debug_validated(prims)

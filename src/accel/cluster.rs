@@ -47,6 +47,17 @@ pub(super) enum Boxes<'a> {
     Owned(Vec<Aabb>),
 }
 
+impl Boxes<'_> {
+    /// Frees the boxes if they are owned, on a thread of their own
+    /// (`system::memory::drop_aside`): a large mesh's take tens of
+    /// milliseconds to unmap.
+    pub(super) fn drop_aside(self) {
+        if let Boxes::Owned(boxes) = self {
+            crate::system::memory::drop_aside(boxes);
+        }
+    }
+}
+
 impl std::ops::Deref for Boxes<'_> {
     type Target = [Aabb];
     fn deref(&self) -> &[Aabb] {
@@ -98,9 +109,7 @@ impl Clusters {
             first,
             (&mut pairs, &mut starts, &mut merged),
         );
-        if let Boxes::Owned(boxes) = boxes {
-            crate::system::memory::drop_aside(boxes);
-        }
+        boxes.drop_aside();
         let (mut spare_starts, mut spare) = (Vec::new(), Vec::new());
         for _ in 1..rounds {
             pair_round(

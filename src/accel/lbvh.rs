@@ -63,9 +63,7 @@ pub(super) fn build(boxes: Boxes, bounds: Aabb, steps: &mut Steps) -> Bvh8 {
         keys: &keys,
     };
     let part = steps.time("cut", || cut.part(0..keys.len()).0);
-    if let Boxes::Owned(boxes) = boxes {
-        crate::system::memory::drop_aside(boxes);
-    }
+    boxes.drop_aside();
     crate::system::memory::drop_aside(keys);
     steps.time("assemble", || part.into_bvh(bounds))
 }
