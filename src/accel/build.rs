@@ -283,6 +283,7 @@ impl std::fmt::Display for TreeStats {
 #[cfg(test)]
 pub(super) mod tests {
     use super::super::binary::binary_tree_and_bounds;
+    use super::super::choice::MODEL_MIN_PRIMS;
     use super::super::collapse::CollapseCosts;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
@@ -367,23 +368,28 @@ pub(super) mod tests {
 
     /// Every leaf holds the primitives of its binary subtree: each
     /// primitive's box lies inside the box of the slot that holds it, and
-    /// each is held once, for a preset whose tree is PLOC's over clusters
-    /// (fastest), and two with a primitive per PLOC leaf whose nodes
-    /// reinsertion has moved (fast, high), on one thread and on three (the
-    /// leaf order the tables record is joined from pieces). The tree is the
-    /// same on both. And every node's boxes lie inside the tree's box.
+    /// each is held once, for the preview tree, a tree of PLOC's over
+    /// clusters (fastest), two over clusters whose nodes reinsertion has
+    /// moved (fast over up to eight, high over pairs) and one with a
+    /// primitive per PLOC leaf, reinserted (high under `MODEL_MIN_PRIMS`),
+    /// on one thread and on three (the leaf order the tables record is
+    /// joined from pieces). The tree is the same on both. And every
+    /// node's boxes lie inside the tree's box.
     #[test]
     fn every_leaf_holds_the_primitives_of_its_subtree() {
-        let boxes = random_boxes(150_000, 8);
-        for quality in [
-            BuildQuality::Preview,
-            BuildQuality::Fastest,
-            BuildQuality::Fast,
-            BuildQuality::High,
+        let all = random_boxes(150_000, 8);
+        let small = MODEL_MIN_PRIMS - 10_000;
+        for (quality, n) in [
+            (BuildQuality::Preview, all.len()),
+            (BuildQuality::Fastest, all.len()),
+            (BuildQuality::Fast, all.len()),
+            (BuildQuality::High, all.len()),
+            (BuildQuality::High, small),
         ] {
+            let boxes = &all[..n];
             let mut trees = Vec::new();
             for threads in [1, 3] {
-                let bvh = on_threads(threads, || Bvh8::build(&boxes, quality));
+                let bvh = on_threads(threads, || Bvh8::build(boxes, quality));
                 let mut held = vec![0u32; boxes.len()];
                 for node in &bvh.nodes {
                     for slot in 0..8 {
@@ -409,7 +415,7 @@ pub(super) mod tests {
                             let p = boxes[id as usize];
                             assert!(
                                 leaf.min.cmple(p.min).all() && p.max.cmple(leaf.max).all(),
-                                "{quality:?}, {threads} threads: primitive {id} outside its leaf"
+                                "{quality:?} over {n}, {threads} threads: primitive {id} outside its leaf"
                             );
                             held[id as usize] += 1;
                         }

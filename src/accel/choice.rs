@@ -40,10 +40,10 @@ const BUILD_NS: [f64; 5] = [120.0, 195.0, 220.0, 270.0, 1280.0];
 
 /// Trace time a ray relative to the medium tree's, of each preset of
 /// [`PRESETS`]: one plus 0.6 times the tree's SAH cost over the medium
-/// tree's, less one, on the dragon (20.9, 19.0, 18.3, 18.1, 17.4); 0.6 is
+/// tree's, less one, on the dragon (20.9, 19.0, 18.3, 18.1, 17.3); 0.6 is
 /// the share of a render's time that moves with the tree
 /// (docs/performance.md).
-const TRACE_FACTOR: [f64; 5] = [1.094, 1.031, 1.007, 1.0, 0.978];
+const TRACE_FACTOR: [f64; 5] = [1.094, 1.031, 1.007, 1.0, 0.974];
 
 /// Where the medium preset is in [`PRESETS`]: the estimate shows its
 /// time beside the chosen one's.
