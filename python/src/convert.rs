@@ -42,6 +42,18 @@ fn rows_of<T: Element + Copy, U>(
     what: &str,
     f: impl Fn(T) -> U,
 ) -> PyResult<Vec<[U; 3]>> {
+    rows_with(array, name, what, |_, row| Ok(row.map(&f)))
+}
+
+/// Each row `i` of an (n, 3) array of `T` made into one value by `f(i,
+/// row)`, which may refuse it, into one array of exactly n values: no
+/// copy of the rows in between.
+fn rows_with<T: Element + Copy, R>(
+    array: &PyReadonlyArray2<'_, T>,
+    name: &str,
+    what: &str,
+    mut f: impl FnMut(usize, [T; 3]) -> PyResult<R>,
+) -> PyResult<Vec<R>> {
     let shape = array.shape();
     if shape[0] == 0 {
         return Ok(Vec::new());
@@ -52,24 +64,26 @@ fn rows_of<T: Element + Copy, U>(
             shape_text(shape)
         )));
     }
+    let mut out = Vec::with_capacity(shape[0]);
     // as_slice also takes Fortran order (contiguous, but by columns).
     let flat = array
         .is_c_contiguous()
         .then(|| array.as_slice().ok())
         .flatten();
-    Ok(match flat {
-        Some(flat) => flat
-            .chunks_exact(3)
-            .map(|r| [f(r[0]), f(r[1]), f(r[2])])
-            .collect(),
+    match flat {
+        Some(flat) => {
+            for (i, r) in flat.chunks_exact(3).enumerate() {
+                out.push(f(i, [r[0], r[1], r[2]])?);
+            }
+        }
         // Not row-major (a column slice, Fortran order): read by strides.
-        None => array
-            .as_array()
-            .rows()
-            .into_iter()
-            .map(|r| [f(r[0]), f(r[1]), f(r[2])])
-            .collect(),
-    })
+        None => {
+            for (i, r) in array.as_array().rows().into_iter().enumerate() {
+                out.push(f(i, [r[0], r[1], r[2]])?);
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// `obj` through `numpy.asarray(obj)`, checked to hold numbers of a dtype
@@ -354,34 +368,36 @@ fn gather<T: Send>(
 pub fn faces(obj: &Bound<'_, PyAny>, vertices: usize) -> PyResult<Vec<[u32; 3]>> {
     const NAME: &str = "faces";
     const WHAT: &str = "integers";
-    let rows: Vec<[i64; 3]> = if let Ok(a) = obj.extract::<PyReadonlyArray2<i64>>() {
-        rows_of(&a, NAME, WHAT, |x| x)?
+    // Each row checked as it is read, straight into the u32 rows: a copy
+    // in i64 first (21 MB for the dragon) was, once freed, the block
+    // whose size glibc took as its mmap threshold, so that the build's
+    // temporaries below it came from the heap and stayed resident after
+    // it (docs/python.md, "Building the dragon: time and memory").
+    let check = |face: usize, row: [i64; 3]| match row
+        .iter()
+        .position(|&k| k < 0 || k as u64 >= vertices as u64)
+    {
+        Some(corner) => Err(error(format!(
+            "faces[{face}][{corner}] = {} is out of range for {vertices} vertices",
+            row[corner]
+        ))),
+        None => Ok(row.map(|k| k as u32)),
+    };
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<i64>>() {
+        rows_with(&a, NAME, WHAT, check)
     } else if let Ok(a) = obj.extract::<PyReadonlyArray2<i32>>() {
-        rows_of(&a, NAME, WHAT, i64::from)?
+        rows_with(&a, NAME, WHAT, |i, r| check(i, r.map(i64::from)))
     } else if let Ok(a) = obj.extract::<PyReadonlyArray2<u32>>() {
-        rows_of(&a, NAME, WHAT, i64::from)?
+        rows_with(&a, NAME, WHAT, |i, r| check(i, r.map(i64::from)))
     } else if let Ok(a) = obj.extract::<PyReadonlyArray2<u64>>() {
-        rows_of(&a, NAME, WHAT, |x| i64::try_from(x).unwrap_or(i64::MAX))?
+        let wide = |x: u64| i64::try_from(x).unwrap_or(i64::MAX);
+        rows_with(&a, NAME, WHAT, |i, r| check(i, r.map(wide)))
     } else {
         match as_numpy(obj, NAME, "iu", WHAT, "int64", 2)? {
-            None => Vec::new(),
-            Some(a) => rows_of(&a.extract::<PyReadonlyArray2<i64>>()?, NAME, WHAT, |x| x)?,
+            None => Ok(Vec::new()),
+            Some(a) => rows_with(&a.extract::<PyReadonlyArray2<i64>>()?, NAME, WHAT, check),
         }
-    };
-    let mut out = Vec::with_capacity(rows.len());
-    for (face, row) in rows.iter().enumerate() {
-        if let Some(corner) = row
-            .iter()
-            .position(|&k| k < 0 || k as u64 >= vertices as u64)
-        {
-            return Err(error(format!(
-                "faces[{face}][{corner}] = {} is out of range for {vertices} vertices",
-                row[corner]
-            )));
-        }
-        out.push(row.map(|k| k as u32));
     }
-    Ok(out)
 }
 
 /// A 1-D array of numbers (any float or integer dtype) as float64.
