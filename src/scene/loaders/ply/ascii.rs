@@ -11,7 +11,7 @@
 //! positions are the same bits as any exact reader gives; `double`
 //! properties round once, from the f64 value, to f32.
 
-use super::face::Face;
+use super::face::{Face, FaceRows};
 use crate::error::{InputError, InputResult};
 use glam::Vec3;
 use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
@@ -23,7 +23,7 @@ use wide::u8x32;
 #[derive(Default)]
 pub(super) struct AsciiBody {
     pub positions: Vec<Vec3>,
-    pub faces: Vec<Face>,
+    pub faces: FaceRows,
 }
 
 /// What to do with one property of an element.
@@ -106,29 +106,33 @@ pub(super) fn read_body(
         // chunk's elements are copied again after parsing.
         let total = done;
         let mut positions = vec![Vec3::ZERO; if name == "vertex" { total } else { 0 }];
-        let mut faces: Vec<Face> = std::iter::repeat_with(Face::default)
-            .take(if name == "face" { total } else { 0 })
-            .collect();
+        let mut rows = vec![[0u32; 3]; if name == "face" { total } else { 0 }];
         let mut position_parts: Vec<&mut [Vec3]> = positions.chunks_mut(CHUNK).collect();
         position_parts.resize_with(chunks.len(), Default::default);
-        let mut face_parts: Vec<&mut [Face]> = faces.chunks_mut(CHUNK).collect();
-        face_parts.resize_with(chunks.len(), Default::default);
-        let parsed: Vec<InputResult<()>> = chunks
+        let mut row_parts: Vec<&mut [[u32; 3]]> = rows.chunks_mut(CHUNK).collect();
+        row_parts.resize_with(chunks.len(), Default::default);
+        let parsed: Vec<InputResult<Vec<(usize, Face)>>> = chunks
             .par_iter()
             .zip(position_parts)
-            .zip(face_parts)
-            .map(|((chunk, positions), faces)| element_reader.parse(chunk, positions, faces))
+            .zip(row_parts)
+            .map(|((chunk, positions), rows)| element_reader.parse(chunk, positions, rows))
             .collect();
-        parsed.into_iter().collect::<InputResult<()>>()?;
+        let mut faces = FaceRows {
+            rows,
+            others: Vec::new(),
+        };
+        for others in parsed {
+            faces.others.extend(others?);
+        }
         if body.positions.is_empty() {
             body.positions = positions;
         } else {
             body.positions.extend(positions);
         }
-        if body.faces.is_empty() {
+        if body.faces.rows.is_empty() && body.faces.others.is_empty() {
             body.faces = faces;
         } else {
-            body.faces.extend(faces);
+            body.faces.append(faces);
         }
         if truncated {
             return Err(InputError::file(
@@ -219,10 +223,17 @@ struct ElementReader<'h> {
 
 impl ElementReader<'_> {
     /// Writes the elements of `chunk` (its vertices' positions or its
-    /// faces, one a slot, in order) or returns the error of its first bad
-    /// line.
-    fn parse(&self, chunk: &Chunk, positions: &mut [Vec3], faces: &mut [Face]) -> InputResult<()> {
+    /// faces' rows, one a slot, in order) and returns its faces that are
+    /// no triangle, with their indices in the element ([`FaceRows`]), or
+    /// the error of its first bad line.
+    fn parse(
+        &self,
+        chunk: &Chunk,
+        positions: &mut [Vec3],
+        rows: &mut [[u32; 3]],
+    ) -> InputResult<Vec<(usize, Face)>> {
         let name = self.name;
+        let mut others = Vec::new();
         let mut element = 0;
         let mut indices: Vec<u32> = Vec::new();
         for (k, text) in chunk.text.lines().enumerate() {
@@ -291,12 +302,15 @@ impl ElementReader<'_> {
                     }
                     positions[element] = p;
                 }
-                "face" => faces[element] = face.unwrap_or_default(),
+                "face" => match face.unwrap_or_default() {
+                    Face::Triangle(t) => rows[element] = t,
+                    other => others.push((chunk.first_element + element, other)),
+                },
                 _ => {}
             }
             element += 1;
         }
-        Ok(())
+        Ok(others)
     }
 }
 

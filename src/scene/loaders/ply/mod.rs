@@ -42,7 +42,7 @@ use super::io_message;
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use binary::Scalar;
-use face::{out_of_range, triangulate};
+use face::out_of_range;
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header, PropertyType, ScalarType};
@@ -126,8 +126,9 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     if header.encoding == Encoding::Ascii {
         let body = ascii::read_body(path, &header, body, line.saturating_sub(1))?;
         let n = body.positions.len();
-        let indices =
-            triangulate(&body.faces, n).map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
+        let indices = (body.faces)
+            .triangulate(n)
+            .map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
         return Ok(mesh_asset(path, body.positions, indices, warnings));
     }
     let (positions, indices) = binary::read_body(path, &header, body, line)?;
