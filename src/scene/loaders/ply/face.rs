@@ -89,7 +89,8 @@ fn push_face(
 /// large scans are, is then its rows, with no second array: a [`Face`]
 /// a face took 24 bytes, twice a row, and freeing those 21 MB for the
 /// dragon kept the build's temporaries resident (glibc took the size as
-/// its mmap threshold; docs/performance.md, "The build's peak memory").
+/// its mmap threshold; docs/performance.md, "The faces that set glibc's
+/// threshold").
 #[derive(Default)]
 pub(super) struct FaceRows {
     pub rows: Vec<[u32; 3]>,
