@@ -245,8 +245,14 @@ mod tests {
     /// 1000 lines) and as the same mesh in binary: the header line count
     /// and the two files.
     fn grid(n: u32) -> (String, Vec<u8>) {
+        grid_of(n, false)
+    }
+
+    /// [`grid`], each quad as two triangles where `triangles` is set.
+    fn grid_of(n: u32, triangles: bool) -> (String, Vec<u8>) {
         let verts = (n + 1) * (n + 1);
-        let head = format!("ply\nformat ascii 1.0\nelement vertex {verts}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n", n * n);
+        let faces = if triangles { 2 * n * n } else { n * n };
+        let head = format!("ply\nformat ascii 1.0\nelement vertex {verts}\nproperty float x\nproperty float y\nproperty float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n");
         let mut ascii = head.clone();
         let mut bin = head.replace("ascii", "binary_little_endian").into_bytes();
         let mut lines = 0;
@@ -266,15 +272,57 @@ mod tests {
             let (i, j) = (q % n, q / n);
             let a = j * (n + 1) + i;
             let quad = [a, a + 1, a + n + 2, a + n + 1];
-            line(
-                &mut ascii,
-                format!("4 {} {} {} {}\n", quad[0], quad[1], quad[2], quad[3]),
-            );
-            bin.push(4);
-            quad.iter()
-                .for_each(|v| bin.extend((*v as i32).to_le_bytes()));
+            let polygons = match triangles {
+                true => vec![
+                    vec![quad[0], quad[1], quad[2]],
+                    vec![quad[0], quad[2], quad[3]],
+                ],
+                false => vec![quad.to_vec()],
+            };
+            for p in polygons {
+                let text: Vec<String> = p.iter().map(|v| v.to_string()).collect();
+                line(&mut ascii, format!("{} {}\n", p.len(), text.join(" ")));
+                bin.push(p.len() as u8);
+                p.iter().for_each(|v| bin.extend((*v as i32).to_le_bytes()));
+            }
         }
         (ascii, bin)
+    }
+
+    /// A large ASCII mesh of triangles, read in parallel chunks straight
+    /// into rows of indices, is its binary twin, and an index out of range
+    /// deep in it names the same face in both.
+    #[test]
+    fn large_ascii_triangles_read_into_rows_as_binary_ones() {
+        let (ascii, bin) = grid_of(200, true); // 40,401 vertices, 80,000 triangles
+        let a = load_ply(&write("tris.ply", ascii.as_bytes())).unwrap();
+        let b = load_ply(&write("trisb.ply", &bin)).unwrap();
+        assert_eq!(a.meshes[0].positions, b.meshes[0].positions);
+        assert_eq!(a.meshes[0].indices, b.meshes[0].indices);
+        assert_eq!(a.meshes[0].indices.len(), 80_000);
+        // Face 61,234's last index out of range, in both files.
+        let face = 61_234usize;
+        let [x, y, z] = a.meshes[0].indices[face];
+        let (from, to) = (format!("3 {x} {y} {z}\n"), format!("3 {x} {y} 99999\n"));
+        let at = ascii
+            .match_indices(&from)
+            .map(|(k, _)| k)
+            .collect::<Vec<_>>();
+        assert_eq!(at.len(), 1, "the face's line is unique");
+        let broken = format!("{}{to}{}", &ascii[..at[0]], &ascii[at[0] + from.len()..]);
+        let mut broken_bin = bin.clone();
+        let record = bin.len() - (80_000 - face) * 13;
+        broken_bin[record + 9..record + 13].copy_from_slice(&99999i32.to_le_bytes());
+        for (name, bytes) in [
+            ("bad.ply", broken.as_bytes()),
+            ("badb.ply", &broken_bin[..]),
+        ] {
+            let e = load_ply(&write(name, bytes)).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("face {face}: vertex index 99999 is out of range")),
+                "{name}: {e}"
+            );
+        }
     }
 
     /// An ASCII body of several parallel chunks reads as its binary twin,
