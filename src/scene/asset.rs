@@ -387,15 +387,15 @@ impl LoadedAsset {
                     }
                 }
             });
-            let alone = self.meshes.len() == 1 && self.shared.is_empty();
-            if alone && used.par_iter().all(|u| u.load(Relaxed)) {
-                return Cow::Borrowed(&m.positions);
-            }
             let own = marked(&m.positions, &used);
+            let alone = self.meshes.len() == 1 && self.shared.is_empty();
+            if let (true, Cow::Borrowed(_)) = (alone, &own) {
+                return own;
+            }
             // The first mesh's points are the list (a copy of a huge
             // mesh's would be one thread's, onto fresh pages).
             if points.is_empty() {
-                points = own;
+                points = own.into_owned();
             } else {
                 points.extend_from_slice(&own);
             }
@@ -478,17 +478,21 @@ fn bake(own: impl Iterator<Item = LoadedMesh>, shared: &[SharedMesh]) -> Vec<Loa
     out
 }
 
-/// The positions whose mark is set, in order, in a list of exactly their
-/// number: each block of the marks counts its own, and then copies them
-/// where the blocks before it end, all in parallel (a filtered collect
-/// grows pieces and joins them on one thread, twice the fresh pages).
-fn marked(positions: &[Vec3], used: &[AtomicBool]) -> Vec<Vec3> {
+/// The positions whose mark is set, in order: all of them as they are
+/// when every mark is set, else in a list of exactly their number: each
+/// block of the marks counts its own, and then copies them where the
+/// blocks before it end, all in parallel (a filtered collect grows
+/// pieces and joins them on one thread, twice the fresh pages).
+fn marked<'a>(positions: &'a [Vec3], used: &[AtomicBool]) -> Cow<'a, [Vec3]> {
     const BLOCK: usize = 1 << 16;
     let counts: Vec<usize> = used
         .par_chunks(BLOCK)
         .map(|u| u.iter().filter(|u| u.load(Relaxed)).count())
         .collect();
     let total = counts.iter().sum();
+    if total == positions.len() {
+        return Cow::Borrowed(positions);
+    }
     let mut out: Vec<Vec3> = (0..total)
         .into_par_iter()
         .with_min_len(BLOCK)
@@ -511,7 +515,7 @@ fn marked(positions: &[Vec3], used: &[AtomicBool]) -> Vec<Vec3> {
                 *slot = p;
             }
         });
-    out
+    Cow::Owned(out)
 }
 
 #[cfg(test)]

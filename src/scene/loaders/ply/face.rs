@@ -34,11 +34,19 @@ impl Face {
     pub(super) fn bad_index(&self, n: usize) -> Option<i64> {
         match self {
             Face::Empty => None,
-            Face::Triangle(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
-            Face::Polygon(idx) => idx.iter().find(|&&k| k as usize >= n).map(|&k| k.into()),
+            Face::Triangle(idx) => first_outside(idx, n),
+            Face::Polygon(idx) => first_outside(idx, n),
             Face::Invalid(k) => Some(*k),
         }
     }
+}
+
+/// The first of `indices` outside `0..n`, if any.
+fn first_outside(indices: &[u32], n: usize) -> Option<i64> {
+    indices
+        .iter()
+        .find(|&&k| k as usize >= n)
+        .map(|&k| k.into())
 }
 
 /// The error of face `i`, whose index `bad` is not one of the `n` vertices.
@@ -110,7 +118,7 @@ impl FaceRows {
     /// index checked against the vertex count `n`; else the first bad
     /// face and its bad index. Rows alone are returned as they are.
     pub(super) fn triangulate(self, n: usize) -> Result<Vec<[u32; 3]>, (usize, i64)> {
-        let bad = |t: &[u32; 3]| t.iter().find(|&&k| k as usize >= n).map(|&k| i64::from(k));
+        let bad = |t: &[u32; 3]| first_outside(t, n);
         if self.others.is_empty() {
             return match super::binary::first_where(&self.rows, |t| bad(t).is_some()) {
                 Some(i) => Err((i, bad(&self.rows[i]).unwrap_or_default())),
