@@ -6,7 +6,7 @@
 # Xeon; needs no network and no Python package (python3 alone converts the
 # PLY for Embree).
 #
-#   tools/bench_lone_walk.sh STRATA EMBREE_TRACE DRAGON.ply [N] [RUNS]
+#   tools/bench_lone_walk.sh STRATA EMBREE_TRACE DRAGON.ply [N] [RUNS] [QUALITY]
 #
 #   STRATA        a strata binary (built for x86-64-v3; `STRATA_SIMD` picks
 #                 its kernel)
@@ -16,6 +16,9 @@
 #   DRAGON.ply    assets/dragon.ply (ASCII, 871,414 triangles)
 #   N             rays of each kind (default 100000)
 #   RUNS          alternating runs per row, the median taken (default 3)
+#   QUALITY       strata's --bvh-quality (default high: Embree builds its
+#                 high-quality tree, so both walk their best tree; auto
+#                 picks by the mesh's size)
 #
 # Writes its ray files to a temporary folder, removed at the end. Per row:
 # Mrays/s of strata avx2, strata avx512 (median of RUNS processes, each the
@@ -26,10 +29,10 @@
 set -euo pipefail
 
 if [ $# -lt 3 ]; then
-    sed -n '2,25p' "$0" | sed 's/^# \{0,1\}//'
+    sed -n '2,28p' "$0" | sed 's/^# \{0,1\}//'
     exit 2
 fi
-strata=$1 embree=$2 mesh=$3 n=${4:-100000} runs=${5:-3}
+strata=$1 embree=$2 mesh=$3 n=${4:-100000} runs=${5:-3} quality=${6:-high}
 for f in "$strata" "$embree" "$mesh"; do
     [ -e "$f" ] || { echo "error: $f: no such file" >&2; exit 2; }
 done
@@ -85,11 +88,12 @@ read -r ready _ <&"${EMB[0]}"
 [ "$ready" = ready ] || { echo "error: $embree did not start:" >&2; cat "$work/embree.log" >&2; exit 1; }
 tree=$(awk '$1 == "building" {t = $2} $1 == "intersector1" && $2 == "=" {k = $3} END {print t ", one-ray kernel " k}' "$work/embree.log")
 echo "Embree: $tree"
+echo "strata: --bvh-quality $quality"
 
 median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 strata_rate() { # kernel kind query-flag
     STRATA_SIMD=$1 "$strata" trace "$mesh" --rays "$work/$2.rays" --hits "$work/$2.$1.hits" \
-        --threads 1 --one-at-a-time --repeats 3 $3 | sed 's/.*= \([0-9.]*\) Mrays\/s.*/\1/'
+        --threads 1 --one-at-a-time --repeats 3 --bvh-quality "$quality" $3 | sed 's/.*= \([0-9.]*\) Mrays\/s.*/\1/'
 }
 embree_rate() { # first query
     echo "$1 $n $2 single 1" >&"${EMB[1]}"
