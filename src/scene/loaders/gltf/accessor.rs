@@ -69,7 +69,7 @@ impl Loader<'_> {
         &self,
         index: usize,
         what: &str,
-        accepts: impl Fn(ComponentType, AccessorType) -> bool,
+        accepts: impl Fn(ComponentType, AccessorType, bool) -> bool,
     ) -> InputResult<(AccessorData<'_>, ComponentType)> {
         let location = format!("accessors[{index}]");
         let accessor = self
@@ -83,10 +83,15 @@ impl Loader<'_> {
             return Err(self.error(&location, "invalid componentType or type"));
         };
         let component = component.0;
-        if !accepts(component, *dimensions) {
+        if !accepts(component, *dimensions, accessor.normalized) {
+            let normalized = if accessor.normalized {
+                "normalized "
+            } else {
+                ""
+            };
             return Err(self.error(
                 &location,
-                format!("{what} cannot be {component:?} {dimensions:?}"),
+                format!("{what} cannot be {normalized}{component:?} {dimensions:?}"),
             ));
         }
         if accessor.sparse.is_some() {
@@ -140,60 +145,51 @@ impl Loader<'_> {
         ))
     }
 
-    pub(super) fn read_vec3(&self, index: usize, what: &str) -> InputResult<Vec<Vec3>> {
-        let (data, _) = self.accessor(index, what, |c, t| {
-            c == ComponentType::F32 && t == AccessorType::Vec3
-        })?;
-        self.finite_elements(index, what, &data, |e| {
-            Vec3::new(
-                f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
-                f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
-                f32::from_le_bytes([e[8], e[9], e[10], e[11]]),
-            )
+    /// A `VEC3` attribute (`POSITION`, `NORMAL`): floats, or the integers
+    /// `attribute` may have, each element finite.
+    pub(super) fn read_vec3(&self, index: usize, attribute: Attribute) -> InputResult<Vec<Vec3>> {
+        let (data, component, normalized) = self.attribute(index, attribute)?;
+        self.finite_elements(index, &attribute.name(), &data, |e| {
+            let c = |k: usize| decode(e, component, k, normalized);
+            Vec3::new(c(0), c(1), c(2))
         })
     }
 
-    /// Texture coordinates: `FLOAT`, or normalized `UNSIGNED_BYTE` or
-    /// `UNSIGNED_SHORT` (read as n/255, n/65535), `VEC2`, as the glTF
-    /// specification allows for `TEXCOORD_n`.
-    /// A `VEC4` float accessor (glTF `TANGENT`), every value finite.
-    pub(super) fn read_vec4(&self, index: usize, what: &str) -> InputResult<Vec<glam::Vec4>> {
-        let (data, _) = self.accessor(index, what, |c, t| {
-            c == ComponentType::F32 && t == AccessorType::Vec4
-        })?;
-        self.finite_elements(index, what, &data, |e| {
-            let f = |k: usize| f32::from_le_bytes([e[k], e[k + 1], e[k + 2], e[k + 3]]);
-            glam::Vec4::new(f(0), f(4), f(8), f(12))
+    /// A `VEC4` attribute (glTF `TANGENT`), every value finite.
+    pub(super) fn read_vec4(&self, index: usize) -> InputResult<Vec<glam::Vec4>> {
+        let attribute = Attribute::Tangent;
+        let (data, component, normalized) = self.attribute(index, attribute)?;
+        self.finite_elements(index, &attribute.name(), &data, |e| {
+            let c = |k: usize| decode(e, component, k, normalized);
+            glam::Vec4::new(c(0), c(1), c(2), c(3))
         })
     }
 
-    pub(super) fn read_uvs(&self, index: usize, what: &str) -> InputResult<Vec<Vec2>> {
-        let (data, component) = self.accessor(index, what, |c, t| {
-            matches!(
-                c,
-                ComponentType::F32 | ComponentType::U8 | ComponentType::U16
-            ) && t == AccessorType::Vec2
-        })?;
-        let normalized = self.root.accessors.get(index).is_some_and(|a| a.normalized);
-        if component != ComponentType::F32 && !normalized {
-            return Err(self.error(
-                format!("accessors[{index}]"),
-                format!("{what} of {component:?} must be normalized"),
-            ));
-        }
-        self.finite_elements(index, what, &data, |e| match component {
-            ComponentType::U8 => Vec2::new(f32::from(e[0]), f32::from(e[1])) / 255.0,
-            ComponentType::U16 => {
-                Vec2::new(
-                    f32::from(u16::from_le_bytes([e[0], e[1]])),
-                    f32::from(u16::from_le_bytes([e[2], e[3]])),
-                ) / 65535.0
-            }
-            _ => Vec2::new(
-                f32::from_le_bytes([e[0], e[1], e[2], e[3]]),
-                f32::from_le_bytes([e[4], e[5], e[6], e[7]]),
-            ),
+    /// Texture coordinates (`VEC2`) of set `set`: floats, or integers (n/255
+    /// and n/65535 for normalized unsigned bytes and shorts, as glTF reads
+    /// them; the rest as `KHR_mesh_quantization` allows).
+    pub(super) fn read_uvs(&self, index: usize, set: usize) -> InputResult<Vec<Vec2>> {
+        let attribute = Attribute::TexCoord(set);
+        let (data, component, normalized) = self.attribute(index, attribute)?;
+        self.finite_elements(index, &attribute.name(), &data, |e| {
+            let c = |k: usize| decode(e, component, k, normalized);
+            Vec2::new(c(0), c(1))
         })
+    }
+
+    /// An attribute accessor's elements, its component type and whether it
+    /// is normalized, refused unless `attribute` may have them.
+    fn attribute(
+        &self,
+        index: usize,
+        attribute: Attribute,
+    ) -> InputResult<(AccessorData<'_>, ComponentType, bool)> {
+        let (data, component) = self.accessor(index, &attribute.name(), |c, t, normalized| {
+            t == attribute.dimensions() && attribute.accepts(c, normalized)
+        })?;
+        // A float is never normalized: the flag is ignored there.
+        let normalized = self.root.accessors[index].normalized;
+        Ok((data, component, normalized))
     }
 
     /// Decode every element of `data`, refusing the first that is not finite
@@ -220,7 +216,7 @@ impl Loader<'_> {
     }
 
     pub(super) fn read_indices(&self, index: usize) -> InputResult<Vec<u32>> {
-        let (data, component) = self.accessor(index, "indices", |c, t| {
+        let (data, component) = self.accessor(index, "indices", |c, t, _| {
             matches!(
                 c,
                 ComponentType::U8 | ComponentType::U16 | ComponentType::U32
@@ -236,6 +232,81 @@ impl Loader<'_> {
                 }
             })
             .collect())
+    }
+}
+
+/// A vertex attribute strata reads, and the component types it may have:
+/// glTF's own (floats; normalized unsigned bytes and shorts for texture
+/// coordinates) and those `KHR_mesh_quantization` adds (Khronos, "glTF
+/// extension registry": positions as bytes or shorts, normalized or not;
+/// normals and tangents as normalized signed ones; texture coordinates as
+/// any of the four, normalized or not). They are read whether or not a file
+/// declares the extension: the component type says how to read them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Attribute {
+    Position,
+    Normal,
+    Tangent,
+    TexCoord(usize),
+}
+
+impl Attribute {
+    /// The attribute's name in a primitive's `attributes`.
+    pub(super) fn name(self) -> String {
+        match self {
+            Self::Position => "POSITION".into(),
+            Self::Normal => "NORMAL".into(),
+            Self::Tangent => "TANGENT".into(),
+            Self::TexCoord(set) => format!("TEXCOORD_{set}"),
+        }
+    }
+
+    fn dimensions(self) -> AccessorType {
+        match self {
+            Self::Position | Self::Normal => AccessorType::Vec3,
+            Self::Tangent => AccessorType::Vec4,
+            Self::TexCoord(_) => AccessorType::Vec2,
+        }
+    }
+
+    fn accepts(self, component: ComponentType, normalized: bool) -> bool {
+        use ComponentType::{F32, I16, I8, U16, U8};
+        match (self, component) {
+            (_, F32) => true,
+            (Self::Position | Self::TexCoord(_), I8 | U8 | I16 | U16) => true,
+            (Self::Normal | Self::Tangent, I8 | I16) => normalized,
+            _ => false,
+        }
+    }
+}
+
+/// Component `k` of element `e`: a float as it is; an integer as its value,
+/// or normalized as glTF says (n/255 and n/65535 unsigned, max(n/127, −1)
+/// and max(n/32767, −1) signed).
+fn decode(e: &[u8], component: ComponentType, k: usize, normalized: bool) -> f32 {
+    let (value, scale, signed) = match component {
+        ComponentType::I8 => (f32::from(e[k] as i8), 127.0, true),
+        ComponentType::U8 => (f32::from(e[k]), 255.0, false),
+        ComponentType::I16 => (
+            f32::from(i16::from_le_bytes([e[2 * k], e[2 * k + 1]])),
+            32767.0,
+            true,
+        ),
+        ComponentType::U16 => (
+            f32::from(u16::from_le_bytes([e[2 * k], e[2 * k + 1]])),
+            65535.0,
+            false,
+        ),
+        // Never an attribute's (`Attribute::accepts`); read as its value.
+        ComponentType::U32 => (u32_le(&e[4 * k..]) as f32, u32::MAX as f32, false),
+        ComponentType::F32 => {
+            return f32::from_le_bytes([e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]])
+        }
+    };
+    match (normalized, signed) {
+        (false, _) => value,
+        (true, false) => value / scale,
+        (true, true) => (value / scale).max(-1.0),
     }
 }
 
@@ -316,5 +387,116 @@ mod tests {
             "accessors[1]",
             "POSITION cannot be U16 Scalar",
         );
+    }
+
+    /// Integers as glTF reads them (max(c/127, −1), c/255, max(c/32767, −1),
+    /// c/65535 normalized; the value otherwise), worked out here in f64.
+    fn dequantized(c: i64, component: u32, normalized: bool) -> f32 {
+        let scale = match component {
+            5120 => 127.0,
+            5121 => 255.0,
+            5122 => 32767.0,
+            _ => 65535.0,
+        };
+        let v = c as f64;
+        (if normalized { (v / scale).max(-1.0) } else { v }) as f32
+    }
+
+    /// `values` as little-endian integers of glTF componentType `component`.
+    fn integers(values: &[i64], component: u32) -> Vec<u8> {
+        values
+            .iter()
+            .flat_map(|&v| match component {
+                5120 | 5121 => vec![v as u8],
+                _ => (v as u16).to_le_bytes().to_vec(),
+            })
+            .collect()
+    }
+
+    /// A file of one triangle whose positions (and, where given, normals)
+    /// are accessors 0 (and 1), placed by `node`, requiring
+    /// KHR_mesh_quantization.
+    fn quantized(b: &Builder, normals: bool, node: &str) -> InputResult<LoadedAsset> {
+        let normals = if normals { r#","NORMAL":1"# } else { "" };
+        let rest = format!(
+            r#""extensionsUsed":["KHR_mesh_quantization"],"extensionsRequired":["KHR_mesh_quantization"],
+               "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0{normals}}}}}]}}],"nodes":[{{"mesh":0{node}}}]"#
+        );
+        load_json(b, &rest)
+    }
+
+    #[test]
+    fn quantized_positions_read_as_the_values_they_stand_for() {
+        // Each component type's extremes and a value between, at every
+        // corner; three corners of each type's values a triangle.
+        let cases: [(u32, [i64; 9]); 4] = [
+            (5120, [-128, -127, 0, 127, 1, -1, 64, -64, 100]),
+            (5121, [0, 255, 1, 128, 254, 7, 200, 3, 99]),
+            (5122, [-32768, -32767, 0, 32767, 1, -1, 12345, -20000, 2]),
+            (5123, [0, 65535, 1, 32768, 65534, 7, 40000, 3, 999]),
+        ];
+        for (component, values) in cases {
+            for normalized in [false, true] {
+                let mut b = Builder::default();
+                b.raw_accessor(&integers(&values, component), component, "VEC3", normalized);
+                let asset = quantized(&b, false, "").unwrap();
+                let got = &asset.meshes[0].positions;
+                for (i, p) in got.iter().enumerate() {
+                    for k in 0..3 {
+                        let want = dequantized(values[3 * i + k], component, normalized);
+                        assert_eq!(p[k], want, "{component} {normalized} corner {i}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_node_dequantizes_positions_as_gltfpack_writes_them() {
+        // gltfpack's layout: unnormalized shorts, four to an element (the
+        // fourth pads it to 8 bytes), scaled and moved by the node.
+        let mut b = Builder::default();
+        let shorts = [0, 0, 0, 0, 1000, 0, 0, 0, 0, 2000, -500, 0];
+        let view = b.view(&integers(&shorts, 5122));
+        b.views[view] = b.views[view].replace('}', r#","byteStride":8}"#);
+        b.accessor(format!(
+            r#"{{"bufferView":{view},"componentType":5122,"count":3,"type":"VEC3"}}"#
+        ));
+        let node = r#","scale":[0.001,0.001,0.002],"translation":[5,0,-1]"#;
+        let asset = quantized(&b, false, node).unwrap().into_baked();
+        assert_corners(
+            &asset.meshes[0],
+            [[5.0, 0.0, -1.0], [6.0, 0.0, -1.0], [5.0, 2.0, -2.0]],
+        );
+    }
+
+    #[test]
+    fn quantized_normals_must_be_normalized_signed_integers() {
+        for (component, normalized, error) in [
+            (5120, true, None),
+            (5122, true, None),
+            (5120, false, Some("NORMAL cannot be I8 Vec3")),
+            (5121, true, Some("NORMAL cannot be normalized U8 Vec3")),
+            (5123, true, Some("NORMAL cannot be normalized U16 Vec3")),
+        ] {
+            let mut b = Builder::default();
+            b.positions(&TRIANGLE);
+            let values = [0, 0, 127, 0, 0, -128, 90, 0, 30];
+            b.raw_accessor(&integers(&values, component), component, "VEC3", normalized);
+            let result = quantized(&b, true, "");
+            match error {
+                Some(needle) => expect_error(result, "scene.gltf", "accessors[1]", needle),
+                None => {
+                    let normals = result.unwrap().meshes[0].normals.clone().unwrap().values;
+                    // The loader keeps normals of unit length.
+                    for (i, &n) in normals.iter().enumerate() {
+                        let want = Vec3::from_array(std::array::from_fn(|k| {
+                            dequantized(values[3 * i + k], component, true)
+                        }));
+                        assert_close(n, want.normalize());
+                    }
+                }
+            }
+        }
     }
 }

@@ -96,9 +96,21 @@ const CONVERT: &str = "convert it to glTF 2.0 first, e.g. with `assimp export FI
 const EXTENSION_WORDS: &[(&str, &str)] = &[
     ("KHR_draco_mesh_compression", "Draco-compressed meshes"),
     ("EXT_meshopt_compression", "meshopt-compressed buffers"),
-    ("KHR_mesh_quantization", "quantized vertex attributes"),
     ("KHR_texture_basisu", "Basis Universal textures"),
 ];
+
+/// A required extension strata reads that the `gltf` crate does not know:
+/// integer vertex attributes (`super::accessor::Attribute`), which change
+/// nothing in the document's structure.
+const QUANTIZATION: &str = "KHR_mesh_quantization";
+
+/// The extensions a file may require: the `gltf` crate's, and
+/// [`QUANTIZATION`].
+fn readable_extensions() -> Vec<&'static str> {
+    let mut names = json::extensions::ENABLED_EXTENSIONS.to_vec();
+    names.push(QUANTIZATION);
+    names
+}
 
 /// Parse and validate the JSON document.
 ///
@@ -139,13 +151,17 @@ pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Ro
         problems.push((where_().to_string(), error))
     });
     // We read neither POSITION's min/max nor custom attributes, so files
-    // that get those wrong still load.
+    // that get those wrong still load; and the crate refuses a required
+    // extension it does not know that strata reads.
     problems.retain(|(where_, error)| {
+        let quantization = *error == json::validation::Error::Unsupported
+            && where_.starts_with("extensionsRequired[")
+            && where_.ends_with(&format!("\"{QUANTIZATION}\""));
         let unused_bounds = where_.contains(".attributes[")
             && (where_.ends_with(".min") || where_.ends_with(".max"));
         let custom_attribute =
             *error == json::validation::Error::Invalid && where_.contains(".attributes[");
-        !(unused_bounds || custom_attribute)
+        !(quantization || unused_bounds || custom_attribute)
     });
     if let Some((location, error)) = problems.first() {
         let mut message = format!("invalid glTF: {error}");
@@ -216,7 +232,7 @@ fn gltf_1_refusal(path: &Path) -> InputError {
 /// is refused by name, before validation reports what the extension
 /// stands in for (a Draco file's accessors have no `bufferView`).
 fn check_required_extensions(path: &Path, root: &json::Root) -> InputResult<()> {
-    let enabled = json::extensions::ENABLED_EXTENSIONS;
+    let enabled = readable_extensions();
     let Some((i, name)) = root
         .extensions_required
         .iter()

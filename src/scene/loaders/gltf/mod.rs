@@ -24,11 +24,12 @@
 //! | `POINTS`, `LINES`, `LINE_LOOP`, `LINE_STRIP` | skipped                            |
 //!
 //! A primitive without `indices` uses its vertices in order (0, 1, 2, …).
-//! Only `POSITION` (and `NORMAL`, when present) are read, both `FLOAT`
-//! `VEC3`, and, for a primitive whose material has a base colour texture,
-//! the `TEXCOORD_n` set that texture names (`FLOAT`, or normalized
-//! `UNSIGNED_BYTE` or `UNSIGNED_SHORT`, `VEC2`); other primitives keep no
-//! texture coordinates. Sparse accessors are not supported.
+//! Only `POSITION` (and `NORMAL`, when present) are read, both `VEC3`,
+//! and, for a primitive whose material has a base colour texture, the
+//! `TEXCOORD_n` set that texture names (`VEC2`); other primitives keep no
+//! texture coordinates. Each is `FLOAT` or the integers glTF and
+//! `KHR_mesh_quantization` allow it (`accessor::Attribute`). Sparse
+//! accessors are not supported.
 //!
 //! # Materials
 //!

@@ -2,6 +2,7 @@
 //! `TEXCOORD_n` (if its material has a base colour texture) and indices
 //! read, and its mode's vertex order turned into triangles.
 
+use super::accessor::Attribute;
 use super::Loader;
 use crate::error::InputResult;
 use crate::geometry::{MeshNormals, MeshTangents, MeshUvs};
@@ -36,14 +37,14 @@ impl Loader<'_> {
             .get(&Checked::Valid(Semantic::Positions))
             .ok_or_else(|| self.error(location, "primitive has no POSITION attribute"))?
             .value();
-        let positions = self.read_vec3(position_accessor, "POSITION")?;
+        let positions = self.read_vec3(position_accessor, Attribute::Position)?;
         let vertex_count = positions.len();
         if vertex_count > u32::MAX as usize {
             return Err(self.error(location, "more than 2³² vertices"));
         }
         let normals = match primitive.attributes.get(&Checked::Valid(Semantic::Normals)) {
             Some(accessor) => {
-                let normals = self.read_vec3(accessor.value(), "NORMAL")?;
+                let normals = self.read_vec3(accessor.value(), Attribute::Normal)?;
                 if normals.len() != vertex_count {
                     return Err(self.error(
                         location,
@@ -106,7 +107,7 @@ impl Loader<'_> {
         });
         let uvs = match uv_accessor {
             Some((set, accessor)) => {
-                let mut values = self.read_uvs(accessor, &format!("TEXCOORD_{set}"))?;
+                let mut values = self.read_uvs(accessor, set as usize)?;
                 if let Some(t) = transform {
                     let m = material.unwrap_or_default();
                     let key = source.map_or("", |(_, _, key)| key);
@@ -144,7 +145,7 @@ impl Loader<'_> {
             .filter(|_| mapped && uvs.is_some())
         {
             Some(accessor) => {
-                let values = self.read_vec4(accessor.value(), "TANGENT")?;
+                let values = self.read_vec4(accessor.value())?;
                 if values.len() != vertex_count {
                     return Err(self.error(
                         location,

@@ -254,17 +254,15 @@ mod tests {
         let uvs = &asset.meshes[0].uvs.as_ref().unwrap().values;
         assert_eq!(uvs, &[Vec2::ZERO, Vec2::X, Vec2::Y]);
 
-        // Unnormalized integers are not texture coordinates.
+        // Unnormalized integers are their values (KHR_mesh_quantization:
+        // a texture transform scales them).
         let mut b = Builder::default();
         b.positions(&TRIANGLE);
         b.raw_accessor(&[0, 0, 255, 0, 0, 255], 5121, "VEC2", false);
         assert_eq!(b.view(&png(1, 1, &[[9, 9, 9]])), view, "the same layout");
-        expect_error(
-            load_gltf(&write(&dir, "u.glb", &b.glb(&rest))),
-            "u.glb",
-            "accessors[1]",
-            "must be normalized",
-        );
+        let asset = load_gltf(&write(&dir, "u.glb", &b.glb(&rest))).unwrap();
+        let uvs = &asset.meshes[0].uvs.as_ref().unwrap().values;
+        assert_eq!(uvs, &[Vec2::ZERO, Vec2::X * 255.0, Vec2::Y * 255.0]);
     }
 
     #[test]
