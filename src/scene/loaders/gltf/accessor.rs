@@ -9,11 +9,13 @@ use ::gltf::json;
 use glam::{Vec2, Vec3};
 use json::accessor::{ComponentType, Type as AccessorType};
 use json::validation::Checked;
+use std::borrow::Cow;
 
 /// An accessor's elements, bounds-checked against its buffer.
 struct AccessorData<'b> {
-    /// From the accessor's first element to the end of its view.
-    bytes: &'b [u8],
+    /// From the accessor's first element to the end of its view; or, for a
+    /// sparse accessor, its elements with the substitutions made.
+    bytes: Cow<'b, [u8]>,
     stride: usize,
     count: usize,
 }
@@ -94,18 +96,52 @@ impl Loader<'_> {
                 format!("{what} cannot be {normalized}{component:?} {dimensions:?}"),
             ));
         }
-        if accessor.sparse.is_some() {
-            return Err(self.error(&location, "sparse accessors are not supported"));
-        }
-        let view_index = accessor
-            .buffer_view
-            .ok_or_else(|| self.error(&location, "accessor has no bufferView"))?
-            .value();
-        let view_location = format!("bufferViews[{view_index}]");
-        let (view, view_bytes) = self.view(view_index, &location)?;
-        let view_length = view_bytes.len() as u64;
-
         let element_size = (component.size() * dimensions.multiplicity()) as u64;
+        let count = accessor.count.0;
+        let data = match accessor.buffer_view {
+            Some(view) => self.dense(&location, view.value(), accessor, element_size)?,
+            // glTF: without a bufferView the elements are zeros, which a
+            // sparse accessor then replaces in part.
+            None if accessor.sparse.is_some() => {
+                let bytes = count
+                    .checked_mul(element_size)
+                    .filter(|&n| n <= MAX_ZERO_BYTES)
+                    .ok_or_else(|| {
+                        self.error(
+                            &location,
+                            format!(
+                                "{count} elements of {element_size} bytes without a bufferView \
+                                 (zeros) are more than strata reads ({MAX_ZERO_BYTES} bytes)"
+                            ),
+                        )
+                    })?;
+                AccessorData {
+                    bytes: Cow::Owned(vec![0; bytes as usize]),
+                    stride: element_size as usize,
+                    count: count as usize,
+                }
+            }
+            None => return Err(self.error(&location, "accessor has no bufferView")),
+        };
+        let data = match &accessor.sparse {
+            Some(sparse) => self.substituted(&location, data, sparse, element_size as usize)?,
+            None => data,
+        };
+        Ok((data, component))
+    }
+
+    /// The elements of `accessor` (at `location`) in buffer view
+    /// `view_index`, checked to fit in it.
+    fn dense(
+        &self,
+        location: &str,
+        view_index: usize,
+        accessor: &json::Accessor,
+        element_size: u64,
+    ) -> InputResult<AccessorData<'_>> {
+        let view_location = format!("bufferViews[{view_index}]");
+        let (view, view_bytes) = self.view(view_index, location)?;
+        let view_length = view_bytes.len() as u64;
         let stride = view.byte_stride.map_or(element_size, |s| s.0 as u64);
         if stride < element_size {
             return Err(self.error(
@@ -127,7 +163,7 @@ impl Loader<'_> {
             Some(needed) if needed <= view_length => {}
             _ => {
                 return Err(self.error(
-                    &location,
+                    location,
                     format!(
                     "{count} elements of {element_size} bytes (stride {stride}) from byteOffset \
                          {offset} do not fit in {view_location} ({view_length} bytes)"
@@ -135,14 +171,92 @@ impl Loader<'_> {
                 ))
             }
         }
-        Ok((
-            AccessorData {
-                bytes: &view_bytes[offset as usize..],
-                stride: stride as usize,
-                count: count as usize,
-            },
-            component,
-        ))
+        Ok(AccessorData {
+            bytes: Cow::Borrowed(&view_bytes[offset as usize..]),
+            stride: stride as usize,
+            count: count as usize,
+        })
+    }
+
+    /// `base`'s elements, tightly packed, with those a sparse accessor names
+    /// (at `location`) replaced by its values: `sparse.count` indices, each
+    /// below the element count, and as many values of `element_size` bytes.
+    fn substituted(
+        &self,
+        location: &str,
+        base: AccessorData<'_>,
+        sparse: &json::accessor::sparse::Sparse,
+        element_size: usize,
+    ) -> InputResult<AccessorData<'static>> {
+        let n = sparse.count.0;
+        let indices_location = format!("{location}.sparse.indices");
+        let values_location = format!("{location}.sparse.values");
+        let Checked::Valid(index_type) = &sparse.indices.component_type else {
+            return Err(self.error(&indices_location, "invalid componentType"));
+        };
+        let index_size = index_type.0.size();
+        let part = |view: usize, at: &str, offset: u64, size: usize| {
+            let (_, bytes) = self.view(view, at)?;
+            let length = bytes.len();
+            n.checked_mul(size as u64)
+                .and_then(|k| k.checked_add(offset))
+                .filter(|&end| end <= length as u64)
+                .map(|end| &bytes[offset as usize..end as usize])
+                .ok_or_else(|| {
+                    self.error(
+                        at,
+                        format!(
+                            "{n} entries of {size} bytes from byteOffset {offset} do not fit in \
+                             bufferViews[{view}] ({length} bytes)"
+                        ),
+                    )
+                })
+        };
+        let indices = part(
+            sparse.indices.buffer_view.value(),
+            &indices_location,
+            sparse.indices.byte_offset.0,
+            index_size,
+        )?;
+        let values = part(
+            sparse.values.buffer_view.value(),
+            &values_location,
+            sparse.values.byte_offset.0,
+            element_size,
+        )?;
+        let mut bytes = match base.bytes {
+            Cow::Owned(bytes) => bytes,
+            Cow::Borrowed(_) => (0..base.count)
+                .flat_map(|i| &base.element(i)[..element_size])
+                .copied()
+                .collect(),
+        };
+        for (k, (at, value)) in indices
+            .chunks_exact(index_size)
+            .zip(values.chunks_exact(element_size))
+            .enumerate()
+        {
+            let i = match index_size {
+                1 => usize::from(at[0]),
+                2 => usize::from(u16::from_le_bytes([at[0], at[1]])),
+                _ => u32_le(at) as usize,
+            };
+            if i >= base.count {
+                return Err(self.error(
+                    &indices_location,
+                    format!(
+                        "entry {k} is element {i}, past the accessor's {} elements",
+                        base.count
+                    ),
+                ));
+            }
+            bytes[i * element_size..(i + 1) * element_size].copy_from_slice(value);
+        }
+        Ok(AccessorData {
+            bytes: Cow::Owned(bytes),
+            stride: element_size,
+            count: base.count,
+        })
     }
 
     /// A `VEC3` attribute (`POSITION`, `NORMAL`): floats, or the integers
@@ -310,6 +424,11 @@ fn decode(e: &[u8], component: ComponentType, k: usize, normalized: bool) -> f32
     }
 }
 
+/// The most bytes of zeros an accessor without a bufferView may stand for
+/// (glTF's sparse accessors over zeros): 2³⁰, 89 million `VEC3` floats, so
+/// that a file cannot make the loader ask for more memory than it holds.
+const MAX_ZERO_BYTES: u64 = 1 << 30;
+
 /// The vector types an accessor decodes to, which must be finite.
 trait FiniteValue: std::fmt::Display {
     fn finite(&self) -> bool;
@@ -386,6 +505,108 @@ mod tests {
             "scene.gltf",
             "accessors[1]",
             "POSITION cannot be U16 Scalar",
+        );
+    }
+
+    /// A file of one non-indexed triangle whose POSITION is accessor
+    /// `position`.
+    fn positions_of(b: &Builder, position: usize) -> InputResult<LoadedAsset> {
+        let rest = format!(
+            r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":{position}}}}}]}}],"nodes":[{{"mesh":0}}]"#
+        );
+        load_json(b, &rest)
+    }
+
+    /// Little-endian f32 bytes of `values`.
+    fn floats(values: &[[f32; 3]]) -> Vec<u8> {
+        values
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
+    }
+
+    #[test]
+    fn sparse_accessors_replace_the_elements_they_name() {
+        // Over a view: corner 1 of the triangle moved to (2, 0, 0), named
+        // by an unsigned byte.
+        let mut b = Builder::default();
+        b.positions(&TRIANGLE);
+        let indices = b.view(&[1]);
+        let values = b.view(&floats(&[[2.0, 0.0, 0.0]]));
+        let sparse = |view: &str| {
+            format!(
+                r#"{{{view}"componentType":5126,"count":3,"type":"VEC3","sparse":{{"count":1,
+                   "indices":{{"bufferView":{indices},"componentType":5121}},
+                   "values":{{"bufferView":{values}}}}}}}"#
+            )
+        };
+        let over_view = b.accessor(sparse(r#""bufferView":0,"#));
+        let asset = positions_of(&b, over_view).unwrap();
+        assert_eq!(
+            asset.meshes[0].positions,
+            [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::Y]
+        );
+        // Over zeros (no bufferView): corners 1 and 2 set, by unsigned
+        // shorts from a byte offset.
+        let mut b = Builder::default();
+        let indices = b.view(&[9, 9, 1, 0, 2, 0]);
+        let values = b.view(&floats(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]));
+        let zeros = b.accessor(format!(
+            r#"{{"componentType":5126,"count":3,"type":"VEC3","sparse":{{"count":2,
+               "indices":{{"bufferView":{indices},"byteOffset":2,"componentType":5123}},
+               "values":{{"bufferView":{values}}}}}}}"#
+        ));
+        let asset = positions_of(&b, zeros).unwrap();
+        assert_eq!(asset.meshes[0].positions, [Vec3::ZERO, Vec3::X, Vec3::Y]);
+    }
+
+    #[test]
+    fn sparse_accessors_that_reach_outside_are_errors_naming_the_part() {
+        let sparse = |count: u64, index: u8, value_bytes: usize| {
+            let mut b = Builder::default();
+            b.positions(&TRIANGLE);
+            let indices = b.view(&[index]);
+            let values = b.view(&vec![0; value_bytes]);
+            let position = b.accessor(format!(
+                r#"{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","sparse":{{"count":{count},
+                   "indices":{{"bufferView":{indices},"componentType":5121}},
+                   "values":{{"bufferView":{values}}}}}}}"#
+            ));
+            positions_of(&b, position)
+        };
+        expect_error(
+            sparse(1, 3, 12),
+            "scene.gltf",
+            "accessors[1].sparse.indices",
+            "entry 0 is element 3, past the accessor's 3 elements",
+        );
+        expect_error(
+            sparse(1, 0, 8),
+            "scene.gltf",
+            "accessors[1].sparse.values",
+            "1 entries of 12 bytes from byteOffset 0 do not fit in bufferViews[2] (8 bytes)",
+        );
+        expect_error(
+            sparse(2, 0, 24),
+            "scene.gltf",
+            "accessors[1].sparse.indices",
+            "do not fit in bufferViews[1]",
+        );
+        // Zeros past what strata reads, and an accessor with neither.
+        let mut b = Builder::default();
+        let indices = b.view(&[0]);
+        let values = b.view(&floats(&[[1.0, 0.0, 0.0]]));
+        let huge = b.accessor(format!(
+            r#"{{"componentType":5126,"count":1000000000,"type":"VEC3","sparse":{{"count":1,
+               "indices":{{"bufferView":{indices},"componentType":5121}},
+               "values":{{"bufferView":{values}}}}}}}"#
+        ));
+        expect_error(
+            positions_of(&b, huge),
+            "scene.gltf",
+            "accessors[0]",
+            "without a bufferView (zeros) are more than strata reads",
         );
     }
 

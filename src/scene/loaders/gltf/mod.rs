@@ -28,8 +28,9 @@
 //! and, for a primitive whose material has a base colour texture, the
 //! `TEXCOORD_n` set that texture names (`VEC2`); other primitives keep no
 //! texture coordinates. Each is `FLOAT` or the integers glTF and
-//! `KHR_mesh_quantization` allow it (`accessor::Attribute`). Sparse
-//! accessors are not supported.
+//! `KHR_mesh_quantization` allow it (`accessor::Attribute`). A sparse
+//! accessor's values replace the elements it names, over its view or over
+//! zeros.
 //!
 //! # Materials
 //!
