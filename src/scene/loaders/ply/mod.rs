@@ -9,14 +9,17 @@
 //! | `ascii.rs`        | an ASCII body, line by line in parallel chunks                |
 //! | `binary.rs`       | a binary body, fixed-size records in parallel, others walked  |
 //! | `face.rs`         | a face's indices, and the fan triangulation both bodies share |
+//! | `strips.rs`       | triangle strips (`tristrips`), read by `ply-rs-bw`'s own parser |
 //! | `binary_tests.rs` | the binary reader against `ply-rs-bw`'s, on generated files   |
 //!
-//! Imports point one way: this entry uses the header and the two body
-//! readers, and the body readers use `face`; nothing below names the entry.
+//! Imports point one way: this entry uses the header, the two body
+//! readers and the strips, and the body readers use `face`; nothing below
+//! names the entry.
 //!
 //! `vertex` elements give `x y z` (float or double); `face` elements give a
 //! `vertex_indices` (or `vertex_index`) list, fan-triangulated like OBJ
-//! n-gons. Other elements and properties are read and ignored.
+//! n-gons; `tristrips` elements give strips of triangles, each ended by −1.
+//! Other elements and properties are read and ignored.
 //!
 //! Before anything is allocated for them, every element count in the
 //! header is checked against the bytes the file actually holds (an ASCII
@@ -35,6 +38,7 @@ mod binary;
 mod binary_tests;
 mod face;
 mod header;
+mod strips;
 
 pub(crate) use binary::first_where;
 
@@ -123,15 +127,19 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     // tests pin this): it is the number of the body's first line.
     let line = reader.line();
     let body = reader.into_inner();
-    if header.encoding == Encoding::Ascii {
+    let (positions, mut indices) = if header.encoding == Encoding::Ascii {
         let body = ascii::read_body(path, &header, body, line.saturating_sub(1))?;
         let n = body.positions.len();
         let indices = (body.faces)
             .triangulate(n)
             .map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
-        return Ok(mesh_asset(path, body.positions, indices, warnings));
+        (body.positions, indices)
+    } else {
+        binary::read_body(path, &header, body, line)?
+    };
+    if strips::has_strips(&header) {
+        indices.extend(strips::strip_triangles(path, &bytes, positions.len())?);
     }
-    let (positions, indices) = binary::read_body(path, &header, body, line)?;
     // The file's bytes are not needed past here; unmapping a large mesh's
     // (264 MB for the 13.9M-triangle dragon) took 20 ms on this thread.
     crate::system::memory::drop_aside(bytes);
@@ -363,6 +371,87 @@ mod tests {
                 .contains("ends before its 62500 'face' elements"),
             "{e}"
         );
+    }
+
+    /// Four vertices of a unit square, then `strips` (ASCII lines of a
+    /// `tristrips` element, or the one list as `int`s in a binary file),
+    /// after one face where `face` is given.
+    fn strip_file(binary: bool, face: Option<[i32; 3]>, strips: &[&[i32]]) -> Vec<u8> {
+        let faces = face.map_or(0, |_| 1);
+        let format = if binary {
+            "binary_little_endian"
+        } else {
+            "ascii"
+        };
+        let mut out = format!(
+            "ply\nformat {format} 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nelement face {faces}\nproperty list uchar int vertex_indices\n\
+             element tristrips {}\nproperty list int int vertex_indices\nend_header\n",
+            strips.len()
+        )
+        .into_bytes();
+        let corners = [
+            [0.0f32, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ];
+        for v in corners {
+            if binary {
+                out.extend(v.iter().flat_map(|c| c.to_le_bytes()));
+            } else {
+                out.extend(format!("{} {} {}\n", v[0], v[1], v[2]).into_bytes());
+            }
+        }
+        let mut list = |count_bytes: Vec<u8>, items: &[i32]| {
+            if binary {
+                out.extend(count_bytes);
+                out.extend(items.iter().flat_map(|k| k.to_le_bytes()));
+            } else {
+                let words: Vec<String> = items.iter().map(i32::to_string).collect();
+                out.extend(format!("{} {}\n", items.len(), words.join(" ")).into_bytes());
+            }
+        };
+        if let Some(face) = face {
+            list(vec![3], &face);
+        }
+        for strip in strips {
+            list((strip.len() as i32).to_le_bytes().to_vec(), strip);
+        }
+        out
+    }
+
+    #[test]
+    fn triangle_strips_are_read_from_ascii_and_binary_files() {
+        for binary in [false, true] {
+            // One strip over the square, then one ended early and joined
+            // by a repeated index; after a face.
+            let bytes = strip_file(
+                binary,
+                Some([0, 2, 1]),
+                &[&[0, 1, 2, 3], &[0, 1, -1, 2, 2, 3]],
+            );
+            let asset = load_ply(&write("strips.ply", &bytes)).unwrap();
+            let mesh = &asset.meshes[0];
+            assert_eq!(mesh.positions.len(), 4);
+            assert_eq!(
+                mesh.indices,
+                [[0, 2, 1], [0, 1, 2], [1, 3, 2]],
+                "binary: {binary}"
+            );
+            assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
+            // An index past the vertices, or below −1, is an error naming
+            // the strip.
+            for bad in [4, -2] {
+                let bytes = strip_file(binary, None, &[&[0, 1, 2], &[1, bad, 3]]);
+                let e = load_ply(&write("bad.ply", &bytes)).unwrap_err().to_string();
+                assert!(
+                    e.contains("bad.ply")
+                        && e.contains(&format!("tristrips 1: vertex index {bad}")),
+                    "{e}"
+                );
+            }
+        }
     }
 
     #[test]
