@@ -1,6 +1,6 @@
 //! Triangle strips: a `tristrips` element whose `vertex_indices` list
-//! runs strips one after another, each ended by −1 (the older scans of
-//! the Stanford and Cyberware archives store their triangles so). The
+//! runs strips one after another, each ended by −1 (as some older scan
+//! files store their triangles; MeshLab's reader takes them too). The
 //! fast body readers skip the element; a file that has one is read again
 //! here by `ply-rs-bw`'s own parser (such files are few and small beside
 //! the scans of faces those readers are for) and its strips are cut into
