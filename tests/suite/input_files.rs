@@ -50,6 +50,29 @@ fn an_stl_model_renders() {
     assert_eq!(code, Some(0), "{err}");
 }
 
+/// A model file named without an extension renders as the model its first
+/// bytes say it is (assimp reads such files too); a scene file without one
+/// still renders as a scene.
+#[test]
+fn a_file_without_an_extension_renders_as_what_it_holds() {
+    let dir = temp_dir("first-contact-bare");
+    std::fs::write(dir.join("cube"), OFF_CUBE).unwrap();
+    let (code, err) = render(&dir, "cube");
+    assert_eq!(code, Some(0), "{err}");
+    assert!(dir.join("out.png").exists());
+    std::fs::remove_file(dir.join("out.png")).unwrap();
+    std::fs::write(dir.join("cube.off"), OFF_CUBE).unwrap();
+    std::fs::write(
+        dir.join("scene"),
+        "[[lights]]\ntype = \"point\"\nposition = [2, 3, 4]\nintensity = 20\n\
+         [[objects]]\nmesh = \"cube\"\n",
+    )
+    .unwrap();
+    let (code, err) = render(&dir, "scene");
+    assert_eq!(code, Some(0), "{err}");
+    assert!(dir.join("out.png").exists());
+}
+
 /// Files strata does not read, or that hold something other than their
 /// name says, are one line that says what they are, exit 2; never a TOML
 /// or UTF-8 parser's complaint.

@@ -41,12 +41,21 @@ use std::path::Path;
 pub const SUPPORTED_EXTENSIONS: &[&str] = &["obj", "gltf", "glb", "ply", "off", "stl"];
 
 /// The lower-case extension of `path`, if it is one [`load_mesh_file`]
-/// reads; else a message naming the format (where strata knows it) and
-/// listing the ones it reads.
+/// reads, or, for a file named without one, that of the mesh format its
+/// first bytes tell for sure (`sniff::told_mesh_extension`); else a
+/// message naming the format (where strata knows it) and listing the ones
+/// it reads.
 pub fn check_extension(path: &Path) -> Result<String, String> {
     let extension = sniff::extension_of(path);
     if SUPPORTED_EXTENSIONS.contains(&extension.as_str()) {
         return Ok(extension);
+    }
+    if let Some(told) = extension
+        .is_empty()
+        .then(|| sniff::told_mesh_extension(path))
+        .flatten()
+    {
+        return Ok(told.to_string());
     }
     let supported = SUPPORTED_EXTENSIONS
         .iter()
@@ -69,8 +78,9 @@ pub fn check_extension(path: &Path) -> Result<String, String> {
 }
 
 /// Load any supported mesh file, chosen by its extension (case-insensitive):
-/// `.obj`, `.gltf`, `.glb`, `.ply`, `.off` or `.stl`. Any other extension,
-/// or first bytes that say the file holds another format, is an
+/// `.obj`, `.gltf`, `.glb`, `.ply`, `.off` or `.stl`; a file without one by
+/// the format its first bytes tell ([`check_extension`]). Any other
+/// extension, or first bytes that say the file holds another format, is an
 /// [`InputError`] naming the file and what it is.
 pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
     let extension = check_extension(path).map_err(|e| InputError::file(path, e))?;
@@ -180,6 +190,40 @@ mod tests {
         let path = write(&dir, "tri.OBJ", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
         let asset = load_mesh_file(&path).unwrap();
         assert_eq!(asset.triangle_count(), 1);
+    }
+
+    /// A file named without an extension is read by the mesh format its
+    /// first bytes tell for sure, as its named twin is; OBJ's first lines
+    /// are too weak a sign, so such a file stays unread.
+    #[test]
+    fn a_file_without_an_extension_is_read_by_what_its_bytes_say() {
+        let dir = temp_dir("dispatch-sniffed");
+        let ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+                    end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let off = b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let stl = b"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+                    vertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+        for (named, bytes) in [
+            ("t.ply", &ply[..]),
+            ("t.off", &off[..]),
+            ("t.stl", &stl[..]),
+        ] {
+            let twin = load_mesh_file(&write(&dir, named, bytes)).unwrap();
+            let bare = load_mesh_file(&write(&dir, "bare", bytes)).unwrap();
+            assert_eq!(
+                bare.meshes[0].positions, twin.meshes[0].positions,
+                "{named}"
+            );
+            assert_eq!(bare.meshes[0].indices, twin.meshes[0].indices, "{named}");
+            assert_eq!(
+                check_extension(&dir.join("bare")).as_deref(),
+                Ok(&named[2..])
+            );
+        }
+        let obj = write(&dir, "bare", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let err = load_mesh_file(&obj).unwrap_err();
+        assert!(err.to_string().contains("without an extension"), "{err}");
     }
 
     #[test]

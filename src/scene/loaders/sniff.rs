@@ -164,6 +164,20 @@ pub(crate) fn extension_of(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// For a file named without an extension: the extension of the mesh format
+/// its first bytes tell for sure, as assimp reads such files by content:
+/// glTF (JSON or binary), PLY, OFF or STL. Not OBJ, whose first line
+/// (`v 1 2 3`, `o name`) is too weak a sign to read a file by.
+pub(crate) fn told_mesh_extension(path: &Path) -> Option<&'static str> {
+    let (head, len) = read_head(path).ok()?;
+    match sniff(&head, len)? {
+        found @ (Format::Gltf | Format::Glb | Format::Ply | Format::Off | Format::Stl) => {
+            found.extension()
+        }
+        _ => None,
+    }
+}
+
 /// The first [`HEAD_BYTES`] of `path` and its length, or why it cannot be read.
 pub(crate) fn read_head(path: &Path) -> InputResult<(Vec<u8>, u64)> {
     let cannot = |e: std::io::Error| {
