@@ -21,23 +21,32 @@ fn render(dir: &std::path::Path, file: &str) -> (Option<i32>, String) {
     (out.status.code(), stderr(&out))
 }
 
+/// The OFF cube written to `dir` as `model` renders as a model, and a
+/// scene file `scene` that names it renders too.
+fn the_cube_renders_as_a_model_and_as_a_scenes_mesh(
+    dir: &std::path::Path,
+    model: &str,
+    scene: &str,
+) {
+    std::fs::write(dir.join(model), OFF_CUBE).unwrap();
+    let (code, err) = render(dir, model);
+    assert_eq!(code, Some(0), "{model}: {err}");
+    assert!(dir.join("out.png").exists());
+    std::fs::remove_file(dir.join("out.png")).unwrap();
+    let text = format!(
+        "[[lights]]\ntype = \"point\"\nposition = [2, 3, 4]\nintensity = 20\n\
+         [[objects]]\nmesh = \"{model}\"\n"
+    );
+    std::fs::write(dir.join(scene), text).unwrap();
+    let (code, err) = render(dir, scene);
+    assert_eq!(code, Some(0), "{scene}: {err}");
+    assert!(dir.join("out.png").exists());
+}
+
 #[test]
 fn an_off_model_renders_as_a_model_and_as_a_scenes_mesh() {
     let dir = temp_dir("first-contact-off");
-    std::fs::write(dir.join("cube.off"), OFF_CUBE).unwrap();
-    let (code, err) = render(&dir, "cube.off");
-    assert_eq!(code, Some(0), "{err}");
-    assert!(dir.join("out.png").exists());
-    std::fs::remove_file(dir.join("out.png")).unwrap();
-    std::fs::write(
-        dir.join("s.toml"),
-        "[[lights]]\ntype = \"point\"\nposition = [2, 3, 4]\nintensity = 20\n\
-         [[objects]]\nmesh = \"cube.off\"\n",
-    )
-    .unwrap();
-    let (code, err) = render(&dir, "s.toml");
-    assert_eq!(code, Some(0), "{err}");
-    assert!(dir.join("out.png").exists());
+    the_cube_renders_as_a_model_and_as_a_scenes_mesh(&dir, "cube.off", "s.toml");
 }
 
 #[test]
@@ -56,21 +65,7 @@ fn an_stl_model_renders() {
 #[test]
 fn a_file_without_an_extension_renders_as_what_it_holds() {
     let dir = temp_dir("first-contact-bare");
-    std::fs::write(dir.join("cube"), OFF_CUBE).unwrap();
-    let (code, err) = render(&dir, "cube");
-    assert_eq!(code, Some(0), "{err}");
-    assert!(dir.join("out.png").exists());
-    std::fs::remove_file(dir.join("out.png")).unwrap();
-    std::fs::write(dir.join("cube.off"), OFF_CUBE).unwrap();
-    std::fs::write(
-        dir.join("scene"),
-        "[[lights]]\ntype = \"point\"\nposition = [2, 3, 4]\nintensity = 20\n\
-         [[objects]]\nmesh = \"cube\"\n",
-    )
-    .unwrap();
-    let (code, err) = render(&dir, "scene");
-    assert_eq!(code, Some(0), "{err}");
-    assert!(dir.join("out.png").exists());
+    the_cube_renders_as_a_model_and_as_a_scenes_mesh(&dir, "cube", "scene");
 }
 
 /// Files strata does not read, or that hold something other than their
