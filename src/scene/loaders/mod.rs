@@ -29,6 +29,7 @@ pub mod off;
 pub mod ply;
 mod sniff;
 pub mod stl;
+mod strip;
 mod text;
 
 pub(crate) use ply::first_where;

@@ -236,11 +236,7 @@ impl Loader<'_> {
             .zip(values.chunks_exact(element_size))
             .enumerate()
         {
-            let i = match index_size {
-                1 => usize::from(at[0]),
-                2 => usize::from(u16::from_le_bytes([at[0], at[1]])),
-                _ => u32_le(at) as usize,
-            };
+            let i = index_at(at, index_type.0) as usize;
             if i >= base.count {
                 return Err(self.error(
                     &indices_location,
@@ -337,15 +333,19 @@ impl Loader<'_> {
             ) && t == AccessorType::Scalar
         })?;
         Ok((0..data.count)
-            .map(|i| {
-                let e = data.element(i);
-                match component {
-                    ComponentType::U8 => u32::from(e[0]),
-                    ComponentType::U16 => u32::from(u16::from_le_bytes([e[0], e[1]])),
-                    _ => u32_le(e),
-                }
-            })
+            .map(|i| index_at(data.element(i), component))
             .collect())
+    }
+}
+
+/// The unsigned index at the start of `e`, of component type `component`
+/// (a byte, a short or an int, as glTF's index lists and a sparse
+/// accessor's indices hold them).
+fn index_at(e: &[u8], component: ComponentType) -> u32 {
+    match component {
+        ComponentType::U8 => u32::from(e[0]),
+        ComponentType::U16 => u32::from(u16::from_le_bytes([e[0], e[1]])),
+        _ => u32_le(e),
     }
 }
 

@@ -2,6 +2,7 @@
 //! `TEXCOORD_n` (if its material has a base colour texture) and indices
 //! read, and its mode's vertex order turned into triangles.
 
+use super::super::strip::triangles_of_strip;
 use super::accessor::Attribute;
 use super::Loader;
 use crate::error::InputResult;
@@ -194,15 +195,7 @@ fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
 fn assemble_triangles(mode: Mode, order: &[u32]) -> Result<Vec<[u32; 3]>, String> {
     let n = order.len();
     match mode {
-        Mode::TriangleStrip => Ok((0..n.saturating_sub(2))
-            .map(|i| {
-                if i % 2 == 0 {
-                    [order[i], order[i + 1], order[i + 2]]
-                } else {
-                    [order[i], order[i + 2], order[i + 1]]
-                }
-            })
-            .collect()),
+        Mode::TriangleStrip => Ok(triangles_of_strip(order).collect()),
         Mode::TriangleFan => Ok((0..n.saturating_sub(2))
             .map(|i| [order[i + 1], order[i + 2], order[0]])
             .collect()),

@@ -6,6 +6,7 @@
 //! the scans of faces those readers are for) and its strips are cut into
 //! triangles.
 
+use super::super::strip::triangles_of_strip;
 use crate::error::{InputError, InputResult};
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Header, Property};
@@ -20,9 +21,8 @@ pub(super) fn has_strips(header: &Header) -> bool {
 }
 
 /// The triangles of every strip of the file `bytes`, whose vertices are
-/// `n`: triangle k of a strip is its indices k, k + 1, k + 2, the odd
-/// ones taken as k, k + 2, k + 1 so that every triangle turns the same
-/// way (as glTF's `TRIANGLE_STRIP` does); a triangle with a repeated
+/// `n`, each strip's as `super::super::strip` makes them (the rule glTF's
+/// `TRIANGLE_STRIP` follows too); a triangle with a repeated
 /// index (what joins strips into one) is dropped. An index below −1 or
 /// not below `n` is an error naming the strip element.
 pub(super) fn strip_triangles(path: &Path, bytes: &[u8], n: usize) -> InputResult<Vec<[u32; 3]>> {
@@ -67,19 +67,11 @@ pub(super) fn strip_triangles(path: &Path, bytes: &[u8], n: usize) -> InputResul
     Ok(triangles)
 }
 
-/// The strip `s`'s triangles appended to `triangles`, as
-/// [`strip_triangles`] says.
+/// The strip `s`'s triangles (`triangles_of_strip`) appended to
+/// `triangles`, but for those with a repeated index.
 fn push_strip(triangles: &mut Vec<[u32; 3]>, s: &[u32]) {
-    for k in 0..s.len().saturating_sub(2) {
-        let t = if k % 2 == 0 {
-            [s[k], s[k + 1], s[k + 2]]
-        } else {
-            [s[k], s[k + 2], s[k + 1]]
-        };
-        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
-            triangles.push(t);
-        }
-    }
+    triangles
+        .extend(triangles_of_strip(s).filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]));
 }
 
 /// The values of an integer list property, widened; `None` for any other.
@@ -103,20 +95,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn strips_turn_every_triangle_the_same_way_and_drop_the_joins() {
-        // A row of quads zig-zagged as a strip: every triangle's normal
-        // points the same way.
-        let p = |i: u32| [f64::from(i / 2), f64::from(i % 2)];
-        let mut t = Vec::new();
-        push_strip(&mut t, &[0, 1, 2, 3, 4, 5, 6]);
-        assert_eq!(t.len(), 5);
-        let turn = |tri: &[u32; 3]| {
-            let [a, b, c] = tri.map(p);
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-        };
-        for tri in &t {
-            assert_eq!(turn(tri), turn(&t[0]), "{tri:?} turns the other way");
-        }
+    fn the_joins_of_strips_are_dropped() {
         let mut t = Vec::new();
         push_strip(&mut t, &[0, 1, 2, 3, 4]);
         assert_eq!(t, [[0, 1, 2], [1, 3, 2], [2, 3, 4]]);
@@ -124,8 +103,5 @@ mod tests {
         let mut t = Vec::new();
         push_strip(&mut t, &[0, 1, 2, 2, 5, 6, 7]);
         assert_eq!(t, [[0, 1, 2], [2, 6, 5], [5, 6, 7]]);
-        let mut t = Vec::new();
-        push_strip(&mut t, &[4, 5]);
-        assert!(t.is_empty(), "two indices make no triangle");
     }
 }
