@@ -148,7 +148,14 @@ const SEED_SCENE_NAME: &str = "scenes/seed.toml (built in)";
 /// The ceiling of a `--time` render's samples when `--spp` is not given.
 pub const TIME_SPP: u32 = 1 << 16;
 
-pub fn run(mut args: RenderArgs) -> Result<(), CliError> {
+pub fn run(args: RenderArgs) -> Result<(), CliError> {
+    // One pool for the whole command: the load, the build, the render and
+    // the output share its threads, started once (a small scene's render
+    // took longer to start its own pool than to load).
+    on_threads(args.threads, || run_here(args))?
+}
+
+fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
     let (slice, partial_output) = check_outputs(&args)?;
     if args.time.is_some() && args.settings.spp.is_none() {
         args.settings.spp = Some(TIME_SPP);
@@ -621,9 +628,9 @@ impl Drop for Finished<'_> {
 }
 
 /// `work` run on a pool of `threads` threads (0: the global pool, one
-/// thread per core).
+/// thread per core): the pool it is called on where that has as many.
 fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<T, CliError> {
-    if threads == 0 {
+    if threads == 0 || rayon::current_num_threads() == threads {
         return Ok(work());
     }
     Ok(super::thread_pool(threads)?.install(work))

@@ -16,6 +16,7 @@ pub mod stats;
 pub mod timeline;
 pub mod warning;
 pub mod window;
+mod workers;
 
 pub use film::Film;
 pub use progress::{each_pass, Observer};

@@ -16,6 +16,7 @@ use super::progress::{Observer, Pass, PassDone};
 use super::timeline::{ItemLists, ItemSpan, Phase, Timeline};
 use super::warning::Warning;
 use super::window::Window;
+use super::workers::Workers;
 use crate::accel::PACKET_SIZE;
 use crate::sampling::{Dim, PixelSampler, SamplerKind};
 use crate::scene::settings::RenderSettings;
@@ -256,15 +257,7 @@ fn render_window(
 ) -> RenderOutcome {
     let setup_start = opts.timeline.as_deref().map(Timeline::now);
     let s = &scene.settings;
-    let threads = if opts.threads == 0 {
-        rayon::current_num_threads().max(1)
-    } else {
-        opts.threads
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
+    let (pool, threads) = Workers::for_threads(opts.threads);
     let window = opts
         .window
         .clone()
@@ -305,7 +298,7 @@ fn render_window(
     let n = film.pixel_count();
     let mut counts = RayCounts::default();
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
-    let mut cpu = crate::system::cputime::CpuMeter::start(&pool);
+    let mut cpu = crate::system::cputime::CpuMeter::start(pool.cpu_ns(), pool.caller());
     let start = Instant::now();
     let chunk = match opts.schedule {
         Schedule::Slices => WORK_ITEM_PIXELS,
@@ -435,7 +428,7 @@ fn render_window(
         counts += pass_counts;
         let film_start = timeline.map(Timeline::now);
         film.add_losses(losses);
-        cpu.pass(&pool);
+        cpu.pass(pool.cpu_ns());
         done = samples.end;
         pace = Some(pass_clock.elapsed().as_secs_f64() / work);
         let after_start = timeline.map(Timeline::now);

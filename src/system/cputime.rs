@@ -26,28 +26,33 @@ pub struct CpuTimes {
 /// at the end. Each reading is one rayon broadcast (microseconds).
 pub struct CpuMeter {
     workers: Option<Vec<u64>>,
+    /// The calling thread's CPU time where its own work, not yet counted
+    /// among the workers', began.
     caller: Option<u64>,
+    /// Which of the workers the calling thread is, if it is one of them
+    /// (a render on the pool it was called from).
+    caller_worker: Option<usize>,
     total: f64,
     critical: f64,
 }
 
 impl CpuMeter {
-    pub fn start(pool: &rayon::ThreadPool) -> Self {
+    /// From `workers`, each worker thread's [`thread_cpu_ns`] (one
+    /// broadcast to the render's workers); `caller_worker`: the calling
+    /// thread's index among them, if it is one, so that its time is not
+    /// counted twice.
+    pub fn start(workers: Option<Vec<u64>>, caller_worker: Option<usize>) -> Self {
         Self {
-            workers: Self::read(pool),
+            workers,
             caller: thread_cpu_ns(),
+            caller_worker,
             total: 0.0,
             critical: 0.0,
         }
     }
 
-    fn read(pool: &rayon::ThreadPool) -> Option<Vec<u64>> {
-        pool.broadcast(|_| thread_cpu_ns()).into_iter().collect()
-    }
-
     /// Close a pass: add its busiest worker's time.
-    pub fn pass(&mut self, pool: &rayon::ThreadPool) {
-        let now = Self::read(pool);
+    pub fn pass(&mut self, now: Option<Vec<u64>>) {
         if let (Some(before), Some(after)) = (&self.workers, &now) {
             let deltas = before
                 .iter()
@@ -56,6 +61,11 @@ impl CpuMeter {
             let (sum, max) = deltas.fold((0.0, 0.0f64), |(s, m), d| (s + d, m.max(d)));
             self.total += sum;
             self.critical += max;
+        }
+        // A caller that is a worker has had its time so far counted with
+        // theirs.
+        if let (Some(k), Some(now)) = (self.caller_worker, &now) {
+            self.caller = now.get(k).copied().or(self.caller);
         }
         self.workers = now;
     }

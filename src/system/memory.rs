@@ -68,15 +68,22 @@ impl PeakMeter {
     }
 }
 
+/// The smallest array [`drop_aside`] frees on a thread of its own: a
+/// smaller one takes less time to unmap (tens of microseconds) than a
+/// thread to start (about a tenth of a millisecond).
+pub const ASIDE_MIN_BYTES: usize = 1 << 20;
+
 /// Frees `value` on a thread of its own, so that the caller goes on at
 /// once: glibc hands every block over 32 MB back to the kernel when it is
 /// freed, and unmapping a large mesh's arrays took 30 to 45 ms a build on
 /// the thread that would go on to the next step (docs/performance.md,
-/// "Memory asked for ahead"). A caller in a pool of one thread (a run told
-/// to use one core), or one where no thread can be started, frees it
-/// here.
-pub fn drop_aside<T: Send + 'static>(value: T) {
-    if rayon::current_num_threads() <= 1 {
+/// "Memory asked for ahead"). An array under [`ASIDE_MIN_BYTES`], a
+/// caller in a pool of one thread (a run told to use one core), or one
+/// where no thread can be started, frees it here.
+pub fn drop_aside<T: Send + 'static>(value: Vec<T>) {
+    if value.capacity() * std::mem::size_of::<T>() < ASIDE_MIN_BYTES
+        || rayon::current_num_threads() <= 1
+    {
         return drop(value);
     }
     let _ = std::thread::Builder::new()

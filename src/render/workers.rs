@@ -1,0 +1,93 @@
+//! The threads a render runs on: the pool it is called on when that pool
+//! has the threads asked for, else a pool of its own.
+//!
+//! Starting a pool costs a render of a small scene more than its load:
+//! threads to create, then to wake, each the first time it is handed
+//! work. A caller that runs the whole command on one pool (`strata
+//! render`, the Python package's `render`) hands the render threads that
+//! are already running. The image does not depend on which threads render
+//! it.
+
+use crate::system::cputime::thread_cpu_ns;
+
+/// Where a render's parallel work runs.
+pub(super) enum Workers {
+    /// The pool the caller runs on, or rayon's global pool outside any.
+    Current,
+    /// A pool of the size asked for, started for this render.
+    Own(rayon::ThreadPool),
+}
+
+impl Workers {
+    /// Workers for `threads` threads (0: as many as the current pool has,
+    /// one per core outside any pool), and their count.
+    pub(super) fn for_threads(threads: usize) -> (Self, usize) {
+        let current = rayon::current_num_threads().max(1);
+        if threads == 0 || threads == current {
+            return (Self::Current, current);
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool");
+        (Self::Own(pool), threads)
+    }
+
+    /// `work` run where its parallel iterators use these workers.
+    pub(super) fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
+        match self {
+            Self::Current => work(),
+            Self::Own(pool) => pool.install(work),
+        }
+    }
+
+    /// The calling thread's index among the workers, if it is one.
+    pub(super) fn caller(&self) -> Option<usize> {
+        match self {
+            Self::Current => rayon::current_thread_index(),
+            Self::Own(_) => None,
+        }
+    }
+
+    /// Each worker's CPU time so far, in nanoseconds (one broadcast);
+    /// `None` where threads' CPU time cannot be read.
+    pub(super) fn cpu_ns(&self) -> Option<Vec<u64>> {
+        let read = |_: rayon::BroadcastContext<'_>| thread_cpu_ns();
+        match self {
+            Self::Current => rayon::broadcast(read),
+            Self::Own(pool) => pool.broadcast(read),
+        }
+        .into_iter()
+        .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A render asked for the current pool's size, or for no size, runs on
+    /// that pool; asked for another size, on a pool of that size.
+    #[test]
+    fn workers_reuse_the_pool_they_are_called_on_when_it_fits() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            for asked in [0, 3] {
+                let (workers, n) = Workers::for_threads(asked);
+                assert!(matches!(workers, Workers::Current), "{asked}");
+                assert_eq!(n, 3);
+                assert_eq!(workers.install(rayon::current_num_threads), 3);
+            }
+            let (workers, n) = Workers::for_threads(2);
+            assert!(matches!(workers, Workers::Own(_)));
+            assert_eq!(n, 2);
+            assert_eq!(workers.install(rayon::current_num_threads), 2);
+            if let Some(times) = workers.cpu_ns() {
+                assert_eq!(times.len(), 2, "one reading a worker");
+            }
+        });
+    }
+}
