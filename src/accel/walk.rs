@@ -23,7 +23,7 @@
 //! line).
 
 use super::build::Bvh8;
-use super::descend::{descend_any, order_key};
+use super::descend::{descend_any, nearest_last, order_key};
 use super::hit::{tie_ray, PrimHit};
 use super::node::{is_leaf, leaf_range};
 use super::node_test::{ChildBoxes, LineBoxes, NodeTest, RayPlanes};
@@ -191,6 +191,9 @@ impl Bvh8 {
         if self.nodes.is_empty() {
             return query.answer(&state, false);
         }
+        if self.nodes.len() == 1 {
+            return self.walk_root_leaves::<T, O, Q>(ray, test, state, query);
+        }
         // The steps of `Walk::step` with the walk's state in locals, and
         // the way down the inner nodes a loop of its own: between two
         // leaves the ray's values stay in registers (in one loop with the
@@ -222,6 +225,62 @@ impl Bvh8 {
                 None => return query.answer(&state, false),
             };
         }
+    }
+
+    /// [`Bvh8::walk_by`] of a tree of one node (up to eight leaves, a
+    /// scene of a few shapes): the leaves its ray enters, in the walk's
+    /// order, without a stack. Each leaf past the ray's reach when its turn
+    /// comes is skipped, as the walk skips a deferred child it pops, so
+    /// the same leaves are tested with the same interval.
+    #[inline(always)]
+    fn walk_root_leaves<T, O, Q>(
+        &self,
+        ray: &Ray,
+        test: T,
+        mut state: Q::State,
+        query: &mut Q,
+    ) -> Q::Answer
+    where
+        T: NodeTest,
+        O: WalkOrder,
+        Q: Query,
+    {
+        let node = &self.nodes[0];
+        let mut ray = *ray;
+        let (tn, mask) = test.test(ChildBoxes::new(&node.bounds), ray.tmax);
+        if mask & mask.wrapping_sub(1) == 0 {
+            // One leaf entered, or none: nothing to order.
+            let hit = mask != 0 && {
+                let (start, count) = leaf_range(node.child[mask.trailing_zeros() as usize % 8]);
+                query.leaf(&mut state, start, count, &mut ray)
+            };
+            return query.answer(&state, hit);
+        }
+        // Farthest first, so nearest first from the back: a one-node
+        // tree's children are all leaves (no other node to refer to).
+        let entries = if O::NEAREST_FIRST {
+            nearest_last(tn, mask, &node.child)
+        } else {
+            let mut slots = mask;
+            std::array::from_fn(|_| {
+                let slot = slots.trailing_zeros() as usize % 8;
+                slots &= slots.wrapping_sub(1);
+                node.child[slot] as u64
+            })
+        };
+        for &entry in entries[..mask.count_ones() as usize].iter().rev() {
+            if O::NEAREST_FIRST
+                && Q::SHORTENS
+                && (entry >> 32) as u32 > (order_key(test.widened(ray.tmax)) | 7)
+            {
+                break;
+            }
+            let (start, count) = leaf_range(entry as u32);
+            if query.leaf(&mut state, start, count, &mut ray) {
+                return query.answer(&state, true);
+            }
+        }
+        query.answer(&state, false)
     }
 
     /// The walk of a ray: [`Bvh8::walk_by`] with the ray's slab test,
@@ -370,17 +429,25 @@ pub(super) mod tests {
         })
     }
 
-    /// Random spheres, checked against brute force for every preset.
+    /// Random spheres, checked against brute force for every preset: a
+    /// tree of many nodes, and trees of one node (a few spheres), which
+    /// walk their root's leaves without a stack.
     #[test]
     fn closest_hit_and_occlusion_agree_with_brute_force_for_every_quality() {
+        for n in [500, 6, 1] {
+            brute_force_agrees(n);
+        }
+    }
+
+    fn brute_force_agrees(n: usize) {
         let mut spheres = Vec::new();
         let mut rng = seeded(1);
         let mut rnd = || rng.unit();
-        for _ in 0..500 {
+        for _ in 0..n {
             let c = Vec3::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
             spheres.push(Sphere {
                 center: c,
-                radius: 0.05 + rnd() * 0.5,
+                radius: 0.05 + rnd() * if n < 10 { 5.0 } else { 0.5 },
             });
         }
         let boxes: Vec<Aabb> = spheres.iter().map(|s| s.bounds()).collect();
@@ -392,6 +459,7 @@ pub(super) mod tests {
             BuildQuality::High,
         ] {
             let bvh = Bvh8::build(&boxes, quality);
+            assert_eq!(bvh.nodes.len() == 1, n <= 8, "{n} spheres, {quality:?}");
             let mut seen: Vec<u32> = bvh
                 .prim_ids
                 .iter()
@@ -401,7 +469,7 @@ pub(super) mod tests {
             seen.sort();
             assert_eq!(
                 seen,
-                (0..500).collect::<Vec<_>>(),
+                (0..n as u32).collect::<Vec<_>>(),
                 "each primitive in exactly one leaf"
             );
             for _ in 0..2000 {
@@ -410,7 +478,7 @@ pub(super) mod tests {
                 let mut ray = Ray::new(o, d);
                 ray.tmax = 5.0 + rnd() * 40.0;
                 let hit = |id: u32, r: &Ray| sphere_hit(&spheres, id, r);
-                let brute = (0..500u32)
+                let brute = (0..n as u32)
                     .filter_map(|i| hit(i, &ray))
                     .min_by(|a, b| a.t.total_cmp(&b.t));
                 let got = bvh.closest_hit(&ray, NO_DATA, |start, count, r| {
@@ -471,6 +539,19 @@ pub(super) mod tests {
         let mut ahead = Vec::new();
         bvh.visit_line(&line, |id| ahead.push(id));
         assert!(ahead.iter().all(|&i| boxes[i as usize].max.x >= 0.0));
+        // A tree of one node, whose leaves the walk visits without a stack.
+        let few: Vec<Aabb> = (0..6)
+            .map(|i| {
+                let c = Vec3::new(2.0 * i as f32 - 5.0, (i % 2) as f32, 0.0);
+                Aabb::new(c - Vec3::splat(0.4), c + Vec3::splat(0.4))
+            })
+            .collect();
+        let bvh = Bvh8::build(&few, BuildQuality::Auto);
+        assert_eq!(bvh.nodes.len(), 1);
+        line.tmin = f32::NEG_INFINITY;
+        let mut seen = Vec::new();
+        bvh.visit_line(&line, |id| seen.push(id));
+        assert!([0, 2, 4].iter().all(|i| seen.contains(i)), "{seen:?}");
     }
 
     #[test]
