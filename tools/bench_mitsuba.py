@@ -46,12 +46,15 @@ Per scene:
      the mean over three seeds) is at most Mitsuba's RMSE, found by
      doubling from 1 spp and then bisecting; the whole strata process
      (wall, including load and BVH build) against Mitsuba's load_dict
-     (median of --runs loads) + warm render.
+     (median of --runs loads) + warm render (median of --runs renders at
+     its spp, each timed beside one of strata's runs: the machine's speed
+     drifts between steps).
   5. Equal RMSE with strata's noise target (--noise E, ceiling
      --noise-spp): the largest E whose RMSE (mean over three seeds) is at
      most Mitsuba's, found by halving or doubling E from 0.5 and then
      bisecting between the last two in log space (four steps); timed as
-     in 4 (every pixel takes 8 samples before the first decision). Mitsuba
+     in 4, Mitsuba's renders again beside strata's runs (every pixel
+     takes 4 samples before the first decision). Mitsuba
      has no noise target of its own, so this compares strata at its best
      with Mitsuba's uniform sampling (--noise-spp 0 skips it).
 
@@ -488,13 +491,16 @@ def bench_scene(args, mi, dr, np, path, tmp):
     n, e = found
     # Mitsuba's load, timed like strata's whole process: the median of
     # --runs loads (the first, above, included), so that one slow load on
-    # this shared machine does not stand for Mitsuba. Each repeat load
-    # alternates with one strata run, so both see the same machine.
+    # this shared machine does not stand for Mitsuba. Each repeat load, and
+    # a warm render of Mitsuba's at its spp, alternates with one strata
+    # run, so both see the same machine (its speed drifted by a third
+    # between step 3 and this one).
     loads = [load_s]
-    walls, renders = [], []
+    walls, renders, m_times = [], [], []
     for k in range(args.runs):
         if k > 0:
             loads.append(load()[1])
+        m_times.append(mitsuba(spp, 100 + k)[1])
         wall, render_s, _ = run_strata(args, path, n, "stratified", os.path.join(tmp, f"{name}-strat.exr"))
         walls.append(wall)
         renders.append(render_s)
@@ -506,12 +512,15 @@ def bench_scene(args, mi, dr, np, path, tmp):
           f"load_dict {load_med:.3f} s (median of {len(loads)}: {min(loads):.3f} to {max(loads):.3f} s) "
           f"+ warm render {med(m_times):.3f} s = {mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
     if args.noise_spp > 0:
-        noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_times)
+        noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, (mitsuba, spp))
     return True
 
 
-def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_times):
-    """Step 5: the largest noise target whose RMSE is at most Mitsuba's."""
+def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_render):
+    """Step 5: the largest noise target whose RMSE is at most Mitsuba's;
+    `m_render` is Mitsuba's warm render and its spp, timed again beside
+    strata's runs."""
+    mitsuba, m_spp = m_render
     med = statistics.median
     out = os.path.join(tmp, f"{name}-noise.exr")
 
@@ -550,7 +559,10 @@ def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_times):
                 hi = mid
     e, err = found
     walls, renders, spp = [], [], []
-    for _ in range(args.runs):
+    # Mitsuba's warm render timed again, alternating with strata's runs.
+    m_times = []
+    for k in range(args.runs):
+        m_times.append(mitsuba(m_spp, 200 + k)[1])
         wall, render_s, _ = run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}")
         walls.append(wall)
         renders.append(render_s)
@@ -560,7 +572,8 @@ def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_times):
     print(f"  equal RMSE, noise target: strata --noise {e:.4g} (ceiling {args.noise_spp} spp, "
           f"{med(spp):.1f} spp on average): RMSE {err:.5f} <= mitsuba's {m_rmse:.5f}")
     print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
-          f"{mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
+          f"load_dict {med(loads):.3f} s + warm render {med(m_times):.3f} s = {mitsuba_total:.3f} s: "
+          f"ratio {med(walls) / mitsuba_total:.2f}")
 
 
 def main():
