@@ -3,10 +3,10 @@
 //!
 //! Starting a pool costs a render of a small scene more than its load:
 //! threads to create, then to wake, each the first time it is handed
-//! work. A caller that runs the whole command on one pool (`strata
-//! render`, the Python package's `render`) hands the render threads that
-//! are already running. The image does not depend on which threads render
-//! it.
+//! work. `strata render` runs the whole command on one pool, and the
+//! Python package's `render` without `threads` on rayon's global pool,
+//! so the render gets threads that are already running. The image does
+//! not depend on which threads render it.
 
 use crate::system::cputime::thread_cpu_ns;
 
