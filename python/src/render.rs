@@ -406,8 +406,6 @@ pub fn render(
         aovs: !aovs.is_empty(),
         timeline: None,
         budget: None,
-        // The pool kept for this `threads`, started once, not one a render.
-        pool: pool.pool(),
     };
     let mut interrupt = Interrupt::default();
     let outcome = py.detach(|| render_scene(&scene, &opts, None, &mut interrupt));

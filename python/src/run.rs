@@ -59,11 +59,6 @@ impl Threads {
         self.0.as_ref().map_or(0, |p| p.current_num_threads())
     }
 
-    /// The pool kept for this size (`None`: rayon's global pool).
-    pub fn pool(&self) -> Option<Arc<rayon::ThreadPool>> {
-        self.0.clone()
-    }
-
     /// `work` on this pool.
     pub fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
         match &self.0 {

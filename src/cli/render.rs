@@ -236,8 +236,6 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
         aovs: !args.aov.is_empty(),
         timeline: timeline.clone(),
         budget: args.time,
-        // The command's own pool (`run`), which the render reuses.
-        pool: None,
     };
     let mut failed = (false, false);
     let checkpoints = each_pass(|film, done| {

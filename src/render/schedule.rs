@@ -130,10 +130,6 @@ pub struct RenderOptions {
     /// last one's pace says would end past them (the first always runs).
     /// The image then depends on the machine's speed.
     pub budget: Option<f64>,
-    /// A pool to render on, kept by the caller for its `threads` (the
-    /// Python package's); `None`: the pool the render is called on, or
-    /// one of `threads` threads started for it (`render::workers`).
-    pub pool: Option<Arc<rayon::ThreadPool>>,
 }
 
 impl Default for RenderOptions {
@@ -149,7 +145,6 @@ impl Default for RenderOptions {
             aovs: false,
             timeline: None,
             budget: None,
-            pool: None,
         }
     }
 }
@@ -262,7 +257,7 @@ fn render_window(
 ) -> RenderOutcome {
     let setup_start = opts.timeline.as_deref().map(Timeline::now);
     let s = &scene.settings;
-    let (pool, threads) = Workers::for_options(opts);
+    let (pool, threads) = Workers::for_threads(opts.threads);
     let window = opts
         .window
         .clone()

@@ -3,35 +3,22 @@
 //!
 //! Starting a pool costs a render of a small scene more than its load:
 //! threads to create, then to wake, each the first time it is handed
-//! work. `strata render` runs the whole command on one pool; the Python
-//! package's `render` hands over the pool it keeps for its `threads`
-//! ([`RenderOptions::pool`]), or none, and renders on rayon's global pool;
+//! work. `strata render` runs the whole command on one pool, and the
+//! Python package's `render` without `threads` on rayon's global pool,
 //! so the render gets threads that are already running. The image does
 //! not depend on which threads render it.
 
-use super::schedule::RenderOptions;
 use crate::system::cputime::thread_cpu_ns;
-use std::sync::Arc;
 
 /// Where a render's parallel work runs.
 pub(super) enum Workers {
     /// The pool the caller runs on, or rayon's global pool outside any.
     Current,
-    /// A pool the caller keeps, or one of the size asked for, started for
-    /// this render.
-    Pool(Arc<rayon::ThreadPool>),
+    /// A pool of the size asked for, started for this render.
+    Own(rayon::ThreadPool),
 }
 
 impl Workers {
-    /// The workers `opts` asks for ([`RenderOptions::pool`], else
-    /// [`Workers::for_threads`]), and their count.
-    pub(super) fn for_options(opts: &RenderOptions) -> (Self, usize) {
-        match &opts.pool {
-            Some(pool) => (Self::Pool(pool.clone()), pool.current_num_threads()),
-            None => Self::for_threads(opts.threads),
-        }
-    }
-
     /// Workers for `threads` threads (0: as many as the current pool has,
     /// one per core outside any pool), and their count.
     pub(super) fn for_threads(threads: usize) -> (Self, usize) {
@@ -43,14 +30,14 @@ impl Workers {
             .num_threads(threads)
             .build()
             .expect("thread pool");
-        (Self::Pool(Arc::new(pool)), threads)
+        (Self::Own(pool), threads)
     }
 
     /// `work` run where its parallel iterators use these workers.
     pub(super) fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
         match self {
             Self::Current => work(),
-            Self::Pool(pool) => pool.install(work),
+            Self::Own(pool) => pool.install(work),
         }
     }
 
@@ -58,7 +45,7 @@ impl Workers {
     pub(super) fn caller(&self) -> Option<usize> {
         match self {
             Self::Current => rayon::current_thread_index(),
-            Self::Pool(pool) => pool.current_thread_index(),
+            Self::Own(_) => None,
         }
     }
 
@@ -68,7 +55,7 @@ impl Workers {
         let read = |_: rayon::BroadcastContext<'_>| thread_cpu_ns();
         match self {
             Self::Current => rayon::broadcast(read),
-            Self::Pool(pool) => pool.broadcast(read),
+            Self::Own(pool) => pool.broadcast(read),
         }
         .into_iter()
         .collect()
@@ -95,34 +82,12 @@ mod tests {
                 assert_eq!(workers.install(rayon::current_num_threads), 3);
             }
             let (workers, n) = Workers::for_threads(2);
-            assert!(matches!(workers, Workers::Pool(_)));
+            assert!(matches!(workers, Workers::Own(_)));
             assert_eq!(n, 2);
             assert_eq!(workers.install(rayon::current_num_threads), 2);
             if let Some(times) = workers.cpu_ns() {
                 assert_eq!(times.len(), 2, "one reading a worker");
             }
         });
-        // A pool handed over is used whatever `threads` says, and knows
-        // its own workers.
-        let kept = Arc::new(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(2)
-                .build()
-                .unwrap(),
-        );
-        let opts = RenderOptions {
-            threads: 5,
-            pool: Some(kept.clone()),
-            ..RenderOptions::default()
-        };
-        let (workers, n) = Workers::for_options(&opts);
-        assert_eq!(n, 2);
-        assert!(matches!(&workers, Workers::Pool(p) if Arc::ptr_eq(p, &kept)));
-        assert_eq!(workers.caller(), None, "called from outside it");
-        let index = kept.install(|| workers.caller());
-        assert!(
-            matches!(index, Some(0 | 1)),
-            "called from its worker: {index:?}"
-        );
     }
 }
