@@ -21,8 +21,16 @@ pub const FIXED_SCALE: f64 = 4_294_967_296.0; // 2^32
 pub fn fixed_to_f64(x: i128) -> f64 {
     match i64::try_from(x) {
         Ok(small) => small as f64,
-        Err(_) => x as f64,
+        Err(_) => wide_to_f64(x),
     }
+}
+
+/// `x as f64` out of line: inlined, the optimizer saw that both of
+/// [`fixed_to_f64`]'s arms compute `x as f64` and kept only the library
+/// call, on every sum.
+#[inline(never)]
+fn wide_to_f64(x: i128) -> f64 {
+    x as f64
 }
 
 /// Largest radiance one sample may carry before it is clamped.
@@ -432,6 +440,33 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sum as f64 is `x as f64`, bit for bit, through i64 and out of
+    /// line alike: at both ends of i64, just past them, at halves of the
+    /// last place of large values, and at the ends of i128.
+    #[test]
+    fn fixed_sums_convert_as_the_direct_cast_does() {
+        let mut values = vec![0i128, 1, -1, i128::MAX, i128::MIN, i128::MIN + 1];
+        for edge in [i64::MAX as i128, i64::MIN as i128] {
+            values.extend((-3..=3).map(|d| edge + d));
+        }
+        for shift in 53..126 {
+            let base = 1i128 << shift;
+            // Just below, at and just above half a unit in the last place.
+            let half = 1i128 << (shift - 53);
+            for x in [
+                base + half - 1,
+                base + half,
+                base + half + 1,
+                base + 3 * half,
+            ] {
+                values.extend([x, -x]);
+            }
+        }
+        for x in values {
+            assert_eq!(fixed_to_f64(x).to_bits(), (x as f64).to_bits(), "{x}");
+        }
+    }
 
     /// The integer conversion is the direct one through f64, bit for bit,
     /// at halves of the last place, subnormals, the top of the range and
