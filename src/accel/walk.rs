@@ -143,6 +143,14 @@ impl<T: NodeTest, S> Walk<T, S> {
     }
 }
 
+/// The largest entry key (`entry >> 32`) a walk whose (widened) reach is
+/// `reach` still visits: the reach's key with the slot bits set, so that
+/// no child whose entry is within it is culled (see `nearest_last`).
+#[inline(always)]
+fn reach_key(reach: f32) -> u32 {
+    order_key(reach) | 7
+}
+
 /// The nearest deferred child a walk whose (widened) reach is `reach` can
 /// still reach, popped off `stack`; `None` once the stack is empty. The
 /// entry distance carries rounding error like the box test's far
@@ -154,7 +162,7 @@ impl<T: NodeTest, S> Walk<T, S> {
 /// pushed is still in reach.
 #[inline(always)]
 fn next_deferred<O: WalkOrder, Q: Query>(stack: &mut Stack<u64>, reach: f32) -> Option<u32> {
-    let reach = order_key(reach) | 7;
+    let reach = reach_key(reach);
     loop {
         let entry = stack.pop()?;
         if !O::NEAREST_FIRST || !Q::SHORTENS || (entry >> 32) as u32 <= reach {
@@ -256,28 +264,28 @@ impl Bvh8 {
             };
             return query.answer(&state, hit);
         }
-        // Farthest first, so nearest first from the back: a one-node
-        // tree's children are all leaves (no other node to refer to).
-        let entries = if O::NEAREST_FIRST {
-            nearest_last(tn, mask, &node.child)
-        } else {
-            let mut slots = mask;
-            std::array::from_fn(|_| {
-                let slot = slots.trailing_zeros() as usize % 8;
-                slots &= slots.wrapping_sub(1);
-                node.child[slot] as u64
-            })
-        };
-        for &entry in entries[..mask.count_ones() as usize].iter().rev() {
-            if O::NEAREST_FIRST
-                && Q::SHORTENS
-                && (entry >> 32) as u32 > (order_key(test.widened(ray.tmax)) | 7)
-            {
-                break;
+        // A one-node tree's children are all leaves (no other node to
+        // refer to).
+        if O::NEAREST_FIRST {
+            // Farthest first, so nearest first from the back.
+            let entries = nearest_last(tn, mask, &node.child);
+            for &entry in entries[..mask.count_ones() as usize].iter().rev() {
+                if Q::SHORTENS && (entry >> 32) as u32 > reach_key(test.widened(ray.tmax)) {
+                    break;
+                }
+                let (start, count) = leaf_range(entry as u32);
+                if query.leaf(&mut state, start, count, &mut ray) {
+                    return query.answer(&state, true);
+                }
             }
-            let (start, count) = leaf_range(entry as u32);
-            if query.leaf(&mut state, start, count, &mut ray) {
-                return query.answer(&state, true);
+        } else {
+            let mut rest = mask;
+            while rest != 0 {
+                let (start, count) = leaf_range(node.child[rest.trailing_zeros() as usize % 8]);
+                rest &= rest - 1;
+                if query.leaf(&mut state, start, count, &mut ray) {
+                    return query.answer(&state, true);
+                }
             }
         }
         query.answer(&state, false)

@@ -45,17 +45,7 @@ pub fn linear_to_srgb(x: f32) -> f32 {
 /// · 255 levels a unit, is where the curve starts), so no bucket holds
 /// two steps.
 pub fn srgb_level(x: f32) -> u8 {
-    let levels = SrgbLevels::get();
-    if !(x > 0.0) {
-        return 0;
-    }
-    if x >= 1.0 {
-        return 255;
-    }
-    // x · 4096 is exact (a power of two) and below 4096: its floor is x's
-    // bucket, whose lowest value has level `start`.
-    let level = levels.start[(x * BUCKETS as f32) as usize];
-    level + (x >= levels.steps[level as usize]) as u8
+    SrgbLevels::get().level(x)
 }
 
 /// Buckets of the lookup that [`srgb_level`] starts from.
@@ -102,6 +92,21 @@ impl SrgbLevels {
             SrgbLevels { steps, start }
         })
     }
+
+    /// [`srgb_level`] of `x`.
+    #[inline]
+    fn level(&self, x: f32) -> u8 {
+        if !(x > 0.0) {
+            return 0;
+        }
+        if x >= 1.0 {
+            return 255;
+        }
+        // x · 4096 is exact (a power of two) and below 4096: its floor is
+        // x's bucket, whose lowest value has level `start`.
+        let level = self.start[(x * BUCKETS as f32) as usize];
+        level + (x >= self.steps[level as usize]) as u8
+    }
 }
 
 pub fn srgb_to_linear(x: f32) -> f32 {
@@ -122,9 +127,10 @@ pub fn encode(
     let mut bytes = std::io::Cursor::new(Vec::new());
     match format {
         ImageFormat::Png => {
+            let levels = SrgbLevels::get();
             let data: Vec<u8> = pixels
                 .iter()
-                .flat_map(|p| p.to_array().map(srgb_level))
+                .flat_map(|p| p.to_array().map(|c| levels.level(c)))
                 .collect();
             let img =
                 image::RgbImage::from_raw(width, height, data).ok_or("image size mismatch")?;

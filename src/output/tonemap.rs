@@ -62,7 +62,7 @@ pub fn apply(pixels: &mut [Vec3], exposure: f32, curve: Tonemap) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::image::linear_to_srgb;
+    use crate::output::image::srgb_level;
 
     #[test]
     fn exposure_scales_before_the_curve() {
@@ -88,7 +88,7 @@ mod tests {
             x = x * 1.01 + 1e-4;
         }
         // Below FILMIC_WHITE, below the last 8-bit level; above, white.
-        let level = |x| (linear_to_srgb(f(x)) * 255.0 + 0.5) as u8;
+        let level = |x| srgb_level(f(x));
         assert!(level(FILMIC_WHITE * 0.99) < 255);
         assert_eq!(level(FILMIC_WHITE * 1.6), 255);
         // Where clamp clips (above 1), filmic still tells values apart.
