@@ -444,6 +444,9 @@ def bench_scene(args, mi, dr, np, path, tmp):
     first_t = mitsuba(spp, 1)[1]
     m_times, m_err, s_render, s_wall, s_err = [], [], [], [], []
     dim = ref.mean(axis=2) < args.below if args.below else None
+    if dim is not None and not dim.any():
+        print(f"  --below {args.below:g}: no pixel of the reference is under it")
+        dim = None
     m_dim, s_dim = [], []
     for k in range(args.runs):
         img, t = mitsuba(spp, 2 + k)
