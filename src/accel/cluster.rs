@@ -247,10 +247,12 @@ const PAIR_BLOCK: usize = 1 << 15;
 /// by id.
 pub(super) fn morton_order(boxes: &[Aabb], bounds: Aabb) -> Vec<u32> {
     // A new array: a u32 is aligned as a u64 is not, so the standard
-    // library cannot collect into the keys' allocation (checked).
+    // library cannot collect into the keys' allocation (checked). In
+    // parallel: one thread took 60 ms of dragon-sub2's build over its 13.9
+    // million keys, while the others waited (`perf record`).
     morton_keys(boxes, bounds)
-        .into_iter()
-        .map(|k| k as u32)
+        .par_iter()
+        .map(|&k| k as u32)
         .collect()
 }
 
