@@ -50,10 +50,13 @@ Per scene:
   4. Equal RMSE: the fewest spp at which strata (stratified; its RMSE
      the mean over three seeds) is at most Mitsuba's RMSE, found by
      doubling from 1 spp and then bisecting; the whole strata process
-     (wall, including load and BVH build) against Mitsuba's load_dict
-     (median of --runs loads) + warm render (median of --runs renders at
-     its spp, each timed beside one of strata's runs: the machine's speed
-     drifts between steps).
+     (wall, including its start, load, BVH build and EXR, but not
+     --stats, which a render needs no more than Mitsuba's does) against
+     Mitsuba's load_dict (median of --runs loads) + warm render (median
+     of --runs renders at its spp, which write no file, each timed beside
+     one of strata's runs: the machine's speed drifts between steps).
+     The render phase printed beside it is from one more strata run,
+     with --stats, not timed.
   5. Equal RMSE with strata's noise target (--noise E, ceiling
      --noise-spp): the largest E whose RMSE (mean over three seeds) is at
      most Mitsuba's, found by halving or doubling E from 0.5 and then
@@ -367,16 +370,24 @@ def region_means(np, img, k=3):
             for i in range(k) for j in range(k)]
 
 
-def run_strata(args, scene, spp, sampler, out, seed=0, noise=None):
-    stats = out + ".json"
+def run_strata(args, scene, spp, sampler, out, seed=0, noise=None, stats=True):
+    """strata's wall time, and with `stats` its render phase and its load and
+    build (from `--stats`, written to OUT.json), else None for both: a run
+    timed as a whole process writes its image alone, as a user's render
+    does (the stats file's fsync and the memory figures' reads cost a
+    1-pixel render 1.5 ms)."""
     cmd = [args.strata, "render", STRATA_SCENES.get(scene, scene), "-q", "--threads", str(args.threads), "--spp", str(spp),
-           "--seed", str(seed), "-o", out, "--stats", stats]
+           "--seed", str(seed), "-o", out]
+    if stats:
+        cmd += ["--stats", out + ".json"]
     # The noise target samples as it must (its own sampler); else the one asked.
     cmd += ["--noise", str(noise)] if noise is not None else ["--sampler", sampler]
     t = time.perf_counter()
     subprocess.run(cmd, check=True, cwd=ROOT)
     wall = time.perf_counter() - t
-    with open(stats) as f:
+    if not stats:
+        return wall, None, None
+    with open(out + ".json") as f:
         st = json.load(f)["time"]
     return wall, st["render_s"], st["load_s"] + st["bvh_build_s"]
 
@@ -517,19 +528,20 @@ def bench_scene(args, mi, dr, np, path, tmp):
     # run, so both see the same machine (its speed drifted by a third
     # between step 3 and this one).
     loads = [load_s]
-    walls, renders, m_times = [], [], []
+    walls, m_times = [], []
+    strat = os.path.join(tmp, f"{name}-strat.exr")
     for k in range(args.runs):
         if k > 0:
             loads.append(load()[1])
         m_times.append(mitsuba(spp, 100 + k)[1])
-        wall, render_s, _ = run_strata(args, path, n, "stratified", os.path.join(tmp, f"{name}-strat.exr"))
-        walls.append(wall)
-        renders.append(render_s)
+        walls.append(run_strata(args, path, n, "stratified", strat, stats=False)[0])
+    # The render phase, for the record, from one more run (not timed).
+    render_s = run_strata(args, path, n, "stratified", strat)[1]
     load_med = med(loads)
     mitsuba_total = load_med + med(m_times)
     print(f"  equal RMSE: strata stratified at {n} spp: RMSE {e:.5f} <= mitsuba's {m_rmse:.5f} at {spp} spp "
           f"(means over {RMSE_SEEDS} seeds and {args.runs} runs)")
-    print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
+    print(f"    strata whole process {med(walls):.3f} s (render {render_s:.3f} s) vs mitsuba "
           f"load_dict {load_med:.3f} s (median of {len(loads)}: {min(loads):.3f} to {max(loads):.3f} s) "
           f"+ warm render {med(m_times):.3f} s = {mitsuba_total:.3f} s: ratio {med(walls) / mitsuba_total:.2f}")
     if args.noise_spp > 0:
@@ -579,20 +591,20 @@ def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_render):
             else:
                 hi = mid
     e, err = found
-    walls, renders, spp = [], [], []
+    walls = []
     # Mitsuba's warm render timed again, alternating with strata's runs.
     m_times = []
     for k in range(args.runs):
         m_times.append(mitsuba(m_spp, 200 + k)[1])
-        wall, render_s, _ = run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}")
-        walls.append(wall)
-        renders.append(render_s)
-        with open(out + ".json") as f:
-            spp.append(json.load(f).get("mean_spp", float("nan")))
+        walls.append(run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}", stats=False)[0])
+    # The render phase and the samples taken, from one more run (not timed).
+    render_s = run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}")[1]
+    with open(out + ".json") as f:
+        spp = json.load(f).get("mean_spp", float("nan"))
     mitsuba_total = med(loads) + med(m_times)
     print(f"  equal RMSE, noise target: strata --noise {e:.4g} (ceiling {args.noise_spp} spp, "
-          f"{med(spp):.1f} spp on average): RMSE {err:.5f} <= mitsuba's {m_rmse:.5f}")
-    print(f"    strata whole process {med(walls):.3f} s (render {med(renders):.3f} s) vs mitsuba "
+          f"{spp:.1f} spp on average): RMSE {err:.5f} <= mitsuba's {m_rmse:.5f}")
+    print(f"    strata whole process {med(walls):.3f} s (render {render_s:.3f} s) vs mitsuba "
           f"load_dict {med(loads):.3f} s + warm render {med(m_times):.3f} s = {mitsuba_total:.3f} s: "
           f"ratio {med(walls) / mitsuba_total:.2f}")
 
