@@ -631,8 +631,8 @@ impl Drop for Finished<'_> {
 /// pool, one thread per core): the pool it is called on where that has as
 /// many. On a worker, not beside the pool: each parallel step started from
 /// a thread outside it waits for a worker to wake and take it, which made
-/// a one-sphere scene's tree take 0.4 ms on the global pool's two threads
-/// against 0.15 ms in a pool of its own (docs/performance.md).
+/// a one-sphere scene's tree take 0.3 to 0.6 ms beside the global pool's
+/// two threads against 0.1 to 0.2 ms in a pool (docs/performance.md).
 fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<T, CliError> {
     if threads == 0 || rayon::current_num_threads() == threads {
         // `rayon::scope` runs its closure on a worker of the current pool

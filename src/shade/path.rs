@@ -41,10 +41,10 @@ use crate::sampling::Dim;
 use glam::{Vec2, Vec3};
 
 /// Bounces after which Russian roulette may end a path: five, as
-/// Mitsuba 3's `rr_depth`. Ending paths earlier saves little time where
-/// it matters, in closed rooms whose walls reflect most of the light, and
-/// costs much noise there: on cornell-planes' walls, at equal render
-/// time, three bounces gave 1.4 times the squared error of five
+/// Mitsuba 3's `rr_depth`. Ending paths earlier saves time in closed
+/// rooms whose walls reflect most of the light, but costs more noise than
+/// the time buys back: on cornell-planes' walls, at equal render time,
+/// three bounces gave 1.4 times the squared error of five
 /// (docs/mitsuba.md, "When Russian roulette starts").
 pub const ROULETTE_DEPTH: u32 = 5;
 
