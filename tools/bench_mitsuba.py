@@ -3,7 +3,8 @@
 
     tools/.venv/bin/python tools/bench_mitsuba.py [SCENE.toml ...]
         [--strata target/release/strata] [--threads 1] [--runs 5]
-        [--spp N] [--ref-spp 1024] [--below L] [--variant llvm_ad_rgb]
+        [--spp N] [--ref-spp 1024] [--same-within 1] [--below L]
+        [--variant llvm_ad_rgb]
 
 Without scenes: scenes/large/dragon-rect.toml, scenes/seed-mc.toml,
 scenes/soft-shadow.toml, scenes/env-constant.toml and scenes/env-sky.toml.
@@ -33,9 +34,12 @@ Per scene:
   1. A Mitsuba reference at --ref-spp (cached under tools/.cache/).
   2. The same-image check: strata (stratified) at --ref-spp against the
      reference: the mean of each of 3x3 image regions must agree within
-     1% (regions darker than 1% of the brightest are compared against that
-     floor). Otherwise the region means are printed and the scene is not
-     compared.
+     --same-within percent (1; regions darker than 1% of the brightest
+     are compared against that floor). Otherwise the region means are
+     printed and the scene is not compared. dragon-gold needs 2: its dim
+     corner is lit through the gold, where the two renderers' Smith
+     masking functions differ and their means by about 1%
+     (docs/mitsuba.md).
   3. Equal spp (the scene's spp, or --spp): Mitsuba (independent sampler)
      and strata (--sampler random) alternate --runs times on --threads
      threads. Mitsuba renders once first (its JIT compiles the kernel;
@@ -441,10 +445,11 @@ def bench_scene(args, mi, dr, np, path, tmp):
     mine = read_exr(mi, np, check)
     ms, ss = region_means(np, ref), region_means(np, mine)
     floor = 0.01 * max(ms)
-    bad = [i for i, (m, s) in enumerate(zip(ms, ss)) if abs(s - m) > 0.01 * max(m, floor)]
+    within = args.same_within / 100
+    bad = [i for i, (m, s) in enumerate(zip(ms, ss)) if abs(s - m) > within * max(m, floor)]
     if mine.shape != ref.shape or bad:
         print(f"{name}: NOT COMPARED: the renderers disagree at {args.ref_spp} spp "
-              f"(3x3 region means, row-major; regions {bad} differ by more than 1%):")
+              f"(3x3 region means, row-major; regions {bad} differ by more than {args.same_within:g}%):")
         print("  mitsuba " + " ".join(f"{m:.5f}" for m in ms))
         print("  strata  " + " ".join(f"{s:.5f}" for s in ss))
         return None
@@ -617,6 +622,8 @@ def main():
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--spp", type=int, default=0, help="equal-spp sample count (default: the scene's)")
     ap.add_argument("--ref-spp", type=int, default=1024)
+    ap.add_argument("--same-within", type=float, default=1.0,
+                    help="step 2's tolerance for the 3x3 region means, in percent")
     ap.add_argument("--below", type=float, default=0.0,
                     help="also report step 3's RMSE over pixels whose reference is under this level")
     ap.add_argument("--variant", default="llvm_ad_rgb")
