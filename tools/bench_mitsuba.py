@@ -374,12 +374,12 @@ def region_means(np, img, k=3):
             for i in range(k) for j in range(k)]
 
 
-def run_strata(args, scene, spp, sampler, out, seed=0, noise=None, stats=True):
-    """strata's wall time, and with `stats` its render phase and its load and
-    build (from `--stats`, written to OUT.json), else None for both: a run
-    timed as a whole process writes its image alone, as a user's render
-    does (the stats file's fsync and the memory figures' reads cost a
-    1-pixel render 1.5 ms)."""
+def run_strata(args, scene, spp, sampler, out, seed=0, noise=None, stats=False):
+    """strata's wall time, and with `stats` its render phase (from
+    `--stats`, written to OUT.json), else None: a run timed as a whole
+    process writes its image alone, as a user's render does (the stats
+    file's fsync and the memory figures' reads cost a 1-pixel render
+    1.5 ms)."""
     cmd = [args.strata, "render", STRATA_SCENES.get(scene, scene), "-q", "--threads", str(args.threads), "--spp", str(spp),
            "--seed", str(seed), "-o", out]
     if stats:
@@ -390,10 +390,9 @@ def run_strata(args, scene, spp, sampler, out, seed=0, noise=None, stats=True):
     subprocess.run(cmd, check=True, cwd=ROOT)
     wall = time.perf_counter() - t
     if not stats:
-        return wall, None, None
+        return wall, None
     with open(out + ".json") as f:
-        st = json.load(f)["time"]
-    return wall, st["render_s"], st["load_s"] + st["bvh_build_s"]
+        return wall, json.load(f)["time"]["render_s"]
 
 
 def bench_scene(args, mi, dr, np, path, tmp):
@@ -469,7 +468,7 @@ def bench_scene(args, mi, dr, np, path, tmp):
         m_times.append(t)
         m_err.append(rmse(np, img, ref))
         out = os.path.join(tmp, f"{name}-rnd.exr")
-        wall, render_s, _ = run_strata(args, path, spp, "random", out, seed=k)
+        wall, render_s = run_strata(args, path, spp, "random", out, seed=k, stats=True)
         s_render.append(render_s)
         s_wall.append(wall)
         mine = read_exr(mi, np, out)
@@ -539,9 +538,9 @@ def bench_scene(args, mi, dr, np, path, tmp):
         if k > 0:
             loads.append(load()[1])
         m_times.append(mitsuba(spp, 100 + k)[1])
-        walls.append(run_strata(args, path, n, "stratified", strat, stats=False)[0])
+        walls.append(run_strata(args, path, n, "stratified", strat)[0])
     # The render phase, for the record, from one more run (not timed).
-    render_s = run_strata(args, path, n, "stratified", strat)[1]
+    render_s = run_strata(args, path, n, "stratified", strat, stats=True)[1]
     load_med = med(loads)
     mitsuba_total = load_med + med(m_times)
     print(f"  equal RMSE: strata stratified at {n} spp: RMSE {e:.5f} <= mitsuba's {m_rmse:.5f} at {spp} spp "
@@ -601,9 +600,9 @@ def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_render):
     m_times = []
     for k in range(args.runs):
         m_times.append(mitsuba(m_spp, 200 + k)[1])
-        walls.append(run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}", stats=False)[0])
+        walls.append(run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}")[0])
     # The render phase and the samples taken, from one more run (not timed).
-    render_s = run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}")[1]
+    render_s = run_strata(args, path, args.noise_spp, None, out, noise=f"{e:.5g}", stats=True)[1]
     with open(out + ".json") as f:
         spp = json.load(f).get("mean_spp", float("nan"))
     mitsuba_total = med(loads) + med(m_times)
