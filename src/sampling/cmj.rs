@@ -218,8 +218,14 @@ fn cmj_point<D: Divisor>(s: u32, pattern: u32, m: D, rows: D, cells: D) -> Vec2 
     let jx = rand_float(s, p_jitter_x);
     let jy = rand_float(s, p_jitter_y);
     let (m, rows) = (m.get() as f32, rows.get() as f32);
+    // Each coordinate is a coarse stratum and a fine one within it: x the
+    // permuted column, then the permuted row; y the row, then the column.
+    // Each cell has a fine stratum of its own in each 1D projection (of
+    // m × rows), so no two samples share one (Kensler 2013's correlated
+    // multi-jitter; until 29 November 2026 y had no fine stratum, and a
+    // pixel's samples were spread over only `rows` strata vertically).
     let x = (sx as f32 + (sy as f32 + jx) / rows) / m;
-    let y = (row as f32 + jy) / rows;
+    let y = (row as f32 + (col as f32 + jy) / m) / rows;
     Vec2::new(x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON))
 }
 
@@ -320,8 +326,11 @@ mod tests {
 
     #[test]
     fn cmj_is_stratified_in_both_projections_for_any_n() {
-        for n in [1u32, 2, 3, 4, 7, 9, 16, 30, 64, 100] {
-            let pts: Vec<Vec2> = (0..n).map(|s| cmj_2d(s, n, 12345)).collect();
+        for (n, pattern) in [1u32, 2, 3, 4, 5, 7, 9, 16, 30, 64, 100]
+            .into_iter()
+            .flat_map(|n| [12345, 7, 0x9e37_79b9].map(|p| (n, p)))
+        {
+            let pts: Vec<Vec2> = (0..n).map(|s| cmj_2d(s, n, pattern)).collect();
             let m = ((n as f32).sqrt() as u32).max(1);
             let rows = n.div_ceil(m);
             // Each column of width 1/m holds at most `rows` samples, each
@@ -335,14 +344,23 @@ mod tests {
             }
             assert!(cols.iter().all(|&c| c <= rows), "n {n} cols {cols:?}");
             assert!(rws.iter().all(|&c| c <= m), "n {n} rows {rws:?}");
-            // For full grids the fine 1D strata (n of them) hold one sample each.
-            if m * rows == n {
-                let mut fine = vec![0; n as usize];
-                for p in &pts {
-                    fine[(p.x * n as f32) as usize] += 1;
-                }
-                assert!(fine.iter().all(|&c| c == 1), "n {n} x-projection {fine:?}");
+            // The fine 1D strata (m × rows of them, n for full grids) hold
+            // at most one sample each, in both projections.
+            let cells = (m * rows) as f32;
+            let (mut fine_x, mut fine_y) =
+                (vec![0; (m * rows) as usize], vec![0; (m * rows) as usize]);
+            for p in &pts {
+                fine_x[(p.x * cells) as usize] += 1;
+                fine_y[(p.y * cells) as usize] += 1;
             }
+            assert!(
+                fine_x.iter().all(|&c| c <= 1),
+                "n {n} x-projection {fine_x:?}"
+            );
+            assert!(
+                fine_y.iter().all(|&c| c <= 1),
+                "n {n} y-projection {fine_y:?}"
+            );
         }
     }
 

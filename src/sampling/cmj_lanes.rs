@@ -247,7 +247,7 @@ impl CmjLanes {
         let jx = rand_float(s, self.jitter_x);
         let jy = rand_float(s, self.jitter_y);
         let x = (to_f32(sx) + (to_f32(sy) + jx) / rows_f) / mf;
-        let y = (to_f32(row) + jy) / rows_f;
+        let y = (to_f32(row) + (to_f32(col) + jy) / mf) / rows_f;
         let limit = f32x8::splat(ONE_MINUS_EPSILON);
         let (x, y) = (x.fast_min(limit).to_array(), y.fast_min(limit).to_array());
         std::array::from_fn(|i| Vec2::new(x[i], y[i]))
