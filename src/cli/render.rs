@@ -13,7 +13,10 @@ use strata::partial::format::{read_partial, write_partial, PartialHeader};
 use strata::render::aov::{self, Aov, AovSum};
 use strata::render::stats::RenderStats;
 use strata::render::timeline::{Phase, Timeline};
-use strata::render::{each_pass, render, Film, RenderOptions, Schedule, SliceSpec, Window};
+use strata::render::{
+    each_pass, is_current_pool, on_current_pool, render, Film, RenderOptions, Schedule, SliceSpec,
+    Window,
+};
 use strata::sampling::SamplerKind;
 use strata::scene::edit::Edit;
 use strata::scene::{
@@ -629,15 +632,10 @@ impl Drop for Finished<'_> {
 
 /// `work` run on a worker of a pool of `threads` threads (0: the global
 /// pool, one thread per core): the pool it is called on where that has as
-/// many. On a worker, not beside the pool: each parallel step started from
-/// a thread outside it waits for a worker to wake and take it, which made
-/// a one-sphere scene's tree take 0.3 to 0.6 ms beside the global pool's
-/// two threads against 0.1 to 0.2 ms in a pool (docs/performance.md).
+/// many ([`is_current_pool`], [`on_current_pool`]).
 fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<T, CliError> {
-    if threads == 0 || rayon::current_num_threads() == threads {
-        // `rayon::scope` runs its closure on a worker of the current pool
-        // (in place where the caller is one).
-        return Ok(rayon::scope(|_| work()));
+    if is_current_pool(threads) {
+        return Ok(on_current_pool(work));
     }
     Ok(super::thread_pool(threads)?.install(work))
 }

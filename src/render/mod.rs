@@ -23,3 +23,4 @@ pub use progress::{each_pass, Observer};
 pub use schedule::{render, RenderOptions, RenderOutcome, Schedule, SliceSpec};
 pub use warning::Warning;
 pub use window::Window;
+pub use workers::{is_current_pool, on_current_pool};

@@ -10,6 +10,23 @@
 
 use crate::system::cputime::thread_cpu_ns;
 
+/// Whether `threads` (0: one per core) asks for the pool the caller is in,
+/// rayon's global pool outside any: 0, or that pool's size. The one rule
+/// for the commands (`on_threads` in the CLI) and a render's workers.
+pub fn is_current_pool(threads: usize) -> bool {
+    threads == 0 || threads == rayon::current_num_threads()
+}
+
+/// `work` on a worker of the pool the caller is in (rayon's global pool
+/// outside any), in place where the caller is one. On a worker, not
+/// beside the pool: each parallel step started from a thread outside it
+/// waits for a worker to wake and take it, which made a one-sphere
+/// scene's tree take 0.3 to 0.6 ms beside the global pool's two threads
+/// against 0.1 to 0.2 ms in a pool (docs/performance.md).
+pub fn on_current_pool<T: Send>(work: impl FnOnce() -> T + Send) -> T {
+    rayon::scope(|_| work())
+}
+
 /// Where a render's parallel work runs.
 pub(super) enum Workers {
     /// The pool the caller runs on, or rayon's global pool outside any.
@@ -22,9 +39,8 @@ impl Workers {
     /// Workers for `threads` threads (0: as many as the current pool has,
     /// one per core outside any pool), and their count.
     pub(super) fn for_threads(threads: usize) -> (Self, usize) {
-        let current = rayon::current_num_threads().max(1);
-        if threads == 0 || threads == current {
-            return (Self::Current, current);
+        if is_current_pool(threads) {
+            return (Self::Current, rayon::current_num_threads());
         }
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -33,7 +49,12 @@ impl Workers {
         (Self::Own(pool), threads)
     }
 
-    /// `work` run where its parallel iterators use these workers.
+    /// `work` run where its parallel iterators use these workers. A pass
+    /// on the current pool runs in place, not on a worker ([`on_current_pool`]):
+    /// called from the Python thread, handing each pass to a worker made
+    /// `render(spp=1)` of cornell-planes slower (6.1 to 7.9 ms against 5.6
+    /// to 6.8, three alternating rounds of 40 calls), and handing over the
+    /// load alone changed nothing measurable.
     pub(super) fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
         match self {
             Self::Current => work(),
@@ -88,6 +109,20 @@ mod tests {
             if let Some(times) = workers.cpu_ns() {
                 assert_eq!(times.len(), 2, "one reading a worker");
             }
+            // On a worker already: in place.
+            let here = rayon::current_thread_index();
+            assert_eq!(on_current_pool(rayon::current_thread_index), here);
         });
+    }
+
+    /// Work for the current pool from a thread outside every pool (the
+    /// test's own) runs on one of the global pool's workers.
+    #[test]
+    fn work_from_outside_a_pool_runs_on_a_worker() {
+        assert_eq!(rayon::current_thread_index(), None);
+        assert!(is_current_pool(0));
+        assert!(is_current_pool(rayon::current_num_threads()));
+        assert!(!is_current_pool(rayon::current_num_threads() + 1));
+        assert!(on_current_pool(rayon::current_thread_index).is_some());
     }
 }
