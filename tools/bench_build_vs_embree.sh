@@ -60,6 +60,8 @@ with open(path, "rb") as f:
         if line.startswith("element vertex"): nv = int(line.split()[2])
         if line.startswith("element face"): nf = int(line.split()[2])
         if line == "end_header" or not line and f.peek(1) == b"": break
+    if nv is None or nf is None:
+        sys.exit(f"error: {path}: no 'element vertex' or 'element face' in its header")
     v = np.fromfile(f, "<f4", nv * 3)
     faces = np.fromfile(f, np.dtype([("n", "u1"), ("i", "<u4", 3)]), nf)
 if len(faces) != nf or (faces["n"] != 3).any():
