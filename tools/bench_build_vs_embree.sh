@@ -49,23 +49,30 @@ python3 - "$mesh" "$work/mesh.tris" <<'EOF'
 import sys
 import numpy as np
 path, out = sys.argv[1:]
+
+
+def fail(why):
+    print(f"error: {path}: {why}", file=sys.stderr)
+    sys.exit(2)
+
+
 with open(path, "rb") as f:
     if f.readline().strip() != b"ply":
-        sys.exit(f"error: {path}: not a PLY file")
+        fail("not a PLY file")
     nv = nf = None
     while True:
         line = f.readline().decode("ascii", "replace").strip()
         if line.startswith("format") and "binary_little_endian" not in line:
-            sys.exit(f"error: {path}: {line!r}: binary_little_endian only")
+            fail(f"{line!r}: binary_little_endian only")
         if line.startswith("element vertex"): nv = int(line.split()[2])
         if line.startswith("element face"): nf = int(line.split()[2])
         if line == "end_header" or not line and f.peek(1) == b"": break
     if nv is None or nf is None:
-        sys.exit(f"error: {path}: no 'element vertex' or 'element face' in its header")
+        fail("no 'element vertex' or 'element face' in its header")
     v = np.fromfile(f, "<f4", nv * 3)
     faces = np.fromfile(f, np.dtype([("n", "u1"), ("i", "<u4", 3)]), nf)
 if len(faces) != nf or (faces["n"] != 3).any():
-    sys.exit(f"error: {path}: expected {nf} triangles as (uchar count, 3 × int) after {nv} float xyz vertices")
+    fail(f"expected {nf} triangles as (uchar count, 3 × int) after {nv} float xyz vertices")
 with open(out, "wb") as o:
     np.array([nv, nf], "<u4").tofile(o)
     v.tofile(o)
