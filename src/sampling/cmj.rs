@@ -217,7 +217,7 @@ fn grid_columns(n: u32) -> u32 {
     }
     (root.saturating_sub(7).max(1)..=root)
         .rev()
-        .find(|&m| n % m == 0)
+        .find(|&m| n.is_multiple_of(m))
         .filter(|&m| n <= ANY_DIVISOR_MAX || 4 * (m as u64) * (m as u64) >= n as u64)
         .unwrap_or(root)
 }
@@ -404,7 +404,7 @@ mod tests {
             assert!((1..=root).contains(&m), "n {n}: {m} columns");
             let exact = (1..=root)
                 .rev()
-                .find(|&d| n % d == 0)
+                .find(|&d| n.is_multiple_of(d))
                 .filter(|&d| n <= ANY_DIVISOR_MAX || 4 * d * d >= n);
             match exact {
                 // The largest such divisor; a power of two's is found at once.
