@@ -191,13 +191,13 @@ pub fn cmj_2d(s: u32, n: u32, pattern: u32) -> Vec2 {
     cmj_point(s, pattern, m, n.div_ceil(m), m * n.div_ceil(m))
 }
 
-/// Up to this many samples any divisor makes the grid, one column of n
-/// rows for a prime, rather than a grid with empty cells: both projections are still
-/// stratified into n, and an empty cell (an eighth of a 7-sample pixel)
-/// cost more than the lost 2D jitter (cornell-planes' RMSE at 7, 13 and
-/// 31 spp 0.072, 0.055, 0.030 with empty cells, 0.055, 0.035, 0.020 in
-/// one column; soft-shadow at 127 spp was the other way round, 0.0016
-/// against 0.0022; docs/converge.md).
+/// Up to this many samples any divisor makes the grid (one column of n
+/// rows for a prime) rather than a grid with empty cells: both
+/// projections are still stratified into n, and an empty cell (an eighth
+/// of a 7-sample pixel) cost more than the lost 2D jitter (cornell-planes'
+/// RMSE at 7, 13 and 31 spp 0.072, 0.055, 0.030 with empty cells, 0.055,
+/// 0.035, 0.020 in one column; soft-shadow at 127 spp was the other way
+/// round, 0.0016 against 0.0022; docs/converge.md).
 const ANY_DIVISOR_MAX: u32 = 32;
 
 /// Columns of the CMJ grid for `n` samples: the largest divisor of `n` up
