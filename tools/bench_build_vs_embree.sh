@@ -9,8 +9,8 @@
 #   EMBREE_TRACE  tools/embree/embree_trace (make -C tools/embree); its
 #                 libembree3.so.3 and libtbb.so.12 found through
 #                 LD_LIBRARY_PATH where they are not installed
-#   MESH.ply      a binary little-endian PLY of triangles (dragon-sub2.ply
-#                 from `tools/fetch-assets --subdivide 2`)
+#   MESH.ply      a PLY or OBJ mesh (dragon-sub2.ply from
+#                 `tools/fetch-assets --subdivide 2`)
 #   ROUNDS        rounds per thread count (default 3)
 #   THREADS       thread counts (default: 2). Two threads run pinned to
 #                 CPUs 0 and 1 (taskset), as on a two-core machine.
@@ -43,40 +43,21 @@ python3 -c "import numpy" 2>/dev/null || { echo "error: python3 cannot import nu
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# MESH.tris for the harness: u32 vertex and triangle counts, f32 xyz, u32
-# indices, triangles in file order.
-python3 - "$mesh" "$work/mesh.tris" <<'EOF'
+# MESH.tris for the harness, read and written by the tools that
+# bench_embree.py uses (validate_embree.load_mesh: OBJ or PLY, in strata's
+# triangle order; bench_embree.write_tris).
+python3 - "$(dirname "$0")" "$mesh" "$work/mesh.tris" <<'EOF'
 import sys
-import numpy as np
-path, out = sys.argv[1:]
-
-
-def fail(why):
-    print(f"error: {path}: {why}", file=sys.stderr)
+tools, path, out = sys.argv[1:]
+sys.path.insert(0, tools)
+from validate_embree import InputError, load_mesh
+from bench_embree import write_tris
+try:
+    vertices, triangles = load_mesh(path)
+except InputError as e:
+    print(f"error: {e}", file=sys.stderr)
     sys.exit(2)
-
-
-with open(path, "rb") as f:
-    if f.readline().strip() != b"ply":
-        fail("not a PLY file")
-    nv = nf = None
-    while True:
-        line = f.readline().decode("ascii", "replace").strip()
-        if line.startswith("format") and "binary_little_endian" not in line:
-            fail(f"{line!r}: binary_little_endian only")
-        if line.startswith("element vertex"): nv = int(line.split()[2])
-        if line.startswith("element face"): nf = int(line.split()[2])
-        if line == "end_header" or not line and f.peek(1) == b"": break
-    if nv is None or nf is None:
-        fail("no 'element vertex' or 'element face' in its header")
-    v = np.fromfile(f, "<f4", nv * 3)
-    faces = np.fromfile(f, np.dtype([("n", "u1"), ("i", "<u4", 3)]), nf)
-if len(faces) != nf or (faces["n"] != 3).any():
-    fail(f"expected {nf} triangles as (uchar count, 3 × int) after {nv} float xyz vertices")
-with open(out, "wb") as o:
-    np.array([nv, nf], "<u4").tofile(o)
-    v.tofile(o)
-    faces["i"].astype("<u4").tofile(o)
+write_tris(vertices, triangles, out)
 EOF
 "$strata" rays random "$mesh" -n 1000 -o "$work/rays.bin" --quiet
 
