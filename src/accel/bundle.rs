@@ -52,7 +52,7 @@ pub const BUNDLE_MAX_BYTES: usize = 256 << 20;
 
 /// One ray of a bundle as its node tests read it: the single-ray test's
 /// numbers, one of each (the test broadcasts them), so that setting a
-/// bundle up writes 32 bytes a ray.
+/// bundle up writes 32 bytes a ray with its end ([`Bundle::ends`]).
 #[derive(Clone, Copy, Default)]
 struct BundleRay {
     origin: [f32; 3],
@@ -60,7 +60,6 @@ struct BundleRay {
     /// ±f32::MAX with the zero's sign, as in the single-ray test.
     neg_inv: [f32; 3],
     tmin: f32,
-    tmax: f32,
 }
 
 /// The octant of a ray's direction, the unit a bundle walks its rays in:
@@ -80,7 +79,7 @@ impl BundleRay {
     /// far planes, in the same operations: the children's entry distances
     /// and the lanes of those the ray may enter.
     #[inline(always)]
-    fn test(&self, near: &[f32x8; 3], far: &[f32x8; 3]) -> (f32x8, f32x8) {
+    fn test(&self, near: &[f32x8; 3], far: &[f32x8; 3], tmax: f32) -> (f32x8, f32x8) {
         let slab = |axis: usize, plane: f32x8| {
             (f32x8::splat(self.origin[axis]) - plane) * f32x8::splat(self.neg_inv[axis])
         };
@@ -89,14 +88,17 @@ impl BundleRay {
             .fast_max(slab(2, near[2]).fast_max(f32x8::splat(self.tmin)));
         let tf = slab(0, far[0])
             .fast_min(slab(1, far[1]))
-            .fast_min(slab(2, far[2]).fast_min(f32x8::splat(self.tmax)));
+            .fast_min(slab(2, far[2]).fast_min(f32x8::splat(tmax)));
         (tn, tn.simd_le(tf * f32x8::splat(WIDEN)))
     }
 }
 
-/// A bundle's rays, and the rays of each direction octant.
+/// A bundle's rays, their ends and the rays of each direction octant.
 struct Bundle {
     rays: [BundleRay; BUNDLE_SIZE],
+    /// Each ray's end, which its node tests read and its leaf tests
+    /// lower ([`Query::leaf_bundle`]).
+    ends: [f32; BUNDLE_SIZE],
     octants: [u64; 8],
 }
 
@@ -109,6 +111,7 @@ impl Bundle {
     fn new(rays: &[Ray], skip: impl Fn(usize) -> bool, bounds: &Aabb) -> Self {
         let mut bundle = Self {
             rays: [BundleRay::default(); BUNDLE_SIZE],
+            ends: [0.0; BUNDLE_SIZE],
             octants: [0; 8],
         };
         for (g, eight) in rays.chunks(PACKET_SIZE).enumerate() {
@@ -126,8 +129,8 @@ impl Bundle {
                     origin: [soa[0][k], soa[1][k], soa[2][k]],
                     neg_inv: [neg_inv[0][k], neg_inv[1][k], neg_inv[2][k]],
                     tmin: soa[6][k],
-                    tmax: soa[7][k],
                 };
+                bundle.ends[i] = soa[7][k];
                 bundle.octants[octant(ray)] |= 1 << i;
             }
         }
@@ -166,12 +169,7 @@ impl OctantWalk {
     /// that enter it, pushing the others farthest first. False if no ray
     /// enters any child.
     #[inline(always)]
-    fn enter_node<L>(
-        &mut self,
-        bvh: &Bvh8,
-        rays: &[BundleRay; BUNDLE_SIZE],
-        leaf_data: &[L],
-    ) -> bool {
+    fn enter_node<L>(&mut self, bvh: &Bvh8, bundle: &Bundle, leaf_data: &[L]) -> bool {
         let node = &bvh.nodes[self.current as usize];
         let near = self.near_rows.map(|row| f32x8::from(node.bounds[row]));
         let far = self.far_rows.map(|row| f32x8::from(node.bounds[row]));
@@ -184,7 +182,7 @@ impl OctantWalk {
         while m != 0 {
             let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
             m &= m - 1;
-            let (tn, enters) = rays[i].test(&near, &far);
+            let (tn, enters) = bundle.rays[i].test(&near, &far, bundle.ends[i]);
             let lanes = enters.to_bits();
             let bit = 1u64 << i;
             rays_lo |= lanes & u32x8::splat(bit as u32);
@@ -234,10 +232,10 @@ impl OctantWalk {
         false
     }
 
-    /// Walks to the end: at each leaf, `visit(rays, i, start, count)` for
-    /// every ray `i` that reaches it, which returns true where ray `i`
-    /// leaves the bundle (blocked). Ends when no ray is left or nothing is
-    /// left to visit.
+    /// Walks to the end: at each leaf, `visit(rays, start, count, mask)`
+    /// with the rays that reach it (bit i: ray i), which returns the rays
+    /// that leave the bundle (blocked). Ends when no ray is left or
+    /// nothing is left to visit.
     ///
     /// A leaf is tested one step late: the walk first takes the next node
     /// or leaf from the stack, so that the leaf's block, prefetched when
@@ -248,33 +246,29 @@ impl OctantWalk {
     fn run<L>(
         mut self,
         bvh: &Bvh8,
-        rays: &mut [BundleRay; BUNDLE_SIZE],
+        bundle: &mut Bundle,
         leaf_data: &[L],
-        mut visit: impl FnMut(&mut [BundleRay; BUNDLE_SIZE], usize, u32, u32) -> bool,
+        mut visit: impl FnMut(&mut [f32; BUNDLE_SIZE], u32, u32, u64) -> u64,
     ) {
         let mut alive = self.mask;
         let mut waiting: Option<(u32, u64)> = None;
         let mut test_leaf =
-            |rays: &mut [BundleRay; BUNDLE_SIZE], leaf: u32, mask: u64, alive: &mut u64| {
+            |ends: &mut [f32; BUNDLE_SIZE], leaf: u32, mask: u64, alive: &mut u64| {
                 let (start, count) = leaf_range(leaf);
-                let mut m = mask & *alive;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize % BUNDLE_SIZE;
-                    m &= m - 1;
-                    if visit(rays, i, start, count) {
-                        *alive &= !(1 << i);
-                    }
+                let reach = mask & *alive;
+                if reach != 0 {
+                    *alive &= !visit(ends, start, count, reach);
                 }
             };
         loop {
             if is_leaf(self.current) {
                 if let Some((leaf, mask)) = waiting.replace((self.current, self.mask)) {
-                    test_leaf(rays, leaf, mask, &mut alive);
+                    test_leaf(&mut bundle.ends, leaf, mask, &mut alive);
                     if alive == 0 {
                         return;
                     }
                 }
-            } else if self.enter_node(bvh, rays, leaf_data) {
+            } else if self.enter_node(bvh, bundle, leaf_data) {
                 continue;
             }
             if !self.pop(alive) {
@@ -282,7 +276,7 @@ impl OctantWalk {
             }
         }
         if let Some((leaf, mask)) = waiting {
-            test_leaf(rays, leaf, mask, &mut alive);
+            test_leaf(&mut bundle.ends, leaf, mask, &mut alive);
         }
     }
 }
@@ -314,27 +308,14 @@ impl Bvh8 {
         let mut ended = 0u64;
         if !self.nodes.is_empty() {
             let mut bundle = Bundle::new(rays, |i| states[i].is_none(), &self.bounds);
-            for (octant, &rays_of_octant) in bundle.octants.iter().enumerate() {
+            for (octant, rays_of_octant) in bundle.octants.into_iter().enumerate() {
                 if rays_of_octant != 0 {
                     let walk = OctantWalk::new(octant, rays_of_octant);
-                    walk.run(
-                        self,
-                        &mut bundle.rays,
-                        leaf_data,
-                        |bundled, i, start, count| {
-                            let Some(state) = &mut states[i] else {
-                                return true;
-                            };
-                            let mut ray = Ray {
-                                tmax: bundled[i].tmax,
-                                ..rays[i]
-                            };
-                            let end = query.leaf(state, start, count, &mut ray);
-                            bundled[i].tmax = ray.tmax;
-                            ended |= (end as u64) << i;
-                            end
-                        },
-                    );
+                    walk.run(self, &mut bundle, leaf_data, |ends, start, count, mask| {
+                        let end = query.leaf_bundle(&mut states, rays, ends, start, count, mask);
+                        ended |= end;
+                        end
+                    });
                 }
             }
         }

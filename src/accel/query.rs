@@ -36,6 +36,63 @@ pub trait Query {
     /// The answer of a walk whose last leaf returned `ended` (false: every
     /// reachable leaf was tested).
     fn answer(&mut self, state: &Self::State, ended: bool) -> Self::Answer;
+
+    /// [`Query::leaf`] for the rays of a bundle that reach the leaf: each
+    /// ray `i` of `mask` (bit i) with a state, tested as `rays[i]` ending
+    /// at `ends[i]`, which a shortening query lowers; returns the rays
+    /// whose walks end. Each ray's own [`Query::leaf`] in turn
+    /// ([`leaf_each`]) unless a query answers a leaf's rays together
+    /// (a scene's instances, whose prototypes they then walk together),
+    /// which must give each ray the same answer at the walk's end.
+    #[inline(always)]
+    fn leaf_bundle(
+        &mut self,
+        states: &mut [Option<Self::State>],
+        rays: &[Ray],
+        ends: &mut [f32],
+        start: u32,
+        count: u32,
+        mask: u64,
+    ) -> u64
+    where
+        Self: Sized,
+    {
+        leaf_each(self, states, rays, ends, start, count, mask)
+    }
+}
+
+/// [`Query::leaf_bundle`] ray by ray: each ray of `mask` with a state
+/// through [`Query::leaf`]. A ray without one (its answer settled before
+/// the walk) ends.
+#[inline(always)]
+pub fn leaf_each<Q: Query>(
+    query: &mut Q,
+    states: &mut [Option<Q::State>],
+    rays: &[Ray],
+    ends: &mut [f32],
+    start: u32,
+    count: u32,
+    mask: u64,
+) -> u64 {
+    let mut ended = 0u64;
+    let mut m = mask;
+    while m != 0 {
+        let i = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let Some(state) = &mut states[i] else {
+            ended |= 1 << i;
+            continue;
+        };
+        let mut ray = Ray {
+            tmax: ends[i],
+            ..rays[i]
+        };
+        if query.leaf(state, start, count, &mut ray) {
+            ended |= 1 << i;
+        }
+        ends[i] = ray.tmax;
+    }
+    ended
 }
 
 /// The closest hit in `(tmin, tmax)`, from a leaf test

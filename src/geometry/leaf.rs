@@ -31,6 +31,18 @@ impl Geometry {
         sheared: &ShearedRay,
     ) -> Option<PrimHit> {
         let (b, lanes) = Self::leaf_lanes(start, count);
+        self.hit_lanes(b, lanes, ray, sheared)
+    }
+
+    /// [`Geometry::hit_leaf`] for the slots `lanes` of block `b`.
+    #[inline(always)]
+    pub(super) fn hit_lanes(
+        &self,
+        b: usize,
+        lanes: u32,
+        ray: &Ray,
+        sheared: &ShearedRay,
+    ) -> Option<PrimHit> {
         let block = &self.leaf_blocks[b];
         // A scene of instances alone has no triangle in its own leaves.
         let triangles = (self.triangle_count > 0)
@@ -71,6 +83,19 @@ impl Geometry {
         except: u32,
     ) -> bool {
         let (b, lanes) = Self::leaf_lanes(start, count);
+        self.blocks_lanes(b, lanes, ray, sheared, except)
+    }
+
+    /// [`Geometry::blocks_leaf`] for the slots `lanes` of block `b`.
+    #[inline(always)]
+    pub(super) fn blocks_lanes(
+        &self,
+        b: usize,
+        lanes: u32,
+        ray: &Ray,
+        sheared: &ShearedRay,
+        except: u32,
+    ) -> bool {
         let block = &self.leaf_blocks[b];
         let mut hit = if self.triangle_count > 0 {
             triangle_lanes::intersect(ray, sheared, block, lanes).0
@@ -169,6 +194,19 @@ impl Geometry {
                     };
                     changed |= keep_tied(&mut out[i], &mut tmax[i], h);
                 }
+            } else if id >= self.first_instance() {
+                // The packet's rays enter the instance together
+                // (`super::instance_bundle`).
+                let ray_of = |i: usize| {
+                    Some(Ray {
+                        tmax: tmax[i],
+                        ..rays[i]
+                    })
+                };
+                let found = self.hit_instance_rays(id, u64::from(rays_mask), ray_of);
+                for (i, h) in found.hits() {
+                    changed |= keep_tied(&mut out[i], &mut tmax[i], h);
+                }
             } else {
                 let mut r = rays_mask;
                 while r != 0 {
@@ -178,7 +216,7 @@ impl Geometry {
                         tmax: tmax[i],
                         ..rays[i]
                     };
-                    if let Some(h) = self.hit_other(id, &ray) {
+                    if let Some(h) = self.hit_analytic(id, &ray) {
                         changed |= keep_tied(&mut out[i], &mut tmax[i], h);
                     }
                 }
@@ -231,6 +269,9 @@ impl Geometry {
             }
             if id < self.triangle_count {
                 open &= !sheared.intersect(&block.triangle(lane), tmax, open).0;
+            } else if id >= self.first_instance() {
+                let ray_of = |i: usize| Some(rays[i]);
+                open &= !(self.instance_blocks_rays(id, u64::from(open), ray_of) as u32);
             } else {
                 let mut r = open;
                 while r != 0 {

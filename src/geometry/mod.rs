@@ -35,6 +35,7 @@
 pub mod crossings;
 pub mod csg;
 pub mod instance;
+mod instance_bundle;
 #[cfg(test)]
 mod interval_tests;
 pub mod leaf;

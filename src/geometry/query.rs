@@ -38,7 +38,7 @@ use super::travel::Travel;
 use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
 use crate::accel::hit::tie_ray;
-use crate::accel::query::{keep_closer, ClosestState};
+use crate::accel::query::{keep_closer, leaf_each, ClosestState};
 use crate::accel::{Kernel, Packet, PacketQuery, PrimHit, Query, PACKET_SIZE};
 use crate::math::lanes::mask_lanes;
 use crate::math::Ray;
@@ -89,7 +89,7 @@ fn closed_end(ray: &Ray) -> Ray {
 /// breaks it), else up to the ray's end, included where the interval is
 /// `CLOSED` (module docs).
 #[inline(always)]
-fn leaf_ray<const CLOSED: bool>(ray: &Ray, best: Option<&PrimHit>) -> Ray {
+pub(super) fn leaf_ray<const CLOSED: bool>(ray: &Ray, best: Option<&PrimHit>) -> Ray {
     match best {
         None if CLOSED => closed_end(ray),
         _ => tie_ray(ray, best),
@@ -129,6 +129,28 @@ impl<const CLOSED: bool> Query for ClosestHit<'_, CLOSED> {
     #[inline(always)]
     fn answer(&mut self, state: &Self::State, _: bool) -> Option<PrimHit> {
         state.best
+    }
+
+    /// A bundle's rays enter a leaf's instances together
+    /// (`super::instance_bundle`).
+    #[inline(always)]
+    fn leaf_bundle(
+        &mut self,
+        states: &mut [Option<Self::State>],
+        rays: &[Ray],
+        ends: &mut [f32],
+        start: u32,
+        count: u32,
+        mask: u64,
+    ) -> u64 {
+        match self.0.instance_parts(start, count, mask) {
+            Some(parts) => {
+                self.0
+                    .hit_leaf_together::<CLOSED>(states, rays, ends, parts, mask);
+                0
+            }
+            None => leaf_each(self, states, rays, ends, start, count, mask),
+        }
     }
 }
 
@@ -235,9 +257,9 @@ struct Occlusion<'g, const CLOSED: bool> {
 
 /// An occlusion walk's ray: its shear, and the end its leaves are tested
 /// up to (made once: the walk never moves it).
-struct OcclusionState {
-    sheared: ShearedRay,
-    tmax: f32,
+pub(super) struct OcclusionState {
+    pub(super) sheared: ShearedRay,
+    pub(super) tmax: f32,
 }
 
 impl<const CLOSED: bool> Query for Occlusion<'_, CLOSED> {
@@ -277,6 +299,26 @@ impl<const CLOSED: bool> Query for Occlusion<'_, CLOSED> {
     #[inline(always)]
     fn answer(&mut self, _: &OcclusionState, ended: bool) -> bool {
         ended
+    }
+
+    /// As [`ClosestHit`]'s.
+    #[inline(always)]
+    fn leaf_bundle(
+        &mut self,
+        states: &mut [Option<OcclusionState>],
+        rays: &[Ray],
+        ends: &mut [f32],
+        start: u32,
+        count: u32,
+        mask: u64,
+    ) -> u64 {
+        match self.geometry.instance_parts(start, count, mask) {
+            Some(parts) => {
+                self.geometry
+                    .blocks_leaf_together::<CLOSED>(states, rays, parts, mask, self.except)
+            }
+            None => leaf_each(self, states, rays, ends, start, count, mask),
+        }
     }
 }
 
@@ -437,6 +479,40 @@ impl Geometry {
             #[inline(always)]
             move || self.bvh.walk(ray, &self.leaf_blocks, &mut query),
         )
+    }
+
+    /// [`Geometry::intersect_open_end`] of each of the rays an instance's
+    /// leaf test gathered, walked together as a bundle where
+    /// [`Geometry::enter_together`] says, else one at a time.
+    pub(super) fn intersect_open_end_rays(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
+        if self.enter_together(rays.len()) {
+            out.fill(None);
+            let mut query = ClosestHit::<false>(self);
+            self.bvh
+                .walk_bundle(rays, &self.leaf_blocks, &mut query, out, |_| false);
+        } else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.intersect_open_end(r);
+            }
+        }
+    }
+
+    /// [`Geometry::occluded_open_end`] of each of the rays an instance's
+    /// leaf test gathered, as [`Geometry::intersect_open_end_rays`].
+    pub(super) fn occluded_open_end_rays(&self, rays: &[Ray], out: &mut [bool]) {
+        if self.enter_together(rays.len()) {
+            out.fill(false);
+            let mut query = Occlusion::<false> {
+                geometry: self,
+                except: u32::MAX,
+            };
+            self.bvh
+                .walk_bundle(rays, &self.leaf_blocks, &mut query, out, |_| false);
+        } else {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.occluded_open_end(r);
+            }
+        }
     }
 
     /// Closest hits of up to [`PACKET_SIZE`] rays: `out[i]` is bit for bit

@@ -78,6 +78,11 @@ pub const CLOSE_DIRECTIONS: f32 = 2.0;
 /// paying (docs/embree.md, "Narrow packets").
 pub const NARROW: f32 = 0.01;
 
+/// The rays of a bundle that may meet one instance enter its prototype
+/// together, as a bundle of their own, from this many on
+/// ([`Geometry::enter_together`]); fewer walk it one at a time.
+pub const ENTER_TOGETHER: usize = 2;
+
 /// How a run of rays travels, as [`Geometry::travel_packet`] and
 /// [`Geometry::travel_stream`] decide. The ranges index the rays the
 /// decision was asked about.
@@ -227,6 +232,14 @@ impl Geometry {
             Span::Bundle(range) => visit(Travel::Bundle(range)),
             Span::Sorted(ids) => visit(Travel::Gathered(ids)),
         });
+    }
+
+    /// Whether `rays` rays of a bundle that may meet one instance of this
+    /// prototype walk it together, as a bundle (`super::instance_bundle`):
+    /// from [`ENTER_TOGETHER`] on, on a tree small enough for bundles to
+    /// pay ([`BUNDLE_MAX_BYTES`]).
+    pub(super) fn enter_together(&self, rays: usize) -> bool {
+        rays >= ENTER_TOGETHER && self.traversal_bytes() <= BUNDLE_MAX_BYTES
     }
 
     /// Calls `visit` with the parts of a stream of rays: every ray in

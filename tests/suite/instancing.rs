@@ -248,6 +248,88 @@ fn packets_streams_and_occlusion_answer_an_instanced_scene_as_single_rays_do() {
     assert!(blocked.iter().any(|&b| b) && blocked.iter().any(|&b| !b));
 }
 
+/// A camera's rays (one origin, neighbours in order) travel as bundles
+/// and packets, whose rays enter each instance's prototype together
+/// (`geometry::instance_bundle`): they must answer as each ray alone does,
+/// where two placements coincide (equal t, the lower id wins), in leaves
+/// that also hold a sphere and world triangles, for rays cut short and
+/// for an occlusion ray that skips one instance.
+#[test]
+fn alike_rays_enter_instances_together_and_answer_as_single_rays_do() {
+    let dir = temp_dir("instancing-together");
+    let mut rng = seeded(9);
+    std::fs::write(dir.join("m.obj"), bumpy_sphere_obj(14, 10, 1.0, 0.25)).unwrap();
+    std::fs::write(dir.join("w.obj"), bumpy_sphere_obj(3, 2, 1.3, 0.1)).unwrap();
+    let mut placements: Vec<Affine3A> = (0..24).map(|_| random_affine(&mut rng, 5.0)).collect();
+    // The same placement twice: every hit on one is a tie with the other.
+    placements.push(placements[3]);
+    let rows: Vec<String> = placements.iter().map(placement_row).collect();
+    std::fs::write(dir.join("places.csv"), rows.join("\n") + "\n").unwrap();
+    // The world mesh and the sphere amid two placements, so that some
+    // leaves hold them beside instances.
+    let (a, b) = (placements[0].translation, placements[1].translation);
+    let s = scene_at(
+        &format!(
+            "{LIGHTS}[[objects]]\nmesh = \"m.obj\"\ninstances = \"places.csv\"\n\
+             [[objects]]\nmesh = \"w.obj\"\ntransform = {{ translate = [{}, {}, {}] }}\n\
+             [[objects]]\nsphere = {{ center = [{}, {}, {}], radius = 1.2 }}\n",
+            a.x, a.y, a.z, b.x, b.y, b.z
+        ),
+        &dir.join("s.toml"),
+    );
+    let g = &s.geometry;
+    assert!(g.instances().len() == placements.len() && g.triangle_count() > 0);
+    // A pinhole grid from one point, row by row, some rays cut short.
+    let eye = Vec3::new(0.5, 1.5, 18.0);
+    let (w, h) = (96, 80);
+    let rays: Vec<Ray> = (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f32, (k / w) as f32);
+            let d = Vec3::new(x / w as f32 - 0.5, 0.45 - y / h as f32, -1.6);
+            let mut r = Ray::new(eye, d.normalize());
+            if k % 5 == 0 {
+                r.tmax = 16.0 + (k % 7) as f32;
+            }
+            r
+        })
+        .collect();
+    let single: Vec<Option<PrimHit>> = rays.iter().map(|r| g.intersect(r)).collect();
+    let first = g.first_instance();
+    let on = |k: u32| {
+        single
+            .iter()
+            .flatten()
+            .filter(|h| h.prim == first + k)
+            .count()
+    };
+    assert!(on(3) > 50, "rays meet the doubled placement ({})", on(3));
+    assert_eq!(on(24), 0, "a tie goes to the lower id");
+    assert!(
+        single.iter().flatten().any(|h| h.prim < first),
+        "rays meet the sphere and the world triangles"
+    );
+    let mut stream = vec![None; rays.len()];
+    g.intersect_stream(&rays, &mut stream);
+    assert_eq!(stream, single, "a stream answers as single rays do");
+    for (chunk, expect) in rays.chunks(8).zip(single.chunks(8)) {
+        let mut out = [None; 8];
+        g.intersect_packet(chunk, &mut out);
+        assert_eq!(&out[..chunk.len()], expect, "a packet as single rays");
+    }
+    for except in [u32::MAX, first, first + 1, first + 3, first - 1] {
+        let blocked: Vec<bool> = rays.iter().map(|r| g.occluded_except(r, except)).collect();
+        let mut stream = vec![false; rays.len()];
+        g.occluded_stream(&rays, except, &mut stream);
+        assert_eq!(stream, blocked, "occlusion skipping {except}, a stream");
+        for (chunk, expect) in rays.chunks(8).zip(blocked.chunks(8)) {
+            let mut out = [false; 8];
+            g.occluded_packet(chunk, except, &mut out);
+            assert_eq!(&out[..chunk.len()], expect, "skipping {except}, a packet");
+        }
+        assert!(blocked.iter().any(|&b| b) && blocked.iter().any(|&b| !b));
+    }
+}
+
 #[test]
 fn an_instanced_mesh_renders_as_its_world_space_copies() {
     let p = pair(47, 6);
