@@ -5,7 +5,7 @@ scene costs per ray from what instancing costs.
 
     bench_instances.py [--field assets/field] [--count 10000]
                        [--strata target/release/strata] [--threads 2]
-                       [--rounds 5] [--spp 4]
+                       [--rounds 5] [--spp 4] [--keep DIR]
 
 The field and the single-mesh scene are `tools/instance_field.py`'s (run
 first: `python3 tools/instance_field.py --count N --single --out DIR`).
@@ -18,6 +18,11 @@ From each scene's own camera, this writes spp jittered pinhole rays a pixel
 * Embree: `tools/embree/embree_trace MESH.tris` (with `--instances FILE.csv`
   for the field: one Embree instance a line over one scene of the mesh),
   built at Embree's high quality, --repeats 3.
+
+With --keep DIR the ray files (single.bin, field.bin) and the scenes
+`strata trace` reads (single.toml, field.toml) stay in DIR, for runs of
+one's own (two binaries alternating, `--occlusion`); else they are written
+to a temporary folder and removed.
 
 Rounds alternate the four runs so that a change in the machine's load
 falls on all; each figure is the median over rounds. The table gives
@@ -79,11 +84,19 @@ def main(argv=None):
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--spp", type=int, default=4, help="rays a pixel")
+    ap.add_argument("--keep", metavar="DIR", help="write the rays and trace scenes to DIR and keep them")
     a = ap.parse_args(argv)
     try:
-        # The rays and the mesh for Embree: tens of MB, removed after.
-        with tempfile.TemporaryDirectory(prefix="bench_instances.") as work:
-            run(a, work)
+        if a.keep:
+            try:
+                os.makedirs(a.keep, exist_ok=True)
+            except OSError as e:
+                raise InputError(a.keep, f"cannot make the folder: {e.strerror}")
+            run(a, a.keep)
+        else:
+            # The rays and the mesh for Embree: tens of MB, removed after.
+            with tempfile.TemporaryDirectory(prefix="bench_instances.") as work:
+                run(a, work)
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
