@@ -16,6 +16,7 @@
 //! total order ([`crate::accel::hit::closer`]) whichever instance is
 //! tested first; an occlusion is a yes or no.
 
+use super::instance::Instance;
 use super::query::{leaf_ray, OcclusionState};
 use super::Geometry;
 use crate::accel::bundle::BUNDLE_SIZE;
@@ -42,19 +43,26 @@ struct Gathered {
 }
 
 impl Gathered {
-    fn new() -> Self {
-        Self {
+    /// The rays `ray_of(i)` of the lanes `i` of `mask` (`None`: a lane to
+    /// skip) that may meet `instance` ([`Instance::may_hit`]), moved into
+    /// its object space.
+    #[inline(always)]
+    fn meeting(instance: &Instance, mask: u64, ray_of: impl Fn(usize) -> Option<Ray>) -> Self {
+        let mut gathered = Self {
             rays: [Ray::new(glam::Vec3::ZERO, glam::Vec3::Z); BUNDLE_SIZE],
             of: [0; BUNDLE_SIZE],
             len: 0,
+        };
+        for i in bits(mask) {
+            if let Some(ray) = ray_of(i) {
+                if instance.may_hit(&ray) {
+                    gathered.rays[gathered.len] = instance.object_ray(&ray);
+                    gathered.of[gathered.len] = i as u8;
+                    gathered.len += 1;
+                }
+            }
         }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, ray: Ray, i: usize) {
-        self.rays[self.len] = ray;
-        self.of[self.len] = i as u8;
-        self.len += 1;
+        gathered
     }
 }
 
@@ -235,14 +243,7 @@ impl Geometry {
         ray_of: impl Fn(usize) -> Option<Ray>,
     ) -> InstanceHits {
         let (instance, prototype) = self.instance(id);
-        let mut gathered = Gathered::new();
-        for i in bits(mask) {
-            if let Some(ray) = ray_of(i) {
-                if instance.may_hit(&ray) {
-                    gathered.push(instance.object_ray(&ray), i);
-                }
-            }
-        }
+        let gathered = Gathered::meeting(instance, mask, ray_of);
         let n = gathered.len;
         let mut found = [None; BUNDLE_SIZE];
         prototype.intersect_open_end_rays(&gathered.rays[..n], &mut found[..n]);
@@ -266,14 +267,7 @@ impl Geometry {
         ray_of: impl Fn(usize) -> Option<Ray>,
     ) -> u64 {
         let (instance, prototype) = self.instance(id);
-        let mut gathered = Gathered::new();
-        for i in bits(mask) {
-            if let Some(ray) = ray_of(i) {
-                if instance.may_hit(&ray) {
-                    gathered.push(instance.object_ray(&ray), i);
-                }
-            }
-        }
+        let gathered = Gathered::meeting(instance, mask, ray_of);
         let n = gathered.len;
         let mut blocked = [false; BUNDLE_SIZE];
         prototype.occluded_open_end_rays(&gathered.rays[..n], &mut blocked[..n]);
