@@ -232,10 +232,10 @@ impl OctantWalk {
         false
     }
 
-    /// Walks to the end: at each leaf, `visit(rays, start, count, mask)`
-    /// with the rays that reach it (bit i: ray i), which returns the rays
-    /// that leave the bundle (blocked). Ends when no ray is left or
-    /// nothing is left to visit.
+    /// Walks to the end: at each leaf, `visit(ends, start, count, mask)`
+    /// with the rays that reach it (bit i: ray i) and the bundle's ends,
+    /// which it may lower; it returns the rays that leave the bundle
+    /// (blocked). Ends when no ray is left or nothing is left to visit.
     ///
     /// A leaf is tested one step late: the walk first takes the next node
     /// or leaf from the stack, so that the leaf's block, prefetched when

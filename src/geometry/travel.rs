@@ -9,6 +9,7 @@
 //! | up to eight a caller traces together | a packet, or alone if [`Packet::new`] refuses them | [`Geometry::travel_packet`] |
 //! | a stream | bundles, narrow packets, alone or in flight | [`Geometry::travel_stream`] |
 //! | a render's batch | a packet or one by one | [`PacketMode`] and [`BatchRays`] |
+//! | a bundle's or a packet's rays that may meet one instance | into its prototype together as a bundle, or one by one | [`Geometry::enter_together`] |
 //!
 //! **Bundles.** A stream is read in spans of [`SPAN`] rays. A span whose
 //! rays are alike, all from close origins (a camera's rays,
