@@ -9,7 +9,7 @@
 //! | up to eight a caller traces together | a packet, or alone if [`Packet::new`] refuses them | [`Geometry::travel_packet`] |
 //! | a stream | bundles, narrow packets, alone or in flight | [`Geometry::travel_stream`] |
 //! | a render's batch | a packet or one by one | [`PacketMode`] and [`BatchRays`] |
-//! | a bundle's or a packet's rays that may meet one instance | into its prototype together as a bundle, or one by one | [`Geometry::enter_together`] |
+//! | a bundle's or a packet's rays that may meet one instance | into its prototype together as a bundle, or one by one | `Geometry::enter_together` |
 //!
 //! **Bundles.** A stream is read in spans of [`SPAN`] rays. A span whose
 //! rays are alike, all from close origins (a camera's rays,
@@ -81,7 +81,7 @@ pub const NARROW: f32 = 0.01;
 
 /// The rays of a bundle that may meet one instance enter its prototype
 /// together, as a bundle of their own, from this many on
-/// ([`Geometry::enter_together`]); fewer walk it one at a time.
+/// (`Geometry::enter_together`); fewer walk it one at a time.
 pub const ENTER_TOGETHER: usize = 2;
 
 /// How a run of rays travels, as [`Geometry::travel_packet`] and
