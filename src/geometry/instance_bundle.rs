@@ -34,8 +34,9 @@ pub(super) struct LeafParts {
     instances: u32,
 }
 
-/// The rays of a bundle that may meet one instance, in its prototype's
-/// object space, and which ray of the bundle each is.
+/// The rays of a bundle or a packet that may meet one instance, in its
+/// prototype's object space, and which ray of the bundle or packet each
+/// is.
 struct Gathered {
     rays: [Ray; BUNDLE_SIZE],
     of: [u8; BUNDLE_SIZE],
