@@ -21,8 +21,9 @@ From each scene's own camera, this writes spp jittered pinhole rays a pixel
 
 With --keep DIR the ray files (single.bin, field.bin) and the scenes
 `strata trace` reads (single.toml, field.toml) stay in DIR, for runs of
-one's own (two binaries alternating, `--occlusion`); else they are written
-to a temporary folder and removed.
+one's own (two binaries alternating, `--occlusion`), beside Embree's
+triangles (mesh.tris) and the last run's hits.bin; else all of them are
+written to a temporary folder and removed.
 
 Rounds alternate the four runs so that a change in the machine's load
 falls on all; each figure is the median over rounds. The table gives
