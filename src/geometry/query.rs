@@ -482,35 +482,42 @@ impl Geometry {
     }
 
     /// [`Geometry::intersect_open_end`] of each of the rays an instance's
-    /// leaf test gathered, walked together as a bundle where
-    /// [`Geometry::enter_together`] says, else one at a time.
+    /// leaf test gathered ([`Geometry::open_end_rays`]).
     pub(super) fn intersect_open_end_rays(&self, rays: &[Ray], out: &mut [Option<PrimHit>]) {
-        if self.enter_together(rays.len()) {
-            out.fill(None);
-            let mut query = ClosestHit::<false>(self);
-            self.bvh
-                .walk_bundle(rays, &self.leaf_blocks, &mut query, out, |_| false);
-        } else {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.intersect_open_end(r);
-            }
-        }
+        self.open_end_rays(ClosestHit::<false>(self), rays, out, |r| {
+            self.intersect_open_end(r)
+        });
     }
 
     /// [`Geometry::occluded_open_end`] of each of the rays an instance's
-    /// leaf test gathered, as [`Geometry::intersect_open_end_rays`].
+    /// leaf test gathered ([`Geometry::open_end_rays`]).
     pub(super) fn occluded_open_end_rays(&self, rays: &[Ray], out: &mut [bool]) {
+        let query = Occlusion::<false> {
+            geometry: self,
+            except: u32::MAX,
+        };
+        self.open_end_rays(query, rays, out, |r| self.occluded_open_end(r));
+    }
+
+    /// `out[i] = alone(&rays[i])`, the answer of `query`'s walk of this
+    /// prototype for a ray whose end its instance's leaf test closed: the
+    /// rays walked together as a bundle where [`Geometry::enter_together`]
+    /// says, else one at a time by `alone`.
+    #[inline(always)]
+    fn open_end_rays<Q: Query<Answer: Default>>(
+        &self,
+        mut query: Q,
+        rays: &[Ray],
+        out: &mut [Q::Answer],
+        alone: impl Fn(&Ray) -> Q::Answer,
+    ) {
         if self.enter_together(rays.len()) {
-            out.fill(false);
-            let mut query = Occlusion::<false> {
-                geometry: self,
-                except: u32::MAX,
-            };
+            out.fill_with(Q::Answer::default);
             self.bvh
                 .walk_bundle(rays, &self.leaf_blocks, &mut query, out, |_| false);
         } else {
             for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.occluded_open_end(r);
+                *o = alone(r);
             }
         }
     }
