@@ -210,11 +210,11 @@ const ANY_DIVISOR_MAX: u32 = 32;
 /// power of two is found at once.
 #[inline]
 fn grid_columns(n: u32) -> u32 {
-    let root = ((n as f32).sqrt() as u32).max(1);
     if n.is_power_of_two() {
         // 2^k: 2^⌊k/2⌋ columns, as many rows or twice as many.
         return 1 << (n.trailing_zeros() / 2);
     }
+    let root = ((n as f32).sqrt() as u32).max(1);
     (root.saturating_sub(7).max(1)..=root)
         .rev()
         .find(|&m| n.is_multiple_of(m))
