@@ -1,7 +1,9 @@
 //! Eight samples of one correlated multi-jittered set at once: the
 //! arithmetic of [`super::cmj`] (Kensler 2013) in `wide::u32x8` lanes, for
 //! the samples of one batch of camera samples (one pixel's pixel or light
-//! samples).
+//! samples), each lane under its own pattern where the batch holds the
+//! samples of several pixels (the sets' sizes, and so their grids, are the
+//! same; the patterns that scramble them are each pixel's own).
 //!
 //! A CMJ sample is three hashed permutations and two hashed floats: chains
 //! of dependent 32-bit multiplications, about a hundred cycles each, where
@@ -32,16 +34,16 @@ use wide::{f32x8, u32x8};
 /// `f32` quotient is exact below it, see the module docs).
 const MAX_CELLS: u32 = 1 << 22;
 
-/// One of a sample's permutations of `0..len` under one pattern, with what
-/// its lanes share.
+/// One of a sample's permutations of `0..len`, each lane under its own
+/// pattern (the same one in every lane for one pixel's samples).
 #[derive(Debug, Clone, Copy)]
 struct PermuteLanes {
     len: u32,
     /// The cycle-walking mask (all ones up to the top bit of `len - 1`).
     w: u32,
-    p: u32,
-    /// `p mod len`.
-    p_mod: u32,
+    p: u32x8,
+    /// `p mod len` (unused, and zero, where `len` is a power of two).
+    p_mod: u32x8,
     /// `len - (2³² mod len)`: what a wrapped `i + p` adds, modulo `len`.
     wrap_add: u32,
 }
@@ -64,14 +66,34 @@ impl LenLanes {
         }
     }
 
-    /// The permutation under pattern `p`.
+    /// The permutation under pattern `p` in every lane.
     #[inline(always)]
     fn with_pattern(&self, p: u32) -> PermuteLanes {
         PermuteLanes {
             len: self.len.divisor(),
             w: self.len.walk_mask(),
+            p: u32x8::splat(p),
+            p_mod: u32x8::splat(self.len.remainder(p)),
+            wrap_add: self.wrap_add,
+        }
+    }
+
+    /// The permutation under pattern `p[i]` in lane `i`.
+    #[inline(always)]
+    fn with_patterns(&self, p: u32x8) -> PermuteLanes {
+        let len = self.len.divisor();
+        let w = self.len.walk_mask();
+        // A power of two's permutation never reads the remainders.
+        let p_mod = if w.wrapping_add(1) == len {
+            u32x8::ZERO
+        } else {
+            u32x8::new(p.to_array().map(|p| self.len.remainder(p)))
+        };
+        PermuteLanes {
+            len,
+            w,
             p,
-            p_mod: self.len.remainder(p),
+            p_mod,
             wrap_add: self.wrap_add,
         }
     }
@@ -92,7 +114,7 @@ impl PermuteLanes {
             // 0..len at once (`x ^ x >> 5` keeps within the mask), so no
             // lane walks a second step; and 2³² is a multiple of the
             // length, so the wrapping (i + p) mod len is its low bits.
-            return (self.hash(i) + splat(p)) & w;
+            return (self.hash(i) + p) & w;
         }
         let len = u32x8::splat(self.len);
         let mut i = i;
@@ -109,8 +131,8 @@ impl PermuteLanes {
         }
         // (i + p) mod len with the scalar code's wrapping add: i + p mod len,
         // plus len − 2³² mod len where the add wrapped; below 3·len.
-        let wrapped = (i + splat(p)).simd_lt(splat(p));
-        let mut r = i + splat(self.p_mod) + (wrapped & splat(self.wrap_add));
+        let wrapped = (i + p).simd_lt(p);
+        let mut r = i + self.p_mod + (wrapped & splat(self.wrap_add));
         for _ in 0..2 {
             r = r - (r.simd_ge(len) & len);
         }
@@ -123,15 +145,15 @@ impl PermuteLanes {
     fn hash(&self, i: u32x8) -> u32x8 {
         let (p, w) = (self.p, u32x8::splat(self.w));
         let splat = u32x8::splat;
-        let mut x = i ^ splat(p);
+        let mut x = i ^ p;
         x *= splat(0xe170_893d);
-        x ^= splat(p >> 16);
+        x ^= p >> 16;
         x ^= (x & w) >> 4;
-        x ^= splat(p >> 8);
+        x ^= p >> 8;
         x *= splat(0x0929_eb3f);
-        x ^= splat(p >> 23);
+        x ^= p >> 23;
         x ^= (x & w) >> 1;
-        x *= splat(1 | p >> 27);
+        x *= splat(1) | p >> 27;
         x *= splat(0x6935_fa69);
         x ^= (x & w) >> 11;
         x *= splat(0x74dc_b303);
@@ -144,11 +166,12 @@ impl PermuteLanes {
     }
 }
 
-/// `rand_float(i, p)` of [`super::cmj`] in each lane.
+/// `rand_float(i, p)` of [`super::cmj`] in each lane, lane `k` under
+/// pattern `p[k]`.
 #[inline(always)]
-fn rand_float(i: u32x8, p: u32) -> f32x8 {
+fn rand_float(i: u32x8, p: u32x8) -> f32x8 {
     let splat = u32x8::splat;
-    let mut i = i ^ splat(p);
+    let mut i = i ^ p;
     i ^= i >> 17;
     i ^= i >> 10;
     i *= splat(0xb365_34e5);
@@ -157,7 +180,7 @@ fn rand_float(i: u32x8, p: u32) -> f32x8 {
     i *= splat(0x93fc_4795);
     i ^= splat(0xdf6e_307f);
     i ^= i >> 17;
-    i *= splat(1 | p >> 18);
+    i *= splat(1) | p >> 18;
     unit_float_lanes(i)
 }
 
@@ -175,8 +198,8 @@ pub struct CmjLanes {
     cells: PermuteLanes,
     columns: PermuteLanes,
     rows: PermuteLanes,
-    jitter_x: u32,
-    jitter_y: u32,
+    jitter_x: u32x8,
+    jitter_y: u32x8,
 }
 
 /// What the draws of one CMJ set share under every pattern (every
@@ -218,6 +241,24 @@ impl CmjGrid {
             cells: self.cells.with_pattern(p_cells),
             columns: self.columns.with_pattern(p_columns),
             rows: self.rows.with_pattern(p_rows),
+            jitter_x: u32x8::splat(jitter_x),
+            jitter_y: u32x8::splat(jitter_y),
+        }
+    }
+
+    /// The set's draws with lane `i` under `patterns[i]` (several pixels'
+    /// sets of one size): lane by lane exactly [`CmjGrid::lanes`] of its
+    /// own pattern.
+    #[inline]
+    pub fn lanes_each(&self, patterns: u32x8) -> CmjLanes {
+        // sample_patterns multiplies a pattern by constants: those of 1.
+        let [p_cells, p_columns, p_rows, jitter_x, jitter_y] =
+            sample_patterns(1).map(|k| patterns * u32x8::splat(k));
+        CmjLanes {
+            n: self.n,
+            cells: self.cells.with_patterns(p_cells),
+            columns: self.columns.with_patterns(p_columns),
+            rows: self.rows.with_patterns(p_rows),
             jitter_x,
             jitter_y,
         }
@@ -262,7 +303,7 @@ impl CmjLanes {
 pub struct StratifiedLanes {
     n: u32,
     strata: PermuteLanes,
-    jitter: u32,
+    jitter: u32x8,
 }
 
 /// What the draws of one stratified 1D set of `n` samples share under
@@ -296,7 +337,20 @@ impl StrataGrid {
             strata: self
                 .strata
                 .with_pattern(pattern.wrapping_mul(STRATA_PATTERN)),
-            jitter: pattern.wrapping_mul(JITTER_PATTERN),
+            jitter: u32x8::splat(pattern.wrapping_mul(JITTER_PATTERN)),
+        }
+    }
+
+    /// The set's draws with lane `i` under `patterns[i]`, as
+    /// [`CmjGrid::lanes_each`] for 2D sets.
+    #[inline]
+    pub fn lanes_each(&self, patterns: u32x8) -> StratifiedLanes {
+        StratifiedLanes {
+            n: self.n,
+            strata: self
+                .strata
+                .with_patterns(patterns * u32x8::splat(STRATA_PATTERN)),
+            jitter: patterns * u32x8::splat(JITTER_PATTERN),
         }
     }
 }
@@ -393,6 +447,41 @@ mod tests {
                     let lanes = std::array::from_fn(|i| (s + i as u32 * n.div_ceil(8)) % n);
                     assert_lanes_match(n, pattern, lanes);
                     s += (n / 64).max(1);
+                }
+            }
+        }
+    }
+
+    /// Lanes under patterns of their own (several pixels' sets of one
+    /// size) are each the scalar sample of its own pattern, 2D and 1D:
+    /// powers of two and sizes whose permutations walk and wrap, patterns
+    /// hashed and extreme side by side.
+    #[test]
+    fn lanes_under_their_own_patterns_are_each_its_scalar_sample() {
+        use crate::sampling::cmj::stratified_1d;
+        for n in [1u32, 2, 3, 4, 7, 16, 17, 35, 64, 100, 1000, 65_537] {
+            let set = CmjSet::new(n);
+            let (grid, strata) = (
+                CmjGrid::new(&set).expect("fits"),
+                StrataGrid::new(n).expect("fits"),
+            );
+            for round in 0..20u32 {
+                let patterns: [u32; LANES] =
+                    std::array::from_fn(|k| match (k + round as usize) % 4 {
+                        0 => u32::MAX - k as u32,
+                        _ => hash_u32(round * 31 + k as u32 * 7 + n),
+                    });
+                let s: [u32; LANES] = std::array::from_fn(|k| hash_u32(k as u32 ^ round) % n);
+                let got = grid.lanes_each(u32x8::new(patterns)).sample(s);
+                let got_1d = strata.lanes_each(u32x8::new(patterns)).sample(s);
+                for lane in 0..LANES {
+                    let (s, p) = (s[lane], patterns[lane]);
+                    assert_eq!(
+                        got[lane].to_array().map(f32::to_bits),
+                        cmj_2d(s, n, p).to_array().map(f32::to_bits),
+                        "n {n} pattern {p:#x} sample {s}"
+                    );
+                    assert_eq!(got_1d[lane].to_bits(), stratified_1d(s, n, p).to_bits());
                 }
             }
         }

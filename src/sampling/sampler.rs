@@ -292,6 +292,10 @@ impl DimSampler {
 #[derive(Debug, Clone, Copy)]
 pub struct SetLanes {
     sampler: PixelSampler,
+    /// Where the lanes draw for several pixels ([`SetLanes::each_pixel`]):
+    /// lane `i`'s hash state after (seed, its pixel), from which its
+    /// dimensions' patterns are hashed.
+    prefixes: Option<u32x8>,
     count: u32,
     /// The stratified sampler's 2D set (prepared), and its grids in lanes
     /// where the set is drawn in lanes.
@@ -315,6 +319,7 @@ impl PixelSampler {
         };
         SetLanes {
             sampler: *self,
+            prefixes: None,
             count,
             set,
             cmj,
@@ -324,6 +329,32 @@ impl PixelSampler {
 }
 
 impl SetLanes {
+    /// The same sets drawn with lane `i` as `samplers[i]` draws: several
+    /// pixels' samples in one batch (a pass of fewer samples a pixel than
+    /// lanes), each lane under its own pixel's patterns, eight points still
+    /// drawn at once. `None` unless every sampler is a stratified one of
+    /// this seed (the sets' size, and so their grids, is the same for all).
+    pub fn each_pixel(&self, samplers: [&PixelSampler; LANES]) -> Option<SetLanes> {
+        let alike =
+            |s: &&PixelSampler| (s.kind, s.seed) == (SamplerKind::Stratified, self.sampler.seed);
+        (self.sampler.kind == SamplerKind::Stratified && samplers.iter().all(alike)).then(|| {
+            SetLanes {
+                prefixes: Some(u32x8::new(samplers.map(|s| s.prefix))),
+                ..*self
+            }
+        })
+    }
+
+    /// Each lane's pattern of dimension `dim`: `PixelSampler::pattern` of
+    /// its own pixel's sampler.
+    #[inline]
+    fn patterns(&self, dim: Dim) -> u32x8 {
+        match self.prefixes {
+            Some(prefixes) => hash_step_lanes(prefixes, u32x8::splat(dim.0)),
+            None => u32x8::splat(self.sampler.pattern(dim)),
+        }
+    }
+
     /// Points `index[i]` of dimension `dim`'s set for the lanes `i` of
     /// `wanted`: exactly [`PixelSampler::get_2d`] of each. Where two or
     /// more lanes are wanted all eight may be drawn at once, so every
@@ -335,6 +366,9 @@ impl SetLanes {
         if sampler.kind != SamplerKind::Stratified {
             return sampler.dim_2d(dim, self.count).get_2d_lanes(*index, wanted);
         }
+        if self.prefixes.is_some() {
+            return self.get_2d_each(dim, index, wanted);
+        }
         let pattern = sampler.pattern(dim);
         if wanted.count_ones() > 1 {
             if let Some(grid) = &self.cmj {
@@ -343,14 +377,36 @@ impl SetLanes {
         }
         let mut points = [Vec2::ZERO; LANES];
         for i in mask_lanes(wanted) {
-            // `CmjSet::sample` is `cmj_2d` of a prepared set.
-            points[i] = if self.set.n == self.count {
-                self.set.sample(index[i], pattern)
-            } else {
-                cmj_2d(index[i], self.count, pattern)
-            };
+            points[i] = self.point_2d(index[i], pattern);
         }
         points
+    }
+
+    /// [`SetLanes::get_2d`] of lanes that draw for several pixels.
+    fn get_2d_each(&self, dim: Dim, index: &[u32; LANES], wanted: u32) -> [Vec2; LANES] {
+        let patterns = self.patterns(dim);
+        if wanted.count_ones() > 1 {
+            if let Some(grid) = &self.cmj {
+                return grid.lanes_each(patterns).sample(*index);
+            }
+        }
+        let patterns = patterns.to_array();
+        let mut points = [Vec2::ZERO; LANES];
+        for i in mask_lanes(wanted) {
+            points[i] = self.point_2d(index[i], patterns[i]);
+        }
+        points
+    }
+
+    /// Point `index` of the 2D set under `pattern`, one at a time.
+    #[inline]
+    fn point_2d(&self, index: u32, pattern: u32) -> Vec2 {
+        // `CmjSet::sample` is `cmj_2d` of a prepared set.
+        if self.set.n == self.count {
+            self.set.sample(index, pattern)
+        } else {
+            cmj_2d(index, self.count, pattern)
+        }
     }
 
     /// Points `index[i]` of dimension `dim`'s 1D set for the lanes `i`
@@ -362,15 +418,21 @@ impl SetLanes {
         if sampler.kind != SamplerKind::Stratified {
             return sampler.get_1d_lanes(dim, *index, self.count, wanted);
         }
-        let pattern = sampler.pattern(dim);
         if wanted.count_ones() > 1 {
             if let Some(grid) = &self.strata {
-                return grid.lanes(pattern).sample(*index);
+                return match self.prefixes {
+                    Some(_) => grid.lanes_each(self.patterns(dim)).sample(*index),
+                    None => grid.lanes(sampler.pattern(dim)).sample(*index),
+                };
             }
         }
         let mut out = [0.0; LANES];
+        let patterns = match self.prefixes {
+            Some(_) => self.patterns(dim).to_array(),
+            None => [sampler.pattern(dim); LANES],
+        };
         for i in mask_lanes(wanted) {
-            out[i] = stratified_1d(index[i], self.count, pattern);
+            out[i] = stratified_1d(index[i], self.count, patterns[i]);
         }
         out
     }
