@@ -13,8 +13,31 @@ use crate::system::cputime::thread_cpu_ns;
 /// Whether `threads` (0: one per core) asks for the pool the caller is in,
 /// rayon's global pool outside any: 0, or that pool's size. The one rule
 /// for the commands (`on_threads` in the CLI) and a render's workers.
+///
+/// Outside every pool, asking the global pool its size starts it: one
+/// thread a core, each idle for the whole run when a command was told
+/// to use fewer (`--threads 1` on a 16-core machine started 16). So the
+/// size is asked only where rayon's rule for it ([`global_pool_size`])
+/// says it may match; the answer still decides.
 pub fn is_current_pool(threads: usize) -> bool {
-    threads == 0 || threads == rayon::current_num_threads()
+    if threads == 0 {
+        return true;
+    }
+    if rayon::current_thread_index().is_none() && threads != global_pool_size() {
+        return false;
+    }
+    threads == rayon::current_num_threads()
+}
+
+/// The size rayon gives its global pool, worked out without starting it:
+/// `RAYON_NUM_THREADS` where it is a positive number, else one thread a
+/// logical core (rayon-core's documented default).
+fn global_pool_size() -> usize {
+    std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|n| n.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// `work` on a worker of the pool the caller is in (rayon's global pool
@@ -121,6 +144,8 @@ mod tests {
     fn work_from_outside_a_pool_runs_on_a_worker() {
         assert_eq!(rayon::current_thread_index(), None);
         assert!(is_current_pool(0));
+        // The size worked out without starting the pool is rayon's own.
+        assert_eq!(global_pool_size(), rayon::current_num_threads());
         assert!(is_current_pool(rayon::current_num_threads()));
         assert!(!is_current_pool(rayon::current_num_threads() + 1));
         assert!(on_current_pool(rayon::current_thread_index).is_some());
