@@ -374,6 +374,22 @@ def region_means(np, img, k=3):
             for i in range(k) for j in range(k)]
 
 
+def quiet(limit=0.5):
+    """Waits, at most `limit` seconds, until this process's threads have
+    stopped using the CPU, so that the next timed run (strata's or
+    Mitsuba's) starts on idle cores: Dr.Jit's workers spin for about
+    11 ms after each render (this process used 22 ms of CPU in the 20 ms
+    after a warm cornell-planes render on two threads, and 23 ms in the
+    200 ms after it), and a strata process started at once took 28.5 ms
+    against 25.3 ms started 200 ms later (docs/mitsuba.md)."""
+    end = time.perf_counter() + limit
+    while time.perf_counter() < end:
+        cpu = time.process_time()
+        time.sleep(0.005)
+        if time.process_time() - cpu < 0.0005:
+            return
+
+
 def run_strata(args, scene, spp, sampler, out, seed=0, noise=None, stats=False):
     """strata's wall time, and with `stats` its render phase (from
     `--stats`, written to OUT.json), else None: a run timed as a whole
@@ -386,6 +402,7 @@ def run_strata(args, scene, spp, sampler, out, seed=0, noise=None, stats=False):
         cmd += ["--stats", out + ".json"]
     # The noise target samples as it must (its own sampler); else the one asked.
     cmd += ["--noise", str(noise)] if noise is not None else ["--sampler", sampler]
+    quiet()
     t = time.perf_counter()
     subprocess.run(cmd, check=True, cwd=ROOT)
     wall = time.perf_counter() - t
@@ -407,6 +424,7 @@ def bench_scene(args, mi, dr, np, path, tmp):
         STRATA_SCENES[path] = same_meshes(path, settings["binary_copies"])
 
     def load():
+        quiet()
         t = time.perf_counter()
         loaded = mi.load_dict(desc)
         return loaded, time.perf_counter() - t
@@ -416,6 +434,7 @@ def bench_scene(args, mi, dr, np, path, tmp):
     cpu = []  # Mitsuba's CPU seconds per wall second while rendering: its thread use
 
     def mitsuba(n, seed):
+        quiet()
         t, c = time.perf_counter(), time.process_time()
         img = np.array(mi.render(scene, spp=n, seed=seed), copy=True).astype(np.float64)
         t = time.perf_counter() - t
