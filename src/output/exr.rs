@@ -10,13 +10,13 @@
 //! reader reads either: the level is not in the file.
 
 use super::atomic::write_bytes_atomic;
-use exr::block::writer::ChunksWriter;
 use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
+use exr::block::writer::ChunksWriter;
 use exr::block::UncompressedBlock;
+use exr::image::write::layers::{LayersWriter, WritableLayers};
 use exr::meta::header::Header;
 use exr::meta::BlockDescription;
 use exr::prelude::Compression;
-use exr::image::write::layers::{LayersWriter, WritableLayers};
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, IntegerBounds, Layer,
     LayerAttributes, Text, Vec2, WritableImage,
@@ -310,7 +310,10 @@ mod tests {
             let whole = (12 * w * lines) as usize;
             let size = block.compressed_pixels_le.len();
             if 16 * (k as u32 + 1) <= noisy_from {
-                assert!(size < whole / 2, "smooth block {k}: {size} of {whole} bytes");
+                assert!(
+                    size < whole / 2,
+                    "smooth block {k}: {size} of {whole} bytes"
+                );
             } else {
                 assert_eq!(size, whole, "noisy block {k} stored whole");
             }
