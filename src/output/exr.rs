@@ -232,6 +232,19 @@ mod tests {
     use super::*;
     use exr::prelude::{read, ReadChannels, ReadLayers};
 
+    /// The file's first layer, every channel and attribute, as the exr
+    /// crate's reader gives them.
+    fn read_back(bytes: Vec<u8>) -> Image<Layer<AnyChannels<FlatSamples>>> {
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(bytes))
+            .unwrap()
+    }
+
     /// The blocks compressed here read back, through the exr crate's
     /// reader, as the very values written, bit for bit: smooth lines
     /// (which ZIP shrinks) and hashed noise (which it cannot, so they are
@@ -274,14 +287,7 @@ mod tests {
                 "{threads} threads"
             );
         }
-        let back = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(std::io::Cursor::new(ours.clone()))
-            .unwrap();
+        let back = read_back(ours.clone());
         let layer = &back.layer_data;
         assert_eq!(layer.size, Vec2(w as usize, h as usize));
         assert_eq!(layer.encoding.compression, Compression::ZIP16);
@@ -352,14 +358,7 @@ mod tests {
             .attributes
             .push(("sampler".into(), Attribute::Text("stratified".into())));
         let bytes = image.encode().unwrap();
-        let back = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(std::io::Cursor::new(bytes))
-            .unwrap();
+        let back = read_back(bytes);
         let layer = &back.layer_data;
         assert_eq!(layer.size, Vec2(3, 2));
         assert_eq!(layer.attributes.layer_position, Vec2(4, 1));
