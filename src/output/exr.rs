@@ -5,9 +5,10 @@
 //!
 //! The blocks are compressed here, at zlib's fastest level, not by the
 //! exr crate (level 4): on strata's renders level 1 took a quarter to a
-//! half of the time for files 0.1 to 1.6 points of their raw size larger
-//! (docs/performance.md, "EXR blocks at zlib's fastest level"). Every
-//! reader reads either: the level is not in the file.
+//! half of the time, for files 0.1 to 2.5 points of their raw size larger
+//! (2 to 13% larger files with the smooth AOV channels; docs/performance.md,
+//! "EXR blocks at zlib's fastest level"). Every reader reads either: the
+//! level is not in the file.
 
 use super::atomic::write_bytes_atomic;
 use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
