@@ -9,23 +9,55 @@ static PEAK_BEFORE_RESET: AtomicU64 = AtomicU64::new(0);
 
 /// Peak resident set size of this process (Linux `VmHWM`), if known.
 pub fn peak_rss_bytes() -> Option<u64> {
-    let hwm = status_kb("VmHWM:")?;
+    let hwm = Status::read()?.hwm;
     Some(hwm.max(PEAK_BEFORE_RESET.load(Ordering::Relaxed)))
 }
 
-/// A `/proc/self/status` field in bytes (`VmHWM:`, `VmRSS:`).
-fn status_kb(field: &str) -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with(field))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+/// The two `/proc/self/status` fields the meters read, in bytes: one read
+/// of the file for both. Each read is the kernel writing the whole file
+/// (about 20 µs); a render's load read it eight times, one field each,
+/// which took 0.14 ms of a small scene's 0.55 ms load.
+#[derive(Debug, Clone, Copy)]
+struct Status {
+    /// `VmRSS`: resident now.
+    rss: u64,
+    /// `VmHWM`: the peak of `rss` since the process began or the last
+    /// reset.
+    hwm: u64,
+}
+
+impl Status {
+    fn read() -> Option<Self> {
+        // One read call: the file is about 1.5 KB; `read_to_string` read
+        // it in growing pieces.
+        let mut buffer = [0u8; 8192];
+        let n = std::io::Read::read(
+            &mut std::fs::File::open("/proc/self/status").ok()?,
+            &mut buffer,
+        )
+        .ok()?;
+        Self::parse(std::str::from_utf8(&buffer[..n]).ok()?)
+    }
+
+    fn parse(status: &str) -> Option<Self> {
+        let field = |name: &str| -> Option<u64> {
+            let line = status.lines().find(|l| l.starts_with(name))?;
+            let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kb * 1024)
+        };
+        Some(Self {
+            rss: field("VmRSS:")?,
+            hwm: field("VmHWM:")?,
+        })
+    }
 }
 
 /// Set `VmHWM` back to the current RSS (Linux ≥ 4.0: write 5 to
-/// `/proc/self/clear_refs`); false where that is not possible.
-fn reset_peak() -> bool {
-    if let Some(hwm) = status_kb("VmHWM:") {
-        PEAK_BEFORE_RESET.fetch_max(hwm, Ordering::Relaxed);
+/// `/proc/self/clear_refs`), keeping the peak it had, `before`, for
+/// [`peak_rss_bytes`]; false where that is not possible.
+fn reset_peak(before: Option<Status>) -> bool {
+    if let Some(s) = before {
+        PEAK_BEFORE_RESET.fetch_max(s.hwm, Ordering::Relaxed);
     }
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
@@ -44,26 +76,33 @@ pub struct PeakMeter {
 
 impl PeakMeter {
     pub fn start() -> Self {
-        let reset = reset_peak();
+        let reset = reset_peak(Status::read());
+        let now = Status::read();
         Self {
-            base: status_kb("VmRSS:"),
+            base: now.map(|s| s.rss),
             reset,
-            hwm_at_phase_start: status_kb("VmHWM:").unwrap_or(u64::MAX),
+            hwm_at_phase_start: now.map_or(u64::MAX, |s| s.hwm),
         }
     }
 
     /// Peak RSS of the phase so far, above the level at `start`.
     pub fn phase_peak(&self) -> Option<u64> {
+        self.peak_in(Status::read())
+    }
+
+    /// The phase's peak by the reading `now`.
+    fn peak_in(&self, now: Option<Status>) -> Option<u64> {
         let base = self.base?;
-        let hwm = status_kb("VmHWM:")?;
+        let hwm = now?.hwm;
         (self.reset || hwm > self.hwm_at_phase_start).then(|| hwm.saturating_sub(base))
     }
 
     /// End a phase: its peak, and a fresh peak for the next one (same base).
     pub fn next_phase(&mut self) -> Option<u64> {
-        let peak = self.phase_peak();
-        self.reset = reset_peak();
-        self.hwm_at_phase_start = status_kb("VmHWM:").unwrap_or(u64::MAX);
+        let now = Status::read();
+        let peak = self.peak_in(now);
+        self.reset = reset_peak(now);
+        self.hwm_at_phase_start = Status::read().map_or(u64::MAX, |s| s.hwm);
         peak
     }
 }
@@ -89,4 +128,37 @@ pub fn drop_aside<T: Send + 'static>(value: Vec<T>) {
     let _ = std::thread::Builder::new()
         .name("strata-free".into())
         .spawn(move || drop(value));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn status_gives_both_fields_in_bytes() {
+        let text =
+            "Name:\tstrata\nVmPeak:\t  900 kB\nVmHWM:\t   700 kB\nVmRSS:\t   512 kB\nThreads:\t3\n";
+        let s = Status::parse(text).unwrap();
+        assert_eq!((s.rss, s.hwm), (512 * 1024, 700 * 1024));
+        assert!(Status::parse("VmRSS:\t512 kB\n").is_none(), "no VmHWM");
+    }
+
+    /// A phase that touches 64 MB has a peak of at least that, and so has
+    /// the whole run (Linux; elsewhere nothing is known).
+    #[test]
+    fn a_phase_that_touches_memory_peaks_above_it() {
+        let Some(now) = Status::read() else {
+            return;
+        };
+        assert!(now.rss <= now.hwm);
+        let mut meter = PeakMeter::start();
+        let bytes = 64 << 20;
+        let touched = vec![1u8; bytes];
+        std::hint::black_box(&touched);
+        if let Some(peak) = meter.next_phase() {
+            assert!(peak >= bytes as u64 * 9 / 10, "{peak}");
+        }
+        drop(touched);
+        assert!(peak_rss_bytes().unwrap() >= bytes as u64 * 9 / 10);
+    }
 }
