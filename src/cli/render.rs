@@ -286,24 +286,28 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
             s.spp, outcome.seconds
         );
     }
-    let mut stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
     if let (Some(t), Some(start)) = (&timeline, output_start) {
         t.phase(Phase::Output, start, t.now());
-        stats.timeline = t.summary();
     }
     if let (Some(path), Some(t)) = (&args.timeline, &timeline) {
         let name = format!("strata render {scene_name}");
         strata::output::atomic::write_bytes_atomic(path, t.to_chrome_json(&name).as_bytes())
             .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
     }
-    if let Some(path) = &args.stats {
-        strata::output::atomic::write_bytes_atomic(path, stats.to_json().as_bytes())
-            .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
-    }
-    if !args.quiet {
-        println!("{}", stats.summary(&args.output));
-        if let (Some(path), Some(summary)) = (&args.timeline, &stats.timeline) {
-            print!("timeline -> {}\n{}", path.display(), summary.text());
+    // The statistics (the run's peak memory read among them) only where
+    // something shows them.
+    if args.stats.is_some() || !args.quiet {
+        let mut stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
+        stats.timeline = timeline.as_deref().and_then(Timeline::summary);
+        if let Some(path) = &args.stats {
+            strata::output::atomic::write_bytes_atomic(path, stats.to_json().as_bytes())
+                .map_err(|e| InputError::file(path, format!("cannot write: {e}")))?;
+        }
+        if !args.quiet {
+            println!("{}", stats.summary(&args.output));
+            if let (Some(path), Some(summary)) = (&args.timeline, &stats.timeline) {
+                print!("timeline -> {}\n{}", path.display(), summary.text());
+            }
         }
     }
     // The process ends with this command: its memory goes back with it,
@@ -552,7 +556,12 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 /// A load that takes more than a second shows what it is doing (reading,
 /// building) on stderr until it ends, unless `--quiet`.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
-    let progress = compile::LoadProgress::default();
+    // The summary line and the statistics show the load's memory peaks.
+    let progress = if args.quiet && args.stats.is_none() {
+        compile::LoadProgress::unmetered()
+    } else {
+        compile::LoadProgress::default()
+    };
     let load = || match args.scene.as_deref() {
         Some(path) if is_model_path(path) => load_model(path, args, &progress),
         Some(path) => Ok(compile::load_edited_scene_with_progress(

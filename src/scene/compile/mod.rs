@@ -269,7 +269,7 @@ fn compile_for(
     progress: &LoadProgress,
     preloaded: Option<(PathBuf, LoadedAsset)>,
 ) -> InputResult<(Scene, LoadTimings)> {
-    let mut memory = PeakMeter::start();
+    let mut memory = progress.metered().then(PeakMeter::start);
     let compile_start = Instant::now();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
@@ -331,7 +331,7 @@ fn compile_for(
     let load = start.elapsed();
     let mut load_steps = Steps::default();
     load_steps.add("compile", compile_start.elapsed());
-    let load_peak_bytes = memory.next_phase();
+    let load_peak_bytes = memory.as_mut().and_then(PeakMeter::next_phase);
     let mut build_steps = Steps::default();
 
     // Area lights were recorded by shape index; make them global primitive ids.
@@ -414,7 +414,7 @@ fn compile_for(
         bvh_quality,
         bvh_choice,
         load_peak_bytes,
-        build_peak_bytes: memory.phase_peak(),
+        build_peak_bytes: memory.as_ref().and_then(PeakMeter::phase_peak),
         load_steps,
         build_steps,
     };
@@ -617,6 +617,26 @@ mod tests {
         assert_eq!(progress.phase(), LoadPhase::Building { triangles: 3 });
         progress.finish();
         assert_eq!(progress.phase(), LoadPhase::Done);
+    }
+
+    /// An unmetered load measures no memory peak and loads the same
+    /// scene; a metered one reports what its meters read.
+    #[test]
+    fn an_unmetered_load_has_no_memory_peaks() {
+        use crate::scene::loaders::test_files::{temp_dir, write};
+        let dir = temp_dir("unmetered");
+        let scene = write(&dir, "s.toml", b"[[objects]]\nsphere = { radius = 1 }\n");
+        let load = |progress: &LoadProgress| {
+            let overrides = RenderOverrides::default();
+            load_edited_scene_with_progress(&scene, &[], &overrides, BuildQuality::Auto, progress)
+                .unwrap()
+        };
+        let (quiet, quiet_timings) = load(&LoadProgress::unmetered());
+        assert_eq!(quiet_timings.load_peak_bytes, None);
+        assert_eq!(quiet_timings.build_peak_bytes, None);
+        let (metered, _) = load(&LoadProgress::default());
+        let shape = |s: &Scene| (s.geometry.primitive_count(), s.geometry.accel_bytes());
+        assert_eq!(shape(&quiet), shape(&metered));
     }
 
     /// A mesh that its transform carries past f32's range is an error

@@ -1,15 +1,19 @@
-//! What a load is doing, for a progress display on another thread.
+//! What a load is doing, for a progress display on another thread, and
+//! whether it measures its memory.
 
 use std::sync::atomic::{AtomicU64, AtomicU8, Ordering::Relaxed};
 
 /// What a load is doing, set by the compiler as it goes and read by a
 /// progress display on another thread (relaxed atomics: a display needs
-/// no order).
+/// no order); and whether anything will show its memory figures.
 #[derive(Debug, Default)]
 pub struct LoadProgress {
     /// 0: loading, 1: building, 2: done.
     phase: AtomicU8,
     triangles: AtomicU64,
+    /// Nothing shows the load's memory peaks: it does not measure them
+    /// (`LoadTimings`' peaks are None).
+    unmetered: bool,
 }
 
 /// A phase of a load.
@@ -25,6 +29,22 @@ pub enum LoadPhase {
 }
 
 impl LoadProgress {
+    /// The progress of a load whose memory peaks nothing will show
+    /// (`strata render -q` without `--stats`): it skips the meters, whose
+    /// reads of `/proc/self/status` cost a small scene's render about
+    /// 0.3 ms (docs/performance.md).
+    pub fn unmetered() -> Self {
+        Self {
+            unmetered: true,
+            ..Self::default()
+        }
+    }
+
+    /// Whether the load measures its memory peaks.
+    pub(super) fn metered(&self) -> bool {
+        !self.unmetered
+    }
+
     pub fn phase(&self) -> LoadPhase {
         match self.phase.load(Relaxed) {
             0 => LoadPhase::Loading,
