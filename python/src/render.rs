@@ -406,6 +406,7 @@ pub fn render(
         aovs: !aovs.is_empty(),
         timeline: None,
         budget: None,
+        cpu_times: false,
     };
     let mut interrupt = Interrupt::default();
     let outcome = py.detach(|| render_scene(&scene, &opts, None, &mut interrupt));

@@ -239,6 +239,7 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
         aovs: !args.aov.is_empty(),
         timeline: timeline.clone(),
         budget: args.time,
+        cpu_times: false,
     };
     let mut failed = (false, false);
     let checkpoints = each_pass(|film, done| {

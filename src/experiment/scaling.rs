@@ -105,6 +105,7 @@ pub fn time_threads_with(
         threads,
         schedule,
         timeline,
+        cpu_times: true,
         ..RenderOptions::default()
     };
     let outcome = render(scene, &opts, None, ());
@@ -401,6 +402,30 @@ impl Drop for ScratchDir {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A timed render measures its workers' CPU time where the system
+    /// reports a thread's (Linux): some, and the critical path within the
+    /// total; a plain render measures none.
+    #[test]
+    fn timed_renders_measure_cpu_time_and_plain_ones_do_not() {
+        let text = "[render]\nwidth = 32\nheight = 24\nspp = 4\n\
+                    [[objects]]\nsphere = { center = [0, 0, -3], radius = 1 }\n";
+        let (scene, _) = crate::scene::compile::load_edited_text(
+            text,
+            Path::new("timed.toml"),
+            &[],
+            &Default::default(),
+            Default::default(),
+        )
+        .unwrap();
+        let plain = crate::render::render(&scene, &RenderOptions::default(), None, ());
+        assert!(plain.cpu.is_none());
+        let timing = time_threads(&scene, Schedule::Slices, 2);
+        if crate::system::cputime::thread_cpu_ns().is_some() {
+            let (total, path) = timing.cpu.expect("CPU time measured");
+            assert!(total > 0.0 && path > 0.0 && path <= total, "{total} {path}");
+        }
+    }
 
     #[test]
     fn thread_counts_double_up_to_the_maximum() {

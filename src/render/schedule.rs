@@ -22,6 +22,7 @@ use crate::sampling::{Dim, PixelSampler, SamplerKind};
 use crate::scene::settings::RenderSettings;
 use crate::scene::Scene;
 use crate::shade::{CameraSample, FirstHit, Integrator, PacketMode, RayCounts, SampleContext};
+use crate::system::cputime::CpuMeter;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::ops::{ControlFlow, Range};
@@ -130,6 +131,11 @@ pub struct RenderOptions {
     /// last one's pace says would end past them (the first always runs).
     /// The image then depends on the machine's speed.
     pub budget: Option<f64>,
+    /// Also measure the workers' CPU time (`RenderOutcome::cpu`, which
+    /// `strata scaling` reads): a broadcast to the pool before the first
+    /// pass and after each, 75 µs of a small render's 3.2 ms, so only
+    /// where something reads it.
+    pub cpu_times: bool,
 }
 
 impl Default for RenderOptions {
@@ -145,6 +151,7 @@ impl Default for RenderOptions {
             aovs: false,
             timeline: None,
             budget: None,
+            cpu_times: false,
         }
     }
 }
@@ -156,7 +163,8 @@ pub struct RenderOutcome {
     pub seconds: f64,
     pub threads: usize,
     pub samples: Range<u32>,
-    /// CPU time spent, where the system reports it (Linux).
+    /// CPU time spent, where asked for (`RenderOptions::cpu_times`) and
+    /// the system reports it (Linux).
     pub cpu: Option<crate::system::cputime::CpuTimes>,
     /// Per pixel of the window, the sums of the first hits, with
     /// [`RenderOptions::aovs`].
@@ -298,7 +306,9 @@ fn render_window(
     let n = film.pixel_count();
     let mut counts = RayCounts::default();
     let mut aov = opts.aovs.then(|| vec![AovSum::default(); n]);
-    let mut cpu = crate::system::cputime::CpuMeter::start(pool.cpu_ns(), pool.caller());
+    let mut cpu = opts
+        .cpu_times
+        .then(|| CpuMeter::start(pool.cpu_ns(), pool.caller()));
     let start = Instant::now();
     let chunk = match opts.schedule {
         Schedule::Slices => WORK_ITEM_PIXELS,
@@ -428,7 +438,9 @@ fn render_window(
         counts += pass_counts;
         let film_start = timeline.map(Timeline::now);
         film.add_losses(losses);
-        cpu.pass(pool.cpu_ns());
+        if let Some(cpu) = &mut cpu {
+            cpu.pass(pool.cpu_ns());
+        }
         done = samples.end;
         pace = Some(pass_clock.elapsed().as_secs_f64() / work);
         let after_start = timeline.map(Timeline::now);
@@ -462,7 +474,7 @@ fn render_window(
         seconds,
         threads,
         samples: full,
-        cpu: cpu.finish(),
+        cpu: cpu.and_then(CpuMeter::finish),
         aov,
         warnings,
         stopped,
