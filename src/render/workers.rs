@@ -10,23 +10,28 @@
 
 use crate::system::cputime::thread_cpu_ns;
 
-/// Whether `threads` (0: one per core) asks for the pool the caller is in,
-/// rayon's global pool outside any: 0, or that pool's size. The one rule
-/// for the commands (`on_threads` in the CLI) and a render's workers.
-///
-/// Outside every pool, asking the global pool its size starts it: one
-/// thread a core, each idle for the whole run when a command was told
-/// to use fewer (`--threads 1` on a 16-core machine started 16). So the
-/// size is asked only where rayon's rule for it ([`global_pool_size`])
-/// says it may match; the answer still decides.
+/// Whether `threads` (0: one per core) asks for the pool the caller is
+/// in: 0, or that pool's size where the caller is one of its workers.
+/// What `strata render` decides by (`on_threads` in the CLI): a command
+/// given `--threads N` runs on a pool of its own, and never starts
+/// rayon's global pool (one idle thread a core beside it, `--threads 1`
+/// on a 16-core machine started 16) nor asks the cores (a tenth of a
+/// millisecond of cgroup files).
 pub fn is_current_pool(threads: usize) -> bool {
-    if threads == 0 {
-        return true;
-    }
-    if rayon::current_thread_index().is_none() && threads != global_pool_size() {
-        return false;
-    }
-    threads == rayon::current_num_threads()
+    threads == 0
+        || (rayon::current_thread_index().is_some() && threads == rayon::current_num_threads())
+}
+
+/// Whether a caller outside every pool asks, with `threads`, for rayon's
+/// global pool: what a render's workers add to [`is_current_pool`], so
+/// that the Python package's `render(threads=N)` with N the global pool's
+/// size reuses its running threads. Asking the global pool its size
+/// starts it, so the size is asked only where rayon's rule for it
+/// ([`global_pool_size`]) says it may match; the answer still decides.
+fn is_global_pool(threads: usize) -> bool {
+    rayon::current_thread_index().is_none()
+        && threads == global_pool_size()
+        && threads == rayon::current_num_threads()
 }
 
 /// The size rayon gives its global pool, worked out without starting it:
@@ -62,7 +67,7 @@ impl Workers {
     /// Workers for `threads` threads (0: as many as the current pool has,
     /// one per core outside any pool), and their count.
     pub(super) fn for_threads(threads: usize) -> (Self, usize) {
-        if is_current_pool(threads) {
+        if is_current_pool(threads) || is_global_pool(threads) {
             return (Self::Current, rayon::current_num_threads());
         }
         let pool = rayon::ThreadPoolBuilder::new()
@@ -145,9 +150,14 @@ mod tests {
         assert_eq!(rayon::current_thread_index(), None);
         assert!(is_current_pool(0));
         // The size worked out without starting the pool is rayon's own.
-        assert_eq!(global_pool_size(), rayon::current_num_threads());
-        assert!(is_current_pool(rayon::current_num_threads()));
-        assert!(!is_current_pool(rayon::current_num_threads() + 1));
+        let global = rayon::current_num_threads();
+        assert_eq!(global_pool_size(), global);
+        // Outside every pool a size is the global pool's for a render's
+        // workers, never for a command.
+        assert!(is_global_pool(global) && !is_current_pool(global));
+        assert!(!is_global_pool(global + 1));
+        let (workers, n) = Workers::for_threads(global);
+        assert!(matches!(workers, Workers::Current) && n == global);
         assert!(on_current_pool(rayon::current_thread_index).is_some());
     }
 }
