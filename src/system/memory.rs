@@ -36,7 +36,7 @@ impl Status {
             &mut buffer,
         )
         .ok()?;
-        Self::parse(std::str::from_utf8(&buffer[..n]).ok()?)
+        Self::parse(&String::from_utf8_lossy(&buffer[..n]))
     }
 
     fn parse(status: &str) -> Option<Self> {
@@ -143,22 +143,22 @@ mod tests {
         assert!(Status::parse("VmRSS:\t512 kB\n").is_none(), "no VmHWM");
     }
 
-    /// A phase that touches 64 MB has a peak of at least that, and so has
-    /// the whole run (Linux; elsewhere nothing is known).
+    /// With 64 MB touched and held, one reading has both fields: the
+    /// resident size at least that, the peak at least the resident size,
+    /// and so the run's peak. (A phase's peak is process-wide, and other
+    /// tests reset it and free memory beside this one: not asserted.)
     #[test]
-    fn a_phase_that_touches_memory_peaks_above_it() {
-        let Some(now) = Status::read() else {
+    fn a_reading_holds_what_is_touched() {
+        if Status::read().is_none() {
             return;
-        };
-        assert!(now.rss <= now.hwm);
-        let mut meter = PeakMeter::start();
+        }
         let bytes = 64 << 20;
         let touched = vec![1u8; bytes];
         std::hint::black_box(&touched);
-        if let Some(peak) = meter.next_phase() {
-            assert!(peak >= bytes as u64 * 9 / 10, "{peak}");
-        }
-        drop(touched);
+        let now = Status::read().unwrap();
+        assert!(now.rss >= bytes as u64 * 9 / 10, "{now:?}");
+        assert!(now.hwm >= now.rss, "{now:?}");
         assert!(peak_rss_bytes().unwrap() >= bytes as u64 * 9 / 10);
+        drop(touched);
     }
 }
