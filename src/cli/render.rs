@@ -297,7 +297,7 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
     }
     // The statistics (the run's peak memory read among them) only where
     // something shows them.
-    if args.stats.is_some() || !args.quiet {
+    if shows_figures(&args) {
         let mut stats = RenderStats::new(&scene_name, &scene, &timings, &opts, &outcome);
         stats.timeline = timeline.as_deref().and_then(Timeline::summary);
         if let Some(path) = &args.stats {
@@ -316,6 +316,13 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
     // mesh's gigabyte page by page took a tenth of a second).
     std::mem::forget(scene);
     Ok(())
+}
+
+/// Whether the run shows its figures (the summary line, or `--stats`):
+/// else it measures none of what only they show (the load's and the
+/// run's memory peaks).
+fn shows_figures(args: &RenderArgs) -> bool {
+    !args.quiet || args.stats.is_some()
 }
 
 /// Whether a render of a `width` × `height` window, with the AOVs and
@@ -557,11 +564,10 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
 /// A load that takes more than a second shows what it is doing (reading,
 /// building) on stderr until it ends, unless `--quiet`.
 fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
-    // The summary line and the statistics show the load's memory peaks.
-    let progress = if args.quiet && args.stats.is_none() {
-        compile::LoadProgress::unmetered()
-    } else {
+    let progress = if shows_figures(args) {
         compile::LoadProgress::default()
+    } else {
+        compile::LoadProgress::unmetered()
     };
     let load = || match args.scene.as_deref() {
         Some(path) if is_model_path(path) => load_model(path, args, &progress),

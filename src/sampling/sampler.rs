@@ -366,47 +366,26 @@ impl SetLanes {
         if sampler.kind != SamplerKind::Stratified {
             return sampler.dim_2d(dim, self.count).get_2d_lanes(*index, wanted);
         }
-        if self.prefixes.is_some() {
-            return self.get_2d_each(dim, index, wanted);
-        }
-        let pattern = sampler.pattern(dim);
         if wanted.count_ones() > 1 {
             if let Some(grid) = &self.cmj {
-                return grid.lanes(pattern).sample(*index);
+                let lanes = match self.prefixes {
+                    Some(_) => grid.lanes_each(self.patterns(dim)),
+                    None => grid.lanes(sampler.pattern(dim)),
+                };
+                return lanes.sample(*index);
             }
         }
+        let patterns = self.patterns(dim).to_array();
         let mut points = [Vec2::ZERO; LANES];
         for i in mask_lanes(wanted) {
-            points[i] = self.point_2d(index[i], pattern);
+            // `CmjSet::sample` is `cmj_2d` of a prepared set.
+            points[i] = if self.set.n == self.count {
+                self.set.sample(index[i], patterns[i])
+            } else {
+                cmj_2d(index[i], self.count, patterns[i])
+            };
         }
         points
-    }
-
-    /// [`SetLanes::get_2d`] of lanes that draw for several pixels.
-    fn get_2d_each(&self, dim: Dim, index: &[u32; LANES], wanted: u32) -> [Vec2; LANES] {
-        let patterns = self.patterns(dim);
-        if wanted.count_ones() > 1 {
-            if let Some(grid) = &self.cmj {
-                return grid.lanes_each(patterns).sample(*index);
-            }
-        }
-        let patterns = patterns.to_array();
-        let mut points = [Vec2::ZERO; LANES];
-        for i in mask_lanes(wanted) {
-            points[i] = self.point_2d(index[i], patterns[i]);
-        }
-        points
-    }
-
-    /// Point `index` of the 2D set under `pattern`, one at a time.
-    #[inline]
-    fn point_2d(&self, index: u32, pattern: u32) -> Vec2 {
-        // `CmjSet::sample` is `cmj_2d` of a prepared set.
-        if self.set.n == self.count {
-            self.set.sample(index, pattern)
-        } else {
-            cmj_2d(index, self.count, pattern)
-        }
     }
 
     /// Points `index[i]` of dimension `dim`'s 1D set for the lanes `i`
@@ -420,17 +399,15 @@ impl SetLanes {
         }
         if wanted.count_ones() > 1 {
             if let Some(grid) = &self.strata {
-                return match self.prefixes {
-                    Some(_) => grid.lanes_each(self.patterns(dim)).sample(*index),
-                    None => grid.lanes(sampler.pattern(dim)).sample(*index),
+                let lanes = match self.prefixes {
+                    Some(_) => grid.lanes_each(self.patterns(dim)),
+                    None => grid.lanes(sampler.pattern(dim)),
                 };
+                return lanes.sample(*index);
             }
         }
+        let patterns = self.patterns(dim).to_array();
         let mut out = [0.0; LANES];
-        let patterns = match self.prefixes {
-            Some(_) => self.patterns(dim).to_array(),
-            None => [sampler.pattern(dim); LANES],
-        };
         for i in mask_lanes(wanted) {
             out[i] = stratified_1d(index[i], self.count, patterns[i]);
         }
