@@ -62,7 +62,10 @@ impl Compiler<'_> {
         if base.max_element() > 1.0 {
             return Err(self.err(
                 &k("base_color"),
-                format!("must be a reflectance between 0 and 1, got {base:?}"),
+                format!(
+                    "must be a reflectance between 0 and 1, got {}",
+                    super::validate::written(base)
+                ),
             ));
         }
         let unit = |x: Option<f32>, field: &str, default: f32| {

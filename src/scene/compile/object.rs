@@ -89,7 +89,10 @@ impl Compiler<'_> {
         if !scale.is_finite() || scale.abs().min_element() == 0.0 {
             return Err(self.err(
                 &format!("{key}.scale"),
-                format!("must be finite and non-zero, got {scale:?}"),
+                format!(
+                    "must be finite and non-zero, got {}",
+                    super::validate::written(scale)
+                ),
             ));
         }
         Ok(Affine3A::from_scale_rotation_translation(

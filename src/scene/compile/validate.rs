@@ -7,19 +7,10 @@ use crate::error::{InputError, InputResult};
 use crate::scene::description::V3;
 use crate::scene::parse::within;
 use glam::Vec3;
-use std::path::Path;
 
-pub(super) fn finite3(v: V3, key: &str, file: &Path) -> InputResult<Vec3> {
-    let v = Vec3::from(v);
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(InputError::new(
-            file,
-            key,
-            format!("must be finite, got {v:?}"),
-        ))
-    }
+/// `v` as a scene file writes it, `[x, y, z]`, for an error message.
+pub(super) fn written(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
 impl Compiler<'_> {
@@ -79,7 +70,12 @@ impl Compiler<'_> {
     }
 
     pub(super) fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {
-        finite3(v, key, &self.file)
+        let v = Vec3::from(v);
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be finite, got {}", written(v))))
+        }
     }
 
     pub(super) fn finite(&self, x: f32, key: &str) -> InputResult<f32> {
@@ -109,7 +105,7 @@ impl Compiler<'_> {
     pub(super) fn colour(&self, v: V3, key: &str) -> InputResult<Vec3> {
         let c = self.v3(v, key)?;
         if c.min_element() < 0.0 {
-            return Err(self.err(key, format!("must not be negative, got {c:?}")));
+            return Err(self.err(key, format!("must not be negative, got {}", written(c))));
         }
         Ok(c)
     }
@@ -177,6 +173,39 @@ mod tests {
             let e = rejected(text);
             assert_eq!(e.location, key, "{text}");
             assert!(e.message.contains(needle), "{text}: {e}");
+        }
+    }
+
+    /// A bad vector is quoted as the file writes it, on the line that
+    /// holds it, whichever check refused it.
+    #[test]
+    fn a_bad_vector_is_quoted_as_written_on_its_line() {
+        for (text, line, quoted) in [
+            (
+                "[render]\nwidth = 4\n[[lights]]\ntype = \"point\"\nposition = [nan, 0.0, 0.0]",
+                5,
+                "[NaN, 0, 0]",
+            ),
+            (
+                "\n[materials.m]\ndiffuse = [0.5, -0.1, 0.5]",
+                3,
+                "[0.5, -0.1, 0.5]",
+            ),
+            (
+                "[[objects]]\nsphere = { radius = 1.0 }\ntransform = { scale = [1.0, 0.0, 2.0] }",
+                3,
+                "[1, 0, 2]",
+            ),
+            (
+                "[materials.m]\nbase_color = [1.5, 0.5, 0.5]",
+                2,
+                "[1.5, 0.5, 0.5]",
+            ),
+        ] {
+            let e = rejected(text);
+            assert_eq!(e.line, Some(line), "{text}: {e}");
+            assert!(e.message.ends_with(quoted), "{text}: {e}");
+            assert!(!e.message.contains("Vec3"), "{text}: {e}");
         }
     }
 }
