@@ -35,7 +35,9 @@ MESH_CASES = {
     "ragged vertices": (lambda: strata_rt.Mesh([[0, 0, 0], [1, 2]], [[0, 1, 0]]), ["vertices"]),
     "a NaN vertex": (lambda: strata_rt.Mesh(np.where(np.arange(24).reshape(8, 3) == 4, np.nan, V), F), ["vertices[1]", "not finite"]),
     "an infinite vertex": (lambda: strata_rt.Mesh(np.where(np.arange(24).reshape(8, 3) == 23, np.inf, V), F), ["vertices[7]", "not finite"]),
-    "a vertex beyond float32": (lambda: strata_rt.Mesh(V * np.array([1, 1, 1e39]), F), ["vertices[0]", "not finite"]),
+    "a vertex beyond float32": (lambda: strata_rt.Mesh(V * np.array([1, 1, 1e39]), F), ["vertices[0]", "not finite as float32", "-1e39]"]),
+    # Quoted as given, not as it lies relative to the mesh's centre.
+    "a NaN vertex far out": (lambda: strata_rt.Mesh(np.where(np.arange(24).reshape(8, 3) == 4, np.nan, V + 1000), F), ["vertices[1]", "[999.0, NaN, 1001.0]"]),
     "float faces": (lambda: strata_rt.Mesh(V, F.astype(np.float64)), ["faces", "integers", "float64"]),
     "faces of 4 columns": (lambda: strata_rt.Mesh(V, np.zeros((2, 4), dtype=np.int64)), ["faces", "(n, 3)", "(2, 4)"]),
     "an index past the end": (lambda: strata_rt.Mesh(V, np.vstack([F, [[0, 1, 8]]])), ["faces[12][2] = 8", "8 vertices"]),

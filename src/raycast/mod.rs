@@ -193,8 +193,18 @@ impl Mesh {
         faces: Vec<[u32; 3]>,
         quality: BuildQuality,
     ) -> Result<Self, MeshArraysError> {
+        // Checked as given: relative to the centre, a NaN would be quoted
+        // moved, and a float64 beyond float32 would read as infinite.
+        if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
+            let value = vertices[vertex].to_array();
+            return Err(MeshArraysError::NotFinite { vertex, value });
+        }
         let centre = centre_of(&vertices);
         let near: Vec<Vec3> = vertices.iter().map(|&v| (v - centre).as_vec3()).collect();
+        if let Some(vertex) = near.iter().position(|v| !v.is_finite()) {
+            let value = vertices[vertex].to_array();
+            return Err(MeshArraysError::BeyondFloat32 { vertex, value });
+        }
         let held_exactly = near
             .iter()
             .zip(&vertices)

@@ -319,3 +319,28 @@ fn first_hits_and_occlusion_equal_each_rays_single_walk() {
         assert!(hits > 500, "{hits} hits");
     }
 }
+
+/// A bad vertex is quoted as the caller gave it, not as it lies relative
+/// to the mesh's centre (far from the origin the two differ), and a
+/// float64 vertex too far out for float32 is named as such.
+#[test]
+fn a_bad_vertex_is_quoted_as_given() {
+    let (v, faces) = cube();
+    let far = DVec3::new(500_123.0, 5_000_456.0, 100.0);
+    let mut given: Vec<DVec3> = v.iter().map(|p| p.as_dvec3() + far).collect();
+    given[3].y = f64::NAN;
+    let e = Mesh::new_exact(given.clone(), faces.clone(), BuildQuality::Auto).unwrap_err();
+    assert!(
+        matches!(e, MeshArraysError::NotFinite { vertex: 3, .. }),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(text.contains("[500124.0, NaN, 99.0]"), "{text}");
+    given[3].y = 1e39;
+    let e = Mesh::new_exact(given, faces, BuildQuality::Auto).unwrap_err();
+    assert!(
+        matches!(e, MeshArraysError::BeyondFloat32 { vertex: 3, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("1e39"), "{e}");
+}

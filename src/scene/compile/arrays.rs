@@ -12,8 +12,15 @@ use glam::Vec3;
 /// (`vertices`, `faces`) that carried them.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshArraysError {
+    /// A NaN or infinite coordinate, quoted as given.
     #[error("vertices[{vertex}] is not finite: {value:?}")]
-    NotFinite { vertex: usize, value: [f32; 3] },
+    NotFinite { vertex: usize, value: [f64; 3] },
+    /// A float64 vertex too far from the mesh's centre for float32 (its
+    /// coordinates relative to the centre overflow), quoted as given.
+    #[error(
+        "vertices[{vertex}] is not finite as float32 relative to the mesh's centre: {value:?}"
+    )]
+    BeyondFloat32 { vertex: usize, value: [f64; 3] },
     #[error("faces[{face}][{corner}] = {index} is out of range for {vertices} vertices")]
     IndexOutOfRange {
         face: usize,
@@ -36,7 +43,7 @@ pub fn mesh_geometry(
     quality: BuildQuality,
 ) -> Result<Geometry, MeshArraysError> {
     if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
-        let value = vertices[vertex].to_array();
+        let value = vertices[vertex].as_dvec3().to_array();
         return Err(MeshArraysError::NotFinite { vertex, value });
     }
     // Planes take ids counting down from u32::MAX; keep well clear of them.
