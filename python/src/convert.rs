@@ -415,23 +415,32 @@ fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
     }
 }
 
-/// An array of shape (..., 3) with more than two dimensions as its (n, 3)
-/// rows (a numpy reshape, a view where it can be) and its leading shape;
-/// anything else as it is, with no leading shape (answers stay (n,)).
-pub fn rows3<'py>(obj: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Vec<usize>)> {
-    let ndim = match obj.hasattr("ndim")? {
-        true => obj.getattr("ndim")?.extract::<usize>().unwrap_or(0),
-        false => 0,
+/// An array of shape (..., 3) other than (n, 3) as its (n, 3) rows (a
+/// numpy reshape, a view where it can be) and its leading shape: `()` for
+/// one row given as (3,) (a list or tuple as numpy reads it), whose answers
+/// are 0-d; `None` for anything else, taken as it is (answers stay (n,),
+/// and a wrong shape is refused by name where the rows are read).
+pub fn rows3<'py>(obj: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Option<Vec<usize>>)> {
+    let array = if obj.hasattr("ndim")? {
+        obj.clone()
+    } else if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        match obj.py().import("numpy")?.call_method1("asarray", (obj,)) {
+            Ok(a) => a,
+            Err(_) => return Ok((obj.clone(), None)),
+        }
+    } else {
+        return Ok((obj.clone(), None));
     };
-    if ndim <= 2 {
-        return Ok((obj.clone(), Vec::new()));
+    let ndim = array.getattr("ndim")?.extract::<usize>().unwrap_or(0);
+    if ndim == 0 || ndim == 2 {
+        return Ok((obj.clone(), None));
     }
-    let shape: Vec<usize> = obj.getattr("shape")?.extract()?;
+    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
     if shape[ndim - 1] != 3 {
-        return Ok((obj.clone(), Vec::new()));
+        return Ok((obj.clone(), None));
     }
-    let rows = obj.call_method1("reshape", ((-1i64, 3i64),))?;
-    Ok((rows, shape[..ndim - 1].to_vec()))
+    let rows = array.call_method1("reshape", ((-1i64, 3i64),))?;
+    Ok((rows, Some(shape[..ndim - 1].to_vec())))
 }
 
 /// Whether `obj` is an array (or a list or tuple) rather than a number.

@@ -20,7 +20,8 @@ use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 /// are kept (no ray hits them), so face ids stay yours.
 ///
 /// Queries take (n, 3) ``origins`` and ``directions``, or (..., 3) of any
-/// leading shape, whose answers come back in that shape (any float dtype;
+/// leading shape, whose answers come back in that shape (one ray given as
+/// (3,) answers 0-d; any float dtype;
 /// a direction need not be unit length, and ``t`` is measured in its
 /// lengths), ``t_max`` (a number or one per ray) and ``t_min`` (a number):
 /// a ray reports what lies in (t_min, t_max], (0, inf] by default. Every
@@ -131,18 +132,18 @@ impl Fields {
 }
 
 /// `values` (`n` items of `tail` values each) as an array of shape
-/// `lead + tail`, the query's input's leading shape, or `(n,) + tail`.
+/// `lead + tail`, the query's input's leading shape (`()` for one row
+/// given as (3,)), or `(n,) + tail` without one.
 fn shaped<T: numpy::Element>(
     py: Python<'_>,
     values: Vec<T>,
-    lead: &[usize],
+    lead: Option<&[usize]>,
     n: usize,
     tail: &[usize],
 ) -> PyResult<Py<PyArrayDyn<T>>> {
-    let mut dims = if lead.is_empty() {
-        vec![n]
-    } else {
-        lead.to_vec()
+    let mut dims = match lead {
+        None => vec![n],
+        Some(lead) => lead.to_vec(),
     };
     dims.extend_from_slice(tail);
     Ok(PyArray1::from_vec(py, values).reshape(dims)?.unbind())
@@ -153,7 +154,7 @@ fn maybe<T: numpy::Element>(
     py: Python<'_>,
     wanted: (bool, &[usize]),
     values: Vec<T>,
-    lead: &[usize],
+    lead: Option<&[usize]>,
     n: usize,
 ) -> PyResult<Option<Py<PyArrayDyn<T>>>> {
     let (wanted, tail) = wanted;
@@ -238,7 +239,7 @@ impl Mesh {
         t_max: Option<&Bound<'_, PyAny>>,
         t_min: Option<f64>,
         bad_rays: &str,
-    ) -> PyResult<(RaySource<'py>, Vec<usize>)> {
+    ) -> PyResult<(RaySource<'py>, Option<Vec<usize>>)> {
         let spec = RaySpec {
             t_min,
             t_max,
@@ -246,17 +247,19 @@ impl Mesh {
         };
         let (o, lead) = convert::rows3(origins)?;
         let (d, lead_d) = convert::rows3(directions)?;
-        if lead != lead_d && !(lead.is_empty() || lead_d.is_empty()) {
-            return Err(PyValueError::new_err(format!(
-                "origins and directions must have the same shape; got {lead:?} and {lead_d:?} before the last axis"
-            )));
+        if let (Some(a), Some(b)) = (&lead, &lead_d) {
+            if a != b {
+                return Err(PyValueError::new_err(format!(
+                    "origins and directions must have the same shape; got {a:?} and {b:?} before the last axis"
+                )));
+            }
         }
-        let lead = if lead.is_empty() { lead_d } else { lead };
+        let lead = lead.or(lead_d);
         // One t_max per ray of an (..., 3) array: in its leading shape.
-        let flat_t_max = match t_max {
-            Some(t) if !lead.is_empty() && t.hasattr("shape")? => {
+        let flat_t_max = match (t_max, &lead) {
+            (Some(t), Some(lead)) if !lead.is_empty() && t.hasattr("shape")? => {
                 let shape: Vec<usize> = t.getattr("shape")?.extract()?;
-                (shape == lead)
+                (&shape == lead)
                     .then(|| t.call_method1("reshape", (-1i64,)))
                     .transpose()?
             }
@@ -525,12 +528,12 @@ impl Mesh {
         }
         let to = |key: &str, tail: &'static [usize]| (fields.has(key), tail);
         Ok(Hits {
-            t: maybe(py, to("t", &[]), t, &lead, n)?,
-            prim: maybe(py, to("prim", &[]), prim, &lead, n)?,
-            u: maybe(py, to("u", &[]), u, &lead, n)?,
-            v: maybe(py, to("v", &[]), v, &lead, n)?,
-            normal: maybe(py, to("normal", &[3]), normal, &lead, n)?,
-            point: maybe(py, to("point", &[3]), point, &lead, n)?,
+            t: maybe(py, to("t", &[]), t, lead.as_deref(), n)?,
+            prim: maybe(py, to("prim", &[]), prim, lead.as_deref(), n)?,
+            u: maybe(py, to("u", &[]), u, lead.as_deref(), n)?,
+            v: maybe(py, to("v", &[]), v, lead.as_deref(), n)?,
+            normal: maybe(py, to("normal", &[3]), normal, lead.as_deref(), n)?,
+            point: maybe(py, to("point", &[3]), point, lead.as_deref(), n)?,
         })
     }
 
@@ -554,7 +557,7 @@ impl Mesh {
             self.0.occluded(rays, out)
         })?;
         let n = out.len();
-        shaped(py, out, &lead, n, &[])
+        shaped(py, out, lead.as_deref(), n, &[])
     }
 
     /// Every surface crossing along each ray in (t_min, t_max], nearest
@@ -635,7 +638,7 @@ impl Mesh {
             }
         })?;
         let n = out.len();
-        shaped(py, out, &lead, n, &[])
+        shaped(py, out, lead.as_deref(), n, &[])
     }
 
     /// Whether each point ((n, 3) floats) is inside the mesh: bool (n,), by
@@ -662,7 +665,7 @@ impl Mesh {
             self.0.contains(&near[..points.len()], out);
         })?;
         let n = out.len();
-        shaped(py, out, &lead, n, &[])
+        shaped(py, out, lead.as_deref(), n, &[])
     }
 
     /// The nearest point on the surface to each point ((n, 3) floats),
@@ -712,11 +715,11 @@ impl Mesh {
             v.push(c.v);
         }
         Ok(ClosestPoints {
-            point: shaped(py, point, &lead, n, &[3])?,
-            distance: shaped(py, distance, &lead, n, &[])?,
-            prim: shaped(py, prim, &lead, n, &[])?,
-            u: shaped(py, u, &lead, n, &[])?,
-            v: shaped(py, v, &lead, n, &[])?,
+            point: shaped(py, point, lead.as_deref(), n, &[3])?,
+            distance: shaped(py, distance, lead.as_deref(), n, &[])?,
+            prim: shaped(py, prim, lead.as_deref(), n, &[])?,
+            u: shaped(py, u, lead.as_deref(), n, &[])?,
+            v: shaped(py, v, lead.as_deref(), n, &[])?,
         })
     }
 }

@@ -109,7 +109,8 @@ class Mesh:
     """A triangle mesh and its BVH, built once (on every core) and asked any number of queries.
 
     Queries take (n, 3) origins, directions and points, or (..., 3) of any leading shape
-    whose answers come back in that shape (all_hits lists the rays flattened) (any float dtype; ``t`` is in
+    whose answers come back in that shape (all_hits lists the rays flattened; one
+    row given as (3,) answers 0-d) (any float dtype; ``t`` is in
     direction lengths), ``t_max`` (a number or one per ray) and ``t_min``
     (where rays start); each releases the GIL and runs on every core, or on
     ``threads`` threads. ``bad_rays="miss"`` makes a ray with a NaN or

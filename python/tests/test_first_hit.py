@@ -210,3 +210,29 @@ def test_inputs_of_any_leading_shape_answer_in_that_shape(bumpy):
     near = mesh.closest_point(points)
     assert near.point.shape == (2, 3, 4, 3) and near.distance.shape == (2, 3, 4)
     np.testing.assert_array_equal(near.distance.reshape(-1), mesh.closest_point(points.reshape(-1, 3)).distance)
+
+
+def test_one_row_given_as_a_vector_answers_as_a_scalar(bumpy):
+    # (..., 3) with no leading axis: one ray or point, as an array or a
+    # list, its answers 0-d (vectors of 3 for normals and points), each
+    # the answer of the same row given as (1, 3).
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(5)
+    o, d = helpers.random_rays(rng, vertices, 40)
+    hits = mesh.intersect(o, d)
+    i = int(np.flatnonzero(hits.prim >= 0)[0])
+    for origin, direction in [(o[i], d[i]), (list(o[i]), tuple(d[i]))]:
+        one = mesh.intersect(origin, direction)
+        assert one.t.shape == () and one.prim.shape == () and one.normal.shape == (3,) and one.point.shape == (3,)
+        for key in hits.keys():
+            np.testing.assert_array_equal(one[key], hits[key][i])
+        assert mesh.occluded(origin, direction).shape == ()
+        assert mesh.count_hits(origin, direction) == mesh.count_hits(o[i:i + 1], d[i:i + 1])[0]
+        assert mesh.all_hits(origin, direction).splits.tolist() == mesh.all_hits(o[i:i + 1], d[i:i + 1]).splits.tolist()
+    p = rng.uniform(-1, 1, 3)
+    assert mesh.contains(p).shape == () and mesh.contains(p) == mesh.contains(p[None])[0]
+    near = mesh.closest_point(p)
+    assert near.point.shape == (3,) and near.distance == mesh.closest_point(p[None]).distance[0]
+    with pytest.raises(ValueError, match=r"origins must be an \(n, 3\) array of floats; got shape \(4,\)"):
+        mesh.intersect(np.zeros(4), np.zeros(4))
