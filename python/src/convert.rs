@@ -433,11 +433,11 @@ pub fn rows3<'py>(obj: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Optio
     };
     let ndim = array.getattr("ndim")?.extract::<usize>().unwrap_or(0);
     if ndim == 0 || ndim == 2 {
-        return Ok((obj.clone(), None));
+        return Ok((array, None));
     }
     let shape: Vec<usize> = array.getattr("shape")?.extract()?;
     if shape[ndim - 1] != 3 {
-        return Ok((obj.clone(), None));
+        return Ok((array, None));
     }
     let rows = array.call_method1("reshape", ((-1i64, 3i64),))?;
     Ok((rows, Some(shape[..ndim - 1].to_vec())))
