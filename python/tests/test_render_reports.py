@@ -3,6 +3,7 @@ prints as ``warning:`` lines, raised as Python warnings in the same words,
 and Ctrl-C, which ends a render at the end of a pass."""
 
 import _thread
+import signal
 import threading
 import time
 import warnings
@@ -59,13 +60,21 @@ def test_ctrl_c_ends_a_render_at_a_pass_end():
     # itself, as before, the test failed on a busy machine: the renders it
     # timed ran slow, the interrupted one fast, and it ended first.
     settings = {"width": 48, "height": 32, "spp": 200_000, "passes": 200_000, "threads": 1}
+    # Python's own Ctrl-C handler, whatever this process inherited: a test
+    # run started in the background by a script inherits SIGINT ignored,
+    # and then interrupt_main does nothing.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.25, _thread.interrupt_main)
-    start = time.perf_counter()
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        strata_rt.render(SEED, **settings)
-    stopped = time.perf_counter() - start
-    timer.join()
+    try:
+        start = time.perf_counter()
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            strata_rt.render(SEED, **settings)
+        stopped = time.perf_counter() - start
+    finally:
+        timer.cancel()
+        timer.join()
+        signal.signal(signal.SIGINT, previous)
     # Where no pass's end checked, the interrupt would come only after
     # the whole render, when Python next looks for signals.
     assert stopped < 10.0, f"stopped after {stopped:.2f} s"
