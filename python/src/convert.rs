@@ -654,7 +654,9 @@ impl RaySource<'_> {
         };
         let r = out[i - first];
         if !r.origin.is_finite() {
-            return Err(not_finite("origins", i, r.origin));
+            // Quoted as given, not as traced (relative to the centre).
+            let given = with_rows!(o, |ro| ro.row64(i));
+            return Err(not_finite("origins", i, given.as_vec3()));
         }
         let what = if r.direction.is_finite() {
             "is zero"

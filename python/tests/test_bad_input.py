@@ -85,6 +85,16 @@ def test_bad_rays_are_refused_by_name(query, name):
 
 
 @pytest.mark.parametrize("query", RAY_QUERIES)
+def test_a_bad_origin_is_quoted_as_given_far_from_the_origin(query):
+    # The mesh is traced relative to its centre; the error quotes the row
+    # the caller gave, not the row moved there.
+    far = strata_rt.Mesh(V + [500_123.0, 5_000_456.0, 100.0], F)
+    o = np.array([[500_123.0, 5_000_456.0, 110.0], [np.nan, 5_000_456.0, 110.0]])
+    d = np.array([[0.0, 0.0, -1.0]] * 2)
+    raises(lambda: getattr(far, query)(o, d), "origins[1]", "[NaN, 5000456.0, 110.0]")
+
+
+@pytest.mark.parametrize("query", RAY_QUERIES)
 def test_the_first_bad_ray_is_named_past_the_first_chunk(query):
     # Rays are read a chunk of 65,536 at a time as the walks go: the error
     # still names the first bad row of all, not the first of a later chunk,
