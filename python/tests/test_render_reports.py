@@ -53,12 +53,10 @@ def test_a_mesh_read_leniently_warns_naming_its_line(tmp_path):
 
 def test_ctrl_c_ends_a_render_at_a_pass_end():
     # 200,000 one-sample passes: about 0.7 ms each on one thread here, so
-    # the whole render takes minutes, and a machine many times faster or
-    # slower still cannot end it before the interrupt (a quarter of a
-    # second in) nor be kept by the interrupt from ending it within ten
-    # seconds, if each pass's end checks for it. Timed against the render
-    # itself, as before, the test failed on a busy machine: the renders it
-    # timed ran slow, the interrupted one fast, and it ended first.
+    # the whole render takes minutes; a machine many times faster or slower
+    # still cannot end it before the interrupt (a quarter of a second in),
+    # nor take ten seconds to stop if each pass's end checks for it. No
+    # other render is timed to choose the moment.
     settings = {"width": 48, "height": 32, "spp": 200_000, "passes": 200_000, "threads": 1}
     # Python's own Ctrl-C handler, whatever this process inherited: a test
     # run started in the background by a script inherits SIGINT ignored,
