@@ -193,27 +193,28 @@ impl Mesh {
         faces: Vec<[u32; 3]>,
         quality: BuildQuality,
     ) -> Result<Self, MeshArraysError> {
-        // Checked as given: relative to the centre, a NaN would be quoted
-        // moved, and a float64 beyond float32 would read as infinite.
-        if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
-            let value = vertices[vertex].to_array();
-            return Err(MeshArraysError::NotFinite { vertex, value });
-        }
         let centre = centre_of(&vertices);
         let near: Vec<Vec3> = vertices.iter().map(|&v| (v - centre).as_vec3()).collect();
-        if let Some(vertex) = near.iter().position(|v| !v.is_finite()) {
-            let value = vertices[vertex].to_array();
-            return Err(MeshArraysError::BeyondFloat32 { vertex, value });
-        }
         let held_exactly = near
             .iter()
             .zip(&vertices)
             .all(|(n, &v)| n.as_dvec3() + centre == v);
-        let given = (!held_exactly).then(|| Given {
-            vertices,
-            faces: faces.clone(),
-        });
-        let mesh = Self::from_geometry(mesh_geometry(near, faces, quality)?);
+        let given_faces = (!held_exactly).then(|| faces.clone());
+        // `mesh_geometry` refuses a vertex that is not finite as traced;
+        // it is quoted as given (relative to the centre a NaN would be
+        // quoted moved), and one finite as given is beyond float32 there.
+        let geometry = mesh_geometry(near, faces, quality).map_err(|e| match e {
+            MeshArraysError::NotFinite { vertex, .. } => {
+                let value = vertices[vertex].to_array();
+                match vertices[vertex].is_finite() {
+                    true => MeshArraysError::BeyondFloat32 { vertex, value },
+                    false => MeshArraysError::NotFinite { vertex, value },
+                }
+            }
+            e => e,
+        })?;
+        let given = given_faces.map(|faces| Given { vertices, faces });
+        let mesh = Self::from_geometry(geometry);
         let bounds = mesh.bounds.map(|b| (b.as_dvec3() + centre).as_vec3());
         Ok(Self {
             centre,
