@@ -216,6 +216,10 @@ impl Bvh8 {
         };
         let root_area = self.bounds.half_area() as f64;
         let mut cost = 0.0f64;
+        // Areas of the boxes a parent keeps for its inner children and its
+        // leaves; the root's own box is entered by every line through it.
+        let (mut node_area, mut leaf_area) = (root_area, 0.0f64);
+        let mut leaf_blocks_area = 0.0f64;
         for node in &self.nodes {
             for slot in 0..8 {
                 let child = node.child[slot];
@@ -239,13 +243,19 @@ impl Bvh8 {
                             .count(),
                     };
                     cost += (LEAF_COST + OTHER_COST * others as f32) as f64 * area;
+                    leaf_area += area;
+                    leaf_blocks_area += area * count.div_ceil(4) as f64;
                 } else {
                     cost += NODE_COST as f64 * area;
+                    node_area += area;
                 }
             }
         }
         if root_area > 0.0 {
             stats.sah_cost = NODE_COST as f64 + cost / root_area;
+            stats.node_tests = node_area / root_area;
+            stats.leaf_tests = leaf_area / root_area;
+            stats.embree_sah = stats.node_tests + leaf_blocks_area / root_area;
         }
         stats
     }
@@ -263,6 +273,19 @@ pub struct TreeStats {
     /// The surface area heuristic's expected cost of one ray that enters
     /// the root, in node tests (the constants the collapse weighs).
     pub sah_cost: f64,
+    /// How many nodes, and how many leaves, a random line through the
+    /// root's box enters on average: the sum of their boxes' surface
+    /// areas over the root's (a convex box inside another is met by that
+    /// share of the lines that meet the outer one: Cauchy's formula, the
+    /// surface area heuristic's premise; MacDonald and Booth 1990). The
+    /// node figure is the one Embree prints as its nodes' `sah` (travCost
+    /// 1); Embree charges each leaf once per block of four primitives it
+    /// holds, where strata tests a leaf's up to eight in one 8-wide test.
+    pub node_tests: f64,
+    pub leaf_tests: f64,
+    /// The total Embree prints for its `triangle4` trees (`verbose=2`):
+    /// the node tests, and each leaf's area once per block of four.
+    pub embree_sah: f64,
 }
 
 impl std::fmt::Display for TreeStats {
@@ -270,12 +293,17 @@ impl std::fmt::Display for TreeStats {
         let per = |a: usize, b: usize| a as f64 / b.max(1) as f64;
         write!(
             f,
-            "{} nodes ({:.2} children each), {} leaves ({:.2} primitives each), SAH cost {:.1}",
+            "{} nodes ({:.2} children each), {} leaves ({:.2} primitives each), SAH cost {:.1}; \
+             a line through the root's box enters {:.2} nodes and {:.2} leaves \
+             (Embree's measure, leaves by blocks of four: {:.2})",
             self.nodes,
             per(self.children, self.nodes),
             self.leaves,
             per(self.leaf_prims, self.leaves),
-            self.sah_cost
+            self.sah_cost,
+            self.node_tests,
+            self.leaf_tests,
+            self.embree_sah
         )
     }
 }
@@ -618,6 +646,13 @@ pub(super) mod tests {
             (1, 1, 8),
             "{stats}"
         );
+        // Every line through the root meets the one leaf, which Embree's
+        // measure charges twice (two blocks of four).
+        assert_eq!(
+            (stats.node_tests, stats.leaf_tests, stats.embree_sah),
+            (1.0, 1.0, 3.0),
+            "{stats}"
+        );
 
         let apart: Vec<Aabb> = (0..8)
             .map(|i| {
@@ -631,6 +666,81 @@ pub(super) mod tests {
             (1, 8, 8),
             "{stats}"
         );
+        // Eight unit cubes (half area 3) in a box of 701 × 1 × 1 (1403).
+        let expected = 8.0 * 3.0 / 1403.0;
+        assert!((stats.leaf_tests - expected).abs() < 1e-12, "{stats}");
+        assert_eq!(stats.embree_sah, stats.node_tests + stats.leaf_tests);
+    }
+
+    /// The expected node and leaf tests are what random lines meet: lines
+    /// uniform in direction and position among those through the root's
+    /// box (each direction's lines cross a disc around the box uniformly;
+    /// those that miss the box are dropped) enter on average as many of
+    /// the boxes the nodes keep as `stats` says, within four standard
+    /// errors. Counting each leaf's primitives, or full areas against half
+    /// ones, or leaving out the root, would each fail it.
+    #[test]
+    fn expected_tests_are_the_boxes_random_lines_meet() {
+        let bvh = Bvh8::build(&random_boxes(1500, 9), BuildQuality::Medium);
+        let stats = bvh.stats();
+        assert!(stats.nodes > 20, "{stats}");
+        let meets = |o: Vec3, d: Vec3, lo: Vec3, hi: Vec3| {
+            let (a, b) = ((lo - o) / d, (hi - o) / d);
+            a.min(b).max_element() <= a.max(b).min_element()
+        };
+        let (centre, radius) = (
+            bvh.bounds.center(),
+            (bvh.bounds.max - bvh.bounds.min).length() / 2.0,
+        );
+        let mut rng = seeded(5);
+        let (mut lines, mut counts) = (0, Vec::new());
+        while lines < 6000 {
+            let d = rng.unit_vector();
+            let (u, v) = d.any_orthonormal_pair();
+            let (x, y) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            if x * x + y * y > 1.0 {
+                continue;
+            }
+            let o = centre + radius * (x * u + y * v);
+            if !meets(o, d, bvh.bounds.min, bvh.bounds.max) {
+                continue;
+            }
+            lines += 1;
+            let (mut nodes, mut leaves) = (1.0f64, 0.0f64);
+            for node in &bvh.nodes {
+                for slot in (0..8).filter(|&k| node.child[k] != EMPTY) {
+                    let b = |row: usize| node.bounds[row][slot];
+                    let (lo, hi) = (Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5)));
+                    if meets(o, d, lo, hi) {
+                        *if is_leaf(node.child[slot]) {
+                            &mut leaves
+                        } else {
+                            &mut nodes
+                        } += 1.0;
+                    }
+                }
+            }
+            counts.push((nodes, leaves));
+        }
+        // A leaf costs Embree at least one block of four.
+        assert!(stats.embree_sah >= stats.node_tests + stats.leaf_tests);
+        let n = counts.len() as f64;
+        for (name, pick, expected) in [
+            ("nodes", 0, stats.node_tests),
+            ("leaves", 1, stats.leaf_tests),
+        ] {
+            let x: Vec<f64> = counts
+                .iter()
+                .map(|c| if pick == 0 { c.0 } else { c.1 })
+                .collect();
+            let mean = x.iter().sum::<f64>() / n;
+            let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            let error = sd / n.sqrt();
+            assert!(
+                (mean - expected).abs() < 4.0 * error,
+                "{name}: lines met {mean:.3} ± {error:.3}, stats say {expected:.3} ({stats})"
+            );
+        }
     }
 
     /// The collapse makes the same choices at any scale: the same binary

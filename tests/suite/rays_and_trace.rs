@@ -116,17 +116,21 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
         one.status.success() && summary.contains("on 1 thread ("),
         "{summary}"
     );
-    ok(&[
-        "trace",
-        ICOSPHERE,
-        "--rays",
-        &s(&a),
-        "--hits",
-        &s(&h2),
-        "--threads",
-        "2",
-        "--quiet",
-    ]);
+    let two = strata_ok(
+        repo(),
+        &[
+            "trace",
+            ICOSPHERE,
+            "--rays",
+            &s(&a),
+            "--hits",
+            &s(&h2),
+            "--threads",
+            "2",
+            "--quiet",
+            "--tree",
+        ],
+    );
     ok(&[
         "trace",
         ICOSPHERE,
@@ -142,6 +146,11 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
 
     // The records are the renderer's own answers, and occlusion agrees.
     let (scene, _) = load_mesh_scene(Path::new(ICOSPHERE), BuildQuality::Auto).unwrap();
+    // `--tree` prints the statistics of the tree it traced, and only them.
+    assert_eq!(
+        two.trim_end(),
+        format!("tree: {}", scene.geometry.bvh().stats())
+    );
     let rays = read_rays(&a).unwrap();
     let occluded = parse_hits(&occ, &std::fs::read(&occ).unwrap()).unwrap();
     for (i, ray) in rays.iter().enumerate() {
