@@ -16,7 +16,8 @@ directional lights, an environment light as a `constant` emitter or an
 `envmap` (its lat-long layout is Mitsuba's; strata looks texels up
 nearest, Mitsuba bilinearly, so Mitsuba gets the map repeated 8x along
 each axis, on which its bilinear lookup is strata's nearest one but for a
-sixteenth of a texel at each edge), a plane as a large rectangle, spheres, PLY/OBJ meshes
+sixteenth of a texel at each edge), a plane as a large rectangle, spheres, triangles (each a
+one-face PLY under tools/.cache/), PLY/OBJ meshes
 (flat-shaded, as strata shades meshes without normals; an ASCII PLY is given
 to Mitsuba as a binary copy, which it loads several times faster, and strata
 renders a copy of the scene file, beside it, that names the same binary
@@ -253,7 +254,7 @@ def translate(path, mi):
 
     for i, obj in enumerate(doc.get("objects", [])):
         for key in obj:
-            if key not in ("sphere", "plane", "mesh", "material", "name", "instances"):
+            if key not in ("sphere", "plane", "triangle", "mesh", "material", "name", "instances"):
                 problems.append(f"objects[{i}].{key}")
         mat = obj.get("material")
         if mat not in bsdfs:
@@ -277,6 +278,9 @@ def translate(path, mi):
                                            v3(p.get("point", [0, 0, 0])))),
                 "bsdf": bsdf,
             }
+        elif "triangle" in obj:
+            scene[f"obj{i}"] = {"type": "ply", "filename": triangle_ply([v3(v) for v in obj["triangle"]["v"]]),
+                                "face_normals": True, "bsdf": bsdf}
         elif "mesh" in obj:
             mesh = os.path.normpath(os.path.join(base, obj["mesh"]))
             ext = os.path.splitext(mesh)[1].lower()
@@ -304,10 +308,29 @@ def translate(path, mi):
         elif "instances" in obj:
             problems.append(f"objects[{i}].instances on a shape other than a mesh")
         else:
-            problems.append(f"objects[{i}] has no sphere, plane or mesh")
+            problems.append(f"objects[{i}] has no sphere, plane, triangle or mesh")
     if problems:
         raise Unsupported("; ".join(problems))
     return scene, settings
+
+
+def triangle_ply(corners):
+    """A PLY of the one triangle `corners` (under tools/.cache/, named by
+    its coordinates), for Mitsuba, which has no triangle shape of its own.
+    The coordinates are written as float32 bits, as strata reads them."""
+    import struct
+
+    data = b"".join(struct.pack("<3f", *c) for c in corners)
+    out = os.path.join(HERE, ".cache", f"triangle-{hashlib.sha256(data).hexdigest()[:16]}.ply")
+    if not os.path.exists(out):
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                  b"property float x\nproperty float y\nproperty float z\n"
+                  b"element face 1\nproperty list uchar int vertex_indices\nend_header\n")
+        with open(out + ".tmp", "wb") as f:
+            f.write(header + data + struct.pack("<B3i", 3, 0, 1, 2))
+        os.replace(out + ".tmp", out)
+    return out
 
 
 def binary_ply(mi, path):
