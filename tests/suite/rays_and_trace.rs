@@ -98,49 +98,21 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
         path(&dir, "2.hits"),
         path(&dir, "occ.hits"),
     );
-    let one = strata(
-        repo(),
-        &[
-            "trace",
-            ICOSPHERE,
-            "--rays",
-            &s(&a),
-            "--hits",
-            &s(&h1),
-            "--threads",
-            "1",
-        ],
-    );
-    let summary = String::from_utf8_lossy(&one.stdout);
-    assert!(
-        one.status.success() && summary.contains("on 1 thread ("),
-        "{summary}"
-    );
-    let two = strata_ok(
-        repo(),
-        &[
-            "trace",
-            ICOSPHERE,
-            "--rays",
-            &s(&a),
-            "--hits",
-            &s(&h2),
-            "--threads",
-            "2",
-            "--quiet",
-            "--tree",
-        ],
-    );
-    ok(&[
-        "trace",
-        ICOSPHERE,
-        "--rays",
-        &s(&a),
-        "--hits",
-        &s(&occ),
-        "--occlusion",
-        "--quiet",
-    ]);
+    // `strata trace` of the rays of `a` into `hits`, with `extra` flags:
+    // its standard output once it has succeeded.
+    let trace = |hits: &PathBuf, extra: &[&str]| {
+        let (rays, hits) = (s(&a), s(hits));
+        let mut args = vec!["trace", ICOSPHERE, "--rays", &rays, "--hits", &hits];
+        args.extend_from_slice(extra);
+        let out = strata(repo(), &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {stderr}");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let summary = trace(&h1, &["--threads", "1"]);
+    assert!(summary.contains("on 1 thread ("), "{summary}");
+    let tree = trace(&h2, &["--threads", "2", "--quiet", "--tree"]);
+    trace(&occ, &["--occlusion", "--quiet"]);
     let hits = parse_hits(&h1, &std::fs::read(&h1).unwrap()).unwrap();
     assert_eq!(std::fs::read(&h1).unwrap(), std::fs::read(&h2).unwrap());
 
@@ -148,7 +120,7 @@ fn ray_files_are_reproducible_and_traces_do_not_depend_on_threads() {
     let (scene, _) = load_mesh_scene(Path::new(ICOSPHERE), BuildQuality::Auto).unwrap();
     // `--tree` prints the statistics of the tree it traced, and only them.
     assert_eq!(
-        two.trim_end(),
+        tree.trim_end(),
         format!("tree: {}", scene.geometry.bvh().stats())
     );
     let rays = read_rays(&a).unwrap();
