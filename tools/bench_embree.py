@@ -146,15 +146,34 @@ class Harness:
 
 
 def embree_tree(report):
-    """'BVH8<triangle4>, one-ray kernel avx512::BVH8Triangle4Intersector1Moeller' from Embree's verbose report."""
+    """'BVH8<triangle4> (SAH 16.42: nodes 12.68, leaves 3.74), one-ray kernel
+    avx512::BVH8Triangle4Intersector1Moeller' from Embree's verbose report:
+    the tree, its statistics (what `strata trace --tree` prints in the same
+    measure) and the kernel."""
     tree = kernel = "?"
+    sah = {}
     for line in report.splitlines():
         words = line.split()
         if len(words) >= 2 and words[0] == "building":
             tree = words[1]
         if len(words) == 3 and words[0] == "intersector1" and words[1] == "=":
             kernel = words[2]
+        # "  total            : sah =  16.418 (100.00%), ..."
+        if len(words) >= 5 and words[0] in ("total", "getAABBNodes", "leaves") and words[2:4] == ["sah", "="]:
+            sah.setdefault(words[0], words[4])
+    if "total" in sah:
+        tree += f" (SAH {float(sah['total']):.2f}: nodes {float(sah.get('getAABBNodes', 'nan')):.2f}, " \
+                f"leaves {float(sah.get('leaves', 'nan')):.2f})"
     return f"{tree}, one-ray kernel {kernel}"
+
+
+def strata_tree(strata, mesh, rays, hits, quality=None):
+    """strata's tree line (`strata trace --tree`): its shape and the same measure."""
+    args = [strata, "trace", mesh, "--rays", rays, "--hits", hits, "--quiet", "--tree"]
+    if quality:
+        args += ["--bvh-quality", quality]
+    out = subprocess.run(args, capture_output=True, text=True)
+    return out.stdout.strip().removeprefix("tree: ") if out.returncode == 0 else "?"
 
 
 def strata_rate(args, mesh, threads):
@@ -224,9 +243,14 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
     try:
         if harnesses:
             print(f"# {name}: Embree built {harnesses[0].tree} (default mode); {harnesses[1].tree} (robust)", flush=True)
+        shown = False
         for kind, first, count, _ in groups:
             sub = os.path.join(workdir, "kind.rays")
             rays[first:first + count].astype("<f4").tofile(sub)
+            if not shown:
+                print(f"# {name}: strata built {strata_tree(a.strata, mesh, sub, os.path.join(workdir, 'hits.bin'))}",
+                      flush=True)
+                shown = True
             for query in ("closest", "occlusion"):
                 for mode in modes:
                     args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", str(a.threads), "--repeats", str(PASSES)]

@@ -86,9 +86,13 @@ EOF
 coproc EMB { "$embree" "$work/dragon.tris" "$work/all.rays" --serve --verbose --threads 1 2>"$work/embree.log"; }
 read -r ready _ <&"${EMB[0]}"
 [ "$ready" = ready ] || { echo "error: $embree did not start:" >&2; cat "$work/embree.log" >&2; exit 1; }
-tree=$(awk '$1 == "building" {t = $2} $1 == "intersector1" && $2 == "=" {k = $3} END {print t ", one-ray kernel " k}' "$work/embree.log")
+tree=$(awk '$1 == "building" {t = $2} $1 == "intersector1" && $2 == "=" {k = $3}
+    $3 == "sah" && $4 == "=" && !($1 in sah) {sah[$1] = $5}
+    END {printf "%s (SAH %s: nodes %s, leaves %s), one-ray kernel %s\n", t, sah["total"], sah["getAABBNodes"], sah["leaves"], k}' "$work/embree.log")
 echo "Embree: $tree"
-echo "strata: --bvh-quality $quality"
+# strata's tree in the same measure (`strata trace --tree`).
+echo "strata: --bvh-quality $quality, $("$strata" trace "$mesh" --rays "$work/random.rays" --hits "$work/tree.hits" \
+    --bvh-quality "$quality" --quiet --tree | sed 's/^tree: //')"
 
 median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 strata_rate() { # kernel kind query-flag
