@@ -167,17 +167,10 @@ def embree_tree(report):
     return f"{tree}, one-ray kernel {kernel}"
 
 
-def strata_tree(strata, mesh, rays, hits, quality=None):
-    """strata's tree line (`strata trace --tree`): its shape and the same measure."""
-    args = [strata, "trace", mesh, "--rays", rays, "--hits", hits, "--quiet", "--tree"]
-    if quality:
-        args += ["--bvh-quality", quality]
-    out = subprocess.run(args, capture_output=True, text=True)
-    return out.stdout.strip().removeprefix("tree: ") if out.returncode == 0 else "?"
-
-
 def strata_rate(args, mesh, threads):
-    """(Mrays/s, BVH seconds) that one `strata trace` run on `threads` threads reports."""
+    """(Mrays/s, BVH seconds) that one `strata trace` run on `threads` threads
+    reports; a run with `--tree` has its tree line printed (strata's tree in
+    the measure of Embree's own statistics, `embree_tree`)."""
     env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
     out = subprocess.run(args, capture_output=True, text=True, env=env)
     if out.returncode != 0:
@@ -192,6 +185,9 @@ def strata_rate(args, mesh, threads):
     if kernel not in KERNELS_SEEN:
         KERNELS_SEEN.add(kernel)
         print(f"# strata walks rays with its {kernel} kernel (STRATA_SIMD picks another)", flush=True)
+    for line in out.stdout.splitlines():
+        if line.startswith("tree: "):
+            print(f"# {os.path.basename(mesh)}: strata built {line.removeprefix('tree: ')}", flush=True)
     return rate, build
 
 
@@ -243,14 +239,10 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
     try:
         if harnesses:
             print(f"# {name}: Embree built {harnesses[0].tree} (default mode); {harnesses[1].tree} (robust)", flush=True)
-        shown = False
+        tree = ["--tree"]  # strata's tree, shown by its first run
         for kind, first, count, _ in groups:
             sub = os.path.join(workdir, "kind.rays")
             rays[first:first + count].astype("<f4").tofile(sub)
-            if not shown:
-                print(f"# {name}: strata built {strata_tree(a.strata, mesh, sub, os.path.join(workdir, 'hits.bin'))}",
-                      flush=True)
-                shown = True
             for query in ("closest", "occlusion"):
                 for mode in modes:
                     args = [a.strata, "trace", mesh, "--rays", sub, "--hits", os.path.join(workdir, "hits.bin"), "--threads", str(a.threads), "--repeats", str(PASSES)]
@@ -260,7 +252,8 @@ def bench_mesh(a, exe, mesh, rays_path, workdir, rows):
                         args.append("--one-at-a-time")
                     s, e = [], ([], [])
                     for _ in range(a.repeats):
-                        rate, build = strata_rate(args, mesh, a.threads)
+                        rate, build = strata_rate(args + tree, mesh, a.threads)
+                        tree = []
                         s.append(rate)
                         builds.append(build)
                         for h, out in zip(harnesses, e):
