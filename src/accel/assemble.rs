@@ -6,6 +6,7 @@
 use super::build::Bvh8;
 use super::collapse::NO_PRIM;
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
+use super::simd::pages::Pages;
 use crate::math::lanes::LANES;
 use crate::math::Aabb;
 use rayon::prelude::*;
@@ -81,6 +82,7 @@ impl Part {
             bounds,
             depth,
             prefetch: true,
+            pages: Pages::Small,
         }
     }
 

@@ -6,11 +6,13 @@
 use super::binary::{binary_tree, Boxes, Recipe};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
+use super::simd::pages::{collect_on, Pages};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3;
 #[cfg(test)]
 use obvhs::bvh2::Bvh2;
+use rayon::prelude::*;
 
 crate::mode::mode_enum! {
     /// Build effort. `auto` picks by primitive count, and for a render by
@@ -52,6 +54,9 @@ pub struct Bvh8 {
     /// [`super::prefetch`]). On after a build; a scene turns it off when
     /// its tree fits the caches ([`super::prefetch::Prefetch::Auto`]).
     pub prefetch: bool,
+    /// The pages the nodes are on, and the leaf store built from this
+    /// tree goes on ([`Bvh8::set_pages`]); small after a build.
+    pub(crate) pages: Pages,
 }
 
 impl Bvh8 {
@@ -62,6 +67,7 @@ impl Bvh8 {
             bounds: Aabb::EMPTY,
             depth: 0,
             prefetch: true,
+            pages: Pages::Small,
         }
     }
 
@@ -159,6 +165,18 @@ impl Bvh8 {
         self.nodes.shrink_to_fit();
     }
 
+    /// Moves the nodes onto `pages` (one copy, after the build), and with
+    /// them the leaf store a scene builds from this tree next
+    /// (`Geometry::new`): huge pages spare a walk through a large tree a
+    /// TLB miss at most nodes, where the rays pay for faulting them in
+    /// ([`super::choice`]).
+    pub fn set_pages(&mut self, pages: Pages) {
+        if pages != self.pages {
+            self.nodes = collect_on(pages, self.nodes.par_iter().copied());
+            self.pages = pages;
+        }
+    }
+
     /// The boxes of the root's children (none for an empty tree): tighter
     /// than the tree's own box once each is moved, as an instance's world
     /// box is made.
@@ -194,6 +212,7 @@ impl Bvh8 {
             bounds,
             depth: 1,
             prefetch: false,
+            pages: Pages::Small,
         }
     }
 

@@ -17,8 +17,21 @@
 //! checked against measurement). Both terms are on the same two threads;
 //! the choice takes no thread count and no slice, so every slice and
 //! every thread count of one render builds the same tree.
+//!
+//! The same estimate says which pages the tree goes on ([`Pages`]): huge
+//! pages save a share of the trace ([`PAGE_GAIN`]) and cost their first
+//! writes ([`PAGE_NS`] a primitive), so a render takes them where
+//!
+//! ```text
+//! PAGE_GAIN · TRACE_NS(prims) · rays > PAGE_NS · prims
+//! ```
+//!
+//! about ten rays a primitive; ray files and Python queries, whose count
+//! the build does not know, take them as Embree does. Pages change no
+//! answer, only time.
 
 use super::build::BuildQuality;
+use super::simd::pages::Pages;
 
 /// The presets `auto` chooses among, in order of effort.
 const PRESETS: [BuildQuality; 5] = [
@@ -60,6 +73,22 @@ fn trace_ns(prims: usize) -> f64 {
     (62.0 + 7.25 * doublings).max(10.0)
 }
 
+/// Nanoseconds a primitive that putting a tree on huge pages costs at
+/// worst: the dragon subdivided twice (13.9 million triangles) built 0.53 s
+/// slower on two threads with its nodes and leaf blocks on them, on a VM
+/// whose host takes back freed memory, so that each fresh huge page is
+/// filled by the host too (docs/performance.md, "Huge pages for the
+/// tree"); where pages are reused the same writes are faster than on
+/// small pages.
+const PAGE_NS: f64 = 38.0;
+
+/// The share of a render's trace time that huge pages save on a tree
+/// larger than the TLB reaches: `scenes/large/dragon-rect.toml`, 16 spp,
+/// one thread, 0.460 s against 0.439 s. The lone walk gains 19%
+/// (`tools/bench_lone_walk.sh`); a render less, its streams already
+/// overlapping some of the misses.
+const PAGE_GAIN: f64 = 0.05;
+
 /// Below this many primitives every preset builds in a few milliseconds
 /// and `auto` keeps the medium tree whatever the work (the fastest
 /// preset's clusters would put up to eight instances or shapes in a leaf).
@@ -71,6 +100,9 @@ pub struct BuildChoice {
     /// The preset built: never `auto`.
     pub quality: BuildQuality,
     pub reason: Reason,
+    /// The pages the tree goes on: huge for a tree of at least
+    /// [`MODEL_MIN_PRIMS`] primitives where the rays pay for them.
+    pub pages: Pages,
 }
 
 /// Why a build has its preset.
@@ -113,7 +145,22 @@ impl BuildQuality {
             }
             (asked, _) => (asked, Reason::Asked),
         };
-        BuildChoice { quality, reason }
+        BuildChoice {
+            quality,
+            reason,
+            pages: pages(prims, rays),
+        }
+    }
+}
+
+/// The pages a tree over `prims` primitives goes on when about `rays` rays
+/// will walk it (`None`: not known before the build).
+fn pages(prims: usize, rays: Option<u64>) -> Pages {
+    let pay = |rays: u64| PAGE_GAIN * trace_ns(prims) * rays as f64 > PAGE_NS * prims as f64;
+    if prims >= MODEL_MIN_PRIMS && rays.is_none_or(pay) {
+        Pages::Huge
+    } else {
+        Pages::Small
     }
 }
 
@@ -150,6 +197,10 @@ impl std::fmt::Display for BuildChoice {
     /// Why, in a few words: what `--stats` records and the summary line
     /// shows after the preset.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let pages = match self.pages {
+            Pages::Small => "",
+            Pages::Huge => "; huge pages",
+        };
         match self.reason {
             Reason::Asked => write!(f, "as asked"),
             Reason::Small { prims } => write!(
@@ -166,7 +217,8 @@ impl std::fmt::Display for BuildChoice {
                 e.trace_s,
                 e.medium_s
             ),
-        }
+        }?;
+        f.write_str(pages)
     }
 }
 
@@ -235,5 +287,37 @@ mod tests {
         for rays in [None, Some(0), Some(1 << 20), Some(u64::MAX)] {
             assert_ne!(auto.choose(1 << 20, rays).quality, BuildQuality::Auto);
         }
+    }
+
+    /// Huge pages for a large tree whose rays pay for them, whatever its
+    /// preset, and for one whose rays are not known; never for a small
+    /// tree; and once they pay, more rays never take them away.
+    #[test]
+    fn huge_pages_where_the_rays_pay_for_them() {
+        let dragon = 871_414;
+        for q in [
+            BuildQuality::Auto,
+            BuildQuality::Preview,
+            BuildQuality::High,
+        ] {
+            assert_eq!(q.choose(dragon, None).pages, Pages::Huge);
+            assert_eq!(q.choose(dragon, Some(1)).pages, Pages::Small);
+            assert_eq!(q.choose(dragon, Some(1 << 30)).pages, Pages::Huge);
+            for rays in [None, Some(u64::MAX)] {
+                assert_eq!(q.choose(MODEL_MIN_PRIMS - 1, rays).pages, Pages::Small);
+            }
+        }
+        for prims in [MODEL_MIN_PRIMS, dragon, 13_942_624] {
+            let huge: Vec<bool> = (0..40)
+                .map(|e| pages(prims, Some(1 << e)) == Pages::Huge)
+                .collect();
+            assert!(huge.windows(2).all(|w| w[0] <= w[1]), "{prims}: {huge:?}");
+            // The break-even is where the saved trace time equals the cost.
+            let even = PAGE_NS / (PAGE_GAIN * trace_ns(prims)) * prims as f64;
+            assert_eq!(pages(prims, Some((even * 0.99) as u64)), Pages::Small);
+            assert_eq!(pages(prims, Some((even * 1.01) as u64)), Pages::Huge);
+        }
+        // A huge mesh's first image (320 × 240, 1 spp) stays on small pages.
+        assert_eq!(pages(13_942_624, Some(230_000)), Pages::Small);
     }
 }

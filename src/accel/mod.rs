@@ -58,5 +58,5 @@ pub use query::{
     ClosestHit, ClosestHitPacket, EveryLeaf, Occlusion, OcclusionPacket, PacketQuery, Query,
 };
 pub use simd::kernel::Kernel;
-pub use simd::{kernel, prefetch};
+pub use simd::{kernel, pages, prefetch};
 pub use walk::{AnyOrder, NearestFirst, WalkOrder};

@@ -301,6 +301,7 @@ pub(super) fn built(boxes: &[Aabb], quality: super::BuildQuality) -> Bvh8 {
 mod tests {
     use super::super::build::BuildQuality;
     use super::super::node::{encode_leaf, is_leaf, leaf_range};
+    use super::super::simd::pages::Pages;
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
 
@@ -476,6 +477,7 @@ mod tests {
             bounds: Aabb::new(Vec3::ZERO, Vec3::ONE),
             depth: 1,
             prefetch: true,
+            pages: Pages::Small,
         }
     }
 

@@ -46,6 +46,7 @@ pub mod query;
 pub mod surface;
 pub mod travel;
 
+use crate::accel::pages::collect_on;
 use crate::accel::{Bvh8, PrimHit};
 use crate::math::lanes::LANES;
 use crate::math::{Ray, Transform};
@@ -178,10 +179,10 @@ impl Geometry {
             let slots = prim_ids.get(b * LANES..(b + 1) * LANES).unwrap_or(&[]);
             slots.iter().copied().filter(|&id| id < triangle_count)
         };
-        let leaf_blocks = prim_ids
-            .par_chunks(LANES)
-            .enumerate()
-            .map(|(b, ids)| {
+        // On the nodes' pages (`Bvh8::set_pages`).
+        let leaf_blocks = collect_on(
+            bvh.pages,
+            prim_ids.par_chunks(LANES).enumerate().map(|(b, ids)| {
                 ahead(b + 4).for_each(|id| vertices.prefetch_indices(id));
                 ahead(b + 2).for_each(|id| vertices.prefetch_vertices(id));
                 let mut block = TriangleBlock::EMPTY;
@@ -193,8 +194,8 @@ impl Geometry {
                     }
                 }
                 block
-            })
-            .collect();
+            }),
+        );
         bvh.prim_ids = Vec::new();
         let GeometryParts {
             meshes,
@@ -429,5 +430,34 @@ impl Geometry {
     pub fn mesh_of(&self, tri: u32) -> &MeshRange {
         let i = self.meshes.partition_point(|m| m.first + m.count <= tri);
         &self.meshes[i]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::accel::pages::{marked_huge, Pages};
+    use crate::accel::BuildQuality;
+    use crate::scene::compile::mesh_geometry;
+    use glam::Vec3;
+
+    /// A large mesh from arrays (its queries' count unknown) gets its tree
+    /// on huge pages, and its leaf blocks with it, where the kernel has
+    /// them (the nodes' move: `accel::simd::pages`'s tests).
+    #[test]
+    fn a_large_tree_from_arrays_is_on_huge_pages() {
+        let n = 400u32;
+        let vertices: Vec<Vec3> = (0..n * n)
+            .map(|i| Vec3::new((i % n) as f32, (i / n) as f32, ((i * 7) % 13) as f32 * 0.1))
+            .collect();
+        let faces: Vec<[u32; 3]> = (0..(n - 1) * (n - 1))
+            .flat_map(|q| {
+                let c = q / (n - 1) * n + q % (n - 1);
+                [[c, c + 1, c + n + 1], [c, c + n + 1, c + n]]
+            })
+            .collect();
+        let g = mesh_geometry(vertices, faces, BuildQuality::Auto).unwrap();
+        assert_eq!(g.bvh.pages, Pages::Huge);
+        assert!(std::mem::size_of_val(g.leaf_blocks.as_slice()) >= 4 << 20);
+        assert_ne!(marked_huge(&g.leaf_blocks), Some(false));
     }
 }

@@ -74,7 +74,9 @@ pub fn mesh_geometry(
         positions: vertices,
         indices: faces,
     };
-    let geometry = triangle_geometry(meshes, vec![source], quality);
+    // Queries from arrays come in numbers the build does not know.
+    let choice = quality.choose(count as usize, None);
+    let geometry = triangle_geometry(meshes, vec![source], choice);
     Ok(geometry.expect("every vertex was checked finite above"))
 }
 

@@ -5,7 +5,7 @@
 
 use super::mesh::{check_attribute, check_indices, triangle_geometry, TriangleSource};
 use super::Compiler;
-use crate::accel::BuildQuality;
+use crate::accel::BuildChoice;
 use crate::error::{io_message, InputError, InputResult};
 use crate::geometry::{Geometry, Instance, MeshRange, NO_MATERIAL};
 use crate::math::Transform;
@@ -403,11 +403,11 @@ fn prototype_parts<'a>(
 /// A prototype's tree over its triangles, and the prototype.
 pub(super) fn build_prototype(
     parts: PrototypeParts,
-    quality: BuildQuality,
+    choice: BuildChoice,
     path: &str,
 ) -> InputResult<Geometry> {
     let PrototypeParts { meshes, sources } = parts;
-    triangle_geometry(meshes, sources, quality)
+    triangle_geometry(meshes, sources, choice)
         .map_err(|(mesh, i)| InputError::new(path, mesh, format!("triangle {i} is not finite")))
 }
 

@@ -5,7 +5,7 @@
 use super::Compiler;
 use crate::accel::prefetch::prefetch;
 use crate::accel::prefetch::Prefetch;
-use crate::accel::{BuildQuality, Bvh8};
+use crate::accel::{BuildChoice, Bvh8};
 use crate::error::io_message;
 use crate::error::{InputError, InputResult};
 use crate::geometry::{Geometry, GeometryParts, TriangleVertices};
@@ -392,11 +392,12 @@ pub(super) fn mesh_triangles(mesh: &LoadedMesh, path: &Path) -> InputResult<Vec<
 pub(super) fn triangle_geometry(
     meshes: Vec<MeshRange>,
     sources: Vec<TriangleSource>,
-    quality: BuildQuality,
+    choice: BuildChoice,
 ) -> Result<Geometry, (String, usize)> {
     let boxes = triangle_boxes(&meshes, &sources)?;
-    let mut bvh = Bvh8::build_from(boxes, quality);
+    let mut bvh = Bvh8::build_from(boxes, choice.quality);
     bvh.shrink_to_fit();
+    bvh.set_pages(choice.pages);
     let vertices = triangle_at(&meshes, &sources);
     let parts = GeometryParts {
         meshes,

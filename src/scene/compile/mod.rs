@@ -369,7 +369,7 @@ fn compile_for(
             .map_or(0, |m| (m.first + m.count) as usize);
         prototypes.push(instance::build_prototype(
             parts,
-            for_purpose(quality, n).quality,
+            for_purpose(quality, n),
             &file,
         )?);
     }
@@ -391,6 +391,7 @@ fn compile_for(
     // The builder reserves room for more nodes than the collapse makes.
     bvh.shrink_to_fit();
     let leaves_start = Instant::now();
+    bvh.set_pages(bvh_choice.pages);
     // Store the vertices once, in the order the leaves read them, straight
     // from the (indexed) sources, with the leaf ids beside them: never two
     // copies of the triangles, and the BVH's own ids become redundant.
