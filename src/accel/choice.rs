@@ -74,7 +74,7 @@ fn trace_ns(prims: usize) -> f64 {
 }
 
 /// Nanoseconds a primitive that putting a tree on huge pages costs at
-/// worst: the dragon subdivided twice (13.9 million triangles) built 0.53 s
+/// worst: the dragon subdivided twice (13.9 million triangles) built 0.54 s
 /// slower on two threads with its nodes and leaf blocks on them, on a VM
 /// whose host takes back freed memory, so that each fresh huge page is
 /// filled by the host too (docs/performance.md, "Huge pages for the

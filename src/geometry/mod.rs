@@ -435,29 +435,40 @@ impl Geometry {
 
 #[cfg(test)]
 mod tests {
+    use super::{Geometry, GeometryParts, MeshRange};
     use crate::accel::pages::{marked_huge, Pages};
-    use crate::accel::BuildQuality;
-    use crate::scene::compile::mesh_geometry;
+    use crate::accel::{BuildQuality, Bvh8};
+    use crate::math::Aabb;
     use glam::Vec3;
 
-    /// A large mesh from arrays (its queries' count unknown) gets its tree
-    /// on huge pages, and its leaf blocks with it, where the kernel has
-    /// them (the nodes' move: `accel::simd::pages`'s tests).
+    /// The leaf blocks go on the pages the tree was moved to, the same
+    /// blocks as on small pages.
     #[test]
-    fn a_large_tree_from_arrays_is_on_huge_pages() {
+    fn the_leaf_blocks_go_on_the_tree_s_pages() {
         let n = 400u32;
-        let vertices: Vec<Vec3> = (0..n * n)
-            .map(|i| Vec3::new((i % n) as f32, (i / n) as f32, ((i * 7) % 13) as f32 * 0.1))
+        let corner = |i: u32| Vec3::new((i % n) as f32, (i / n) as f32, (i % 13) as f32 * 0.1);
+        let tris: Vec<[Vec3; 3]> = (0..n * (n - 1))
+            .map(|i| [corner(i), corner(i + 1), corner(i + n)])
             .collect();
-        let faces: Vec<[u32; 3]> = (0..(n - 1) * (n - 1))
-            .flat_map(|q| {
-                let c = q / (n - 1) * n + q % (n - 1);
-                [[c, c + 1, c + n + 1], [c, c + n + 1, c + n]]
-            })
-            .collect();
-        let g = mesh_geometry(vertices, faces, BuildQuality::Auto).unwrap();
-        assert_eq!(g.bvh.pages, Pages::Huge);
-        assert!(std::mem::size_of_val(g.leaf_blocks.as_slice()) >= 4 << 20);
-        assert_ne!(marked_huge(&g.leaf_blocks), Some(false));
+        let geometry = |pages: Pages| {
+            let boxes = tris.iter().map(|t| Aabb::from_points(t)).collect();
+            let mut bvh = Bvh8::build_from(boxes, BuildQuality::Preview);
+            bvh.set_pages(pages);
+            let parts = GeometryParts {
+                meshes: vec![MeshRange {
+                    name: "grid".into(),
+                    count: tris.len() as u32,
+                    ..MeshRange::default()
+                }],
+                ..GeometryParts::default()
+            };
+            Geometry::new(parts, bvh, |id| tris[id as usize])
+        };
+        let (small, huge) = (geometry(Pages::Small), geometry(Pages::Huge));
+        assert!(std::mem::size_of_val(huge.leaf_blocks.as_slice()) >= 4 << 20);
+        let ids = |g: &Geometry| g.leaf_blocks.iter().flat_map(|b| b.id).collect::<Vec<_>>();
+        assert_eq!(ids(&small), ids(&huge));
+        assert_ne!(marked_huge(&small.leaf_blocks), Some(true));
+        assert_ne!(marked_huge(&huge.leaf_blocks), Some(false));
     }
 }

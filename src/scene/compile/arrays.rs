@@ -83,6 +83,7 @@ pub fn mesh_geometry(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::pages::Pages;
     use crate::math::Ray;
 
     fn quad() -> (Vec<Vec3>, Vec<[u32; 3]>) {
@@ -93,6 +94,22 @@ mod tests {
             Vec3::new(-1.0, 1.0, 0.0),
         ];
         (v, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    /// A large mesh from arrays, whose queries come in numbers the build
+    /// does not know, has its tree put on huge pages; a small one not.
+    #[test]
+    fn a_large_mesh_from_arrays_asks_for_huge_pages() {
+        let n = 400u32;
+        let vertices = (0..n * n)
+            .map(|i| Vec3::new((i % n) as f32, (i / n) as f32, 0.0))
+            .collect();
+        let faces = (0..n * (n - 1)).map(|i| [i, i + 1, i + n]).collect();
+        let large = mesh_geometry(vertices, faces, BuildQuality::Auto).unwrap();
+        assert_eq!(large.bvh().pages, Pages::Huge);
+        let (v, f) = quad();
+        let small = mesh_geometry(v, f, BuildQuality::Auto).unwrap();
+        assert_eq!(small.bvh().pages, Pages::Small);
     }
 
     #[test]
