@@ -1,13 +1,15 @@
 //! The build that fits the render: `auto` chooses from the whole render's
 //! settings (never a slice or the thread count), so every split builds the
 //! same tree and merges to the one image; a named preset wins; the choice
-//! and its reason are in `--stats` and the summary line.
+//! and its reason (with the pages the tree goes on) are in `--stats` and
+//! the summary line.
 
 use crate::common::meshes::bumpy_sphere_obj;
 use crate::common::process::{repo, strata_ok};
 use crate::common::temp_dir;
 use std::path::Path;
 use strata::accel::choice::MODEL_MIN_PRIMS;
+use strata::accel::pages::Pages;
 use strata::accel::BuildQuality;
 
 fn s(p: &Path) -> &str {
@@ -37,7 +39,9 @@ fn pixel_bits(path: &Path) -> Vec<[u32; 3]> {
 /// each the one the model names for the whole render's rays; each slice
 /// (of the preview) on each thread count chooses the same as the whole,
 /// and the slices merge to the whole image bit for bit. A crop renders a
-/// few pixels of the long render cheaply and leaves the choice alone.
+/// few pixels of the long render cheaply and leaves the choice alone. The
+/// preview's tree stays on small pages, the long render's goes on huge
+/// ones, and the reason says so.
 #[test]
 fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
     let dir = temp_dir("build-choice");
@@ -48,7 +52,8 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
     let mut chosen = Vec::new();
     for (width, height, spp, crop) in [(24u32, 16u32, 2u32, false), (320, 240, 4096, true)] {
         let rays = u64::from(width * height * spp) * 2;
-        let want = BuildQuality::Auto.choose(TRIANGLES, Some(rays)).quality;
+        let choice = BuildQuality::Auto.choose(TRIANGLES, Some(rays));
+        let want = choice.quality;
         let mut settings = vec![
             "--width".to_string(),
             width.to_string(),
@@ -72,6 +77,8 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             assert_eq!(st["bvh_quality"], want.name(), "{name}: {st}");
             let why = st["bvh_why"].as_str().unwrap().to_string();
             assert!(why.starts_with("auto: "), "{why}");
+            let huge = choice.pages == Pages::Huge;
+            assert_eq!(why.ends_with("; huge pages"), huge, "{why}");
             assert!(summary.contains(&format!("BVH {want} ")), "{summary}");
             assert!(summary.contains(&why), "{summary}");
             (out, why)
@@ -89,17 +96,22 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             strata_ok(repo(), &["merge", s(&p0), s(&p1), "-o", s(&merged)]);
             assert_eq!(pixel_bits(&merged), bits, "{spp} spp: merged slices");
         }
-        chosen.push(want);
+        chosen.push((want, choice.pages));
     }
     assert_eq!(
         chosen[0],
-        BuildQuality::Preview,
-        "a preview builds the preview tree"
+        (BuildQuality::Preview, Pages::Small),
+        "a preview builds the preview tree, on small pages"
     );
     assert!(
-        !matches!(chosen[1], BuildQuality::Preview | BuildQuality::Fastest),
+        !matches!(chosen[1].0, BuildQuality::Preview | BuildQuality::Fastest),
         "a long render builds more: {:?}",
         chosen[1]
+    );
+    assert_eq!(
+        chosen[1].1,
+        Pages::Huge,
+        "a long render's tree on huge pages"
     );
 }
 
