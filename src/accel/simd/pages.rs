@@ -116,7 +116,8 @@ fn advise(_start: usize, _bytes: usize, _advice: Advice) {}
 
 /// Whether the mapping that holds the middle of `values` is marked for
 /// huge pages (`hg` in its `VmFlags` in /proc/self/smaps); `None` where
-/// the kernel has no transparent huge pages (or the target is not Linux).
+/// that cannot be read: no transparent huge pages in the kernel, no smaps
+/// with flags (some sandboxes), or a target other than Linux.
 #[cfg(test)]
 pub(crate) fn marked_huge<T>(values: &[T]) -> Option<bool> {
     if !cfg!(target_os = "linux")
@@ -125,7 +126,7 @@ pub(crate) fn marked_huge<T>(values: &[T]) -> Option<bool> {
         return None;
     }
     let addr = values.as_ptr() as usize + std::mem::size_of_val(values) / 2;
-    let smaps = std::fs::read_to_string("/proc/self/smaps").expect("smaps");
+    let smaps = std::fs::read_to_string("/proc/self/smaps").ok()?;
     let mut inside = false;
     for line in smaps.lines() {
         let range = line.split_whitespace().next().unwrap_or("");
@@ -139,7 +140,7 @@ pub(crate) fn marked_huge<T>(values: &[T]) -> Option<bool> {
             return Some(flags.split_whitespace().any(|f| f == "hg"));
         }
     }
-    panic!("no mapping holds {addr:#x}");
+    None
 }
 
 #[cfg(test)]
