@@ -6,13 +6,12 @@
 use super::binary::{binary_tree, Boxes, Recipe};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
-use super::simd::pages::{collect_on, Pages};
+use super::simd::pages::{move_to_huge_pages, Pages};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3;
 #[cfg(test)]
 use obvhs::bvh2::Bvh2;
-use rayon::prelude::*;
 
 crate::mode::mode_enum! {
     /// Build effort. `auto` picks by primitive count, and for a render by
@@ -165,16 +164,16 @@ impl Bvh8 {
         self.nodes.shrink_to_fit();
     }
 
-    /// Moves the nodes onto `pages` (one copy, after the build), and with
+    /// Puts the nodes on `pages` (in place, after the build), and with
     /// them the leaf store a scene builds from this tree next
     /// (`Geometry::new`): huge pages spare a walk through a large tree a
     /// TLB miss at most nodes, where the rays pay for faulting them in
     /// ([`super::choice`]).
     pub fn set_pages(&mut self, pages: Pages) {
-        if pages != self.pages {
-            self.nodes = collect_on(pages, self.nodes.par_iter().copied());
-            self.pages = pages;
+        if pages == Pages::Huge {
+            move_to_huge_pages(&self.nodes);
         }
+        self.pages = pages;
     }
 
     /// The boxes of the root's children (none for an empty tree): tighter
