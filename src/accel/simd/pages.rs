@@ -12,7 +12,7 @@
 //! default; with `always` it gives them anyway), and Embree asks for them
 //! for its trees: on the dragon its process held 61 MB of `AnonHugePages`
 //! and strata's none; with its tree on huge pages strata's lone walk went
-//! from 0.74 to 0.80 of Embree's speed to 0.88 and 0.89 (docs/performance.md,
+//! from 0.74–0.82 of Embree's speed to 0.88–0.89 (docs/performance.md,
 //! "Huge pages for the tree").
 //!
 //! Huge pages are not free where they are first written: on the
@@ -36,16 +36,18 @@
 //!
 //! Why the `unsafe` is sound: `madvise` with either advice changes no
 //! byte of memory and no mapping's permissions (a collapse moves pages
-//! to new frames, invisibly to the process); the range given lies inside
-//! the vector's own allocation. A failure (a kernel without transparent
-//! huge pages, or none free) leaves the vector as it was. The safe twin
-//! is a plain `collect`, what every other target gets; the tests hold the
-//! two to the same vector and check that the kernel recorded the advice.
+//! to new frames, invisibly to the process); the range given is whole
+//! pages inside the vector's (or the slice's) own bytes. A failure (a
+//! kernel without transparent huge pages, or none free) leaves the values
+//! as they were. The safe twin is what every other target gets: a plain
+//! `collect`, and values already written left where they are; the tests
+//! hold both to the same values and check that the kernel recorded the
+//! advice.
 
 use rayon::prelude::*;
 
-/// The smallest array worth advising: one whole huge page cannot lie
-/// inside a smaller one at any address.
+/// The smallest array advised: a round size that holds a whole huge page
+/// (2 MiB, aligned) wherever it starts.
 const MIN_BYTES: usize = 4 << 20;
 
 /// The pages a tree's arrays are written to.
