@@ -84,9 +84,9 @@ const PAGE_NS: f64 = 38.0;
 
 /// The share of a render's trace time that huge pages save on a tree
 /// larger than the TLB reaches: `scenes/large/dragon-rect.toml`, 16 spp,
-/// one thread, 0.460 s against 0.439 s. The lone walk gains 19%
-/// (`tools/bench_lone_walk.sh`); a render less, its streams already
-/// overlapping some of the misses.
+/// one thread, 0.460 s against 0.439 s. The lone walk gains 8 to 19%
+/// (`tools/bench_lone_walk.sh`, three runs); a render less, its streams
+/// already overlapping some of the misses.
 const PAGE_GAIN: f64 = 0.05;
 
 /// Below this many primitives every preset builds in a few milliseconds

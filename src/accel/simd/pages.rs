@@ -8,8 +8,8 @@
 //! node's load waits for a page walk as well as for its line. Backed by 2
 //! MiB pages the same arrays take 23 entries. Linux gives huge pages to
 //! the ranges a process asks for with `madvise(MADV_HUGEPAGE)` where
-//! transparent huge pages are set to `madvise` (Debian's and Ubuntu's
-//! default; with `always` it gives them anyway), and Embree asks for them
+//! transparent huge pages are set to `madvise` (as on the workplace's
+//! machines; with `always` it gives them anyway), and Embree asks for them
 //! for its trees: on the dragon its process held 61 MB of `AnonHugePages`
 //! and strata's none; with its tree on huge pages strata's lone walk went
 //! from 0.74–0.82 of Embree's speed to 0.88–0.89 (docs/performance.md,
@@ -17,7 +17,7 @@
 //!
 //! Huge pages are not free where they are first written: on the
 //! workplace's VMs, whose host takes back the memory a process frees, a
-//! fresh huge page cost about 2 ms (the dragon subdivided twice built 0.5
+//! fresh huge page cost 1.5 to 5 ms (the dragon subdivided twice built 0.5
 //! s slower with its tree on them), and with every large allocation on
 //! them (glibc's `glibc.malloc.hugetlb=1`) the build took half as long
 //! again. So only the walk's own arrays (the nodes and the leaf blocks)
