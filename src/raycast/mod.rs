@@ -267,7 +267,9 @@ impl Mesh {
         // The tree is relative to the centre: each map takes it there first.
         let shift = Affine3A::from_translation(self.centre.as_vec3());
         let built: Vec<Affine3A> = maps.iter().map(|&m| m * shift).collect();
-        let geometry = placed(self.geometry.clone(), &built, quality).map_err(PlaceError::Map)?;
+        let mut prototype = self.geometry.clone();
+        prototype.restore_pages();
+        let geometry = placed(prototype, &built, quality).map_err(PlaceError::Map)?;
         Ok(Self {
             maps: maps.to_vec(),
             prototype_centre: self.centre,
