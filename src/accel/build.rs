@@ -6,7 +6,7 @@
 use super::binary::{binary_tree, Boxes, Recipe};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
-use super::simd::pages::{move_to_huge_pages, Pages};
+use super::simd::pages::{give_back_freed_memory, move_to_huge_pages, Pages};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3;
@@ -36,6 +36,10 @@ impl BuildQuality {
         self.choose(prim_count, None).quality
     }
 }
+
+/// From this many primitives a build ends by handing its temporaries'
+/// freed pages back ([`give_back_freed_memory`], 2 ms on the dragon).
+const GIVE_BACK_MIN_PRIMS: usize = 100_000;
 
 /// The 8-wide BVH. `prim_ids` lists primitive ids in leaf order, in
 /// blocks of [`LANES`](crate::math::lanes::LANES) slots that no leaf straddles; unused slots
@@ -105,7 +109,7 @@ impl Bvh8 {
     /// [`Bvh8::build_from_with_others`] that adds the wall time of each of
     /// its steps to `steps` (bounds, clusters or Morton order, PLOC,
     /// reinsertion, collapse; for the preview preset morton, cut and
-    /// assemble), for `--stats`.
+    /// assemble; then, for a large tree, give back), for `--stats`.
     pub fn build_timed(
         boxes: Vec<Aabb>,
         quality: BuildQuality,
@@ -128,15 +132,20 @@ impl Bvh8 {
             return Self::empty();
         };
         let preset = quality.preset(prims);
-        if preset == BuildQuality::Preview {
-            return super::lbvh::build(boxes, bounds, steps).debug_validated(prims);
+        let tree = if preset == BuildQuality::Preview {
+            super::lbvh::build(boxes, bounds, steps).debug_validated(prims)
+        } else {
+            let others = prims.saturating_sub(first_other as usize);
+            let recipe = Recipe::of(preset, prims, others);
+            let bvh2 = binary_tree(boxes, bounds, recipe, steps);
+            steps.time("collapse", || {
+                super::collapse::collapse_owned(bvh2, bounds, first_other).debug_validated(prims)
+            })
+        };
+        if prims >= GIVE_BACK_MIN_PRIMS {
+            steps.time("give back", give_back_freed_memory);
         }
-        let others = prims.saturating_sub(first_other as usize);
-        let recipe = Recipe::of(preset, prims, others);
-        let bvh2 = binary_tree(boxes, bounds, recipe, steps);
-        steps.time("collapse", || {
-            super::collapse::collapse_owned(bvh2, bounds, first_other).debug_validated(prims)
-        })
+        tree
     }
 
     /// The 8-wide tree over obvhs's binary one, whose root box is `bounds`,

@@ -185,3 +185,55 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Resident memory of this process in bytes (`VmRSS`), where Linux
+/// says.
+fn resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
+}
+
+/// Memory freed in the middle of glibc's heap stays resident until it
+/// is handed back, and is not resident after: 16 MB of small arrays
+/// (under any mmap threshold, so on the heap), one kept after them so
+/// that the heap's top is not free, freed, then handed back. Run in a
+/// process of its own by the test below, so that no other test's
+/// allocations move the process's memory between the two reads.
+#[test]
+#[ignore = "run in a process of its own by freed_memory_goes_back_to_the_system"]
+fn freed_memory_goes_back_in_this_process() {
+    let chunks: Vec<Vec<u8>> = (0..4096).map(|i| vec![i as u8 | 1; 4000]).collect();
+    // Opaque to the optimiser, which would otherwise drop both arrays.
+    let chunks = std::hint::black_box(chunks);
+    let kept = std::hint::black_box(vec![7u8; 4000]);
+    drop(chunks);
+    let (Some(before), true) = (resident_bytes(), cfg!(target_env = "gnu")) else {
+        return;
+    };
+    strata::accel::pages::give_back_freed_memory();
+    let after = resident_bytes().unwrap();
+    assert!(
+        before > after + (12 << 20),
+        "resident {before} bytes before, {after} after"
+    );
+    assert_eq!(kept[3999], 7, "what is alive stays");
+}
+
+#[test]
+fn freed_memory_goes_back_to_the_system() {
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    let name = "memory::freed_memory_goes_back_in_this_process";
+    let out = std::process::Command::new(exe)
+        .args(["--exact", name, "--ignored", "--test-threads=1"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -10,7 +10,8 @@
 //!   build's); the twin is the build's own code.
 //! - [`pages`]: the walk's arrays on huge pages (`madvise`), so that a
 //!   tree larger than the caches does not miss the TLB at every node; the
-//!   twin is a plain vector.
+//!   twin is a plain vector. And a large build's freed memory handed back
+//!   to the system (`malloc_trim`); the twin keeps it.
 //!
 //! Each part's doc says why its `unsafe` is sound.
 
