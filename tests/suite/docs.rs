@@ -12,7 +12,7 @@
 //! - every mesh format strata reads is documented, and the refusals the
 //!   scene format shows are what strata says.
 
-use crate::common::process::{repo, run, strata_command};
+use crate::common::process::{repo, run, strata_command, strata_ok};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -673,4 +673,62 @@ fn the_command_reader_finds_commands_in_loops_chains_and_continuations() {
             "render --spp 4 b.toml"
         ]
     );
+}
+
+/// The summary line with its figures and output path taken out: what a
+/// render always prints, whatever its numbers.
+fn summary_shape(line: &str) -> String {
+    let line = line.split(" -> ").next().unwrap_or(line);
+    let mut shape = String::new();
+    for c in line.chars() {
+        if c.is_ascii_digit() || c == '.' {
+            if !shape.ends_with('#') {
+                shape.push('#');
+            }
+        } else {
+            shape.push(c);
+        }
+    }
+    shape
+}
+
+/// The summary line the README and the CLI reference show after `cargo
+/// run --release` is the one strata prints for the seed scene, figures
+/// aside.
+#[test]
+fn the_summary_line_the_docs_show_is_the_one_strata_prints() {
+    let dir = crate::common::temp_dir("docs-summary");
+    let out = dir.join("render.png");
+    let printed = strata_ok(
+        &repo(),
+        &[
+            "render",
+            "scenes/seed.toml",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--threads",
+            "2",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    );
+    let printed = printed
+        .lines()
+        .find(|l| l.contains(" spp: "))
+        .unwrap_or_else(|| panic!("no summary line in {printed:?}"));
+    for doc in ["README.md", "docs/cli.md"] {
+        let text = read(&repo().join(doc));
+        let shown = text
+            .lines()
+            .find(|l| l.starts_with("640x480 1 spp: "))
+            .unwrap_or_else(|| panic!("{doc} shows no summary line"));
+        assert_eq!(
+            summary_shape(shown),
+            summary_shape(printed),
+            "{doc} shows\n{shown}\nstrata prints\n{printed}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
