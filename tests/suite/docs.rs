@@ -700,7 +700,7 @@ fn the_summary_line_the_docs_show_is_the_one_strata_prints() {
     let dir = crate::common::temp_dir("docs-summary");
     let out = dir.join("render.png");
     let printed = strata_ok(
-        &repo(),
+        repo(),
         &[
             "render",
             "scenes/seed.toml",
