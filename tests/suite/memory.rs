@@ -220,6 +220,8 @@ fn freed_memory_goes_back_in_this_process() {
     assert_eq!(kept[3999], 7, "what is alive stays");
 }
 
+/// [`freed_memory_goes_back_in_this_process`] in a process of its own:
+/// this test binary started again on that test alone.
 #[test]
 fn freed_memory_goes_back_to_the_system() {
     let Ok(exe) = std::env::current_exe() else {

@@ -93,15 +93,15 @@ pub fn move_to_huge_pages<T>(values: &[T]) {
 }
 
 /// Hands the pages of memory the process has freed back to the system
-/// (glibc's `malloc_trim(0)`: each arena's free chunks of whole pages are
-/// unmapped with `MADV_DONTNEED`, the heap's top trimmed).
+/// (glibc's `malloc_trim(0)`: the whole pages inside each arena's free
+/// chunks are released with `MADV_DONTNEED`, the heap's top trimmed).
 ///
 /// A build's temporaries (the binary tree, PLOC's clusters, the collapse's
 /// tables) are freed when it ends, but those glibc placed on its heap
 /// (arrays under its mmap threshold, which grows to 32 MiB as larger
 /// arrays are freed) stay resident, and the leaf blocks written next (a
 /// mapping of their own) came on top of them: the dragon's render peaked
-/// at 103 B a triangle, 15 MB of it freed memory (docs/performance.md,
+/// at 103 B a triangle, 12 to 16 MB of it freed memory (docs/performance.md,
 /// "Freed memory handed back"). The call takes about 2 ms there.
 ///
 /// Why the `unsafe` is sound: `malloc_trim` has no precondition, takes
