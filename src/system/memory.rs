@@ -13,6 +13,11 @@ pub fn peak_rss_bytes() -> Option<u64> {
     Some(hwm.max(PEAK_BEFORE_RESET.load(Ordering::Relaxed)))
 }
 
+/// Resident memory of this process now (Linux `VmRSS`), if known.
+pub fn resident_bytes() -> Option<u64> {
+    Some(Status::read()?.rss)
+}
+
 /// The two `/proc/self/status` fields the meters read, in bytes: one read
 /// of the file for both. Each read is the kernel writing the whole file
 /// (about 20 µs); a render's load read it eight times, one field each,

@@ -6,6 +6,7 @@ use crate::common::process::{repo, strata_ok};
 use glam::Vec3;
 use std::path::Path;
 use strata::scene::loaders::load_mesh_file;
+use strata::system::memory::resident_bytes;
 
 /// A binary PLY height field of `2 * n * n` triangles on [0, 1]².
 fn write_grid(path: &Path, n: u32) {
@@ -184,14 +185,6 @@ fn mesh_instances_and_loose_triangles_keep_their_vertices() {
         assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
     }
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// Resident memory of this process in bytes (`VmRSS`), where Linux
-/// says.
-fn resident_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
 }
 
 /// Memory freed in the middle of glibc's heap stays resident until it
