@@ -95,7 +95,9 @@ class Strata:
         self.mesh = self.module.Mesh(v, f)
 
     def intersect(self, o, d):
-        hit = self.mesh.intersect(o, d, threads=self.threads)
+        # The row's quantities, the ones Open3D's cast_rays answers (the
+        # float64 hit point, which Open3D does not give, left out).
+        hit = self.mesh.intersect(o, d, threads=self.threads, fields=INTERSECT_FIELDS)
         return hit.t, hit.prim
 
     def occluded(self, o, d):
@@ -200,6 +202,9 @@ class Open3D:
     def contains(self, p):
         return self.scene.compute_occupancy(self.o3d.core.Tensor(p), nthreads=self.threads).numpy() > 0.5
 
+
+# What the first-hit row asks each engine for.
+INTERSECT_FIELDS = ("t", "prim", "u", "v", "normal")
 
 ENGINES = {"strata": Strata, "embreex": Embreex, "open3d": Open3D}
 

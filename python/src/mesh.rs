@@ -8,7 +8,7 @@ use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, 
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use std::path::PathBuf;
-use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
+use strata::raycast::{self, BuildQuality, FirstHitColumns, PlaceError};
 
 /// A triangle mesh and its BVH, built once (on every core) and asked any
 /// number of queries.
@@ -39,47 +39,6 @@ use strata::raycast::{self, BuildQuality, FirstHit, PlaceError};
 /// precision wherever the mesh lies.
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Mesh(raycast::Mesh);
-
-/// Each task's rays' answers, written in place by the threads: a column
-/// not asked for is empty.
-struct HitColumns<'a> {
-    t: &'a mut [f32],
-    prim: &'a mut [i64],
-    u: &'a mut [f32],
-    v: &'a mut [f32],
-    /// Three per ray.
-    normal: &'a mut [f32],
-    point: &'a mut [f64],
-}
-
-impl HitColumns<'_> {
-    /// Copies `hits` into the columns asked for, one row each.
-    fn fill(self, hits: &[FirstHit]) {
-        if !self.t.is_empty() {
-            self.t.iter_mut().zip(hits).for_each(|(o, h)| *o = h.t);
-        }
-        if !self.prim.is_empty() {
-            self.prim
-                .iter_mut()
-                .zip(hits)
-                .for_each(|(o, h)| *o = h.face);
-        }
-        if !self.u.is_empty() {
-            self.u.iter_mut().zip(hits).for_each(|(o, h)| *o = h.u);
-        }
-        if !self.v.is_empty() {
-            self.v.iter_mut().zip(hits).for_each(|(o, h)| *o = h.v);
-        }
-        if !self.normal.is_empty() {
-            let rows = self.normal.chunks_exact_mut(3).zip(hits);
-            rows.for_each(|(o, h)| h.normal.write_to_slice(o));
-        }
-        if !self.point.is_empty() {
-            let rows = self.point.chunks_exact_mut(3).zip(hits);
-            rows.for_each(|(o, h)| h.point.write_to_slice(o));
-        }
-    }
-}
 
 /// Rows `rows` of `column` (`width` values a row) cut into one piece per
 /// task of `TASK` rows; an empty column (not asked for) into empty pieces.
@@ -493,7 +452,6 @@ impl Mesh {
         let mut v = column::<f32>(fields.has("v"), n);
         let mut normal = column::<f32>(fields.has("normal"), 3 * n);
         let mut point = column::<f64>(fields.has("point"), 3 * n);
-        let surface = fields.has("normal") || fields.has("point");
         for start in (0..n).step_by(CHUNK) {
             let r = start..(start + CHUNK).min(n);
             rays.read(r.clone(), &threads, &mut chunk)?;
@@ -504,9 +462,9 @@ impl Mesh {
                 .zip(task_pieces(&mut v, 1, r.clone()))
                 .zip(task_pieces(&mut normal, 3, r.clone()))
                 .zip(task_pieces(&mut point, 3, r.clone()))
-                .map(|(((((t, prim), u), v), normal), point)| HitColumns {
+                .map(|(((((t, face), u), v), normal), point)| FirstHitColumns {
                     t,
-                    prim,
+                    face,
                     u,
                     v,
                     normal,
@@ -515,14 +473,7 @@ impl Mesh {
                 .collect::<Vec<_>>();
             let work = chunk.par_chunks(TASK).zip(pieces);
             py.detach(|| {
-                threads.install(|| {
-                    work.for_each(|(rays, out)| {
-                        let mut hits = [FirstHit::MISS; TASK];
-                        let hits = &mut hits[..rays.len()];
-                        self.0.first_hits(rays, hits, surface);
-                        out.fill(hits)
-                    })
-                })
+                threads.install(|| work.for_each(|(rays, out)| self.0.first_hits_into(rays, out)))
             });
             py.check_signals()?;
         }

@@ -19,7 +19,7 @@
 //!
 //! | query | answers | per |
 //! |---|---|---|
-//! | [`Mesh::first_hits`] | [`FirstHit`]: t, face, barycentrics, normal, point | ray |
+//! | [`Mesh::first_hits`], [`Mesh::first_hits_into`] | [`FirstHit`]: t, face, barycentrics, normal, point (or the columns asked for) | ray |
 //! | [`Mesh::occluded`] | whether anything blocks it | ray |
 //! | [`Mesh::all_hits`] | every [`Crossing`] of the surface, nearest first, and their count | ray |
 //! | [`Mesh::count_hits`] | how many crossings | ray |
@@ -117,6 +117,55 @@ impl FirstHit {
         normal: Vec3::NAN,
         point: DVec3::NAN,
     };
+}
+
+/// Where [`Mesh::first_hits_into`] writes its rays' first hits: a column
+/// a quantity, row i for ray i (three values a row for `normal` and
+/// `point`); an empty column is not asked for.
+pub struct FirstHitColumns<'a> {
+    pub t: &'a mut [f32],
+    pub face: &'a mut [i64],
+    pub u: &'a mut [f32],
+    pub v: &'a mut [f32],
+    pub normal: &'a mut [f32],
+    pub point: &'a mut [f64],
+}
+
+impl FirstHitColumns<'_> {
+    /// Each column's length and values a row.
+    fn lens(&self) -> [(usize, usize); 6] {
+        [
+            (self.t.len(), 1),
+            (self.face.len(), 1),
+            (self.u.len(), 1),
+            (self.v.len(), 1),
+            (self.normal.len(), 3),
+            (self.point.len(), 3),
+        ]
+    }
+
+    /// Writes `hit` into row `i` of each column asked for.
+    #[inline(always)]
+    fn put(&mut self, i: usize, hit: &FirstHit) {
+        if let Some(o) = self.t.get_mut(i) {
+            *o = hit.t;
+        }
+        if let Some(o) = self.face.get_mut(i) {
+            *o = hit.face;
+        }
+        if let Some(o) = self.u.get_mut(i) {
+            *o = hit.u;
+        }
+        if let Some(o) = self.v.get_mut(i) {
+            *o = hit.v;
+        }
+        if let Some(o) = self.normal.get_mut(3 * i..3 * i + 3) {
+            hit.normal.write_to_slice(o);
+        }
+        if let Some(o) = self.point.get_mut(3 * i..3 * i + 3) {
+            hit.point.write_to_slice(o);
+        }
+    }
 }
 
 /// Where a ray crosses the surface: its t and the face crossed.
@@ -380,7 +429,33 @@ impl Mesh {
     #[inline(never)]
     pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit], surface: bool) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        for (rays, out) in rays.chunks(SPAN).zip(out.chunks_mut(SPAN)) {
+        self.each_first_hit(rays, surface, |i, hit| out[i] = hit);
+    }
+
+    /// [`Mesh::first_hits`] written straight into the columns asked for
+    /// (an empty column is neither computed nor written; the normal and
+    /// the point are found only where one of them is asked for): a
+    /// binding's arrays, without a row of every quantity staged for each
+    /// ray and copied again (a tenth of the Python package's first-hit
+    /// query on the dragon's random rays, docs/python.md).
+    #[inline(never)]
+    pub fn first_hits_into(&self, rays: &[Ray], out: FirstHitColumns<'_>) {
+        let n = rays.len();
+        for (len, width) in out.lens() {
+            assert!(
+                len == 0 || len == width * n,
+                "a column of {len} for {n} rays"
+            );
+        }
+        let surface = !out.normal.is_empty() || !out.point.is_empty();
+        let mut out = out;
+        self.each_first_hit(rays, surface, |i, hit| out.put(i, &hit));
+    }
+
+    /// Each ray's first hit, handed to `put` with the ray's index.
+    #[inline(always)]
+    fn each_first_hit(&self, rays: &[Ray], surface: bool, mut put: impl FnMut(usize, FirstHit)) {
+        for (k, rays) in rays.chunks(SPAN).enumerate() {
             let mut found = [None; SPAN];
             let found = &mut found[..rays.len()];
             self.geometry.intersect_stream(rays, found);
@@ -392,8 +467,8 @@ impl Mesh {
                     self.geometry.prefetch_triangle(hit);
                 }
             }
-            for ((o, hit), ray) in out.iter_mut().zip(found.iter()).zip(rays) {
-                *o = match hit {
+            for (j, (hit, ray)) in found.iter().zip(rays).enumerate() {
+                let answer = match hit {
                     None => FirstHit::MISS,
                     Some(hit) if surface => self.first_hit(ray, hit),
                     Some(hit) => FirstHit {
@@ -404,6 +479,7 @@ impl Mesh {
                         ..FirstHit::MISS
                     },
                 };
+                put(k * SPAN + j, answer);
             }
         }
     }

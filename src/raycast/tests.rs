@@ -344,3 +344,79 @@ fn a_bad_vertex_is_quoted_as_given() {
     );
     assert!(e.to_string().contains("1e39"), "{e}");
 }
+
+/// The columns `first_hits_into` writes hold, row for row and bit for
+/// bit, what `first_hits` answers, whichever of them are asked for (the
+/// others empty): with the normal and the point left out, the walk's
+/// answers are still the same.
+#[test]
+fn first_hit_columns_hold_what_first_hits_answers() {
+    let (placed, copies) = placed_and_copies();
+    let (rays, _) = rays_and_points(700);
+    let n = rays.len();
+    for mesh in [placed, copies] {
+        let mut want = vec![FirstHit::MISS; n];
+        mesh.first_hits(&rays, &mut want, true);
+        assert!(want.iter().filter(|h| h.face >= 0).count() > 100);
+        // Each of the 64 subsets of the six columns.
+        for asked in 0..64u32 {
+            let has = |k: u32| asked >> k & 1 == 1;
+            let len = |k: u32, width: usize| if has(k) { width * n } else { 0 };
+            let (mut t, mut face) = (vec![-7.0f32; len(0, 1)], vec![-7i64; len(1, 1)]);
+            let (mut u, mut v) = (vec![-7.0f32; len(2, 1)], vec![-7.0f32; len(3, 1)]);
+            let (mut normal, mut point) = (vec![-7.0f32; len(4, 3)], vec![-7.0f64; len(5, 3)]);
+            let columns = FirstHitColumns {
+                t: &mut t,
+                face: &mut face,
+                u: &mut u,
+                v: &mut v,
+                normal: &mut normal,
+                point: &mut point,
+            };
+            mesh.first_hits_into(&rays, columns);
+            for (i, h) in want.iter().enumerate() {
+                let same = |a: f32, b: f32| a.to_bits() == b.to_bits();
+                assert!(
+                    !has(0) || same(t[i], h.t),
+                    "t of ray {i}, columns {asked:#b}"
+                );
+                assert!(!has(1) || face[i] == h.face, "face of ray {i}");
+                assert!(!has(2) || same(u[i], h.u), "u of ray {i}");
+                assert!(!has(3) || same(v[i], h.v), "v of ray {i}");
+                if has(4) {
+                    let row = Vec3::from_slice(&normal[3 * i..3 * i + 3]);
+                    assert_eq!(
+                        row.to_array().map(f32::to_bits),
+                        h.normal.to_array().map(f32::to_bits)
+                    );
+                }
+                if has(5) {
+                    let row = DVec3::from_slice(&point[3 * i..3 * i + 3]);
+                    assert_eq!(
+                        row.to_array().map(f64::to_bits),
+                        h.point.to_array().map(f64::to_bits)
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A column whose length is neither 0 nor a row for each ray is refused
+/// before any ray is walked.
+#[test]
+#[should_panic(expected = "a column of 5 for 4 rays")]
+fn a_first_hit_column_of_the_wrong_length_is_refused() {
+    let mesh = cube_mesh();
+    let rays = vec![Ray::new(Vec3::new(0.5, 0.5, -3.0), Vec3::Z); 4];
+    let mut t = vec![0.0f32; 5];
+    let columns = FirstHitColumns {
+        t: &mut t,
+        face: &mut [],
+        u: &mut [],
+        v: &mut [],
+        normal: &mut [],
+        point: &mut [],
+    };
+    mesh.first_hits_into(&rays, columns);
+}
