@@ -180,6 +180,14 @@ pub(super) fn binary_tree(boxes: Boxes, bounds: Aabb, recipe: Recipe, steps: &mu
         steps.time("ploc", || super::ploc::ploc(boxes, order, radius, near))
     };
     if recipe.reinsertion > 0.0 {
+        // The reinsertion's buffers (a third of the tree at `high`) would
+        // be new pages on top of what PLOC freed and glibc still holds:
+        // that is handed back first, so the reinsertion's peak is the
+        // tree's and its own (docs/performance.md, "Binary nodes of 32
+        // bytes": the dragon's `high` render 121 → 98 B a triangle).
+        if bvh2.primitive_indices.len() >= super::build::GIVE_BACK_MIN_PRIMS {
+            steps.time("give back", super::simd::pages::give_back_freed_memory);
+        }
         steps.time("reinsertion", || {
             ReinsertionOptimizer::default().run(&mut bvh2, recipe.reinsertion, None)
         });

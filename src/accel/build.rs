@@ -37,9 +37,9 @@ impl BuildQuality {
     }
 }
 
-/// From this many primitives a build ends by handing its temporaries'
-/// freed pages back ([`give_back_freed_memory`], 2 ms on the dragon).
-const GIVE_BACK_MIN_PRIMS: usize = 100_000;
+/// From this many primitives a build hands its freed pages back before a
+/// reinsertion and at its end ([`give_back_freed_memory`], 2 ms on the dragon).
+pub(super) const GIVE_BACK_MIN_PRIMS: usize = 100_000;
 
 /// The 8-wide BVH. `prim_ids` lists primitive ids in leaf order, in
 /// blocks of [`LANES`](crate::math::lanes::LANES) slots that no leaf straddles; unused slots

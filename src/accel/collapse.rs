@@ -78,7 +78,7 @@ pub(super) fn collapse(bvh2: &Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
 
 /// [`collapse`] that takes the binary tree and frees it, with the cost
 /// tables' choices, before the 8-wide tree's parts are copied into one:
-/// the copy is the collapse's second peak, and the binary tree (96 bytes
+/// the copy is the collapse's second peak, and the binary tree (64 bytes
 /// a primitive) dwarfs what it copies.
 pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8 {
     let Bvh2 {
@@ -92,7 +92,7 @@ pub(super) fn collapse_owned(bvh2: Bvh2, bounds: Aabb, first_other: u32) -> Bvh8
     drop(primitive_indices);
     let part = costs.emit(0, 0, 0);
     drop(costs);
-    // 48 bytes a node, 600 MB on the 13.9M-triangle dragon's medium tree:
+    // 32 bytes a node, 400 MB on the 13.9M-triangle dragon's medium tree:
     // unmapped on a thread of its own, it costs the copy below nothing
     // (0.05 s on the build's thread).
     crate::system::memory::drop_aside(nodes);
@@ -167,7 +167,7 @@ pub(super) struct CollapseCosts<'a, 'i> {
     /// of a subtree are the run of [`CollapseCosts::count`] ids from where
     /// its leftmost leaf's are, so a leaf of the 8-wide tree copies one
     /// run instead of walking its binary subtree again (a cache miss a
-    /// node: the nodes are 48 bytes, scattered by PLOC's levels).
+    /// node: the nodes are 32 bytes, scattered by PLOC's levels).
     ordered: Vec<u32>,
 }
 
@@ -350,11 +350,19 @@ impl<'a, 'i> CollapseCosts<'a, 'i> {
 
     /// Half the surface area of BVH2 node `i`'s box, in [`CollapseCosts::unit`]s.
     pub(super) fn area(&self, i: usize) -> f32 {
-        // Three lanes: a node's box shares its fourth lanes with its counts.
+        // Axis by axis, in scalars: a node's box shares its fourth lanes
+        // with its counts, which read as floats are subnormal, and a
+        // 4-lane multiply on them (what LLVM made of the same three
+        // products on `Vec3`s) takes a microcode assist on Intel cores:
+        // the collapse ran twice as long there (docs/performance.md,
+        // "Binary nodes of 32 bytes"). The same operations on the same
+        // three lanes, so the same bits.
         let b = self.nodes[i].aabb();
-        let (min, max) = (Vec3::from(b.min), Vec3::from(b.max));
-        let d = max * self.unit - min * self.unit;
-        d.x * d.y + d.y * d.z + d.z * d.x
+        let u = self.unit;
+        let dx = b.max.x * u - b.min.x * u;
+        let dy = b.max.y * u - b.min.y * u;
+        let dz = b.max.z * u - b.min.z * u;
+        dx * dy + dy * dz + dz * dx
     }
 
     fn count(&self, i: usize) -> u32 {

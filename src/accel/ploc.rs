@@ -158,7 +158,7 @@ fn ploc_over(
     // The nodes, zeroed by the allocator: fresh pages, which the kernel
     // maps (and clears) only when a merge first writes them, in parallel.
     // So the tree's memory grows as the clusters' shrinks, and the two
-    // are never both whole (96 and 72 bytes a primitive).
+    // are never both whole (64 and 72 bytes a primitive).
     let mut nodes: Vec<Bvh2Node> = wide::bytemuck::zeroed_vec(2 * n - 1);
     // Pairs are written down from the end, so children follow parents.
     let mut insert = nodes.len();
