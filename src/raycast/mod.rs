@@ -433,11 +433,11 @@ impl Mesh {
     }
 
     /// [`Mesh::first_hits`] written straight into the columns asked for
-    /// (an empty column is neither computed nor written; the normal and
-    /// the point are found only where one of them is asked for): a
-    /// binding's arrays, without a row of every quantity staged for each
-    /// ray and copied again (a tenth of the Python package's first-hit
-    /// query on the dragon's random rays, docs/python.md).
+    /// (an empty column is not written; the normal and the point are
+    /// found only where one of them is asked for): a binding's arrays,
+    /// without a row of every quantity staged for each ray and copied
+    /// again (3% of the Python package's first hits on the dragon's
+    /// random rays, docs/python.md).
     #[inline(never)]
     pub fn first_hits_into(&self, rays: &[Ray], out: FirstHitColumns<'_>) {
         let n = rays.len();
