@@ -123,11 +123,17 @@ impl FirstHit {
 /// a quantity, row i for ray i (three values a row for `normal` and
 /// `point`); an empty column is not asked for.
 pub struct FirstHitColumns<'a> {
+    /// [`FirstHit::t`], a value a ray.
     pub t: &'a mut [f32],
+    /// [`FirstHit::face`], a value a ray.
     pub face: &'a mut [i64],
+    /// [`FirstHit::u`], a value a ray.
     pub u: &'a mut [f32],
+    /// [`FirstHit::v`], a value a ray.
     pub v: &'a mut [f32],
+    /// [`FirstHit::normal`], x, y and z a ray.
     pub normal: &'a mut [f32],
+    /// [`FirstHit::point`], x, y and z a ray.
     pub point: &'a mut [f64],
 }
 
