@@ -203,7 +203,7 @@ class Open3D:
         return self.scene.compute_occupancy(self.o3d.core.Tensor(p), nthreads=self.threads).numpy() > 0.5
 
 
-# What the first-hit row asks each engine for.
+# What the first-hit row asks strata_rt for: what Open3D's cast_rays answers.
 INTERSECT_FIELDS = ("t", "prim", "u", "v", "normal")
 
 ENGINES = {"strata": Strata, "embreex": Embreex, "open3d": Open3D}

@@ -8,6 +8,7 @@ use super::choice::MODEL_MIN_PRIMS;
 pub(super) use super::cluster::Boxes;
 use super::cluster::{morton_order, Clusters};
 use super::node::MAX_PRIMS;
+use super::simd::pages::give_back_freed_memory;
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3A;
@@ -142,6 +143,18 @@ pub(super) fn bounds(boxes: &[Aabb], steps: &mut Steps) -> Option<Aabb> {
     }))
 }
 
+/// From this many primitives a build hands its freed pages back before a
+/// reinsertion and at its end ([`give_back_freed_memory`], 2 ms on the dragon).
+const GIVE_BACK_MIN_PRIMS: usize = 100_000;
+
+/// A build over `prims` primitives hands its freed pages back here if it
+/// is large ([`GIVE_BACK_MIN_PRIMS`]), timed as its `give back` step.
+pub(super) fn give_back_if_large(prims: usize, steps: &mut Steps) {
+    if prims >= GIVE_BACK_MIN_PRIMS {
+        steps.time("give back", give_back_freed_memory);
+    }
+}
+
 /// The binary tree over `boxes` (not empty, inside `bounds`) that
 /// `recipe` builds: one primitive a leaf, or one cluster of up to
 /// 2^rounds primitives a leaf ([`super::cluster`]).
@@ -185,9 +198,7 @@ pub(super) fn binary_tree(boxes: Boxes, bounds: Aabb, recipe: Recipe, steps: &mu
         // that is handed back first, so the reinsertion's peak is the
         // tree's and its own (docs/performance.md, "Binary nodes of 32
         // bytes": the dragon's `high` render 121 → 98 B a triangle).
-        if bvh2.primitive_indices.len() >= super::build::GIVE_BACK_MIN_PRIMS {
-            steps.time("give back", super::simd::pages::give_back_freed_memory);
-        }
+        give_back_if_large(bvh2.primitive_indices.len(), steps);
         steps.time("reinsertion", || {
             ReinsertionOptimizer::default().run(&mut bvh2, recipe.reinsertion, None)
         });

@@ -3,10 +3,10 @@
 //! by the surface area heuristic over the whole subtree (Ylitie, Karras
 //! and Laine 2017), see [`super::collapse`].
 
-use super::binary::{binary_tree, Boxes, Recipe};
+use super::binary::{binary_tree, give_back_if_large, Boxes, Recipe};
 use super::collapse::{LEAF_COST, NODE_COST, OTHER_COST};
 use super::node::{encode_leaf, is_leaf, leaf_range, Node8, EMPTY};
-use super::simd::pages::{give_back_freed_memory, move_to_huge_pages, Pages};
+use super::simd::pages::{move_to_huge_pages, Pages};
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3;
@@ -36,10 +36,6 @@ impl BuildQuality {
         self.choose(prim_count, None).quality
     }
 }
-
-/// From this many primitives a build hands its freed pages back before a
-/// reinsertion and at its end ([`give_back_freed_memory`], 2 ms on the dragon).
-pub(super) const GIVE_BACK_MIN_PRIMS: usize = 100_000;
 
 /// The 8-wide BVH. `prim_ids` lists primitive ids in leaf order, in
 /// blocks of [`LANES`](crate::math::lanes::LANES) slots that no leaf straddles; unused slots
@@ -142,9 +138,7 @@ impl Bvh8 {
                 super::collapse::collapse_owned(bvh2, bounds, first_other).debug_validated(prims)
             })
         };
-        if prims >= GIVE_BACK_MIN_PRIMS {
-            steps.time("give back", give_back_freed_memory);
-        }
+        give_back_if_large(prims, steps);
         tree
     }
 

@@ -445,7 +445,7 @@ impl Mesh {
     /// again (3% of the Python package's first hits on the dragon's
     /// random rays, docs/python.md).
     #[inline(never)]
-    pub fn first_hits_into(&self, rays: &[Ray], out: FirstHitColumns<'_>) {
+    pub fn first_hits_into(&self, rays: &[Ray], mut out: FirstHitColumns<'_>) {
         let n = rays.len();
         for (len, width) in out.lens() {
             assert!(
@@ -454,7 +454,6 @@ impl Mesh {
             );
         }
         let surface = !out.normal.is_empty() || !out.point.is_empty();
-        let mut out = out;
         self.each_first_hit(rays, surface, |i, hit| out.put(i, &hit));
     }
 
