@@ -1,7 +1,8 @@
 //! The binary tree a build collapses: PLOC ([`super::ploc`]) over
 //! primitives sorted along a Morton curve, or over [`super::cluster`]s of
-//! them, then obvhs's reinsertion (Meister and Bittner 2018; Bittner,
-//! Hapala and Havran 2013), as each preset's [`Recipe`] says.
+//! them, then reinsertion ([`super::reinsert`]: Meister and Bittner
+//! 2018; Bittner, Hapala and Havran 2013), as each preset's [`Recipe`]
+//! says.
 
 use super::build::BuildQuality;
 use super::choice::MODEL_MIN_PRIMS;
@@ -12,7 +13,6 @@ use super::simd::pages::give_back_freed_memory;
 use crate::math::Aabb;
 use crate::system::steps::Steps;
 use glam::Vec3A;
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
 use rayon::prelude::*;
 
@@ -30,7 +30,7 @@ pub(super) struct Recipe {
     /// `search_depth_threshold`), while clusters are many and their
     /// neighbours on the curve near.
     pub near_passes: usize,
-    /// The share of nodes obvhs's reinsertion moves in a batch (obvhs's
+    /// The share of nodes reinsertion moves in its first batch (obvhs's
     /// `reinsertion_batch_ratio`); 0: none.
     pub reinsertion: f32,
 }
@@ -200,7 +200,7 @@ pub(super) fn binary_tree(boxes: Boxes, bounds: Aabb, recipe: Recipe, steps: &mu
         // bytes": the dragon's `high` render 121 → 98 B a triangle).
         give_back_if_large(bvh2.primitive_indices.len(), steps);
         steps.time("reinsertion", || {
-            ReinsertionOptimizer::default().run(&mut bvh2, recipe.reinsertion, None)
+            super::reinsert::reinsert(&mut bvh2, recipe.reinsertion)
         });
     }
     // The collapse reads nodes and primitive indices only: free the maps
@@ -234,6 +234,7 @@ mod tests {
     use super::*;
     use crate::sampling::stream::{seeded, Draw};
     use glam::Vec3;
+    use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 
     /// Boxes of a closed, wrinkled surface (a mesh's triangles), and
     /// their union.

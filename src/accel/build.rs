@@ -1,5 +1,5 @@
 //! The 8-wide BVH and its build: the binary tree ([`super::binary`]:
-//! PLOC and obvhs's reinsertion), then a collapse into 8-wide nodes chosen
+//! PLOC and reinsertion), then a collapse into 8-wide nodes chosen
 //! by the surface area heuristic over the whole subtree (Ylitie, Karras
 //! and Laine 2017), see [`super::collapse`].
 

@@ -42,6 +42,7 @@ pub mod node_test;
 pub mod packet;
 mod ploc;
 pub mod query;
+mod reinsert;
 mod simd;
 mod stack;
 mod validate;
