@@ -394,7 +394,7 @@ pub(super) fn triangle_geometry(
     sources: Vec<TriangleSource>,
     choice: BuildChoice,
 ) -> Result<Geometry, (String, usize)> {
-    let boxes = triangle_boxes(&meshes, &sources)?;
+    let boxes = triangle_boxes(&meshes, &sources, 0)?;
     let mut bvh = Bvh8::build_from(boxes, choice.quality);
     bvh.shrink_to_fit();
     bvh.set_pages(choice.pages);
@@ -410,13 +410,15 @@ pub(super) fn triangle_geometry(
 
 /// Every triangle's box, mesh by mesh; the first triangle with a vertex
 /// that is not finite is an error naming its mesh and its index there.
-/// (Its box would not say: a box's min and max pass a NaN by.)
+/// (Its box would not say: a box's min and max pass a NaN by.) The
+/// vector has room for `room_after` more boxes.
 pub(super) fn triangle_boxes(
     meshes: &[MeshRange],
     sources: &[TriangleSource],
+    room_after: usize,
 ) -> Result<Vec<Aabb>, (String, usize)> {
     let n = meshes.last().map_or(0, |m| (m.first + m.count) as usize);
-    let mut boxes = Vec::with_capacity(n);
+    let mut boxes = Vec::with_capacity(n + room_after);
     let not_finite = |t: &[Vec3; 3]| !t.iter().all(|p| p.is_finite());
     for (mesh, source) in meshes.iter().zip(sources) {
         let triangles = source.triangles();
@@ -487,10 +489,10 @@ mod tests {
         let meshes = [range("a", 0, 1), range("b", 1, 4)];
         let soup = || TriangleSource::Soup(vec![[p(0.0), p(1.0), p(2.0)]]);
         for bad in [3, 4] {
-            let got = triangle_boxes(&meshes, &[soup(), indexed(bad)]).map(|b| b.len());
+            let got = triangle_boxes(&meshes, &[soup(), indexed(bad)], 0).map(|b| b.len());
             assert_eq!(got, Err(("b".into(), 2)), "vertex {bad}");
         }
-        let unused = triangle_boxes(&meshes, &[soup(), indexed(1)]).map(|b| b.len());
+        let unused = triangle_boxes(&meshes, &[soup(), indexed(1)], 0).map(|b| b.len());
         assert_eq!(unused, Ok(5));
     }
 
@@ -658,7 +660,7 @@ material = "grey"
                 TriangleSource::Soup((0..10).map(tri).collect()),
                 TriangleSource::Soup(second),
             ];
-            match (triangle_boxes(&meshes, &sources), bad) {
+            match (triangle_boxes(&meshes, &sources, 0), bad) {
                 (Ok(boxes), None) => assert_eq!(boxes.len(), n + 10),
                 // The NaN at n - 2 comes after every other but the last.
                 (Err(e), Some(i)) => assert_eq!(e, ("b".to_string(), i.min(n - 2))),

@@ -544,9 +544,12 @@ impl<'d> Compiler<'d> {
     }
 
     fn primitive_boxes(&self) -> InputResult<Vec<Aabb>> {
-        let mut boxes = mesh::triangle_boxes(&self.meshes, &self.sources)
+        // Room for the shapes' and the instances' boxes from the start: a
+        // huge mesh's boxes grown by one moved 334 MB of pages (on huge
+        // pages, split into small ones) for a ground plane's box.
+        let room = self.shapes.len() + self.instances.len();
+        let mut boxes = mesh::triangle_boxes(&self.meshes, &self.sources, room)
             .map_err(|(mesh, i)| self.err(&mesh, format!("triangle {i} is not finite")))?;
-        boxes.reserve(self.shapes.len() + self.instances.len());
         for (i, s) in self.shapes.iter().enumerate() {
             let local = s.shape.bounds(&self.csg);
             let b = if s.transform == NO_TRANSFORM {
