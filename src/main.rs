@@ -4,6 +4,12 @@ mod cli;
 
 use std::process::ExitCode;
 
+/// The system's allocator, with large blocks on huge pages where they are
+/// cheap to write first (`STRATA_HUGE_PAGES`, docs/cli.md).
+#[global_allocator]
+static ALLOCATOR: strata::accel::allocator::HugePageAllocator =
+    strata::accel::allocator::HugePageAllocator;
+
 fn main() -> ExitCode {
     cli::cpu::require_built_for_features();
     let args = cli::flags::parse();

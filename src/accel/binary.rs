@@ -30,7 +30,7 @@ pub(super) struct Recipe {
     /// `search_depth_threshold`), while clusters are many and their
     /// neighbours on the curve near.
     pub near_passes: usize,
-    /// The share of nodes reinsertion moves in its first batch (obvhs's
+    /// The share of nodes reinsertion's first batch tries to move (obvhs's
     /// `reinsertion_batch_ratio`); 0: none.
     pub reinsertion: f32,
 }

@@ -154,10 +154,13 @@ impl BuildQuality {
 }
 
 /// The pages a tree over `prims` primitives goes on when about `rays` rays
-/// will walk it (`None`: not known before the build).
+/// will walk it (`None`: not known before the build): huge where the
+/// rays pay for their first write, or where every large allocation is on
+/// them anyway (`accel::allocator`).
 fn pages(prims: usize, rays: Option<u64>) -> Pages {
     let pay = |rays: u64| PAGE_GAIN * trace_ns(prims) * rays as f64 > PAGE_NS * prims as f64;
-    if prims >= MODEL_MIN_PRIMS && rays.is_none_or(pay) {
+    let everywhere = super::simd::allocator::large_allocations_on_huge_pages();
+    if prims >= MODEL_MIN_PRIMS && (everywhere || rays.is_none_or(pay)) {
         Pages::Huge
     } else {
         Pages::Small

@@ -59,5 +59,5 @@ pub use query::{
     ClosestHit, ClosestHitPacket, EveryLeaf, Occlusion, OcclusionPacket, PacketQuery, Query,
 };
 pub use simd::kernel::Kernel;
-pub use simd::{kernel, pages, prefetch};
+pub use simd::{allocator, kernel, pages, prefetch};
 pub use walk::{AnyOrder, NearestFirst, WalkOrder};

@@ -12,6 +12,7 @@ pub mod scaling;
 pub mod trace;
 
 use clap::{Parser, Subcommand};
+use strata::accel::allocator::HugePages;
 use strata::accel::Kernel;
 use strata::error::InputError;
 
@@ -25,7 +26,7 @@ use strata::error::InputError;
     version = strata::VERSION,
     about,
     long_about = None,
-    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: the build's own; avx512, where the CPU has it, for measuring)."
+    after_help = "With no command, strata renders the built-in seed scene to render.png.\nEvery command has its own help: strata render --help. Documentation: docs/cli.md.\nSTRATA_SIMD=auto|avx2|avx512 picks the instruction set rays are walked in (default auto: the build's own; avx512, where the CPU has it, for measuring).\nSTRATA_HUGE_PAGES=auto|on|off puts large allocations on huge pages (default auto: where the kernel has handed no memory back to a host, so that they are cheap to write first)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -97,6 +98,7 @@ pub fn count(n: usize, one: &str, many: &str) -> String {
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
     choose_kernel()?;
+    choose_huge_pages()?;
     match cli.command {
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Merge(args)) => merge::run(args),
@@ -107,6 +109,19 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Bench(args)) => bench::run(args),
         None => render::run(render::RenderArgs::default()),
     }
+}
+
+/// `STRATA_HUGE_PAGES` (auto, on or off): whether large allocations go
+/// on huge pages; unset, `auto` (where they are cheap to write first:
+/// `strata::accel::allocator`).
+fn choose_huge_pages() -> Result<(), CliError> {
+    let choice = match std::env::var_os("STRATA_HUGE_PAGES") {
+        Some(name) => HugePages::parse(name.to_string_lossy().trim())
+            .map_err(|e| InputError::new("<environment>", "STRATA_HUGE_PAGES", e))?,
+        None => HugePages::Auto,
+    };
+    choice.apply();
+    Ok(())
 }
 
 /// `STRATA_SIMD` (auto, avx2 or avx512): the instruction set the hot

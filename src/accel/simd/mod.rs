@@ -13,10 +13,15 @@
 //!   twin is a plain vector. And a large build's freed memory handed back
 //!   to the system (`malloc_trim`); the twin keeps it.
 //!
+//! - [`allocator`]: the `strata` command's allocator, the system's with
+//!   every large block advised for huge pages where they are cheap to
+//!   write first; the twin is the system's allocator.
+//!
 //! Each part's doc says why its `unsafe` is sound.
 
 #![allow(unsafe_code)]
 
+pub mod allocator;
 pub mod kernel;
 pub mod pages;
 pub mod prefetch;

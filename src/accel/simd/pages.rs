@@ -49,7 +49,7 @@ use rayon::prelude::*;
 
 /// The smallest array advised: a round size that holds a whole huge page
 /// (2 MiB, aligned) wherever it starts.
-const MIN_BYTES: usize = 4 << 20;
+pub(super) const MIN_BYTES: usize = 4 << 20;
 
 /// The pages a tree's arrays are written to.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -115,6 +115,12 @@ pub fn give_back_freed_memory() {
     unsafe {
         libc::malloc_trim(0);
     }
+}
+
+/// Advises the whole pages inside `bytes` bytes from `start` for huge
+/// pages as they are first written (the allocator's large blocks).
+pub(super) fn advise_huge(start: usize, bytes: usize) {
+    advise(start, bytes, Advice::Huge);
 }
 
 #[derive(Clone, Copy)]
