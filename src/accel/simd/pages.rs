@@ -21,9 +21,11 @@
 //! fresh huge page cost 1.5 to 5 ms (the dragon subdivided twice built 0.5
 //! s slower with its tree on them), and with every large allocation on
 //! them (glibc's `glibc.malloc.hugetlb=1`) the build took half as long
-//! again. So only the walk's own arrays (the nodes and the leaf blocks)
-//! ask, and only where the render's rays pay for it
-//! ([`super::super::choice`] decides: [`Pages`]).
+//! again. So there only the walk's own arrays (the nodes and the leaf
+//! blocks) ask, and only where the render's rays pay for it
+//! ([`super::super::choice`] decides: [`Pages`]). Where huge pages are
+//! cheap to write first, the `strata` command puts every large block on
+//! them ([`super::allocator`]), and the tree with them.
 //!
 //! The kernel chooses a page's size when it is first written, so
 //! [`collect_on`] advises the vector's room before it writes
