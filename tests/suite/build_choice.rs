@@ -5,7 +5,7 @@
 //! the summary line.
 
 use crate::common::meshes::bumpy_sphere_obj;
-use crate::common::process::{repo, strata_ok};
+use crate::common::process::{repo, run, strata_command};
 use crate::common::temp_dir;
 use std::path::Path;
 use strata::accel::choice::MODEL_MIN_PRIMS;
@@ -41,7 +41,10 @@ fn pixel_bits(path: &Path) -> Vec<[u32; 3]> {
 /// and the slices merge to the whole image bit for bit. A crop renders a
 /// few pixels of the long render cheaply and leaves the choice alone. The
 /// preview's tree stays on small pages, the long render's goes on huge
-/// ones, and the reason says so.
+/// ones, and the reason says so (with `STRATA_HUGE_PAGES=off`: the rays'
+/// choice alone). Where every large allocation goes on huge pages
+/// (`STRATA_HUGE_PAGES=on`), the preview's tree does too, and its image is
+/// the same bit for bit.
 #[test]
 fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
     let dir = temp_dir("build-choice");
@@ -71,7 +74,12 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             let mut args = vec!["render", s(&scene), "-o", s(&out), "--stats", s(&json)];
             args.extend(settings.iter().map(String::as_str));
             args.extend(extra);
-            let summary = strata_ok(repo(), &args);
+            let summary = run(
+                strata_command(repo())
+                    .args(&args)
+                    .env("STRATA_HUGE_PAGES", "off"),
+                "strata",
+            );
             let st = stats(&json);
             assert_eq!(st["triangles"], TRIANGLES);
             assert_eq!(st["bvh_quality"], want.name(), "{name}: {st}");
@@ -93,8 +101,25 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             let (p1, why1) = render("p1.strata", &["--slice", "1/2", "--threads", "2"]);
             assert_eq!([&why0, &why1], [&why; 2]);
             let merged = dir.join("merged.exr");
-            strata_ok(repo(), &["merge", s(&p0), s(&p1), "-o", s(&merged)]);
+            run(
+                strata_command(repo()).args(["merge", s(&p0), s(&p1), "-o", s(&merged)]),
+                "strata merge",
+            );
             assert_eq!(pixel_bits(&merged), bits, "{spp} spp: merged slices");
+            // Every large allocation on huge pages: the tree too.
+            let out = dir.join("huge.exr");
+            let json = dir.join("huge.json");
+            let mut args = vec!["render", s(&scene), "-o", s(&out), "--stats", s(&json)];
+            args.extend(settings.iter().map(String::as_str));
+            run(
+                strata_command(repo())
+                    .args(&args)
+                    .env("STRATA_HUGE_PAGES", "on"),
+                "strata",
+            );
+            let why_huge = stats(&json)["bvh_why"].as_str().unwrap().to_string();
+            assert_eq!(why_huge, format!("{why}; huge pages"));
+            assert_eq!(pixel_bits(&out), bits, "{spp} spp: on huge pages");
         }
         chosen.push((want, choice.pages));
     }
@@ -125,24 +150,27 @@ fn a_named_preset_overrides_auto() {
     for q in ["high", "fastest", "preview"] {
         let json = dir.join("s.json");
         let out = dir.join("o.png");
-        let summary = strata_ok(
-            repo(),
-            &[
-                "render",
-                s(&scene),
-                "-o",
-                s(&out),
-                "--width",
-                "8",
-                "--height",
-                "8",
-                "--spp",
-                "1",
-                "--bvh-quality",
-                q,
-                "--stats",
-                s(&json),
-            ],
+        // On the rays' choice of pages alone: small for 8 × 8 pixels.
+        let summary = run(
+            strata_command(repo())
+                .args([
+                    "render",
+                    s(&scene),
+                    "-o",
+                    s(&out),
+                    "--width",
+                    "8",
+                    "--height",
+                    "8",
+                    "--spp",
+                    "1",
+                    "--bvh-quality",
+                    q,
+                    "--stats",
+                    s(&json),
+                ])
+                .env("STRATA_HUGE_PAGES", "off"),
+            "strata",
         );
         let st = stats(&json);
         assert_eq!(
@@ -151,4 +179,27 @@ fn a_named_preset_overrides_auto() {
         );
         assert!(summary.contains(&format!("BVH {q} ")), "{summary}");
     }
+}
+
+/// `STRATA_HUGE_PAGES` other than auto, on or off is an input error
+/// naming the variable and the values it takes, before any work.
+#[test]
+fn a_huge_pages_setting_it_does_not_know_is_refused() {
+    let dir = temp_dir("huge-pages-bad");
+    let out = dir.join("seed.png");
+    let o = strata_command(repo())
+        .args(["render", "scenes/seed.toml", "-o"])
+        .arg(&out)
+        .env("STRATA_HUGE_PAGES", "always")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with(
+            "error: <environment>: STRATA_HUGE_PAGES: 'always': expected auto, on or off"
+        ),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing written");
 }
