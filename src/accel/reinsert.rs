@@ -31,6 +31,7 @@ use rayon::prelude::*;
 /// down to 1/31 (obvhs's sequence, which spends the later batches on the
 /// largest nodes only).
 const BATCHES: u32 = 16;
+const _: () = assert!(BATCHES < u8::MAX as u32, "a batch's mark is a byte");
 
 /// Reinserts nodes of `bvh2` in batches, the first of `share` of its nodes
 /// (obvhs's `reinsertion_batch_ratio`); none if `share` is 0. Leaves
@@ -47,8 +48,9 @@ pub(super) fn reinsert(bvh2: &mut Bvh2, share: f32) {
     Bvh2::compute_parents(&bvh2.nodes, &mut parents);
     bvh2.parents = parents;
     bvh2.children_are_ordered_after_parents = false;
-    // marks[i] == b: node i is moved or moved into in batch b (from 1).
-    let mut marks = vec![0u32; nodes];
+    // marks[i] == b: node i is moved or moved into in batch b (from 1); a
+    // byte a node, as obvhs's flags (the `high` build peaks here).
+    let mut marks = vec![0u8; nodes];
     for batch in 0..BATCHES {
         // obvhs's sizes to the bit: the share of the nodes in f32, over
         // 1, 3, 5, …; `+ 1`: the root is never a candidate.
@@ -68,7 +70,7 @@ pub(super) fn reinsert(bvh2: &mut Bvh2, share: f32) {
                 .total_cmp(&a.area_diff)
                 .then(a.from.cmp(&b.from))
         });
-        let mark = batch + 1;
+        let mark = batch as u8 + 1;
         for found in &moves {
             let (from, to) = (found.from as usize, found.to as usize);
             // The nodes a move rewrites or reads the parent of; a move
