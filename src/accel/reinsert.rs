@@ -74,8 +74,9 @@ pub(super) fn reinsert(bvh2: &mut Bvh2, share: f32) {
         for found in &moves {
             let (from, to) = (found.from as usize, found.to as usize);
             // The nodes a move rewrites or reads the parent of; a move
-            // touching one that an earlier move of the batch touched
-            // waits for a later batch (its search saw the tree before).
+            // touching one that an earlier move of the batch touched is
+            // dropped (its search saw the tree before that move), and its
+            // node may be a candidate again in a later batch.
             let touched = [
                 to,
                 from,

@@ -4,8 +4,8 @@
 //! than small ones ([`HugePages`]). One of the parts of [`super`], the
 //! crate's one module with `unsafe`.
 //!
-//! A huge mesh's first image writes about 3.9 GB of fresh memory on the
-//! way (280 bytes a triangle of dragon-sub2), and on 4 KiB pages each page
+//! A huge mesh's first image writes about 3.4 GB of fresh memory on the
+//! way (250 bytes a triangle of dragon-sub2), and on 4 KiB pages each page
 //! is a fault into the kernel: 840,000 of them, a quarter of the process's
 //! time on one thread, and on 16 threads a queue on the kernel's
 //! page-table locks. With every large block on huge pages (glibc's
