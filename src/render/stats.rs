@@ -102,6 +102,10 @@ pub struct BuildMemory {
     pub build_peak_bytes: Option<u64>,
     /// The larger of the two, per triangle.
     pub peak_bytes_per_triangle: Option<f64>,
+    /// Whether the process put its large allocations on huge pages
+    /// (`STRATA_HUGE_PAGES`, [`crate::accel::allocator`]): the same image
+    /// either way, but a different time and peak.
+    pub huge_pages: bool,
 }
 
 impl RenderStats {
@@ -173,6 +177,7 @@ impl RenderStats {
                 load_peak_bytes: timings.load_peak_bytes,
                 build_peak_bytes: timings.build_peak_bytes,
                 peak_bytes_per_triangle: timings.peak_bytes().and_then(per_triangle),
+                huge_pages: crate::accel::allocator::large_allocations_on_huge_pages(),
             },
             invalid_samples: outcome.film.invalid,
             first_invalid_sample: outcome.film.first_invalid,

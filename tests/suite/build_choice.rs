@@ -82,6 +82,7 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             );
             let st = stats(&json);
             assert_eq!(st["triangles"], TRIANGLES);
+            assert_eq!(st["memory"]["huge_pages"], false);
             assert_eq!(st["bvh_quality"], want.name(), "{name}: {st}");
             let why = st["bvh_why"].as_str().unwrap().to_string();
             assert!(why.starts_with("auto: "), "{why}");
@@ -117,8 +118,10 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
                     .env("STRATA_HUGE_PAGES", "on"),
                 "strata",
             );
-            let why_huge = stats(&json)["bvh_why"].as_str().unwrap().to_string();
+            let st = stats(&json);
+            let why_huge = st["bvh_why"].as_str().unwrap().to_string();
             assert_eq!(why_huge, format!("{why}; huge pages"));
+            assert_eq!(st["memory"]["huge_pages"], true);
             assert_eq!(pixel_bits(&out), bits, "{spp} spp: on huge pages");
         }
         chosen.push((want, choice.pages));
