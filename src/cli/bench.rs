@@ -240,8 +240,13 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         std::fs::create_dir_all(&work).map_err(harness_error)?;
     }
     println!(
-        "# strata walks rays with its {} kernel (STRATA_SIMD picks another)",
-        strata::accel::Kernel::selected().name()
+        "# strata walks rays with its {} kernel (STRATA_SIMD picks another); large allocations on {} pages (STRATA_HUGE_PAGES)",
+        strata::accel::Kernel::selected().name(),
+        if strata::accel::allocator::large_allocations_on_huge_pages() {
+            "huge"
+        } else {
+            "small"
+        }
     );
     println!(
         "{:<22} {:>9} {:>8} {:>7} {:>8} {:>9} {:>10} {:>6} {:>3} {:>9} {:>9} {:>6}",
