@@ -68,7 +68,9 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
         if crop {
             settings.extend(["--crop".into(), "150,110,152,112".into()]);
         }
-        let render = |name: &str, extra: &[&str]| {
+        // The render `name` with `extra` flags and `STRATA_HUGE_PAGES` set
+        // to `pages`: its output, its stats and its summary line.
+        let render_with = |name: &str, extra: &[&str], pages: &str| {
             let out = dir.join(name);
             let json = dir.join(format!("{name}.json"));
             let mut args = vec!["render", s(&scene), "-o", s(&out), "--stats", s(&json)];
@@ -77,10 +79,13 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             let summary = run(
                 strata_command(repo())
                     .args(&args)
-                    .env("STRATA_HUGE_PAGES", "off"),
+                    .env("STRATA_HUGE_PAGES", pages),
                 "strata",
             );
-            let st = stats(&json);
+            (out, stats(&json), summary)
+        };
+        let render = |name: &str, extra: &[&str]| {
+            let (out, st, summary) = render_with(name, extra, "off");
             assert_eq!(st["triangles"], TRIANGLES);
             assert_eq!(st["memory"]["huge_pages"], false);
             assert_eq!(st["bvh_quality"], want.name(), "{name}: {st}");
@@ -108,17 +113,7 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             );
             assert_eq!(pixel_bits(&merged), bits, "{spp} spp: merged slices");
             // Every large allocation on huge pages: the tree too.
-            let out = dir.join("huge.exr");
-            let json = dir.join("huge.json");
-            let mut args = vec!["render", s(&scene), "-o", s(&out), "--stats", s(&json)];
-            args.extend(settings.iter().map(String::as_str));
-            run(
-                strata_command(repo())
-                    .args(&args)
-                    .env("STRATA_HUGE_PAGES", "on"),
-                "strata",
-            );
-            let st = stats(&json);
+            let (out, st, _) = render_with("huge.exr", &[], "on");
             let why_huge = st["bvh_why"].as_str().unwrap().to_string();
             assert_eq!(why_huge, format!("{why}; huge pages"));
             assert_eq!(st["memory"]["huge_pages"], true);

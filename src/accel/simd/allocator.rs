@@ -63,18 +63,16 @@ impl HugePages {
         }
     }
 
-    /// Applies the choice to the allocator of this process, and says
-    /// whether large allocations now go on huge pages. In a process that
-    /// has not installed [`HugePageAllocator`] only the tree's pages
+    /// Applies the choice to the allocator of this process. In a process
+    /// that has not installed [`HugePageAllocator`] only the tree's pages
     /// follow it ([`large_allocations_on_huge_pages`]).
-    pub fn apply(self) -> bool {
+    pub fn apply(self) {
         let on = match self {
             Self::Auto => huge_pages_are_cheap(),
             Self::On => true,
             Self::Off => false,
         };
         LARGE_ON_HUGE_PAGES.store(on, Relaxed);
-        on
     }
 }
 
@@ -111,10 +109,11 @@ pub fn huge_pages_are_cheap() -> bool {
 /// allocator.
 pub struct HugePageAllocator;
 
-/// Advises the fresh block `ptr` of `size` bytes if it is large and the
-/// process asks.
-fn advise_large(ptr: *mut u8, size: usize, on: bool) {
-    if on && size >= MIN_BYTES && !ptr.is_null() {
+/// Advises the fresh block `ptr` of `size` bytes if it is large and
+/// `asked` (the process's switch; read only for a large block, so that
+/// the allocations of every size pay for one comparison alone).
+fn advise_large(ptr: *mut u8, size: usize, asked: fn() -> bool) {
+    if size >= MIN_BYTES && !ptr.is_null() && asked() {
         advise_huge(ptr as usize, size);
     }
 }
@@ -125,13 +124,13 @@ fn advise_large(ptr: *mut u8, size: usize, on: bool) {
 unsafe impl GlobalAlloc for HugePageAllocator {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         let ptr = unsafe { System.alloc(layout) };
-        advise_large(ptr, layout.size(), large_allocations_on_huge_pages());
+        advise_large(ptr, layout.size(), large_allocations_on_huge_pages);
         ptr
     }
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         let ptr = unsafe { System.alloc_zeroed(layout) };
-        advise_large(ptr, layout.size(), large_allocations_on_huge_pages());
+        advise_large(ptr, layout.size(), large_allocations_on_huge_pages);
         ptr
     }
 
@@ -142,7 +141,7 @@ unsafe impl GlobalAlloc for HugePageAllocator {
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         let moved = unsafe { System.realloc(ptr, layout, new_size) };
         if new_size > layout.size() {
-            advise_large(moved, new_size, large_allocations_on_huge_pages());
+            advise_large(moved, new_size, large_allocations_on_huge_pages);
         }
         moved
     }
@@ -168,7 +167,7 @@ mod tests {
             unsafe {
                 let ptr = System.alloc_zeroed(layout);
                 assert!(!ptr.is_null());
-                advise_large(ptr, size, on);
+                advise_large(ptr, size, if on { || true } else { || false });
                 let bytes = std::slice::from_raw_parts_mut(ptr, size);
                 assert!(bytes.iter().step_by(4096).all(|&b| b == 0));
                 for (i, b) in bytes.iter_mut().enumerate().step_by(1000) {
