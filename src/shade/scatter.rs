@@ -175,6 +175,11 @@ impl Bsdf {
     /// f(wo, wi) and the density [`Bsdf::sample`] draws `wi` with (world
     /// space, unit); zero below the surface, where both normals must
     /// agree that `wi` is above it.
+    // Inlined, with the Lambertian lobe: called with the direction just
+    // written by a light's sample, a call read it back from memory before
+    // the stores had landed (a third of the call's time). The other lobes
+    // stay calls of their own.
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3) -> (Vec3, f32) {
         if self.ng.dot(wi) <= 0.0 {
             return (Vec3::ZERO, 0.0);
@@ -193,6 +198,9 @@ impl Bsdf {
     /// A direction drawn with `choice` (picks the lobe) and `u`, both
     /// uniform; `None` where the lobe's direction falls below the surface
     /// or nothing scatters.
+    // Inlined, with the Lambertian lobe, as `eval`: returned through
+    // memory, the sample was read back before its stores had landed.
+    #[inline(always)]
     pub fn sample(&self, choice: f32, u: Vec2) -> Option<BsdfSample> {
         match &self.lobes {
             Lobes::Lambert(l) => {
@@ -206,22 +214,25 @@ impl Bsdf {
                 if !(x < total) {
                     return None;
                 }
-                self.smooth_sample(self.frame.to_world(cosine_hemisphere(u)))
+                self.lambert_sample(l, cosine_hemisphere(u))
             }
             Lobes::Phong(p) => self.sample_phong(p, choice, u),
-            Lobes::MetallicRoughness(m) => {
-                if self.wo.z <= 0.0 {
-                    return None;
-                }
-                let wi = if choice < m.p_spec {
-                    let h = sample_visible_normal(self.wo, m.alpha, u);
-                    2.0 * self.wo.dot(h) * h - self.wo
-                } else {
-                    cosine_hemisphere(u)
-                };
-                self.smooth_sample(self.frame.to_world(wi))
-            }
+            Lobes::MetallicRoughness(m) => self.sample_microfacet(m, choice, u),
         }
+    }
+
+    #[inline(never)]
+    fn sample_microfacet(&self, m: &Microfacet, choice: f32, u: Vec2) -> Option<BsdfSample> {
+        if self.wo.z <= 0.0 {
+            return None;
+        }
+        let wi = if choice < m.p_spec {
+            let h = sample_visible_normal(self.wo, m.alpha, u);
+            2.0 * self.wo.dot(h) * h - self.wo
+        } else {
+            cosine_hemisphere(u)
+        };
+        self.smooth_sample(self.frame.to_world(wi))
     }
 
     /// The sample of a smooth lobe's direction `wi`: the whole BSDF and
@@ -240,6 +251,25 @@ impl Bsdf {
         })
     }
 
+    /// A cosine-weighted direction `local` (in the shading frame) of a
+    /// [`Lambert`] BSDF: f·cos/pdf is ρ exactly, and the density cos/π,
+    /// without [`Bsdf::eval`]'s work; `None` where `local` (or the view)
+    /// is not above both normals, as [`Bsdf::eval`] would find it.
+    #[inline(always)]
+    fn lambert_sample(&self, l: &Lambert, local: Vec3) -> Option<BsdfSample> {
+        let wi = self.frame.to_world(local);
+        if !(local.z > 0.0 && self.wo.z > 0.0 && self.ng.dot(wi) > 0.0) {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            weight: l.diffuse,
+            pdf: local.z * FRAC_1_PI,
+            delta: false,
+        })
+    }
+
+    #[inline(never)]
     fn sample_phong(&self, p: &Phong, choice: f32, u: Vec2) -> Option<BsdfSample> {
         let total = p.cdf[4];
         if !(total > 0.0) {
@@ -308,11 +338,17 @@ impl Lambert {
     }
 
     /// [`Phong::eval`] with its highlight and glossy lobes of no chance.
+    #[inline(always)]
     fn eval(&self, wi: Vec3) -> (Vec3, f32) {
-        let total = self.total;
         let f = self.diffuse * FRAC_1_PI;
-        let pdf = total * wi.z * FRAC_1_PI;
-        (f, if total > 0.0 { pdf / total } else { 0.0 })
+        (
+            f,
+            if self.total > 0.0 {
+                wi.z * FRAC_1_PI
+            } else {
+                0.0
+            },
+        )
     }
 }
 
@@ -363,6 +399,7 @@ impl Phong {
     }
 
     /// Local wo and wi, both above.
+    #[inline(never)]
     fn eval(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
         let total = self.cdf[4];
         let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
@@ -406,6 +443,7 @@ impl Microfacet {
     }
 
     /// Local wo and wi, both above.
+    #[inline(never)]
     fn eval(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
         let h = (wo + wi).normalize();
         let f = schlick_rgb(self.f0, wo.dot(h));

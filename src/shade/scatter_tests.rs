@@ -236,14 +236,29 @@ fn same(a: Vec3, b: Vec3) -> bool {
     a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
 }
 
-/// The Lambertian BSDF a diffuse-only Phong material is held as gives bit
-/// for bit what the general Phong mix gives: the same sampled direction,
-/// weight, density and delta flag, the same value and density for any
-/// direction (above and below the surface), over random materials (ρ
-/// past 1 too, scaled; a highlight with a negative exponent, which
-/// switches it off), textures, views and normals.
+/// Within a few units in the last place (relative 1e-6), each channel.
+fn close(a: Vec3, b: Vec3) -> bool {
+    (0..3).all(|k| close_f(a[k], b[k]))
+}
+
+/// Within a few units in the last place, or within the rounding of a
+/// unit vector's component (2e-7) where a density is a cosine over π:
+/// the two compute the cosine in different frames.
+fn close_f(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + 2e-7
+}
+
+/// The Lambertian BSDF a diffuse-only Phong material is held as gives
+/// what the general Phong mix gives, to rounding: the same sampled
+/// direction bit for bit, its weight (ρ itself, where the mix divides
+/// f·cos by the density) and density within a few units in the last
+/// place, the same value and a density as close for any direction
+/// (above and below the surface), over random materials (ρ past 1 too,
+/// scaled; a highlight with a negative exponent, which switches it off),
+/// textures, views and normals. Only a direction within rounding of the
+/// surface may be drawn by one and refused by the other.
 #[test]
-fn a_lambertian_phong_material_is_sampled_and_evaluated_bit_for_bit_as_the_phong_mix() {
+fn a_lambertian_phong_material_is_sampled_and_evaluated_as_the_phong_mix() {
     let mut rng = Numbers(0x5eed_61f0);
     let mut lambert_draws = 0;
     for case in 0..4000 {
@@ -301,18 +316,29 @@ fn a_lambertian_phong_material_is_sampled_and_evaluated_bit_for_bit_as_the_phong
                     lambert_draws += 1;
                     assert!(
                         same(a.wi, b.wi)
-                            && same(a.weight, b.weight)
-                            && a.pdf.to_bits() == b.pdf.to_bits()
+                            && close(a.weight, b.weight)
+                            && close_f(a.pdf, b.pdf)
                             && a.delta == b.delta,
                         "case {case}: {a:?} against {b:?}"
                     );
                 }
-                _ => panic!("case {case}, choice {choice}: {a:?} against {b:?}"),
+                (Some(s), None) | (None, Some(s)) => {
+                    // Refused by one: only at the surface's rounding.
+                    let grazing = fast
+                        .cos(s.wi)
+                        .abs()
+                        .min(ng.dot(s.wi).abs())
+                        .min(wo.dot(ns).abs());
+                    assert!(
+                        grazing < 1e-5,
+                        "case {case}, choice {choice}: {a:?} against {b:?}"
+                    );
+                }
             }
             let wi = unit(&mut rng);
             let ((fa, pa), (fb, pb)) = (fast.eval(wi), general.eval(wi));
             assert!(
-                same(fa, fb) && pa.to_bits() == pb.to_bits(),
+                same(fa, fb) && close_f(pa, pb),
                 "case {case}: eval({wi}) {fa} {pa} against {fb} {pb}"
             );
         }
