@@ -628,8 +628,12 @@ impl Geometry {
     /// step later, which no hit in `(tmin, tmax]` can tell.
     #[inline(always)]
     fn walk_closed<'g, Q: SceneQuery<'g>>(&'g self, query: Q, ray: &Ray) -> Q::Answer {
-        self.bvh
-            .walk(&closed_end(ray), &self.leaf_blocks, &mut query.open())
+        self.bvh.walk_to(
+            ray,
+            closed_end(ray).tmax,
+            &self.leaf_blocks,
+            &mut query.open(),
+        )
     }
 
     /// Up to [`PACKET_SIZE`] rays a caller chose to trace together.
