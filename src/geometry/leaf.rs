@@ -9,7 +9,7 @@ use crate::accel::{PrimHit, PACKET_SIZE};
 use crate::math::lanes::LANES;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
-use crate::shape::triangle_lanes::{self, ShearedRays};
+use crate::shape::triangle_lanes::{self, ShearedRays, TriangleBlock};
 
 impl Geometry {
     /// The lanes of leaf `start..start + count` in its block.
@@ -44,31 +44,51 @@ impl Geometry {
         sheared: &ShearedRay,
     ) -> Option<PrimHit> {
         let block = &self.leaf_blocks[b];
-        // A scene of instances alone has no triangle in its own leaves.
-        let triangles = (self.triangle_count > 0)
-            .then(|| triangle_lanes::closest(ray, sheared, block, lanes))
+        let (triangles, others) = self.split_lanes(block, lanes);
+        // A leaf of analytic shapes alone skips the 8-wide test (its
+        // lanes' NaN vertices would reject the ray anyway).
+        let hit = (triangles != 0)
+            .then(|| triangle_lanes::closest(ray, sheared, block, triangles))
             .flatten();
-        let mut best = triangles.map(|h| PrimHit {
+        let mut best = hit.map(|h| PrimHit {
             t: h.t,
             prim: block.id[h.lane],
             u: h.u,
             v: h.v,
             part: (b * LANES + h.lane) as u32,
         });
-        if self.has_others() {
+        if others != 0 {
             let mut ray = tie_ray(ray, best.as_ref());
-            let mut m = lanes;
+            let mut m = others;
             while m != 0 {
                 let id = block.id[m.trailing_zeros() as usize];
                 m &= m - 1;
-                if id >= self.triangle_count {
-                    if let Some(h) = self.hit_other(id, &ray) {
-                        keep_tied(&mut best, &mut ray.tmax, h);
-                    }
+                if let Some(h) = self.hit_other(id, &ray) {
+                    keep_tied(&mut best, &mut ray.tmax, h);
                 }
             }
         }
         best
+    }
+
+    /// The slots of `lanes` in `block` that hold triangles, and those that
+    /// hold anything else (analytic shapes, instances): the ids at or past
+    /// the triangles'. A scene of triangles alone asks no id.
+    #[inline(always)]
+    fn split_lanes(&self, block: &TriangleBlock, lanes: u32) -> (u32, u32) {
+        if !self.has_others() {
+            return (lanes, 0);
+        }
+        let mut others = 0;
+        let mut m = lanes;
+        while m != 0 {
+            let lane = m.trailing_zeros();
+            m &= m - 1;
+            if block.id[lane as usize] >= self.triangle_count {
+                others |= 1 << lane;
+            }
+        }
+        (lanes & !others, others)
     }
 
     /// True if something in leaf `start..start + count` other than
@@ -97,8 +117,9 @@ impl Geometry {
         except: u32,
     ) -> bool {
         let block = &self.leaf_blocks[b];
-        let mut hit = if self.triangle_count > 0 {
-            triangle_lanes::intersect(ray, sheared, block, lanes).0
+        let (triangles, others) = self.split_lanes(block, lanes);
+        let mut hit = if triangles != 0 {
+            triangle_lanes::intersect(ray, sheared, block, triangles).0
         } else {
             0
         };
@@ -109,14 +130,12 @@ impl Geometry {
                 return true;
             }
         }
-        if self.has_others() {
-            let mut m = lanes;
-            while m != 0 {
-                let id = block.id[m.trailing_zeros() as usize];
-                m &= m - 1;
-                if id >= self.triangle_count && id != except && self.other_blocks(id, ray) {
-                    return true;
-                }
+        let mut m = others;
+        while m != 0 {
+            let id = block.id[m.trailing_zeros() as usize];
+            m &= m - 1;
+            if id != except && self.other_blocks(id, ray) {
+                return true;
             }
         }
         false
