@@ -84,9 +84,8 @@ impl Geometry {
         while m != 0 {
             let lane = m.trailing_zeros();
             m &= m - 1;
-            if block.id[lane as usize] >= self.triangle_count {
-                others |= 1 << lane;
-            }
+            // Without a branch: which slots of a leaf are shapes is data.
+            others |= u32::from(block.id[lane as usize] >= self.triangle_count) << lane;
         }
         (lanes & !others, others)
     }
