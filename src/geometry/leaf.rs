@@ -10,6 +10,7 @@ use crate::math::lanes::LANES;
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use crate::shape::triangle_lanes::{self, ShearedRays, TriangleBlock};
+use wide::u32x8;
 
 impl Geometry {
     /// The lanes of leaf `start..start + count` in its block.
@@ -79,15 +80,13 @@ impl Geometry {
         if !self.has_others() {
             return (lanes, 0);
         }
-        let mut others = 0;
-        let mut m = lanes;
-        while m != 0 {
-            let lane = m.trailing_zeros();
-            m &= m - 1;
-            // Without a branch: which slots of a leaf are shapes is data.
-            others |= u32::from(block.id[lane as usize] >= self.triangle_count) << lane;
-        }
-        (lanes & !others, others)
+        // The eight ids in one compare: a loop over a leaf's one or two
+        // slots mispredicted its count and its compares (a tenth of a
+        // lone walk's time on a scene of a few shapes).
+        let triangles = u32x8::from(block.id)
+            .simd_lt(u32x8::splat(self.triangle_count))
+            .to_bitmask();
+        (lanes & triangles, lanes & !triangles)
     }
 
     /// True if something in leaf `start..start + count` other than
