@@ -439,7 +439,17 @@ impl Geometry {
 
     /// The mesh a triangle belongs to.
     pub fn mesh_of(&self, tri: u32) -> &MeshRange {
-        let i = self.meshes.partition_point(|m| m.first + m.count <= tri);
+        // A few meshes (a scene whose every object is a mesh of its own)
+        // are counted without a branch: the binary search's compares
+        // mispredicted, a third of `surface`'s time on cornell.
+        let i = if self.meshes.len() <= 16 {
+            self.meshes
+                .iter()
+                .map(|m| usize::from(m.first + m.count <= tri))
+                .sum()
+        } else {
+            self.meshes.partition_point(|m| m.first + m.count <= tri)
+        };
         &self.meshes[i]
     }
 }
@@ -488,5 +498,49 @@ mod tests {
         copy.restore_pages();
         assert_ne!(marked_huge(&copy.leaf_blocks), Some(false));
         assert_eq!(ids(&copy), ids(&huge));
+    }
+
+    /// Every triangle's mesh is the one whose range holds it, counted (up
+    /// to 16 meshes) or searched (more), empty meshes among them.
+    #[test]
+    fn every_triangle_finds_its_mesh_among_few_or_many() {
+        for n in [1u32, 2, 7, 16, 17, 40] {
+            // Mesh k holds k % 4 triangles (the first one at least one).
+            let counts: Vec<u32> = (0..n).map(|k| if k == 0 { 1 } else { k % 4 }).collect();
+            let mut meshes = Vec::new();
+            let mut first = 0;
+            for (k, &count) in counts.iter().enumerate() {
+                meshes.push(MeshRange {
+                    name: format!("m{k}"),
+                    first,
+                    count,
+                    material: k as u32,
+                    ..MeshRange::default()
+                });
+                first += count;
+            }
+            let tri = |i: u32| {
+                [
+                    Vec3::new(i as f32, 0.0, 0.0),
+                    Vec3::new(i as f32, 1.0, 0.0),
+                    Vec3::Z,
+                ]
+            };
+            let boxes = (0..first).map(|i| Aabb::from_points(&tri(i))).collect();
+            let bvh = Bvh8::build_from(boxes, BuildQuality::Preview);
+            let parts = GeometryParts {
+                meshes,
+                ..GeometryParts::default()
+            };
+            let g = Geometry::new(parts, bvh, tri);
+            for t in 0..first {
+                let m = g.mesh_of(t);
+                assert!(
+                    m.first <= t && t < m.first + m.count,
+                    "{n} meshes, triangle {t}: {}",
+                    m.name
+                );
+            }
+        }
     }
 }
