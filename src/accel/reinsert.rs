@@ -160,32 +160,6 @@ mod tests {
             .sum()
     }
 
-    /// Every node reached once from the root, every parent link right,
-    /// every box the union of its children's, every primitive in one leaf.
-    fn assert_sound(bvh2: &Bvh2, prims: usize) {
-        let mut seen_prims = vec![0u8; prims];
-        let mut stack = vec![0usize];
-        let mut reached = 0;
-        while let Some(node) = stack.pop() {
-            reached += 1;
-            let n = &bvh2.nodes[node];
-            if n.is_leaf() {
-                for slot in n.first_index..n.first_index + n.prim_count {
-                    seen_prims[bvh2.primitive_indices[slot as usize] as usize] += 1;
-                }
-                continue;
-            }
-            let (a, b) = (n.first_index as usize, n.first_index as usize + 1);
-            assert_eq!(bvh2.parents[a] as usize, node);
-            assert_eq!(bvh2.parents[b] as usize, node);
-            let union = bvh2.nodes[a].aabb().union(bvh2.nodes[b].aabb());
-            assert_eq!(n.aabb(), &union, "node {node}'s box is its children's");
-            stack.extend([a, b]);
-        }
-        assert_eq!(reached, bvh2.nodes.len(), "every node in the tree once");
-        assert!(seen_prims.iter().all(|&c| c == 1), "every primitive once");
-    }
-
     /// The tree is sound, costs less than before and no more than 0.5%
     /// above obvhs's own reinsertion's with the same share (they differ
     /// only in ties), and is the same node for node on one thread and on
@@ -202,7 +176,10 @@ mod tests {
                     assert_eq!(ours.nodes.len(), before.nodes.len());
                     continue;
                 }
-                assert_sound(&ours, n);
+                // obvhs's own check: every node reached once, every
+                // parent link right, every box its children's union
+                // (tight) and holding its primitives, each primitive once.
+                ours.validate(&boxes, false, true);
                 let mut theirs = before.clone();
                 ReinsertionOptimizer::default().run(&mut theirs, share, None);
                 let (cost, was, obvhs) = (sah(&ours), sah(&before), sah(&theirs));
