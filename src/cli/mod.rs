@@ -115,12 +115,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
 /// on huge pages; unset, `auto` (where they are cheap to write first:
 /// `strata::accel::allocator`).
 fn choose_huge_pages() -> Result<(), CliError> {
-    let choice = match std::env::var_os("STRATA_HUGE_PAGES") {
-        Some(name) => HugePages::parse(name.to_string_lossy().trim())
-            .map_err(|e| InputError::new("<environment>", "STRATA_HUGE_PAGES", e))?,
-        None => HugePages::Auto,
-    };
-    choice.apply();
+    from_env("STRATA_HUGE_PAGES", HugePages::parse)?
+        .unwrap_or_default()
+        .apply();
     Ok(())
 }
 
@@ -128,11 +125,22 @@ fn choose_huge_pages() -> Result<(), CliError> {
 /// walks run in, for measuring one against the other; unset, the build's
 /// own (`strata::accel::Kernel::detect`).
 fn choose_kernel() -> Result<(), CliError> {
-    if let Some(name) = std::env::var_os("STRATA_SIMD") {
-        let name = name.to_string_lossy();
-        let kernel = Kernel::parse(name.trim())
-            .map_err(|e| InputError::new("<environment>", "STRATA_SIMD", e))?;
+    if let Some(kernel) = from_env("STRATA_SIMD", Kernel::parse)? {
         kernel.set();
     }
     Ok(())
+}
+
+/// Environment variable `var` read by `parse` (trimmed); `None` where it
+/// is unset. A value `parse` refuses is an error naming the variable.
+fn from_env<T>(
+    var: &str,
+    parse: impl FnOnce(&str) -> Result<T, String>,
+) -> Result<Option<T>, CliError> {
+    let Some(value) = std::env::var_os(var) else {
+        return Ok(None);
+    };
+    let parsed = parse(value.to_string_lossy().trim())
+        .map_err(|e| InputError::new("<environment>", var, e))?;
+    Ok(Some(parsed))
 }
