@@ -5,7 +5,7 @@
 //! the summary line.
 
 use crate::common::meshes::bumpy_sphere_obj;
-use crate::common::process::{repo, run, strata_command};
+use crate::common::process::{repo, run, strata_command, strata_ok};
 use crate::common::temp_dir;
 use std::path::Path;
 use strata::accel::choice::MODEL_MIN_PRIMS;
@@ -107,10 +107,7 @@ fn auto_chooses_from_the_whole_render_for_every_slice_and_thread_count() {
             let (p1, why1) = render("p1.strata", &["--slice", "1/2", "--threads", "2"]);
             assert_eq!([&why0, &why1], [&why; 2]);
             let merged = dir.join("merged.exr");
-            run(
-                strata_command(repo()).args(["merge", s(&p0), s(&p1), "-o", s(&merged)]),
-                "strata merge",
-            );
+            strata_ok(repo(), &["merge", s(&p0), s(&p1), "-o", s(&merged)]);
             assert_eq!(pixel_bits(&merged), bits, "{spp} spp: merged slices");
             // Every large allocation on huge pages: the tree too.
             let (out, st, _) = render_with("huge.exr", &[], "on");
