@@ -435,12 +435,13 @@ impl Mesh {
     #[inline(never)]
     pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit], surface: bool) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        self.each_first_hit(rays, surface, |i, hit| out[i] = hit);
+        self.each_first_hit(rays, surface, surface, |i, hit| out[i] = hit);
     }
 
     /// [`Mesh::first_hits`] written straight into the columns asked for
-    /// (an empty column is not written; the normal and the point are
-    /// found only where one of them is asked for): a binding's arrays,
+    /// (an empty column is not written; the normal is found only where
+    /// it or the point is asked for, the point only where it is): a
+    /// binding's arrays,
     /// without a row of every quantity staged for each ray and copied
     /// again (3% of the Python package's first hits on the dragon's
     /// random rays, docs/python.md).
@@ -453,13 +454,21 @@ impl Mesh {
                 "a column of {len} for {n} rays"
             );
         }
-        let surface = !out.normal.is_empty() || !out.point.is_empty();
-        self.each_first_hit(rays, surface, |i, hit| out.put(i, &hit));
+        let point = !out.point.is_empty();
+        let surface = point || !out.normal.is_empty();
+        self.each_first_hit(rays, surface, point, |i, hit| out.put(i, &hit));
     }
 
-    /// Each ray's first hit, handed to `put` with the ray's index.
+    /// Each ray's first hit, handed to `put` with the ray's index; with
+    /// `surface` its face's normal, and with `point` too its point.
     #[inline(always)]
-    fn each_first_hit(&self, rays: &[Ray], surface: bool, mut put: impl FnMut(usize, FirstHit)) {
+    fn each_first_hit(
+        &self,
+        rays: &[Ray],
+        surface: bool,
+        point: bool,
+        mut put: impl FnMut(usize, FirstHit),
+    ) {
         for (k, rays) in rays.chunks(SPAN).enumerate() {
             let mut found = [None; SPAN];
             let found = &mut found[..rays.len()];
@@ -475,7 +484,7 @@ impl Mesh {
             for (j, (hit, ray)) in found.iter().zip(rays).enumerate() {
                 let answer = match hit {
                     None => FirstHit::MISS,
-                    Some(hit) if surface => self.first_hit(ray, hit),
+                    Some(hit) if surface => self.first_hit(ray, hit, point),
                     Some(hit) => FirstHit {
                         t: hit.t,
                         face: self.geometry.flat_prim(hit, &self.flat) as i64,
@@ -490,11 +499,24 @@ impl Mesh {
     }
 
     /// What [`Mesh::first_hits`] answers for `ray`'s hit `hit`: the face
-    /// and its normal, and the point in float64 where the ray (as traced,
-    /// relative to the centre) meets the face's plane.
-    fn first_hit(&self, ray: &Ray, hit: &crate::accel::PrimHit) -> FirstHit {
+    /// and its normal, and with `point` the point in float64 where the ray
+    /// (as traced, relative to the centre) meets the face's plane (NaN
+    /// without: a binding that asks for normals alone does not pay for
+    /// the point's exact solve).
+    fn first_hit(&self, ray: &Ray, hit: &crate::accel::PrimHit, point: bool) -> FirstHit {
         let face = self.geometry.flat_prim(hit, &self.flat) as i64;
         let [a, b, c] = self.corners(hit, face);
+        let normal = (b - a).cross(c - a).normalize().as_vec3();
+        if !point {
+            return FirstHit {
+                t: hit.t,
+                face,
+                u: hit.u,
+                v: hit.v,
+                normal,
+                point: DVec3::NAN,
+            };
+        }
         let origin = ray.origin.as_dvec3() + self.centre;
         let direction = ray.direction.as_dvec3();
         let point = match exact::plane_hit(origin - a, direction, [DVec3::ZERO, b - a, c - a]) {
@@ -511,7 +533,7 @@ impl Mesh {
             face,
             u: hit.u,
             v: hit.v,
-            normal: (b - a).cross(c - a).normalize().as_vec3(),
+            normal,
             point,
         }
     }

@@ -310,7 +310,7 @@ fn first_hits_and_occlusion_equal_each_rays_single_walk() {
                         .then_some((first[i].t, first[i].u, first[i].v)),
                     "ray {i}"
                 );
-                let want = own.map_or(FirstHit::MISS, |h| mesh.first_hit(ray, &h));
+                let want = own.map_or(FirstHit::MISS, |h| mesh.first_hit(ray, &h, true));
                 assert_eq!(bits(&first[i]), bits(&want), "ray {i}");
                 assert_eq!(blocked[i], mesh.geometry.occluded(ray), "ray {i}");
                 hits += own.is_some() as usize;
