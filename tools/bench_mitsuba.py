@@ -42,10 +42,10 @@ Per scene:
      gold of its top-left region is about 1% darker in Mitsuba, whose
      rays start a fixed 1e-4 off their surface (a quarter of a dragon
      triangle's edge); strata offset as Mitsuba does agrees within 0.05%
-     (docs/mitsuba.md, "dragon-gold's last percent"). The per-pixel RMSE between the two images is
-     printed too: the noise of two --ref-spp renders where they agree
-     pixel by pixel, more where blur, edges or highlights differ, which
-     region means average away.
+     (docs/mitsuba.md, "dragon-gold's last percent"). The per-pixel RMSE
+     between the two images is printed too: the noise of two --ref-spp
+     renders where they agree pixel by pixel, more where blur, edges or
+     highlights differ, which region means average away.
   3. Equal spp (the scene's spp, or --spp): Mitsuba (independent sampler)
      and strata (--sampler random) alternate --runs times on --threads
      threads. Mitsuba renders once first (its JIT compiles the kernel;
@@ -212,8 +212,9 @@ def translate(path, mi):
             # visible normals with Schlick's Fresnel from base_color, and no
             # diffuse lobe (its weight is 1 - metallic). It differs in
             # Smith's masking (separable; strata's is height-correlated),
-            # which moved dragon-gold's regions by under 0.1%. Dielectric ones differ
-            # (Disney's diffuse against Lambert's): not translated.
+            # which moved dragon-gold's regions by under 0.1%. Dielectric
+            # ones differ (Disney's diffuse against Lambert's): not
+            # translated.
             extra = [key for key in m if key not in ("base_color", "metallic", "roughness")]
             if float(m.get("metallic", 0.0)) != 1.0 or extra:
                 problems.append(f"material {name!r}: metallic-roughness other than a metal "
