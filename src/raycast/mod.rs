@@ -506,34 +506,27 @@ impl Mesh {
     fn first_hit(&self, ray: &Ray, hit: &crate::accel::PrimHit, point: bool) -> FirstHit {
         let face = self.geometry.flat_prim(hit, &self.flat) as i64;
         let [a, b, c] = self.corners(hit, face);
-        let normal = (b - a).cross(c - a).normalize().as_vec3();
-        if !point {
-            return FirstHit {
-                t: hit.t,
-                face,
-                u: hit.u,
-                v: hit.v,
-                normal,
-                point: DVec3::NAN,
-            };
-        }
-        let origin = ray.origin.as_dvec3() + self.centre;
-        let direction = ray.direction.as_dvec3();
-        let point = match exact::plane_hit(origin - a, direction, [DVec3::ZERO, b - a, c - a]) {
-            Some((t, ..)) => origin + t * direction,
-            // Parallel in float64 where float32 found a hit: the f32 barycentrics.
-            None => {
-                (1.0 - f64::from(hit.u) - f64::from(hit.v)) * a
-                    + f64::from(hit.u) * b
-                    + f64::from(hit.v) * c
+        let point = if point {
+            let origin = ray.origin.as_dvec3() + self.centre;
+            let direction = ray.direction.as_dvec3();
+            match exact::plane_hit(origin - a, direction, [DVec3::ZERO, b - a, c - a]) {
+                Some((t, ..)) => origin + t * direction,
+                // Parallel in float64 where float32 found a hit: the f32 barycentrics.
+                None => {
+                    (1.0 - f64::from(hit.u) - f64::from(hit.v)) * a
+                        + f64::from(hit.u) * b
+                        + f64::from(hit.v) * c
+                }
             }
+        } else {
+            DVec3::NAN
         };
         FirstHit {
             t: hit.t,
             face,
             u: hit.u,
             v: hit.v,
-            normal,
+            normal: (b - a).cross(c - a).normalize().as_vec3(),
             point,
         }
     }
