@@ -414,6 +414,16 @@ def rmse(np, a, b):
     return float(np.sqrt(np.mean((a - b) ** 2)))
 
 
+def over_seeds(mi, np, ref, out, render):
+    """`render(seed)` (writing `out`) for RMSE_SEEDS seeds: the mean of
+    their RMSEs against `ref`, and their mean image (for `bias`)."""
+    imgs = []
+    for seed in range(RMSE_SEEDS):
+        render(seed)
+        imgs.append(read_exr(mi, np, out))
+    return statistics.mean(rmse(np, img, ref) for img in imgs), sum(imgs) / len(imgs)
+
+
 def bias(np, mean_img, ref):
     """How far the mean of a few seeds' images sits from the reference,
     region by region (3x3, as the same-image check): RMSE counts a
@@ -582,14 +592,10 @@ def bench_scene(args, mi, dr, np, path, tmp):
     seed_means = {}
 
     def strata_rmse(n):
-        errs, imgs = [], []
-        for seed in range(RMSE_SEEDS):
-            out = os.path.join(tmp, f"{name}-strat.exr")
-            run_strata(args, path, n, "stratified", out, seed=seed)
-            imgs.append(read_exr(mi, np, out))
-            errs.append(rmse(np, imgs[-1], ref))
-        seed_means[n] = sum(imgs) / len(imgs)
-        return statistics.mean(errs)
+        out = os.path.join(tmp, f"{name}-strat.exr")
+        err, seed_means[n] = over_seeds(mi, np, ref, out, lambda seed: run_strata(
+            args, path, n, "stratified", out, seed=seed))
+        return err
 
     lo, n, found = 0, 1, None
     while n <= 4 * args.ref_spp:
@@ -649,13 +655,9 @@ def noise_target(args, mi, np, path, name, tmp, ref, m_rmse, loads, m_render):
     seed_means = {}
 
     def noise_rmse(e):
-        errs, imgs = [], []
-        for seed in range(RMSE_SEEDS):
-            run_strata(args, path, args.noise_spp, None, out, seed=seed, noise=f"{e:.5g}")
-            imgs.append(read_exr(mi, np, out))
-            errs.append(rmse(np, imgs[-1], ref))
-        seed_means[e] = sum(imgs) / len(imgs)
-        return statistics.mean(errs)
+        err, seed_means[e] = over_seeds(mi, np, ref, out, lambda seed: run_strata(
+            args, path, args.noise_spp, None, out, seed=seed, noise=f"{e:.5g}"))
+        return err
 
     # Bracket: lo meets Mitsuba's RMSE, hi (larger) does not.
     lo, hi, found = None, None, None
