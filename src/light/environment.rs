@@ -88,7 +88,7 @@ impl Environment {
     #[inline]
     pub fn sample(&self, n: Option<Vec3>, u: Vec2, method: LightSampling) -> Option<EnvSample> {
         match (&self.emission, method, n) {
-            (Emission::Constant(l), LightSampling::SolidAngle, Some(n)) => {
+            (Emission::Constant(l), m, Some(n)) if m.by_solid_angle() => {
                 // Cosine-weighted about n (Malley's method on the concentric disk).
                 let d = concentric_disk(u);
                 let z = (1.0 - d.length_squared()).max(0.0).sqrt();
@@ -99,7 +99,7 @@ impl Environment {
                     pdf,
                 })
             }
-            (Emission::Map(map), LightSampling::SolidAngle, _) => {
+            (Emission::Map(map), m, _) if m.by_solid_angle() => {
                 let (uv, pdf_uv) = map.distribution.sample(u);
                 let (local, sin_theta) = uv_to_direction(uv);
                 let pdf = pdf_uv / (2.0 * PI * PI * sin_theta);
@@ -125,10 +125,10 @@ impl Environment {
     #[inline]
     pub fn pdf(&self, n: Option<Vec3>, wi: Vec3, method: LightSampling) -> f32 {
         match (&self.emission, method, n) {
-            (Emission::Constant(_), LightSampling::SolidAngle, Some(n)) => {
+            (Emission::Constant(_), m, Some(n)) if m.by_solid_angle() => {
                 n.dot(wi).max(0.0) * FRAC_1_PI
             }
-            (Emission::Map(map), LightSampling::SolidAngle, _) => {
+            (Emission::Map(map), m, _) if m.by_solid_angle() => {
                 let local = self.to_world.transpose() * wi;
                 let sin_theta = (1.0 - local.y * local.y).max(0.0).sqrt();
                 if sin_theta > 0.0 {

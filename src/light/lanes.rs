@@ -2,7 +2,7 @@
 //! SIMD lane: each lane samples exactly what [`Light::seen_from`] samples
 //! from its point alone.
 
-use super::sample::towards;
+use super::sample::{subtends_much, towards};
 use super::{Light, LightFrom, LightSample, LightSampling};
 use crate::math::lanes::{mask_lanes, LANES};
 use crate::sampling::spherical_rect_lanes::SphericalRects;
@@ -29,8 +29,26 @@ impl Light {
                 seen: self.seen_from(points[lane], method),
             };
         }
-        if let Some((rect, radiance)) = self.solid_angle_rect(method) {
-            let rects = SphericalRects::new(points, active, rect.corner, rect.edge_u, rect.edge_v);
+        if let Some((rect, radiance)) = self.rect_by_solid_angle_somewhere(method) {
+            // The lanes whose points see the light large enough for its
+            // spherical rectangle; the others (and the lanes where it
+            // cannot be built) sample it by area.
+            let mut wanted = active;
+            if method == LightSampling::Auto {
+                for i in mask_lanes(active) {
+                    if !subtends_much(rect, points[i]) {
+                        wanted &= !(1 << i);
+                    }
+                }
+            }
+            if wanted == 0 {
+                return LightLanes::Each {
+                    light: self,
+                    points: *points,
+                    method: LightSampling::Area,
+                };
+            }
+            let rects = SphericalRects::new(points, wanted, rect.corner, rect.edge_u, rect.edge_v);
             return LightLanes::Rects {
                 light: self,
                 points: *points,
@@ -101,7 +119,8 @@ impl LightLanes<'_> {
                     if rects.valid() >> i & 1 != 0 {
                         out[i] = towards(points[i], q[i], *normal, weight[i], None);
                     } else {
-                        // The point is (nearly) in the light's plane: sample by area.
+                        // The point is (nearly) in the light's plane, or
+                        // sees the light small (`auto`): sample by area.
                         out[i] = light.sample_from(points[i], u[i], LightSampling::Area);
                     }
                 }
@@ -176,6 +195,8 @@ mod tests {
         };
         let mut rng = seeded(11);
         let mut sampled = 0;
+        // Under `auto`, lanes of the rect lights that look large and small.
+        let (mut large, mut small) = (0, 0);
         for case in 0..3000 {
             let light = &lights[case % lights.len()];
             let points: [Vec3; LANES] = std::array::from_fn(|lane| match (case + lane) % 4 {
@@ -190,7 +211,19 @@ mod tests {
             });
             let active = 1 + (rng.unit() * 255.0) as u32;
             let u: [Vec2; LANES] = std::array::from_fn(|_| Vec2::new(rng.unit(), rng.unit()));
-            for method in [LightSampling::Area, LightSampling::SolidAngle] {
+            if let Some((rect, _)) = light.rect_by_solid_angle_somewhere(LightSampling::Auto) {
+                for i in mask_lanes(active) {
+                    match subtends_much(rect, points[i]) {
+                        true => large += 1,
+                        false => small += 1,
+                    }
+                }
+            }
+            for method in [
+                LightSampling::Area,
+                LightSampling::SolidAngle,
+                LightSampling::Auto,
+            ] {
                 let lanes = light
                     .seen_from_lanes(&points, active, method)
                     .sample(active, &u);
@@ -206,5 +239,9 @@ mod tests {
             }
         }
         assert!(sampled > 10_000, "only {sampled} samples reached a light");
+        assert!(
+            large > 200 && small > 1000,
+            "auto: {large} large, {small} small"
+        );
     }
 }

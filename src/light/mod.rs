@@ -52,6 +52,9 @@
 //! Zimmerman 1996, "Monte Carlo Techniques for Direct Lighting
 //! Calculations"); disks, parallelograms and points inside a sphere light
 //! fall back to sampling by area, which `light_sampling = "area"` forces.
+//! `light_sampling = "auto"` (the path integrator's default) samples a rect
+//! light by area from the points where it looks small
+//! ([`SMALL_SOLID_ANGLE`]), by solid angle elsewhere.
 //! The environment light ([`environment`]) has its own sampling. Glowing
 //! surfaces are one more light for the path integrator ([`emitters`]).
 
@@ -65,7 +68,7 @@ mod spot;
 pub use emitters::{EmissionTexture, Emitter, EmitterId, Emitters, NO_PART};
 pub use environment::Environment;
 pub use lanes::LightLanes;
-pub use sample::{LightFrom, LightSample, LightSampling};
+pub use sample::{LightFrom, LightSample, LightSampling, SMALL_SOLID_ANGLE};
 pub use spot::{spot_falloff, spot_power};
 
 use crate::shape::disk::Disk;

@@ -33,7 +33,7 @@ impl Light {
         let pdf = match *self {
             Light::Rect { rect, .. } => {
                 let solid_angle = self
-                    .solid_angle_rect(method)
+                    .solid_angle_rect(p, method)
                     .and_then(|_| SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v));
                 match solid_angle {
                     Some(s) if -rect.normal.dot(wi) > 0.0 => 1.0 / s.solid_angle,
@@ -44,7 +44,7 @@ impl Light {
             Light::Disk { disk, .. } => by_area(disk.area(), true),
             Light::Sphere { center, radius, .. } => {
                 let cone = super::sphere_cone(p, center, radius);
-                if let (LightSampling::SolidAngle, Some((_, solid_angle))) = (method, cone) {
+                if let (true, Some((_, solid_angle))) = (method.by_solid_angle(), cone) {
                     1.0 / solid_angle
                 } else {
                     // Sampled over the sphere's area, whose samples see only
@@ -102,9 +102,22 @@ mod tests {
                 prim: 0,
             },
         ];
-        let p = Vec3::new(0.1, 0.0, 0.2);
-        for light in &lights {
-            for method in [LightSampling::Area, LightSampling::SolidAngle] {
+        // The rect light subtends about 0.5 sr from the first point and
+        // 0.014 from the second: `auto` samples it by solid angle from
+        // the one and by area from the other.
+        let points = [Vec3::new(0.1, 0.0, 0.2), Vec3::new(0.1, -10.0, 0.2)];
+        assert!(lights[0]
+            .solid_angle_rect(points[0], LightSampling::Auto)
+            .is_some());
+        assert!(lights[0]
+            .solid_angle_rect(points[1], LightSampling::Auto)
+            .is_none());
+        for (light, p) in lights.iter().flat_map(|l| points.map(|p| (l, p))) {
+            for method in [
+                LightSampling::Area,
+                LightSampling::SolidAngle,
+                LightSampling::Auto,
+            ] {
                 let mut drawn = 0;
                 for i in 0..16 {
                     let u = Vec2::new((i as f32 + 0.5) / 16.0, (i as f32 * 7.0 + 0.5) / 16.0 % 1.0);
@@ -123,11 +136,14 @@ mod tests {
                     let got = light.pdf(p, q, n, method);
                     assert!(
                         (got - want).abs() <= 2e-3 * want,
-                        "{light:?} {method:?}: {got} vs {want}"
+                        "{light:?} {method:?} from {p}: {got} vs {want}"
                     );
                 }
                 // (A sphere drawn by area shows its far half from behind.)
-                assert!(drawn >= 5, "{light:?} {method:?}: {drawn} samples of 16");
+                assert!(
+                    drawn >= 5,
+                    "{light:?} {method:?} from {p}: {drawn} samples of 16"
+                );
             }
         }
     }

@@ -19,7 +19,43 @@ crate::mode::mode_enum! {
         /// Uniform over the solid angle the light subtends, where we can.
         #[default]
         SolidAngle = "solid_angle" | "solid-angle",
+        /// As `solid_angle`, but a rect light that subtends less than
+        /// `SMALL_SOLID_ANGLE` at the shading point by area, where the
+        /// two densities nearly agree and area's samples cost a tenth as
+        /// much (the path integrator's default).
+        Auto = "auto",
     }
+}
+
+/// The solid angle (sr) below which `auto` samples a rect light by area,
+/// as seen from a shading point: there area sampling's density in solid
+/// angle, r²/(A cosθ), varies by about Ω/2 across the light, so its
+/// samples' weights are nearly as even as the spherical rectangle's, which
+/// costs a dozen dependent divisions, roots and arc cosines to build and
+/// to sample (Ureña, Fajardo and King 2013). Measured in docs/mitsuba.md,
+/// "Rect lights by area where they look small".
+pub const SMALL_SOLID_ANGLE: f32 = 0.1;
+
+impl LightSampling {
+    /// Whether lights with a cheap solid-angle density of their own
+    /// (spheres' cones, environment maps) are sampled by it.
+    #[inline]
+    pub fn by_solid_angle(self) -> bool {
+        self != LightSampling::Area
+    }
+}
+
+/// Whether `auto` samples `rect` by solid angle from `p`: its solid angle
+/// there, estimated as A·cosθ/d² from the light's centre (d) and normal,
+/// is at least [`SMALL_SOLID_ANGLE`]. A point behind the one-sided light
+/// (which sees none of it) answers no.
+#[inline]
+pub(super) fn subtends_much(rect: &Rect, p: Vec3) -> bool {
+    let to = p - (rect.corner + 0.5 * (rect.edge_u + rect.edge_v));
+    let d2 = to.length_squared();
+    let facing = rect.normal.dot(to);
+    // A·cosθ/d² = A·(n·to)/d³ ≥ Ω₀, without a division.
+    rect.area() * facing >= SMALL_SOLID_ANGLE * d2 * d2.sqrt()
 }
 
 /// One light sample seen from a shading point.
@@ -83,7 +119,7 @@ impl Light {
     /// hit's shadow samples does only the per-sample work. The samples are
     /// exactly those of [`Light::sample`].
     pub fn seen_from(&self, p: Vec3, method: LightSampling) -> LightFrom<'_> {
-        if let Some((rect, radiance)) = self.solid_angle_rect(method) {
+        if let Some((rect, radiance)) = self.solid_angle_rect(p, method) {
             if let Some(s) = SphericalRect::new(p, rect.corner, rect.edge_u, rect.edge_v) {
                 return LightFrom::SphericalRect {
                     p,
@@ -107,13 +143,24 @@ impl Light {
     }
 
     /// The rect light and its radiance, where `method` samples it by the
-    /// solid angle of its spherical rectangle (which needs perpendicular
-    /// edges; a parallelogram is sampled by area). One decision for
-    /// [`Light::seen_from`] and [`Light::seen_from_lanes`].
-    pub(super) fn solid_angle_rect(&self, method: LightSampling) -> Option<(&Rect, Vec3)> {
+    /// solid angle of its spherical rectangle from `p` (which needs
+    /// perpendicular edges, a parallelogram being sampled by area, and
+    /// under `auto` a light that looks large from `p`). One decision for
+    /// [`Light::seen_from`], [`Light::seen_from_lanes`] and [`Light::pdf`].
+    pub(super) fn solid_angle_rect(&self, p: Vec3, method: LightSampling) -> Option<(&Rect, Vec3)> {
+        let (rect, radiance) = self.rect_by_solid_angle_somewhere(method)?;
+        (method != LightSampling::Auto || subtends_much(rect, p)).then_some((rect, radiance))
+    }
+
+    /// The rect light and its radiance, where `method` samples it by solid
+    /// angle from some points ([`Light::solid_angle_rect`] says which).
+    pub(super) fn rect_by_solid_angle_somewhere(
+        &self,
+        method: LightSampling,
+    ) -> Option<(&Rect, Vec3)> {
         match self {
             Light::Rect { rect, radiance, .. }
-                if method == LightSampling::SolidAngle && rect.is_rectangle() =>
+                if method.by_solid_angle() && rect.is_rectangle() =>
             {
                 Some((rect, *radiance))
             }
@@ -178,7 +225,7 @@ impl Light {
             } => {
                 let to_center = center - p;
                 let cone = super::sphere_cone(p, center, radius);
-                if let (LightSampling::SolidAngle, Some((cos_max, solid_angle))) = (method, cone) {
+                if let (true, Some((cos_max, solid_angle))) = (method.by_solid_angle(), cone) {
                     // Uniform in the cone of directions that see the sphere.
                     let dc = to_center.length_squared().sqrt();
                     let frame = Frame::from_z(to_center / dc);
@@ -328,6 +375,49 @@ mod tests {
         let a = irradiance(&rect, LightSampling::Area, Vec3::Y);
         let s = irradiance(&rect, LightSampling::SolidAngle, Vec3::Y);
         assert!((a - s).abs() / s < 5e-3, "area {a} vs solid angle {s}");
+    }
+
+    /// `auto` draws a rect light's spherical rectangle where it subtends
+    /// at least [`SMALL_SOLID_ANGLE`] and its area where less (or where
+    /// the point is behind it), judged by A·cosθ/d² from its centre: a
+    /// square of side 2 (A = 4) straight overhead at height h subtends
+    /// about 4/h², so the switch is near h = √40 ≈ 6.3, and at 45° off
+    /// its axis (cosθ/d² = 1/(2√2 h²)) near h = 3.8. Either way the
+    /// samples give the exact irradiance of a square light overhead,
+    /// E = 4L·(x/√(1+x²))·atan(x/√(1+x²)) with x = 1/h (a quarter of the
+    /// square, side 1 at distance h, four times).
+    #[test]
+    fn auto_samples_a_rect_light_by_solid_angle_only_where_it_looks_large() {
+        let at = |h: f32| Light::Rect {
+            rect: Rect::new(Vec3::new(-1.0, h, -1.0), Vec3::X * 2.0, Vec3::Z * 2.0).unwrap(),
+            radiance: Vec3::ONE,
+            prim: 0,
+        };
+        let large = |light: &Light, p: Vec3| {
+            let method = LightSampling::Auto;
+            let by_solid_angle = light.solid_angle_rect(p, method).is_some();
+            let seen = matches!(light.seen_from(p, method), LightFrom::SphericalRect { .. });
+            assert_eq!(by_solid_angle, seen, "{p}");
+            by_solid_angle
+        };
+        for (h, want) in [(1.0, true), (6.0, true), (6.6, false), (30.0, false)] {
+            assert_eq!(large(&at(h), Vec3::ZERO), want, "overhead at {h}");
+        }
+        for (h, want) in [(3.6, true), (4.0, false)] {
+            assert_eq!(large(&at(h), Vec3::new(h, 0.0, 0.0)), want, "45° at {h}");
+        }
+        // Behind the light, which emits downwards: by area.
+        assert!(!large(&at(-0.5), Vec3::ZERO));
+        for h in [0.5f64, 2.0, 8.0] {
+            let x = 1.0 / h;
+            let c = x / (1.0 + x * x).sqrt();
+            let exact = 4.0 * c * c.atan();
+            let e = irradiance(&at(h as f32), LightSampling::Auto, Vec3::Y);
+            assert!(
+                (e - exact).abs() / exact < 5e-3,
+                "height {h}: {e} vs {exact}"
+            );
+        }
     }
 
     #[test]

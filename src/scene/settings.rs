@@ -17,7 +17,7 @@
 //! sampler = "stratified" # or "random"
 //! seed = 0
 //! background = [0.0, 0.0, 0.0]   # radiance of rays that hit nothing
-//! light_sampling = "solid_angle" # or "area"
+//! light_sampling = "solid_angle" # or "area", or "auto" (the path integrator's default)
 //! glossy_sampling = "lobe"       # or "uniform"
 //! noise = 0.02           # adaptive: samples where the noise is, to this target (spp the ceiling)
 //! exposure = 0.0         # stops, for 8-bit outputs (and the noise target's floor)
@@ -98,8 +98,10 @@ pub struct RenderOverrides {
     #[serde(default, deserialize_with = "super::description::optional_colour")]
     pub background: Option<[f32; 3]>,
     /// solid_angle: spherical rectangles and sphere cones where possible;
-    /// area: uniform over the light's surface [render.light_sampling; default
-    /// solid_angle]
+    /// area: uniform over the light's surface; auto: as solid_angle, but a
+    /// rect light that looks small from the point (under 0.1 sr) by area
+    /// [render.light_sampling; default solid_angle, auto under the path
+    /// integrator]
     #[arg(long)]
     pub light_sampling: Option<LightSampling>,
     /// lobe: importance-sample the cosⁿ lobe; uniform: the hemisphere, a
@@ -355,7 +357,7 @@ impl RenderSettings {
     /// layer with [`RenderOverrides::check`] first.
     pub fn merge(layers: &[&RenderOverrides]) -> Self {
         let mut s = Self::default();
-        let (mut spp_given, mut sampler_given) = (false, false);
+        let (mut spp_given, mut sampler_given, mut light_sampling_given) = (false, false, false);
         for layer in layers {
             let RenderOverrides {
                 width,
@@ -376,6 +378,7 @@ impl RenderSettings {
             } = **layer;
             spp_given |= spp.is_some();
             sampler_given |= sampler.is_some();
+            light_sampling_given |= light_sampling.is_some();
             s.width = width.unwrap_or(s.width);
             s.height = height.unwrap_or(s.height);
             s.spp = spp.unwrap_or(s.spp);
@@ -401,6 +404,14 @@ impl RenderSettings {
         // a set per pass (docs/converge.md measures the difference).
         if s.noise.is_some() && !sampler_given {
             s.sampler = SamplerKind::Sobol;
+        }
+        // Spherical rectangles where a rect light looks large, area where it
+        // looks small: the same noise for a tenth of the cost there
+        // (docs/mitsuba.md, "Rect lights by area where they look small").
+        // The seed's integrator keeps solid_angle, so that its scenes
+        // render as they always have.
+        if s.integrator == IntegratorKind::Path && !light_sampling_given {
+            s.light_sampling = LightSampling::Auto;
         }
         s
     }
@@ -449,6 +460,27 @@ mod tests {
                 RenderSettings::merge(&layers).sampler,
                 SamplerKind::Stratified
             );
+        }
+    }
+
+    /// The path integrator samples rect lights by `auto` unless a layer
+    /// names a method; the seed's integrator keeps `solid_angle`.
+    #[test]
+    fn the_path_integrator_samples_lights_by_auto_unless_a_method_is_given() {
+        let path = RenderOverrides {
+            integrator: Some(IntegratorKind::Path),
+            ..Default::default()
+        };
+        let light = |layers: &[&RenderOverrides]| RenderSettings::merge(layers).light_sampling;
+        assert_eq!(light(&[&path]), LightSampling::Auto);
+        assert_eq!(light(&[]), LightSampling::SolidAngle);
+        for method in [LightSampling::Area, LightSampling::SolidAngle] {
+            let given = RenderOverrides {
+                light_sampling: Some(method),
+                ..Default::default()
+            };
+            assert_eq!(light(&[&given, &path]), method);
+            assert_eq!(light(&[&path, &given]), method);
         }
     }
 
