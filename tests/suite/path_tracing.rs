@@ -1,8 +1,9 @@
 //! The path integrator (`integrator = "path"`): analytic answers (white
 //! furnaces, the bounce series inside a glowing sphere), glowing surfaces
-//! against the lights they equal, indirect light that the distribution
-//! integrator lacks and that converges as 1/N, and images bit-identical
-//! across threads, slices and noise targets.
+//! against the lights they equal, `auto` light sampling against either
+//! method it mixes, indirect light that the distribution integrator lacks
+//! and that converges as 1/N, and images bit-identical across threads,
+//! slices and noise targets.
 
 use crate::common::films::{film_of, part, pixel_means};
 use crate::common::scene;
@@ -154,6 +155,62 @@ fn glowing_surfaces_light_the_room_as_the_lights_they_equal() {
             (a - b).abs() < 4.0 * se + 2e-3 * a,
             "light {a} ± {sa} vs glowing {b} ± {sb}"
         );
+    }
+}
+
+/// `light_sampling = "auto"` (the path integrator's default) samples a
+/// rect light by its spherical rectangle where it looks large and by its
+/// area where it looks small, and weighs BSDF rays that hit the light by
+/// the density of the method chosen at their origin: a floor under a low
+/// square light, seen from the light's foot (large) to far off (small),
+/// comes out as under either method alone, in the near and the far half
+/// of the image alike. The renders share their random numbers, so each
+/// seed's difference is compared with the spread of those differences.
+/// (A glossy sphere under the light made the differences heavy-tailed:
+/// with area sampling its highlight is found rarely and brightly.)
+#[test]
+fn auto_light_sampling_gives_the_image_of_either_method() {
+    const SEEDS: u32 = 32;
+    let text = |method: &str| {
+        format!(
+            "[render]\nwidth = 12\nheight = 8\nintegrator = \"path\"\nmax_depth = 2\n\
+             light_sampling = \"{method}\"\n\
+             [camera]\nposition = [0.0, 2.5, 1.5]\nlook_at = [0.0, 0.0, -1.0]\nfov = 40.0\n\
+             [[lights]]\ntype = \"rect\"\ncorner = [-0.4, 0.8, -0.4]\nedge_u = [0.8, 0.0, 0.0]\n\
+             edge_v = [0.0, 0.0, 0.8]\nradiance = [50.0, 50.0, 50.0]\n\
+             [[objects]]\nplane = {{ normal = [0.0, 1.0, 0.0] }}\n"
+        )
+    };
+    // Per seed, the mean of the top half of the image (the floor far off)
+    // and of the bottom half (near the light's foot).
+    let halves = |method: &str| -> Vec<[f64; 2]> {
+        let s = scene(&text(method));
+        (0..SEEDS)
+            .map(|seed| {
+                let p = pixels(&s, seed, 32);
+                let mean = |rows: std::ops::Range<usize>| {
+                    rows.flat_map(|y| (0..12).map(move |x| y * 12 + x))
+                        .map(|i| p[i].x as f64)
+                        .sum::<f64>()
+                        / 48.0
+                };
+                [mean(0..4), mean(4..8)]
+            })
+            .collect()
+    };
+    let auto = halves("auto");
+    for method in ["solid_angle", "area"] {
+        let other = halves(method);
+        for (h, half) in ["far", "near"].into_iter().enumerate() {
+            let a = auto.iter().map(|m| m[h]).sum::<f64>() / SEEDS as f64;
+            let differences: Vec<f64> = auto.iter().zip(&other).map(|(a, b)| a[h] - b[h]).collect();
+            let (d, se) = mean_and_se(&differences);
+            assert!(a > 0.01, "{half}: lit {a}");
+            assert!(
+                d.abs() < 4.0 * se + 1e-4 * a,
+                "{half}: auto {a}, {method} differs by {d} ± {se}"
+            );
+        }
     }
 }
 
