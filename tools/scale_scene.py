@@ -58,6 +58,17 @@ def scale_table(table, lengths, other, factor, where):
     return out
 
 
+def files_absolute(table, here):
+    """`table` with each string value that names a file beside the scene
+    (a texture, an environment map) made absolute, so that the copy,
+    written elsewhere, still finds it."""
+    def fix(v):
+        if isinstance(v, str) and not os.path.isabs(v) and os.path.isfile(os.path.join(here, v)):
+            return os.path.join(here, v)
+        return v
+    return {k: fix(v) for k, v in table.items()}
+
+
 def read_ply(path):
     """Vertices (n, 3) float64 and triangles (m, 3) of an ASCII or binary
     little-endian PLY whose vertices are float x, y, z and faces triangles."""
@@ -153,14 +164,17 @@ def main():
     k = a.factor
     out = {}
     for key, value in doc.items():
-        if key in ("render", "materials"):
+        if key == "render":
             out[key] = value
+        elif key == "materials":
+            out[key] = {name: files_absolute(m, here) for name, m in value.items()}
         elif key == "camera":
             out[key] = scale_table(value, CAMERA_LENGTHS, CAMERA_OTHER, k, "camera")
         elif key == "lights":
             out[key] = []
             for i, light in enumerate(value):
-                s = scale_table(light, LIGHT_LENGTHS | {"intensity"}, LIGHT_OTHER, k, f"lights[{i}]")
+                s = scale_table(files_absolute(light, here), LIGHT_LENGTHS | {"intensity"},
+                                LIGHT_OTHER, k, f"lights[{i}]")
                 if "intensity" in light:
                     s["intensity"] = scaled(light["intensity"], k * k)
                 out[key].append(s)

@@ -21,8 +21,8 @@ crate::mode::mode_enum! {
         SolidAngle = "solid_angle" | "solid-angle",
         /// As `solid_angle`, but a rect light that subtends less than
         /// `SMALL_SOLID_ANGLE` at the shading point by area, where the
-        /// two densities nearly agree and area's samples cost a tenth as
-        /// much (the path integrator's default).
+        /// two densities nearly agree and area's samples cost less (the
+        /// path integrator's default).
         Auto = "auto",
     }
 }
