@@ -51,7 +51,7 @@ impl LightSampling {
 /// (which sees none of it) answers no.
 #[inline]
 pub(super) fn subtends_much(rect: &Rect, p: Vec3) -> bool {
-    let to = p - (rect.corner + 0.5 * (rect.edge_u + rect.edge_v));
+    let to = p - rect.point(0.5, 0.5);
     let d2 = to.length_squared();
     let facing = rect.normal.dot(to);
     // A·cosθ/d² = A·(n·to)/d³ ≥ Ω₀, without a division.
