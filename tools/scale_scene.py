@@ -7,8 +7,10 @@
 Positions, edges, radii and the camera's focus distance and aperture are
 scaled; radiance is not (a surface's radiance does not depend on the
 units), and point and spot intensities are scaled by FACTOR² so that the
-irradiance they give, I/r², stays the same. Meshes (PLY only, triangles,
-float x y z) are written scaled beside the output as NAME-xFACTOR.ply.
+irradiance they give, I/r², stays the same. PLY meshes, read as strata
+reads them (validate_embree.py's reader: float32 positions, polygons
+fanned), are written scaled beside the output as NAME-xFACTOR.ply; an OBJ
+is refused (its materials would be lost).
 
 What it is for: a renderer whose ray offsets are absolute (Mitsuba 3
 spawns rays (1 + max|p|)·1500·2⁻²⁴ off a surface) shows them less in
@@ -25,7 +27,9 @@ import os
 import sys
 import tomllib
 
-import numpy as np
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import numpy as np  # noqa: E402
+from validate_embree import InputError, load_ply  # noqa: E402
 
 CAMERA_LENGTHS = {"position", "look_at", "focus_distance", "aperture", "height"}
 CAMERA_OTHER = {"type", "fov", "up"}
@@ -67,43 +71,6 @@ def files_absolute(table, here):
             return os.path.join(here, v)
         return v
     return {k: fix(v) for k, v in table.items()}
-
-
-def read_ply(path):
-    """Vertices (n, 3) float64 and triangles (m, 3) of an ASCII or binary
-    little-endian PLY whose vertices are float x, y, z and faces triangles."""
-    with open(path, "rb") as f:
-        header = []
-        while True:
-            line = f.readline()
-            if not line:
-                sys.exit(f"scale_scene.py: {path}: no end_header")
-            header.append(line.decode("ascii", "replace").strip())
-            if header[-1] == "end_header":
-                break
-        fmt = next(h.split()[1] for h in header if h.startswith("format"))
-        nv = int(next(h.split()[2] for h in header if h.startswith("element vertex")))
-        nf = int(next(h.split()[2] for h in header if h.startswith("element face")))
-        props = [h for h in header if h.startswith("property")]
-        if props[:3] != ["property float x", "property float y", "property float z"] or len(props) != 4:
-            sys.exit(f"scale_scene.py: {path}: only float x y z vertices and one face list are read")
-        if fmt == "ascii":
-            v = np.loadtxt(f, max_rows=nv, dtype=np.float64, ndmin=2)
-            faces = np.loadtxt(f, max_rows=nf, dtype=np.int64, ndmin=2)
-            if (faces[:, 0] != 3).any():
-                sys.exit(f"scale_scene.py: {path}: a face that is not a triangle")
-            return v, faces[:, 1:4]
-        if fmt != "binary_little_endian":
-            sys.exit(f"scale_scene.py: {path}: format {fmt} is not read")
-        v = np.frombuffer(f.read(12 * nv), dtype="<f4").reshape(nv, 3).astype(np.float64)
-        kind = props[3].split()
-        index = {"int": "<i4", "uint": "<u4", "int32": "<i4", "uint32": "<u4"}.get(kind[3])
-        if kind[2] not in ("uchar", "uint8") or index is None:
-            sys.exit(f"scale_scene.py: {path}: face list {' '.join(kind[2:4])} is not read")
-        rec = np.frombuffer(f.read(13 * nf), dtype=[("n", "u1"), ("i", index, (3,))])
-        if (rec["n"] != 3).any():
-            sys.exit(f"scale_scene.py: {path}: a face that is not a triangle")
-        return v, rec["i"].astype(np.int64)
 
 
 def write_ply(path, v, faces):
@@ -191,8 +158,11 @@ def main():
                         if not src.lower().endswith(".ply"):
                             sys.exit(f"scale_scene.py: objects[{i}].mesh: {x}: only PLY meshes are scaled")
                         name = f"{os.path.splitext(os.path.basename(src))[0]}-x{a.factor:g}.ply"
-                        v, faces = read_ply(src)
-                        write_ply(os.path.join(there, name), v * k, faces)
+                        try:
+                            v, faces = load_ply(src)
+                        except InputError as e:
+                            sys.exit(f"scale_scene.py: {e}")
+                        write_ply(os.path.join(there, name), v.astype(np.float64) * k, faces)
                         s[field] = name
                     elif field in ("material", "name"):
                         s[field] = x
