@@ -430,11 +430,19 @@ def bias(np, mean_img, ref):
     systematic offset only beside the noise, so an estimator biased by a
     few percent (a noise target's pixels that stop before they meet a rare
     bright path, docs/mitsuba.md) can still reach Mitsuba's RMSE."""
-    ms, ss = region_means(np, ref), region_means(np, mean_img)
-    floor = 0.01 * max(ms)
-    devs = [(s - m) / max(m, floor) for m, s in zip(ms, ss)]
+    devs = region_deviations(np, mean_img, ref)[2]
     return (f"its {RMSE_SEEDS} seeds' mean image, 3x3 region means against the reference: "
             + " ".join(f"{100 * d:+.1f}%" for d in devs))
+
+
+def region_deviations(np, img, ref):
+    """The 3x3 region means of `ref` and of `img`, and each region's
+    relative deviation, against the larger of the reference's mean and a
+    floor of 1% of its brightest region (so that a dark region's noise
+    does not count as a difference)."""
+    ms, ss = region_means(np, ref), region_means(np, img)
+    floor = 0.01 * max(ms)
+    return ms, ss, [(s - m) / max(m, floor) for m, s in zip(ms, ss)]
 
 
 def region_means(np, img, k=3):
@@ -530,17 +538,15 @@ def bench_scene(args, mi, dr, np, path, tmp):
     check = os.path.join(tmp, f"{name}-check.exr")
     run_strata(args, path, args.ref_spp, "stratified", check)
     mine = read_exr(mi, np, check)
-    ms, ss = region_means(np, ref), region_means(np, mine)
-    floor = 0.01 * max(ms)
-    within = args.same_within / 100
-    bad = [i for i, (m, s) in enumerate(zip(ms, ss)) if abs(s - m) > within * max(m, floor)]
+    ms, ss, devs = region_deviations(np, mine, ref)
+    bad = [i for i, d in enumerate(devs) if abs(d) > args.same_within / 100]
     if mine.shape != ref.shape or bad:
         print(f"{name}: NOT COMPARED: the renderers disagree at {args.ref_spp} spp "
               f"(3x3 region means, row-major; regions {bad} differ by more than {args.same_within:g}%):")
         print("  mitsuba " + " ".join(f"{m:.5f}" for m in ms))
         print("  strata  " + " ".join(f"{s:.5f}" for s in ss))
         return None
-    worst = max(abs(s - m) / max(m, floor) for m, s in zip(ms, ss))
+    worst = max(abs(d) for d in devs)
     # Per pixel too: blur, edges and highlights that region means average
     # away (a lens of twice the radius, a plane of focus 8% nearer).
     print(f"{name}: same image: 3x3 region means agree within {100 * worst:.2f}% at {args.ref_spp} spp; "
