@@ -2,7 +2,7 @@
 //! SIMD lane: each lane samples exactly what [`Light::seen_from`] samples
 //! from its point alone.
 
-use super::sample::{subtends_much, towards};
+use super::sample::{by_solid_angle_from, towards};
 use super::{Light, LightFrom, LightSample, LightSampling};
 use crate::math::lanes::{mask_lanes, LANES};
 use crate::sampling::spherical_rect_lanes::SphericalRects;
@@ -30,15 +30,13 @@ impl Light {
             };
         }
         if let Some((rect, radiance)) = self.rect_by_solid_angle_somewhere(method) {
-            // The lanes whose points see the light large enough for its
-            // spherical rectangle; the others (and the lanes where it
-            // cannot be built) sample it by area.
+            // The lanes whose points sample it by its spherical rectangle
+            // (the scalar code's decision, `by_solid_angle_from`); the
+            // others (and the lanes where it cannot be built) by area.
             let mut wanted = active;
-            if method == LightSampling::Auto {
-                for i in mask_lanes(active) {
-                    if !subtends_much(rect, points[i]) {
-                        wanted &= !(1 << i);
-                    }
+            for i in mask_lanes(active) {
+                if !by_solid_angle_from(rect, points[i], method) {
+                    wanted &= !(1 << i);
                 }
             }
             if wanted == 0 {
@@ -141,6 +139,7 @@ impl LightLanes<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::sample::subtends_much;
     use super::*;
     use crate::shape::disk::Disk;
     use crate::shape::rect::Rect;

@@ -45,6 +45,16 @@ impl LightSampling {
     }
 }
 
+/// Whether `method`, which samples the rectangle `rect` by solid angle
+/// from some points ([`Light::rect_by_solid_angle_somewhere`]), does from
+/// `p`: everywhere but under `auto`, which asks [`subtends_much`]. The
+/// per-point part of [`Light::solid_angle_rect`], which the lanes ask per
+/// lane.
+#[inline]
+pub(super) fn by_solid_angle_from(rect: &Rect, p: Vec3, method: LightSampling) -> bool {
+    method != LightSampling::Auto || subtends_much(rect, p)
+}
+
 /// Whether `auto` samples `rect` by solid angle from `p`: its solid angle
 /// there, estimated as A·cosθ/d² from the light's centre (d) and normal,
 /// is at least [`SMALL_SOLID_ANGLE`]. A point behind the one-sided light
@@ -149,7 +159,7 @@ impl Light {
     /// [`Light::seen_from`], [`Light::seen_from_lanes`] and [`Light::pdf`].
     pub(super) fn solid_angle_rect(&self, p: Vec3, method: LightSampling) -> Option<(&Rect, Vec3)> {
         let (rect, radiance) = self.rect_by_solid_angle_somewhere(method)?;
-        (method != LightSampling::Auto || subtends_much(rect, p)).then_some((rect, radiance))
+        by_solid_angle_from(rect, p, method).then_some((rect, radiance))
     }
 
     /// The rect light and its radiance, where `method` samples it by solid
