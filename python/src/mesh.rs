@@ -65,10 +65,28 @@ fn column<T: Clone + Default>(wanted: bool, len: usize) -> Vec<T> {
 struct Fields([bool; 6]);
 
 impl Fields {
-    fn new(fields: Option<Vec<String>>) -> PyResult<Self> {
-        let Some(names) = fields else {
+    /// The arrays `fields` names: a sequence of names, or None for all.
+    /// A str alone is refused in words (pyo3 would say it "can't extract
+    /// `str` to `Vec`"), not read as a list of its letters.
+    fn new(fields: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let Some(fields) = fields.filter(|f| !f.is_none()) else {
             return Ok(Self([true; 6]));
         };
+        if fields.cast::<pyo3::types::PyString>().is_ok() {
+            let name = fields.repr()?;
+            return Err(PyTypeError::new_err(format!(
+                "fields must be a sequence of names such as (\"t\", \"prim\"); got the str {name}: write ({name},) for that one"
+            )));
+        }
+        let names: Vec<String> = fields.extract().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "fields must be a sequence of names from {}; got {}",
+                HITS_KEYS.join(", "),
+                fields
+                    .repr()
+                    .map_or_else(|_| "an object".to_string(), |r| r.to_string())
+            ))
+        })?;
         let mut wanted = [false; 6];
         for name in names {
             let Some(k) = HITS_KEYS.iter().position(|&key| key == name) else {
@@ -439,7 +457,7 @@ impl Mesh {
         threads: Option<i64>,
         t_min: Option<f64>,
         bad_rays: &str,
-        fields: Option<Vec<String>>,
+        fields: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
         let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
@@ -485,6 +503,7 @@ impl Mesh {
             v: maybe(py, to("v", &[]), v, lead.as_deref(), n)?,
             normal: maybe(py, to("normal", &[3]), normal, lead.as_deref(), n)?,
             point: maybe(py, to("point", &[3]), point, lead.as_deref(), n)?,
+            shape: lead.unwrap_or_else(|| vec![n]),
         })
     }
 
@@ -671,6 +690,7 @@ impl Mesh {
             prim: shaped(py, prim, lead.as_deref(), n, &[])?,
             u: shaped(py, u, lead.as_deref(), n, &[])?,
             v: shaped(py, v, lead.as_deref(), n, &[])?,
+            shape: lead.unwrap_or_else(|| vec![n]),
         })
     }
 }

@@ -1,7 +1,7 @@
 //! The named results of `Mesh`'s queries: arrays as attributes or keys.
 
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
-use pyo3::exceptions::PyKeyError;
+use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 
 /// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
@@ -29,6 +29,39 @@ pub struct Hits {
     /// precision, wherever the mesh lies); NaN on a miss.
     #[pyo3(get)]
     pub(crate) point: Option<Py<PyArrayDyn<f64>>>,
+    /// The rays' leading shape (`[n]` for an (n, 3) input, `[]` for one
+    /// ray given as (3,)): what `len` and the repr count, with or without
+    /// any array computed.
+    pub(crate) shape: Vec<usize>,
+}
+
+/// `len()` of a result over a leading shape: its first axis, as numpy's
+/// `len`; a TypeError for one ray or point given alone, whose arrays are
+/// 0-d (numpy's "len() of unsized object").
+fn first_axis(shape: &[usize], what: &str) -> PyResult<usize> {
+    shape.first().copied().ok_or_else(|| {
+        PyTypeError::new_err(format!(
+            "len() of {what} of one {} given alone: its arrays are 0-d",
+            if what == "ClosestPoints" {
+                "point"
+            } else {
+                "ray"
+            }
+        ))
+    })
+}
+
+/// "1 ray", "5 rays", or "10 rays in shape (2, 5)": how many queries a
+/// result answers, and their shape where it is not a plain list.
+fn counted(shape: &[usize], noun: &str) -> String {
+    let n: usize = shape.iter().product();
+    let plural = if n == 1 { "" } else { "s" };
+    if shape.len() == 1 || shape.is_empty() {
+        format!("{n} {noun}{plural}")
+    } else {
+        let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+        format!("{n} {noun}{plural} in shape ({})", dims.join(", "))
+    }
 }
 
 pub const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
@@ -63,26 +96,35 @@ impl Hits {
         self.__getitem__(py, key).is_ok()
     }
 
-    /// The number of rays.
-    fn __len__(&self, py: Python<'_>) -> usize {
-        HITS_KEYS
-            .into_iter()
-            .find_map(|k| self.__getitem__(py, k).ok())
-            .and_then(|a| a.bind(py).len().ok())
-            .unwrap_or(0)
+    /// The length of the rays' first axis (the number of rays for an
+    /// (n, 3) input), as numpy's ``len``; a TypeError for one ray given as (3,).
+    fn __len__(&self) -> PyResult<usize> {
+        first_axis(&self.shape, "Hits")
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
-        let n = self.__len__(py);
-        let hits = match &self.prim {
-            Some(p) => p
+        // Counted from whichever of prim and t was computed.
+        let hits = match (&self.prim, &self.t) {
+            (Some(p), _) => p
                 .bind(py)
                 .to_vec()
-                .map_or(0, |p| p.iter().filter(|&&p| p >= 0).count()),
-            None => 0,
+                .ok()
+                .map(|p| p.iter().filter(|&&p| p >= 0).count()),
+            (None, Some(t)) => t
+                .bind(py)
+                .to_vec()
+                .ok()
+                .map(|t| t.iter().filter(|t| t.is_finite()).count()),
+            (None, None) => None,
+        };
+        let hits = match hits {
+            Some(1) => ", 1 hit".to_string(),
+            Some(h) => format!(", {h} hits"),
+            None => String::new(),
         };
         format!(
-            "Hits({n} rays, {hits} hit; keys {})",
+            "Hits({}{hits}; keys {})",
+            counted(&self.shape, "ray"),
             self.keys(py).join(", ")
         )
     }
@@ -108,6 +150,8 @@ pub struct ClosestPoints {
     /// float64 (n,): barycentric coordinate of the face's third vertex at the point; NaN where none.
     #[pyo3(get)]
     pub(crate) v: Py<PyArrayDyn<f64>>,
+    /// The points' leading shape, as [`Hits::shape`].
+    pub(crate) shape: Vec<usize>,
 }
 
 const CLOSEST_KEYS: [&str; 5] = ["point", "distance", "prim", "u", "v"];
@@ -136,14 +180,17 @@ impl ClosestPoints {
         CLOSEST_KEYS.contains(&key)
     }
 
-    /// The number of query points.
-    fn __len__(&self, py: Python<'_>) -> usize {
-        self.distance.bind(py).len().unwrap_or(0)
+    /// The length of the points' first axis (the number of points for an
+    /// (n, 3) input), as numpy's ``len``; a TypeError for one point given as (3,).
+    fn __len__(&self) -> PyResult<usize> {
+        first_axis(&self.shape, "ClosestPoints")
     }
 
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let n = self.distance.bind(py).len().unwrap_or(0);
-        format!("ClosestPoints({n} points; keys point, distance, prim, u, v)")
+    fn __repr__(&self) -> String {
+        format!(
+            "ClosestPoints({}; keys point, distance, prim, u, v)",
+            counted(&self.shape, "point")
+        )
     }
 }
 

@@ -42,7 +42,8 @@ class Hits:
     def __contains__(self, key: str) -> bool:
         """Whether ``key`` names one of the arrays."""
     def __len__(self) -> int:
-        """The number of rays."""
+        """The length of the rays' first axis (the number of rays for an (n, 3) input), as
+        numpy's ``len``; a TypeError for one ray given as (3,)."""
 
 class ClosestPoints:
     """The nearest surface point to each query point (``Mesh.closest_point``), as attributes or keys."""
@@ -70,7 +71,8 @@ class ClosestPoints:
     def __contains__(self, key: str) -> bool:
         """Whether ``key`` names one of the arrays."""
     def __len__(self) -> int:
-        """The number of query points."""
+        """The length of the points' first axis (the number of points for an (n, 3) input),
+        as numpy's ``len``; a TypeError for one point given as (3,)."""
 
 class Crossings:
     """Every crossing of each ray (``Mesh.all_hits``), ray after ray, each ray's nearest first,

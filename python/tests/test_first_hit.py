@@ -190,6 +190,12 @@ def test_fields_computes_only_what_is_asked(bumpy):
     np.testing.assert_array_equal(some.prim, every.prim)
     with pytest.raises(ValueError, match="fields"):
         mesh.intersect(origins, directions, fields=("depth",))
+    # One name alone is not a sequence of its letters.
+    with pytest.raises(TypeError, match=r"fields must be a sequence of names .* got the str 't'"):
+        mesh.intersect(origins, directions, fields="t")
+    with pytest.raises(TypeError, match="fields must be a sequence of names from t, prim"):
+        mesh.intersect(origins, directions, fields=[1, 2])
+    assert mesh.intersect(origins, directions, fields=None).keys() == every.keys()
 
 
 def test_inputs_of_any_leading_shape_answer_in_that_shape(bumpy):
@@ -236,3 +242,32 @@ def test_one_row_given_as_a_vector_answers_as_a_scalar(bumpy):
     assert near.point.shape == (3,) and near.distance == mesh.closest_point(p[None]).distance[0]
     with pytest.raises(ValueError, match=r"origins must be an \(n, 3\) array of floats; got shape \(4,\)"):
         mesh.intersect(np.zeros(4), np.zeros(4))
+
+
+def test_len_and_repr_count_the_queries_in_any_shape(bumpy):
+    # len() is the first axis, as numpy's; the repr counts every query
+    # (and names the shape where it is not a list), with or without an
+    # array computed; one ray or point given alone has no len(), as a 0-d
+    # numpy array has none.
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(6)
+    o, d = helpers.random_rays(rng, vertices, 60)
+    flat = mesh.intersect(o, d)
+    hits = int((flat.prim >= 0).sum())
+    assert 1 < hits < 60 and len(flat) == 60
+    assert repr(flat).startswith(f"Hits(60 rays, {hits} hits; keys t, prim")
+    grid = mesh.intersect(o.reshape(3, 4, 5, 3), d.reshape(3, 4, 5, 3), fields=("t",))
+    assert len(grid) == 3 and repr(grid) == f"Hits(60 rays in shape (3, 4, 5), {hits} hits; keys t)"
+    assert len(mesh.intersect(o, d, fields=())) == 60
+    assert repr(mesh.intersect(o, d, fields=())) == "Hits(60 rays; keys )"
+    i = int(np.flatnonzero(flat.prim >= 0)[0])
+    one = mesh.intersect(o[i], d[i])
+    assert repr(one).startswith("Hits(1 ray, 1 hit; keys")
+    with pytest.raises(TypeError, match="one ray given alone"):
+        len(one)
+    near = mesh.closest_point(rng.uniform(-1, 1, (2, 3, 3)))
+    assert len(near) == 2 and repr(near).startswith("ClosestPoints(6 points in shape (2, 3); keys")
+    assert repr(mesh.closest_point(o[0])).startswith("ClosestPoints(1 point; keys")
+    with pytest.raises(TypeError, match="one point given alone"):
+        len(mesh.closest_point(o[0]))
