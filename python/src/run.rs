@@ -17,8 +17,9 @@ pub const CHUNK: usize = 65_536;
 /// interleaved walks' worth (and a stream's span), few enough that
 /// threads balance.
 pub const TASK: usize = 256;
-/// More threads than any machine has cores: a typo, not a request.
-const MAX_THREADS: i64 = 4096;
+/// More threads than any machine has cores: a typo, not a request (the
+/// command line's limit too).
+const MAX_THREADS: i64 = strata::system::budget::MAX_THREADS as i64;
 
 /// Where a query runs: rayon's global pool (one thread per core), or a
 /// pool of a given size, built once per size and kept.

@@ -57,7 +57,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub repeats: usize,
     /// The "all threads" column (default: every core).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
     /// BVH build effort; auto picks by primitive count.
     #[arg(long, default_value = "auto")]

@@ -58,7 +58,7 @@ pub struct ConvergeArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeats: u32,
     /// Worker threads (default: all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// Also measure adaptive sampling (stratified+is with `--noise E`) at
     /// each of these noise targets, e.g. 0.1,0.05,0.025: rows named

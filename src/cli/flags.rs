@@ -371,4 +371,36 @@ mod tests {
         // A number a float or a signed option takes is passed on as it is.
         assert!(parse_from(["strata", "render", "--background", "-1"]).is_ok());
     }
+
+    /// A thread count past any machine's cores is a usage error naming the
+    /// flag and the limit, for every command that takes one (unchecked,
+    /// `--threads 100000` reserved 32 GB of stacks and never started).
+    #[test]
+    fn a_thread_count_past_any_machine_is_refused() {
+        let max = strata::system::budget::MAX_THREADS;
+        for command in [
+            &["render"][..],
+            &["trace", "m.obj", "--rays", "r", "--hits", "h"],
+            &["converge", "s.toml"],
+            &["bench"],
+        ] {
+            let mut args = command.to_vec();
+            let too_many = (max + 1).to_string();
+            args.extend(["--threads", too_many.as_str()]);
+            let text = error(&args);
+            assert!(
+                text.contains("--threads") && text.contains(&format!("at most {max}")),
+                "{args:?}: {text}"
+            );
+            let mut args = command.to_vec();
+            let most = max.to_string();
+            args.extend(["--threads", most.as_str()]);
+            assert!(
+                parse_from(["strata"].into_iter().chain(args)).is_ok(),
+                "{command:?}"
+            );
+        }
+        let text = error(&["scaling", "--max-threads", &(max + 1).to_string()]);
+        assert!(text.contains("--max-threads"), "{text}");
+    }
 }

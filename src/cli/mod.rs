@@ -75,6 +75,22 @@ pub fn writable(path: &std::path::Path, flag: &str, extensions: &[&str]) -> Resu
         .map_err(|e| InputError::new("<command line>", flag, e).into())
 }
 
+/// `--threads N`: 0 (one thread per core) to
+/// [`strata::system::budget::MAX_THREADS`]. clap calls it, so a count past
+/// that is the usual one-line usage error (exit 2) before anything starts.
+pub fn parse_threads(text: &str) -> Result<usize, String> {
+    let max = strata::system::budget::MAX_THREADS;
+    match text.parse::<usize>() {
+        Ok(n) if n <= max => Ok(n),
+        Ok(n) => Err(format!(
+            "{n} threads is more than any machine has cores: at most {max} (0 for one per core)"
+        )),
+        Err(_) => Err(format!(
+            "expected a whole number of threads from 0 (one per core) to {max}"
+        )),
+    }
+}
+
 /// A pool of `threads` threads (0: one per core).
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, CliError> {
     rayon::ThreadPoolBuilder::new()

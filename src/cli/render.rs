@@ -54,7 +54,7 @@ pub struct RenderArgs {
     pub set: Vec<Edit>,
     /// Threads for loading, the BVH build and rendering (default: all
     /// cores). The image is identical for any count.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// Render only slice k of P of every pixel's samples (0-based k), e.g. 3/8,
     /// into a .strata part; `strata merge` combines the P parts.

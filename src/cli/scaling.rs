@@ -37,7 +37,7 @@ pub struct ScalingArgs {
     /// built-in seed scene.
     pub scene: Option<PathBuf>,
     /// Largest thread count; the run measures 1, 2, 4, … and this. Default: all cores.
-    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=strata::system::budget::MAX_THREADS as u64))]
     pub max_threads: Option<usize>,
     /// Renders per configuration; the median is reported.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]

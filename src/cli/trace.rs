@@ -36,7 +36,7 @@ pub struct TraceArgs {
     #[arg(long)]
     pub occlusion: bool,
     /// Worker threads (default: all cores). The hits are identical for any count.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
     /// BVH build effort; auto picks by primitive count.
     #[arg(long, default_value = "auto")]

@@ -14,6 +14,12 @@
 use std::fmt;
 use std::sync::OnceLock;
 
+/// The most worker threads a user may ask for (the command line's
+/// `--threads`, the Python package's `threads=`): more than any machine
+/// has cores, so a larger count is a typo, not a request. Unchecked, a
+/// pool of 100,000 threads reserved 32 GB of stacks and never started.
+pub const MAX_THREADS: usize = 4096;
+
 /// What one process may allocate, and where that figure comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Budget {
