@@ -1,6 +1,6 @@
 //! `render(scene, **settings)`: `strata render` with the image returned as
 //! an array. The scene is loaded, edited and rendered by the library's own
-//! functions (`load_edited_scene`, `render::render`) and the image is the
+//! functions (`load_edited_scene` or `load_model_file`, `render::render`) and the image is the
 //! film's `to_rgb`, as the CLI writes into its EXR: the same pixels bit for
 //! bit. The thread count, passes, packets and schedule change only the time.
 
@@ -21,6 +21,7 @@ use strata::render::{
     render as render_scene, Film, Observer, RenderOptions, Schedule, SliceSpec, Warning, Window,
 };
 use strata::scene::edit::Edit;
+use strata::scene::model::{is_model_path, load_model_file};
 use strata::scene::settings::GlossySampling;
 use strata::scene::BuildQuality;
 use strata::scene::{load_edited_scene, load_edited_text, RenderOverrides};
@@ -248,15 +249,18 @@ impl Observer for Interrupt {
     }
 }
 
-/// Render a scene file as ``strata render`` does, and return the image:
-/// float32 (height, width, 3), linear RGB, the pixels of the CLI's EXR
-/// output bit for bit.
+/// Render a scene file, or a model file as it comes, as ``strata render``
+/// does, and return the image: float32 (height, width, 3), linear RGB, the
+/// pixels of the CLI's EXR output bit for bit.
 ///
 /// ``scene`` is a path (str or os.PathLike), the scene file's TOML text (a
 /// str with a line break), or a dict of its tables (``{"camera": {...},
 /// "objects": [...]}``); text and dicts render as the same file would,
 /// their relative paths resolved against the working directory and their
-/// errors naming ``<scene>``.
+/// errors naming ``<scene>``. A path to a model file (.obj, .ply, .gltf,
+/// .glb, .off, .stl) renders it with its own camera and lights, or framed
+/// and lit by a studio where it has none, as ``strata render MODEL`` does
+/// (``set`` then edits that made scene, as ``--set`` does).
 ///
 /// Every setting is the flag of the same name (``spp=64`` is ``--spp
 /// 64``), and overrides the scene file's ``[render]`` table; ``set`` edits
@@ -364,6 +368,9 @@ pub fn render(
     let source = scene_source(scene)?;
     let loaded = py.detach(|| {
         pool.install(|| match &source {
+            SceneSource::File(path) if is_model_path(path) => {
+                load_model_file(path, &edits, &overrides, quality)
+            }
             SceneSource::File(path) => load_edited_scene(path, &edits, &overrides, quality),
             SceneSource::Text(text) => {
                 let path = Path::new(TEXT_SCENE);

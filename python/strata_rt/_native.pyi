@@ -243,7 +243,8 @@ def render(
     crop: Union[Tuple[int, int, int, int], str, None] = None,
     aovs: Literal[False, None] = None,
 ) -> NDArray[np.float32]:
-    """Render a scene file as ``strata render`` does: float32 (height, width, 3), the CLI's EXR pixels bit for bit."""
+    """Render a scene file, or a model file as it comes, as ``strata render`` does: float32
+    (height, width, 3), the CLI's EXR pixels bit for bit."""
 @overload
 def render(
     scene: Union[str, os.PathLike[str], Mapping[str, Any]],
@@ -272,4 +273,5 @@ def render(
     crop: Union[Tuple[int, int, int, int], str, None] = None,
     aovs: Union[Literal[True], Sequence[Literal["albedo", "normal", "depth", "spp"]]] = ...,
 ) -> Tuple[NDArray[np.float32], Dict[str, NDArray[np.float32]]]:
-    """Render a scene file as ``strata render`` does, with its AOVs as a dict of arrays."""
+    """Render a scene file, or a model file as it comes, as ``strata render`` does, with its
+    AOVs as a dict of arrays."""

@@ -51,6 +51,14 @@ CASES = [
         ["--width", "40", "--height", "32", "--spp", "3", "--crop", "8,4,30,20", "--background", "0.1,0.2,0.3"],
         dict(width=40, height=32, spp=3, crop=(8, 4, 30, 20), background=[0.1, 0.2, 0.3]),
     ),
+    # A model file as it comes: the scene `strata render MODEL` makes
+    # around it (its own camera and lights, or the studio's), edited.
+    ("meshes/box.gltf", ["--width", "32", "--height", "24", "--spp", "2"], dict(width=32, height=24, spp=2)),
+    (
+        "meshes/icosphere.obj",
+        ["--width", "36", "--height", "30", "--spp", "3", "--set", "camera.fov=30"],
+        dict(width=36, height=30, spp=3, set={"camera.fov": 30}),
+    ),
 ]
 
 

@@ -19,6 +19,7 @@ use strata::render::{
 };
 use strata::sampling::SamplerKind;
 use strata::scene::edit::Edit;
+use strata::scene::model::is_model_path;
 use strata::scene::{
     compile, load_edited_scene, model, parse, LoadTimings, RenderOverrides, Scene,
 };
@@ -597,12 +598,6 @@ fn load(args: &RenderArgs) -> Result<(Scene, LoadTimings), CliError> {
     })
 }
 
-/// Whether `path` names a model file rather than a scene file: one of the
-/// mesh formats, by its extension.
-fn is_model_path(path: &std::path::Path) -> bool {
-    strata::scene::loaders::check_extension(path).is_ok()
-}
-
 /// The scene made around a model file (see `strata::scene::model`): its
 /// notes said on stderr unless `--quiet`, saved first with `--save-scene`,
 /// then compiled.
@@ -665,10 +660,7 @@ pub fn load_or_seed(
 ) -> Result<(Scene, LoadTimings), CliError> {
     Ok(match path {
         Some(path) if is_model_path(path) => {
-            let start = std::time::Instant::now();
-            let made = model::model_scene(path, settings, edits, None)?;
-            let progress = compile::LoadProgress::default();
-            compile::compile_model(made, settings, quality, start, &progress)?
+            model::load_model_file(path, edits, settings, quality)?
         }
         Some(path) => load_edited_scene(path, edits, settings, quality)?,
         None => {

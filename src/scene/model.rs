@@ -699,6 +699,28 @@ fn light_table(out: &mut String, l: &LightDesc) {
     out.push('\n');
 }
 
+/// Whether `path` names a model file (one of the mesh formats, by its
+/// extension) rather than a scene file: what `strata render PATH` and the
+/// Python package's `render(PATH)` render as it comes.
+pub fn is_model_path(path: &Path) -> bool {
+    super::loaders::check_extension(path).is_ok()
+}
+
+/// The scene [`model_scene`] makes around `model` (its own camera and
+/// lights, or the studio's), with `edits` and `overrides` applied,
+/// compiled: what `strata render MODEL` renders, its notes left unsaid.
+pub fn load_model_file(
+    model: &Path,
+    edits: &[Edit],
+    overrides: &RenderOverrides,
+    quality: super::BuildQuality,
+) -> InputResult<(super::Scene, super::LoadTimings)> {
+    let start = Instant::now();
+    let made = model_scene(model, overrides, edits, None)?;
+    let progress = super::compile::LoadProgress::default();
+    super::compile::compile_model(made, overrides, quality, start, &progress)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
