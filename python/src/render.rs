@@ -21,7 +21,7 @@ use strata::render::{
     render as render_scene, Film, Observer, RenderOptions, Schedule, SliceSpec, Warning, Window,
 };
 use strata::scene::edit::Edit;
-use strata::scene::model::{is_model_path, load_model_file};
+use strata::scene::model::{is_model_path, load_model_file, CameraChoice};
 use strata::scene::settings::GlossySampling;
 use strata::scene::BuildQuality;
 use strata::scene::{load_edited_scene, load_edited_text, RenderOverrides};
@@ -94,6 +94,32 @@ fn toml_value(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Value> {
         "{at}: a {} is not a scene value (a bool, number, string, list or dict)",
         obj.get_type().name()?
     )))
+}
+
+/// `render`'s `camera`: a model file's camera N (0-based), or "auto",
+/// strata's framing camera, as `--camera` takes; a scene has its own.
+fn camera_choice(
+    camera: Option<&Bound<'_, PyAny>>,
+    source: &SceneSource,
+) -> PyResult<Option<CameraChoice>> {
+    let Some(camera) = camera.filter(|c| !c.is_none()) else {
+        return Ok(None);
+    };
+    if !matches!(source, SceneSource::File(path) if is_model_path(path)) {
+        return Err(error(
+            "camera applies to a model file (.glb, .gltf, .obj, .ply, .off, .stl), not to a scene; a scene has its own [camera] and can name a glTF camera with `camera = N` on its mesh object".into(),
+        ));
+    }
+    let text = match camera.extract::<i64>() {
+        Ok(n) if !camera.is_instance_of::<PyBool>() => n.to_string(),
+        _ => camera.extract::<String>().unwrap_or_default(),
+    };
+    text.parse::<CameraChoice>().map(Some).map_err(|e| {
+        error(format!(
+            "camera must be a camera number (0, 1, …) or \"auto\"; got {}: {e}",
+            camera.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+        ))
+    })
 }
 
 /// Where `render`'s scene comes from.
@@ -260,7 +286,9 @@ impl Observer for Interrupt {
 /// errors naming ``<scene>``. A path to a model file (.obj, .ply, .gltf,
 /// .glb, .off, .stl) renders it with its own camera and lights, or framed
 /// and lit by a studio where it has none, as ``strata render MODEL`` does
-/// (``set`` then edits that made scene, as ``--set`` does).
+/// (``set`` then edits that made scene, as ``--set`` does); ``camera=N``
+/// renders from its camera N (0-based) instead, ``camera="auto"`` from
+/// the studio's framing camera, as ``--camera`` does.
 ///
 /// Every setting is the flag of the same name (``spp=64`` is ``--spp
 /// 64``), and overrides the scene file's ``[render]`` table; ``set`` edits
@@ -294,7 +322,7 @@ impl Observer for Interrupt {
     scene, *, width=None, height=None, spp=None, shadow_samples=None,
     reflection_samples=None, max_depth=None, sampler=None, seed=None, background=None,
     light_sampling=None, glossy_sampling=None, noise=None, exposure=None, tonemap=None,
-    integrator=None, set=None, threads=None, passes=None,
+    integrator=None, set=None, camera=None, threads=None, passes=None,
     packets=None, schedule=None, bvh_quality=None, crop=None, aovs=None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -317,6 +345,7 @@ pub fn render(
     tonemap: Option<&str>,
     integrator: Option<&str>,
     set: Option<&Bound<'_, PyAny>>,
+    camera: Option<&Bound<'_, PyAny>>,
     threads: Option<i64>,
     passes: Option<i64>,
     packets: Option<&str>,
@@ -366,10 +395,11 @@ pub fn render(
     let aovs = aov_list(aovs)?;
 
     let source = scene_source(scene)?;
+    let camera = camera_choice(camera, &source)?;
     let loaded = py.detach(|| {
         pool.install(|| match &source {
             SceneSource::File(path) if is_model_path(path) => {
-                load_model_file(path, &edits, &overrides, quality)
+                load_model_file(path, &edits, &overrides, quality, camera)
             }
             SceneSource::File(path) => load_edited_scene(path, &edits, &overrides, quality),
             SceneSource::Text(text) => {

@@ -1,6 +1,7 @@
 """render equals the CLI's EXR output bit for bit: the image, the AOVs,
 --set edits and crops."""
 
+import json
 import os
 import subprocess
 
@@ -55,6 +56,11 @@ CASES = [
     # around it (its own camera and lights, or the studio's), edited.
     ("meshes/box.gltf", ["--width", "32", "--height", "24", "--spp", "2"], dict(width=32, height=24, spp=2)),
     (
+        "meshes/box.gltf",
+        ["--width", "32", "--height", "24", "--spp", "2", "--camera", "auto"],
+        dict(width=32, height=24, spp=2, camera="auto"),
+    ),
+    (
         "meshes/icosphere.obj",
         ["--width", "36", "--height", "30", "--spp", "3", "--set", "camera.fov=30"],
         dict(width=36, height=30, spp=3, set={"camera.fov": 30}),
@@ -62,7 +68,7 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("scene,flags,settings", CASES, ids=[c[0] for c in CASES])
+@pytest.mark.parametrize("scene,flags,settings", CASES, ids=[" ".join([c[0], *c[1][6:]]) for c in CASES])
 def test_render_equals_the_cli_exr_bit_for_bit(strata_bin, tmp_path, scene, flags, settings):
     path = helpers.REPO / "scenes" / scene
     exr = cli_exr(strata_bin, tmp_path, path, [*flags, "--aov", "albedo,normal,depth"])
@@ -131,3 +137,26 @@ def test_a_bad_scene_as_text_or_dict_names_where():
         strata_rt.render(42)
     with pytest.raises(FileNotFoundError):
         strata_rt.render("no-such-scene.toml")
+
+
+def test_camera_picks_a_model_files_camera_and_nothing_else(tmp_path):
+    # The box with two cameras of its own (glTF nodes), front and above.
+    gltf = json.loads((helpers.REPO / "scenes" / "meshes" / "box.gltf").read_text())
+    gltf["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}] * 2
+    gltf["nodes"] += [{"camera": 0, "translation": [0, 0.5, 4]},
+                      {"camera": 1, "translation": [0, 5, 0], "rotation": [-0.7071068, 0, 0, 0.7071068]}]
+    gltf["scenes"][0]["nodes"] += [2, 3]
+    box = tmp_path / "box.gltf"
+    box.write_text(json.dumps(gltf))
+    small = dict(width=16, height=12, spp=1)
+    first, second, auto = (strata_rt.render(box, camera=c, **small) for c in (0, 1, "auto"))
+    np.testing.assert_array_equal(strata_rt.render(box, **small), first)
+    assert not np.array_equal(first, second) and not np.array_equal(first, auto)
+    with pytest.raises(ValueError, match="camera must be a camera number"):
+        strata_rt.render(box, camera="side", **small)
+    with pytest.raises(ValueError, match="camera must be a camera number"):
+        strata_rt.render(box, camera=-1, **small)
+    with pytest.raises(strata_rt.InputError, match="camera"):
+        strata_rt.render(box, camera=7, **small)
+    with pytest.raises(ValueError, match="camera applies to a model file"):
+        strata_rt.render(helpers.REPO / "scenes" / "seed.toml", camera=0, **small)

@@ -660,7 +660,7 @@ pub fn load_or_seed(
 ) -> Result<(Scene, LoadTimings), CliError> {
     Ok(match path {
         Some(path) if is_model_path(path) => {
-            model::load_model_file(path, edits, settings, quality)?
+            model::load_model_file(path, edits, settings, quality, None)?
         }
         Some(path) => load_edited_scene(path, edits, settings, quality)?,
         None => {

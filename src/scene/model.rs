@@ -706,17 +706,19 @@ pub fn is_model_path(path: &Path) -> bool {
     super::loaders::check_extension(path).is_ok()
 }
 
-/// The scene [`model_scene`] makes around `model` (its own camera and
-/// lights, or the studio's), with `edits` and `overrides` applied,
-/// compiled: what `strata render MODEL` renders, its notes left unsaid.
+/// The scene [`model_scene`] makes around `model` (its own camera, or
+/// `camera`, and its lights, or the studio's), with `edits` and
+/// `overrides` applied, compiled: what `strata render MODEL` renders, its
+/// notes left unsaid.
 pub fn load_model_file(
     model: &Path,
     edits: &[Edit],
     overrides: &RenderOverrides,
     quality: super::BuildQuality,
+    camera: Option<CameraChoice>,
 ) -> InputResult<(super::Scene, super::LoadTimings)> {
     let start = Instant::now();
-    let made = model_scene(model, overrides, edits, None)?;
+    let made = model_scene(model, overrides, edits, camera)?;
     let progress = super::compile::LoadProgress::default();
     super::compile::compile_model(made, overrides, quality, start, &progress)
 }

@@ -16,9 +16,11 @@ use strata::scene::RenderOverrides;
 /// Keywords of `render` that are not render settings, each with the
 /// `strata render` flag it is: what to render (`set`) and how (threads,
 /// passes, packets, schedule, BVH effort, the window, the AOVs), which
-/// change the time or the output, never a pixel's value.
-const FRONT_END: [(&str, &str); 8] = [
+/// change the time or the output, never a pixel's value; and which of a
+/// model file's cameras to render from.
+const FRONT_END: [(&str, &str); 9] = [
     ("set", "--set"),
+    ("camera", "--camera"),
     ("threads", "--threads"),
     ("passes", "--passes"),
     ("packets", "--packets"),
