@@ -200,6 +200,8 @@ class RaycastingScene:
         """Unit normals (right-hand rule, float32) of scene faces; 0 for -1."""
         self.mesh  # noqa: B018 - builds the scene's arrays
         hit = face >= 0
+        if len(self._scene_faces) == 0:  # an empty scene: nothing to index, nothing hit
+            return np.zeros(face.shape + (3,), dtype=np.float32)
         tri = self._scene_vertices[self._scene_faces[np.where(hit, face, 0)]]
         n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         length = np.linalg.norm(n, axis=1, keepdims=True)

@@ -210,6 +210,13 @@ def test_an_empty_scene_and_a_scene_grown_after_a_query():
     rays = np.array([[0.5, 0.5, 10, 0, 0, -1]])
     assert np.isinf(scene.cast_rays(rays)["t_hit"][0])
     assert scene.count_intersections(rays)[0] == 0
+    # No surface: no closest point (NaN, invalid ids; Open3D answers the
+    # origin at distance 0), an infinite distance, nothing inside.
+    near = scene.compute_closest_points(np.zeros((2, 3), np.float32))
+    assert np.isnan(near["points"]).all() and (near["geometry_ids"] == INVALID_ID).all()
+    assert (near["primitive_ids"] == INVALID_ID).all() and (near["primitive_normals"] == 0).all()
+    assert np.isinf(scene.compute_distance(np.zeros((1, 3)))).all()
+    assert scene.compute_occupancy(np.zeros((1, 3)))[0] == 0
     v, f = helpers.box([0, 0, 0], [1, 1, 1])
     assert scene.add_triangles(v, f) == 0
     assert scene.count_intersections(rays)[0] == 2
