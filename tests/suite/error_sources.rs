@@ -99,6 +99,16 @@ fn a_scene_files_values_name_the_line_the_edit_or_the_flag() {
             &["ok.toml", "--shadow-samples", "0"],
             "error: <command line>: --shadow-samples 0: must be at least 1",
         ),
+        // A value the compiler checks: the edited key is named once, and
+        // a key inside an edited table after it.
+        (
+            &["ok.toml", "--set", "camera.fov=500"],
+            "error: <command line>: --set camera.fov: must be between 0 and 180 degrees, got 500",
+        ),
+        (
+            &["ok.toml", "--set", "camera={fov = 500}"],
+            "error: <command line>: --set camera: camera.fov: must be between 0 and 180 degrees, got 500",
+        ),
         (
             &["ok.toml", "--background", "1,0,-1"],
             "error: <command line>: --background 1,0,-1: must be finite and not negative",

@@ -60,6 +60,12 @@ impl Compiler<'_> {
             within(key, path) || (within(path, key) && !self.source.contains(path))
         };
         match self.edited.iter().find(by_edit) {
+            // The key inside the edited value is named where it is not
+            // the edited key itself (`--set camera.fov: must be …`, not
+            // `--set camera.fov: camera.fov: must be …`).
+            Some(path) if path == key => {
+                InputError::new("<command line>", format!("--set {path}"), message)
+            }
             Some(path) => InputError::new(
                 "<command line>",
                 format!("--set {path}"),
