@@ -1,8 +1,8 @@
 //! `render(scene, **settings)`: `strata render` with the image returned as
 //! an array. The scene is loaded, edited and rendered by the library's own
-//! functions (`load_edited_scene` or `load_model_file`, `render::render`) and the image is the
-//! film's `to_rgb`, as the CLI writes into its EXR: the same pixels bit for
-//! bit. The thread count, passes, packets and schedule change only the time.
+//! functions (`load_edited_scene` or `load_model_file`, `render::render`)
+//! and the image is the film's `to_rgb`, as the CLI writes into its EXR:
+//! the same pixels bit for bit. The thread count, passes, packets and schedule change only the time.
 
 use crate::mesh::rows;
 use crate::run::Threads;
@@ -21,7 +21,7 @@ use strata::render::{
     render as render_scene, Film, Observer, RenderOptions, Schedule, SliceSpec, Warning, Window,
 };
 use strata::scene::edit::Edit;
-use strata::scene::model::{is_model_path, load_model_file, CameraChoice};
+use strata::scene::model::{is_model_path, load_model_file, CameraChoice, ONLY_FOR_A_MODEL};
 use strata::scene::settings::GlossySampling;
 use strata::scene::BuildQuality;
 use strata::scene::{load_edited_scene, load_edited_text, RenderOverrides};
@@ -106,9 +106,7 @@ fn camera_choice(
         return Ok(None);
     };
     if !matches!(source, SceneSource::File(path) if is_model_path(path)) {
-        return Err(error(
-            "camera applies to a model file (.glb, .gltf, .obj, .ply, .off, .stl), not to a scene; a scene has its own [camera] and can name a glTF camera with `camera = N` on its mesh object".into(),
-        ));
+        return Err(error(format!("camera {ONLY_FOR_A_MODEL}")));
     }
     let text = match camera.extract::<i64>() {
         Ok(n) if !camera.is_instance_of::<PyBool>() => n.to_string(),

@@ -36,17 +36,12 @@ pub struct Hits {
 }
 
 /// `len()` of a result over a leading shape: its first axis, as numpy's
-/// `len`; a TypeError for one ray or point given alone, whose arrays are
-/// 0-d (numpy's "len() of unsized object").
-fn first_axis(shape: &[usize], what: &str) -> PyResult<usize> {
+/// `len`; a TypeError for one `noun` (ray or point) given alone, whose
+/// arrays are 0-d (numpy's "len() of unsized object").
+fn first_axis(shape: &[usize], what: &str, noun: &str) -> PyResult<usize> {
     shape.first().copied().ok_or_else(|| {
         PyTypeError::new_err(format!(
-            "len() of {what} of one {} given alone: its arrays are 0-d",
-            if what == "ClosestPoints" {
-                "point"
-            } else {
-                "ray"
-            }
+            "len() of {what} of one {noun} given alone: its arrays are 0-d"
         ))
     })
 }
@@ -56,7 +51,7 @@ fn first_axis(shape: &[usize], what: &str) -> PyResult<usize> {
 fn counted(shape: &[usize], noun: &str) -> String {
     let n: usize = shape.iter().product();
     let plural = if n == 1 { "" } else { "s" };
-    if shape.len() == 1 || shape.is_empty() {
+    if shape.len() <= 1 {
         format!("{n} {noun}{plural}")
     } else {
         let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
@@ -99,7 +94,7 @@ impl Hits {
     /// The length of the rays' first axis (the number of rays for an
     /// (n, 3) input), as numpy's ``len``; a TypeError for one ray given as (3,).
     fn __len__(&self) -> PyResult<usize> {
-        first_axis(&self.shape, "Hits")
+        first_axis(&self.shape, "Hits", "ray")
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
@@ -183,7 +178,7 @@ impl ClosestPoints {
     /// The length of the points' first axis (the number of points for an
     /// (n, 3) input), as numpy's ``len``; a TypeError for one point given as (3,).
     fn __len__(&self) -> PyResult<usize> {
-        first_axis(&self.shape, "ClosestPoints")
+        first_axis(&self.shape, "ClosestPoints", "point")
     }
 
     fn __repr__(&self) -> String {

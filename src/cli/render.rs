@@ -497,10 +497,7 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
         (args.save_scene.is_some(), "--save-scene"),
     ] {
         if given && !model {
-            return Err(flag(name)(
-                "applies to a model file (.glb, .gltf, .obj, .ply), not to a scene file; a scene file has its own [camera] and can name a glTF camera with `camera = N` on its mesh object".into(),
-            )
-            .into());
+            return Err(flag(name)(model::ONLY_FOR_A_MODEL.into()).into());
         }
     }
     if let Some(path) = &args.save_scene {

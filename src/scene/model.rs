@@ -699,6 +699,10 @@ fn light_table(out: &mut String, l: &LightDesc) {
     out.push('\n');
 }
 
+/// Why a model file's option (`--camera`, `--save-scene`; the Python
+/// package's `camera=`) is refused for a scene.
+pub const ONLY_FOR_A_MODEL: &str = "applies to a model file (.glb, .gltf, .obj, .ply, .off, .stl), not to a scene file; a scene file has its own [camera] and can name a glTF camera with `camera = N` on its mesh object";
+
 /// Whether `path` names a model file (one of the mesh formats, by its
 /// extension) rather than a scene file: what `strata render PATH` and the
 /// Python package's `render(PATH)` render as it comes.
