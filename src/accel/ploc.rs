@@ -515,6 +515,17 @@ mod tests {
         }
     }
 
+    /// Boxes as the neighbour search reads them.
+    fn simd_boxes(boxes: &[Aabb]) -> Vec<Box3A> {
+        boxes
+            .iter()
+            .map(|b| Box3A {
+                min: b.min.into(),
+                max: b.max.into(),
+            })
+            .collect()
+    }
+
     /// The least union area with cluster `i` among `range`, ties to the
     /// nearer index, then to the right for an even `i` (as `closer`).
     fn brute_nearest(
@@ -553,13 +564,7 @@ mod tests {
                     Aabb::new(c - glam::Vec3::splat(0.5), c + glam::Vec3::splat(0.5))
                 })
                 .collect();
-            let bounds: Vec<Box3A> = boxes
-                .iter()
-                .map(|b| Box3A {
-                    min: b.min.into(),
-                    max: b.max.into(),
-                })
-                .collect();
+            let bounds = simd_boxes(&boxes);
             let scale = unit_scale(&bounds);
             for r in [1, 6] {
                 let mut nearest = vec![0; n];
@@ -595,14 +600,7 @@ mod tests {
     /// cluster's), across block edges.
     #[test]
     fn nearest_neighbours_match_brute_force() {
-        let boxes = surface_boxes(2 * BLOCK + 50, 11);
-        let bounds: Vec<Box3A> = boxes
-            .iter()
-            .map(|b| Box3A {
-                min: b.min.into(),
-                max: b.max.into(),
-            })
-            .collect();
+        let bounds = simd_boxes(&surface_boxes(2 * BLOCK + 50, 11));
         for r in [1, 6, 14] {
             let mut nearest = vec![0; bounds.len()];
             let scale = unit_scale(&bounds);
