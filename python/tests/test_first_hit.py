@@ -27,6 +27,15 @@ def scale(vertices):
     return float(np.abs(vertices).max())
 
 
+def bumpy_query(bumpy, n, seed):
+    """The bumpy mesh, n random rays at it, and the generator that drew
+    them (for a test's further draws)."""
+    vertices, faces = bumpy
+    rng = np.random.default_rng(seed)
+    origins, directions = helpers.random_rays(rng, vertices, n)
+    return strata_rt.Mesh(vertices, faces), origins, directions, rng
+
+
 def test_first_hits_match_brute_force_away_from_edges(case):
     vertices, faces, mesh, origins, directions, brute = case
     hits = mesh.intersect(origins, directions)
@@ -178,10 +187,7 @@ def test_every_query_answers_for_t_in_0_to_t_max_inclusive():
 
 
 def test_fields_computes_only_what_is_asked(bumpy):
-    vertices, faces = bumpy
-    mesh = strata_rt.Mesh(vertices, faces)
-    rng = np.random.default_rng(3)
-    origins, directions = helpers.random_rays(rng, vertices, 500)
+    mesh, origins, directions, _ = bumpy_query(bumpy, 500, seed=3)
     every = mesh.intersect(origins, directions)
     some = mesh.intersect(origins, directions, fields=("t", "prim"))
     assert some.keys() == ["t", "prim"] and some.normal is None and some.point is None
@@ -199,10 +205,7 @@ def test_fields_computes_only_what_is_asked(bumpy):
 
 
 def test_inputs_of_any_leading_shape_answer_in_that_shape(bumpy):
-    vertices, faces = bumpy
-    mesh = strata_rt.Mesh(vertices, faces)
-    rng = np.random.default_rng(4)
-    o, d = helpers.random_rays(rng, vertices, 60)
+    mesh, o, d, rng = bumpy_query(bumpy, 60, seed=4)
     grid_o, grid_d = o.reshape(3, 4, 5, 3), d.reshape(3, 4, 5, 3)
     flat, grid = mesh.intersect(o, d), mesh.intersect(grid_o, grid_d, t_max=np.full((3, 4, 5), np.inf))
     assert grid.t.shape == (3, 4, 5) and grid.normal.shape == (3, 4, 5, 3) and grid.point.shape == (3, 4, 5, 3)
@@ -222,10 +225,7 @@ def test_one_row_given_as_a_vector_answers_as_a_scalar(bumpy):
     # (..., 3) with no leading axis: one ray or point, as an array or a
     # list, its answers 0-d (vectors of 3 for normals and points), each
     # the answer of the same row given as (1, 3).
-    vertices, faces = bumpy
-    mesh = strata_rt.Mesh(vertices, faces)
-    rng = np.random.default_rng(5)
-    o, d = helpers.random_rays(rng, vertices, 40)
+    mesh, o, d, rng = bumpy_query(bumpy, 40, seed=5)
     hits = mesh.intersect(o, d)
     i = int(np.flatnonzero(hits.prim >= 0)[0])
     for origin, direction in [(o[i], d[i]), (list(o[i]), tuple(d[i]))]:
@@ -249,10 +249,7 @@ def test_len_and_repr_count_the_queries_in_any_shape(bumpy):
     # (and names the shape where it is not a list), with or without an
     # array computed; one ray or point given alone has no len(), as a 0-d
     # numpy array has none.
-    vertices, faces = bumpy
-    mesh = strata_rt.Mesh(vertices, faces)
-    rng = np.random.default_rng(6)
-    o, d = helpers.random_rays(rng, vertices, 60)
+    mesh, o, d, rng = bumpy_query(bumpy, 60, seed=6)
     flat = mesh.intersect(o, d)
     hits = int((flat.prim >= 0).sum())
     assert 1 < hits < 60 and len(flat) == 60
