@@ -80,7 +80,8 @@ pub struct RenderOverrides {
     /// hits trace one) [render.reflection_samples; default 1]
     #[arg(long)]
     pub reflection_samples: Option<u32>,
-    /// Maximum reflection and refraction depth [render.max_depth; default 5]
+    /// Maximum reflection and refraction depth, at most 256 [render.max_depth;
+    /// default 5]
     #[arg(long)]
     pub max_depth: Option<u32>,
     /// stratified: correlated multi-jittered sets of any sample count;
@@ -254,6 +255,13 @@ impl RenderSettings {
 /// The largest image side and sample count a render accepts.
 pub const MAX_SIDE: u32 = 1 << 15;
 pub const MAX_SPP: u32 = 1 << 22;
+/// Most bounces `max_depth` allows. The distribution integrator recurses
+/// once a reflection or refraction (about 1.4 KB of stack a level), so
+/// two facing mirrors at a depth of 1,500 overflowed a worker's 2 MiB
+/// stack and aborted the process. 256 leaves a fivefold margin there,
+/// and is far past the depths scenes use (at most 8 in the repository's;
+/// pbrt-v4's default is 5).
+pub const MAX_DEPTH: u32 = 256;
 
 /// A value of one layer of settings that no render can use.
 #[derive(Debug, Clone, PartialEq)]
@@ -313,6 +321,13 @@ impl RenderOverrides {
                 let message = format!("image larger than {MAX_SIDE} pixels on a side");
                 return bad(field, v.to_string(), message);
             }
+        }
+        if let Some(v) = self.max_depth.filter(|&v| v > MAX_DEPTH) {
+            return bad(
+                "max_depth",
+                v.to_string(),
+                format!("at most {MAX_DEPTH} bounces"),
+            );
         }
         if let Some(v) = self.spp.filter(|&v| v > MAX_SPP) {
             return bad(

@@ -86,6 +86,57 @@ fn a_camera_up_parallel_to_the_view_is_rejected() {
     assert_rejected("up", Some(text), &[], &["camera.up"]);
 }
 
+/// Two facing perfect mirrors: every camera ray bounces to `max_depth`.
+const MIRRORS: &str = "[render]\nwidth = 4\nheight = 3\nmax_depth = DEPTH\n\
+[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, -1]\n\
+[materials.m]\ndiffuse = 0\nreflectivity = 1.0\n\
+[[lights]]\ntype = \"point\"\nposition = [0, 0.5, 0]\nintensity = 1\n\
+[[objects]]\nplane = { point = [0, 0, -1], normal = [0, 0, 1] }\nmaterial = \"m\"\n\
+[[objects]]\nplane = { point = [0, 0, 1], normal = [0, 0, -1] }\nmaterial = \"m\"\n";
+
+/// The distribution integrator recurses once a bounce: a depth past the
+/// limit is refused (it overflowed a worker's stack and aborted the
+/// process at 1,500), and the limit itself renders, on the workers'
+/// stacks and on the main thread's (`--debug-sample`).
+#[test]
+fn a_depth_past_the_limit_is_refused_and_the_limit_renders() {
+    assert_rejected(
+        "depth",
+        Some(&MIRRORS.replace("DEPTH", "257")),
+        &[],
+        &["scene.toml", "line 4", "render.max_depth", "at most 256"],
+    );
+    let dir = crate::common::temp_dir("depth-limit");
+    std::fs::write(dir.join("m.toml"), MIRRORS.replace("DEPTH", "5")).unwrap();
+    let flag = strata(&dir, &["render", "m.toml", "-q", "--max-depth", "1500"]);
+    let err = String::from_utf8_lossy(&flag.stderr);
+    assert_eq!(flag.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--max-depth 1500: at most 256 bounces"),
+        "{err}"
+    );
+    for extra in [
+        &["--threads", "1"][..],
+        &["--threads", "2"],
+        &["--debug-sample", "1,1,0"],
+    ] {
+        let mut args = vec![
+            "render",
+            "m.toml",
+            "-q",
+            "-o",
+            "m.png",
+            "--max-depth",
+            "256",
+        ];
+        args.extend(extra);
+        let out = strata(&dir, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{extra:?}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn missing_files_are_named() {
     assert_rejected("no-scene", None, &[], &["scene.toml", "cannot read"]);

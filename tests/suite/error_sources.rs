@@ -81,6 +81,12 @@ fn a_scene_files_values_name_the_line_the_edit_or_the_flag() {
     let dir = temp_dir("sources-scene");
     std::fs::write(dir.join("s.toml"), "[render]\nwidth = 8\nspp = 0\n").unwrap();
     std::fs::write(dir.join("ok.toml"), "[render]\nwidth = 8\nheight = 8\n").unwrap();
+    let camera = |position: &str| {
+        format!("[camera]\nposition = {position}\nlook_at = [0, 1, 0]\n[render]\nwidth = 8\nheight = 8\n")
+    };
+    std::fs::write(dir.join("cam.toml"), camera("[0, 1, 5]")).unwrap();
+    std::fs::write(dir.join("top.toml"), camera("[0, 5, 0]")).unwrap();
+    std::fs::write(dir.join("far.toml"), camera("[0, 1, 1e20]")).unwrap();
     std::fs::write(
         dir.join("env.toml"),
         "[render]\nwidth = 8\nheight = 8\n[[lights]]\ntype = \"environment\"\nradiance = 1.0\n",
@@ -112,6 +118,29 @@ fn a_scene_files_values_name_the_line_the_edit_or_the_flag() {
         (
             &["ok.toml", "--background", "1,0,-1"],
             "error: <command line>: --background 1,0,-1: must be finite and not negative",
+        ),
+        // A relation between two keys, one of them edited: the edit is
+        // named, not the file's line of the key the user left alone.
+        (
+            &["cam.toml", "--set", "camera.position=[0, 1, 0]"],
+            "error: <command line>: --set camera.position: camera.look_at: equals camera.position, so there is no view direction",
+        ),
+        (
+            &["cam.toml", "--set", "camera.position=[0, 5, 0]"],
+            "error: <command line>: --set camera.position: camera.up: is not given, and its default [0, 1, 0] is parallel to the view direction from camera.position to camera.look_at: give camera.up across it",
+        ),
+        (
+            &["cam.toml", "--set", "camera.up=[0, 0, 3]"],
+            "error: <command line>: --set camera.up: is zero or parallel to the view direction",
+        ),
+        // Both ends in the file: its line of `up`'s table (up not written).
+        (
+            &["top.toml"],
+            "error: top.toml: line 1: camera.up: is not given, and its default [0, 1, 0] is parallel to the view direction from camera.position to camera.look_at: give camera.up across it",
+        ),
+        (
+            &["far.toml"],
+            "error: far.toml: line 3: camera.look_at: lies too far from camera.position for 32-bit floats (their distance must stay below about 1e19)",
         ),
     ] {
         assert_eq!(refused(&dir, args), said, "{args:?}");

@@ -42,14 +42,33 @@ impl Compiler<'_> {
         let position = self.v3(d.position, "camera.position")?;
         let look_at = self.v3(d.look_at, "camera.look_at")?;
         let up = self.v3(d.up, "camera.up")?;
+        let ends = ["camera.position", "camera.look_at"];
         if position == look_at {
-            return Err(self.err(
+            return Err(self.err_among(
                 "camera.look_at",
+                &ends[..1],
                 "equals camera.position, so there is no view direction",
             ));
         }
-        let view = View::look_at(position, look_at, up, w, h)
-            .ok_or_else(|| self.err("camera.up", "is zero or parallel to the view direction"))?;
+        if !(look_at - position).length_squared().is_finite() {
+            return Err(self.err_among(
+                "camera.look_at",
+                &ends[..1],
+                "lies too far from camera.position for 32-bit floats (their distance must stay below about 1e19)",
+            ));
+        }
+        let view = View::look_at(position, look_at, up, w, h).ok_or_else(|| {
+            let message = if self.gives("camera.up") || !up.is_finite() {
+                "is zero or parallel to the view direction".to_string()
+            } else {
+                // The user never wrote `up`: say which one was meant.
+                format!(
+                    "is not given, and its default {} is parallel to the view direction from camera.position to camera.look_at: give camera.up across it",
+                    super::validate::written(up)
+                )
+            };
+            self.err_among("camera.up", &ends, message)
+        })?;
         let fov = |c: &Self| -> InputResult<f32> {
             let f = c.finite(d.fov.unwrap_or(DEFAULT_FOV), "camera.fov")?;
             if f > 0.0 && f < 180.0 {

@@ -75,6 +75,34 @@ impl Compiler<'_> {
         }
     }
 
+    /// An error at `key` that the values of `others` share the blame for
+    /// (`camera.look_at` equal to `camera.position`): where the command
+    /// line edited one of them and not `key`, the edit is named, with
+    /// `key` after it, rather than the file's line of a value the user
+    /// did not change.
+    pub(super) fn err_among(
+        &self,
+        key: &str,
+        others: &[&str],
+        message: impl Into<String>,
+    ) -> InputError {
+        let edited = |k: &str| self.edited.iter().any(|path| within(k, path));
+        match others.iter().find(|&&k| edited(k)) {
+            Some(&other) if !edited(key) => {
+                let mut e = self.err(other, message);
+                e.message = format!("{key}: {}", e.message);
+                e
+            }
+            _ => self.err(key, message),
+        }
+    }
+
+    /// Whether the scene gives `key` itself (in its file or by an edit),
+    /// rather than leaving it to its default.
+    pub(super) fn gives(&self, key: &str) -> bool {
+        self.source.contains(key) || self.edited.iter().any(|path| within(key, path))
+    }
+
     pub(super) fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {
         let v = Vec3::from(v);
         if v.is_finite() {
