@@ -54,6 +54,17 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
     };
     check_target(&args.output, extensions)
         .map_err(|e| InputError::new("<command line>", "--output", e))?;
+    if let Some(part) = args
+        .parts
+        .iter()
+        .find(|p| super::same_file(p, &args.output))
+    {
+        let why = format!(
+            "'{}' is one of the parts it merges: write the merge to a file of its own",
+            part.display()
+        );
+        return Err(InputError::new("<command line>", "--output", why).into());
+    }
     check_memory(&args.parts, !partial_output)?;
     if let Some(e) = args.exposure.filter(|e| !e.is_finite()) {
         let why = format!("{e} is not a number of stops");

@@ -75,6 +75,45 @@ pub fn writable(path: &std::path::Path, flag: &str, extensions: &[&str]) -> Resu
         .map_err(|e| InputError::new("<command line>", flag, e).into())
 }
 
+/// Whether two paths name one file, whether or not it exists yet: each
+/// resolved through its folder (links and `..` followed), so that
+/// `out.json` and `./out.json` are the same.
+pub fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    use std::path::{Path, PathBuf};
+    let resolve = |p: &Path| -> Option<PathBuf> {
+        if let Ok(path) = std::fs::canonicalize(p) {
+            return Some(path);
+        }
+        let folder = match p.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f,
+            _ => Path::new("."),
+        };
+        Some(std::fs::canonicalize(folder).ok()?.join(p.file_name()?))
+    };
+    match (resolve(a), resolve(b)) {
+        (Some(a), Some(b)) => a == b,
+        _ => a == b,
+    }
+}
+
+/// The first of `files` (each a flag and the path it names, if given)
+/// that names a file an earlier one names too: the second would overwrite
+/// the first's output (or its input) without a word.
+pub fn distinct_files(files: &[(&str, Option<&std::path::Path>)]) -> Result<(), CliError> {
+    let given: Vec<(&str, &std::path::Path)> =
+        files.iter().filter_map(|&(f, p)| Some((f, p?))).collect();
+    for (i, &(flag, path)) in given.iter().enumerate() {
+        if let Some((earlier, _)) = given[..i].iter().find(|(_, p)| same_file(p, path)) {
+            let why = format!(
+                "'{}' is also the {earlier} file: give each its own",
+                path.display()
+            );
+            return Err(InputError::new("<command line>", flag, why).into());
+        }
+    }
+    Ok(())
+}
+
 /// `--threads N`: 0 (one thread per core) to
 /// [`strata::system::budget::MAX_THREADS`]. clap calls it, so a count past
 /// that is the usual one-line usage error (exit 2) before anything starts.

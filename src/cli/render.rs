@@ -506,6 +506,15 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
     if let Some(path) = &args.timeline {
         super::writable(path, "--timeline", &["json"])?;
     }
+    // Not the checkpoint: a slice's part may be its own checkpoint
+    // (`--checkpoint part_3.strata --resume -o part_3.strata`,
+    // docs/distributed.md), the finished part replacing the last pass's.
+    super::distinct_files(&[
+        ("--output", Some(&args.output)),
+        ("--stats", args.stats.as_deref()),
+        ("--save-scene", args.save_scene.as_deref()),
+        ("--timeline", args.timeline.as_deref()),
+    ])?;
     if partial_output || args.checkpoint.is_some() {
         // A part or a checkpoint holds whole images' sums, to be merged.
         if args.crop.is_some() {

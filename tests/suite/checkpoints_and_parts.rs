@@ -204,6 +204,71 @@ fn parts_of_another_build_are_refused_unless_forced() {
     assert_eq!(stdout(&o).trim(), format!("strata {}", strata::VERSION));
 }
 
+/// A merge never writes over one of its own parts (it would then hold
+/// every slice, and the next merge of the same parts would fail on a
+/// duplicate), named however the path is written; nor does a render write
+/// its stats and its timeline to one file. A slice's part may still be
+/// its own checkpoint.
+#[test]
+fn no_output_overwrites_an_input_or_another_output() {
+    let dir = crate::common::temp_dir("overwrite");
+    std::fs::write(dir.join("s.toml"), SPHERE_ON_PLANE).unwrap();
+    for k in 0..2 {
+        let (slice, out) = (format!("{k}/2"), format!("p{k}.strata"));
+        let args = [
+            "render",
+            "s.toml",
+            "-q",
+            "--slice",
+            &slice,
+            "-o",
+            &out,
+            "--checkpoint",
+            &out,
+            "--resume",
+        ];
+        let o = strata(&dir, &args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    }
+    let before = std::fs::read(dir.join("p0.strata")).unwrap();
+    let name = dir.file_name().unwrap().to_string_lossy();
+    let round_about = format!("../{name}/p1.strata");
+    for output in ["p0.strata", "./p0.strata", &round_about] {
+        let o = strata(&dir, &["merge", "p0.strata", "p1.strata", "-o", output]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{output}: {err}");
+        assert!(
+            err.contains("--output") && err.contains("is one of the parts it merges"),
+            "{err}"
+        );
+    }
+    assert_eq!(std::fs::read(dir.join("p0.strata")).unwrap(), before);
+    let o = strata(
+        &dir,
+        &["merge", "p0.strata", "p1.strata", "-o", "all.strata"],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let args = [
+        "render",
+        "s.toml",
+        "-q",
+        "-o",
+        "a.png",
+        "--stats",
+        "r.json",
+        "--timeline",
+        "./r.json",
+    ];
+    let o = strata(&dir, &args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--timeline: './r.json' is also the --stats file"),
+        "{err}"
+    );
+    assert!(!dir.join("a.png").exists() && !dir.join("r.json").exists());
+}
+
 /// A sliced render of a scene with its own exposure and tone curve merges
 /// into the PNG that one process writes; parts of different curves are
 /// refused with the way out, and the merge's flags choose another display.
