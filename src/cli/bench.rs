@@ -218,6 +218,15 @@ fn meshes(args: &BenchArgs) -> Result<Vec<PathBuf>, CliError> {
 
 pub fn run(args: BenchArgs) -> Result<(), CliError> {
     super::writable(&args.csv, "--csv", &["csv"])?;
+    // Every mesh found and of a format strata reads before the first is
+    // measured: a typo in the last one should not cost the others' run.
+    let mut meshes = meshes(&args)?;
+    for mesh in &mut meshes {
+        let given = mesh.clone();
+        strata::scene::loaders::check_extension(&given).map_err(|e| InputError::file(&given, e))?;
+        *mesh = std::fs::canonicalize(&given)
+            .map_err(|e| InputError::file(&given, format!("cannot open: {e}")))?;
+    }
     let all = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -263,7 +272,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         "Embree",
         "ratio"
     );
-    let result = bench_meshes(&args, &pools, harness.as_deref(), &work, &mut csv);
+    let result = bench_meshes(&args, &meshes, &pools, harness.as_deref(), &work, &mut csv);
     let _ = std::fs::remove_dir_all(&work);
     result?;
     strata::output::atomic::write_bytes_atomic(&args.csv, csv.as_bytes())
@@ -274,15 +283,14 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
 
 fn bench_meshes(
     args: &BenchArgs,
+    meshes: &[PathBuf],
     pools: &[(usize, rayon::ThreadPool)],
     harness: Option<&Path>,
     work: &Path,
     csv: &mut String,
 ) -> Result<(), CliError> {
-    for mesh in meshes(args)? {
-        let abs = std::fs::canonicalize(&mesh)
-            .map_err(|e| InputError::file(&mesh, format!("cannot open: {e}")))?;
-        let (scene, timings) = load_mesh_scene(&abs, args.bvh_quality)?;
+    for mesh in meshes {
+        let (scene, timings) = load_mesh_scene(mesh, args.bvh_quality)?;
         let rss = peak_rss_bytes().unwrap_or(0) as f64 / (1 << 20) as f64;
         let tris = scene.geometry.triangle_count() as usize;
         let bpt = scene.geometry.accel_bytes() as f64 / tris.max(1) as f64;

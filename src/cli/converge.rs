@@ -70,12 +70,22 @@ pub struct ConvergeArgs {
     /// times --max-spp).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub noise_spp: Option<u32>,
-    /// No progress output.
+    /// No progress bar and no notes on standard error; the table still goes
+    /// to standard output.
     #[arg(short, long)]
     pub quiet: bool,
 }
 
 pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
+    // Every flag is checked before the reference is rendered, which takes
+    // most of the run.
+    if let Some(e) = args.noise.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
+        return Err(InputError::flag(
+            format!("--noise {e}"),
+            "must be relative errors above 0, such as 0.05,0.025",
+        )
+        .into());
+    }
     super::writable(&args.csv, "--csv", &["csv"])?;
     super::writable(&args.chart, "--chart", &["svg"])?;
     if args.reference.is_none() {
@@ -101,12 +111,14 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
         }
         None => {
             let path = reference_path(&args);
-            eprintln!(
-                "no --reference given: rendering a {}-spp reference with {} sampling, saved to {}",
-                args.reference_spp,
-                converge::REFERENCE_METHOD.name,
-                path.display()
-            );
+            if !args.quiet {
+                eprintln!(
+                    "no --reference given: rendering a {}-spp reference with {} sampling, saved to {}",
+                    args.reference_spp,
+                    converge::REFERENCE_METHOD.name,
+                    path.display()
+                );
+            }
             let pixels = converge::reference(
                 &scene,
                 args.reference_spp,
@@ -118,34 +130,25 @@ pub fn run(args: ConvergeArgs) -> Result<(), CliError> {
             pixels
         }
     };
-    if !args.quiet {
-        println!(
-            "{:<28} {:>6} {:>10} {:>12} {:>12}",
-            "method", "spp", "seconds", "RMSE", "relMSE"
-        );
-    }
-    if let Some(e) = args.noise.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
-        return Err(InputError::flag(
-            format!("--noise {e}"),
-            "must be relative errors above 0, such as 0.05,0.025",
-        )
-        .into());
-    }
+    // The table is the command's answer: -q silences only the progress
+    // and the notes on standard error.
+    println!(
+        "{:<28} {:>6} {:>10} {:>12} {:>12}",
+        "method", "spp", "seconds", "RMSE", "relMSE"
+    );
     let row = |p: &Point| {
-        if !args.quiet {
-            let method = match p.noise {
-                Some(e) => format!("{}@{e}", p.method),
-                None => p.method.to_string(),
-            };
-            println!(
-                "{:<28} {:>6} {:>10.4} {:>12.4e} {:>12.4e}",
-                method,
-                p.mean_spp.round(),
-                p.seconds,
-                p.rmse,
-                p.rel_mse
-            );
-        }
+        let method = match p.noise {
+            Some(e) => format!("{}@{e}", p.method),
+            None => p.method.to_string(),
+        };
+        println!(
+            "{:<28} {:>6} {:>10.4} {:>12.4e} {:>12.4e}",
+            method,
+            p.mean_spp.round(),
+            p.seconds,
+            p.rmse,
+            p.rel_mse
+        );
     };
     let mut points = converge::measure(
         &scene,

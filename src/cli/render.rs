@@ -526,6 +526,14 @@ fn check_outputs(args: &RenderArgs) -> Result<(SliceSpec, bool), CliError> {
         }
     }
     if !args.aov.is_empty() {
+        let twice = (1..args.aov.len()).find(|&i| args.aov[..i].contains(&args.aov[i]));
+        if let Some(a) = twice.map(|i| args.aov[i]) {
+            return Err(flag("--aov")(format!(
+                "{} is named twice: each AOV is one set of channels",
+                a.name()
+            ))
+            .into());
+        }
         if ImageFormat::from_path(&args.output) != Some(ImageFormat::Exr) {
             return Err(
                 flag("--aov")("AOVs are EXR channels: write the output to .exr".into()).into(),

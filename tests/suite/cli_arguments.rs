@@ -15,6 +15,45 @@ fn a_bare_strata_renders_the_built_in_scene_in_any_directory() {
     assert!(stdout(&o).contains("-> render.png"), "{}", stdout(&o));
 }
 
+/// Flags whose mistakes were found only after the work they spoil (a
+/// whole render, a reference, a mesh's benchmark) are refused before it:
+/// with the scene or first mesh missing, their error must come first, and
+/// nothing is printed to standard output.
+#[test]
+fn mistaken_flags_are_refused_before_any_work() {
+    let dir = crate::common::temp_dir("flags-first");
+    for (args, said) in [
+        (
+            &[
+                "render",
+                "missing.toml",
+                "-o",
+                "x.exr",
+                "--aov",
+                "normal,depth,normal",
+            ][..],
+            "--aov: normal is named twice",
+        ),
+        (
+            &["converge", "missing.toml", "--noise", "0.1,-1"],
+            "--noise -1: must be relative errors above 0",
+        ),
+        (
+            &["bench", "missing.obj", "--no-embree", "--csv", "b.csv"],
+            "missing.obj: cannot open",
+        ),
+        (
+            &["bench", "missing.toml", "--no-embree", "--csv", "b.csv"],
+            "missing.toml: cannot load '.toml' files as a mesh",
+        ),
+    ] {
+        let o = strata(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(said), "{args:?}: {}", stderr(&o));
+        assert_eq!(stdout(&o), "", "{args:?}: work began before the refusal");
+    }
+}
+
 #[test]
 fn every_output_path_is_checked_before_the_scene_is_loaded() {
     let dir = crate::common::temp_dir("paths");
