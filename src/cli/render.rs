@@ -271,8 +271,11 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
         write_partial(&args.output, header, &outcome.film)
             .map_err(|e| InputError::file(&args.output, format!("cannot write: {e}")))?;
     } else {
+        // The samples the image holds: fewer than asked where a time
+        // budget ended the render.
+        let held = outcome.done.clamp(full.start, full.end) - full.start;
         image
-            .write(&outcome.film, outcome.aov.as_deref(), full.end - full.start)
+            .write(&outcome.film, outcome.aov.as_deref(), held)
             .map_err(|e| InputError::file(&args.output, e))?;
     }
     if let (Some(budget), false) = (args.time, args.quiet) {

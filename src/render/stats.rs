@@ -38,6 +38,9 @@ pub struct RenderStats {
     pub mean_spp: f64,
     /// The noise target (`--noise`), if any.
     pub noise: Option<f32>,
+    /// The time budget in seconds (`--time`), if any: `spp` is then its
+    /// ceiling, and `samples_rendered` what the budget reached.
+    pub time_budget_s: Option<f64>,
     pub sampler: String,
     pub seed: u32,
     pub threads: usize,
@@ -136,6 +139,7 @@ impl RenderStats {
             ],
             mean_spp: outcome.film.mean_samples(),
             noise: s.noise.filter(|_| opts.slice.count == 1),
+            time_budget_s: opts.budget,
             sampler: format!("{:?}", s.sampler).to_lowercase(),
             seed: s.seed,
             threads: outcome.threads,
@@ -222,6 +226,9 @@ impl RenderStats {
         let [start, end] = self.samples_rendered;
         let mut samples = if end - start == self.spp {
             format!("{} spp", self.spp)
+        } else if let (Some(budget), 0) = (self.time_budget_s, start) {
+            // The ceiling is the budget's, not a count the user asked for.
+            format!("{end} spp in a {budget} s budget")
         } else {
             format!("samples {start}..{end} of {} spp", self.spp)
         };

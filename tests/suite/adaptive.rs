@@ -272,6 +272,38 @@ fn the_command_line_writes_counts_and_refuses_what_cannot_work() {
         out.contains("time budget 0.1 s: ") && out.contains(" of 24 samples per pixel reached"),
         "{out}"
     );
+    // A budget that ends the render long before its ceiling: the EXR
+    // header and the summary give the samples the image holds, not the
+    // ceiling, which no one asked for.
+    let o = strata(
+        &dir,
+        &[
+            "render", "s.toml", "--time", "50ms", "-o", "t.exr", "--stats", "t.json",
+        ],
+    );
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("t.json")).unwrap()).unwrap();
+    let reached = stats["samples_rendered"][1].as_u64().unwrap();
+    assert!(
+        reached > 0 && reached < stats["spp"].as_u64().unwrap(),
+        "{stats}"
+    );
+    assert_eq!(stats["time_budget_s"].as_f64(), Some(0.05));
+    let exr = read_exr(&dir.join("t.exr"));
+    let spp = exr
+        .layer
+        .other
+        .get(&exr::meta::attribute::Text::from("spp"));
+    assert_eq!(
+        spp,
+        Some(&exr::meta::attribute::AttributeValue::I32(reached as i32))
+    );
+    assert!(
+        out.contains(&format!(" {reached} spp in a 0.05 s budget")),
+        "{out}"
+    );
 }
 
 /// `--exposure` and `--tonemap` change what a PNG shows and leave the EXR
