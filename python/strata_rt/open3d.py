@@ -15,7 +15,12 @@ that code written for it runs on strata by changing one import::
 
 It takes numpy arrays (and lists), and Open3D tensors and meshes where
 Open3D is installed; it answers with numpy arrays, or with Open3D tensors
-where it was given one. Open3D is never imported by ``strata_rt``.
+where it was given one or holds an Open3D mesh. ``create_rays_pinhole``
+answers a tensor, as Open3D's does, wherever ``open3d`` is imported
+(found in ``sys.modules``), else a numpy array: Open3D is never imported
+by ``strata_rt``. A query point with a NaN or infinite coordinate gets
+Open3D's answers: distance NaN (a NaN coordinate) or inf, occupancy 0,
+no closest point (INVALID_ID).
 
 What differs is what strata does better: a ray through a shared edge or
 vertex of a closed mesh is counted once (``count_intersections``,
@@ -23,7 +28,13 @@ vertex of a closed mesh is counted once (``count_intersections``,
 ``compute_occupancy``), never twice or not at all, so one sample
 (``nsamples=1``) is exact; and a ray with a NaN or infinite coordinate
 or a zero direction is a miss. Meshes far from the origin are traced
-relative to their centre (``strata_rt.Mesh``).
+relative to their centre (``strata_rt.Mesh``). Also different: a ray that
+starts exactly on a surface does not hit it there, as strata's rays
+cover (0, t_max] so that a ray leaving a surface does not hit it again.
+From a point on a face of a box, Open3D 0.20 answers t_hit 0 both ways,
+counts 2 crossings going into the box and 1 going out, and calls both
+occluded; strata answers the far face's t_hit and 1 crossing going in,
+and going out t_hit inf, 0 crossings, not occluded.
 """
 
 from __future__ import annotations
@@ -296,32 +307,67 @@ class RaycastingScene:
 
     # ----------------------------------------------------------- points
 
+    def _closest(self, p: np.ndarray, threads: Optional[int]) -> Dict[str, np.ndarray]:
+        """``Mesh.closest_point`` of each row of ``p`` (n, 3), as arrays of
+        every row: a point with a NaN or infinite coordinate (which
+        ``Mesh`` refuses) has none, as in an empty scene (point, u, v NaN,
+        prim -1), at the distance Open3D gives it: NaN for a NaN
+        coordinate, else inf."""
+        finite = np.isfinite(p).all(axis=1)
+        if finite.all():
+            near = self.mesh.closest_point(p, threads=threads)
+            return {k: near[k] for k in ("point", "distance", "prim", "u", "v")}
+        out = {
+            "point": np.full((len(p), 3), np.nan),
+            "distance": np.where(np.isnan(p).any(axis=1), np.nan, np.inf),
+            "prim": np.full(len(p), -1, dtype=np.int64),
+            "u": np.full(len(p), np.nan),
+            "v": np.full(len(p), np.nan),
+        }
+        if finite.any():
+            near = self.mesh.closest_point(p[finite], threads=threads)
+            for k in out:
+                out[k][finite] = near[k]
+        return out
+
     def compute_closest_points(self, query_points: Any, nthreads: int = 0) -> Dict[str, Any]:
         """The nearest surface point to each point of ``query_points``
         ((..., 3)): ``points`` float32 (..., 3), ``geometry_ids`` and
         ``primitive_ids`` uint32 (...), ``primitive_uvs`` float32 (..., 2)
-        and ``primitive_normals`` float32 (..., 3) of its face."""
+        and ``primitive_normals`` float32 (..., 3) of its face. A query
+        point with a NaN or infinite coordinate has none: INVALID_ID, as
+        Open3D answers (whose points, uvs and normals are then whatever
+        its memory held), with NaN points and uvs and zero normals."""
         p, shape = _rows(query_points, 3, "query_points")
-        near = self.mesh.closest_point(p, threads=self._query_threads(nthreads))
-        geometry_ids, primitive_ids = self._ids(near.prim)
-        uvs = np.stack([near.u, near.v], axis=1).astype(np.float32)
+        near = self._closest(p, self._query_threads(nthreads))
+        geometry_ids, primitive_ids = self._ids(near["prim"])
+        uvs = np.stack([near["u"], near["v"]], axis=1).astype(np.float32)
         return self._out(query_points, {
-            "points": near.point.astype(np.float32).reshape(shape + (3,)),
+            "points": near["point"].astype(np.float32).reshape(shape + (3,)),
             "geometry_ids": geometry_ids.reshape(shape),
             "primitive_ids": primitive_ids.reshape(shape),
             "primitive_uvs": uvs.reshape(shape + (2,)),
-            "primitive_normals": self._normals(near.prim).reshape(shape + (3,)),
+            "primitive_normals": self._normals(near["prim"]).reshape(shape + (3,)),
         })
 
     def compute_distance(self, query_points: Any, nthreads: int = 0) -> Any:
-        """The distance from each point to the nearest surface: float32 (...)."""
+        """The distance from each point to the nearest surface: float32
+        (...); as Open3D's, NaN for a point with a NaN coordinate and inf
+        for one with an infinite coordinate."""
         p, shape = _rows(query_points, 3, "query_points")
-        near = self.mesh.closest_point(p, threads=self._query_threads(nthreads))
-        return self._out(query_points, near.distance.astype(np.float32).reshape(shape))
+        distance = self._closest(p, self._query_threads(nthreads))["distance"]
+        return self._out(query_points, distance.astype(np.float32).reshape(shape))
 
     def _inside(self, p: np.ndarray, nsamples: int, threads: Optional[int]) -> np.ndarray:
         """Inside or not: one exact parity (``Mesh.contains``), or the
-        majority of ``nsamples`` parities along fixed directions."""
+        majority of ``nsamples`` parities along fixed directions. A point
+        with a NaN or infinite coordinate is outside (Open3D's occupancy
+        0 for it)."""
+        finite = np.isfinite(p).all(axis=1)
+        if not finite.all():
+            inside = np.zeros(len(p), dtype=bool)
+            inside[finite] = self._inside(p[finite], nsamples, threads)
+            return inside
         if nsamples == 1:
             return self.mesh.contains(p, threads=threads)
         votes = np.zeros(len(p), dtype=np.int64)
@@ -334,18 +380,21 @@ class RaycastingScene:
         """The distance to the nearest surface, negative inside (meant for
         closed meshes that do not intersect one another): float32 (...).
         Inside is the parity of the crossings along a ray (``nsamples``
-        rays, odd, by majority), exact on shared edges and vertices."""
+        rays, odd, by majority), exact on shared edges and vertices. A
+        point with a NaN coordinate gives NaN, one with an infinite
+        coordinate inf, as in Open3D."""
         p, shape = _rows(query_points, 3, "query_points")
         nsamples = _nsamples(nsamples)
         threads = self._query_threads(nthreads)
-        distance = self.mesh.closest_point(p, threads=threads).distance
+        distance = self._closest(p, threads)["distance"]
         inside = self._inside(p, nsamples, threads)
         signed = np.where(inside, -distance, distance).astype(np.float32)
         return self._out(query_points, signed.reshape(shape))
 
     def compute_occupancy(self, query_points: Any, nthreads: int = 0, nsamples: int = 1) -> Any:
         """1 inside, 0 outside, float32 (...): as ``compute_signed_distance``
-        decides the sign."""
+        decides the sign (0 for a point with a NaN or infinite coordinate,
+        as in Open3D)."""
         p, shape = _rows(query_points, 3, "query_points")
         inside = self._inside(p, _nsamples(nsamples), self._query_threads(nthreads))
         return self._out(query_points, inside.astype(np.float32).reshape(shape))
@@ -356,7 +405,11 @@ class RaycastingScene:
     def create_rays_pinhole(*args: Any, **kwargs: Any) -> Any:
         """Rays of a pinhole camera, float32 (height_px, width_px, 6), one
         through each pixel's centre, directions not normalised (their
-        camera-space z is 1). Either form of Open3D's:
+        camera-space z is 1): an Open3D tensor, as Open3D's own answers,
+        where the ``open3d`` module is imported (in ``sys.modules``: Open3D
+        is in use, and a scene of its tensor meshes answers in tensors,
+        which this camera's rays must index), else a numpy array. Either
+        form of Open3D's:
 
         ``create_rays_pinhole(intrinsic_matrix, extrinsic_matrix, width_px,
         height_px)``: a 3x3 intrinsic matrix and a 4x4 world-to-camera map
@@ -370,7 +423,6 @@ class RaycastingScene:
         """
         names_k = ["intrinsic_matrix", "extrinsic_matrix", "width_px", "height_px"]
         names_f = ["fov_deg", "center", "eye", "up", "width_px", "height_px"]
-        first = args[0] if args else kwargs.get("intrinsic_matrix", kwargs.get("fov_deg"))
         by_matrix = "intrinsic_matrix" in kwargs or (args and np.ndim(_array(args[0], "intrinsic_matrix")) == 2)
         names = names_k if by_matrix else names_f
         if len(args) > len(names):
@@ -390,10 +442,12 @@ class RaycastingScene:
             rays = _pinhole(k, e[:3, :3], e[:3, 3], width, height)
         else:
             rays = _look_at(given, width, height)
-        if _is_open3d(first) or any(_is_open3d(v) for v in given.values()):
-            o3d = sys.modules.get("open3d")
-            if o3d is not None:
-                return o3d.core.Tensor.from_numpy(rays)
+        # Open3D's tutorial passes lists and indexes these rays with the
+        # scene's answers, tensors: only whether Open3D is loaded can tell
+        # the two uses apart (and strata never imports it itself).
+        o3d = sys.modules.get("open3d")
+        if o3d is not None:
+            return o3d.core.Tensor.from_numpy(rays)
         return rays
 
 

@@ -17,7 +17,13 @@ is what strata does better: every hit along a ray comes from one
 traversal (``Mesh.all_hits``), not from re-casting each ray from its last
 hit plus an offset, so a ray through a shared edge or vertex of a closed
 mesh is reported once, never zero times or twice, at any scale; and each
-ray's hits come together, nearest first (index_ray ascending).
+ray's hits come together, nearest first (index_ray ascending). Also
+different: a ray starting exactly on the surface does not hit it there
+(strata's rays cover (0, t_max], so that a ray leaving a surface does not
+hit it again; both of trimesh's engines report that face, at t = 0);
+and ``contains_points`` follows trimesh's rule (both ways along a ray)
+on an open mesh, but asks one ray on a closed one, whose parity is exact
+and the same both ways.
 
 Conventions kept from trimesh: indices are int64, locations float64
 (computed in float64 on the mesh's own triangles, so they lie on the
@@ -34,7 +40,7 @@ with ``vertices`` (n, 3) and ``faces`` (m, 3) works.
 
 from __future__ import annotations
 
-from typing import Any, Optional, Tuple, Union
+from typing import Any, Callable, Optional, Tuple, Union
 
 import numpy as np
 
@@ -57,6 +63,8 @@ class RayMeshIntersector:
         self.threads = threads
         self._key: Any = None
         self._strata: Optional[Mesh] = None
+        self._closed: Optional[bool] = None
+        self._face_bounds: Tuple[np.ndarray, np.ndarray] = (np.zeros(3), np.zeros(3))
 
     @property
     def strata_mesh(self) -> Mesh:
@@ -68,6 +76,7 @@ class RayMeshIntersector:
         if self._strata is None or key != self._key or key is None:
             self._strata = Mesh(np.asarray(self.mesh.vertices), np.asarray(self.mesh.faces))
             self._key = key
+            self._closed = None
         return self._strata
 
     def _rays(self, ray_origins: Any, ray_directions: Any) -> Tuple[np.ndarray, np.ndarray]:
@@ -87,7 +96,14 @@ class RayMeshIntersector:
         if origins.size == 0:
             origins = origins.reshape((0, 3))
             directions = directions.reshape((0, 3))
+        if origins.ndim != 2 or origins.shape[1] != 3:
+            # Hits are listed by ray (index_ray): one row per ray, as trimesh has them.
+            raise ValueError(f"ray_origins and ray_directions must have shape (n, 3); got {origins.shape}")
         return origins, directions
+
+    def _corners(self, faces: np.ndarray) -> np.ndarray:
+        """float64 (k, 3, 3): the corners of ``faces``, as the mesh gives them."""
+        return np.asarray(self.mesh.vertices, dtype=np.float64)[np.asarray(self.mesh.faces)[faces]]
 
     def _locations(
         self, origins: np.ndarray, directions: np.ndarray, index_ray: np.ndarray, index_tri: np.ndarray
@@ -95,7 +111,7 @@ class RayMeshIntersector:
         """Where each ray meets its triangle's plane, in float64 on the
         mesh's own vertices (Cramer's rule, as Möller and Trumbore 1997):
         on the face's plane to float64's precision at any coordinates."""
-        tri = np.asarray(self.mesh.vertices, dtype=np.float64)[np.asarray(self.mesh.faces)[index_tri]]
+        tri = self._corners(index_tri)
         o = origins[index_ray].astype(np.float64)
         d = directions[index_ray].astype(np.float64)
         a = tri[:, 0]
@@ -122,9 +138,12 @@ class RayMeshIntersector:
 
         ``multiple_hits``: every hit along each ray (at most ``max_hits``,
         ``None`` for no limit), else only the first. Hits are grouped by
-        ray, rays in ascending order, each ray's hits nearest first. A ray
-        that only touches the surface (at a silhouette edge or corner) has
-        its first hit listed where its crossings would not list it, so the
+        ray, rays in ascending order, each ray's hits nearest first. A
+        crossing through an edge or a vertex that faces share is listed
+        once (as ``Mesh.count_hits`` counts it), under
+        ``intersects_first``'s face where it is the ray's first; a ray that
+        only touches the surface (at a silhouette edge or corner) has its
+        first hit listed where its crossings would not list it, so the
         first of a ray's hits is always ``intersects_first``'s.
         """
         origins, directions = self._rays(ray_origins, ray_directions)
@@ -132,7 +151,9 @@ class RayMeshIntersector:
         first = mesh.intersect(origins, directions, threads=self.threads, bad_rays="miss", fields=("t", "prim"))
         if multiple_hits:
             splits, t, prim = mesh.all_hits(origins, directions, threads=self.threads, bad_rays="miss")
-            splits, t, prim = _with_first_hits(splits, t, prim, first.t, first.prim)
+            splits, t, prim = _with_first_hits(
+                splits, t, prim, first.t, first.prim, self._corners, origins, directions
+            )
             counts = np.diff(splits)
             index_ray = np.repeat(np.arange(len(counts), dtype=np.int64), counts)
             if max_hits is not None:
@@ -169,37 +190,160 @@ class RayMeshIntersector:
         return self.strata_mesh.occluded(origins, directions, threads=self.threads, bad_rays="miss")
 
     def contains_points(self, points: Any) -> np.ndarray:
-        """Whether each point is inside the mesh: bool (n,), by the parity of
-        surface crossings along one ray (``Mesh.contains``; a closed mesh is
-        assumed, and points on the surface may go either way). A point with
-        a NaN or infinite coordinate is not contained."""
+        """Whether each point is inside the mesh: bool (n,) (or the points'
+        leading shape). A point with a NaN or infinite coordinate is not
+        contained; a point on the surface may go either way.
+
+        On a closed mesh (each edge shared by an even number of faces)
+        one ray's parity of crossings (``Mesh.contains``) is exact, and is
+        what trimesh's rule below gives, as both ways along a line through
+        a closed surface have the same parity. On an open mesh it follows
+        trimesh's ``contains_points``: a point not strictly inside the
+        faces' bounding box is outside; else it counts crossings along a
+        fixed direction and its opposite, and is inside where both counts
+        are odd, outside where both are even or either is 0; where they
+        disagree and neither is 0, it asks once more along a second fixed
+        direction (trimesh draws a random one) and counts a point whose
+        two counts still disagree as outside."""
         points = np.asarray(points, dtype=np.float64)
-        finite = np.isfinite(points).all(axis=-1) if points.ndim == 2 else None
-        if finite is None or finite.all():
-            return self.strata_mesh.contains(points, threads=self.threads)
-        inside = np.zeros(len(points), dtype=bool)
-        inside[finite] = self.strata_mesh.contains(points[finite], threads=self.threads)
+        if points.ndim == 0 or points.shape[-1] != 3:
+            raise ValueError(f"points must have shape (n, 3); got {points.shape}")
+        mesh = self.strata_mesh
+        flat = points.reshape(-1, 3)
+        finite = np.isfinite(flat).all(axis=1)
+        inside = np.zeros(len(flat), dtype=bool)
+        if self._is_closed():
+            if finite.all():
+                return mesh.contains(points, threads=self.threads)
+            inside[finite] = mesh.contains(flat[finite], threads=self.threads)
+        else:
+            lo, hi = self._face_bounds
+            box = finite & (flat > lo).all(axis=1) & (flat < hi).all(axis=1)
+            inside[box] = self._contains_open(mesh, flat[box])
+        return inside.reshape(points.shape[:-1])
+
+    def _is_closed(self) -> bool:
+        """Whether every edge of the faces (by vertex index) is an edge of
+        an even number of them: a closed surface, whose crossings along
+        a line have the same parity either way from any point off it.
+        Worked out once per mesh (a sort of its edges; ``strata_mesh``
+        forgets it when the mesh changes)."""
+        if self._closed is None:
+            faces = np.asarray(self.mesh.faces, dtype=np.int64).reshape(-1, 3)
+            edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+            keys = np.sort(edges[:, 0] * (int(edges.max(initial=0)) + 1) + edges[:, 1])
+            # Sorted, every run of equal keys is of even length exactly when
+            # there are evenly many and they pair off, 0 with 1, 2 with 3, ...
+            self._closed = len(keys) % 2 == 0 and bool((keys[0::2] == keys[1::2]).all())
+            if not self._closed:  # so not empty: the box trimesh's rule asks first
+                corners = np.asarray(self.mesh.vertices, dtype=np.float64)[faces.reshape(-1)]
+                self._face_bounds = (corners.min(axis=0), corners.max(axis=0))
+        return self._closed
+
+    def _contains_open(self, mesh: Mesh, points: np.ndarray) -> np.ndarray:
+        """trimesh's two-way parity rule (``contains_points``) on points
+        inside the faces' bounding box."""
+        inside, unsure = self._both_ways(mesh, points, _CONTAINS_DIRECTION)
+        if unsure.any():
+            again, still = self._both_ways(mesh, points[unsure], _CONTAINS_RETRY)
+            inside[unsure] = again & ~still
         return inside
+
+    def _both_ways(self, mesh: Mesh, points: np.ndarray, direction: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """Inside (both crossing counts odd) and unsure (their parities
+        disagree and neither is 0), along ``direction`` and its opposite."""
+        d = np.broadcast_to(direction, points.shape)
+        ahead = mesh.count_hits(points, d, threads=self.threads)
+        behind = mesh.count_hits(points, -d, threads=self.threads)
+        odd_ahead, odd_behind = ahead % 2 == 1, behind % 2 == 1
+        inside = odd_ahead & odd_behind
+        unsure = (odd_ahead != odd_behind) & (ahead > 0) & (behind > 0)
+        return inside, unsure
+
+
+#: trimesh's direction for contains_points (trimesh.ray.ray_util): the
+#: same first question, so that answers match trimesh's.
+_CONTAINS_DIRECTION = np.array([0.4395064455, 0.617598629942, 0.652231566745])
+#: The second direction, for points whose two counts disagree: fixed, where
+#: trimesh draws a random one, so that the same points get the same answer.
+_CONTAINS_RETRY = np.array([-0.5773502692, 0.2113248654, 0.7886751346])
+
+
+#: How far apart, relative to the ray's reach (below), two hits on faces
+#: that share a corner may lie along the ray and still be one point of the
+#: surface: 2**-16, 128 float32 steps (2**-23). Two faces' t at the same
+#: point differ by the rounding of strata's float32 arithmetic on each
+#: face's corners relative to the origin, a step or two of the reach (2 at
+#: most on rays through every vertex and edge of icospheres); grazing
+#: angles magnify it, hence the margin. A touch and a crossing on
+#: neighbouring faces this close (1.5e-5 of the reach) list as one hit.
+_TIE = 2.0**-16
 
 
 def _with_first_hits(
-    splits: np.ndarray, t: np.ndarray, prim: np.ndarray, first_t: np.ndarray, first_prim: np.ndarray
+    splits: np.ndarray,
+    t: np.ndarray,
+    prim: np.ndarray,
+    first_t: np.ndarray,
+    first_prim: np.ndarray,
+    corners: Callable[[np.ndarray], np.ndarray],
+    origins: np.ndarray,
+    directions: np.ndarray,
 ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every ray's crossings, led by its first hit: where the first
-    crossing is at the first hit's t but names another face of the edge or
-    corner there, the first hit's face; where the crossings start later
-    (or not at all), the first hit put in front (a ray that touches the
-    surface at a silhouette edge or corner before, or without, crossing it)."""
+    """Every ray's crossings (``Mesh.all_hits``), led by its first hit
+    (``Mesh.intersect``), each crossing listed once.
+
+    At a crossing through an edge or a vertex that several faces share,
+    ``intersect`` accepts every one of them and keeps the least t, while
+    ``all_hits`` lists the one face that owns the crossing (so that it is
+    counted once); each computes t on its own face's corners, so the two
+    t may differ by a float32 step or two, either way. The first hit is
+    the first crossing, relabelled with the first hit's face, where
+    - it names the same face, or
+    - its t is not below the crossing's (``intersect`` would have kept
+      the crossing's face had it been nearer: only rounding puts it
+      beyond), or
+    - its face shares a corner with the crossing's (the only faces that
+      can meet the ray at one point of an edge or vertex) and the two t
+      are within ``_TIE`` of the ray's reach: the largest distance, in
+      direction lengths, from the origin to the two faces' corners, the
+      scale of the rounding of t on them.
+    Any other first hit is a touch of the surface (a silhouette edge or
+    corner, which crosses nothing) before the crossings, or without any,
+    and is put in front of them, so that ``intersects_first`` always
+    names the first of a ray's hits."""
     counts = np.diff(splits)
     has = counts > 0
     starts = splits[:-1]
-    first_crossing = np.full(len(counts), np.inf, dtype=np.float32)
-    first_crossing[has] = t[starts[has]]
+    cross_t = np.full(len(counts), np.inf, dtype=np.float32)
+    cross_t[has] = t[starts[has]]
+    cross_prim = np.full(len(counts), -1, dtype=np.int64)
+    cross_prim[has] = prim[starts[has]]
     hit = first_prim >= 0
-    same_t = hit & has & (first_t == first_crossing)
+    same = hit & has & ((first_prim == cross_prim) | (first_t >= cross_t))
+    rays = np.flatnonzero(hit & has & ~same)
+    if len(rays):
+        a, b = corners(first_prim[rays]), corners(cross_prim[rays])
+        share = (a[:, :, None, :] == b[:, None, :, :]).all(axis=-1).any(axis=(1, 2))
+        o = origins[rays].astype(np.float64)[:, None, :]
+        length = np.linalg.norm(directions[rays].astype(np.float64), axis=1)
+        reach = np.linalg.norm(np.concatenate([a, b], axis=1) - o, axis=2).max(axis=1) / length
+        gap = cross_t[rays].astype(np.float64) - first_t[rays].astype(np.float64)
+        same[rays] = share & (gap <= _TIE * reach)
     prim = prim.copy()
-    prim[starts[same_t]] = first_prim[same_t]
-    touch = hit & (first_t < first_crossing)
+    relabel = same & (first_prim != cross_prim)
+    if relabel.any():
+        # Where the ray only touches an edge or a vertex, all_hits may list
+        # two faces there (a touch crosses twice or not at all), the first
+        # hit's face second: the two swap, so that no face is listed twice.
+        owner = np.repeat(np.arange(len(counts)), counts)
+        later = np.ones(len(prim), dtype=bool)
+        later[starts[has]] = False
+        match = np.flatnonzero(later & relabel[owner] & (prim == first_prim[owner]))
+        match = match[np.unique(owner[match], return_index=True)[1]]  # the first match of each ray
+        prim[match] = cross_prim[owner[match]]
+        prim[starts[relabel]] = first_prim[relabel]
+    touch = hit & ~same
     if not touch.any():
         return splits, t, prim
     rays = np.flatnonzero(touch)

@@ -3,7 +3,9 @@
 Without Open3D: analytic boxes and spheres, float64 brute force, the keys,
 dtypes, shapes and invalid ids Open3D documents, and Open3D tensors
 played by a stand-in module (tools/compare_open3d.py compares the answers
-with Open3D's own where it is installed).
+with Open3D's own where it is installed). The few tests that take the
+``o3d`` fixture compare with Open3D itself and skip without it: its
+tutorial, non-finite query points, a ray from a surface.
 """
 
 import math
@@ -16,6 +18,39 @@ import pytest
 import helpers
 import strata_rt
 from strata_rt.open3d import INVALID_ID, RaycastingScene
+
+#: The real Open3D module once a test has imported it.
+_OPEN3D = {}
+
+
+@pytest.fixture(autouse=True)
+def open3d_unloaded(monkeypatch):
+    """Open3D as not imported, for the test's length: create_rays_pinhole
+    answers in Open3D tensors where it is (sys.modules), and the tests
+    that do not ask for it (the ``o3d`` fixture) check numpy answers."""
+    loaded = sys.modules.get("open3d")
+    if getattr(loaded, "__file__", None):  # the real one, not a stand-in
+        _OPEN3D.setdefault("module", loaded)
+    monkeypatch.delitem(sys.modules, "open3d", raising=False)
+
+
+@pytest.fixture
+def o3d(open3d_unloaded):
+    """The real Open3D, imported for the test's length (skips where it is
+    not installed); the tests after it, here and in other files (the docs'
+    numpy examples), find it as they would have: not imported."""
+    module = _OPEN3D.get("module")
+    if module is None:
+        # ImportError too: an Open3D that is installed but cannot load (it needs libusb) skips.
+        module = pytest.importorskip(
+            "open3d", reason="Open3D (tools/requirements-bench.txt) to compare with", exc_type=ImportError
+        )
+        _OPEN3D["module"] = module
+    sys.modules["open3d"] = module
+    yield module
+    # Before the autouse fixture's undo, which puts it back where it was.
+    sys.modules.pop("open3d", None)
+
 
 CAST_KEYS = {"t_hit": np.float32, "geometry_ids": np.uint32, "primitive_ids": np.uint32,
              "primitive_uvs": np.float32, "primitive_normals": np.float32}
@@ -293,3 +328,115 @@ def test_open3d_tensors_in_give_open3d_tensors_out(monkeypatch):
     assert isinstance(ans["t_hit"], FakeTensor) and ans["t_hit"].numpy()[0] == 4.0
     rays = RaycastingScene.create_rays_pinhole(FakeTensor(np.eye(3)), FakeTensor(np.eye(4)), 2, 2)
     assert isinstance(rays, FakeTensor) and rays.numpy().shape == (2, 2, 6)
+    # With Open3D loaded, the camera's rays are a tensor whatever its
+    # arguments, as Open3D's are (its tutorial passes lists); without, numpy.
+    for args in ((np.eye(3), np.eye(4), 2, 2), (90, [0, 0, 2], [2, 3, 0], [0, 1, 0], 4, 3)):
+        rays = RaycastingScene.create_rays_pinhole(*args)
+        assert isinstance(rays, FakeTensor) and rays.numpy().dtype == np.float32
+        monkeypatch.delitem(sys.modules, "open3d")
+        plain = RaycastingScene.create_rays_pinhole(*args)
+        assert type(plain) is np.ndarray
+        np.testing.assert_array_equal(plain, rays.numpy())
+        monkeypatch.setitem(sys.modules, "open3d", fake)
+
+
+def test_open3d_s_tutorial_runs_as_written(o3d):
+    """Open3D's ray-casting tutorial, its lines as they are but for the
+    scene's class: a scene of tensor meshes answers in tensors, which
+    index the camera's rays; the points are Open3D's."""
+
+    def tutorial(scene_class):
+        cube = o3d.t.geometry.TriangleMesh.from_legacy(o3d.geometry.TriangleMesh.create_box())
+        scene = scene_class()
+        scene.add_triangles(cube)
+        rays = scene_class.create_rays_pinhole(
+            fov_deg=90, center=[0, 0, 2], eye=[2, 3, 0], up=[0, 1, 0], width_px=64, height_px=48
+        )
+        ans = scene.cast_rays(rays)
+        hit = ans["t_hit"].isfinite()
+        points = rays[hit][:, :3] + rays[hit][:, 3:] * ans["t_hit"][hit].reshape((-1, 1))
+        return hit.numpy(), points.numpy()
+
+    hit, points = tutorial(RaycastingScene)
+    their_hit, their_points = tutorial(o3d.t.geometry.RaycastingScene)
+    np.testing.assert_array_equal(hit, their_hit)
+    assert hit.sum() > 100
+    np.testing.assert_allclose(points, their_points, rtol=0, atol=1e-5)
+
+
+NON_FINITE = np.float32([
+    [np.nan, 0.5, 0.5], [0.5, np.inf, 0.5], [-np.inf, np.inf, 0.0], [np.nan, np.inf, 0.0],
+    [0.5, 0.3, 0.2], [2.0, 0.5, 0.25],
+])
+
+
+def test_point_queries_answer_non_finite_points_as_open3d_does(o3d):
+    """A query point with a NaN or infinite coordinate: Open3D 0.20's
+    distance is NaN for a NaN coordinate, else inf, its occupancy 0 and
+    its ids INVALID_ID (the rest of its closest point is whatever its
+    memory held); the finite points answer as they would alone."""
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    ours, theirs = RaycastingScene(), o3d.t.geometry.RaycastingScene()
+    ours.add_triangles(v, f)
+    theirs.add_triangles(o3d.core.Tensor(v.astype(np.float32)), o3d.core.Tensor(f.astype(np.uint32)))
+    points = o3d.core.Tensor(NON_FINITE)
+    distance = ours.compute_distance(points).numpy()
+    np.testing.assert_allclose(distance, theirs.compute_distance(points).numpy(), rtol=1e-6)
+    for nsamples in (1, 3):
+        for query in ("compute_signed_distance", "compute_occupancy"):
+            got = getattr(ours, query)(points, nsamples=nsamples).numpy()
+            expected = getattr(theirs, query)(points, nsamples=nsamples).numpy()
+            np.testing.assert_allclose(got, expected, rtol=1e-6, err_msg=f"{query}, nsamples={nsamples}")
+    near, their_near = ours.compute_closest_points(points), theirs.compute_closest_points(points)
+    for k in ("geometry_ids", "primitive_ids"):
+        np.testing.assert_array_equal(near[k].numpy(), their_near[k].numpy())
+    np.testing.assert_allclose(near["points"].numpy()[4:], their_near["points"].numpy()[4:], atol=1e-6)
+
+
+def test_point_queries_take_non_finite_points():
+    """Without Open3D: no error for the batch, the finite points' answers
+    as alone, and for the others the answers the docstrings give."""
+    scene, *_ = two_boxes()
+    bad, good = NON_FINITE[:4], NON_FINITE[4:]
+    np.testing.assert_array_equal(scene.compute_distance(NON_FINITE)[:4], [np.nan, np.inf, np.inf, np.nan])
+    np.testing.assert_array_equal(scene.compute_distance(NON_FINITE)[4:], scene.compute_distance(good))
+    for nsamples in (1, 3):
+        occupancy = scene.compute_occupancy(NON_FINITE, nsamples=nsamples)
+        alone = scene.compute_occupancy(good, nsamples=nsamples)
+        np.testing.assert_array_equal(occupancy, np.concatenate([np.zeros(4), alone]))
+        signed = scene.compute_signed_distance(NON_FINITE, nsamples=nsamples)
+        alone = scene.compute_signed_distance(good, nsamples=nsamples)
+        np.testing.assert_array_equal(signed, np.concatenate([scene.compute_distance(bad), alone]))
+    near = scene.compute_closest_points(NON_FINITE)
+    alone = scene.compute_closest_points(good)
+    for k in near:
+        np.testing.assert_array_equal(near[k][4:], alone[k])
+    assert (near["geometry_ids"][:4] == INVALID_ID).all() and (near["primitive_ids"][:4] == INVALID_ID).all()
+    assert np.isnan(near["points"][:4]).all() and (near["primitive_normals"][:4] == 0).all()
+
+
+ON_A_FACE = np.float32([
+    [0.3, 0.4, 0.0, 0, 0, 1],   # on the cube's bottom face, going in
+    [0.3, 0.4, 0.0, 0, 0, -1],  # on it, going out
+])
+
+
+def test_a_ray_from_a_surface_does_not_hit_it_there():
+    """strata's rays cover (0, t_max] (docs/python.md): from a point on a
+    face, going in, the far face; going out, nothing."""
+    scene = RaycastingScene()
+    scene.add_triangles(*helpers.box([0, 0, 0], [1, 1, 1]))
+    np.testing.assert_array_equal(scene.cast_rays(ON_A_FACE)["t_hit"], [1.0, np.inf])
+    np.testing.assert_array_equal(scene.count_intersections(ON_A_FACE), [1, 0])
+    np.testing.assert_array_equal(scene.test_occlusions(ON_A_FACE), [True, False])
+
+
+def test_open3d_hits_a_surface_a_ray_starts_on(o3d):
+    """What docs/python.md says Open3D 0.20 answers for those rays: t_hit 0
+    both ways, 2 and 1 crossings, occluded both ways."""
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.t.geometry.TriangleMesh.from_legacy(o3d.geometry.TriangleMesh.create_box()))
+    rays = o3d.core.Tensor(ON_A_FACE)
+    np.testing.assert_array_equal(scene.cast_rays(rays)["t_hit"].numpy(), [0.0, 0.0])
+    np.testing.assert_array_equal(scene.count_intersections(rays).numpy(), [2, 1])
+    np.testing.assert_array_equal(scene.test_occlusions(rays).numpy(), [True, True])

@@ -2,6 +2,8 @@
 (trimesh.ray.ray_triangle) on the same meshes and rays, and as a drop-in
 ``mesh.ray``."""
 
+import types
+
 import numpy as np
 import pytest
 
@@ -143,6 +145,8 @@ def test_conventions_kept_from_trimesh(bumpy):
     # Mismatched shapes raise, as trimesh does; empty input gives empty answers.
     with pytest.raises(ValueError):
         ray.intersects_id(o, d[:2])
+    with pytest.raises(ValueError, match="ray_origins"):
+        ray.intersects_id(o[0], d[0])
     tri, idx, loc = ray.intersects_id(np.zeros((0, 3)), np.zeros((0, 3)), return_locations=True)
     assert tri.shape == (0,) and loc.shape == (0, 3)
     # The BVH follows the mesh: moved vertices, new answers.
@@ -184,3 +188,109 @@ def test_first_hit_and_locations_agree_on_grazing_rays():
     assert first[-1] >= 0
     loc, ray, _ = mesh.ray.intersects_location(origins[-1:], directions[-1:])
     assert np.isclose(loc[0, 2], -0.5, rtol=0, atol=1e-12)
+
+
+def test_a_ray_through_a_shared_edge_or_vertex_lists_its_crossing_once():
+    """Rays from outside a closed icosphere through each of its vertices
+    and edge midpoints cross it twice: listed twice, as count_hits counts,
+    and led by intersects_first's face. There Mesh.intersect and
+    Mesh.all_hits name different faces of the edge or vertex, whose t
+    differ by a float32 step either way (on up to an eighth of these rays)."""
+    far = [7e4, -3e4, 1e3]  # a mesh far from the origin is traced relative to its centre
+    for sphere, shift in ((trimesh.creation.icosphere(3), 0), (trimesh.creation.icosphere(3), far),
+                          (trimesh.creation.icosphere(2, radius=1e3), far)):
+        sphere.vertices += shift
+        centre = sphere.vertices.mean(axis=0)
+        targets = np.vstack([sphere.vertices, sphere.vertices[sphere.edges_unique].mean(axis=1)])
+        out = targets - centre
+        for origins in (centre + 3 * out + 0.246 * sphere.scale, centre + 1e3 * out):
+            directions = targets - origins
+            ray = RayMeshIntersector(sphere)
+            counts = ray.strata_mesh.count_hits(origins, directions)
+            assert (counts == 2).all()
+            first = ray.intersects_first(origins, directions)
+            tri, index = ray.intersects_id(origins, directions, multiple_hits=True)
+            np.testing.assert_array_equal(np.bincount(index, minlength=len(origins)), counts)
+            np.testing.assert_array_equal(tri[0::2], first)
+            locations, index_ray, index_tri = ray.intersects_location(origins, directions)
+            np.testing.assert_array_equal(np.bincount(index_ray, minlength=len(origins)), counts)
+            np.testing.assert_array_equal(index_tri, tri)
+            # The first location is the target itself, the second beyond it.
+            np.testing.assert_allclose(locations[0::2], targets, rtol=0, atol=1e-9 * np.abs(origins).max())
+            along = np.einsum("ij,ij->i", locations[1::2] - locations[0::2], directions)
+            assert (along > 0).all()
+
+
+def test_a_ray_that_touches_an_edge_or_vertex_lists_no_face_twice():
+    """Rays along the tangent plane at an icosphere's vertices and edge
+    midpoints only touch it there: all_hits lists two faces of the edge or
+    vertex, or none, and intersect names one of them, maybe the second:
+    each face is listed once, the first hit first."""
+    sphere = trimesh.creation.icosphere(2)
+    rng = np.random.default_rng(5)
+    targets = np.vstack([sphere.vertices, sphere.vertices[sphere.edges_unique].mean(axis=1)])
+    normals = targets / np.linalg.norm(targets, axis=1, keepdims=True)
+    ray = RayMeshIntersector(sphere)
+    for _ in range(4):
+        tangents = np.cross(normals, rng.normal(size=normals.shape))
+        origins = targets - 2 * tangents
+        tri, index = ray.intersects_id(origins, tangents)
+        pairs = index * len(sphere.faces) + tri
+        assert len(np.unique(pairs)) == len(pairs)
+        first = ray.intersects_first(origins, tangents)
+        hit = np.unique(index)
+        np.testing.assert_array_equal(hit, np.flatnonzero(first >= 0))
+        np.testing.assert_array_equal(tri[np.searchsorted(index, hit)], first[hit])
+
+
+def test_contains_points_follows_trimesh_s_rule_on_an_open_mesh(bumpy, monkeypatch):
+    """On an open mesh one ray's parity depends on the ray; trimesh asks
+    both ways along it (and once more, along a random direction, where the
+    two disagree and neither count is 0). The adapter asks the same
+    questions, its second direction fixed: with trimesh's random one made
+    that direction, the two agree on every point away from the surface."""
+    from trimesh.ray import ray_util
+
+    import strata_rt.trimesh as adapter
+
+    plane = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2]])
+    points = [[0.2, 0.2, -0.1], [0.2, 0.2, 0.1]]
+    np.testing.assert_array_equal(RayMeshIntersector(plane).contains_points(points), [False, False])
+    np.testing.assert_array_equal(TrimeshEngine(plane).contains_points(points), [False, False])
+    # A box less one of its 12 triangles: open, an odd number of faces.
+    box = trimesh.creation.box()
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:11])
+    points = np.random.default_rng(6).uniform(-0.6, 0.6, size=(300, 3))
+    away = np.abs(np.abs(points).max(axis=1) - 0.5) > 0.01
+    inside = RayMeshIntersector(open_box).contains_points(points)
+    np.testing.assert_array_equal(inside[away], TrimeshEngine(open_box).contains_points(points)[away])
+    assert inside.sum() > 50
+    # The bumpy sphere with two holes, and a square inside it: a point
+    # below the square sees the square and the sphere one way, the sphere
+    # alone the other.
+    vertices, faces = bumpy
+    middle = vertices[faces].mean(axis=1)
+    keep = ~((middle[:, 2] > 0.7) | ((np.abs(middle[:, 0]) < 0.25) & (middle[:, 1] > 0)))
+    square = np.array([[-0.5, -0.5, 0.05], [0.5, -0.5, 0.05], [-0.5, 0.5, 0.05], [0.5, 0.5, 0.05]])
+    mesh = trimesh.Trimesh(
+        np.vstack([vertices, square]),
+        np.vstack([faces[keep], np.array([[0, 1, 2], [1, 3, 2]]) + len(vertices)]),
+        process=False,
+    )
+    ours = RayMeshIntersector(mesh)
+    points = np.random.default_rng(4).uniform(-1.3, 1.3, size=(2000, 3))
+    away = ours.strata_mesh.closest_point(points).distance > 1e-3
+    fixed = types.SimpleNamespace(random=lambda n: adapter._CONTAINS_RETRY + 0.5)
+    monkeypatch.setattr(ray_util.util, "random_generator", lambda *args: fixed)
+    theirs = ray_util.contains_points(TrimeshEngine(mesh), points)
+    inside = ours.contains_points(points)
+    np.testing.assert_array_equal(inside[away], theirs[away])
+    # Points of every kind: inside, where one ray's parity says otherwise,
+    # and where the first two counts disagree and neither is 0.
+    assert inside.sum() > 50 and (ours.strata_mesh.contains(points) != inside).sum() > 50
+    d = np.broadcast_to(adapter._CONTAINS_DIRECTION, points.shape)
+    ahead, behind = ours.strata_mesh.count_hits(points, d), ours.strata_mesh.count_hits(points, -d)
+    assert (((ahead - behind) % 2 == 1) & (ahead > 0) & (behind > 0)).sum() > 20
+    # mesh.contains asks mesh.ray: the drop-in answers the same.
+    mesh.ray = ours
+    np.testing.assert_array_equal(mesh.contains(points), inside)
