@@ -114,3 +114,32 @@ def test_a_mesh_near_the_origin_keeps_every_bit(bumpy):
     v, f = bumpy
     mesh = strata_rt.Mesh(v, f)
     np.testing.assert_array_equal(mesh.triangles, v.astype(np.float32)[f])
+
+
+@pytest.mark.parametrize("exponent", [-36, -30, 30, 39])
+def test_every_answer_scales_with_the_mesh_where_float32_holds_it(exponent):
+    """The sphere scaled by a power of two (exact in float32) from about
+    1.5e-11 to 5e11 in radius: t, counts, inside and closest points answer as
+    at scale 1, scaled (closest_point's region tests overflowed past 1e9
+    and underflowed below 1e-10, off by up to 270%)."""
+    k = 2.0**exponent
+    v, f = sphere_at(np.zeros(3), radius=1.0)
+    rng = np.random.default_rng(12)
+    origins, directions = rays_through(rng, np.zeros(3), 1.0, 2000, 1.2)
+    points = rng.uniform(-1.5, 1.5, (2000, 3))
+    unit, scaled = strata_rt.Mesh(v, f), strata_rt.Mesh(v * k, f)
+    a, b = unit.intersect(origins, directions), scaled.intersect(origins * k, directions)
+    np.testing.assert_array_equal(b.t, (a.t * np.float32(k)).astype(np.float32))
+    np.testing.assert_array_equal(b.prim, a.prim)
+    np.testing.assert_array_equal(scaled.count_hits(origins * k, directions), unit.count_hits(origins, directions))
+    np.testing.assert_array_equal(scaled.contains(points * k), unit.contains(points))
+    near_a, near_b = unit.closest_point(points), scaled.closest_point(points * k)
+    np.testing.assert_array_equal(near_b.prim, near_a.prim)
+    np.testing.assert_allclose(near_b.distance, near_a.distance * k, rtol=1e-12)
+
+
+@pytest.mark.parametrize("k", [1e13, 5e-12])
+def test_a_mesh_too_large_or_small_for_float32_says_so(k):
+    v, f = sphere_at(np.zeros(3), radius=1.0)
+    with pytest.raises(ValueError, match=r"from the mesh's centre, where strata's float32 ray tests are exact from 1e-11 to 1e12: scale them"):
+        strata_rt.Mesh(v * k, f)

@@ -78,49 +78,94 @@ const DEGENERATE: f32 = 64.0 * f32::EPSILON * f32::EPSILON;
 /// edges, so its answer is still a point of it.
 pub fn closest_point_on_triangle(p: Vec3, v: &[Vec3; 3]) -> Vec3 {
     let [a, b, c] = *v;
-    let ab = b - a;
-    let ac = c - a;
+    // The regions' tests multiply four coordinates (`vc = d1·d4 − d3·d2`),
+    // which overflow f32 for a triangle of size 1e9 and underflow for one
+    // of size 1e-10, silently choosing a wrong region. They are made on
+    // the differences scaled by a power of two that brings the largest
+    // near 1: exact, so every sign and ratio is the unscaled one wherever
+    // that did not overflow or underflow; the point is then made from
+    // the unscaled differences.
+    let (ab, ac) = (b - a, c - a);
+    let s = unit_scale(ab.abs().max(ac.abs()).max((p - a).abs()).max_element());
+    let region = face_region([ab, ac, p - a, p - b, p - c].map(|d| d * s));
+    match region {
+        Region::Edges => closest_point_on_edges(p, v),
+        Region::Vertex(k) => v[k],
+        Region::Edge(from, to, t) => v[from] + (v[to] - v[from]) * t,
+        Region::Face(wb, wc) => a + ab * wb + ac * wc,
+        Region::Plane(n, k) => p - n * k / s,
+    }
+}
+
+/// The power of two that brings `m` (a finite magnitude, or 0) into
+/// [1, 2), within f32's normal range: 1 for 0 or a value not finite.
+fn unit_scale(m: f32) -> f32 {
+    if !(m.is_finite() && m > 0.0) {
+        return 1.0;
+    }
+    let exponent = ((m.to_bits() >> 23) as i32 - 127).clamp(-126, 126);
+    f32::from_bits(((127 - exponent) as u32) << 23)
+}
+
+/// Which part of a triangle holds the point nearest to `p`, and where on
+/// it: what [`closest_point_on_triangle`] makes the point from.
+enum Region {
+    /// Degenerate: the nearest point of the three edges.
+    Edges,
+    /// Corner `k`.
+    Vertex(usize),
+    /// Edge from corner `from` to `to`, at `t` along it.
+    Edge(usize, usize, f32),
+    /// The face, at barycentric weights of `b` and `c`.
+    Face(f32, f32),
+    /// `p`'s projection on the plane: `p − n·k` (the normal and the
+    /// factor of the scaled triangle).
+    Plane(Vec3, f32),
+}
+
+/// Ericson's region tests on a triangle abc for a point p, given as the
+/// differences `[ab, ac, ap, bp, cp]` (Ericson 2005, §5.1.5; each
+/// region's test reads dot products already made for the previous ones).
+fn face_region(differences: [Vec3; 5]) -> Region {
+    let [ab, ac, ap, bp, cp] = differences;
     let n = ab.cross(ac);
     let n2 = n.length_squared();
     if !(n2 > DEGENERATE * ab.length_squared() * ac.length_squared()) {
-        return closest_point_on_edges(p, v);
+        return Region::Edges;
     }
     // Vertex a's region.
-    let ap = p - a;
     let d1 = ab.dot(ap);
     let d2 = ac.dot(ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
+        return Region::Vertex(0);
     }
     // Vertex b's region.
-    let bp = p - b;
     let d3 = ab.dot(bp);
     let d4 = ac.dot(bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return b;
+        return Region::Vertex(1);
     }
     // Edge ab's region. Its weight's denominator d1 − d3 is |ab|² > 0.
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
+        return Region::Edge(0, 1, d1 / (d1 - d3));
     }
     // Vertex c's region.
-    let cp = p - c;
     let d5 = ab.dot(cp);
     let d6 = ac.dot(cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return c;
+        return Region::Vertex(2);
     }
     // Edge ac's region.
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
+        return Region::Edge(0, 2, d2 / (d2 - d6));
     }
     // Edge bc's region.
     let va = d3 * d6 - d5 * d4;
     let (e4, e5) = (d4 - d3, d5 - d6);
     if va <= 0.0 && e4 >= 0.0 && e5 >= 0.0 {
-        return b + (c - b) * (e4 / (e4 + e5));
+        return Region::Edge(1, 2, e4 / (e4 + e5));
     }
     // The face's, from its barycentric weights, so that the point lies in
     // the triangle's span to rounding of its own coordinates. Far from a
@@ -128,9 +173,9 @@ pub fn closest_point_on_triangle(p: Vec3, v: &[Vec3; 3]) -> Vec3 {
     // sign, p's projection onto the plane.
     let sum = va + vb + vc;
     if sum > 0.0 {
-        return a + ab * (vb / sum) + ac * (vc / sum);
+        return Region::Face(vb / sum, vc / sum);
     }
-    p - n * (n.dot(ap) / n2)
+    Region::Plane(n, n.dot(ap) / n2)
 }
 
 /// The point of the edges of triangle `v` nearest to `p` (the first edge
@@ -315,6 +360,31 @@ mod tests {
         for _ in 0..3000 {
             let v = [rng.cube(2.0), rng.cube(2.0), rng.cube(2.0)];
             check_against_samples(rng.cube(6.0), &v);
+        }
+    }
+
+    /// The same triangles and points scaled by powers of two from 2⁻⁶⁰
+    /// to 2⁶⁰ (1e-18 to 1e18) answer the scaled point bit for bit: the
+    /// regions' products of four coordinates overflowed f32 from about
+    /// 1e9 and underflowed below 1e-10, and chose wrong regions there
+    /// (the Python package's `closest_point` on a mesh scaled by 1e10 was
+    /// off by up to 270%).
+    #[test]
+    fn the_nearest_point_scales_with_the_triangle() {
+        let mut rng = seeded(9);
+        for round in 0..2000 {
+            let v = [rng.cube(2.0), rng.cube(2.0), rng.cube(2.0)];
+            let p = rng.cube(6.0);
+            let q = closest_point_on_triangle(p, &v);
+            for k in (-60..=60).step_by(4) {
+                let s = 2f32.powi(k);
+                let scaled = closest_point_on_triangle(p * s, &v.map(|x| x * s));
+                assert_eq!(
+                    scaled.to_array().map(f32::to_bits),
+                    (q * s).to_array().map(f32::to_bits),
+                    "round {round}, scale 2^{k}"
+                );
+            }
         }
     }
 

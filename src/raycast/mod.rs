@@ -50,7 +50,7 @@ use crate::geometry::travel::SPAN;
 use crate::geometry::{Found, Geometry};
 pub use crate::math::Ray;
 pub use crate::scene::MeshArraysError;
-use crate::scene::{load_mesh_scene, mesh_geometry};
+use crate::scene::{check_extent, load_mesh_scene, mesh_geometry};
 use glam::{Affine3A, DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
@@ -310,7 +310,15 @@ impl Mesh {
     /// used as it is: triangle `i` of the file is face `i`.
     pub fn load(path: &Path, quality: BuildQuality) -> InputResult<Self> {
         let (scene, _) = load_mesh_scene(path, quality)?;
-        Ok(Self::from_geometry(scene.geometry))
+        let mesh = Self::from_geometry(scene.geometry);
+        // Traced as the file places it (its centre is the origin).
+        let extent = match mesh.triangle_count() {
+            0 => 0.0,
+            _ => mesh.bounds[0].abs().max(mesh.bounds[1].abs()).max_element(),
+        };
+        check_extent(f64::from(extent))
+            .map_err(|e| crate::error::InputError::file(path, e.to_string()))?;
+        Ok(mesh)
     }
 
     /// This mesh placed once by each of `maps` (object to world): stored

@@ -27,8 +27,8 @@ use crate::texture::Textures;
 /// The BVH build effort a render or a mesh query asks for (`bvh_quality`).
 pub use crate::accel::BuildQuality;
 pub use compile::{
-    load_edited_scene, load_edited_text, load_mesh_scene, load_scene, load_scene_for_tracing,
-    mesh_geometry, scene_from_str, LoadTimings, MeshArraysError,
+    check_extent, load_edited_scene, load_edited_text, load_mesh_scene, load_scene,
+    load_scene_for_tracing, mesh_geometry, scene_from_str, LoadTimings, MeshArraysError, EXTENT,
 };
 pub use settings::{RenderOverrides, RenderSettings};
 
