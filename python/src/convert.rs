@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use strata::math::Ray;
 
-use crate::run::Threads;
+use crate::run::{Threads, CHUNK, TASK};
 
 fn error(message: String) -> PyErr {
     PyValueError::new_err(message)
@@ -308,11 +308,19 @@ pub fn points(
         let p = r.row64(i);
         let near = (p - centre).as_vec3();
         ((p, near), !p.as_vec3().is_finite() || !near.is_finite())
-    }));
+    }))?;
     match bad {
         Some(i) => Err(not_finite(name, i, points[i].0.as_vec3())),
         None => Ok(points),
     }
+}
+
+/// How many tasks reading `n` rows makes: rows of [`TASK`] at a time, as
+/// many as one chunk of a query has at most (a whole array of points is
+/// read at once), so that reading starts no more threads than the query's
+/// steps do.
+fn read_tasks(n: usize) -> usize {
+    n.min(CHUNK).div_ceil(TASK)
 }
 
 /// `out` = `make(i)` for `i` in `range` (its old items dropped, its
@@ -323,20 +331,25 @@ fn gather_into<T: Send>(
     range: std::ops::Range<usize>,
     out: &mut Vec<T>,
     make: impl Fn(usize) -> (T, bool) + Sync,
-) -> Option<usize> {
+) -> PyResult<Option<usize>> {
     let first_bad = AtomicUsize::new(usize::MAX);
     out.clear();
-    threads.install(|| {
-        out.par_extend(range.into_par_iter().map(|i| {
-            let (value, bad) = make(i);
-            if bad {
-                first_bad.fetch_min(i, Ordering::Relaxed);
-            }
-            value
-        }))
-    });
+    threads.run(read_tasks(range.len()), |min_len| {
+        out.par_extend(
+            range
+                .into_par_iter()
+                .with_min_len(min_len.max(TASK))
+                .map(|i| {
+                    let (value, bad) = make(i);
+                    if bad {
+                        first_bad.fetch_min(i, Ordering::Relaxed);
+                    }
+                    value
+                }),
+        )
+    })?;
     let bad = first_bad.into_inner();
-    (bad != usize::MAX).then_some(bad)
+    Ok((bad != usize::MAX).then_some(bad))
 }
 
 /// `make(i)` for `i` in `0..n`, on `threads`, and the first `i` whose
@@ -345,22 +358,10 @@ fn gather<T: Send>(
     threads: &Threads,
     n: usize,
     make: impl Fn(usize) -> (T, bool) + Sync,
-) -> (Vec<T>, Option<usize>) {
-    let first_bad = AtomicUsize::new(usize::MAX);
-    let out = threads.install(|| {
-        (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let (value, bad) = make(i);
-                if bad {
-                    first_bad.fetch_min(i, Ordering::Relaxed);
-                }
-                value
-            })
-            .collect()
-    });
-    let bad = first_bad.into_inner();
-    (out, (bad != usize::MAX).then_some(bad))
+) -> PyResult<(Vec<T>, Option<usize>)> {
+    let mut out = Vec::with_capacity(n);
+    let bad = gather_into(threads, 0..n, &mut out, make)?;
+    Ok((out, bad))
 }
 
 /// An (m, 3) array of any integer dtype, as vertex indices: each in
@@ -483,12 +484,8 @@ fn t_maxes(t_max: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<TMax> {
         return Ok(TMax::All(f32::INFINITY));
     };
     if !is_sequence(obj)? {
-        let t: f64 = obj.extract().map_err(|_| {
-            error(format!(
-                "t_max must be a number or an (n,) array with one per ray; got {}",
-                obj.get_type().name().map_or("?".into(), |s| s.to_string())
-            ))
-        })?;
+        let what = "a number or an (n,) array with one per ray (None for no limit)";
+        let t = crate::args::real(obj, "t_max", what)?;
         return Ok(TMax::All(check_t_max(t, "t_max")?));
     }
     let ts = column(obj, "t_max")?;
@@ -648,7 +645,7 @@ impl RaySource<'_> {
                     b => (ray, b),
                 }
             }
-        )));
+        )))?;
         let Some(i) = bad else {
             return Ok(());
         };

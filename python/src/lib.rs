@@ -3,14 +3,18 @@
 //! A thin layer over the library: [`convert`] turns numpy arrays (any
 //! float or integer dtype, lists, non-contiguous views) into strata's
 //! types and refuses bad input with a `ValueError` that names the
-//! argument; [`mesh`] holds the BVH and answers the ray and point queries;
+//! argument; [`args`] reads the other arguments (numbers, flags, names,
+//! paths), a wrong type a `TypeError` that names the argument; [`mesh`] holds the BVH and answers the ray and point queries;
 //! [`run`] runs a query's rays on rayon with the GIL released, in chunks
-//! between which Ctrl-C is checked; [`render`] is `strata render` returning
+//! between which Ctrl-C is checked, on no more threads than a chunk has
+//! tasks (one task, or `threads=1`, on the calling thread); [`render`] is `strata render` returning
 //! arrays (its warnings raised as Python warnings, Ctrl-C checked between
 //! passes). The Python package (`python/strata_rt/`) re-exports all of it.
 
+mod args;
 mod convert;
 mod mesh;
+mod mesh_objects;
 mod render;
 mod results;
 mod run;

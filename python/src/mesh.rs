@@ -1,13 +1,14 @@
 //! `Mesh`: a triangle mesh with its BVH, and the queries on it.
 
+use crate::args;
 use crate::convert::{self, BadRays, RaySource, RaySpec};
+use crate::mesh_objects;
 use crate::results::{ClosestPoints, Crossings, Hits, HITS_KEYS};
 use crate::run::{self, Threads, CHUNK, TASK};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyNotImplementedError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
-use std::path::PathBuf;
 use strata::raycast::{self, BuildQuality, FirstHitColumns, PlaceError};
 
 /// A triangle mesh and its BVH, built once (on every core) and asked any
@@ -25,8 +26,10 @@ use strata::raycast::{self, BuildQuality, FirstHitColumns, PlaceError};
 /// a direction need not be unit length, and ``t`` is measured in its
 /// lengths), ``t_max`` (a number or one per ray) and ``t_min`` (a number):
 /// a ray reports what lies in (t_min, t_max], (0, inf] by default. Every
-/// query releases the GIL and runs on every core, or on ``threads``
-/// threads; Ctrl-C stops it between chunks of 65,536 rays. Bad input
+/// query releases the GIL and runs on every core, or on at most
+/// ``threads`` threads (an int; never more threads than it has tasks of
+/// 256 rays or points, so a small query, or ``threads=1``, runs on the
+/// calling thread); Ctrl-C stops it between chunks of 65,536 rays. Bad input
 /// raises ``ValueError`` naming the argument; ``bad_rays="miss"`` makes a
 /// ray with a NaN or infinite coordinate or a zero direction a miss
 /// instead, as Open3D's and trimesh's engines answer it.
@@ -38,7 +41,13 @@ use strata::raycast::{self, BuildQuality, FirstHitColumns, PlaceError};
 /// the walk found as given, so they lie on its plane to float64's
 /// precision wherever the mesh lies.
 #[pyclass(frozen, module = "strata_rt._native")]
-pub struct Mesh(raycast::Mesh);
+pub struct Mesh(
+    raycast::Mesh,
+    /// How many placements a placed mesh has (`Mesh.place`'s maps); 0 for
+    /// a mesh that is not placed. For the repr: the library gives the maps
+    /// only with a copy of the placed mesh's triangles.
+    usize,
+);
 
 /// Rows `rows` of `column` (`width` values a row) cut into one piece per
 /// task of `TASK` rows; an empty column (not asked for) into empty pieces.
@@ -165,20 +174,6 @@ fn corner_arrays(py: Python<'_>, tris: Vec<[glam::Vec3; 3]>) -> PyResult<CornerA
     Ok((vertices, faces))
 }
 
-/// ``vertices`` and ``faces`` of one object passed as ``Mesh(obj)``.
-fn vertices_and_faces_of<'py>(
-    obj: &Bound<'py, PyAny>,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    if obj.hasattr("vertices")? && obj.hasattr("faces")? {
-        return Ok((obj.getattr("vertices")?, obj.getattr("faces")?));
-    }
-    Err(PyTypeError::new_err(format!(
-        "Mesh takes vertices and faces, or one object with both as attributes (a \
-         trimesh.Trimesh); faces is missing and a {} has no vertices and faces",
-        obj.get_type().name()?
-    )))
-}
-
 impl Mesh {
     /// Vertices and faces: as given, or the triangles' corners merged by
     /// exact position (a loaded or placed mesh).
@@ -214,9 +209,11 @@ impl Mesh {
         origins: &Bound<'py, PyAny>,
         directions: &Bound<'py, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
-        t_min: Option<f64>,
+        t_min: Option<&Bound<'_, PyAny>>,
         bad_rays: &str,
     ) -> PyResult<(RaySource<'py>, Option<Vec<usize>>)> {
+        let what = "a number >= 0, the same for every ray (None for 0)";
+        let t_min = args::optional(t_min, |t| args::real(t, "t_min", what))?;
         let spec = RaySpec {
             t_min,
             t_max,
@@ -255,12 +252,16 @@ impl Mesh {
 impl Mesh {
     /// Build the mesh and its BVH from ``vertices`` ((n, 3) floats) and
     /// ``faces`` ((m, 3) integer indices into ``vertices``), or from one
-    /// object that has both as attributes (a ``trimesh.Trimesh``:
-    /// ``Mesh(tm)``).
+    /// mesh object that has them: a ``trimesh.Trimesh`` (``vertices``,
+    /// ``faces``: ``Mesh(tm)``), an Open3D ``o3d.geometry.TriangleMesh``
+    /// (``vertices``, ``triangles``) or ``o3d.t.geometry.TriangleMesh``
+    /// (``vertex.positions``, ``triangle.indices``), read by what they
+    /// have (neither library is imported).
     ///
     /// Raises ValueError naming what is wrong: a shape or dtype, a
     /// vertex that is NaN or infinite (``vertices[i]``), an index out of
-    /// range (``faces[i][k]``); TypeError for one object without them.
+    /// range (``faces[i][k]``); TypeError for one object without them
+    /// (a ``trimesh.Scene``'s says how to get one mesh of it).
     #[new]
     #[pyo3(signature = (vertices, faces=None))]
     fn new(
@@ -270,37 +271,44 @@ impl Mesh {
     ) -> PyResult<Self> {
         let (vertices, faces) = match faces {
             Some(faces) => (vertices.clone(), faces.clone()),
-            None => vertices_and_faces_of(vertices)?,
+            None => mesh_objects::vertices_and_faces_of(vertices)?,
         };
         let vertices = convert::dvec3s(&vertices, "vertices")?;
         let faces = convert::faces(&faces, vertices.len())?;
         let mesh = py
             .detach(|| raycast::Mesh::new_exact(vertices, faces, BuildQuality::Auto))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Self(mesh))
+        Ok(Self(mesh, 0))
     }
 
     /// Load a mesh file (OBJ, PLY, glTF, GLB, OFF or STL) with strata's own
-    /// loaders, used as it is: triangle i of the file is face i.
+    /// loaders, used as it is: triangle i of the file is face i. ``path``
+    /// is a str, an ``os.PathLike`` (``pathlib.Path``) or bytes, as
+    /// ``os.fspath`` takes them; anything else raises TypeError.
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a
     /// ValueError; FileNotFoundError if it does not exist) with strata's
     /// one-line message naming the file and the line or key.
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let path = args::path(path, "path")?;
         let loaded = py.detach(|| raycast::Mesh::load(&path, BuildQuality::Auto));
         match loaded {
-            Ok(mesh) => Ok(Self(mesh)),
+            Ok(mesh) => Ok(Self(mesh, 0)),
             Err(e) if !path.exists() => Err(PyFileNotFoundError::new_err(e.to_string())),
             Err(e) => Err(crate::InputError::new_err(e.to_string())),
         }
     }
 
-    /// Pickling: the mesh as ``Mesh(vertices, faces)`` of its triangles,
-    /// one vertex row per corner, which answers every query bit for bit as
-    /// this one does (hits depend on the triangles' corners alone, never on
-    /// shared indices or on the tree); a placed mesh as that of the mesh it
-    /// places, placed again by the same maps.
+    /// Pickling: as ``Mesh(vertices, faces)`` of its triangles, one float32
+    /// vertex row per corner, which answers every query bit for bit as
+    /// this one does (hits depend on the triangles' corners alone, never
+    /// on shared indices or on the tree); a mesh whose float64 vertices
+    /// float32 does not hold exactly (most float64 arrays; hit points are
+    /// computed on them) as ``Mesh(vertices, faces)`` of them as given,
+    /// float64 and int64; a placed mesh as ``Mesh._placed(vertices, faces,
+    /// transforms)``: the mesh it places, so, placed again by the same maps
+    /// (float64 (n, 3, 4)).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let py = slf.py();
         let mesh = &slf.borrow().0;
@@ -379,7 +387,7 @@ impl Mesh {
         }
         let maps = convert::affine_maps(transforms, "transforms")?;
         match py.detach(|| self.0.place(&maps, BuildQuality::Auto)) {
-            Ok(placed) => Ok(Self(placed)),
+            Ok(placed) => Ok(Self(placed, maps.len())),
             Err(PlaceError::Map(k)) => Err(PyValueError::new_err(format!(
                 "transforms[{k}] is not invertible, or places the mesh beyond float32's range"
             ))),
@@ -427,16 +435,32 @@ impl Mesh {
     }
 
     fn __repr__(&self) -> String {
+        let n = self.triangle_count();
+        let counted = |n: usize, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
+        // A placed mesh: its placements of the mesh it places, whose
+        // triangles each placement repeats (len() counts them all).
+        let what = match self.1 {
+            0 => counted(n, "triangle"),
+            copies => format!(
+                "{} of {}",
+                counted(copies, "placement"),
+                counted(n / copies, "triangle")
+            ),
+        };
+        if n == 0 {
+            // Its bounds are the empty box's inf and -inf: nothing to show.
+            return format!("Mesh({what})");
+        }
         let [lo, hi] = self.0.bounds();
         format!(
-            "Mesh({} triangles, bounds {:?} to {:?})",
-            self.triangle_count(),
+            "Mesh({what}, bounds {:?} to {:?})",
             lo.to_array(),
             hi.to_array()
         )
     }
 
-    /// The first hit of each ray in (0, t_max]: a ``Hits`` with ``t`` (inf
+    /// The first hit of each ray in (t_min, t_max] (t_min 0 and t_max inf
+    /// by default): a ``Hits`` with ``t`` (inf
     /// on a miss), ``prim`` (-1), barycentric ``u`` and ``v``, the unit
     /// geometric ``normal`` and the hit ``point``.
     ///
@@ -454,9 +478,9 @@ impl Mesh {
         origins: &Bound<'_, PyAny>,
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
-        threads: Option<i64>,
-        t_min: Option<f64>,
-        bad_rays: &str,
+        threads: Option<&Bound<'_, PyAny>>,
+        t_min: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::bad_rays)] bad_rays: &str,
         fields: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
@@ -489,10 +513,16 @@ impl Mesh {
                     point,
                 })
                 .collect::<Vec<_>>();
-            let work = chunk.par_chunks(TASK).zip(pieces);
+            let tasks = pieces.len();
             py.detach(|| {
-                threads.install(|| work.for_each(|(rays, out)| self.0.first_hits_into(rays, out)))
-            });
+                threads.run(tasks, |min_len| {
+                    chunk
+                        .par_chunks(TASK)
+                        .zip(pieces)
+                        .with_min_len(min_len)
+                        .for_each(|(rays, out)| self.0.first_hits_into(rays, out))
+                })
+            })?;
             py.check_signals()?;
         }
         let to = |key: &str, tail: &'static [usize]| (fields.has(key), tail);
@@ -507,7 +537,8 @@ impl Mesh {
         })
     }
 
-    /// Whether anything blocks each ray in (0, t_max]: bool (n,).
+    /// Whether anything blocks each ray in (t_min, t_max] (t_min 0 and
+    /// t_max inf by default): bool (n,).
     #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
     #[allow(clippy::too_many_arguments)] // Python's keywords, one each
     fn occluded<'py>(
@@ -516,9 +547,9 @@ impl Mesh {
         origins: &Bound<'_, PyAny>,
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
-        threads: Option<i64>,
-        t_min: Option<f64>,
-        bad_rays: &str,
+        threads: Option<&Bound<'_, PyAny>>,
+        t_min: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::bad_rays)] bad_rays: &str,
     ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
         let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
@@ -530,12 +561,13 @@ impl Mesh {
         shaped(py, out, lead.as_deref(), n, &[])
     }
 
-    /// Every surface crossing along each ray in (t_min, t_max], nearest
-    /// first: a ``Crossings`` with ``splits`` (int64 (n+1,), Open3D's
-    /// layout: ray i's crossings are ``splits[i]:splits[i+1]``), ``t``
-    /// (float32), ``prim`` (int64), ``ray`` (int64, the ray of each) and,
-    /// with ``uv=True``, the barycentrics ``u`` and ``v`` (float64, where
-    /// the ray meets the face's plane). It unpacks as ``splits, t, prim``.
+    /// Every surface crossing along each ray in (t_min, t_max] (t_min 0 and
+    /// t_max inf by default), nearest first: a ``Crossings`` with
+    /// ``splits`` (int64 (n+1,), Open3D's layout: ray i's crossings are
+    /// ``splits[i]:splits[i+1]``), ``t`` (float32), ``prim`` (int64),
+    /// ``ray`` (int64, the ray of each) and, with ``uv=True``, the
+    /// barycentrics ``u`` and ``v`` (float64, where the ray meets the
+    /// face's plane). It unpacks as ``splits, t, prim``.
     ///
     /// One traversal per ray, not a re-cast from each hit: a ray through a
     /// shared edge or vertex of a closed mesh crosses the surface there
@@ -548,10 +580,10 @@ impl Mesh {
         origins: &Bound<'_, PyAny>,
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
-        threads: Option<i64>,
-        t_min: Option<f64>,
-        bad_rays: &str,
-        uv: bool,
+        threads: Option<&Bound<'_, PyAny>>,
+        t_min: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::bad_rays)] bad_rays: &str,
+        #[pyo3(from_py_with = args::uv)] uv: bool,
     ) -> PyResult<Crossings> {
         let threads = Threads::new(threads)?;
         let (rays, _) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
@@ -582,8 +614,9 @@ impl Mesh {
         })
     }
 
-    /// The number of surface crossings along each ray in (0, t_max]: int64
-    /// (n,), as ``all_hits`` would list them.
+    /// The number of surface crossings along each ray in (t_min, t_max]
+    /// (t_min 0 and t_max inf by default): int64 (n,), as ``all_hits``
+    /// would list them.
     #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise"))]
     #[allow(clippy::too_many_arguments)] // Python's keywords, one each
     fn count_hits<'py>(
@@ -592,9 +625,9 @@ impl Mesh {
         origins: &Bound<'_, PyAny>,
         directions: &Bound<'_, PyAny>,
         t_max: Option<&Bound<'_, PyAny>>,
-        threads: Option<i64>,
-        t_min: Option<f64>,
-        bad_rays: &str,
+        threads: Option<&Bound<'_, PyAny>>,
+        t_min: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::bad_rays)] bad_rays: &str,
     ) -> PyResult<Py<PyArrayDyn<i64>>> {
         let threads = Threads::new(threads)?;
         let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
@@ -623,7 +656,7 @@ impl Mesh {
         &self,
         py: Python<'py>,
         points: &Bound<'_, PyAny>,
-        threads: Option<i64>,
+        threads: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Py<PyArrayDyn<bool>>> {
         let threads = Threads::new(threads)?;
         let (points, lead) = convert::rows3(points)?;
@@ -650,13 +683,15 @@ impl Mesh {
         &self,
         py: Python<'_>,
         points: &Bound<'_, PyAny>,
-        max_distance: Option<f64>,
-        signed: bool,
-        threads: Option<i64>,
+        max_distance: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::signed)] signed: bool,
+        threads: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<ClosestPoints> {
         let threads = Threads::new(threads)?;
         let (points, lead) = convert::rows3(points)?;
         let points = convert::points(&points, "points", self.0.centre(), &threads)?;
+        let what = "a number >= 0 (None for no limit)";
+        let max_distance = args::optional(max_distance, |d| args::real(d, "max_distance", what))?;
         let max_distance = match max_distance {
             None => f32::INFINITY,
             Some(d) if d >= 0.0 => d as f32,

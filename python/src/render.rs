@@ -4,6 +4,7 @@
 //! and the image is the film's `to_rgb`, as the CLI writes into its EXR:
 //! the same pixels bit for bit. The thread count, passes, packets and schedule change only the time.
 
+use crate::args::{self, optional};
 use crate::mesh::rows;
 use crate::run::Threads;
 use numpy::{PyArray1, PyArrayMethods};
@@ -32,23 +33,26 @@ fn error(message: String) -> PyErr {
 }
 
 /// An optional count: `None`, or an int from `min` up.
-fn count(value: Option<i64>, name: &str, min: i64) -> PyResult<Option<u32>> {
-    match value {
+fn count(value: Option<&Bound<'_, PyAny>>, name: &str, min: i64) -> PyResult<Option<u32>> {
+    let what = format!("an int from {min} to {}", u32::MAX);
+    match optional(value, |v| args::whole(v, name, &what))? {
         None => Ok(None),
         Some(v) if v >= min && v <= u32::MAX as i64 => Ok(Some(v as u32)),
-        Some(v) => Err(error(format!(
-            "{name} must be an int from {min} to {}; got {v}",
-            u32::MAX
-        ))),
+        Some(v) => Err(error(format!("{name} must be {what}; got {v}"))),
     }
+}
+
+/// An optional number (`noise`, `exposure`).
+fn number(value: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<f32>> {
+    optional(value, |v| args::real(v, name, "a number")).map(|v| v.map(|v| v as f32))
 }
 
 /// An optional mode given by name (`"random"`), parsed as the CLI does.
 fn mode<T: std::str::FromStr<Err = String>>(
-    value: Option<&str>,
+    value: Option<&Bound<'_, PyAny>>,
     name: &str,
 ) -> PyResult<Option<T>> {
-    value
+    optional(value, |v| args::text(v, name, "a name (a str)"))?
         .map(|text| text.parse().map_err(|e| error(format!("{name}: {e}"))))
         .transpose()
 }
@@ -132,8 +136,8 @@ enum SceneSource {
 /// resolved against the working directory.
 const TEXT_SCENE: &str = "<scene>";
 
-/// `render`'s `scene`: a path (str or os.PathLike), TOML text (a str with
-/// a line break), or a dict of the scene file's tables.
+/// `render`'s `scene`: a path (str, os.PathLike or bytes), TOML text (a str
+/// with a line break), or a dict of the scene file's tables.
 fn scene_source(scene: &Bound<'_, PyAny>) -> PyResult<SceneSource> {
     if let Ok(dict) = scene.cast::<PyDict>() {
         let Value::Table(table) = toml_value(dict.as_any(), "scene")? else {
@@ -148,17 +152,13 @@ fn scene_source(scene: &Bound<'_, PyAny>) -> PyResult<SceneSource> {
             return Ok(SceneSource::Text(text));
         }
     }
-    scene
-        .extract::<PathBuf>()
+    args::path(scene, "scene")
         .map(SceneSource::File)
         .map_err(|_| {
-            let kind = scene
-                .get_type()
-                .name()
-                .map_or("?".into(), |n| n.to_string());
             PyTypeError::new_err(format!(
-            "scene must be a path, TOML text or a dict of the scene file's tables; got a {kind}"
-        ))
+                "scene must be a path, TOML text or a dict of the scene file's tables; got {}",
+                args::described(scene)
+            ))
         })
 }
 
@@ -232,6 +232,46 @@ fn crop_text(crop: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
         .extract()
         .map_err(|_| error("crop must be (x0, y0, x1, y1): four ints, pixels, half-open".into()))?;
     Ok(Some(format!("{},{},{},{}", c[0], c[1], c[2], c[3])))
+}
+
+/// strata's error for a scene it cannot use, in the package's words: what
+/// the CLI blames on its command line (`<command line>: --set camera.foo:
+/// …`, `--spp 0`, `--camera`) is blamed on the argument of `render` that
+/// gave it (`set["camera.foo"]: …`, `spp=0: …`, `camera: …`).
+fn in_python_words(mut e: strata::error::InputError) -> strata::error::InputError {
+    if e.file == strata::error::COMMAND_LINE {
+        e.file = argument_of(&e.location);
+        e.location = String::new();
+    }
+    e.more = e.more.into_iter().map(in_python_words).collect();
+    e
+}
+
+/// The argument of `render` that the CLI's `flag` stands for: `--set
+/// camera.fov=0` is `set["camera.fov"] = 0`, `--spp 0` is `spp=0`,
+/// `--camera` is `camera`.
+fn argument_of(flag: &str) -> String {
+    if flag == "--set" {
+        return "set".to_string();
+    }
+    if let Some(edit) = flag.strip_prefix("--set ") {
+        return match edit.split_once('=') {
+            None => format!("set[{:?}]", edit.trim()),
+            Some((path, "")) => format!("set[{:?}] = None", path.trim()),
+            Some((path, value)) => format!("set[{:?}] = {}", path.trim(), value.trim()),
+        };
+    }
+    let Some(flag) = flag.strip_prefix("--") else {
+        return if flag.is_empty() {
+            "render".to_string()
+        } else {
+            flag.to_string()
+        };
+    };
+    match flag.split_once(' ') {
+        Some((name, value)) => format!("{}={value}", name.replace('-', "_")),
+        None => flag.replace('-', "_"),
+    }
 }
 
 /// Raises each of the scene's and the render's warnings as a Python
@@ -312,9 +352,11 @@ impl Observer for Interrupt {
 /// pass with ``KeyboardInterrupt``. What ``strata render`` warns of (a
 /// mesh read leniently, a scene without light, more passes than samples)
 /// is raised as a ``UserWarning``, and samples dropped as NaN or infinite
-/// as a ``RuntimeWarning``. A bad setting raises ValueError naming it; a
-/// scene strata cannot read raises ``strata_rt.InputError`` with strata's
-/// one-line message.
+/// as a ``RuntimeWarning``. A bad setting raises ValueError naming it (one
+/// of the wrong type, a bool for a number among them, TypeError); a scene
+/// strata cannot read raises ``strata_rt.InputError`` with strata's
+/// one-line message, which names the argument at fault where it is one of
+/// these (``set["camera.fov"]: …``, ``camera: …``) rather than a flag.
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, width=None, height=None, spp=None, shadow_samples=None,
@@ -327,28 +369,28 @@ impl Observer for Interrupt {
 pub fn render(
     py: Python<'_>,
     scene: &Bound<'_, PyAny>,
-    width: Option<i64>,
-    height: Option<i64>,
-    spp: Option<i64>,
-    shadow_samples: Option<i64>,
-    reflection_samples: Option<i64>,
-    max_depth: Option<i64>,
-    sampler: Option<&str>,
-    seed: Option<i64>,
+    width: Option<&Bound<'_, PyAny>>,
+    height: Option<&Bound<'_, PyAny>>,
+    spp: Option<&Bound<'_, PyAny>>,
+    shadow_samples: Option<&Bound<'_, PyAny>>,
+    reflection_samples: Option<&Bound<'_, PyAny>>,
+    max_depth: Option<&Bound<'_, PyAny>>,
+    sampler: Option<&Bound<'_, PyAny>>,
+    seed: Option<&Bound<'_, PyAny>>,
     background: Option<&Bound<'_, PyAny>>,
-    light_sampling: Option<&str>,
-    glossy_sampling: Option<&str>,
-    noise: Option<f32>,
-    exposure: Option<f32>,
-    tonemap: Option<&str>,
-    integrator: Option<&str>,
+    light_sampling: Option<&Bound<'_, PyAny>>,
+    glossy_sampling: Option<&Bound<'_, PyAny>>,
+    noise: Option<&Bound<'_, PyAny>>,
+    exposure: Option<&Bound<'_, PyAny>>,
+    tonemap: Option<&Bound<'_, PyAny>>,
+    integrator: Option<&Bound<'_, PyAny>>,
     set: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyAny>>,
-    threads: Option<i64>,
-    passes: Option<i64>,
-    packets: Option<&str>,
-    schedule: Option<&str>,
-    bvh_quality: Option<&str>,
+    threads: Option<&Bound<'_, PyAny>>,
+    passes: Option<&Bound<'_, PyAny>>,
+    packets: Option<&Bound<'_, PyAny>>,
+    schedule: Option<&Bound<'_, PyAny>>,
+    bvh_quality: Option<&Bound<'_, PyAny>>,
     crop: Option<&Bound<'_, PyAny>>,
     aovs: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
@@ -370,8 +412,8 @@ pub fn render(
         background,
         light_sampling: mode(light_sampling, "light_sampling")?,
         glossy_sampling: mode::<GlossySampling>(glossy_sampling, "glossy_sampling")?,
-        noise,
-        exposure,
+        noise: number(noise, "noise")?,
+        exposure: number(exposure, "exposure")?,
         tonemap: mode(tonemap, "tonemap")?,
         integrator: mode(integrator, "integrator")?,
     };
@@ -381,7 +423,7 @@ pub fn render(
     let edits = edits(set)?;
     let pool = Threads::new(threads)?;
     let passes = count(passes, "passes", 1)?;
-    if let (Some(p), Some(e)) = (passes, noise) {
+    if let (Some(p), Some(e)) = (passes, overrides.noise) {
         return Err(error(format!(
             "passes={p} with noise={e}: a noise target's passes are its decision points (after 4, 8, 12, 16, … samples); leave passes out"
         )));
@@ -405,8 +447,8 @@ pub fn render(
                 load_edited_text(text, path, &edits, &overrides, quality)
             }
         })
-    });
-    let scene = match (loaded, &source) {
+    })?;
+    let scene = match (loaded.map_err(in_python_words), &source) {
         (Ok((scene, _)), _) => scene,
         (Err(e), SceneSource::File(path)) if !path.exists() => {
             return Err(PyFileNotFoundError::new_err(e.to_string()))

@@ -1,11 +1,15 @@
 //! The named results of `Mesh`'s queries: arrays as attributes or keys.
 
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
-use pyo3::exceptions::{PyKeyError, PyTypeError};
+use pyo3::exceptions::{PyIndexError, PyKeyError, PyTypeError};
 use pyo3::prelude::*;
+use pyo3::types::{PyString, PyTuple};
 
 /// The first hit of each ray (``Mesh.intersect``): arrays of one entry (or
 /// row) per ray, as attributes or as keys (``hits.t`` or ``hits["t"]``).
+/// A mapping of names to arrays (``keys()``, ``items()``, ``get()``,
+/// ``dict(hits)``), indexed by name, not by ray: ``hits.t[0]`` is ray 0's
+/// distance. It pickles (a ``multiprocessing`` worker can return one).
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Hits {
     /// float32 (n,): distance along the ray, in direction lengths; inf on a miss (None unless asked for in ``fields``, as every array here).
@@ -61,20 +65,49 @@ fn counted(shape: &[usize], noun: &str) -> String {
 
 pub const HITS_KEYS: [&str; 6] = ["t", "prim", "u", "v", "normal", "point"];
 
+/// The TypeError of a result indexed by anything but a name: an int
+/// (``hits[0]``, and so ``tuple(hits)`` and ``for x in hits``) or a slice.
+fn not_a_name(what: &str, example: &str, noun: &str, key: &Bound<'_, PyAny>) -> PyErr {
+    let (var, name) = example.split_once('.').unwrap_or((example, ""));
+    PyTypeError::new_err(format!(
+        "{what} is a mapping of names to arrays: index it by name ({var}[\"{name}\"]; \
+         {var}.keys() lists them), and an array by {noun} ({example}[0]); got {}",
+        crate::args::described(key)
+    ))
+}
+
+/// `key` as a name, if it is a str.
+fn name_of(key: &Bound<'_, PyAny>) -> Option<String> {
+    if !key.is_instance_of::<PyString>() {
+        return None;
+    }
+    key.extract::<String>().ok()
+}
+
+/// `(name, array)` of each of `keys` that `named` finds, in order.
+fn items_of(
+    keys: &[&'static str],
+    named: impl Fn(&str) -> PyResult<Py<PyAny>>,
+) -> Vec<(&'static str, Py<PyAny>)> {
+    keys.iter()
+        .filter_map(|&k| named(k).ok().map(|a| (k, a)))
+        .collect()
+}
+
+/// An optional array, for pickling: itself, or None.
+fn maybe_clone<T>(py: Python<'_>, a: &Option<Py<T>>) -> Option<Py<T>> {
+    a.as_ref().map(|a| a.clone_ref(py))
+}
+
 #[pymethods]
 impl Hits {
-    /// The array named ``key``: one of ``keys()``.
-    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        let found = match key {
-            "t" => self.t.as_ref().map(|a| a.clone_ref(py).into_any()),
-            "prim" => self.prim.as_ref().map(|a| a.clone_ref(py).into_any()),
-            "u" => self.u.as_ref().map(|a| a.clone_ref(py).into_any()),
-            "v" => self.v.as_ref().map(|a| a.clone_ref(py).into_any()),
-            "normal" => self.normal.as_ref().map(|a| a.clone_ref(py).into_any()),
-            "point" => self.point.as_ref().map(|a| a.clone_ref(py).into_any()),
-            _ => None,
-        };
-        found.ok_or_else(|| PyKeyError::new_err(key.to_string()))
+    /// The array named ``key``: one of ``keys()``. Hits is indexed by name,
+    /// not by ray: an int raises TypeError (``hits.t[0]`` is ray 0's t).
+    fn __getitem__(&self, py: Python<'_>, key: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
+        match name_of(key) {
+            Some(name) => self.named(py, &name),
+            None => Err(not_a_name("Hits", "hits.t", "ray", key)),
+        }
     }
 
     /// The names of the arrays computed (``fields``; by default t, prim,
@@ -82,15 +115,77 @@ impl Hits {
     fn keys(&self, py: Python<'_>) -> Vec<&'static str> {
         HITS_KEYS
             .into_iter()
-            .filter(|k| self.__getitem__(py, k).is_ok())
+            .filter(|k| self.named(py, k).is_ok())
             .collect()
     }
 
-    /// Whether ``key`` names one of the arrays computed.
-    fn __contains__(&self, py: Python<'_>, key: &str) -> bool {
-        self.__getitem__(py, key).is_ok()
+    /// ``(name, array)`` of each array computed, in the order of ``keys()``.
+    fn items(&self, py: Python<'_>) -> Vec<(&'static str, Py<PyAny>)> {
+        items_of(&HITS_KEYS, |k| self.named(py, k))
     }
 
+    /// The arrays computed, in the order of ``keys()``.
+    fn values(&self, py: Python<'_>) -> Vec<Py<PyAny>> {
+        self.items(py).into_iter().map(|(_, a)| a).collect()
+    }
+
+    /// The array named ``key`` if it was computed, else ``default``.
+    #[pyo3(signature = (key, default=None))]
+    fn get(&self, py: Python<'_>, key: &Bound<'_, PyAny>, default: Option<Py<PyAny>>) -> Py<PyAny> {
+        name_of(key)
+            .and_then(|name| self.named(py, &name).ok())
+            .unwrap_or_else(|| default.unwrap_or_else(|| py.None()))
+    }
+
+    /// Whether ``key`` names one of the arrays computed.
+    fn __contains__(&self, py: Python<'_>, key: &Bound<'_, PyAny>) -> bool {
+        name_of(key).is_some_and(|name| self.named(py, &name).is_ok())
+    }
+
+    /// Pickling: ``Hits._unpickle`` of its arrays (None where not
+    /// computed) and the rays' leading shape.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let h = slf.get();
+        let state = (
+            maybe_clone(py, &h.t),
+            maybe_clone(py, &h.prim),
+            maybe_clone(py, &h.u),
+            maybe_clone(py, &h.v),
+            maybe_clone(py, &h.normal),
+            maybe_clone(py, &h.point),
+            h.shape.clone(),
+        );
+        Ok((
+            slf.get_type().getattr("_unpickle")?,
+            state.into_pyobject(py)?,
+        ))
+    }
+
+    /// Unpickling: the Hits of these arrays and leading shape.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)] // the arrays, one each
+    fn _unpickle(
+        t: Option<Py<PyArrayDyn<f32>>>,
+        prim: Option<Py<PyArrayDyn<i64>>>,
+        u: Option<Py<PyArrayDyn<f32>>>,
+        v: Option<Py<PyArrayDyn<f32>>>,
+        normal: Option<Py<PyArrayDyn<f32>>>,
+        point: Option<Py<PyArrayDyn<f64>>>,
+        shape: Vec<usize>,
+    ) -> Self {
+        Self {
+            t,
+            prim,
+            u,
+            v,
+            normal,
+            point,
+            shape,
+        }
+    }
     /// The length of the rays' first axis (the number of rays for an
     /// (n, 3) input), as numpy's ``len``; a TypeError for one ray given as (3,).
     fn __len__(&self) -> PyResult<usize> {
@@ -125,8 +220,25 @@ impl Hits {
     }
 }
 
+impl Hits {
+    /// The array named `name`, if it was computed.
+    fn named(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        let found = match name {
+            "t" => self.t.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "prim" => self.prim.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "u" => self.u.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "v" => self.v.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "normal" => self.normal.as_ref().map(|a| a.clone_ref(py).into_any()),
+            "point" => self.point.as_ref().map(|a| a.clone_ref(py).into_any()),
+            _ => None,
+        };
+        found.ok_or_else(|| PyKeyError::new_err(name.to_string()))
+    }
+}
+
 /// The nearest surface point to each query point (``Mesh.closest_point``),
-/// as attributes or keys (``near.distance`` or ``near["distance"]``).
+/// as attributes or keys (``near.distance`` or ``near["distance"]``): a
+/// mapping of names to arrays, as ``Hits`` is. It pickles.
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct ClosestPoints {
     /// float64 (n, 3): the nearest point on the surface, computed in
@@ -151,18 +263,29 @@ pub struct ClosestPoints {
 
 const CLOSEST_KEYS: [&str; 5] = ["point", "distance", "prim", "u", "v"];
 
-#[pymethods]
 impl ClosestPoints {
-    /// The array named ``key``: one of ``keys()``.
-    fn __getitem__(&self, py: Python<'_>, key: &str) -> PyResult<Py<PyAny>> {
-        Ok(match key {
+    /// The array named `name`.
+    fn named(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        Ok(match name {
             "point" => self.point.clone_ref(py).into_any(),
             "distance" => self.distance.clone_ref(py).into_any(),
             "prim" => self.prim.clone_ref(py).into_any(),
             "u" => self.u.clone_ref(py).into_any(),
             "v" => self.v.clone_ref(py).into_any(),
-            _ => return Err(PyKeyError::new_err(key.to_string())),
+            _ => return Err(PyKeyError::new_err(name.to_string())),
         })
+    }
+}
+
+#[pymethods]
+impl ClosestPoints {
+    /// The array named ``key``: one of ``keys()``. Indexed by name, not by
+    /// point: an int raises TypeError (``near.distance[0]`` is point 0's).
+    fn __getitem__(&self, py: Python<'_>, key: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
+        match name_of(key) {
+            Some(name) => self.named(py, &name),
+            None => Err(not_a_name("ClosestPoints", "near.distance", "point", key)),
+        }
     }
 
     /// The names of the arrays: point, distance, prim, u, v.
@@ -170,9 +293,68 @@ impl ClosestPoints {
         CLOSEST_KEYS.to_vec()
     }
 
+    /// ``(name, array)`` of each array, in the order of ``keys()``.
+    fn items(&self, py: Python<'_>) -> Vec<(&'static str, Py<PyAny>)> {
+        items_of(&CLOSEST_KEYS, |k| self.named(py, k))
+    }
+
+    /// The arrays, in the order of ``keys()``.
+    fn values(&self, py: Python<'_>) -> Vec<Py<PyAny>> {
+        self.items(py).into_iter().map(|(_, a)| a).collect()
+    }
+
+    /// The array named ``key``, else ``default``.
+    #[pyo3(signature = (key, default=None))]
+    fn get(&self, py: Python<'_>, key: &Bound<'_, PyAny>, default: Option<Py<PyAny>>) -> Py<PyAny> {
+        name_of(key)
+            .and_then(|name| self.named(py, &name).ok())
+            .unwrap_or_else(|| default.unwrap_or_else(|| py.None()))
+    }
+
     /// Whether ``key`` names one of the arrays.
-    fn __contains__(&self, key: &str) -> bool {
-        CLOSEST_KEYS.contains(&key)
+    fn __contains__(&self, key: &Bound<'_, PyAny>) -> bool {
+        name_of(key).is_some_and(|name| CLOSEST_KEYS.contains(&name.as_str()))
+    }
+
+    /// Pickling: ``ClosestPoints._unpickle`` of its arrays and the points'
+    /// leading shape.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let c = slf.get();
+        let state = (
+            c.point.clone_ref(py),
+            c.distance.clone_ref(py),
+            c.prim.clone_ref(py),
+            c.u.clone_ref(py),
+            c.v.clone_ref(py),
+            c.shape.clone(),
+        );
+        Ok((
+            slf.get_type().getattr("_unpickle")?,
+            state.into_pyobject(py)?,
+        ))
+    }
+
+    /// Unpickling: the ClosestPoints of these arrays and leading shape.
+    #[staticmethod]
+    fn _unpickle(
+        point: Py<PyArrayDyn<f64>>,
+        distance: Py<PyArrayDyn<f64>>,
+        prim: Py<PyArrayDyn<i64>>,
+        u: Py<PyArrayDyn<f64>>,
+        v: Py<PyArrayDyn<f64>>,
+        shape: Vec<usize>,
+    ) -> Self {
+        Self {
+            point,
+            distance,
+            prim,
+            u,
+            v,
+            shape,
+        }
     }
 
     /// The length of the points' first axis (the number of points for an
@@ -191,7 +373,7 @@ impl ClosestPoints {
 
 /// Every crossing of each ray (``Mesh.all_hits``), ray after ray, each
 /// ray's nearest first, as attributes or keys; it also unpacks as
-/// ``splits, t, prim = mesh.all_hits(...)``.
+/// ``splits, t, prim = mesh.all_hits(...)``. It pickles.
 #[pyclass(frozen, module = "strata_rt._native")]
 pub struct Crossings {
     /// int64 (n + 1,): ray i's crossings are ``splits[i]:splits[i+1]`` (Open3D's ray_splits).
@@ -222,16 +404,27 @@ impl Crossings {
     /// The array named ``key`` (one of ``keys()``), or ``splits``, ``t``,
     /// ``prim`` by their place 0, 1, 2 in the tuple ``all_hits`` returned.
     fn __getitem__(&self, py: Python<'_>, key: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
-        if let Ok(i) = key.extract::<isize>() {
-            let name = match i {
-                0 | -3 => "splits",
-                1 | -2 => "t",
-                2 | -1 => "prim",
-                _ => return Err(pyo3::exceptions::PyIndexError::new_err(format!("{i}"))),
-            };
-            return self.named(py, name);
+        if let Some(name) = name_of(key) {
+            return self.named(py, &name);
         }
-        self.named(py, &key.extract::<String>()?)
+        let Ok(i) = key.extract::<isize>() else {
+            return Err(PyTypeError::new_err(format!(
+                "Crossings is indexed by name (found[\"t\"]; found.keys() lists them) or by \
+                 0, 1, 2 as the tuple splits, t, prim; got {}",
+                crate::args::described(key)
+            )));
+        };
+        let name = match i {
+            0 | -3 => "splits",
+            1 | -2 => "t",
+            2 | -1 => "prim",
+            _ => {
+                return Err(PyIndexError::new_err(format!(
+                    "Crossings index {i} is out of range: it unpacks as splits, t, prim"
+                )))
+            }
+        };
+        self.named(py, name)
     }
 
     /// The names of the arrays computed: splits, t, prim, ray (and u, v with ``uv=True``).
@@ -242,10 +435,29 @@ impl Crossings {
             .collect()
     }
 
-    /// Whether ``key`` names one of the arrays computed.
-    fn __contains__(&self, py: Python<'_>, key: &str) -> bool {
-        self.named(py, key).is_ok()
+    /// ``(name, array)`` of each array computed, in the order of ``keys()``.
+    fn items(&self, py: Python<'_>) -> Vec<(&'static str, Py<PyAny>)> {
+        items_of(&CROSSINGS_KEYS, |k| self.named(py, k))
     }
+
+    /// The arrays computed, in the order of ``keys()``.
+    fn values(&self, py: Python<'_>) -> Vec<Py<PyAny>> {
+        self.items(py).into_iter().map(|(_, a)| a).collect()
+    }
+
+    /// The array named ``key`` if it was computed, else ``default``.
+    #[pyo3(signature = (key, default=None))]
+    fn get(&self, py: Python<'_>, key: &Bound<'_, PyAny>, default: Option<Py<PyAny>>) -> Py<PyAny> {
+        name_of(key)
+            .and_then(|name| self.named(py, &name).ok())
+            .unwrap_or_else(|| default.unwrap_or_else(|| py.None()))
+    }
+
+    /// Whether ``key`` names one of the arrays computed.
+    fn __contains__(&self, py: Python<'_>, key: &Bound<'_, PyAny>) -> bool {
+        name_of(key).is_some_and(|name| self.named(py, &name).is_ok())
+    }
+
     /// ``splits, t, prim``: what ``all_hits`` returned as a tuple before.
     fn __iter__(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
         let parts = (
@@ -256,11 +468,54 @@ impl Crossings {
         Ok(parts.into_pyobject(py)?.try_iter()?.into_any().unbind())
     }
 
+    /// Pickling: ``Crossings._unpickle`` of its arrays (u and v None
+    /// unless computed).
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let c = slf.get();
+        let state = (
+            c.splits.clone_ref(py),
+            c.t.clone_ref(py),
+            c.prim.clone_ref(py),
+            c.ray.clone_ref(py),
+            maybe_clone(py, &c.u),
+            maybe_clone(py, &c.v),
+        );
+        Ok((
+            slf.get_type().getattr("_unpickle")?,
+            state.into_pyobject(py)?,
+        ))
+    }
+
+    /// Unpickling: the Crossings of these arrays.
+    #[staticmethod]
+    fn _unpickle(
+        splits: Py<PyArray1<i64>>,
+        t: Py<PyArray1<f32>>,
+        prim: Py<PyArray1<i64>>,
+        ray: Py<PyArray1<i64>>,
+        u: Option<Py<PyArray1<f64>>>,
+        v: Option<Py<PyArray1<f64>>>,
+    ) -> Self {
+        Self {
+            splits,
+            t,
+            prim,
+            ray,
+            u,
+            v,
+        }
+    }
+
     fn __repr__(&self, py: Python<'_>) -> String {
         let rays = self.splits.bind(py).len().unwrap_or(1).saturating_sub(1);
         let h = self.t.bind(py).len().unwrap_or(0);
         format!(
-            "Crossings({rays} rays, {h} crossings; keys {})",
+            "Crossings({}, {}; keys {})",
+            counted(&[rays], "ray"),
+            counted(&[h], "crossing"),
             self.keys(py).join(", ")
         )
     }

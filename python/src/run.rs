@@ -4,7 +4,6 @@
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use strata::math::Ray;
 
@@ -20,53 +19,119 @@ pub const TASK: usize = 256;
 /// More threads than any machine has cores: a typo, not a request (the
 /// command line's limit too).
 const MAX_THREADS: i64 = strata::system::budget::MAX_THREADS as i64;
+/// Pools of a given size kept for the next query that asks for as many
+/// threads: the most recently used few, so that a loop over thread
+/// counts does not keep every pool it made (and its threads) alive.
+const POOLS_KEPT: usize = 4;
 
-/// Where a query runs: rayon's global pool (one thread per core), or a
-/// pool of a given size, built once per size and kept.
-#[derive(Clone)]
-pub struct Threads(Option<Arc<rayon::ThreadPool>>);
+/// A query's `threads`: how many threads it may use, or `None` for rayon's
+/// global pool (one thread per core). Each step of the query runs on no
+/// more threads than it has tasks ([`Threads::run`]): ten rays with
+/// `threads=1024` run on the calling thread, as with `threads=1`, and
+/// start no thread.
+#[derive(Clone, Copy)]
+pub struct Threads(Option<usize>);
+
+/// Where one step of a query runs.
+enum Plan {
+    /// On the calling thread alone: one task, or `threads=1`.
+    Here,
+    /// On rayon's global pool.
+    Global,
+    /// On a pool of this many threads.
+    Pool(usize),
+}
 
 impl Threads {
-    /// The pool for the `threads` argument (`None`: every core).
-    pub fn new(threads: Option<i64>) -> PyResult<Self> {
-        let Some(n) = threads else {
+    /// The `threads` argument: a whole number from 1 to [`MAX_THREADS`],
+    /// or None for every core. Nothing is started here.
+    pub fn new(threads: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let what =
+            format!("a whole number of threads, from 1 to {MAX_THREADS} (or None for every core)");
+        let Some(n) = crate::args::optional(threads, |t| crate::args::whole(t, "threads", &what))?
+        else {
             return Ok(Self(None));
         };
         if !(1..=MAX_THREADS).contains(&n) {
             return Err(PyValueError::new_err(format!(
-                "threads must be an int from 1 to {MAX_THREADS}, or None for every core; got {n}"
+                "threads must be {what}; got {n}"
             )));
         }
-        static POOLS: Mutex<BTreeMap<usize, Arc<rayon::ThreadPool>>> = Mutex::new(BTreeMap::new());
-        let mut pools = POOLS.lock().unwrap_or_else(|e| e.into_inner());
-        let n = n as usize;
-        if let Some(pool) = pools.get(&n) {
-            return Ok(Self(Some(pool.clone())));
-        }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .thread_name(|i| format!("strata_rt-{i}"))
-            .build()
-            .map_err(|e| {
-                PyValueError::new_err(format!("threads: cannot start {n} threads: {e}"))
-            })?;
-        let pool = Arc::new(pool);
-        pools.insert(n, pool.clone());
-        Ok(Self(Some(pool)))
+        Ok(Self(Some(n as usize)))
     }
 
-    /// The thread count this runs on (`0`: rayon's global pool).
+    /// The thread count asked for (`0`: every core), as `RenderOptions`
+    /// takes it.
     pub fn count(&self) -> usize {
-        self.0.as_ref().map_or(0, |p| p.current_num_threads())
+        self.0.unwrap_or(0)
     }
 
-    /// `work` on this pool.
-    pub fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
-        match &self.0 {
-            Some(pool) => pool.install(work),
-            None => work(),
+    fn plan(&self, tasks: usize) -> Plan {
+        let n = self.0.map_or(tasks, |n| n.min(tasks));
+        if n <= 1 {
+            return Plan::Here;
+        }
+        match self.0 {
+            // As many as the global pool has: that pool, not another.
+            Some(_) if n != rayon::current_num_threads() => Plan::Pool(n),
+            _ => Plan::Global,
         }
     }
+
+    /// `work` for one step of a query, of `tasks` tasks, on no more threads
+    /// than `tasks` and than `threads` allow: on the calling thread alone
+    /// where that is one (no pool, no hand-over to another thread), else on
+    /// rayon's global pool (`threads=None`, or as many threads as it has)
+    /// or on a pool of that many threads (made once and kept, the last
+    /// [`POOLS_KEPT`] sizes used). `work` gets the fewest items its
+    /// parallel iterators may cut off as one piece (`with_min_len`): 1, or
+    /// `usize::MAX` on the calling thread, so that they never split and
+    /// never hand a piece to rayon's global pool. Answers do not depend on
+    /// where the tasks ran.
+    pub fn run<T: Send>(&self, tasks: usize, work: impl FnOnce(usize) -> T + Send) -> PyResult<T> {
+        Ok(match self.plan(tasks) {
+            Plan::Here => work(usize::MAX),
+            Plan::Global => work(1),
+            Plan::Pool(n) => pool(n)?.install(|| work(1)),
+        })
+    }
+
+    /// `work` with rayon's parallel iterators on at most `threads`
+    /// threads and at most one per core (a render's loading and tree
+    /// building, whose tasks are not counted here): rayon's global pool for
+    /// `threads=None`.
+    pub fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        match self.0.map(|n| n.min(cores)) {
+            None => Ok(work()),
+            Some(n) if n == rayon::current_num_threads() => Ok(work()),
+            Some(n) => Ok(pool(n)?.install(work)),
+        }
+    }
+}
+
+/// The pool of `n` threads: made, or one kept from an earlier query.
+fn pool(n: usize) -> PyResult<Arc<rayon::ThreadPool>> {
+    static POOLS: Mutex<Vec<(usize, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
+    let mut pools = POOLS.lock().unwrap_or_else(|e| e.into_inner());
+    let pool = match pools.iter().position(|(size, _)| *size == n) {
+        Some(i) => pools.remove(i).1,
+        None => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .thread_name(|i| format!("strata_rt-{i}"))
+                .build()
+                .map_err(|e| {
+                    PyValueError::new_err(format!("threads: cannot start {n} threads: {e}"))
+                })?;
+            Arc::new(pool)
+        }
+    };
+    // Most recently used first; the least recently used pool dropped
+    // (its threads end once no query still holds it).
+    pools.insert(0, (n, pool.clone()));
+    pools.truncate(POOLS_KEPT);
+    Ok(pool)
 }
 
 /// `out[i] = answer of items[i]`: `answer` fills a task's answers from its
@@ -96,13 +161,14 @@ fn answer_chunk<I: Sync, R: Send>(
     answer: &(impl Fn(&[I], &mut [R]) + Sync),
 ) -> PyResult<()> {
     py.detach(|| {
-        threads.install(|| {
+        threads.run(items.len().div_ceil(TASK), |min_len| {
             items
                 .par_chunks(TASK)
                 .zip(out.par_chunks_mut(TASK))
+                .with_min_len(min_len)
                 .for_each(|(items, out)| answer(items, out))
         })
-    });
+    })?;
     py.check_signals()
 }
 
@@ -141,9 +207,10 @@ pub fn flat<R: Send>(
     for start in (0..rays.len()).step_by(CHUNK) {
         rays.read(start..(start + CHUNK).min(rays.len()), threads, &mut items)?;
         let parts: Vec<(Vec<u32>, Vec<R>)> = py.detach(|| {
-            threads.install(|| {
+            threads.run(items.len().div_ceil(TASK), |min_len| {
                 items
                     .par_chunks(TASK)
+                    .with_min_len(min_len)
                     .map(|items| {
                         let mut found = Vec::new();
                         let mut counts = Vec::with_capacity(items.len());
@@ -152,7 +219,7 @@ pub fn flat<R: Send>(
                     })
                     .collect()
             })
-        });
+        })?;
         for (c, a) in parts {
             counts.extend(c);
             answers.extend(a);

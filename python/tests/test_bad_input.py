@@ -68,9 +68,12 @@ RAY_CASES = {
     "a negative t_max of one ray": (dict(t_max=np.array([1.0, -2.0])), ["t_max[1]", ">= 0"]),
     "t_max of another length": (dict(t_max=np.ones(3)), ["t_max", "3 values for 2 rays"]),
     "t_max of 2 dimensions": (dict(t_max=np.ones((2, 1))), ["t_max", "(n,)", "(2, 1)"]),
-    "t_max as text": (dict(t_max="far"), ["t_max", "number"]),
     "no threads": (dict(threads=0), ["threads", "got 0"]),
     "negative threads": (dict(threads=-2), ["threads", "got -2"]),
+    "too many threads": (dict(threads=10**6), ["threads", "from 1 to 4096", "got 1000000"]),
+    "threads past 64 bits": (dict(threads=10**30), ["threads", "got 1000000000000000000000000000000"]),
+    "a negative t_min": (dict(t_min=-1.0), ["t_min", ">= 0", "-1"]),
+    "an unknown bad_rays": (dict(bad_rays="skip"), ["bad_rays", '"raise" or "miss"', "skip"]),
 }
 
 
@@ -82,6 +85,58 @@ def test_bad_rays_are_refused_by_name(query, name):
     args.update({k: v for k, v in change.items() if k in ("origins", "directions")})
     options = {k: v for k, v in change.items() if k not in ("origins", "directions")}
     raises(lambda: getattr(MESH, query)(args["origins"], args["directions"], **options), *words)
+
+
+# A value of the wrong type: a TypeError that names the argument and what
+# it got (pyo3's own said "'float' object cannot be interpreted as an
+# integer", "must be real number, not list", or took True for 1).
+RAY_TYPE_CASES = {
+    "threads of a float": (dict(threads=1.5), ["threads must be a whole number of threads", "got float 1.5"]),
+    "threads of True": (dict(threads=True), ["threads", "got bool True"]),
+    "threads of numpy's True": (dict(threads=np.True_), ["threads", "True"]),
+    "threads of a str": (dict(threads="2"), ["threads", "got str '2'"]),
+    "t_min of a list": (dict(t_min=[0, 0, 0, 0]), ["t_min must be a number", "got list [0, 0, 0, 0]"]),
+    "t_min of an array": (dict(t_min=np.zeros(2)), ["t_min", "got ndarray of shape (2,)"]),
+    "t_min of True": (dict(t_min=True), ["t_min", "got bool True"]),
+    "t_min as text": (dict(t_min="0"), ["t_min", "got str '0'"]),
+    "t_max of True": (dict(t_max=True), ["t_max", "got bool True"]),
+    "t_max as text": (dict(t_max="far"), ["t_max", "number", "got str 'far'"]),
+    "bad_rays of an int": (dict(bad_rays=1), ["bad_rays", "got int 1"]),
+}
+
+
+@pytest.mark.parametrize("query", RAY_QUERIES)
+@pytest.mark.parametrize("name", list(RAY_TYPE_CASES))
+def test_wrong_types_are_refused_by_name(query, name):
+    options, words = RAY_TYPE_CASES[name]
+    raises(lambda: getattr(MESH, query)(O, D, **options), *words, kind=TypeError)
+
+
+POINT_TYPE_CASES = {
+    "threads of a float": ("contains", dict(threads=2.0), ["threads", "got float 2.0"]),
+    "signed as text": ("closest_point", dict(signed="yes"), ["signed must be True or False", "got str 'yes'"]),
+    "signed of 1": ("closest_point", dict(signed=1), ["signed", "got int 1"]),
+    "max_distance of True": ("closest_point", dict(max_distance=True), ["max_distance", "got bool True"]),
+    "max_distance as text": ("closest_point", dict(max_distance="near"), ["max_distance", "got str 'near'"]),
+}
+
+
+@pytest.mark.parametrize("name", list(POINT_TYPE_CASES))
+def test_wrong_point_query_types_are_refused_by_name(name):
+    query, options, words = POINT_TYPE_CASES[name]
+    raises(lambda: getattr(MESH, query)(O, **options), *words, kind=TypeError)
+
+
+def test_numbers_and_flags_of_numpy_types_are_taken():
+    want = MESH.intersect(O, D, threads=2, t_min=0.5, t_max=9.0)
+    got = MESH.intersect(O, D, threads=np.int64(2), t_min=np.float32(0.5), t_max=np.float64(9))
+    np.testing.assert_array_equal(got.t, want.t)
+    assert np.isfinite(got.t).all()
+    near = MESH.closest_point(O, signed=np.True_, max_distance=np.int32(10), threads=np.uint8(1))
+    np.testing.assert_array_equal(near.distance, MESH.closest_point(O, signed=True).distance)
+    raises(lambda: MESH.all_hits(O, D, uv="yes"), "uv must be True or False", kind=TypeError)
+    assert MESH.all_hits(O, D, uv=np.True_).u is not None
+    assert MESH.intersect(O, D, t_min=None, threads=None, bad_rays="miss").t.shape == (2,)
 
 
 @pytest.mark.parametrize("query", RAY_QUERIES)
@@ -153,6 +208,17 @@ def test_bad_files_give_strata_s_one_line_message(tmp_path):
     raises(lambda: strata_rt.Mesh.load(odd), str(odd), kind=strata_rt.InputError)
 
 
+def test_a_path_is_a_str_a_path_like_or_bytes(tmp_path):
+    obj = tmp_path / "tri.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    for path in (obj, str(obj), os.fsencode(obj)):
+        assert len(strata_rt.Mesh.load(path)) == 1
+    raises(lambda: strata_rt.Mesh.load(os.fsencode(tmp_path / "none.obj")), "none.obj", kind=FileNotFoundError)
+    raises(lambda: strata_rt.Mesh.load(3), "path must be a path", "got int 3", kind=TypeError)
+    raises(lambda: strata_rt.render(os.fsencode(tmp_path / "none.toml")), "none.toml", kind=FileNotFoundError)
+    raises(lambda: strata_rt.render(3.5), "scene must be a path", "got float 3.5", kind=TypeError)
+
+
 SCENE = helpers.REPO / "scenes" / "seed.toml"
 
 RENDER_CASES = {
@@ -179,6 +245,42 @@ RENDER_CASES = {
 def test_bad_render_settings_are_refused_by_name(name):
     settings, words = RENDER_CASES[name]
     raises(lambda: strata_rt.render(SCENE, **settings), *words)
+
+
+RENDER_TYPE_CASES = {
+    "a width of a float": (dict(width=16.5), ["width must be an int", "got float 16.5"]),
+    "spp of True": (dict(spp=True), ["spp", "got bool True"]),
+    "a seed as text": (dict(seed="7"), ["seed", "got str '7'"]),
+    "threads of a float": (dict(threads=2.0), ["threads", "got float 2.0"]),
+    "passes of a list": (dict(passes=[2]), ["passes", "got list [2]"]),
+    "noise as text": (dict(noise="low"), ["noise must be a number", "got str 'low'"]),
+    "exposure of True": (dict(exposure=True), ["exposure", "got bool True"]),
+    "a sampler of an int": (dict(sampler=1), ["sampler", "got int 1"]),
+    "a tone curve as bytes": (dict(tonemap=b"filmic"), ["tonemap", "got bytes b'filmic'"]),
+}
+
+
+@pytest.mark.parametrize("name", list(RENDER_TYPE_CASES))
+def test_wrong_render_types_are_refused_by_name(name):
+    settings, words = RENDER_TYPE_CASES[name]
+    raises(lambda: strata_rt.render(SCENE, **settings), *words, kind=TypeError)
+
+
+def test_a_bad_edit_is_blamed_on_the_set_argument_not_a_command_line():
+    """strata says "<command line>: --set camera.foo: …" of a bad --set;
+    from Python the edit came from render's set argument, and a camera the
+    model lacks from its camera argument."""
+    small = dict(width=8, height=8, spp=1)
+    for edit in ({"camera.foo": 1}, ["camera.foo=1"]):
+        message = raises(lambda: strata_rt.render(SCENE, set=edit, **small), kind=strata_rt.InputError)
+        assert message.startswith('set["camera.foo"]: unknown key'), message
+    message = raises(lambda: strata_rt.render(SCENE, set={"camera.fov": None, "camera.nope": None}, **small), kind=strata_rt.InputError)
+    assert message.startswith('set["camera.nope"]'), message
+    message = raises(lambda: strata_rt.render(SCENE, set={"render.spp": 0}, **small), kind=strata_rt.InputError)
+    assert message.startswith('set["render.spp"] = 0: ') and "at least 1" in message, message
+    box = helpers.REPO / "scenes" / "meshes" / "box.gltf"
+    message = raises(lambda: strata_rt.render(box, camera=3, **small), "no camera 3", kind=strata_rt.InputError)
+    assert message.startswith("camera: "), message
 
 
 def test_bad_scenes_give_strata_s_one_line_message(tmp_path):

@@ -199,3 +199,25 @@ def test_all_hits_is_named_and_gives_rays_and_barycentrics(bumpy):
     along = origins[found.ray] + t[:, None].astype(np.float64) * directions[found.ray]
     np.testing.assert_allclose(on, along, atol=1e-5)
     assert (found.u >= -1e-9).all() and (found.v >= -1e-9).all() and (found.u + found.v <= 1 + 1e-9).all()
+
+
+def test_crossings_count_in_words_and_are_a_mapping_that_unpacks(bumpy):
+    mesh = strata_rt.Mesh(*bumpy)
+    rng = np.random.default_rng(6)
+    origins, directions = helpers.random_rays(rng, bumpy[0], 40)
+    found = mesh.all_hits(origins, directions)
+    i = int(np.flatnonzero(np.diff(found.splits) == 2)[0])
+    assert repr(mesh.all_hits(origins[i], directions[i])).startswith("Crossings(1 ray, 2 crossings; keys")
+    one = mesh.all_hits(origins[i], directions[i], t_max=found.t[found.splits[i]])
+    assert repr(one) == "Crossings(1 ray, 1 crossing; keys splits, t, prim, ray)"
+    # Still a tuple of splits, t, prim by position; names otherwise.
+    splits, t, prim = found
+    assert found[0] is not None and np.array_equal(found[-1], prim)
+    with pytest.raises(IndexError):
+        found[3]
+    with pytest.raises(TypeError, match=r'indexed by name \(found\["t"\]'):
+        found[1.5]
+    assert [k for k, _ in found.items()] == found.keys() == ["splits", "t", "prim", "ray"]
+    assert found.get("u") is None and found.get("u", 0) == 0 and "u" not in found and 0 not in found
+    np.testing.assert_array_equal(found.get("ray"), found.ray)
+    assert len(found.values()) == 4

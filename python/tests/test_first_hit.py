@@ -2,6 +2,8 @@
 mode, through embreex), on the bunny and a generated mesh; the same
 answers for any thread count and any input dtype or layout."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -151,6 +153,9 @@ def test_empty_input_gives_empty_answers(bumpy):
         assert mesh.occluded(empty, empty).shape == (0,)
     empty_mesh = strata_rt.Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
     assert empty_mesh.triangle_count == 0
+    # No bounds to show (the empty box's are inf and -inf); one triangle is singular.
+    assert repr(empty_mesh) == "Mesh(0 triangles)"
+    assert repr(strata_rt.Mesh(np.eye(3), [[0, 1, 2]])) == "Mesh(1 triangle, bounds [0.0, 0.0, 0.0] to [1.0, 1.0, 1.0])"
     assert (empty_mesh.intersect([[0, 0, 0]], [[0, 0, 1]]).prim == -1).all()
 
 
@@ -268,3 +273,71 @@ def test_len_and_repr_count_the_queries_in_any_shape(bumpy):
     assert repr(mesh.closest_point(o[0])).startswith("ClosestPoints(1 point; keys")
     with pytest.raises(TypeError, match="one point given alone"):
         len(mesh.closest_point(o[0]))
+
+
+def test_hits_is_a_mapping_of_names_indexed_by_name_only(bumpy):
+    # hits[0] and tuple(hits) once failed with "'int' object is not an
+    # instance of 'str'": the error now says to index by name or index
+    # the array; items(), values() and get() are a mapping's.
+    mesh, o, d, rng = bumpy_query(bumpy, 30, seed=7)
+    hits = mesh.intersect(o, d)
+    for index in (lambda: hits[0], lambda: tuple(hits), lambda: hits[1:3]):
+        with pytest.raises(TypeError, match=r'index it by name \(hits\["t"\].*hits\.t\[0\]'):
+            index()
+    with pytest.raises(KeyError):
+        hits["depth"]
+    assert [k for k, _ in hits.items()] == hits.keys() == list(dict(hits))
+    for (key, array), value in zip(hits.items(), hits.values()):
+        np.testing.assert_array_equal(array, getattr(hits, key))
+        np.testing.assert_array_equal(value, array)
+    np.testing.assert_array_equal(hits.get("t"), hits.t)
+    some = mesh.intersect(o, d, fields=("prim",))
+    assert some.get("t") is None and some.get("t", 5) == 5 and some.get(0) is None
+    assert [k for k, _ in some.items()] == ["prim"] and 0 not in some and "prim" in some
+    near = mesh.closest_point(rng.uniform(-1, 1, (5, 3)))
+    with pytest.raises(TypeError, match=r'near\["distance"\].*near\.distance\[0\]'):
+        near[0]
+    assert [k for k, _ in near.items()] == near.keys() and near.get("depth") is None
+    np.testing.assert_array_equal(near.get("distance"), near.distance)
+
+
+def running_threads():
+    return len(os.listdir("/proc/self/task"))
+
+
+def test_threads_never_outnumber_the_tasks(bumpy):
+    """threads=N starts no more threads than a call has tasks (chunks of
+    256 rays or points): ten rays with threads=1024 once started 1024
+    threads (1.4 s); they run on the calling thread, as with threads=1.
+    The answers are the same for any count."""
+    if not os.path.isdir("/proc/self/task"):
+        pytest.skip("counts the process's threads in /proc/self/task (Linux)")
+    mesh, o, d, rng = bumpy_query(bumpy, 2000, seed=8)
+    points = rng.uniform(-1, 1, (2000, 3))
+
+    def every_query(n, threads):
+        return [
+            mesh.intersect(o[:n], d[:n], threads=threads).prim,
+            mesh.occluded(o[:n], d[:n], threads=threads),
+            mesh.count_hits(o[:n], d[:n], threads=threads),
+            np.diff(mesh.all_hits(o[:n], d[:n], threads=threads).splits),
+            mesh.contains(points[:n], threads=threads),
+            mesh.closest_point(points[:n], threads=threads).distance,
+        ]
+
+    want = every_query(2000, None)
+    before = running_threads()
+    for threads in (1, 2, 1024, 4096):
+        for got, expected in zip(every_query(10, threads), want):
+            np.testing.assert_array_equal(got, expected[:10])
+    assert running_threads() <= before, "a call of one task started threads"
+    before = running_threads()
+    for got, expected in zip(every_query(2000, 37), want):  # 8 tasks
+        np.testing.assert_array_equal(got, expected)
+    assert running_threads() - before <= 8
+
+
+def test_ray_queries_say_they_take_t_min():
+    for query in ("intersect", "occluded", "all_hits", "count_hits"):
+        doc = getattr(strata_rt.Mesh, query).__doc__
+        assert "(t_min, t_max]" in doc and "(0, t_max]" not in doc, query

@@ -171,3 +171,12 @@ def test_closest_points_are_the_copies_in_world_distances(placed, rng, squash):
     np.testing.assert_allclose(near.distance, brute, rtol=1e-5, atol=2e-6 * size.max())
     # A copy's centre is inside it: a negative signed distance.
     assert (placed.closest_point(maps[:, :, 3], signed=True).distance < 0).all()
+
+
+def test_a_placed_mesh_says_it_is_placed(placed):
+    mesh, maps, placed, copies = placed
+    assert repr(placed).startswith(f"Mesh(12 placements of {len(mesh)} triangles, bounds [")
+    assert len(placed) == 12 * len(mesh)
+    assert repr(copies).startswith(f"Mesh({12 * len(mesh)} triangles, bounds")
+    one = strata_rt.Mesh(np.eye(3), [[0, 1, 2]]).place(maps[:1])
+    assert repr(one).startswith("Mesh(1 placement of 1 triangle, bounds")

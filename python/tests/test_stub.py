@@ -173,3 +173,42 @@ def test_the_checks_can_fail():
     ):
         with pytest.raises(AssertionError):
             same_params("drifted", drifted, runtime)
+
+
+def stub_method(cls: str, name: str) -> ast.FunctionDef:
+    for item in stub_module()[cls].body:
+        if isinstance(item, ast.FunctionDef) and item.name == name:
+            return item
+    pytest.fail(f"the stub has no {cls}.{name}")
+
+
+def test_the_stub_says_what_pickling_gives():
+    """Mesh.__reduce__ gives float64 vertices as given for a mesh of
+    float64 arrays that float32 does not hold exactly (float32 corners
+    otherwise) and Mesh._placed (not a type) for a placed mesh; the
+    results reduce to their own _unpickle. The stub's return types say so."""
+    import numpy as np
+
+    mesh = _native.Mesh(np.eye(3) / 3, [[0, 1, 2]])
+    call, (vertices, faces) = mesh.__reduce__()
+    assert call is _native.Mesh and vertices.dtype == np.float64 and faces.dtype == np.int64
+    call, (vertices, faces) = _native.Mesh(np.eye(3), [[0, 1, 2]]).__reduce__()
+    assert call is _native.Mesh and vertices.dtype == np.float32
+    call, args = mesh.place(np.eye(3, 4)[None]).__reduce__()
+    assert call == _native.Mesh._placed and len(args) == 3
+    returns = ast.unparse(stub_method("Mesh", "__reduce__").returns)
+    assert "Callable" in returns and "np.float64" in returns and "np.float32" in returns, returns
+    assert "_placed" in ast.get_docstring(stub_method("Mesh", "__reduce__"))
+    o, d = [[0.1, 0.1, 1.0]], [[0.0, 0.0, -1.0]]
+    for result in (mesh.intersect(o, d), mesh.all_hits(o, d), mesh.closest_point(o)):
+        cls = type(result).__name__
+        call, _ = result.__reduce__()
+        assert call == getattr(type(result), "_unpickle"), cls
+        stub_method(cls, "_unpickle")
+        assert "Callable" in ast.unparse(stub_method(cls, "__reduce__").returns), cls
+
+
+def test_the_stub_s_ray_queries_say_they_take_t_min():
+    for query in ("intersect", "occluded", "all_hits", "count_hits"):
+        doc = ast.get_docstring(stub_method("Mesh", query))
+        assert "(t_min, t_max]" in doc and "(0, t_max]" not in doc, query
