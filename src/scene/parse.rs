@@ -81,7 +81,17 @@ const SECTIONS: &[&str] = &["render", "camera", "materials", "lights", "objects"
 /// Only a TOML syntax error is an `Err`.
 pub fn read_leniently(path: &Path, text: &str) -> InputResult<SceneDescription> {
     let source = SourceMap::new(text);
-    let root = DeTable::parse(text).map_err(|e| serde_error(path, &source, &e))?;
+    let root = DeTable::parse(text).map_err(|e| {
+        let mut error = serde_error(path, &source, &e);
+        // TOML's "duplicate key" names no key: its span is the key.
+        if let Some(key) = e.span().and_then(|s| text.get(s)) {
+            let key = key.trim();
+            if e.message().trim() == "duplicate key" && !key.is_empty() && !key.contains('\n') {
+                error.message = format!("duplicate key '{key}': each key is given once a table");
+            }
+        }
+        error
+    })?;
     let mut reader = Reader {
         path,
         source: &source,
@@ -208,11 +218,23 @@ impl<'i> Reader<'_> {
     {
         array
             .enumerate()
-            .map(|(i, value)| match self.read(value) {
-                (Some(t), true) => t,
-                _ => {
-                    unread.push(format!("{section}[{i}]"));
-                    T::default()
+            .map(|(i, value)| {
+                let before = self.mistakes.found.len();
+                let read = self.read(value);
+                // A mistake of the element as a whole (a missing key) is
+                // located at its `[[section]]` header, whose path is the
+                // section's: name the element.
+                for (_, e) in &mut self.mistakes.found[before..] {
+                    if e.location == section {
+                        e.location = format!("{section}[{i}]");
+                    }
+                }
+                match read {
+                    (Some(t), true) => t,
+                    _ => {
+                        unread.push(format!("{section}[{i}]"));
+                        T::default()
+                    }
                 }
             })
             .collect()
@@ -302,6 +324,18 @@ impl Mistakes {
 pub fn in_user_words(message: &str, key: &str) -> String {
     if let Some(rest) = message.strip_prefix("invalid type: ") {
         if let Some((found, wanted)) = rest.rsplit_once(", expected ") {
+            // An integer past 64 bits, which TOML reads as an i128.
+            let huge = found
+                .strip_prefix("integer `")
+                .and_then(|n| n.strip_suffix("` as i128"));
+            if let (Some(n), Some((min, max))) = (huge, integer_range(wanted)) {
+                let bound = match (n.starts_with('-'), min) {
+                    (true, 0) => "of 0 or more".to_string(),
+                    (true, min) => format!("of at least {min}"),
+                    (false, _) => format!("of at most {max}"),
+                };
+                return format!("expected a whole number {bound}, found {n}");
+            }
             let wanted = wanted_words(wanted, key);
             // `spp = "16"`: a number in quotes is a string in TOML.
             let quoted_number = found
@@ -381,6 +415,16 @@ fn wanted_words(wanted: &str, key: &str) -> String {
     if integer_range(wanted).is_some() {
         return "a whole number".to_string();
     }
+    if wanted.starts_with("struct ") || wanted == "a map" || wanted == "map" {
+        return "a table".to_string();
+    }
+    if wanted == "a sequence" || wanted == "sequence" {
+        return match key {
+            // `[lights]` where `[[lights]]` was meant.
+            "lights" | "objects" => format!("an array of tables, one [[{key}]] each"),
+            _ => "an array".to_string(),
+        };
+    }
     let text = match wanted {
         "f32" | "f64" => "a number",
         "a boolean" | "bool" => "true or false",
@@ -456,6 +500,34 @@ mod tests {
         );
         let e = parse_description(p, "[render\n").unwrap_err();
         assert!(e.to_string().starts_with("bad.toml: line 1:"), "{e}");
+    }
+
+    /// What serde and TOML said in Rust's words (an i128, a struct's
+    /// name, a sequence), or without the key or the element at fault.
+    #[test]
+    fn mistakes_name_the_key_and_the_element_in_the_formats_words() {
+        let p = Path::new("s.toml");
+        let said = |text: &str| parse_description(p, text).unwrap_err().to_string();
+        assert_eq!(
+            said("[render]\nspp = 99999999999999999999\n"),
+            "s.toml: line 2: render.spp: expected a whole number of at most 4294967295, found 99999999999999999999"
+        );
+        assert_eq!(
+            said("render = 5\n"),
+            "s.toml: line 1: render: expected a table, found 5"
+        );
+        assert_eq!(
+            said("[lights]\ntype = \"point\"\n"),
+            "s.toml: line 1: lights: expected an array of tables, one [[lights]] each, found a table"
+        );
+        assert_eq!(
+            said("[[lights]]\nposition = [0, 1, 0]\n"),
+            "s.toml: line 1: lights[0]: missing key 'type'"
+        );
+        assert_eq!(
+            said("[render]\nspp = 4\nspp = 5\n"),
+            "s.toml: line 3: duplicate key 'spp': each key is given once a table"
+        );
     }
 
     #[test]
