@@ -157,7 +157,8 @@ fn near_only(e: &mut clap::Error, typed: ContextKind, suggested: ContextKind) {
 
 /// A count given a whole number below its least value (`--spp -4`,
 /// `--camera -1`, `--passes 0`): "must be at least N" in place of clap's
-/// words for a failed parse.
+/// words for a failed parse; and given something else (`--spp 1.5`):
+/// "expected a whole number".
 fn below_least(e: clap::Error, cmd: &mut Command, sub: &str) -> clap::Error {
     let (Some(ContextValue::String(flag)), Some(ContextValue::String(value))) = (
         e.get(ContextKind::InvalidArg),
@@ -166,9 +167,9 @@ fn below_least(e: clap::Error, cmd: &mut Command, sub: &str) -> clap::Error {
         return e;
     };
     let (flag, value) = (flag.clone(), value.clone());
-    let Ok(number) = value.trim().parse::<i128>() else {
-        return e;
-    };
+    // Not a whole number at all (`1.5`, `ten`): clap says "invalid digit
+    // found in string".
+    let number = value.trim().parse::<i128>();
     let long = flag.split_whitespace().next().unwrap_or("");
     let here = match cmd.find_subcommand_mut(sub) {
         Some(s) => s,
@@ -183,12 +184,14 @@ fn below_least(e: clap::Error, cmd: &mut Command, sub: &str) -> clap::Error {
     let Some(least) = least_value(arg) else {
         return e;
     };
-    if number >= least {
-        return e;
-    }
+    let why = match number {
+        Err(_) => "expected a whole number".to_string(),
+        Ok(n) if n < least => format!("must be at least {least}"),
+        Ok(_) => return e,
+    };
     clap::Error::raw(
         ErrorKind::ValueValidation,
-        format!("invalid value '{value}' for '{flag}': must be at least {least}"),
+        format!("invalid value '{value}' for '{flag}': {why}"),
     )
     .format(here)
 }
@@ -370,6 +373,16 @@ mod tests {
         }
         // A number a float or a signed option takes is passed on as it is.
         assert!(parse_from(["strata", "render", "--background", "-1"]).is_ok());
+        // Not a whole number: said so, not "invalid digit found in string".
+        for args in [
+            &["render", "--spp", "1.5"][..],
+            &["render", "--width", "ten"],
+            &["render", "--threads", "1.5"],
+        ] {
+            let text = error(args);
+            assert!(text.contains("expected a whole number"), "{args:?}: {text}");
+            assert!(!text.contains("invalid digit"), "{args:?}: {text}");
+        }
     }
 
     /// A thread count past any machine's cores is a usage error naming the
