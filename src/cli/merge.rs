@@ -67,7 +67,10 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
     }
     check_memory(&args.parts, !partial_output)?;
     if let Some(e) = args.exposure.filter(|e| !e.is_finite()) {
-        let why = format!("{e} is not a number of stops");
+        let why = format!(
+            "{e} is not a number of stops{}",
+            strata::scene::settings::past_float32(e)
+        );
         return Err(InputError::new(COMMAND_LINE, "--exposure", why).into());
     }
     let mut parts = Vec::with_capacity(args.parts.len());

@@ -255,6 +255,17 @@ impl RenderSettings {
 /// The largest image side and sample count a render accepts.
 pub const MAX_SIDE: u32 = 1 << 15;
 pub const MAX_SPP: u32 = 1 << 22;
+
+/// What to add to a message about `x` where it is infinite: a number
+/// written past float32's range (`1e40`) reads as inf, which the user
+/// never wrote.
+pub fn past_float32(x: f32) -> &'static str {
+    if x.is_infinite() {
+        " (a number past ±3.4e38, float32's largest, reads as inf)"
+    } else {
+        ""
+    }
+}
 /// Most bounces `max_depth` allows. The distribution integrator recurses
 /// once a reflection or refraction (about 1.4 KB of stack a level), so
 /// two facing mirrors at a depth of 1,500 overflowed a worker's 2 MiB
@@ -339,14 +350,14 @@ impl RenderOverrides {
         if let Some(e) = self.noise.filter(|e| !(e.is_finite() && *e > 0.0)) {
             let message =
                 "must be an error above 0, such as 0.02 (2% where the luminance is 1)".to_string();
-            return bad("noise", e.to_string(), message);
+            return bad("noise", e.to_string(), message + past_float32(e));
         }
         if let Some(e) = self
             .exposure
             .filter(|e| !(e.is_finite() && e.abs() <= 64.0))
         {
             let message = "must be a number of stops between -64 and 64".to_string();
-            return bad("exposure", e.to_string(), message);
+            return bad("exposure", e.to_string(), message + past_float32(e));
         }
         if let Some(c) = self.background {
             if !c.iter().all(|x| x.is_finite() && *x >= 0.0) {

@@ -6,6 +6,7 @@ use super::Compiler;
 use crate::error::{InputError, InputResult};
 use crate::scene::description::V3;
 use crate::scene::parse::within;
+use crate::scene::settings::past_float32;
 use glam::Vec3;
 
 /// `v` as a scene file writes it, `[x, y, z]`, for an error message.
@@ -108,7 +109,8 @@ impl Compiler<'_> {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(self.err(key, format!("must be finite, got {}", written(v))))
+            let note = past_float32(v.max_element().abs().max(v.min_element().abs()));
+            Err(self.err(key, format!("must be finite, got {}{note}", written(v))))
         }
     }
 
@@ -116,7 +118,7 @@ impl Compiler<'_> {
         if x.is_finite() {
             Ok(x)
         } else {
-            Err(self.err(key, format!("must be finite, got {x}")))
+            Err(self.err(key, format!("must be finite, got {x}{}", past_float32(x))))
         }
     }
 
@@ -124,7 +126,11 @@ impl Compiler<'_> {
         if x.is_finite() && x > 0.0 {
             Ok(x)
         } else {
-            Err(self.err(key, format!("must be a positive finite number, got {x}")))
+            let note = past_float32(x);
+            Err(self.err(
+                key,
+                format!("must be a positive finite number, got {x}{note}"),
+            ))
         }
     }
 
@@ -132,7 +138,8 @@ impl Compiler<'_> {
         if x.is_finite() && x >= 0.0 {
             Ok(x)
         } else {
-            Err(self.err(key, format!("must be a finite number ≥ 0, got {x}")))
+            let note = past_float32(x);
+            Err(self.err(key, format!("must be a finite number ≥ 0, got {x}{note}")))
         }
     }
 
@@ -177,6 +184,16 @@ mod tests {
                 "[[objects]]\nsphere = { radius = inf }",
                 "objects[0].sphere.radius",
                 "positive",
+            ),
+            (
+                "[[objects]]\nsphere = { radius = 1e39 }",
+                "objects[0].sphere.radius",
+                "past ±3.4e38, float32's largest, reads as inf",
+            ),
+            (
+                "[camera]\nposition = [0, 1, 1e300]",
+                "camera.position",
+                "past ±3.4e38, float32's largest, reads as inf",
             ),
             (
                 "[materials.m]\nshininess = -1.0",
