@@ -8,7 +8,7 @@ use strata::error::{InputError, COMMAND_LINE};
 use strata::output::atomic::check_target;
 use strata::output::image::{write_image, ImageFormat};
 use strata::output::tonemap::Tonemap;
-use strata::partial::format::{read_partial, write_partial, PIXEL_BYTES};
+use strata::partial::format::{read_partial, write_partial, Partial, PIXEL_BYTES};
 use strata::partial::merge::{merge_partials, MergeRules};
 use strata::render::film::render_bytes_per_pixel;
 use strata::render::Warning;
@@ -73,14 +73,21 @@ pub fn run(args: MergeArgs) -> Result<(), CliError> {
         );
         return Err(InputError::new(COMMAND_LINE, "--exposure", why).into());
     }
-    let mut parts = Vec::with_capacity(args.parts.len());
+    let mut parts: Vec<(PathBuf, Partial)> = Vec::with_capacity(args.parts.len());
+    // An EXR is the film itself, which no exposure or curve changes: its
+    // parts show as the first does, whatever each was rendered with.
+    let exr = ImageFormat::from_path(&args.output) == Some(ImageFormat::Exr);
     for path in &args.parts {
         let mut part = read_partial(path).map_err(|e| InputError::file(path, e))?;
         // The flags replace the display the parts carry: it shows the film,
         // and does not change it.
+        let shown = match parts.first() {
+            Some((_, first)) if exr => (first.header.exposure, first.header.tonemap),
+            _ => (part.header.exposure, part.header.tonemap),
+        };
         let h = &mut part.header;
-        h.exposure = args.exposure.unwrap_or(h.exposure);
-        h.tonemap = args.tonemap.unwrap_or(h.tonemap);
+        h.exposure = args.exposure.unwrap_or(shown.0);
+        h.tonemap = args.tonemap.unwrap_or(shown.1);
         parts.push((path.clone(), part));
     }
     let n = parts.len();

@@ -229,12 +229,10 @@ impl PartialHeader {
     /// `other` (ignoring which slices and samples each holds, and which
     /// build wrote it), as "what: mine vs theirs".
     pub fn render_mismatch(&self, other: &PartialHeader) -> Option<String> {
+        // The settings first, the scene's fingerprint (which covers the
+        // camera, and so the resolution too) last: a part of another size
+        // is told its size, not a hash.
         let pairs: [(&str, String, String); 9] = [
-            (
-                "scene (fingerprint of geometry, materials, lights, camera)",
-                format!("{:016x}", self.scene_hash),
-                format!("{:016x}", other.scene_hash),
-            ),
             (
                 "resolution",
                 format!("{}x{}", self.width, self.height),
@@ -266,6 +264,11 @@ impl PartialHeader {
                 "slice count P",
                 self.slice_count.to_string(),
                 other.slice_count.to_string(),
+            ),
+            (
+                "scene (fingerprint of geometry, materials, lights, camera)",
+                format!("{:016x}", self.scene_hash),
+                format!("{:016x}", other.scene_hash),
             ),
         ];
         pairs

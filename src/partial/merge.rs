@@ -127,11 +127,21 @@ fn check_same_render(parts: &[(PathBuf, Partial)], force: bool) -> InputResult<(
             .render_mismatch(first)
             .map(|m| format!("{m} (this file vs that one)"))
             .or_else(|| {
-                // Not the film but how an image shows it: one image, one curve.
+                // Not the film but how an image shows it: one image, one
+                // curve and one exposure (an EXR shows neither: the
+                // command line gives its parts the first's).
                 (h.tonemap != first.tonemap).then(|| {
                     format!(
                         "tone curve: {} vs {} (this file vs that one); choose one with strata merge --tonemap",
                         h.tonemap, first.tonemap
+                    )
+                })
+            })
+            .or_else(|| {
+                (h.exposure.to_bits() != first.exposure.to_bits()).then(|| {
+                    format!(
+                        "exposure: {} vs {} stops (this file vs that one); choose one with strata merge --exposure",
+                        h.exposure, first.exposure
                     )
                 })
             })

@@ -345,4 +345,41 @@ fn a_merged_png_shows_the_film_as_the_render_does() {
         "m.png",
     ]);
     assert_eq!(read("m.png"), read("whole.png"));
+    // An EXR shows neither the curve nor the exposure: such parts merge.
+    ok(&["merge", "-q", "p0.strata", "p1.strata", "-o", "m.exr"]);
+    // Another exposure is refused for a PNG as another curve is.
+    part.header.tonemap = strata::output::tonemap::Tonemap::Filmic;
+    part.header.exposure = 1.0;
+    write_partial(&p1, &part.header, &part.film).unwrap();
+    let o = strata(&dir, &["merge", "p0.strata", "p1.strata", "-o", "e.png"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("exposure: 1 vs 3 stops") && e.contains("--exposure"),
+        "{e}"
+    );
+    ok(&[
+        "merge",
+        "-q",
+        "--exposure",
+        "3",
+        "p0.strata",
+        "p1.strata",
+        "-o",
+        "e.png",
+    ]);
+    assert_eq!(read("e.png"), read("whole.png"));
+    // A part of another size is told its size, not the scene's fingerprint.
+    let wider = (part.header.width + 1).to_string();
+    let args = [
+        "render", "s.toml", "-q", "--slice", "1/2", "--width", &wider, "-o", "w.strata",
+    ];
+    ok(&args);
+    let o = strata(&dir, &["merge", "p0.strata", "w.strata", "-o", "s.exr"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("resolution: ") && !e.contains("fingerprint"),
+        "{e}"
+    );
 }
