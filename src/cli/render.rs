@@ -207,6 +207,14 @@ fn run_here(mut args: RenderArgs) -> Result<(), CliError> {
         .map_or((s.width, s.height), |w| (w.width(), w.height()));
     check_image_memory(&args, w, h).map_err(|m| image_size_error(&args, m))?;
     let full = slice.samples(s.spp);
+    if full.is_empty() {
+        // Its part merges as it should (it holds nothing), but a job array
+        // of more slices than samples runs tasks that do no work.
+        super::warn([format!(
+            "slice {}/{} of {} spp holds no samples: split into at most {} slices",
+            slice.index, slice.count, s.spp, s.spp
+        )]);
+    }
     // The header holds the scene's fingerprint, a hash of every triangle:
     // computed only when a .strata file (output or checkpoint) is written.
     let header = (partial_output || args.checkpoint.is_some())

@@ -388,6 +388,27 @@ fn bad_slices_and_outputs_are_refused_on_one_line() {
         assert!(err.contains(mention), "{args:?}: {err}");
     }
     assert!(!Path::new("part.png").exists());
+    // More slices than samples: a slice without samples renders (its part
+    // merges as nothing) but says so, with how many slices would do.
+    let part = t.dir.join("empty.strata");
+    let args = [
+        "render",
+        s(&t.scene),
+        "-q",
+        "--spp",
+        "4",
+        "--slice",
+        "4/8",
+        "-o",
+        s(&part),
+    ];
+    let o = strata(repo(), &args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: slice 4/8 of 4 spp holds no samples: split into at most 4 slices"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&t.dir).ok();
 }
 
