@@ -48,7 +48,7 @@ const COLUMNS: [(&str, &str); 12] = [
 #[command(after_help = "Every column of the table: strata bench --help.")]
 #[command(after_long_help = format!("The table's columns:\n{}", strata::experiment::column_key(&COLUMNS)))]
 pub struct BenchArgs {
-    /// Meshes (OBJ, glTF, GLB or PLY); default: every mesh in assets/.
+    /// Meshes (OBJ, glTF, GLB, PLY, OFF or STL); default: every mesh in assets/.
     pub meshes: Vec<PathBuf>,
     /// Packets of 8 rays per ray set (the single rows trace them ray by ray).
     #[arg(long = "batches", value_name = "N", default_value_t = 50_000, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
@@ -59,7 +59,8 @@ pub struct BenchArgs {
     /// The "all threads" column (default: every core).
     #[arg(long, value_parser = super::parse_threads)]
     pub threads: Option<usize>,
-    /// BVH build effort; auto picks by primitive count.
+    /// BVH build effort; auto builds medium whatever the mesh (the tree does
+    /// not depend on how many rays are timed).
     #[arg(long, default_value = "auto")]
     pub bvh_quality: BuildQuality,
     /// Where to save the CSV.

@@ -48,7 +48,7 @@ impl std::str::FromStr for KindArg {
 pub struct RaysArgs {
     /// random | camera | grazing | edges | inside, or all (N of each, in that order).
     pub kind: KindArg,
-    /// Mesh file (.obj, .ply, .gltf or .glb), used as it is.
+    /// Mesh file (.obj, .ply, .gltf, .glb, .off or .stl), used as it is.
     pub mesh: PathBuf,
     /// Rays to write (of each kind, for all).
     #[arg(short, default_value_t = 100_000)]

@@ -26,7 +26,7 @@ use strata::scene::{
 
 #[derive(Debug, Args, Clone)]
 pub struct RenderArgs {
-    /// Scene file (TOML), or a model file (.glb, .gltf, .obj, .ply) to
+    /// Scene file (TOML), or a model file (.glb, .gltf, .obj, .ply, .off, .stl) to
     /// render as it comes: with its own camera and lights where it has
     /// them, else framed from a three-quarter view under default lights.
     /// Without one, the built-in seed scene (the same as the repository's

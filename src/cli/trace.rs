@@ -19,7 +19,7 @@ use strata::scene::{load_mesh_scene, load_scene_for_tracing, Scene};
 
 #[derive(Debug, Args, Clone)]
 pub struct TraceArgs {
-    /// Mesh file (.obj, .ply, .gltf or .glb), used as it is: triangle i of
+    /// Mesh file (.obj, .ply, .gltf, .glb, .off or .stl), used as it is: triangle i of
     /// the file is primitive i. Or a scene file (.toml), with its
     /// instances: instance k's triangle j is numbered as if every instance
     /// were a copy, after the scene's own primitives and the earlier
@@ -38,7 +38,8 @@ pub struct TraceArgs {
     /// Worker threads (default: all cores). The hits are identical for any count.
     #[arg(long, default_value_t = 0, value_parser = super::parse_threads)]
     pub threads: usize,
-    /// BVH build effort; auto picks by primitive count.
+    /// BVH build effort; auto builds medium whatever the mesh (the tree does
+    /// not depend on how many rays are timed).
     #[arg(long, default_value = "auto")]
     pub bvh_quality: BuildQuality,
     /// Trace the rays this many times and report the median time, with

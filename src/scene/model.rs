@@ -307,7 +307,7 @@ fn ground_height(bounds: Option<(Vec3, Vec3)>) -> f32 {
 /// the light is strata's, so the way out is to colour it, not to drop it.
 fn made_up_environment(model: &Path) -> String {
     format!(
-        "{} has no lights, so strata lights it with a white environment, which is also what rays that hit nothing see; \
+        "{} has no lights, so strata lights it with its studio, whose dim sky (a constant environment light) is also what rays that hit nothing see; \
          to change it, colour that light: --set 'lights[0].radiance=[R, G, B]' (it lights the model too), \
          or give the scene lights of your own (--save-scene writes it to edit)",
         model.display()
@@ -701,7 +701,7 @@ fn light_table(out: &mut String, l: &LightDesc) {
 
 /// Why a model file's option (`--camera`, `--save-scene`; the Python
 /// package's `camera=`) is refused for a scene.
-pub const ONLY_FOR_A_MODEL: &str = "applies to a model file (.glb, .gltf, .obj, .ply, .off, .stl), not to a scene file; a scene file has its own [camera] and can name a glTF camera with `camera = N` on its mesh object";
+pub const ONLY_FOR_A_MODEL: &str = "applies to a model file (.glb, .gltf, .obj, .ply, .off, .stl), not to a scene file, which is already a scene (its own [camera], which can name a glTF camera with `camera = N` on its mesh object)";
 
 /// Whether `path` names a model file (one of the mesh formats, by its
 /// extension) rather than a scene file: what `strata render PATH` and the

@@ -273,7 +273,26 @@ fn unknown_materials_and_shapeless_objects_are_rejected() {
         "mat",
         Some("[[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"nope\"\n"),
         &[],
-        &["objects[0].material", "nope"],
+        &[
+            "objects[0].material",
+            "nope",
+            "the scene has no [materials] tables",
+        ],
+    );
+    // A near miss of a [materials] table's name is suggested, else the names.
+    let scene = "[materials.floor]\ndiffuse = 0.5\n[materials.jade]\ndiffuse = 0.3\n\
+                 [[objects]]\nsphere = { radius = 1.0 }\nmaterial = \"NAME\"\n";
+    assert_rejected(
+        "mat-near",
+        Some(&scene.replace("NAME", "flor")),
+        &[],
+        &["unknown material 'flor'; did you mean 'floor'?"],
+    );
+    assert_rejected(
+        "mat-far",
+        Some(&scene.replace("NAME", "A")),
+        &[],
+        &["unknown material 'A' (expected floor or jade)"],
     );
     assert_rejected(
         "shapeless",

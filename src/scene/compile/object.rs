@@ -115,14 +115,29 @@ impl Compiler<'_> {
         if let Some(&id) = self.material_ids.get(name) {
             return Ok(id);
         }
-        let unknown = || format!("unknown material '{name}'");
         match name.rsplit_once(':') {
             Some((file, _)) if loaders::check_extension(Path::new(file)).is_ok() => {
                 self.asset(file, key)?;
                 let id = self.material_ids.get(name).copied();
-                id.ok_or_else(|| self.err(key, unknown()))
+                id.ok_or_else(|| self.err(key, self.unknown_material(name)))
             }
-            _ => Err(self.err(key, unknown())),
+            _ => Err(self.err(key, self.unknown_material(name))),
+        }
+    }
+
+    /// "unknown material 'flor'; did you mean 'floor'?", among the
+    /// `[materials]` tables' names (a mesh file's own are `FILE:NAME`).
+    fn unknown_material(&self, name: &str) -> String {
+        let mut names: Vec<&str> = self
+            .material_ids
+            .keys()
+            .map(String::as_str)
+            .filter(|n| !n.contains(':'))
+            .collect();
+        names.sort_unstable();
+        match names.is_empty() {
+            true => format!("unknown material '{name}' (the scene has no [materials] tables)"),
+            false => crate::mode::unknown("material", name, &names),
         }
     }
 
