@@ -256,7 +256,12 @@ pub fn rows(mode: Mode, counts: &[usize], timings: &[Vec<Timing>]) -> Vec<Scalin
                 efficiency: speedup / threads as f64,
                 mrays_per_s: rays as f64 / seconds / 1e6,
                 cpu_path_s,
-                cpu_speedup: cpu_base.zip(cpu_path_s).map(|(b, m)| b / m),
+                // A process's CPU time comes in clock ticks: a render
+                // shorter than one reads 0, and 0/0 is no speedup.
+                cpu_speedup: cpu_base
+                    .zip(cpu_path_s)
+                    .filter(|&(b, m)| b > 0.0 && m > 0.0)
+                    .map(|(b, m)| b / m),
                 runs: t.iter().map(|x| x.seconds).collect(),
             }
         })
@@ -462,5 +467,22 @@ mod tests {
         assert!(panels[0].series[0].reference && panels.iter().all(|p| p.integer_x));
         assert_eq!(panels[1].series[0].points, vec![(1.0, 100.0), (2.0, 100.0)]);
         assert_eq!(panels[1].series[1].points, vec![(1.0, 100.0), (2.0, 100.0)]);
+        // CPU times below the clock's tick read 0: no speedup, not NaN.
+        let zero = |s: f64| Timing {
+            seconds: s,
+            rays: 1,
+            cpu: Some((0.0, 0.0)),
+        };
+        let r = rows(
+            Mode::Processes,
+            &[1, 2],
+            &[vec![zero(0.004)], vec![zero(0.005)]],
+        );
+        assert_eq!(r[1].cpu_speedup, None);
+        assert!(
+            !csv(&r).contains("NaN") && !table(&r).contains("NaN"),
+            "{}",
+            table(&r)
+        );
     }
 }
