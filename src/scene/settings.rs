@@ -261,7 +261,7 @@ pub const MAX_SPP: u32 = 1 << 22;
 /// never wrote.
 pub fn past_float32(x: f32) -> &'static str {
     if x.is_infinite() {
-        " (a number past ±3.4e38, float32's largest, reads as inf)"
+        " (inf, or a number written past ±3.4e38, float32's largest)"
     } else {
         ""
     }

@@ -137,6 +137,36 @@ fn a_depth_past_the_limit_is_refused_and_the_limit_renders() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Every mistake of one table is named in one run, in the file's order
+/// (the checks stopped at the first key of the struct's order).
+#[test]
+fn every_mistake_of_a_material_is_named_in_file_order() {
+    let dir = crate::common::temp_dir("material-mistakes");
+    for (text, keys) in [
+        (
+            "[materials.a]\nior = 0\nshininess = -1\nglossiness = inf\ntransparency = -0.5\n",
+            &["ior", "shininess", "glossiness", "transparency"][..],
+        ),
+        (
+            "[materials.a]\nroughness = 2\nmetallic = -1\n",
+            &["roughness", "metallic"],
+        ),
+    ] {
+        std::fs::write(dir.join("m.toml"), text).unwrap();
+        let out = strata(&dir, &["render", "m.toml", "-q", "-o", "m.png"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        let lines: Vec<&str> = err.trim_end().lines().collect();
+        assert_eq!(lines.len(), keys.len(), "{err}");
+        for (i, (line, key)) in lines.iter().zip(keys).enumerate() {
+            let at = format!("m.toml: line {}: materials.a.{key}: ", i + 2);
+            assert!(line.contains(&at), "{line}");
+        }
+        assert!(!dir.join("m.png").exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn missing_files_are_named() {
     assert_rejected("no-scene", None, &[], &["scene.toml", "cannot read"]);

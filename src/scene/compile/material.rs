@@ -18,16 +18,43 @@ impl Compiler<'_> {
         if m.base_color.is_some() || m.metallic.is_some() || m.roughness.is_some() {
             return self.metallic_roughness(m, key);
         }
+        // Every key checked, so that one run names each mistake of the
+        // table (the file's order is restored where they are reported).
+        let [diffuse, specular, emission] = [
+            (m.diffuse, "diffuse"),
+            (m.specular, "specular"),
+            (m.emission, "emission"),
+        ]
+        .map(|(c, name)| self.colour(c, &k(name)));
+        let [shininess, reflectivity, glossiness, transparency] = [
+            (m.shininess, "shininess"),
+            (m.reflectivity, "reflectivity"),
+            (m.glossiness, "glossiness"),
+            (m.transparency, "transparency"),
+        ]
+        .map(|(x, name)| self.non_negative(x, &k(name)));
+        let ior = self.positive(m.ior, &k("ior"));
+        let colours = [&diffuse, &specular, &emission].map(|r| r.as_ref().err());
+        let numbers = [&shininess, &reflectivity, &glossiness, &transparency, &ior];
+        let errors = colours
+            .into_iter()
+            .chain(numbers.map(|r| r.as_ref().err()))
+            .flatten()
+            .cloned()
+            .collect();
+        if let Some(e) = crate::error::InputError::all(errors) {
+            return Err(e);
+        }
         Ok(Material {
-            diffuse: self.colour(m.diffuse, &k("diffuse"))?,
-            specular: self.colour(m.specular, &k("specular"))?,
-            shininess: self.non_negative(m.shininess, &k("shininess"))?,
-            reflectivity: self.non_negative(m.reflectivity, &k("reflectivity"))?,
-            glossiness: self.non_negative(m.glossiness, &k("glossiness"))?,
-            transparency: self.non_negative(m.transparency, &k("transparency"))?,
-            ior: self.positive(m.ior, &k("ior"))?,
+            diffuse: diffuse?,
+            specular: specular?,
+            shininess: shininess?,
+            reflectivity: reflectivity?,
+            glossiness: glossiness?,
+            transparency: transparency?,
+            ior: ior?,
             fresnel: m.fresnel,
-            emission: self.colour(m.emission, &k("emission"))?,
+            emission: emission?,
             one_sided: false,
             diffuse_texture: None,
             pbr: None,
@@ -76,9 +103,21 @@ impl Compiler<'_> {
                 Err(self.err(&k(field), format!("must be between 0 and 1, got {x}")))
             }
         };
-        let metallic = unit(m.metallic, "metallic", 0.0)?;
-        let roughness = unit(m.roughness, "roughness", 0.5)?;
-        let emission = self.colour(m.emission, &k("emission"))?;
+        let (metallic, roughness) = (
+            unit(m.metallic, "metallic", 0.0),
+            unit(m.roughness, "roughness", 0.5),
+        );
+        let emission = self.colour(m.emission, &k("emission"));
+        let errors = [metallic.as_ref().err(), roughness.as_ref().err()]
+            .into_iter()
+            .chain([emission.as_ref().err()])
+            .flatten()
+            .cloned()
+            .collect();
+        if let Some(e) = crate::error::InputError::all(errors) {
+            return Err(e);
+        }
+        let (metallic, roughness, emission) = (metallic?, roughness?, emission?);
         Ok(Material::metallic_roughness(
             base, metallic, roughness, emission,
         ))

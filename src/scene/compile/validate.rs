@@ -188,12 +188,12 @@ mod tests {
             (
                 "[[objects]]\nsphere = { radius = 1e39 }",
                 "objects[0].sphere.radius",
-                "past ±3.4e38, float32's largest, reads as inf",
+                "got inf (inf, or a number written past ±3.4e38, float32's largest)",
             ),
             (
                 "[camera]\nposition = [0, 1, 1e300]",
                 "camera.position",
-                "past ±3.4e38, float32's largest, reads as inf",
+                "(inf, or a number written past ±3.4e38, float32's largest)",
             ),
             (
                 "[materials.m]\nshininess = -1.0",
