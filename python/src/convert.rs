@@ -567,6 +567,10 @@ pub struct RaySource<'py> {
     bad: BadRays,
     centre: DVec3,
     n: usize,
+    /// Whether every ray shares the one origin, or the one direction,
+    /// given (a row broadcast over the other array's rows, as numpy does).
+    one_origin: bool,
+    one_direction: bool,
 }
 
 /// Rays from `origins` and `directions` ((n, 3) each, finite, no zero
@@ -583,17 +587,25 @@ pub fn ray_source<'py>(
     let origins = read_vec3s(origins, "origins")?;
     let directions = read_vec3s(directions, "directions")?;
     let (no, nd) = (origins.rows()?.len(), directions.rows()?.len());
-    if no != nd {
-        return Err(error(format!(
-            "origins and directions must have the same length; got {no} and {nd}"
-        )));
-    }
+    // One row of either goes with every row of the other (numpy's
+    // broadcasting): one direction from many origins, or many from one.
+    let n = match (no, nd) {
+        _ if no == nd => no,
+        (1, n) | (n, 1) => n,
+        _ => {
+            return Err(error(format!(
+                "origins and directions must have the same length, or one of them one row; got {no} and {nd}"
+            )))
+        }
+    };
     Ok(RaySource {
-        t_max: t_maxes(spec.t_max, no)?,
+        t_max: t_maxes(spec.t_max, n)?,
         t_min: t_min_of(spec.t_min)?,
         bad: spec.bad,
         centre,
-        n: no,
+        n,
+        one_origin: no == 1 && n != 1,
+        one_direction: nd == 1 && n != 1,
         origins,
         directions,
     })
@@ -623,20 +635,25 @@ impl RaySource<'_> {
         let miss = self.bad == BadRays::Miss;
         let centred = self.centre != DVec3::ZERO;
         let (centre, t, t_min) = (self.centre, &self.t_max, self.t_min);
+        let (one_origin, one_direction) = (self.one_origin, self.one_direction);
         let first = range.start;
         let bad = with_rows!(o, |ro| with_rows!(d, |rd| gather_into(
             threads,
             range.clone(),
             out,
             |i| {
+                let (oi, di) = (
+                    if one_origin { 0 } else { i },
+                    if one_direction { 0 } else { i },
+                );
                 // Without a centre, the row rounded once, as (row - 0) would be.
                 let origin = match centred {
-                    true => (ro.row64(i) - centre).as_vec3(),
-                    false => ro.row(i),
+                    true => (ro.row64(oi) - centre).as_vec3(),
+                    false => ro.row(oi),
                 };
                 let ray = Ray {
                     origin,
-                    direction: rd.row(i),
+                    direction: rd.row(di),
                     tmin: t_min,
                     tmax: t.get(i),
                 };
@@ -650,10 +667,14 @@ impl RaySource<'_> {
             return Ok(());
         };
         let r = out[i - first];
+        let (oi, di) = (
+            if one_origin { 0 } else { i },
+            if one_direction { 0 } else { i },
+        );
         if !r.origin.is_finite() {
             // Quoted as given, not as traced (relative to the centre).
-            let given = with_rows!(o, |ro| ro.row64(i));
-            return Err(not_finite("origins", i, given.as_vec3()));
+            let given = with_rows!(o, |ro| ro.row64(oi));
+            return Err(not_finite("origins", oi, given.as_vec3()));
         }
         let what = if r.direction.is_finite() {
             "is zero"
@@ -661,7 +682,7 @@ impl RaySource<'_> {
             "is not finite (as float32)"
         };
         Err(error(format!(
-            "directions[{i}] {what}: {:?}; a direction must be a finite, non-zero vector",
+            "directions[{di}] {what}: {:?}; a direction must be a finite, non-zero vector",
             r.direction.to_array()
         )))
     }

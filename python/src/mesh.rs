@@ -22,7 +22,8 @@ use strata::raycast::{self, BuildQuality, FirstHitColumns, PlaceError};
 ///
 /// Queries take (n, 3) ``origins`` and ``directions``, or (..., 3) of any
 /// leading shape, whose answers come back in that shape (one ray given as
-/// (3,) answers 0-d; any float dtype;
+/// (3,) answers 0-d; one origin or one direction goes with every row of
+/// the other, as numpy broadcasts it; any float dtype;
 /// a direction need not be unit length, and ``t`` is measured in its
 /// lengths), ``t_max`` (a number or one per ray) and ``t_min`` (a number):
 /// a ray reports what lies in (t_min, t_max], (0, inf] by default. Every
@@ -221,14 +222,21 @@ impl Mesh {
         };
         let (o, lead) = convert::rows3(origins)?;
         let (d, lead_d) = convert::rows3(directions)?;
-        if let (Some(a), Some(b)) = (&lead, &lead_d) {
-            if a != b {
+        // One ray's worth of either, (3,) or (1, 3), goes with every row of
+        // the other: the answers take the other's shape.
+        let one = |lead: &[usize]| lead.iter().product::<usize>() == 1;
+        let lead = match (lead, lead_d) {
+            (Some(a), Some(b)) if a == b || one(&a) => Some(b),
+            (Some(a), Some(b)) if one(&b) => Some(a),
+            (Some(a), Some(b)) => {
                 return Err(PyValueError::new_err(format!(
-                    "origins and directions must have the same shape; got {a:?} and {b:?} before the last axis"
+                    "origins and directions must have the same shape, or one of them a single row; got {a:?} and {b:?} before the last axis"
                 )));
             }
-        }
-        let lead = lead.or(lead_d);
+            // An (n, 3) array with one row as (3,): the answers are (n,).
+            (None, Some(one_row)) | (Some(one_row), None) if one(&one_row) => None,
+            (a, b) => a.or(b),
+        };
         // One t_max per ray of an (..., 3) array: in its leading shape.
         let flat_t_max = match (t_max, &lead) {
             (Some(t), Some(lead)) if !lead.is_empty() && t.hasattr("shape")? => {

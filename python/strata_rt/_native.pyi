@@ -182,7 +182,8 @@ class Mesh:
 
     Queries take (n, 3) origins, directions and points, or (..., 3) of any leading shape
     whose answers come back in that shape (all_hits lists the rays flattened; one
-    row given as (3,) answers 0-d) (any float dtype; ``t`` is in
+    row given as (3,) answers 0-d; one origin or one direction goes with every row
+    of the other, as numpy broadcasts it) (any float dtype; ``t`` is in
     direction lengths), ``t_max`` (a number or one per ray) and ``t_min``
     (where rays start); each releases the GIL and runs on every core, or on at
     most ``threads`` threads (never more than it has tasks of 256 rays or points:

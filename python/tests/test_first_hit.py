@@ -341,3 +341,20 @@ def test_ray_queries_say_they_take_t_min():
     for query in ("intersect", "occluded", "all_hits", "count_hits"):
         doc = getattr(strata_rt.Mesh, query).__doc__
         assert "(t_min, t_max]" in doc and "(0, t_max]" not in doc, query
+
+
+def test_one_origin_or_direction_goes_with_every_row_of_the_other(bumpy):
+    # numpy's broadcasting of a single row: the answers are those of the
+    # row repeated, in the other array's shape.
+    mesh, o, d, rng = bumpy_query(bumpy, 30, seed=7)
+    down = np.array([0.0, 0.0, -1.0])
+    one_way, repeated = mesh.intersect(o, down), mesh.intersect(o, np.tile(down, (30, 1)))
+    for key in repeated.keys():
+        np.testing.assert_array_equal(one_way[key], repeated[key])
+    np.testing.assert_array_equal(mesh.count_hits(o, [0, 0, -1]), mesh.count_hits(o, np.tile(down, (30, 1))))
+    from_one = mesh.intersect(o[0], d.reshape(5, 6, 3), t_max=np.full((5, 6), 10.0))
+    assert from_one.t.shape == (5, 6)
+    np.testing.assert_array_equal(from_one.t.reshape(-1), mesh.intersect(np.tile(o[0], (30, 1)), d, t_max=10.0).t)
+    assert mesh.occluded(o[:1], down).shape == (1,)
+    with pytest.raises(ValueError, match="the same length, or one of them one row; got 4 and 3"):
+        mesh.intersect(o[:4], d[:3])
