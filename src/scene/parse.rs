@@ -327,14 +327,10 @@ pub fn in_user_words(message: &str, key: &str) -> String {
             // An integer past 64 bits, which TOML reads as an i128.
             let huge = found
                 .strip_prefix("integer `")
-                .and_then(|n| n.strip_suffix("` as i128"));
-            if let (Some(n), Some((min, max))) = (huge, integer_range(wanted)) {
-                let bound = match (n.starts_with('-'), min) {
-                    (true, 0) => "of 0 or more".to_string(),
-                    (true, min) => format!("of at least {min}"),
-                    (false, _) => format!("of at most {max}"),
-                };
-                return format!("expected a whole number {bound}, found {n}");
+                .and_then(|n| n.strip_suffix("` as i128"))
+                .and_then(|n| n.parse::<i128>().ok());
+            if let (Some(n), Some(range)) = (huge, integer_range(wanted)) {
+                return out_of_range(n, range);
             }
             let wanted = wanted_words(wanted, key);
             // `spp = "16"`: a number in quotes is a string in TOML.
@@ -356,15 +352,8 @@ pub fn in_user_words(message: &str, key: &str) -> String {
                 .strip_prefix("integer `")
                 .and_then(|n| n.strip_suffix('`'))
                 .and_then(|n| n.parse::<i128>().ok());
-            if let (Some(n), Some((min, max))) = (number, integer_range(wanted)) {
-                let bound = if n < min && min == 0 {
-                    "of 0 or more".to_string()
-                } else if n < min {
-                    format!("of at least {min}")
-                } else {
-                    format!("of at most {max}")
-                };
-                return format!("expected a whole number {bound}, found {n}");
+            if let (Some(n), Some(range)) = (number, integer_range(wanted)) {
+                return out_of_range(n, range);
             }
             return format!(
                 "expected {}, found {}",
@@ -395,6 +384,19 @@ pub fn in_user_words(message: &str, key: &str) -> String {
         return format!("missing key '{}'", rest.trim_end_matches('`'));
     }
     message.to_string()
+}
+
+/// A whole number `n` outside an integer type's `(min, max)`, said with
+/// the bound it crosses.
+fn out_of_range(n: i128, (min, max): (i128, i128)) -> String {
+    let bound = if n < min && min == 0 {
+        "of 0 or more".to_string()
+    } else if n < min {
+        format!("of at least {min}")
+    } else {
+        format!("of at most {max}")
+    };
+    format!("expected a whole number {bound}, found {n}")
 }
 
 /// `unknown key 'x'; did you mean 'y'?`, else the valid names.

@@ -266,6 +266,7 @@ pub fn past_float32(x: f32) -> &'static str {
         ""
     }
 }
+
 /// Most bounces `max_depth` allows. The distribution integrator recurses
 /// once a reflection or refraction (about 1.4 KB of stack a level), so
 /// two facing mirrors at a depth of 1,500 overflowed a worker's 2 MiB

@@ -18,8 +18,6 @@ impl Compiler<'_> {
         if m.base_color.is_some() || m.metallic.is_some() || m.roughness.is_some() {
             return self.metallic_roughness(m, key);
         }
-        // Every key checked, so that one run names each mistake of the
-        // table (the file's order is restored where they are reported).
         let [diffuse, specular, emission] = [
             (m.diffuse, "diffuse"),
             (m.specular, "specular"),
@@ -34,17 +32,16 @@ impl Compiler<'_> {
         ]
         .map(|(x, name)| self.non_negative(x, &k(name)));
         let ior = self.positive(m.ior, &k("ior"));
-        let colours = [&diffuse, &specular, &emission].map(|r| r.as_ref().err());
-        let numbers = [&shininess, &reflectivity, &glossiness, &transparency, &ior];
-        let errors = colours
-            .into_iter()
-            .chain(numbers.map(|r| r.as_ref().err()))
-            .flatten()
-            .cloned()
-            .collect();
-        if let Some(e) = crate::error::InputError::all(errors) {
-            return Err(e);
-        }
+        super::validate::all_passed([
+            diffuse.as_ref().err(),
+            specular.as_ref().err(),
+            emission.as_ref().err(),
+            shininess.as_ref().err(),
+            reflectivity.as_ref().err(),
+            glossiness.as_ref().err(),
+            transparency.as_ref().err(),
+            ior.as_ref().err(),
+        ])?;
         Ok(Material {
             diffuse: diffuse?,
             specular: specular?,
@@ -108,15 +105,11 @@ impl Compiler<'_> {
             unit(m.roughness, "roughness", 0.5),
         );
         let emission = self.colour(m.emission, &k("emission"));
-        let errors = [metallic.as_ref().err(), roughness.as_ref().err()]
-            .into_iter()
-            .chain([emission.as_ref().err()])
-            .flatten()
-            .cloned()
-            .collect();
-        if let Some(e) = crate::error::InputError::all(errors) {
-            return Err(e);
-        }
+        super::validate::all_passed([
+            metallic.as_ref().err(),
+            roughness.as_ref().err(),
+            emission.as_ref().err(),
+        ])?;
         let (metallic, roughness, emission) = (metallic?, roughness?, emission?);
         Ok(Material::metallic_roughness(
             base, metallic, roughness, emission,

@@ -14,6 +14,19 @@ pub(super) fn written(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
+/// `Ok` where every one of a table's checks passed, else every error
+/// among them (each a check's `err()`): the checks all run, so that
+/// one run names each mistake of the table (in the file's order where
+/// they are reported).
+pub(super) fn all_passed<'e>(
+    checks: impl IntoIterator<Item = Option<&'e InputError>>,
+) -> InputResult<()> {
+    match InputError::all(checks.into_iter().flatten().cloned().collect()) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
 impl Compiler<'_> {
     /// Refuse the keys of the table at `key` that its type does not take:
     /// `given` lists each optional key and whether the file gives it,
@@ -87,9 +100,8 @@ impl Compiler<'_> {
         others: &[&str],
         message: impl Into<String>,
     ) -> InputError {
-        let edited = |k: &str| self.edited.iter().any(|path| within(k, path));
-        match others.iter().find(|&&k| edited(k)) {
-            Some(&other) if !edited(key) => {
+        match others.iter().find(|&&k| self.edit_gives(k)) {
+            Some(&other) if !self.edit_gives(key) => {
                 let mut e = self.err(other, message);
                 e.message = format!("{key}: {}", e.message);
                 e
@@ -101,7 +113,13 @@ impl Compiler<'_> {
     /// Whether the scene gives `key` itself (in its file or by an edit),
     /// rather than leaving it to its default.
     pub(super) fn gives(&self, key: &str) -> bool {
-        self.source.contains(key) || self.edited.iter().any(|path| within(key, path))
+        self.source.contains(key) || self.edit_gives(key)
+    }
+
+    /// Whether a `--set` edit gives `key` (the key itself, or a table
+    /// around it).
+    fn edit_gives(&self, key: &str) -> bool {
+        self.edited.iter().any(|path| within(key, path))
     }
 
     pub(super) fn v3(&self, v: V3, key: &str) -> InputResult<Vec3> {
@@ -109,7 +127,7 @@ impl Compiler<'_> {
         if v.is_finite() {
             Ok(v)
         } else {
-            let note = past_float32(v.max_element().abs().max(v.min_element().abs()));
+            let note = past_float32(v.abs().max_element());
             Err(self.err(key, format!("must be finite, got {}{note}", written(v))))
         }
     }
