@@ -60,7 +60,7 @@ impl Geometry {
             let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
             let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
             let mesh = self.mesh_of(hit.prim);
-            let mut ng = triangle::geometric_normal(&v).normalize_or(Vec3::Z);
+            let mut ng = triangle::unit_normal(&v).unwrap_or(Vec3::Z);
             if mesh.mirrored {
                 ng = -ng;
             }

@@ -11,6 +11,6 @@ pub mod transform;
 pub mod trig;
 
 pub use aabb::Aabb;
-pub use frame::Frame;
+pub use frame::{unit_cross, unit_scale, Frame};
 pub use ray::Ray;
 pub use transform::Transform;

@@ -5,6 +5,7 @@
 //! area preserving, so stratified (u, v) stay stratified on the sphere.
 
 use crate::math::trig::{acos8, sin_cos};
+use crate::math::unit_scale;
 use glam::{Vec2, Vec3};
 use std::f32::consts::TAU;
 use wide::f32x8;
@@ -50,11 +51,23 @@ impl SphericalRect {
         let x0 = d.dot(x);
         let y0 = d.dot(y);
         let (x1, y1) = (x0 + lu, y0 + lv);
-        // The spherical quad's corners and the normals of its great-circle edges.
-        let v00 = Vec3::new(x0, y0, z0);
-        let v01 = Vec3::new(x0, y1, z0);
-        let v10 = Vec3::new(x1, y0, z0);
-        let v11 = Vec3::new(x1, y1, z0);
+        // The spherical quad's corners and the normals of its great-circle
+        // edges. The normals are scale-free, so they are made from the
+        // corners brought near 1 by a power of two ([`unit_scale`]): the
+        // same bits wherever the unscaled products stay in float32's range,
+        // and a light 1e9 or 1e-11 across (whose corners' fourth powers
+        // overflow or underflow) sampled as one 1 across.
+        let s = unit_scale(
+            x0.abs()
+                .max(x1.abs())
+                .max(y0.abs())
+                .max(y1.abs())
+                .max(z0.abs()),
+        );
+        let v00 = Vec3::new(x0, y0, z0) * s;
+        let v01 = Vec3::new(x0, y1, z0) * s;
+        let v10 = Vec3::new(x1, y0, z0) * s;
+        let v11 = Vec3::new(x1, y1, z0) * s;
         let n0 = v00.cross(v10).try_normalize()?;
         let n1 = v10.cross(v11).try_normalize()?;
         let n2 = v11.cross(v01).try_normalize()?;

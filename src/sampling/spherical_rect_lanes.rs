@@ -14,6 +14,7 @@
 
 use crate::math::lanes::{Lanes3, LANES};
 use crate::math::trig::{acos8, sin_cos8};
+use crate::math::unit_scale;
 use glam::{Vec2, Vec3};
 use std::f32::consts::TAU;
 use wide::f32x8;
@@ -95,10 +96,18 @@ impl SphericalRects {
         let x0 = d.dot(Lanes3::splat(x));
         let y0 = d.dot(Lanes3::splat(y));
         let (x1, y1) = (x0 + f32x8::splat(lu), y0 + f32x8::splat(lv));
+        // Brought near 1 for the normals, as the scalar code does.
+        let largest = x0
+            .abs()
+            .max(x1.abs())
+            .max(y0.abs())
+            .max(y1.abs())
+            .max(z0.abs());
+        let s = f32x8::from(largest.to_array().map(unit_scale));
         let corner_at = |cx: f32x8, cy: f32x8| Lanes3 {
-            x: cx,
-            y: cy,
-            z: z0,
+            x: cx * s,
+            y: cy * s,
+            z: z0 * s,
         };
         let (v00, v01) = (corner_at(x0, y0), corner_at(x0, y1));
         let (v10, v11) = (corner_at(x1, y0), corner_at(x1, y1));

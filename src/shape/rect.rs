@@ -2,7 +2,7 @@
 //! b·edge_v` for a, b in [0, 1], facing `edge_u × edge_v`.
 
 use crate::math::offset::gamma;
-use crate::math::{Aabb, Ray};
+use crate::math::{unit_cross, unit_scale, Aabb, Ray};
 use glam::Vec3;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,7 +20,9 @@ pub struct Rect {
 impl Rect {
     /// `None` if the edges are parallel or zero.
     pub fn new(corner: Vec3, edge_u: Vec3, edge_v: Vec3) -> Option<Self> {
-        let normal = edge_u.cross(edge_v).try_normalize()?;
+        // At any scale: `normalize` of the cross product overflows for
+        // edges past 4e9 and underflows below 1e-10.
+        let normal = unit_cross(edge_u, edge_v)?;
         let vn = edge_v.cross(normal);
         let un = edge_u.cross(normal);
         let dual_u = vn / vn.dot(edge_u);
@@ -35,8 +37,14 @@ impl Rect {
         })
     }
 
+    /// `|edge_u × edge_v|`, from the edges brought near 1 by a power of
+    /// two ([`unit_scale`]): the same bits where the product's length²
+    /// stays in float32's range, and no overflow past edges of 4e9 or
+    /// underflow below 1e-10 (a light that small was sampled as one of no
+    /// area, so by area it lit nothing).
     pub fn area(&self) -> f32 {
-        self.edge_u.cross(self.edge_v).length()
+        let s = unit_scale(self.edge_u.abs().max(self.edge_v.abs()).max_element());
+        (self.edge_u * s).cross(self.edge_v * s).length() / (s * s)
     }
 
     /// True if the edges are perpendicular, so solid-angle sampling applies.

@@ -7,7 +7,7 @@
 //! hits at least one of them: no cracks. Edge functions that come out
 //! exactly zero are recomputed in f64, as the paper recommends.
 
-use crate::math::Ray;
+use crate::math::{unit_cross, Ray};
 use glam::Vec3;
 
 /// Per-ray precomputation of the shear (done once per traversal).
@@ -316,6 +316,15 @@ fn origin_error_bound(
 /// Unnormalised geometric normal along the winding (v0, v1, v2).
 pub fn geometric_normal(v: &[Vec3; 3]) -> Vec3 {
     (v[1] - v[0]).cross(v[2] - v[0])
+}
+
+/// The unit normal along the winding (v0, v1, v2), or `None` for a
+/// triangle without area: [`unit_cross`] of its edges, so the same at any
+/// scale float32 holds them at (where `normalize` of
+/// [`geometric_normal`] overflowed past edges of 4e9 and underflowed below
+/// 1e-10).
+pub fn unit_normal(v: &[Vec3; 3]) -> Option<Vec3> {
+    unit_cross(v[1] - v[0], v[2] - v[0])
 }
 
 #[cfg(test)]
@@ -634,5 +643,31 @@ mod tests {
             }
         }
         assert_eq!(lost, 0, "grazing hits lost");
+    }
+
+    /// The unit normal of a triangle scaled by any power of two float32
+    /// holds its edges at is the unscaled one, bit for bit (the scaling is
+    /// exact), and float64's to float32's precision; `normalize` of the
+    /// cross product turned to +z past edges of 4e9 (its length² overflows)
+    /// and below 1e-10 (it falls into subnormals).
+    #[test]
+    fn the_unit_normal_is_the_same_at_every_scale() {
+        let v = [
+            Vec3::new(0.3, -1.2, 0.7),
+            Vec3::new(1.9, 0.4, -0.6),
+            Vec3::new(-0.8, 1.1, 1.3),
+        ];
+        let unscaled = unit_normal(&v).unwrap();
+        let [a, b, c] = v.map(|p| p.as_dvec3());
+        let exact = (b - a).cross(c - a).normalize();
+        assert!((unscaled.as_dvec3() - exact).length() < 1e-6);
+        for k in -120..=120 {
+            let s = 2f32.powi(k);
+            let scaled = unit_normal(&v.map(|p| p * s));
+            assert_eq!(scaled, Some(unscaled), "scaled by 2^{k}");
+        }
+        assert_eq!(unit_normal(&[Vec3::ONE; 3]), None);
+        assert_eq!(unit_normal(&[Vec3::ZERO, Vec3::X, Vec3::X * 2.0]), None);
+        assert_eq!(unit_normal(&[Vec3::ZERO, Vec3::X, Vec3::INFINITY]), None);
     }
 }

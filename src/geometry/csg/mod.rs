@@ -435,7 +435,7 @@ impl Csg {
                 let v = self.triangles[i];
                 let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
                 let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
-                let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3::Z);
+                let n = crate::shape::triangle::unit_normal(&v).unwrap_or(Vec3::Z);
                 (p, barycentric_error(b, v), n, self.triangle_materials[i])
             }
         };
