@@ -109,7 +109,7 @@ pub fn mesh_geometry(
     // Queries from arrays come in numbers the build does not know.
     let choice = quality.choose(count as usize, None);
     let geometry = triangle_geometry(meshes, vec![source], choice);
-    Ok(geometry.expect("every vertex was checked finite above"))
+    Ok(geometry.expect("every vertex was checked finite and within EXTENT above"))
 }
 
 #[cfg(test)]

@@ -408,7 +408,7 @@ pub(super) fn build_prototype(
 ) -> InputResult<Geometry> {
     let PrototypeParts { meshes, sources } = parts;
     triangle_geometry(meshes, sources, choice)
-        .map_err(|(mesh, i)| InputError::new(path, mesh, format!("triangle {i} is not finite")))
+        .map_err(|bad| InputError::new(path, bad.mesh.clone(), bad.message()))
 }
 
 #[cfg(test)]

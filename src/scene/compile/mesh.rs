@@ -2,6 +2,7 @@
 //! and single triangles, kept indexed until the BVH is built and then
 //! written once, in leaf order, into the scene's leaf blocks.
 
+use super::arrays::EXTENT;
 use super::Compiler;
 use crate::accel::prefetch::prefetch;
 use crate::accel::prefetch::Prefetch;
@@ -387,13 +388,13 @@ pub(super) fn mesh_triangles(mesh: &LoadedMesh, path: &Path) -> InputResult<Vec<
 
 /// A tree over triangles alone (a prototype, or a mesh given as arrays):
 /// the BVH over their boxes, the leaf blocks read from the sources in leaf
-/// order, nothing else. `Err((mesh, i))` names the first triangle that is
-/// not finite.
+/// order, nothing else. `Err` names the first triangle that is not
+/// finite or past [`REACH`].
 pub(super) fn triangle_geometry(
     meshes: Vec<MeshRange>,
     sources: Vec<TriangleSource>,
     choice: BuildChoice,
-) -> Result<Geometry, (String, usize)> {
+) -> Result<Geometry, OutOfReach> {
     let boxes = triangle_boxes(&meshes, &sources, 0)?;
     let mut bvh = Bvh8::build_from(boxes, choice.quality);
     bvh.shrink_to_fit();
@@ -408,24 +409,61 @@ pub(super) fn triangle_geometry(
     Ok(geometry)
 }
 
+/// How far from the origin, in any coordinate, a triangle's vertices may
+/// lie: the upper end of [`EXTENT`], where the watertight test's products
+/// of three coordinates (relative to a ray's origin) start to overflow
+/// float32. Below it a scene renders the same at any scale (a cube scaled
+/// by 2⁻⁴³ or 2³⁹, its light and camera with it, gives the unscaled image
+/// bit for bit); scaled to 1e13 it rendered black.
+pub const REACH: f32 = *EXTENT.end() as f32;
+
+/// The first triangle of a mesh that the ray tests cannot trace: one with
+/// a vertex that is not finite or lies past [`REACH`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutOfReach {
+    pub mesh: String,
+    /// Its index in its mesh.
+    pub triangle: usize,
+    /// Its vertices' largest coordinate by magnitude (inf or NaN where
+    /// one is not finite).
+    pub farthest: f32,
+}
+
+impl OutOfReach {
+    /// What is wrong with the triangle, for an error naming its mesh.
+    pub fn message(&self) -> String {
+        let i = self.triangle;
+        if self.farthest.is_finite() {
+            format!(
+                "triangle {i} lies {:.3e} from the origin, past the {REACH:e} within which float32 ray tests stay exact: scale the scene down (its camera and lights with it)",
+                self.farthest
+            )
+        } else {
+            format!("triangle {i} is not finite")
+        }
+    }
+}
+
 /// Every triangle's box, mesh by mesh; the first triangle with a vertex
-/// that is not finite is an error naming its mesh and its index there.
-/// (Its box would not say: a box's min and max pass a NaN by.) The
-/// vector has room for `room_after` more boxes.
+/// that is not finite or lies past [`REACH`] is an error naming its mesh
+/// and its index there. (Its box would not say: a box's min and max pass
+/// a NaN by.) The vector has room for `room_after` more boxes.
 pub(super) fn triangle_boxes(
     meshes: &[MeshRange],
     sources: &[TriangleSource],
     room_after: usize,
-) -> Result<Vec<Aabb>, (String, usize)> {
+) -> Result<Vec<Aabb>, OutOfReach> {
     let n = meshes.last().map_or(0, |m| (m.first + m.count) as usize);
     let mut boxes = Vec::with_capacity(n + room_after);
-    let not_finite = |t: &[Vec3; 3]| !t.iter().all(|p| p.is_finite());
+    // NaN fails the comparison too (where `max_element` would pass it by).
+    let within = |p: &Vec3| p.abs().cmple(Vec3::splat(REACH)).all();
+    let out_of_reach = |t: &[Vec3; 3]| !t.iter().all(within);
     for (mesh, source) in meshes.iter().zip(sources) {
         let triangles = source.triangles();
         let first_bad = match triangles {
             Triangles::Soup(t) => {
                 boxes.par_extend(t.par_iter().map(|t| Aabb::from_points(t)));
-                loaders::first_where(t, not_finite)
+                loaders::first_where(t, out_of_reach)
             }
             Triangles::Indexed { positions, indices } => {
                 let points = |t: &[u32; 3]| t.map(|k| positions[k as usize]);
@@ -442,15 +480,32 @@ pub(super) fn triangle_boxes(
                 // The points first: about half as many as the triangles,
                 // so a finite mesh's check reads a sixth of what checking
                 // its triangles would.
-                if positions.par_iter().all(|p| p.is_finite()) {
+                if positions.par_iter().all(within) {
                     None
                 } else {
-                    loaders::first_where(indices, |t| not_finite(&points(t)))
+                    loaders::first_where(indices, |t| out_of_reach(&points(t)))
                 }
             }
         };
         if let Some(i) = first_bad {
-            return Err((mesh.name.clone(), i));
+            let corners = match triangles {
+                Triangles::Soup(t) => t[i],
+                Triangles::Indexed { positions, indices } => {
+                    indices[i].map(|k| positions[k as usize])
+                }
+            };
+            let farthest = match corners.iter().all(|p| p.is_finite()) {
+                true => corners
+                    .iter()
+                    .map(|p| p.abs().max_element())
+                    .fold(0.0, f32::max),
+                false => f32::INFINITY,
+            };
+            return Err(OutOfReach {
+                mesh: mesh.name.clone(),
+                triangle: i,
+                farthest,
+            });
         }
     }
     Ok(boxes)
@@ -490,7 +545,9 @@ mod tests {
         let soup = || TriangleSource::Soup(vec![[p(0.0), p(1.0), p(2.0)]]);
         for bad in [3, 4] {
             let got = triangle_boxes(&meshes, &[soup(), indexed(bad)], 0).map(|b| b.len());
-            assert_eq!(got, Err(("b".into(), 2)), "vertex {bad}");
+            let e = got.unwrap_err();
+            assert_eq!((e.mesh.as_str(), e.triangle), ("b", 2), "vertex {bad}");
+            assert_eq!(e.message(), "triangle 2 is not finite");
         }
         let unused = triangle_boxes(&meshes, &[soup(), indexed(1)], 0).map(|b| b.len());
         assert_eq!(unused, Ok(5));
@@ -663,9 +720,43 @@ material = "grey"
             match (triangle_boxes(&meshes, &sources, 0), bad) {
                 (Ok(boxes), None) => assert_eq!(boxes.len(), n + 10),
                 // The NaN at n - 2 comes after every other but the last.
-                (Err(e), Some(i)) => assert_eq!(e, ("b".to_string(), i.min(n - 2))),
+                (Err(e), Some(i)) => assert_eq!((e.mesh, e.triangle), ("b".into(), i.min(n - 2))),
                 (got, want) => panic!("{:?} for {want:?}", got.map(|b| b.len())),
             }
         }
+    }
+
+    /// A triangle past [`REACH`] is refused as one that is not finite is,
+    /// its distance said; one on the bound is traced. In a soup and in an
+    /// indexed mesh, whose points are checked first.
+    #[test]
+    fn a_triangle_past_the_reach_of_float32_ray_tests_is_named() {
+        let meshes = [range("far", 0, 3)];
+        let at = |x: f32| [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, x)];
+        for far in [REACH, 2e12, -3e15, f32::MAX] {
+            let tris = vec![at(1.0), at(2.0), at(far)];
+            let indexed = TriangleSource::Indexed {
+                positions: tris.iter().flatten().copied().collect(),
+                indices: (0..3).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
+            };
+            for source in [TriangleSource::Soup(tris), indexed] {
+                let got = triangle_boxes(&meshes, &[source], 0);
+                if far == REACH {
+                    assert_eq!(got.map(|b| b.len()).ok(), Some(3));
+                    continue;
+                }
+                let e = got.unwrap_err();
+                assert_eq!((e.triangle, e.farthest), (2, far.abs()));
+                let said = format!(
+                    "triangle 2 lies {:.3e} from the origin, past the 1e12",
+                    far.abs()
+                );
+                assert!(e.message().starts_with(&said), "{}", e.message());
+            }
+        }
+        // A NaN coordinate beside finite ones: not finite, not "far".
+        let nan = TriangleSource::Soup(vec![[Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 5.0), Vec3::X]]);
+        let e = triangle_boxes(&[range("nan", 0, 1)], &[nan], 0).unwrap_err();
+        assert_eq!(e.message(), "triangle 0 is not finite");
     }
 }

@@ -549,7 +549,7 @@ impl<'d> Compiler<'d> {
         // pages, split into small ones) for a ground plane's box.
         let room = self.shapes.len() + self.instances.len();
         let mut boxes = mesh::triangle_boxes(&self.meshes, &self.sources, room)
-            .map_err(|(mesh, i)| self.err(&mesh, format!("triangle {i} is not finite")))?;
+            .map_err(|bad| self.err(&bad.mesh, bad.message()))?;
         for (i, s) in self.shapes.iter().enumerate() {
             let local = s.shape.bounds(&self.csg);
             let b = if s.transform == NO_TRANSFORM {
@@ -657,7 +657,7 @@ mod tests {
         let scene = dir.join("s.toml");
         std::fs::write(
             &scene,
-            "[[objects]]\nmesh = \"m.obj\"\ntransform = { scale = 1e20 }\n",
+            "[[objects]]\nmesh = \"m.obj\"\ntransform = { scale = 1e9 }\n",
         )
         .unwrap();
         let e = load_scene(&scene, &RenderOverrides::default(), BuildQuality::Auto).unwrap_err();
