@@ -9,9 +9,10 @@
 //!   slipped key, a swapped pair, a missing letter, not another word.
 //! - **A negative number is a value.** clap reads `--spp -4` as the flag
 //!   `--spp` followed by a flag `-4`, and advises `-- -4`. Every option
-//!   that takes a value accepts a negative number here, so its own parser
-//!   sees it, and a count told a number below its least value says "must
-//!   be at least N".
+//!   that takes a value accepts a negative number here, and one that takes
+//!   a list of numbers any value beginning with a hyphen (`--crop
+//!   -1,0,5,5`), so its own parser sees it, and a count told a number
+//!   below its least value says "must be at least N".
 
 use super::Cli;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
@@ -46,11 +47,16 @@ pub fn command() -> Command {
 
 fn negative_values(cmd: Command) -> Command {
     cmd.mut_args(|a| {
-        if a.get_long().is_some() && a.get_action().takes_values() {
-            a.allow_negative_numbers(true)
-        } else {
-            a
+        if !(a.get_long().is_some() && a.get_action().takes_values()) {
+            return a;
         }
+        // A list of numbers (`--crop -1,0,5,5`, `--background -1,0,0`) is
+        // no number to clap: its value begins with a hyphen however it
+        // reads, so that its own parser says what is wrong with it.
+        let list = a
+            .get_value_names()
+            .is_some_and(|names| names.iter().any(|n| n.contains(',')));
+        a.allow_negative_numbers(true).allow_hyphen_values(list)
     })
     .mut_subcommands(negative_values)
 }
@@ -371,8 +377,17 @@ mod tests {
             );
             assert!(!text.contains("-- -"), "{args:?}: {text}");
         }
-        // A number a float or a signed option takes is passed on as it is.
+        // A number a float or a signed option takes is passed on as it is,
+        // and so is a list of numbers beginning with a negative one.
         assert!(parse_from(["strata", "render", "--background", "-1"]).is_ok());
+        // (checked where the render reads them, "must be finite and not
+        // negative", "pixel coordinates start at 0").
+        for (flag, value) in [("--crop", "-1,0,5,5"), ("--background", "-1,0,0")] {
+            assert!(
+                parse_from(["strata", "render", flag, value]).is_ok(),
+                "{flag}"
+            );
+        }
         // Not a whole number: said so, not "invalid digit found in string".
         for args in [
             &["render", "--spp", "1.5"][..],

@@ -80,7 +80,15 @@ impl Window {
             .collect::<Result<_, _>>()
             .unwrap_or_default();
         let [x0, y0, x1, y1] = numbers[..] else {
-            return Err(format!("'{text}' is not X0,Y0,X1,Y1 (four whole numbers)"));
+            let negative = text
+                .split(',')
+                .any(|s| s.trim().parse::<i64>().is_ok_and(|n| n < 0));
+            return Err(match negative {
+                true => format!(
+                    "'{text}': pixel coordinates start at 0 (X0,Y0,X1,Y1 from the top left)"
+                ),
+                false => format!("'{text}' is not X0,Y0,X1,Y1 (four whole numbers)"),
+            });
         };
         if x0 >= x1 || y0 >= y1 {
             return Err(format!("'{text}' is empty: need X0 < X1 and Y0 < Y1"));
@@ -117,6 +125,7 @@ mod tests {
         for (text, needle) in [
             ("1,2,3", "four whole numbers"),
             ("a,0,1,1", "four whole numbers"),
+            ("-1,0,5,3", "pixel coordinates start at 0"),
             ("3,0,3,2", "empty"),
             ("0,0,9,2", "reaches past the 8x4 image"),
         ] {

@@ -338,10 +338,23 @@ pub fn in_user_words(message: &str, key: &str) -> String {
                 .strip_prefix("string \"")
                 .and_then(|s| s.strip_suffix('"'))
                 .is_some_and(|s| s.trim().parse::<f64>().is_ok());
-            let hint = if quoted_number && wanted.contains("number") {
-                " (write it without the quotes)"
-            } else {
-                ""
+            // `--set camera.position=-1,0,5`: a list without its brackets
+            // is a string to TOML.
+            let bare_list = found
+                .strip_prefix("string \"")
+                .and_then(|s| s.strip_suffix('"'))
+                .filter(|s| {
+                    s.contains(',') && s.split(',').all(|x| x.trim().parse::<f64>().is_ok())
+                })
+                .map(|s| s.split(',').map(str::trim).collect::<Vec<_>>().join(", "));
+            let hint = match bare_list {
+                Some(list) if wanted.contains('[') || wanted == "an array" => {
+                    format!(" (write a list in brackets: [{list}])")
+                }
+                _ if quoted_number && wanted.contains("number") => {
+                    " (write it without the quotes)".to_string()
+                }
+                _ => String::new(),
             };
             return format!("expected {wanted}, found {}{hint}", found_words(found));
         }
@@ -542,6 +555,16 @@ mod tests {
         assert_eq!(
             words("invalid type: string \"many\", expected u32"),
             "expected a whole number, found the string \"many\""
+        );
+        // A list without its brackets (`--set camera.position=-1,0,5`);
+        // where one number is wanted, no list is suggested.
+        assert_eq!(
+            in_user_words("invalid type: string \"-1,0,5\", expected an array of length 3", "camera.position"),
+            "expected three numbers [x, y, z], found the string \"-1,0,5\" (write a list in brackets: [-1, 0, 5])"
+        );
+        assert_eq!(
+            words("invalid type: string \"1,2\", expected u32"),
+            "expected a whole number, found the string \"1,2\""
         );
         assert_eq!(
             words("invalid type: floating point `1.5`, expected u32"),
