@@ -56,6 +56,26 @@ pub fn unit_cross(a: Vec3, b: Vec3) -> Option<Vec3> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn frames_are_orthonormal_even_near_the_poles() {
+        for z in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(1e-8, 0.0, -1.0).normalize(),
+            Vec3::new(0.3, -0.4, 0.5).normalize(),
+        ] {
+            let f = Frame::from_z(z);
+            for (a, b) in [(f.x, f.y), (f.y, f.z), (f.x, f.z)] {
+                assert!(a.dot(b).abs() < 1e-6);
+            }
+            for v in [f.x, f.y, f.z] {
+                assert!((v.length() - 1.0).abs() < 1e-6);
+            }
+            assert!((f.x.cross(f.y) - f.z).length() < 1e-5, "right-handed");
+        }
+    }
+
     /// The scale brings every positive normal float32 below 2^127 into
     /// [1, 2), is a power of two, and stays finite and non-zero for any
     /// input.

@@ -84,10 +84,23 @@ fn coordinates_near_1e30_render_without_nan_or_panic() {
     let dir = temp_dir("degenerate-huge");
     let text = "[render]\nwidth = 24\nheight = 16\n[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
         [[lights]]\ntype = \"point\"\nposition = [1e30, 1e30, 1e30]\nintensity = [1e30, 1e30, 1e30]\n\
-        [[objects]]\ntriangle = { v = [[-1e30, -1e30, -1e29], [1e30, -1e30, -1e29], [0.0, 1e30, -1e29]] }\n\
         [[objects]]\nsphere = { center = [0.0, 0.0, -1e30], radius = 1e29 }\n\
         [[objects]]\nsphere = { radius = 0.5 }\n";
     assert_eq!(render_invalid(text, &dir), 0);
+    // A triangle that far is past float32's ray tests (scene::compile::REACH):
+    // refused, named, rather than rendered wrong.
+    let with_triangle = format!(
+        "{text}[[objects]]\ntriangle = {{ v = [[-1e30, -1e30, -1e29], [1e30, -1e30, -1e29], [0.0, 1e30, -1e29]] }}\n"
+    );
+    let path = dir.join("scene.toml");
+    let Err(e) = strata::scene::scene_from_str(&with_triangle, &path, &Default::default()) else {
+        panic!("a triangle at 1e30 was not refused");
+    };
+    assert!(
+        e.to_string()
+            .contains("objects[2]: triangle 0 lies 1.000e30 from the origin"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -424,8 +424,8 @@ pub struct OutOfReach {
     pub mesh: String,
     /// Its index in its mesh.
     pub triangle: usize,
-    /// Its vertices' largest coordinate by magnitude (inf or NaN where
-    /// one is not finite).
+    /// Its vertices' largest coordinate by magnitude (inf where one is
+    /// not finite).
     pub farthest: f32,
 }
 
