@@ -333,25 +333,19 @@ pub fn in_user_words(message: &str, key: &str) -> String {
                 return out_of_range(n, range);
             }
             let wanted = wanted_words(wanted, key);
-            // `spp = "16"`: a number in quotes is a string in TOML.
-            let quoted_number = found
+            // Numbers written as a string, comma-separated: `spp = "16"` (a
+            // number in quotes is a string in TOML) or `--set
+            // camera.position=-1,0,5` (a list without its brackets).
+            let numbers = found
                 .strip_prefix("string \"")
                 .and_then(|s| s.strip_suffix('"'))
-                .is_some_and(|s| s.trim().parse::<f64>().is_ok());
-            // `--set camera.position=-1,0,5`: a list without its brackets
-            // is a string to TOML.
-            let bare_list = found
-                .strip_prefix("string \"")
-                .and_then(|s| s.strip_suffix('"'))
-                .filter(|s| {
-                    s.contains(',') && s.split(',').all(|x| x.trim().parse::<f64>().is_ok())
-                })
-                .map(|s| s.split(',').map(str::trim).collect::<Vec<_>>().join(", "));
-            let hint = match bare_list {
-                Some(list) if wanted.contains('[') || wanted == "an array" => {
-                    format!(" (write a list in brackets: [{list}])")
+                .map(|s| s.split(',').map(str::trim).collect::<Vec<_>>())
+                .filter(|parts| parts.iter().all(|x| x.parse::<f64>().is_ok()));
+            let hint = match numbers {
+                Some(list) if list.len() > 1 && (wanted.contains('[') || wanted == "an array") => {
+                    format!(" (write a list in brackets: [{}])", list.join(", "))
                 }
-                _ if quoted_number && wanted.contains("number") => {
+                Some(one) if one.len() == 1 && wanted.contains("number") => {
                     " (write it without the quotes)".to_string()
                 }
                 _ => String::new(),
