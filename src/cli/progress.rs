@@ -2,7 +2,7 @@
 //! (an observer of `strata::render`) and what a slow load is doing. Both
 //! go to stderr, hidden with `--quiet` or when stderr is not a terminal.
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 use strata::render::progress::{Observer, Pass, PassDone};
@@ -13,21 +13,21 @@ use strata::scene::compile::{LoadPhase, LoadProgress};
 /// its samples and the previous pass's rate.
 pub struct RenderBar {
     bar: ProgressBar,
+    quiet: bool,
     /// Rays and seconds at the end of the previous pass, for its rate.
     last: (u64, f64),
     rate: String,
 }
 
 impl RenderBar {
+    /// A bar drawn nowhere until the render says how many work items it
+    /// has ([`Observer::started`]): a bar of length 0 reads as full, and
+    /// was shown at 100% before the first item.
     pub fn new(quiet: bool) -> Self {
-        let bar = if quiet {
-            ProgressBar::hidden()
-        } else {
-            ProgressBar::new(0)
-        };
+        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::hidden());
         bar.set_style(
             ProgressStyle::with_template(
-                "{prefix} [{bar:40.cyan/blue}] {percent:>3}% {msg} ETA {eta}",
+                "{prefix} [{wide_bar:.cyan/blue}] {percent:>3}% {msg} ETA {eta}",
             )
             .expect("static template")
             .progress_chars("=> "),
@@ -35,6 +35,7 @@ impl RenderBar {
         bar.set_prefix("render");
         Self {
             bar,
+            quiet,
             last: (0, 0.0),
             rate: String::new(),
         }
@@ -44,6 +45,10 @@ impl RenderBar {
 impl Observer for RenderBar {
     fn started(&mut self, work_items: u64) {
         self.bar.set_length(work_items);
+        if !self.quiet {
+            // Hidden by indicatif itself when stderr is not a terminal.
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+        }
     }
 
     fn pass_started(&mut self, pass: &Pass) {
