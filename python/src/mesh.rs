@@ -266,8 +266,12 @@ impl Mesh {
     /// (``vertex.positions``, ``triangle.indices``), read by what they
     /// have (neither library is imported).
     ///
+    /// A vertex no face uses is never traced and may be anything (NaN,
+    /// as a depth image's mesh keeps its missing pixels).
+    ///
     /// Raises ValueError naming what is wrong: a shape or dtype, a
-    /// vertex that is NaN or infinite (``vertices[i]``), an index out of
+    /// vertex that a face uses and is NaN or infinite (``vertices[i]``,
+    /// and the face), an index out of
     /// range (``faces[i][k]``); TypeError for one object without them
     /// (a ``trimesh.Scene``'s says how to get one mesh of it).
     #[new]

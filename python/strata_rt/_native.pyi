@@ -197,7 +197,8 @@ class Mesh:
         """Build the mesh and its BVH from vertices ((n, 3) floats) and faces ((m, 3) integer indices),
         or from one mesh object that has them: a ``trimesh.Trimesh`` (``vertices``, ``faces``), an
         Open3D ``o3d.geometry.TriangleMesh`` (``vertices``, ``triangles``) or
-        ``o3d.t.geometry.TriangleMesh`` (``vertex.positions``, ``triangle.indices``)."""
+        ``o3d.t.geometry.TriangleMesh`` (``vertex.positions``, ``triangle.indices``). A vertex no
+        face uses is never traced and may be NaN; one a face uses must be finite (ValueError)."""
     def __reduce__(
         self,
     ) -> Union[

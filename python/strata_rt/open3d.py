@@ -172,9 +172,17 @@ class RaycastingScene:
         if f.size and (f.min() < 0 or f.max() >= len(v)):
             bad = int(np.flatnonzero(((f < 0) | (f >= len(v))).any(axis=1))[0])
             raise ValueError(f"triangle_indices[{bad}] = {f[bad].tolist()} is out of range for {len(v)} vertices")
-        if not np.isfinite(v).all():
-            bad = int(np.flatnonzero(~np.isfinite(v).all(axis=1))[0])
-            raise ValueError(f"vertex_positions[{bad}] is not finite: {v[bad].tolist()}")
+        # A vertex no triangle uses is never traced (Open3D takes a depth
+        # image's NaN vertices); one a triangle uses must be finite.
+        bad_rows = ~np.isfinite(v).all(axis=1)
+        if bad_rows.any() and f.size:
+            used_bad = bad_rows[f]
+            if used_bad.any():
+                face = int(np.flatnonzero(used_bad.any(axis=1))[0])
+                bad = int(f[face][used_bad[face]][0])
+                raise ValueError(
+                    f"vertex_positions[{bad}] is not finite: {v[bad].tolist()} (triangle_indices[{face}] uses it)"
+                )
         self._vertices.append(np.asarray(v, dtype=np.float64))
         self._faces.append(f)
         self._starts = np.append(self._starts, self._starts[-1] + len(f))

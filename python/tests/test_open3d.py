@@ -240,6 +240,46 @@ def test_nthreads_and_bad_input_name_the_argument():
         scene.add_triangles(object())
 
 
+def test_a_vertex_no_triangle_uses_may_be_nan():
+    """A depth image's mesh keeps its missing pixels as NaN vertices that
+    no triangle uses: taken, and answered as without them; a NaN vertex
+    a triangle uses is refused, naming it and the triangle."""
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    rays = np.random.default_rng(3).normal(size=(500, 6)) * [0.6, 0.6, 0.6, 1, 1, 1] + [0.5, 0.5, 0.5, 0, 0, 0]
+    plain = RaycastingScene()
+    plain.add_triangles(v, f)
+    scene = RaycastingScene()
+    scene.add_triangles(np.vstack([[np.nan] * 3, v, [np.inf, 0, 0]]), f + 1)
+    want, got = plain.cast_rays(rays), scene.cast_rays(rays)
+    for k in want:
+        np.testing.assert_array_equal(got[k], want[k])
+    assert np.isfinite(want["t_hit"]).sum() > 100
+    np.testing.assert_array_equal(scene.count_intersections(rays), plain.count_intersections(rays))
+    mesh = strata_rt.Mesh(np.vstack([v, [np.nan, 0, 0]]), f)
+    np.testing.assert_array_equal(mesh.intersect(rays[:, :3], rays[:, 3:]).t, want["t_hit"])
+    used = f.copy()
+    used[5, 1] = len(v)
+    with pytest.raises(ValueError, match=rf"vertex_positions\[{len(v)}\] is not finite.*triangle_indices\[5\]"):
+        RaycastingScene().add_triangles(np.vstack([v, [np.nan, 0, 0]]), used)
+    with pytest.raises(ValueError, match=rf"vertices\[{len(v)}\] is not finite.*faces\[5\]"):
+        strata_rt.Mesh(np.vstack([v, [np.nan, 0, 0]]), used)
+
+
+def test_open3d_takes_a_nan_vertex_no_triangle_uses(o3d):
+    """The case above, as Open3D answers it: the same first hits."""
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    with_nan = np.vstack([v, [np.nan, 0, 0]]).astype(np.float32)
+    rays = (np.random.default_rng(3).normal(size=(500, 6)) * [0.6, 0.6, 0.6, 1, 1, 1] + [0.5, 0.5, 0.5, 0, 0, 0]).astype(np.float32)
+    theirs = o3d.t.geometry.RaycastingScene()
+    theirs.add_triangles(o3d.core.Tensor(with_nan), o3d.core.Tensor(f.astype(np.uint32)))
+    ours = RaycastingScene()
+    ours.add_triangles(with_nan, f)
+    want = theirs.cast_rays(o3d.core.Tensor(rays))
+    got = ours.cast_rays(rays)
+    np.testing.assert_array_equal(np.isfinite(got["t_hit"]), np.isfinite(want["t_hit"].numpy()))
+    np.testing.assert_allclose(got["t_hit"], want["t_hit"].numpy(), rtol=1e-6, atol=1e-6)
+
+
 def test_an_empty_scene_and_a_scene_grown_after_a_query():
     scene = RaycastingScene()
     rays = np.array([[0.5, 0.5, 10, 0, 0, -1]])

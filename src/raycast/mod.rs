@@ -50,7 +50,7 @@ use crate::geometry::travel::SPAN;
 use crate::geometry::{Found, Geometry};
 pub use crate::math::Ray;
 pub use crate::scene::MeshArraysError;
-use crate::scene::{check_extent, load_mesh_scene, mesh_geometry};
+use crate::scene::{check_extent, load_mesh_scene, mesh_geometry, used_vertices};
 use glam::{Affine3A, DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
@@ -248,22 +248,37 @@ impl Mesh {
         faces: Vec<[u32; 3]>,
         quality: BuildQuality,
     ) -> Result<Self, MeshArraysError> {
-        let centre = centre_of(&vertices);
+        // Vertices no face uses are never traced (`mesh_geometry`): they
+        // neither move the centre nor need to be held exactly.
+        let used = used_vertices(&faces, vertices.len());
+        let centre = centre_of(
+            vertices
+                .iter()
+                .zip(&used)
+                .filter(|(_, &u)| u)
+                .map(|(v, _)| v),
+        );
         let near: Vec<Vec3> = vertices.iter().map(|&v| (v - centre).as_vec3()).collect();
-        let held_exactly = near
-            .iter()
-            .zip(&vertices)
-            .all(|(n, &v)| n.as_dvec3() + centre == v);
+        let held_exactly = (near.iter().zip(&vertices).zip(&used))
+            .all(|((n, &v), &u)| !u || n.as_dvec3() + centre == v);
         let given_faces = (!held_exactly).then(|| faces.clone());
         // `mesh_geometry` refuses a vertex that is not finite as traced;
         // it is quoted as given (relative to the centre a NaN would be
         // quoted moved), and one finite as given is beyond float32 there.
         let geometry = mesh_geometry(near, faces, quality).map_err(|e| match e {
-            MeshArraysError::NotFinite { vertex, .. } => {
+            MeshArraysError::NotFinite { vertex, face, .. } => {
                 let value = vertices[vertex].to_array();
                 match vertices[vertex].is_finite() {
-                    true => MeshArraysError::BeyondFloat32 { vertex, value },
-                    false => MeshArraysError::NotFinite { vertex, value },
+                    true => MeshArraysError::BeyondFloat32 {
+                        vertex,
+                        value,
+                        face,
+                    },
+                    false => MeshArraysError::NotFinite {
+                        vertex,
+                        value,
+                        face,
+                    },
                 }
             }
             e => e,
@@ -638,9 +653,8 @@ impl Mesh {
 /// What a mesh of `vertices` is traced relative to (module docs): the
 /// middle of their box rounded to a multiple of the power of two at least
 /// its largest side; zero where that is zero (a mesh near the origin).
-fn centre_of(vertices: &[DVec3]) -> DVec3 {
+fn centre_of<'a>(vertices: impl Iterator<Item = &'a DVec3>) -> DVec3 {
     let (lo, hi) = vertices
-        .iter()
         .filter(|v| v.is_finite())
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
             (lo.min(v), hi.max(v))

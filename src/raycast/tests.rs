@@ -336,6 +336,7 @@ fn a_bad_vertex_is_quoted_as_given() {
     );
     let text = e.to_string();
     assert!(text.contains("[500124.0, NaN, 99.0]"), "{text}");
+    assert!(text.ends_with("(faces[1] uses it)"), "{text}");
     given[3].y = 1e39;
     let e = Mesh::new_exact(given, faces, BuildQuality::Auto).unwrap_err();
     assert!(
@@ -419,4 +420,40 @@ fn a_first_hit_column_of_the_wrong_length_is_refused() {
         point: &mut [],
     };
     mesh.first_hits_into(&rays, columns);
+}
+
+/// A vertex no face uses, NaN or far out, is taken and changes nothing:
+/// not the centre the mesh is traced relative to (at UTM-like
+/// coordinates, where a far vertex would move it), nor whether the
+/// vertices must be kept in float64, nor any answer.
+#[test]
+fn a_vertex_no_face_uses_changes_nothing() {
+    let (v, faces) = cube();
+    let far = DVec3::new(500_123.0, 5_000_456.0, 100.0);
+    let given: Vec<DVec3> = v.iter().map(|p| p.as_dvec3() + far).collect();
+    let plain = Mesh::new_exact(given.clone(), faces.clone(), BuildQuality::Auto).unwrap();
+    let (rays, points) = rays_and_points(500);
+    let key = |h: &FirstHit| (h.t.to_bits(), h.face, h.point.to_array().map(f64::to_bits));
+    let mut want = vec![FirstHit::MISS; rays.len()];
+    plain.first_hits(&rays, &mut want, true);
+    let mut inside_want = vec![false; points.len()];
+    plain.contains(&points, &mut inside_want);
+    for extra in [DVec3::NAN, DVec3::new(1e20, 0.0, 0.0), DVec3::ZERO] {
+        let mut with = given.clone();
+        with.push(extra);
+        let mesh = Mesh::new_exact(with, faces.clone(), BuildQuality::Auto).unwrap();
+        assert_eq!(mesh.centre(), plain.centre(), "{extra}");
+        assert_eq!(mesh.given().is_some(), plain.given().is_some(), "{extra}");
+        let mut got = vec![FirstHit::MISS; rays.len()];
+        mesh.first_hits(&rays, &mut got, true);
+        let (a, b): (Vec<_>, Vec<_>) = (
+            got.iter().map(key).collect(),
+            want.iter().map(key).collect(),
+        );
+        assert_eq!(a, b, "{extra}");
+        let mut inside = vec![false; points.len()];
+        mesh.contains(&points, &mut inside);
+        assert_eq!(inside, inside_want, "{extra}");
+    }
+    assert!(want.iter().filter(|h| h.face >= 0).count() > 10);
 }

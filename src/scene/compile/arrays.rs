@@ -12,15 +12,25 @@ use glam::Vec3;
 /// (`vertices`, `faces`) that carried them.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshArraysError {
-    /// A NaN or infinite coordinate, quoted as given.
-    #[error("vertices[{vertex}] is not finite: {value:?}")]
-    NotFinite { vertex: usize, value: [f64; 3] },
-    /// A float64 vertex too far from the mesh's centre for float32 (its
-    /// coordinates relative to the centre overflow), quoted as given.
+    /// A NaN or infinite coordinate of a vertex that face `face` uses,
+    /// quoted as given.
+    #[error("vertices[{vertex}] is not finite: {value:?} (faces[{face}] uses it)")]
+    NotFinite {
+        vertex: usize,
+        value: [f64; 3],
+        face: usize,
+    },
+    /// A float64 vertex that face `face` uses too far from the mesh's
+    /// centre for float32 (its coordinates relative to the centre
+    /// overflow), quoted as given.
     #[error(
-        "vertices[{vertex}] is not finite as float32 relative to the mesh's centre: {value:?}"
+        "vertices[{vertex}] is not finite as float32 relative to the mesh's centre: {value:?} (faces[{face}] uses it)"
     )]
-    BeyondFloat32 { vertex: usize, value: [f64; 3] },
+    BeyondFloat32 {
+        vertex: usize,
+        value: [f64; 3],
+        face: usize,
+    },
     #[error("faces[{face}][{corner}] = {index} is out of range for {vertices} vertices")]
     IndexOutOfRange {
         face: usize,
@@ -62,22 +72,16 @@ pub fn check_extent(extent: f64) -> Result<(), MeshArraysError> {
 
 /// Compile one triangle mesh from its vertices and faces (indices into
 /// `vertices`), with no transform, material or attributes: what ray
-/// queries need. Every vertex must be finite and every index in range;
-/// degenerate faces are kept (no ray hits them) so that face ids stay the
-/// caller's.
+/// queries need. Every index must be in range and every vertex a face
+/// uses finite; a vertex no face uses is never read, so it may be
+/// anything (a depth image's mesh keeps its missing pixels as NaN
+/// vertices, which Open3D and Embree take). Degenerate faces are kept (no
+/// ray hits them) so that face ids stay the caller's.
 pub fn mesh_geometry(
     vertices: Vec<Vec3>,
     faces: Vec<[u32; 3]>,
     quality: BuildQuality,
 ) -> Result<Geometry, MeshArraysError> {
-    if let Some(vertex) = vertices.iter().position(|v| !v.is_finite()) {
-        let value = vertices[vertex].as_dvec3().to_array();
-        return Err(MeshArraysError::NotFinite { vertex, value });
-    }
-    let extent = vertices
-        .iter()
-        .fold(0.0f32, |m, v| m.max(v.abs().max_element()));
-    check_extent(f64::from(extent))?;
     // Planes take ids counting down from u32::MAX; keep well clear of them.
     let max = (u32::MAX / 2) as usize;
     if faces.len() > max {
@@ -96,6 +100,34 @@ pub fn mesh_geometry(
             });
         }
     }
+    let farthest = |v: &Vec3| v.abs().max_element();
+    let all_finite = vertices.iter().all(|v| v.is_finite());
+    let extent = match all_finite {
+        // Every vertex, used or not, when all are finite: the common case
+        // needs no pass over the faces.
+        true => vertices.iter().map(farthest).fold(0.0f32, f32::max),
+        false => f32::INFINITY,
+    };
+    let extent = if check_extent(f64::from(extent)).is_ok() {
+        extent
+    } else {
+        let used = used_vertices(&faces, vertices.len());
+        let first_bad = (0..vertices.len()).find(|&i| used[i] && !vertices[i].is_finite());
+        if let Some(vertex) = first_bad {
+            let value = vertices[vertex].as_dvec3().to_array();
+            let face = first_face_using(&faces, vertex);
+            return Err(MeshArraysError::NotFinite {
+                vertex,
+                value,
+                face,
+            });
+        }
+        (0..vertices.len())
+            .filter(|&i| used[i])
+            .map(|i| farthest(&vertices[i]))
+            .fold(0.0f32, f32::max)
+    };
+    check_extent(f64::from(extent))?;
     let count = faces.len() as u32;
     let meshes = vec![MeshRange {
         name: "mesh".into(),
@@ -109,7 +141,27 @@ pub fn mesh_geometry(
     // Queries from arrays come in numbers the build does not know.
     let choice = quality.choose(count as usize, None);
     let geometry = triangle_geometry(meshes, vec![source], choice);
-    Ok(geometry.expect("every vertex was checked finite and within EXTENT above"))
+    Ok(geometry.expect("every vertex a face uses was checked finite and within EXTENT above"))
+}
+
+/// `used[i]`: whether a face of `faces` (every index below `n`) uses
+/// vertex `i`.
+pub fn used_vertices(faces: &[[u32; 3]], n: usize) -> Vec<bool> {
+    let mut used = vec![false; n];
+    for &k in faces.iter().flatten() {
+        if let Some(u) = used.get_mut(k as usize) {
+            *u = true;
+        }
+    }
+    used
+}
+
+/// The first face of `faces` that uses `vertex` (0 where none does).
+pub fn first_face_using(faces: &[[u32; 3]], vertex: usize) -> usize {
+    faces
+        .iter()
+        .position(|f| f.contains(&(vertex as u32)))
+        .unwrap_or(0)
 }
 
 #[cfg(test)]
@@ -189,10 +241,43 @@ mod tests {
         );
         v[3].y = f32::NAN;
         let err = mesh_geometry(v, f, BuildQuality::Auto).unwrap_err();
-        assert!(
-            err.to_string().starts_with("vertices[3] is not finite"),
-            "{err}"
+        assert_eq!(
+            err.to_string(),
+            "vertices[3] is not finite: [-1.0, NaN, 0.0] (faces[1] uses it)"
         );
+    }
+
+    /// A vertex no face uses is never traced: NaN, infinite or far past
+    /// [`EXTENT`], it is taken, and the mesh answers as it does without
+    /// it; the same value in a vertex a face uses is refused.
+    #[test]
+    fn a_vertex_no_face_uses_may_be_anything() {
+        let (v, f) = quad();
+        let plain = mesh_geometry(v.clone(), f.clone(), BuildQuality::Auto).unwrap();
+        for bad in [f32::NAN, f32::INFINITY, 1e30] {
+            // Unused, first and last, so that indices past it shift too.
+            let mut with = vec![Vec3::new(bad, 0.0, 0.0)];
+            with.extend(&v);
+            with.push(Vec3::new(0.0, bad, 0.0));
+            let shifted: Vec<[u32; 3]> = f.iter().map(|t| t.map(|k| k + 1)).collect();
+            let g = mesh_geometry(with.clone(), shifted.clone(), BuildQuality::Auto).unwrap();
+            for (x, y) in [(0.5, -0.5), (-0.5, 0.5), (0.9, 0.95), (2.0, 0.0)] {
+                let ray = Ray::new(Vec3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
+                let (a, b) = (g.intersect(&ray), plain.intersect(&ray));
+                assert_eq!(a.map(|h| (h.prim, h.t)), b.map(|h| (h.prim, h.t)), "{bad}");
+            }
+            let mut used = shifted;
+            used[1][2] = 5;
+            let e = mesh_geometry(with, used, BuildQuality::Auto).unwrap_err();
+            match bad.is_finite() {
+                true => assert!(matches!(e, MeshArraysError::Extent { .. }), "{e}"),
+                false => assert!(
+                    e.to_string().starts_with("vertices[5] is not finite")
+                        && e.to_string().ends_with("(faces[1] uses it)"),
+                    "{e}"
+                ),
+            }
+        }
     }
 
     #[test]
