@@ -129,6 +129,48 @@ pub(crate) fn warn_without_triangles(asset: &mut LoadedAsset, path: &Path, found
     }
 }
 
+/// Vertices no triangle uses are never traced, so they may hold anything:
+/// a scanner's organised mesh keeps its missing samples as NaN vertices
+/// that no face uses, and Open3D, MeshLab and trimesh read such files.
+/// Each vertex that is not finite and that no triangle of `indices` uses
+/// is given the position of one a triangle does (so that a box of all the
+/// positions, which frames a model in its studio, does not move). The
+/// first vertex a triangle uses that is not finite is an error: its index
+/// and the first triangle using it. `indices` must be in range.
+pub(crate) fn settle_unused_vertices(
+    positions: &mut [glam::Vec3],
+    indices: &[[u32; 3]],
+) -> Result<(), (usize, usize)> {
+    use rayon::prelude::*;
+    if positions.par_iter().all(|p| p.is_finite()) {
+        return Ok(());
+    }
+    let mut used = vec![false; positions.len()];
+    for &k in indices.iter().flatten() {
+        used[k as usize] = true;
+    }
+    let bad = |i: &usize| used[*i] && !positions[*i].is_finite();
+    if let Some(vertex) = (0..positions.len()).find(bad) {
+        let face = indices
+            .iter()
+            .position(|t| t.contains(&(vertex as u32)))
+            .expect("a vertex marked used is in a triangle");
+        return Err((vertex, face));
+    }
+    let stand_in = match indices.first() {
+        Some(t) => positions[t[0] as usize],
+        None => positions
+            .iter()
+            .copied()
+            .find(|p| p.is_finite())
+            .unwrap_or_default(),
+    };
+    for p in positions.iter_mut().filter(|p| !p.is_finite()) {
+        *p = stand_in;
+    }
+    Ok(())
+}
+
 /// Temporary files for the loaders' unit tests.
 #[cfg(test)]
 pub(crate) mod test_files {

@@ -157,6 +157,8 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
     };
 
     let mut positions = Vec::with_capacity(n_vertices as usize);
+    // The vertices that are not finite, with their lines.
+    let mut not_finite = Vec::new();
     for k in 0..n_vertices {
         let (n, line) = lines
             .next()
@@ -172,13 +174,13 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
         let mut p = [0.0f32; 3];
         for (c, token) in p.iter_mut().zip([x, y, z]) {
             *c = match token.parse::<f32>() {
-                Ok(v) if v.is_finite() => v,
-                Ok(_) => {
-                    return Err(at(
-                        path,
-                        n,
-                        format!("vertex {k}: '{token}' is not a finite number"),
-                    ))
+                // NaN or infinite: checked once the faces are known (a
+                // vertex no face uses may be NaN), so its line is kept.
+                Ok(v) => {
+                    if !v.is_finite() && not_finite.last() != Some(&(k, n)) {
+                        not_finite.push((k, n));
+                    }
+                    v
                 }
                 Err(_) => {
                     return Err(at(
@@ -242,6 +244,18 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
         }
     }
 
+    if let Err((vertex, _)) = super::settle_unused_vertices(&mut positions, &indices) {
+        let line = not_finite
+            .iter()
+            .find(|&&(k, _)| k as usize == vertex)
+            .map_or(0, |&(_, n)| n);
+        let message = format!(
+            "vertex {vertex} is not finite: {} (a face uses it)",
+            positions[vertex]
+        );
+        return Err(at(path, line, message));
+    }
+
     let mut warnings = Vec::new();
     if let Some((n, _)) = lines.next() {
         warnings.push(at(
@@ -287,6 +301,19 @@ mod tests {
         }
     }
 
+    /// A vertex no face uses may be NaN or infinite (a scanner's
+    /// organised mesh): it loads, standing in for a vertex a face uses.
+    #[test]
+    fn vertices_no_face_uses_may_be_nan() {
+        let a = parse("OFF\n5 1 0\nnan nan nan\n0 0 0\n1 0 0\n0 1 0\n-inf 0 0\n3 1 2 3\n").unwrap();
+        let m = &a.meshes[0];
+        assert_eq!(m.indices, vec![[1, 2, 3]]);
+        assert!(m
+            .positions
+            .iter()
+            .all(|p| p.is_finite() && p.max_element() <= 1.0));
+    }
+
     #[test]
     fn ngons_become_fans_in_file_order() {
         let asset = parse(
@@ -328,7 +355,7 @@ mod tests {
             ("OFF\n1000000000 1 0\n0 0 0\n", "m.off: line 2: the counts claim 1000000000 vertices and 1 faces, more than the file's"),
             ("OFF\n3 0 0\n0 0 0\n1 0\n0 1 0\n", "m.off: line 4: vertex 1 needs three coordinates x y z, found '1 0'"),
             ("OFF\n3 0 0\n0 0 0\n1 0 x\n0 1 0\n", "line 4: vertex 1: 'x' is not a number"),
-            ("OFF\n3 0 0\n0 0 0\n1 0 inf\n0 1 0\n", "line 4: vertex 1: 'inf' is not a finite number"),
+            ("OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n", "line 4: vertex 1 is not finite: [1, 0, inf] (a face uses it)"),
             ("OFF\n3 0 0\n0 0 0\n1 0 0\n", "m.off: the file ends after 2 of the 3 vertices that the counts on line 2 announce"),
         ];
         for (text, needle) in cases {

@@ -24,6 +24,8 @@ use wide::u8x32;
 pub(super) struct AsciiBody {
     pub positions: Vec<Vec3>,
     pub faces: FaceRows,
+    /// The line of the first vertex, for messages.
+    pub first_vertex_line: usize,
 }
 
 /// What to do with one property of an element.
@@ -89,6 +91,9 @@ pub(super) fn read_body(
                 truncated = true;
                 (rest, rest.lines().count())
             });
+            if name == "vertex" && done == 0 && body.positions.is_empty() {
+                body.first_vertex_line = line + 1;
+            }
             chunks.push(Chunk {
                 text: chunk,
                 first_line: line + 1,
@@ -292,16 +297,9 @@ impl ElementReader<'_> {
                 )));
             }
             match name {
-                "vertex" => {
-                    let p = Vec3::from(position);
-                    if !p.is_finite() {
-                        return Err(at(format!(
-                            "vertex {} is not finite: {p}",
-                            chunk.first_element + element
-                        )));
-                    }
-                    positions[element] = p;
-                }
+                // Checked once the faces are known: a vertex no face uses
+                // may be NaN (`loaders::settle_unused_vertices`).
+                "vertex" => positions[element] = Vec3::from(position),
                 "face" => match face.unwrap_or_default() {
                     Face::Triangle(t) => rows[element] = t,
                     other => others.push((chunk.first_element + element, other)),

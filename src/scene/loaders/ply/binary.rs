@@ -315,12 +315,8 @@ fn read<const BIG: bool>(
         }
         line += element.count;
     }
-    if let Some(i) = first_where(&positions, |p| !p.is_finite()) {
-        return Err(InputError::file(
-            path,
-            format!("vertex {i} is not finite: {}", positions[i]),
-        ));
-    }
+    // Vertices that are not finite are checked once the faces are known
+    // (`loaders::settle_unused_vertices`).
     let n = positions.len();
     let out_of_range = |i: usize, bad: i64| super::face::out_of_range(path, i, bad, n);
     let triangles = match faces {

@@ -140,9 +140,6 @@ fn old_loader(path: &Path) -> Result<Mesh, String> {
             }
         }
     }
-    if let Some(i) = positions.iter().position(|p: &Vec3| !p.is_finite()) {
-        return Err(format!("vertex {i} is not finite: {}", positions[i]));
-    }
     let n = positions.len();
     let mut indices = Vec::new();
     for (i, RefFace(f, set)) in faces.iter().enumerate() {
@@ -160,6 +157,21 @@ fn old_loader(path: &Path) -> Result<Mesh, String> {
         }
         for k in 1..f.len().saturating_sub(1) {
             indices.push([f[0], f[k], f[k + 1]].map(|k| k as u32));
+        }
+    }
+    // Once the faces are read: a vertex a face uses must be finite; one no
+    // face uses takes the first triangle's first vertex's place.
+    let used = |i: usize| indices.iter().flatten().any(|&k| k as usize == i);
+    let not_finite = |i: usize| !positions[i].is_finite();
+    if let Some(i) = (0..n).find(|&i| not_finite(i) && used(i)) {
+        return Err(format!(
+            "vertex {i} is not finite: {} (a face uses it)",
+            positions[i]
+        ));
+    }
+    if let Some(first) = indices.first().map(|t| positions[t[0] as usize]) {
+        for p in positions.iter_mut().filter(|p| !p.is_finite()) {
+            *p = first;
         }
     }
     Ok((positions, indices))
@@ -474,6 +486,15 @@ fn small_files_agree_whole_and_cut_anywhere() {
             assert_eq!(positions.len(), nv);
             if !shape.polygons {
                 assert_eq!(triangles.len(), nf);
+            }
+        } else if let (Some(v), None) = (shape.nan_vertex, shape.bad_face) {
+            // An error exactly where a face uses the NaN vertex.
+            match whole {
+                Ok((positions, triangles)) => {
+                    assert!(!triangles.iter().flatten().any(|&k| k as usize == v));
+                    assert!(positions.iter().all(|p| p.is_finite()));
+                }
+                Err(e) => assert!(e.ends_with("(a face uses it)"), "{e}"),
             }
         } else {
             assert!(whole.is_err());

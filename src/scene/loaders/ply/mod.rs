@@ -127,18 +127,29 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     // tests pin this): it is the number of the body's first line.
     let line = reader.line();
     let body = reader.into_inner();
-    let (positions, mut indices) = if header.encoding == Encoding::Ascii {
+    let (mut positions, mut indices, first_vertex_line) = if header.encoding == Encoding::Ascii {
         let body = ascii::read_body(path, &header, body, line.saturating_sub(1))?;
         let n = body.positions.len();
         let indices = (body.faces)
             .triangulate(n)
             .map_err(|(i, bad)| out_of_range(path, i, bad, n))?;
-        (body.positions, indices)
+        (body.positions, indices, Some(body.first_vertex_line))
     } else {
-        binary::read_body(path, &header, body, line)?
+        let (positions, indices) = binary::read_body(path, &header, body, line)?;
+        (positions, indices, None)
     };
     if strips::has_strips(&header) {
         indices.extend(strips::strip_triangles(path, &bytes, positions.len())?);
+    }
+    // The triangle is not named: a polygon's triangles are not its face's
+    // number in the file.
+    if let Err((vertex, _)) = super::settle_unused_vertices(&mut positions, &indices) {
+        let message = format!(
+            "vertex {vertex} is not finite: {} (a face uses it)",
+            positions[vertex]
+        );
+        let line = first_vertex_line.map(|first| first + vertex);
+        return Err(InputError::file(path, message).on_line(line));
     }
     // The file's bytes are not needed past here; unmapping a large mesh's
     // (264 MB for the 13.9M-triangle dragon) took 20 ms on this thread.
@@ -223,6 +234,65 @@ mod tests {
     }
 
     const HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+    /// A scanner's organised mesh: NaN and infinite vertices that no face
+    /// uses load, in ASCII and binary, and take the place of a vertex a
+    /// face uses (no box of the positions grows); one a face uses is an
+    /// error naming the vertex and, in ASCII, its line.
+    #[test]
+    fn vertices_no_face_uses_may_be_nan() {
+        let head = HEAD.replace("vertex 4", "vertex 6");
+        let nan = [f32::NAN; 3];
+        let inf = [f32::INFINITY, 0.0, 0.0];
+        let points = [
+            nan,
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            inf,
+        ];
+        let file = |binary: bool, face: [i32; 4]| {
+            if !binary {
+                let text = |p: [f32; 3]| format!("{} {} {}\n", p[0], p[1], p[2]).to_lowercase();
+                let body: String = points.iter().map(|&p| text(p)).collect();
+                let face = format!("4 {} {} {} {}\n", face[0], face[1], face[2], face[3]);
+                return format!("{head}{body}{face}").into_bytes();
+            }
+            let mut bin = head.replace("ascii", "binary_little_endian").into_bytes();
+            bin.extend(points.iter().flatten().flat_map(|c| c.to_le_bytes()));
+            bin.push(4);
+            bin.extend(face.iter().flat_map(|i| i.to_le_bytes()));
+            bin
+        };
+        let quad = load_ply(&write(
+            "quad.ply",
+            format!("{HEAD}0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n").as_bytes(),
+        ))
+        .unwrap();
+        let corners = |a: &LoadedAsset| {
+            let m = &a.meshes[0];
+            m.indices
+                .iter()
+                .map(|t| t.map(|k| m.positions[k as usize]))
+                .collect::<Vec<_>>()
+        };
+        for binary in [false, true] {
+            let a = load_ply(&write("scan.ply", &file(binary, [1, 2, 3, 4]))).unwrap();
+            assert_eq!(corners(&a), corners(&quad), "binary {binary}");
+            assert!(a.meshes[0]
+                .positions
+                .iter()
+                .all(|p| (0.0..=1.0).contains(&p.max_element())));
+            let e = load_ply(&write("scan.ply", &file(binary, [1, 2, 5, 4]))).unwrap_err();
+            let text = e.to_string();
+            assert!(
+                text.contains("vertex 5 is not finite: [inf, 0, 0] (a face uses it)"),
+                "{text}"
+            );
+            assert_eq!(text.contains("line 15:"), !binary, "{text}");
+        }
+    }
 
     #[test]
     fn ascii_and_binary_give_the_same_quad() {
