@@ -195,10 +195,40 @@ impl TriangleVertices for TrianglesById<'_> {
     }
 }
 
+/// Where a mesh of the scene was written, for errors about its triangles:
+/// the key of its object, and for a mesh file's mesh the file (as found
+/// and as the scene writes it) and the mesh's name there (an OBJ
+/// object's, a glTF mesh's; empty where it has none).
+pub(super) struct MeshOrigin {
+    pub key: String,
+    pub file: Option<(PathBuf, String, String)>,
+}
+
 impl Compiler<'_> {
+    /// The error for a triangle out of reach, at its object's key, with
+    /// the mesh file and mesh it is in; a model file rendered as it comes
+    /// (no scene file of keys) names its own mesh.
+    pub(super) fn out_of_reach(&self, bad: &OutOfReach) -> InputError {
+        let origin = &self.mesh_origins[bad.index];
+        match &origin.file {
+            Some((path, ..)) if *path == self.file => {
+                InputError::new(path, bad.mesh.clone(), bad.message())
+            }
+            Some((_, written, name)) => {
+                let mesh = match name.is_empty() {
+                    true => String::new(),
+                    false => format!(", mesh \"{name}\""),
+                };
+                let message = format!("{written}{mesh}: {}", bad.message());
+                self.err(&origin.key, message)
+            }
+            None => self.err(&origin.key, bad.message()),
+        }
+    }
+
     pub(super) fn push_mesh(
         &mut self,
-        name: String,
+        (name, origin): (String, MeshOrigin),
         tris: TriangleSource,
         material: u32,
         normals: Option<MeshNormals>,
@@ -211,6 +241,7 @@ impl Compiler<'_> {
         let first = self.meshes.last().map_or(0, |m| m.first + m.count);
         let count = tris.len() as u32;
         self.sources.push(tris);
+        self.mesh_origins.push(origin);
         self.meshes.push(MeshRange {
             name,
             first,
@@ -283,6 +314,7 @@ impl Compiler<'_> {
         let (asset, first_material, path) = self.asset(file, &format!("{key}.mesh"))?;
         let t = Transform::new(m).expect("checked by the caller");
         let instanced = self.mesh_uses.get(&path).is_some_and(|&n| n > 1);
+        let written = file.to_string();
         let file = (asset.clone(), first_material, path.clone());
         // The meshes the file itself places more than once are instances
         // wherever the file is placed; the rest is one prototype if the
@@ -330,7 +362,18 @@ impl Compiler<'_> {
                 mesh.name.clone()
             };
             let mirrored = (m.matrix3.determinant() < 0.0) != mesh.mirrored;
-            self.push_mesh(name, tris, material, normals, (uvs, tangents), mirrored);
+            let origin = MeshOrigin {
+                key: format!("{key}.mesh"),
+                file: Some((path.clone(), written.clone(), mesh.name.clone())),
+            };
+            self.push_mesh(
+                (name, origin),
+                tris,
+                material,
+                normals,
+                (uvs, tangents),
+                mirrored,
+            );
         }
         Ok(())
     }
@@ -422,6 +465,8 @@ pub const REACH: f32 = *EXTENT.end() as f32;
 #[derive(Debug, Clone, PartialEq)]
 pub struct OutOfReach {
     pub mesh: String,
+    /// The mesh's index among the meshes checked.
+    pub index: usize,
     /// Its index in its mesh.
     pub triangle: usize,
     /// Its vertices' largest coordinate by magnitude (inf where one is
@@ -458,7 +503,7 @@ pub(super) fn triangle_boxes(
     // NaN fails the comparison too (where `max_element` would pass it by).
     let within = |p: &Vec3| p.abs().cmple(Vec3::splat(REACH)).all();
     let out_of_reach = |t: &[Vec3; 3]| !t.iter().all(within);
-    for (mesh, source) in meshes.iter().zip(sources) {
+    for (index, (mesh, source)) in meshes.iter().zip(sources).enumerate() {
         let triangles = source.triangles();
         let first_bad = match triangles {
             Triangles::Soup(t) => {
@@ -503,6 +548,7 @@ pub(super) fn triangle_boxes(
             };
             return Err(OutOfReach {
                 mesh: mesh.name.clone(),
+                index,
                 triangle: i,
                 farthest,
             });

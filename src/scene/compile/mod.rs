@@ -446,6 +446,8 @@ struct Compiler<'d> {
     /// The triangles of each entry of `meshes`.
     sources: Vec<TriangleSource>,
     meshes: Vec<MeshRange>,
+    /// Where each entry of `meshes` was written, for errors.
+    mesh_origins: Vec<mesh::MeshOrigin>,
     shapes: Vec<AnalyticPrim>,
     transforms: Vec<Transform>,
     csg: Csg,
@@ -488,6 +490,7 @@ impl<'d> Compiler<'d> {
             edited,
             sources: Vec::new(),
             meshes: Vec::new(),
+            mesh_origins: Vec::new(),
             shapes: Vec::new(),
             transforms: Vec::new(),
             csg: Csg::default(),
@@ -549,7 +552,7 @@ impl<'d> Compiler<'d> {
         // pages, split into small ones) for a ground plane's box.
         let room = self.shapes.len() + self.instances.len();
         let mut boxes = mesh::triangle_boxes(&self.meshes, &self.sources, room)
-            .map_err(|bad| self.err(&bad.mesh, bad.message()))?;
+            .map_err(|bad| self.out_of_reach(&bad))?;
         for (i, s) in self.shapes.iter().enumerate() {
             let local = s.shape.bounds(&self.csg);
             let b = if s.transform == NO_TRANSFORM {

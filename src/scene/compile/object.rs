@@ -3,7 +3,7 @@
 //! own space, planes stay outside the BVH, triangles and meshes are baked
 //! into world space, groups recurse and CSG objects go to [`super::csg`].
 
-use super::mesh::TriangleSource;
+use super::mesh::{MeshOrigin, TriangleSource};
 use super::Compiler;
 use crate::error::InputResult;
 use crate::geometry::{AnalyticPrim, Shape, NO_TRANSFORM};
@@ -245,8 +245,12 @@ impl Compiler<'_> {
             for (i, p) in tri.v.iter().enumerate() {
                 v[i] = m.transform_point3(self.v3(*p, &format!("{key}.triangle.v[{i}]"))?);
             }
+            let origin = MeshOrigin {
+                key: key.to_string(),
+                file: None,
+            };
             self.push_mesh(
-                key.to_string(),
+                (key.to_string(), origin),
                 TriangleSource::Soup(vec![v]),
                 material,
                 None,
