@@ -205,27 +205,6 @@ pub(super) struct MeshOrigin {
 }
 
 impl Compiler<'_> {
-    /// The error for a triangle out of reach, at its object's key, with
-    /// the mesh file and mesh it is in; a model file rendered as it comes
-    /// (no scene file of keys) names its own mesh.
-    pub(super) fn out_of_reach(&self, bad: &OutOfReach) -> InputError {
-        let origin = &self.mesh_origins[bad.index];
-        match &origin.file {
-            Some((path, ..)) if *path == self.file => {
-                InputError::new(path, bad.mesh.clone(), bad.message())
-            }
-            Some((_, written, name)) => {
-                let mesh = match name.is_empty() {
-                    true => String::new(),
-                    false => format!(", mesh \"{name}\""),
-                };
-                let message = format!("{written}{mesh}: {}", bad.message());
-                self.err(&origin.key, message)
-            }
-            None => self.err(&origin.key, bad.message()),
-        }
-    }
-
     pub(super) fn push_mesh(
         &mut self,
         (name, origin): (String, MeshOrigin),

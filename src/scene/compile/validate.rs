@@ -2,6 +2,7 @@
 //! scene file is checked where it is read, and a bad one is an error that
 //! names its key path (`objects[2].sphere.radius`).
 
+use super::mesh::OutOfReach;
 use super::Compiler;
 use crate::error::{InputError, InputResult};
 use crate::scene::description::V3;
@@ -63,6 +64,27 @@ impl Compiler<'_> {
         what: &str,
     ) -> InputResult<T> {
         value.ok_or_else(|| self.err(key, format!("{what} needs `{name}`")))
+    }
+
+    /// The error for a triangle out of reach, at its object's key, with
+    /// the mesh file and mesh it is in; a model file rendered as it comes
+    /// (no scene file of keys) names its own mesh.
+    pub(super) fn out_of_reach(&self, bad: &OutOfReach) -> InputError {
+        let origin = &self.mesh_origins[bad.index];
+        match &origin.file {
+            Some((path, ..)) if *path == self.file => {
+                InputError::new(path, bad.mesh.clone(), bad.message())
+            }
+            Some((_, written, name)) => {
+                let mesh = match name.is_empty() {
+                    true => String::new(),
+                    false => format!(", mesh \"{name}\""),
+                };
+                let message = format!("{written}{mesh}: {}", bad.message());
+                self.err(&origin.key, message)
+            }
+            None => self.err(&origin.key, bad.message()),
+        }
     }
 
     /// An error at `key` of the scene file, on the line where the key (or
