@@ -28,6 +28,25 @@ pub(super) struct AsciiBody {
     pub first_vertex_line: usize,
 }
 
+/// The line of element `index` of the element whose lines start at line
+/// `first`, in the ASCII `body` that follows the header's last line,
+/// `line` (blank lines carry no element): for a message about an element
+/// found bad after parsing.
+pub(super) fn line_of_element(
+    body: &[u8],
+    line: usize,
+    first: usize,
+    index: usize,
+) -> Option<usize> {
+    let text = std::str::from_utf8(body).ok()?;
+    let (number, _) = (line + 1..)
+        .zip(text.lines())
+        .skip(first.checked_sub(line + 1)?)
+        .filter(|(_, text)| !text.trim_ascii().is_empty())
+        .nth(index)?;
+    Some(number)
+}
+
 /// What to do with one property of an element.
 #[derive(Clone, Copy)]
 enum Use {

@@ -148,7 +148,8 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
             "vertex {vertex} is not finite: {} (a face uses it)",
             positions[vertex]
         );
-        let line = first_vertex_line.map(|first| first + vertex);
+        let line = first_vertex_line
+            .and_then(|first| ascii::line_of_element(body, line.saturating_sub(1), first, vertex));
         return Err(InputError::file(path, message).on_line(line));
     }
     // The file's bytes are not needed past here; unmapping a large mesh's
@@ -255,7 +256,9 @@ mod tests {
         let file = |binary: bool, face: [i32; 4]| {
             if !binary {
                 let text = |p: [f32; 3]| format!("{} {} {}\n", p[0], p[1], p[2]).to_lowercase();
+                // A blank line among them, which carries no element.
                 let body: String = points.iter().map(|&p| text(p)).collect();
+                let body = body.replacen('\n', "\n\n", 1);
                 let face = format!("4 {} {} {} {}\n", face[0], face[1], face[2], face[3]);
                 return format!("{head}{body}{face}").into_bytes();
             }
@@ -290,7 +293,8 @@ mod tests {
                 text.contains("vertex 5 is not finite: [inf, 0, 0] (a face uses it)"),
                 "{text}"
             );
-            assert_eq!(text.contains("line 15:"), !binary, "{text}");
+            // Vertex 5 (the 6th) is on line 16, after the blank line.
+            assert_eq!(text.contains("line 16:"), !binary, "{text}");
         }
     }
 
