@@ -294,3 +294,19 @@ def test_contains_points_follows_trimesh_s_rule_on_an_open_mesh(bumpy, monkeypat
     # mesh.contains asks mesh.ray: the drop-in answers the same.
     mesh.ray = ours
     np.testing.assert_array_equal(mesh.contains(points), inside)
+
+
+def test_a_nan_vertex_no_face_uses_answers_as_without_it():
+    """A mesh that keeps missing samples as NaN vertices no face uses:
+    the intersector takes it and answers as for the mesh without them."""
+    box = trimesh.creation.box()
+    with_nan = trimesh.Trimesh(np.vstack([box.vertices, [[np.nan] * 3]]), box.faces, process=False)
+    rng = np.random.default_rng(5)
+    origins = rng.normal(size=(300, 3)) * 0.3
+    directions = rng.normal(size=(300, 3))
+    plain, ours = RayMeshIntersector(box), RayMeshIntersector(with_nan)
+    first = plain.intersects_first(origins, directions)
+    np.testing.assert_array_equal(ours.intersects_first(origins, directions), first)
+    assert (first >= 0).sum() > 200
+    points = rng.normal(size=(300, 3)) * 0.6
+    np.testing.assert_array_equal(ours.contains_points(points), plain.contains_points(points))
