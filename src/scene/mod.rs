@@ -28,8 +28,7 @@ use crate::texture::Textures;
 pub use crate::accel::BuildQuality;
 pub use compile::{
     check_extent, load_edited_scene, load_edited_text, load_mesh_scene, load_scene,
-    load_scene_for_tracing, mesh_geometry, scene_from_str, used_vertices, LoadTimings,
-    MeshArraysError, EXTENT,
+    load_scene_for_tracing, mesh_geometry, scene_from_str, LoadTimings, MeshArraysError, EXTENT,
 };
 pub use settings::{RenderOverrides, RenderSettings};
 

@@ -6,6 +6,7 @@
 use super::mesh::{triangle_geometry, TriangleSource};
 use crate::accel::BuildQuality;
 use crate::geometry::{Geometry, MeshRange};
+use crate::scene::loaders::{first_face_using, used_vertices};
 use glam::Vec3;
 
 /// What is wrong with a mesh's arrays, in the names of the arguments
@@ -100,17 +101,11 @@ pub fn mesh_geometry(
             });
         }
     }
-    let farthest = |v: &Vec3| v.abs().max_element();
-    let all_finite = vertices.iter().all(|v| v.is_finite());
-    let extent = match all_finite {
-        // Every vertex, used or not, when all are finite: the common case
-        // needs no pass over the faces.
-        true => vertices.iter().map(farthest).fold(0.0f32, f32::max),
-        false => f32::INFINITY,
-    };
-    let extent = if check_extent(f64::from(extent)).is_ok() {
-        extent
-    } else {
+    // The common case, every vertex finite and within reach, needs no pass
+    // over the faces; otherwise only the vertices faces use count.
+    let all_within =
+        vertices.iter().all(|v| v.is_finite()) && check_extent(extent_of(vertices.iter())).is_ok();
+    if !all_within {
         let used = used_vertices(&faces, vertices.len());
         let first_bad = (0..vertices.len()).find(|&i| used[i] && !vertices[i].is_finite());
         if let Some(vertex) = first_bad {
@@ -122,12 +117,13 @@ pub fn mesh_geometry(
                 face,
             });
         }
-        (0..vertices.len())
-            .filter(|&i| used[i])
-            .map(|i| farthest(&vertices[i]))
-            .fold(0.0f32, f32::max)
-    };
-    check_extent(f64::from(extent))?;
+        let in_use = vertices
+            .iter()
+            .zip(&used)
+            .filter(|(_, &u)| u)
+            .map(|(v, _)| v);
+        check_extent(extent_of(in_use))?;
+    }
     let count = faces.len() as u32;
     let meshes = vec![MeshRange {
         name: "mesh".into(),
@@ -144,24 +140,11 @@ pub fn mesh_geometry(
     Ok(geometry.expect("every vertex a face uses was checked finite and within EXTENT above"))
 }
 
-/// `used[i]`: whether a face of `faces` (every index below `n`) uses
-/// vertex `i`.
-pub fn used_vertices(faces: &[[u32; 3]], n: usize) -> Vec<bool> {
-    let mut used = vec![false; n];
-    for &k in faces.iter().flatten() {
-        if let Some(u) = used.get_mut(k as usize) {
-            *u = true;
-        }
-    }
-    used
-}
-
-/// The first face of `faces` that uses `vertex` (0 where none does).
-pub fn first_face_using(faces: &[[u32; 3]], vertex: usize) -> usize {
-    faces
-        .iter()
-        .position(|f| f.contains(&(vertex as u32)))
-        .unwrap_or(0)
+/// The largest coordinate of `vertices` by magnitude, what
+/// [`check_extent`] takes.
+fn extent_of<'a>(vertices: impl Iterator<Item = &'a Vec3>) -> f64 {
+    let farthest = vertices.map(|v| v.abs().max_element()).fold(0.0, f32::max);
+    f64::from(farthest)
 }
 
 #[cfg(test)]

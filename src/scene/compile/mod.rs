@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-pub use arrays::{check_extent, mesh_geometry, used_vertices, MeshArraysError, EXTENT};
+pub use arrays::{check_extent, mesh_geometry, MeshArraysError, EXTENT};
 pub use instance::{read_instances, PLACEMENT_BYTES};
 pub use progress::{LoadPhase, LoadProgress};
 pub use text::load_edited_text;

@@ -136,26 +136,25 @@ pub(crate) fn warn_without_triangles(asset: &mut LoadedAsset, path: &Path, found
 /// is given the position of one a triangle does (so that a box of all the
 /// positions, which frames a model in its studio, does not move). The
 /// first vertex a triangle uses that is not finite is an error: its index
-/// and the first triangle using it. `indices` must be in range.
+/// and what is wrong with it (its triangle is not named: a polygon's
+/// triangles are not its face's number in the file). `indices` must be in
+/// range.
 pub(crate) fn settle_unused_vertices(
     positions: &mut [glam::Vec3],
     indices: &[[u32; 3]],
-) -> Result<(), (usize, usize)> {
+) -> Result<(), (usize, String)> {
     use rayon::prelude::*;
     if positions.par_iter().all(|p| p.is_finite()) {
         return Ok(());
     }
-    let mut used = vec![false; positions.len()];
-    for &k in indices.iter().flatten() {
-        used[k as usize] = true;
-    }
+    let used = used_vertices(indices, positions.len());
     let bad = |i: &usize| used[*i] && !positions[*i].is_finite();
     if let Some(vertex) = (0..positions.len()).find(bad) {
-        let face = indices
-            .iter()
-            .position(|t| t.contains(&(vertex as u32)))
-            .expect("a vertex marked used is in a triangle");
-        return Err((vertex, face));
+        let p = positions[vertex];
+        return Err((
+            vertex,
+            format!("vertex {vertex} is not finite: {p} (a face uses it)"),
+        ));
     }
     let stand_in = match indices.first() {
         Some(t) => positions[t[0] as usize],
@@ -169,6 +168,26 @@ pub(crate) fn settle_unused_vertices(
         *p = stand_in;
     }
     Ok(())
+}
+
+/// `used[i]`: whether a face of `faces` (every index below `n`) uses
+/// vertex `i`.
+pub(crate) fn used_vertices(faces: &[[u32; 3]], n: usize) -> Vec<bool> {
+    let mut used = vec![false; n];
+    for &k in faces.iter().flatten() {
+        if let Some(u) = used.get_mut(k as usize) {
+            *u = true;
+        }
+    }
+    used
+}
+
+/// The first face of `faces` that uses `vertex` (0 where none does).
+pub(crate) fn first_face_using(faces: &[[u32; 3]], vertex: usize) -> usize {
+    faces
+        .iter()
+        .position(|f| f.contains(&(vertex as u32)))
+        .unwrap_or(0)
 }
 
 /// Temporary files for the loaders' unit tests.

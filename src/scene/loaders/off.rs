@@ -244,15 +244,11 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
         }
     }
 
-    if let Err((vertex, _)) = super::settle_unused_vertices(&mut positions, &indices) {
+    if let Err((vertex, message)) = super::settle_unused_vertices(&mut positions, &indices) {
         let line = not_finite
             .iter()
             .find(|&&(k, _)| k as usize == vertex)
             .map_or(0, |&(_, n)| n);
-        let message = format!(
-            "vertex {vertex} is not finite: {} (a face uses it)",
-            positions[vertex]
-        );
         return Err(at(path, line, message));
     }
 

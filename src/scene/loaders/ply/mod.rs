@@ -141,13 +141,7 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     if strips::has_strips(&header) {
         indices.extend(strips::strip_triangles(path, &bytes, positions.len())?);
     }
-    // The triangle is not named: a polygon's triangles are not its face's
-    // number in the file.
-    if let Err((vertex, _)) = super::settle_unused_vertices(&mut positions, &indices) {
-        let message = format!(
-            "vertex {vertex} is not finite: {} (a face uses it)",
-            positions[vertex]
-        );
+    if let Err((vertex, message)) = super::settle_unused_vertices(&mut positions, &indices) {
         let line = first_vertex_line
             .and_then(|first| ascii::line_of_element(body, line.saturating_sub(1), first, vertex));
         return Err(InputError::file(path, message).on_line(line));
