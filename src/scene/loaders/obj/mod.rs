@@ -172,6 +172,12 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     // alongside to learn whether every face of a model had normals and
     // texture coordinates (tobj fills gaps in either with a neighbour's).
     let mut faces = scan.faces.iter();
+    // tobj names the faces before any `o` or `g` "unnamed_object": no name
+    // of the file's, so none of ours (errors would quote it as one).
+    let tobj_default = |name: String| match name == TOBJ_DEFAULT_NAME && !names_default(&source) {
+        true => String::new(),
+        false => name,
+    };
     for model in models {
         let mesh = model.mesh;
         let triangle_count = mesh.indices.len() / 3;
@@ -215,7 +221,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             indices: triangles(&mesh.texcoord_indices),
         });
         asset.meshes.push(LoadedMesh {
-            name: model.name,
+            name: tobj_default(model.name),
             positions: vec3s(&mesh.positions),
             indices,
             normals,
@@ -227,6 +233,17 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     }
     super::warn_without_triangles(&mut asset, path, "no faces");
     Ok(asset)
+}
+
+/// The name tobj gives the faces no `o` or `g` line names.
+const TOBJ_DEFAULT_NAME: &str = "unnamed_object";
+
+/// Whether an `o` or `g` line of `text` itself names tobj's default name.
+fn names_default(text: &str) -> bool {
+    text.lines().any(|line| {
+        let mut words = line.split_whitespace();
+        matches!(words.next(), Some("o" | "g")) && words.any(|w| w == TOBJ_DEFAULT_NAME)
+    })
 }
 
 fn vec3s(flat: &[f32]) -> Vec<Vec3> {
@@ -344,6 +361,17 @@ mod tests {
                 [Vec3::new(5., 6., 5.), Vec3::new(6., 5., 5.), Vec3::ZERO],
             ]
         );
+    }
+
+    #[test]
+    fn faces_no_object_names_have_no_name() {
+        let text = format!("{SQUARE}f 1 2 3\no named\nf 1 3 4\n");
+        let asset = load_text(&text).unwrap();
+        let names: Vec<&str> = asset.meshes.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(names, ["", "named"]);
+        // The name tobj gives unnamed faces, written in the file, is kept.
+        let text = format!("{SQUARE}o unnamed_object\nf 1 2 3\n");
+        assert_eq!(load_text(&text).unwrap().meshes[0].name, "unnamed_object");
     }
 
     #[test]
