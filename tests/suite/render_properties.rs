@@ -216,12 +216,19 @@ fn a_scene_renders_the_same_at_every_scale_float32_reaches() {
     }
     let far = scaled_cube(&dir, 2e12, "point");
     let cube = std::fs::read(dir.join("cube.obj")).unwrap();
-    crate::common::process::assert_rejected(
-        "past-reach",
-        Some(&far),
-        &[("cube.obj", &cube)],
-        // The object's key and line, and the mesh file, named.
-        // (The OBJ names no object, so no mesh name follows the file.)
-        &["line 14: objects[0].mesh: cube.obj: triangle 0 lies 2.000e12 from the origin, past the 1e12"],
-    );
+    // Placed once, its triangles are the scene's; placed twice, they are
+    // a prototype's, whose tree is built apart: named alike, at the first
+    // placement. (The OBJ names no object, so no mesh name follows the
+    // file.)
+    let twice =
+        format!("{far}[[objects]]\nmesh = \"cube.obj\"\ntransform = {{ translate = [0, 1, 0] }}\n");
+    for (name, scene) in [("past-reach", &far), ("past-reach-placed-twice", &twice)] {
+        crate::common::process::assert_rejected(
+            name,
+            Some(scene),
+            &[("cube.obj", &cube)],
+            // The object's key and line, and the mesh file, named.
+            &["line 14: objects[0].mesh: cube.obj: triangle 0 lies 2.000e12 from the origin, past the 1e12"],
+        );
+    }
 }

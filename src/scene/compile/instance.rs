@@ -3,7 +3,9 @@
 //! becomes an [`Instance`]; `instances = "FILE.csv"` gives an object many
 //! placements at once, one row-major 3×4 object-to-world matrix per line.
 
-use super::mesh::{check_attribute, check_indices, triangle_geometry, TriangleSource};
+use super::mesh::{
+    check_attribute, check_indices, triangle_geometry, MeshOrigin, OutOfReach, TriangleSource,
+};
 use super::Compiler;
 use crate::accel::BuildChoice;
 use crate::error::{io_message, InputError, InputResult};
@@ -22,6 +24,8 @@ use std::sync::Arc;
 pub(super) struct PrototypeParts {
     pub(super) meshes: Vec<MeshRange>,
     pub(super) sources: Vec<TriangleSource>,
+    /// Where each mesh was first placed, for errors about its triangles.
+    pub(super) origins: Vec<MeshOrigin>,
 }
 
 /// How many times each mesh file (by resolved path) is placed, counting
@@ -260,7 +264,7 @@ impl Compiler<'_> {
     pub(super) fn mesh_instance(
         &mut self,
         file: &(Arc<LoadedAsset>, u32, PathBuf),
-        key: &str,
+        (key, written): (&str, &str),
         m: Affine3A,
         explicit_material: Option<u32>,
         inherited: u32,
@@ -275,7 +279,7 @@ impl Compiler<'_> {
                 };
                 (source, mesh)
             });
-            prototype_parts(sources, first_material, path, key)
+            prototype_parts(sources, first_material, path, (key, written))
         })?;
         let material = explicit_material.unwrap_or(NO_MATERIAL);
         let instance = Instance::new(m, prototype, material, inherited).ok_or_else(|| {
@@ -313,7 +317,7 @@ impl Compiler<'_> {
     pub(super) fn shared_instances(
         &mut self,
         file: &(Arc<LoadedAsset>, u32, PathBuf),
-        key: &str,
+        (key, written): (&str, &str),
         m: Affine3A,
         explicit_material: Option<u32>,
         inherited: u32,
@@ -329,7 +333,7 @@ impl Compiler<'_> {
                     };
                     (source, part)
                 });
-                prototype_parts(sources, *first_material, path, key)
+                prototype_parts(sources, *first_material, path, (key, written))
             })?;
             let material = explicit_material.unwrap_or(NO_MATERIAL);
             for placement in &shared.placements {
@@ -358,11 +362,12 @@ fn prototype_parts<'a>(
     meshes: impl Iterator<Item = (TriangleSource, &'a LoadedMesh)>,
     first_material: u32,
     path: &Path,
-    key: &str,
+    (key, written): (&str, &str),
 ) -> InputResult<PrototypeParts> {
     let mut parts = PrototypeParts {
         meshes: Vec::new(),
         sources: Vec::new(),
+        origins: Vec::new(),
     };
     for (source, mesh) in meshes {
         check_indices(mesh, path)?;
@@ -380,6 +385,10 @@ fn prototype_parts<'a>(
         }
         let first = parts.meshes.last().map_or(0, |m| m.first + m.count);
         parts.sources.push(source);
+        parts.origins.push(MeshOrigin {
+            key: format!("{key}.mesh"),
+            file: Some((path.to_path_buf(), written.to_string(), mesh.name.clone())),
+        });
         parts.meshes.push(MeshRange {
             name: if mesh.name.is_empty() {
                 key.to_string()
@@ -400,15 +409,21 @@ fn prototype_parts<'a>(
     Ok(parts)
 }
 
-/// A prototype's tree over its triangles, and the prototype.
+/// A prototype's tree over its triangles, and the prototype; `Err` names
+/// the first triangle out of reach and where its mesh was placed first.
 pub(super) fn build_prototype(
     parts: PrototypeParts,
     choice: BuildChoice,
-    path: &str,
-) -> InputResult<Geometry> {
-    let PrototypeParts { meshes, sources } = parts;
-    triangle_geometry(meshes, sources, choice)
-        .map_err(|bad| InputError::new(path, bad.mesh.clone(), bad.message()))
+) -> Result<Geometry, (OutOfReach, MeshOrigin)> {
+    let PrototypeParts {
+        meshes,
+        sources,
+        mut origins,
+    } = parts;
+    triangle_geometry(meshes, sources, choice).map_err(|bad| {
+        let origin = origins.swap_remove(bad.index);
+        (bad, origin)
+    })
 }
 
 #[cfg(test)]

@@ -298,9 +298,9 @@ impl Compiler<'_> {
         // The meshes the file itself places more than once are instances
         // wherever the file is placed; the rest is one prototype if the
         // file is placed more than once, else baked.
-        self.shared_instances(&file, key, m, explicit_material, inherited)?;
+        self.shared_instances(&file, (key, &written), m, explicit_material, inherited)?;
         if instanced && asset.meshes.iter().any(|mesh| !mesh.indices.is_empty()) {
-            self.mesh_instance(&file, key, m, explicit_material, inherited)?;
+            self.mesh_instance(&file, (key, &written), m, explicit_material, inherited)?;
         }
         for (k, mesh) in asset.meshes.iter().enumerate().filter(|_| !instanced) {
             check_indices(mesh, &path)?;

@@ -361,17 +361,14 @@ fn compile_for(
     // Each prototype's tree first: an instance's box is its root's child
     // boxes moved into world space.
     let mut prototypes = Vec::with_capacity(c.prototypes.len());
-    let file = path.display().to_string();
     for parts in std::mem::take(&mut c.prototypes) {
         let n = parts
             .meshes
             .last()
             .map_or(0, |m| (m.first + m.count) as usize);
-        prototypes.push(instance::build_prototype(
-            parts,
-            for_purpose(quality, n),
-            &file,
-        )?);
+        let prototype = instance::build_prototype(parts, for_purpose(quality, n))
+            .map_err(|(bad, origin)| c.out_of_reach_at(&origin, &bad))?;
+        prototypes.push(prototype);
     }
     let mut boxes = build_steps.time("boxes", || c.primitive_boxes())?;
     for (k, inst) in c.instances.iter_mut().enumerate() {

@@ -2,7 +2,7 @@
 //! scene file is checked where it is read, and a bad one is an error that
 //! names its key path (`objects[2].sphere.radius`).
 
-use super::mesh::OutOfReach;
+use super::mesh::{MeshOrigin, OutOfReach};
 use super::Compiler;
 use crate::error::{InputError, InputResult};
 use crate::scene::description::V3;
@@ -70,10 +70,15 @@ impl Compiler<'_> {
     /// the mesh file and mesh it is in; a model file rendered as it comes
     /// (no scene file of keys) names its own mesh.
     pub(super) fn out_of_reach(&self, bad: &OutOfReach) -> InputError {
-        let origin = &self.mesh_origins[bad.index];
+        self.out_of_reach_at(&self.mesh_origins[bad.index], bad)
+    }
+
+    /// [`Compiler::out_of_reach`] for a mesh placed first at `origin` (a
+    /// prototype's: its trees are built apart from the scene's).
+    pub(super) fn out_of_reach_at(&self, origin: &MeshOrigin, bad: &OutOfReach) -> InputError {
         match &origin.file {
-            Some((path, ..)) if *path == self.file => {
-                InputError::new(path, bad.mesh.clone(), bad.message())
+            Some((path, _, name)) if *path == self.file => {
+                InputError::new(path, name.clone(), bad.message())
             }
             Some((_, written, name)) => {
                 let mesh = match name.is_empty() {
