@@ -3,9 +3,7 @@
 //! becomes an [`Instance`]; `instances = "FILE.csv"` gives an object many
 //! placements at once, one row-major 3×4 object-to-world matrix per line.
 
-use super::mesh::{
-    check_attribute, check_indices, triangle_geometry, MeshOrigin, OutOfReach, TriangleSource,
-};
+use super::mesh::{check_attribute, check_indices, triangle_geometry, MeshOrigin, TriangleSource};
 use super::Compiler;
 use crate::accel::BuildChoice;
 use crate::error::{io_message, InputError, InputResult};
@@ -409,21 +407,20 @@ fn prototype_parts<'a>(
     Ok(parts)
 }
 
-/// A prototype's tree over its triangles, and the prototype; `Err` names
-/// the first triangle out of reach and where its mesh was placed first.
+/// A prototype's tree over its triangles, and the prototype; a triangle
+/// out of reach is named where its mesh was placed first.
 pub(super) fn build_prototype(
     parts: PrototypeParts,
     choice: BuildChoice,
-) -> Result<Geometry, (OutOfReach, MeshOrigin)> {
+    compiler: &Compiler,
+) -> InputResult<Geometry> {
     let PrototypeParts {
         meshes,
         sources,
-        mut origins,
+        origins,
     } = parts;
-    triangle_geometry(meshes, sources, choice).map_err(|bad| {
-        let origin = origins.swap_remove(bad.index);
-        (bad, origin)
-    })
+    triangle_geometry(meshes, sources, choice)
+        .map_err(|bad| compiler.out_of_reach_at(&origins[bad.index], &bad))
 }
 
 #[cfg(test)]

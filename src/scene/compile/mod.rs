@@ -366,9 +366,11 @@ fn compile_for(
             .meshes
             .last()
             .map_or(0, |m| (m.first + m.count) as usize);
-        let prototype = instance::build_prototype(parts, for_purpose(quality, n))
-            .map_err(|(bad, origin)| c.out_of_reach_at(&origin, &bad))?;
-        prototypes.push(prototype);
+        prototypes.push(instance::build_prototype(
+            parts,
+            for_purpose(quality, n),
+            &c,
+        )?);
     }
     let mut boxes = build_steps.time("boxes", || c.primitive_boxes())?;
     for (k, inst) in c.instances.iter_mut().enumerate() {
