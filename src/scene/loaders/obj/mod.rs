@@ -173,10 +173,13 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     // texture coordinates (tobj fills gaps in either with a neighbour's).
     let mut faces = scan.faces.iter();
     // tobj names the faces before any `o` or `g` "unnamed_object": no name
-    // of the file's, so none of ours (errors would quote it as one).
-    let tobj_default = |name: String| match name == TOBJ_DEFAULT_NAME && !names_default(&source) {
+    // of the file's, so none of ours (errors would quote it as one). The
+    // text is searched once, and only where a model has that name (tobj
+    // may split the unnamed faces into several models at a `usemtl`).
+    let unnamed = models.iter().any(|m| m.name == TOBJ_DEFAULT_NAME) && !names_default(&source);
+    let name = |model: String| match unnamed && model == TOBJ_DEFAULT_NAME {
         true => String::new(),
-        false => name,
+        false => model,
     };
     for model in models {
         let mesh = model.mesh;
@@ -221,7 +224,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             indices: triangles(&mesh.texcoord_indices),
         });
         asset.meshes.push(LoadedMesh {
-            name: tobj_default(model.name),
+            name: name(model.name),
             positions: vec3s(&mesh.positions),
             indices,
             normals,
