@@ -173,11 +173,8 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
     // texture coordinates (tobj fills gaps in either with a neighbour's).
     let mut faces = scan.faces.iter();
     // tobj names the faces before any `o` or `g` "unnamed_object": no name
-    // of the file's, so none of ours (errors would quote it as one). The
-    // text is searched once, and only where a model has that name (tobj
-    // may split the unnamed faces into several models at a `usemtl`).
-    let unnamed = models.iter().any(|m| m.name == TOBJ_DEFAULT_NAME) && !names_default(&source);
-    let name = |model: String| match unnamed && model == TOBJ_DEFAULT_NAME {
+    // of the file's, so none of ours (errors would quote it as one).
+    let name = |model: String| match model == TOBJ_DEFAULT_NAME && !scan.writes_default_name {
         true => String::new(),
         false => model,
     };
@@ -240,14 +237,6 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
 
 /// The name tobj gives the faces no `o` or `g` line names.
 const TOBJ_DEFAULT_NAME: &str = "unnamed_object";
-
-/// Whether an `o` or `g` line of `text` itself names tobj's default name.
-fn names_default(text: &str) -> bool {
-    text.lines().any(|line| {
-        let mut words = line.split_whitespace();
-        matches!(words.next(), Some("o" | "g")) && words.any(|w| w == TOBJ_DEFAULT_NAME)
-    })
-}
 
 fn vec3s(flat: &[f32]) -> Vec<Vec3> {
     flat.chunks_exact(3).map(Vec3::from_slice).collect()

@@ -40,6 +40,9 @@ pub(super) struct ObjScan {
     pub(super) strip_colours: bool,
     /// What was read leniently, each naming its file and line.
     pub(super) warnings: Vec<InputError>,
+    /// An `o` or `g` line names tobj's name for unnamed faces
+    /// ([`super::TOBJ_DEFAULT_NAME`]): a model of that name is the file's.
+    pub(super) writes_default_name: bool,
 }
 
 /// What a `usemtl` without a name becomes for tobj: a name no library
@@ -159,6 +162,7 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
         needs_rewrite: false,
         strip_colours: false,
         warnings: Vec::new(),
+        writes_default_name: false,
     };
     let mut coloured_vertices = 0usize;
     let mut material_names: HashSet<String> = HashSet::new();
@@ -293,6 +297,10 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
                 library_missing |= !all_read;
                 material_names.extend(library.iter().map(|m| m.name.clone()));
                 scan.libraries.insert(PathBuf::from(name), library);
+            }
+            "o" | "g" => {
+                let mut names = line.split_whitespace().skip(1);
+                scan.writes_default_name |= names.any(|w| w == super::TOBJ_DEFAULT_NAME);
             }
             _ => {}
         }
