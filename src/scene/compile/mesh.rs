@@ -443,8 +443,7 @@ pub const REACH: f32 = *EXTENT.end() as f32;
 /// a vertex that is not finite or lies past [`REACH`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct OutOfReach {
-    pub mesh: String,
-    /// The mesh's index among the meshes checked.
+    /// The mesh's index among the meshes checked (its origin names it).
     pub index: usize,
     /// Its index in its mesh.
     pub triangle: usize,
@@ -470,7 +469,7 @@ impl OutOfReach {
 
 /// Every triangle's box, mesh by mesh; the first triangle with a vertex
 /// that is not finite or lies past [`REACH`] is an error naming its mesh
-/// and its index there. (Its box would not say: a box's min and max pass
+/// (by its index among `meshes`) and its index there. (Its box would not say: a box's min and max pass
 /// a NaN by.) The vector has room for `room_after` more boxes.
 pub(super) fn triangle_boxes(
     meshes: &[MeshRange],
@@ -482,7 +481,7 @@ pub(super) fn triangle_boxes(
     // NaN fails the comparison too (where `max_element` would pass it by).
     let within = |p: &Vec3| p.abs().cmple(Vec3::splat(REACH)).all();
     let out_of_reach = |t: &[Vec3; 3]| !t.iter().all(within);
-    for (index, (mesh, source)) in meshes.iter().zip(sources).enumerate() {
+    for (index, source) in sources.iter().enumerate() {
         let triangles = source.triangles();
         let first_bad = match triangles {
             Triangles::Soup(t) => {
@@ -526,7 +525,6 @@ pub(super) fn triangle_boxes(
                 false => f32::INFINITY,
             };
             return Err(OutOfReach {
-                mesh: mesh.name.clone(),
                 index,
                 triangle: i,
                 farthest,
@@ -571,7 +569,7 @@ mod tests {
         for bad in [3, 4] {
             let got = triangle_boxes(&meshes, &[soup(), indexed(bad)], 0).map(|b| b.len());
             let e = got.unwrap_err();
-            assert_eq!((e.mesh.as_str(), e.triangle), ("b", 2), "vertex {bad}");
+            assert_eq!((e.index, e.triangle), (1, 2), "mesh b, vertex {bad}");
             assert_eq!(e.message(), "triangle 2 is not finite");
         }
         let unused = triangle_boxes(&meshes, &[soup(), indexed(1)], 0).map(|b| b.len());
@@ -745,7 +743,8 @@ material = "grey"
             match (triangle_boxes(&meshes, &sources, 0), bad) {
                 (Ok(boxes), None) => assert_eq!(boxes.len(), n + 10),
                 // The NaN at n - 2 comes after every other but the last.
-                (Err(e), Some(i)) => assert_eq!((e.mesh, e.triangle), ("b".into(), i.min(n - 2))),
+                // Mesh 1 is b.
+                (Err(e), Some(i)) => assert_eq!((e.index, e.triangle), (1, i.min(n - 2))),
                 (got, want) => panic!("{:?} for {want:?}", got.map(|b| b.len())),
             }
         }
