@@ -296,7 +296,11 @@ impl Mesh {
     /// Load a mesh file (OBJ, PLY, glTF, GLB, OFF or STL) with strata's own
     /// loaders, used as it is: triangle i of the file is face i. ``path``
     /// is a str, an ``os.PathLike`` (``pathlib.Path``) or bytes, as
-    /// ``os.fspath`` takes them; anything else raises TypeError.
+    /// ``os.fspath`` takes them; anything else raises TypeError. What the
+    /// format can write in float64 is kept so, as trimesh reads it (OBJ
+    /// and OFF decimals, PLY ``double`` properties) and held as a mesh
+    /// from those arrays is; PLY ``float``, STL and glTF coordinates are
+    /// read as float32.
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a
     /// ValueError; FileNotFoundError if it does not exist) with strata's

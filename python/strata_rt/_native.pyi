@@ -216,7 +216,9 @@ class Mesh:
     @staticmethod
     def load(path: Union[str, bytes, os.PathLike[str], os.PathLike[bytes]]) -> "Mesh":
         """Load an OBJ, PLY, glTF, GLB, OFF or STL file with strata's loaders; triangle i of the file
-        is face i. ``path`` is a str, bytes or an ``os.PathLike``, as ``os.fspath`` takes them."""
+        is face i. ``path`` is a str, bytes or an ``os.PathLike``, as ``os.fspath`` takes them.
+        OBJ and OFF decimals and PLY ``double`` properties are kept in float64 (as from arrays);
+        PLY ``float``, STL and glTF coordinates are read as float32."""
     @property
     def triangle_count(self) -> int:
         """The number of triangles (faces); of a placed mesh, every copy's."""

@@ -73,6 +73,56 @@ def test_a_sphere_at_utm_coordinates_answers_as_at_the_origin():
     np.testing.assert_array_equal(tm.ray.contains_points(points), r < 5)
 
 
+def write_obj(path, v, f):
+    """An OBJ of float64 vertices in shortest round-trip decimals."""
+    with open(path, "w") as out:
+        out.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v.tolist())
+        out.writelines(f"f {a} {b} {c}\n" for a, b, c in (f + 1).tolist())
+
+
+def write_ply(path, v, f, scalar):
+    """A binary PLY of `scalar` ("double" or "float") vertex properties."""
+    dtype = {"double": "<f8", "float": "<f4"}[scalar]
+    header = (
+        f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
+        + "".join(f"property {scalar} {axis}\n" for axis in "xyz")
+        + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    faces = np.zeros(len(f), dtype=[("n", "u1"), ("k", "<i4", 3)])
+    faces["n"], faces["k"] = 3, f
+    with open(path, "wb") as out:
+        out.write(header.encode())
+        out.write(v.astype(dtype).tobytes())
+        out.write(faces.tobytes())
+
+
+def test_a_far_file_loads_as_it_writes_its_coordinates(tmp_path):
+    """Mesh.load keeps an OBJ's decimals and a PLY's doubles in float64, as
+    trimesh reads them: the UTM sphere from a file answers as from its
+    arrays, bit for bit, on its own faces' planes. A PLY of floats is
+    float32 by its header, and loads as such."""
+    v, f = sphere_at(UTM)
+    rng = np.random.default_rng(11)
+    origins, directions = rays_through(rng, UTM, 5.0, 2000, 4.5)
+    want = strata_rt.Mesh(v, f).intersect(origins, directions)
+    write_obj(tmp_path / "sphere.obj", v, f)
+    write_ply(tmp_path / "sphere.ply", v, f, "double")
+    for name in ["sphere.obj", "sphere.ply"]:
+        loaded = strata_rt.Mesh.load(tmp_path / name)
+        got = loaded.intersect(origins, directions)
+        for key in want.keys():
+            np.testing.assert_array_equal(got[key], want[key], err_msg=f"{name} {key}")
+        assert plane_distance(got.point, v[f[got.prim]]).max() < 1e-8
+        np.testing.assert_array_equal(loaded.vertices[loaded.faces], v[f])
+    write_ply(tmp_path / "floats.ply", v, f, "float")
+    rounded = v.astype(np.float32).astype(np.float64)
+    got = strata_rt.Mesh.load(tmp_path / "floats.ply").intersect(origins, directions)
+    want = strata_rt.Mesh(rounded, f).intersect(origins, directions)
+    np.testing.assert_array_equal(got.point, want.point)
+    # float32 moves the faces: up to 0.25 m at five million.
+    assert plane_distance(got.point, v[f[got.prim]]).max() > 1e-3
+
+
 def test_the_bunny_moved_by_a_million_answers_as_unmoved(bunny):
     v, f = bunny
     v = helpers.as_stored(v)

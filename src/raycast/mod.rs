@@ -44,17 +44,54 @@ pub mod exact;
 mod tests;
 
 pub use crate::accel::BuildQuality;
-use crate::error::InputResult;
+use crate::error::{InputError, InputResult};
 use crate::geometry::instance::placed;
 use crate::geometry::travel::SPAN;
 use crate::geometry::{Found, Geometry};
 pub use crate::math::Ray;
-use crate::scene::loaders::used_vertices;
+use crate::scene::loaders::{check_extension, load_mesh_file_with, used_vertices, Coordinates};
 pub use crate::scene::MeshArraysError;
 use crate::scene::{check_extent, load_mesh_scene, mesh_geometry};
 use glam::{Affine3A, DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
+
+/// A mesh's float64 vertices and its faces, as [`Mesh::new_exact`] takes them.
+type Arrays = (Vec<DVec3>, Vec<[u32; 3]>);
+
+/// A mesh file's vertices as the file writes them, in float64, and its
+/// faces in file order: each mesh's vertices that its faces use, in the
+/// loader's order (tobj's for an OBJ: an object's own, by first use), the
+/// meshes one after another, as a scene compiles them. `None`
+/// for a format whose coordinates are float32 (glTF, STL) or a file whose
+/// extension names none (the scene's compile words that error), which are
+/// loaded as a scene's meshes are.
+fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
+    if !check_extension(path).is_ok_and(|e| matches!(e.as_str(), "obj" | "ply" | "off")) {
+        return Ok(None);
+    }
+    let asset = load_mesh_file_with(path, Coordinates::Float64)?;
+    let (mut vertices, mut faces) = (Vec::new(), Vec::new());
+    for mesh in &asset.meshes {
+        let Some(exact) = &mesh.exact_positions else {
+            return Ok(None);
+        };
+        // A vertex no face uses is never traced; a file may leave it NaN.
+        let mut index = vec![u32::MAX; exact.len()];
+        for ((k, &p), used) in exact
+            .iter()
+            .enumerate()
+            .zip(used_vertices(&mesh.indices, exact.len()))
+        {
+            if used {
+                index[k] = vertices.len() as u32;
+                vertices.push(p);
+            }
+        }
+        faces.extend(mesh.indices.iter().map(|t| t.map(|k| index[k as usize])));
+    }
+    Ok(asset.shared.is_empty().then_some((vertices, faces)))
+}
 
 /// A triangle mesh and its tree, built once and asked any number of
 /// queries (module docs).
@@ -322,9 +359,18 @@ impl Mesh {
         }
     }
 
-    /// A mesh file (OBJ, PLY, glTF or GLB) read with strata's loaders and
-    /// used as it is: triangle `i` of the file is face `i`.
+    /// A mesh file (OBJ, PLY, OFF, STL, glTF or GLB) read with strata's
+    /// loaders and used as it is: triangle `i` of the file is face `i`.
+    /// Where the format can write more than float32 holds (OBJ and OFF
+    /// text, PLY `double` properties), the file's own float64 coordinates
+    /// are held as a mesh from arrays is ([`Mesh::new_exact`]): centred
+    /// where far from the origin, hit and closest points on the faces the
+    /// file writes ([`file_arrays`]).
     pub fn load(path: &Path, quality: BuildQuality) -> InputResult<Self> {
+        if let Some((vertices, faces)) = file_arrays(path)? {
+            return Self::new_exact(vertices, faces, quality)
+                .map_err(|e| InputError::file(path, e.to_string()));
+        }
         let (scene, _) = load_mesh_scene(path, quality)?;
         let mesh = Self::from_geometry(scene.geometry);
         // Traced as the file places it (its centre is the origin).

@@ -3,6 +3,7 @@
 //! as a binding asks for `(0, t_max]`, with no nudge.
 
 use super::*;
+use crate::scene::loaders::test_files::{temp_dir, write};
 use glam::{Mat3, Quat};
 use rand::{RngExt, SeedableRng};
 
@@ -456,4 +457,131 @@ fn a_vertex_no_face_uses_changes_nothing() {
         assert_eq!(inside, inside_want, "{extra}");
     }
     assert!(want.iter().filter(|h| h.face >= 0).count() > 10);
+}
+
+/// The files of one mesh, each format that can write float64: an OBJ and
+/// an OFF of shortest round-trip decimals, PLYs of `double` properties
+/// (ASCII and binary), and a PLY of `float` properties with the same text.
+fn mesh_files(dir: &Path, v: &[DVec3], faces: &[[u32; 3]]) -> [std::path::PathBuf; 5] {
+    let rows = |prefix: &str| -> String {
+        v.iter()
+            .map(|p| format!("{prefix}{:?} {:?} {:?}\n", p.x, p.y, p.z))
+            .collect()
+    };
+    let listed = |base: u32, prefix: &str| -> String {
+        (faces.iter())
+            .map(|t| format!("{prefix}{} {} {}\n", t[0] + base, t[1] + base, t[2] + base))
+            .collect()
+    };
+    let header = |format: &str, scalar: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex {}\nproperty {scalar} x\nproperty {scalar} y\n\
+             property {scalar} z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+            v.len(),
+            faces.len()
+        )
+    };
+    let obj = format!("{}{}", rows("v "), listed(1, "f "));
+    let off = format!(
+        "OFF\n{} {} 0\n{}{}",
+        v.len(),
+        faces.len(),
+        rows(""),
+        listed(0, "3 ")
+    );
+    let ascii = |scalar| format!("{}{}{}", header("ascii", scalar), rows(""), listed(0, "3 "));
+    let mut binary = header("binary_little_endian", "double").into_bytes();
+    binary.extend(
+        v.iter()
+            .flat_map(|p| p.to_array())
+            .flat_map(f64::to_le_bytes),
+    );
+    for t in faces {
+        binary.push(3);
+        binary.extend(t.iter().flat_map(|&k| (k as i32).to_le_bytes()));
+    }
+    let files = ["m.obj", "m.off", "double.ply", "binary.ply", "float.ply"].map(|f| dir.join(f));
+    let texts = [
+        obj.into_bytes(),
+        off.into_bytes(),
+        ascii("double").into_bytes(),
+        binary,
+    ];
+    for (path, bytes) in files.iter().zip(texts) {
+        std::fs::write(path, bytes).unwrap();
+    }
+    std::fs::write(&files[4], ascii("float")).unwrap();
+    files
+}
+
+/// Each face's corners as the mesh holds them given, in float64.
+fn given_corners(mesh: &Mesh) -> Option<Vec<[DVec3; 3]>> {
+    let (v, f) = mesh.given()?;
+    Some(f.iter().map(|t| t.map(|k| v[k as usize])).collect())
+}
+
+/// A file's own float64 coordinates are held as it writes them: a cube
+/// at UTM-like coordinates (where float32 is 0.5 m coarse) loaded from an
+/// OBJ, an OFF and `double` PLYs is the mesh of its float64 arrays, bit
+/// for bit (its centre, its vertices as given, every first hit); from a
+/// PLY whose header says `float`, it is the mesh of those arrays rounded
+/// to float32, as the header says, whatever digits the text writes.
+#[test]
+fn a_far_file_is_held_as_it_writes_its_coordinates() {
+    let (v, faces) = cube();
+    let far = DVec3::new(500_123.37, 5_000_456.71, 100.3);
+    let given: Vec<DVec3> = v.iter().map(|p| p.as_dvec3() * 1.37 + far).collect();
+    let rounded: Vec<DVec3> = given.iter().map(|p| p.as_vec3().as_dvec3()).collect();
+    let arrays = Mesh::new_exact(given.clone(), faces.clone(), BuildQuality::Auto).unwrap();
+    let float32 = Mesh::new_exact(rounded, faces.clone(), BuildQuality::Auto).unwrap();
+    assert!(arrays.given().is_some() && arrays.centre() != DVec3::ZERO);
+    let rays: Vec<Ray> = rays_and_points(400)
+        .0
+        .iter()
+        .map(|r| Ray::new(r.origin * 1.37, r.direction))
+        .collect();
+    let key = |h: &FirstHit| (h.t.to_bits(), h.face, h.point.to_array().map(f64::to_bits));
+    let hits = |mesh: &Mesh| {
+        let mut got = vec![FirstHit::MISS; rays.len()];
+        mesh.first_hits(&rays, &mut got, true);
+        got.iter().map(key).collect::<Vec<_>>()
+    };
+    let dir = temp_dir("far-files");
+    for (k, path) in mesh_files(&dir, &given, &faces).iter().enumerate() {
+        let want = if k < 4 { &arrays } else { &float32 };
+        let mesh = Mesh::load(path, BuildQuality::Auto).unwrap();
+        assert_eq!(mesh.centre(), want.centre(), "{}", path.display());
+        // The faces' corners as given (tobj orders an OBJ's vertices by
+        // first use).
+        assert_eq!(
+            given_corners(&mesh),
+            given_corners(want),
+            "{}",
+            path.display()
+        );
+        assert_eq!(hits(&mesh), hits(want), "{}", path.display());
+    }
+    assert!(hits(&arrays).iter().filter(|h| h.1 >= 0).count() > 50);
+    assert_ne!(hits(&arrays), hits(&float32), "float32 moves the faces");
+}
+
+/// An OBJ's meshes are faces one after another in file order, as the scene
+/// of the file compiles them: two objects, a quad, a degenerate triangle
+/// and a vertex no face uses.
+#[test]
+fn a_loaded_file_keeps_the_scene_s_face_order() {
+    let dir = temp_dir("face-order");
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 7 7 7\nv 0.1 0.2 0.3\n\
+                o a\nf 1 2 3 4\nf 1 1 2\no b\nf 6 2 3\nf 4 6 1\n";
+    let path = write(&dir, "two.obj", text.as_bytes());
+    let loaded = Mesh::load(&path, BuildQuality::Auto).unwrap();
+    let (scene, _) = load_mesh_scene(&path, BuildQuality::Auto).unwrap();
+    let compiled = Mesh::from_geometry(scene.geometry);
+    assert_eq!(loaded.triangle_count(), 5);
+    assert_eq!(loaded.triangles(), compiled.triangles());
+    let (vertices, _) = loaded.given().expect("0.1 is no float32");
+    // Each object's own vertices that its faces use (4 and 5): not the
+    // one no face uses.
+    assert_eq!(vertices.len(), 9);
+    assert!(!vertices.contains(&DVec3::splat(7.0)));
 }

@@ -10,7 +10,7 @@ use crate::geometry::{MeshNormals, MeshTangents, MeshUvs};
 use crate::material::Material;
 use crate::math::{Aabb, Transform};
 use crate::texture::Textures;
-use glam::{Affine3A, Mat3, Vec3};
+use glam::{Affine3A, DVec3, Mat3, Vec3};
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::rc::Rc;
@@ -23,6 +23,15 @@ use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 pub struct LoadedMesh {
     pub name: String,
     pub positions: Vec<Vec3>,
+    /// The file's own coordinates in float64, one per position (`positions`
+    /// are their rounding to float32), kept only where the load asked for
+    /// them ([`Coordinates::Float64`]) and the file can write more than
+    /// float32 holds: OBJ and OFF text, PLY `double` properties. A query
+    /// mesh is held to them (`raycast::Mesh::load`); a scene traces
+    /// `positions`.
+    ///
+    /// [`Coordinates::Float64`]: crate::scene::loaders::Coordinates::Float64
+    pub exact_positions: Option<Vec<DVec3>>,
     pub indices: Vec<[u32; 3]>,
     /// Shading normals, only if the file has them.
     pub normals: Option<MeshNormals>,

@@ -78,21 +78,40 @@ pub fn check_extension(path: &Path) -> Result<String, String> {
     ))
 }
 
+/// The precision a load keeps a file's coordinates in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coordinates {
+    /// float32, as a scene traces them.
+    Float32,
+    /// float32 and, where the format can write more, the file's own
+    /// float64 values beside them ([`LoadedMesh::exact_positions`]): a
+    /// query mesh far from the origin, whose float32 rounding would move
+    /// its faces (0.25 m at five million).
+    ///
+    /// [`LoadedMesh::exact_positions`]: crate::scene::asset::LoadedMesh::exact_positions
+    Float64,
+}
+
 /// Load any supported mesh file, chosen by its extension (case-insensitive):
 /// `.obj`, `.gltf`, `.glb`, `.ply`, `.off` or `.stl`; a file without one by
 /// the format its first bytes tell ([`check_extension`]). Any other
 /// extension, or first bytes that say the file holds another format, is an
 /// [`InputError`] naming the file and what it is.
 pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
+    load_mesh_file_with(path, Coordinates::Float32)
+}
+
+/// [`load_mesh_file`], keeping the file's coordinates as `coordinates` says.
+pub fn load_mesh_file_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
     let extension = check_extension(path).map_err(|e| InputError::file(path, e))?;
     let (head, len) = sniff::read_head(path)?;
     sniff::check_mesh_head(path, &extension, &head, len)?;
     match extension.as_str() {
-        "obj" => obj::load_obj(path),
+        "obj" => obj::load_obj_with(path, coordinates),
         "gltf" | "glb" => gltf::load_gltf(path),
-        "off" => off::load_off(path),
+        "off" => off::load_off_with(path, coordinates),
         "stl" => stl::load_stl(path),
-        _ => ply::load_ply(path),
+        _ => ply::load_ply_with(path, coordinates),
     }
 }
 

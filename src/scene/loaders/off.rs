@@ -27,16 +27,21 @@
 //! anything is allocated for them. Text after the last face is ignored
 //! with a warning, and a file without faces loads with one.
 
-use super::io_message;
 use super::sniff::is_off_keyword;
 use super::text::decode_text;
+use super::{io_message, Coordinates};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::path::Path;
 
 /// Load an OFF file into one mesh; see the module documentation.
 pub fn load_off(path: &Path) -> InputResult<LoadedAsset> {
+    load_off_with(path, Coordinates::Float32)
+}
+
+/// [`load_off`], keeping the file's coordinates as `coordinates` says.
+pub fn load_off_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     // A binary OFF file's header is text, its body not: say so before the
@@ -53,7 +58,7 @@ pub fn load_off(path: &Path) -> InputResult<LoadedAsset> {
         ));
     }
     let text = decode_text(path, &bytes)?;
-    parse_off(path, &text)
+    parse_off(path, &text, coordinates)
 }
 
 fn at(path: &Path, line: usize, message: impl Into<String>) -> InputError {
@@ -76,7 +81,11 @@ fn whole(token: &str, what: &str) -> Result<u64, String> {
 }
 
 /// Read OFF text; `path` names the file in errors.
-pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
+pub(crate) fn parse_off(
+    path: &Path,
+    text: &str,
+    coordinates: Coordinates,
+) -> InputResult<LoadedAsset> {
     let mut lines = content_lines(text);
     let Some((header_line, header)) = lines.next() else {
         return Err(InputError::file(
@@ -157,6 +166,8 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
     };
 
     let mut positions = Vec::with_capacity(n_vertices as usize);
+    let mut exact_positions =
+        (coordinates == Coordinates::Float64).then(|| Vec::with_capacity(n_vertices as usize));
     // The vertices that are not finite, with their lines.
     let mut not_finite = Vec::new();
     for k in 0..n_vertices {
@@ -192,6 +203,11 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
             };
         }
         positions.push(Vec3::from(p));
+        if let Some(exact) = &mut exact_positions {
+            // Each token read as float32 above is a number.
+            let [x, y, z] = [x, y, z].map(|t| t.parse::<f64>().unwrap_or(f64::NAN));
+            exact.push(DVec3::new(x, y, z));
+        }
     }
 
     let mut indices = Vec::with_capacity(n_faces as usize);
@@ -270,6 +286,7 @@ pub(crate) fn parse_off(path: &Path, text: &str) -> InputResult<LoadedAsset> {
         meshes: vec![LoadedMesh {
             name,
             positions,
+            exact_positions,
             indices,
             ..LoadedMesh::default()
         }],
@@ -287,7 +304,7 @@ mod tests {
     use crate::scene::loaders::test_files::{temp_dir, write};
 
     fn parse(text: &str) -> InputResult<LoadedAsset> {
-        parse_off(Path::new("m.off"), text)
+        parse_off(Path::new("m.off"), text, Coordinates::Float32)
     }
 
     fn error(text: &str) -> String {

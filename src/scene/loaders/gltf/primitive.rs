@@ -175,6 +175,8 @@ impl Loader<'_> {
             material,
             uvs,
             mirrored: false,
+            // glTF's positions are float32 (its spec's accessor types).
+            exact_positions: None,
         }))
     }
 }

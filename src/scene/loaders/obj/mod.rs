@@ -102,12 +102,12 @@ mod ignored;
 mod mtl;
 mod scan;
 
-use super::io_message;
 use super::text::decode_text;
+use super::{io_message, Coordinates};
 use crate::error::{InputError, InputResult};
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2};
 use mtl::mtl_to_material;
 use scan::{rewrite_for_tobj, scan_obj};
 use std::borrow::Cow;
@@ -118,6 +118,13 @@ use std::path::Path;
 /// Errors name the file and, for malformed content, the line. An OBJ without
 /// faces loads as an asset without triangles.
 pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
+    load_obj_with(path, Coordinates::Float32)
+}
+
+/// [`load_obj`], keeping the file's coordinates as `coordinates` says
+/// (tobj reads them as float64, `use_f64`; a scene's float32 positions are
+/// those rounded).
+pub fn load_obj_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let text = decode_text(path, &bytes)?;
@@ -199,7 +206,7 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             && !mesh.normals.is_empty()
             && mesh.normal_indices.len() == mesh.indices.len())
         .then(|| MeshNormals {
-            values: vec3s(&mesh.normals),
+            values: vec3s(&mesh.normals).map(|n| n.as_vec3()).collect(),
             indices: triangles(&mesh.normal_indices),
         });
         let material = mesh.material_id.filter(|&i| i < asset.materials.len());
@@ -216,13 +223,15 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
             values: mesh
                 .texcoords
                 .chunks_exact(2)
-                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .map(|t| Vec2::new(t[0] as f32, 1.0 - t[1] as f32))
                 .collect(),
             indices: triangles(&mesh.texcoord_indices),
         });
         asset.meshes.push(LoadedMesh {
             name: name(model.name),
-            positions: vec3s(&mesh.positions),
+            positions: vec3s(&mesh.positions).map(|p| p.as_vec3()).collect(),
+            exact_positions: (coordinates == Coordinates::Float64)
+                .then(|| vec3s(&mesh.positions).collect()),
             indices,
             normals,
             material,
@@ -238,8 +247,8 @@ pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
 /// The name tobj gives the faces no `o` or `g` line names.
 const TOBJ_DEFAULT_NAME: &str = "unnamed_object";
 
-fn vec3s(flat: &[f32]) -> Vec<Vec3> {
-    flat.chunks_exact(3).map(Vec3::from_slice).collect()
+fn vec3s(flat: &[f64]) -> impl Iterator<Item = DVec3> + '_ {
+    flat.chunks_exact(3).map(DVec3::from_slice)
 }
 
 fn triangles(flat: &[u32]) -> Vec<[u32; 3]> {
@@ -316,6 +325,7 @@ mod test_helpers {
 mod tests {
     use super::test_helpers::{corners, load_text, SQUARE};
     use super::*;
+    use glam::Vec3;
 
     use super::super::test_files::{temp_dir, write};
 

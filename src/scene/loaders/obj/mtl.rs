@@ -14,7 +14,7 @@ use super::parse_finite;
 use crate::error::{InputError, InputResult};
 use crate::material::{Maps, Material, NormalMap, NormalMapKind};
 use crate::texture::{Encoding, Image, Texture, Textures, Wrap};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -341,13 +341,19 @@ fn parse_colour(keyword: &str, tokens: &[&str]) -> Result<[f32; 3], String> {
     }
 }
 
+/// An MTL colour, which tobj reads as float64 (`use_f64`, for OBJ
+/// coordinates), rounded once to ours.
+fn rgb(c: [f64; 3]) -> Vec3 {
+    DVec3::from(c).as_vec3()
+}
+
 /// Map one MTL material to ours; see the table in the [`obj` module
 /// documentation](super).
 pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
     let defaults = Material::default();
-    let specular = m.specular.map(Vec3::from).unwrap_or(Vec3::ZERO);
+    let specular = m.specular.map(rgb).unwrap_or(Vec3::ZERO);
     let mut transparency = match m.dissolve {
-        Some(d) => 1.0 - d,
+        Some(d) => 1.0 - d as f32,
         None => m
             .unknown_param
             .get("Tr")
@@ -361,18 +367,19 @@ pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
     let illum = m.illumination_model.unwrap_or(0);
     let mirror = matches!(illum, 3 | 5 | 7);
     Material {
-        diffuse: m.diffuse.map(Vec3::from).unwrap_or(defaults.diffuse),
+        diffuse: m.diffuse.map(rgb).unwrap_or(defaults.diffuse),
         specular,
-        shininess: m.shininess.unwrap_or(0.0),
+        shininess: m.shininess.map_or(0.0, |s| s as f32),
         reflectivity: if mirror { specular.max_element() } else { 0.0 },
         glossiness: 0.0,
         transparency: transparency.clamp(0.0, 1.0),
         ior: m
             .optical_density
+            .map(|n| n as f32)
             .filter(|n| n.is_finite() && *n > 0.0)
             .unwrap_or(defaults.ior),
         fresnel: matches!(illum, 5 | 7),
-        emission: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
+        emission: m.emissive.map(rgb).unwrap_or(Vec3::ZERO),
         // `parse_mtl` put the texture's index in place of the file name.
         diffuse_texture: m.diffuse_texture.as_deref().and_then(|t| t.parse().ok()),
         maps: Maps {

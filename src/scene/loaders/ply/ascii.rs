@@ -9,11 +9,12 @@
 //! file fails here as it would in any PLY reader. Errors name the file's
 //! line. Floats parse with Rust's correctly rounded `str::parse`, so the
 //! positions are the same bits as any exact reader gives; `double`
-//! properties round once, from the f64 value, to f32.
+//! properties round once, from the f64 value, to f32 (or are kept as read,
+//! for a [`Point`] of float64).
 
 use super::face::{Face, FaceRows};
+use super::point::Point;
 use crate::error::{InputError, InputResult};
-use glam::Vec3;
 use ply_rs_bw::ply::{Header, PropertyType, ScalarType};
 use rayon::prelude::*;
 use std::path::Path;
@@ -21,8 +22,8 @@ use wide::u8x32;
 
 /// What a mesh takes from an ASCII PLY body.
 #[derive(Default)]
-pub(super) struct AsciiBody {
-    pub positions: Vec<Vec3>,
+pub(super) struct AsciiBody<P> {
+    pub positions: Vec<P>,
     pub faces: FaceRows,
     /// The line of the first vertex, for messages.
     pub first_vertex_line: usize,
@@ -69,12 +70,12 @@ const CHUNK: usize = 1 << 14;
 /// of [`CHUNK`] elements by one scan for line ends (which also counts
 /// lines, for messages), and the chunks are parsed in parallel. Errors
 /// are those of a line-by-line reader: the first bad line in file order.
-pub(super) fn read_body(
+pub(super) fn read_body<P: Point>(
     path: &Path,
     header: &Header,
     bytes: &[u8],
     mut line: usize,
-) -> InputResult<AsciiBody> {
+) -> InputResult<AsciiBody<P>> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let before = &bytes[..e.valid_up_to()];
         let at = line + 1 + before.iter().filter(|&&b| b == b'\n').count();
@@ -129,9 +130,9 @@ pub(super) fn read_body(
         // Each chunk writes its own part of the element's one array, so no
         // chunk's elements are copied again after parsing.
         let total = done;
-        let mut positions = vec![Vec3::ZERO; if name == "vertex" { total } else { 0 }];
+        let mut positions = vec![P::default(); if name == "vertex" { total } else { 0 }];
         let mut rows = vec![[0u32; 3]; if name == "face" { total } else { 0 }];
-        let mut position_parts: Vec<&mut [Vec3]> = positions.chunks_mut(CHUNK).collect();
+        let mut position_parts: Vec<&mut [P]> = positions.chunks_mut(CHUNK).collect();
         position_parts.resize_with(chunks.len(), Default::default);
         let mut row_parts: Vec<&mut [[u32; 3]]> = rows.chunks_mut(CHUNK).collect();
         row_parts.resize_with(chunks.len(), Default::default);
@@ -250,10 +251,10 @@ impl ElementReader<'_> {
     /// faces' rows, one a slot, in order) and returns its faces that are
     /// no triangle, with their indices in the element ([`FaceRows`]), or
     /// the error of its first bad line.
-    fn parse(
+    fn parse<P: Point>(
         &self,
         chunk: &Chunk,
-        positions: &mut [Vec3],
+        positions: &mut [P],
         rows: &mut [[u32; 3]],
     ) -> InputResult<Vec<(usize, Face)>> {
         let name = self.name;
@@ -273,13 +274,13 @@ impl ElementReader<'_> {
                     .next()
                     .ok_or_else(|| at(format!("'{name}' element: {what} is missing")))
             };
-            let mut position = [0.0f32; 3];
+            let mut position = [0.0f64; 3];
             let mut face = None;
             for &(role, data_type) in &self.uses {
                 match (role, data_type) {
                     (Use::Coordinate(axis), PropertyType::Scalar(t)) => {
                         let token = next("a coordinate")?;
-                        position[axis] = number(token, t).map_err(&at)? as f32;
+                        position[axis] = number(token, t).map_err(&at)?;
                     }
                     (Use::Indices, PropertyType::List(count_type, item_type)) => {
                         let n = count(next("the index count")?, count_type).map_err(&at)?;
@@ -318,7 +319,7 @@ impl ElementReader<'_> {
             match name {
                 // Checked once the faces are known: a vertex no face uses
                 // may be NaN (`loaders::settle_unused_vertices`).
-                "vertex" => positions[element] = Vec3::from(position),
+                "vertex" => positions[element] = P::from_f64s(position),
                 "face" => match face.unwrap_or_default() {
                     Face::Triangle(t) => rows[element] = t,
                     other => others.push((chunk.first_element + element, other)),

@@ -18,10 +18,11 @@
 //! a later `vertex` or `face` element replaces an earlier one.
 
 use super::face::Face;
+use super::point::Point;
 use crate::error::{InputError, InputResult};
-use glam::Vec3;
 use ply_rs_bw::ply::{Encoding, Header, PropertyType, ScalarType};
 use rayon::prelude::*;
+use std::marker::PhantomData;
 use std::path::Path;
 
 /// A PLY scalar type, as a plain copyable value.
@@ -73,24 +74,24 @@ fn take<const N: usize>(b: &[u8], at: usize) -> [u8; N] {
     a
 }
 
-/// The float of type `t` at `b[at..]`, rounded to f32 (as the old reader
-/// did: a `double` rounds once).
+/// The float of type `t` at `b[at..]`, as f64 (a `float` widened, so
+/// exact); a [`Point`] rounds it once.
 #[inline]
-fn float<const BIG: bool>(b: &[u8], at: usize, t: Scalar) -> f32 {
+fn float<const BIG: bool>(b: &[u8], at: usize, t: Scalar) -> f64 {
     if t == Scalar::F64 {
         let bytes = take(b, at);
-        (if BIG {
+        if BIG {
             f64::from_be_bytes(bytes)
         } else {
             f64::from_le_bytes(bytes)
-        }) as f32
+        }
     } else {
         let bytes = take(b, at);
-        if BIG {
+        f64::from(if BIG {
             f32::from_be_bytes(bytes)
         } else {
             f32::from_le_bytes(bytes)
-        }
+        })
     }
 }
 
@@ -249,25 +250,25 @@ const MIN_TASK: usize = 1 << 12;
 /// Reads the binary `body` that follows `header`, whose first element's
 /// line is `line` (`ply-rs-bw`'s count, for messages), and checks it:
 /// the mesh's positions and triangles (faces fan-triangulated).
-pub(super) fn read_body(
+pub(super) fn read_body<P: Point>(
     path: &Path,
     header: &Header,
     body: &[u8],
     line: usize,
-) -> InputResult<(Vec<Vec3>, Vec<[u32; 3]>)> {
+) -> InputResult<(Vec<P>, Vec<[u32; 3]>)> {
     if header.encoding == Encoding::BinaryBigEndian {
-        read::<true>(path, header, body, line)
+        read::<true, P>(path, header, body, line)
     } else {
-        read::<false>(path, header, body, line)
+        read::<false, P>(path, header, body, line)
     }
 }
 
-fn read<const BIG: bool>(
+fn read<const BIG: bool, P: Point>(
     path: &Path,
     header: &Header,
     body: &[u8],
     mut line: usize,
-) -> InputResult<(Vec<Vec3>, Vec<[u32; 3]>)> {
+) -> InputResult<(Vec<P>, Vec<[u32; 3]>)> {
     let bad = |message: String| InputError::file(path, format!("invalid PLY: {message}"));
     let mut positions = Vec::new();
     let mut faces = Faces::Walked(Vec::new());
@@ -287,7 +288,7 @@ fn read<const BIG: bool>(
         match records {
             Some((size, records)) => {
                 if name == "vertex" {
-                    positions = fixed_positions::<BIG>(&layout, records, size);
+                    positions = fixed_positions::<BIG, P>(&layout, records, size);
                 } else if let ("face", Some((at, item))) = (name.as_str(), layout.indices()) {
                     faces = Faces::Triangles {
                         triangles: fixed_triangles::<BIG>(records, size, at, item),
@@ -303,7 +304,11 @@ fn read<const BIG: bool>(
                 at += records.len();
             }
             None => {
-                let mut walk = Walk::<BIG> { bytes: rest, at: 0 };
+                let mut walk = Walk::<BIG, P> {
+                    bytes: rest,
+                    at: 0,
+                    point: PhantomData,
+                };
                 let walked = walk.element(&layout, line).map_err(bad)?;
                 at += walk.at;
                 match name.as_str() {
@@ -371,18 +376,22 @@ fn all_lists_hold_three<const BIG: bool>(layout: &Layout, records: &[u8], size: 
         .all(|r| lists.iter().all(|&(at, t)| integer::<BIG>(r, at, t) == 3))
 }
 
-fn fixed_positions<const BIG: bool>(layout: &Layout, records: &[u8], size: usize) -> Vec<Vec3> {
+fn fixed_positions<const BIG: bool, P: Point>(
+    layout: &Layout,
+    records: &[u8],
+    size: usize,
+) -> Vec<P> {
     let coordinates = layout.coordinates();
     let mut positions = Vec::new();
     if size == 0 {
         // Records of no bytes: a vertex of no coordinates each.
-        positions.resize(layout.count, Vec3::ZERO);
+        positions.resize(layout.count, P::default());
         return positions;
     }
     records
         .par_chunks_exact(size)
         .with_min_len(MIN_TASK)
-        .map(|r| Vec3::from(coordinates.map(|c| c.map_or(0.0, |(at, t)| float::<BIG>(r, at, t)))))
+        .map(|r| P::from_f64s(coordinates.map(|c| c.map_or(0.0, |(at, t)| float::<BIG>(r, at, t)))))
         .collect_into_vec(&mut positions);
     positions
 }
@@ -425,15 +434,17 @@ fn face_of(k: &[i64]) -> Face {
 
 /// What one walked element gives the mesh.
 #[derive(Default)]
-struct Walked {
-    positions: Vec<Vec3>,
+struct Walked<P> {
+    positions: Vec<P>,
     faces: Vec<Face>,
 }
 
 /// A walk over an element's records, one value at a time.
-struct Walk<'b, const BIG: bool> {
+struct Walk<'b, const BIG: bool, P> {
     bytes: &'b [u8],
     at: usize,
+    /// The type the walk keeps positions in.
+    point: PhantomData<P>,
 }
 
 /// Why a value could not be read: the end of the file (with the message
@@ -446,7 +457,7 @@ enum Stop {
 /// What `std::io::Read::read_exact` says at the end of a file.
 const FILL: &str = "failed to fill whole buffer";
 
-impl<const BIG: bool> Walk<'_, BIG> {
+impl<const BIG: bool, P: Point> Walk<'_, BIG, P> {
     /// The next `n` bytes.
     fn bytes(&mut self, n: usize) -> Result<&[u8], Stop> {
         let b = self
@@ -483,11 +494,11 @@ impl<const BIG: bool> Walk<'_, BIG> {
 
     /// Reads the element of `layout`, whose first record is on `line`, or
     /// the message of the old reader's error.
-    fn element(&mut self, layout: &Layout, line: usize) -> Result<Walked, String> {
+    fn element(&mut self, layout: &Layout, line: usize) -> Result<Walked<P>, String> {
         let mut walked = Walked::default();
         let mut items = Vec::new();
         for i in 0..layout.count {
-            let mut position = [0.0f32; 3];
+            let mut position = [0.0f64; 3];
             let mut face = Face::Empty;
             let record = self.record(layout, &mut position, &mut face, &mut items);
             match record {
@@ -503,7 +514,7 @@ impl<const BIG: bool> Walk<'_, BIG> {
                 Err(Stop::Invalid(message)) => return Err(format!("Line {}: {message}", line + i)),
             }
             match layout.name {
-                "vertex" => walked.positions.push(Vec3::from(position)),
+                "vertex" => walked.positions.push(P::from_f64s(position)),
                 "face" => walked.faces.push(face),
                 _ => {}
             }
@@ -514,7 +525,7 @@ impl<const BIG: bool> Walk<'_, BIG> {
     fn record(
         &mut self,
         layout: &Layout,
-        position: &mut [f32; 3],
+        position: &mut [f64; 3],
         face: &mut Face,
         items: &mut Vec<i64>,
     ) -> Result<(), Stop> {

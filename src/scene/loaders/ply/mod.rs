@@ -9,6 +9,7 @@
 //! | `ascii.rs`        | an ASCII body, line by line in parallel chunks                |
 //! | `binary.rs`       | a binary body, fixed-size records in parallel, others walked  |
 //! | `face.rs`         | a face's indices, and the fan triangulation both bodies share |
+//! | `point.rs`        | a vertex position, float32 or (for exact coordinates) float64 |
 //! | `strips.rs`       | triangle strips (`tristrips`), read by `ply-rs-bw`'s own parser |
 //! | `binary_tests.rs` | the binary reader against `ply-rs-bw`'s, on generated files   |
 //!
@@ -16,7 +17,8 @@
 //! readers and the strips, and the body readers use `face`; nothing below
 //! names the entry.
 //!
-//! `vertex` elements give `x y z` (float or double); `face` elements give a
+//! `vertex` elements give `x y z` (float or double, a double rounded to
+//! float32 or, where the load asks, kept: `point`); `face` elements give a
 //! `vertex_indices` (or `vertex_index`) list, fan-triangulated like OBJ
 //! n-gons; `tristrips` elements give strips of triangles, each ended by −1.
 //! Other elements and properties are read and ignored.
@@ -38,18 +40,20 @@ mod binary;
 mod binary_tests;
 mod face;
 mod header;
+mod point;
 mod strips;
 
 pub(crate) use binary::first_where;
 
-use super::io_message;
+use super::{io_message, Coordinates};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use binary::Scalar;
 use face::out_of_range;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header, PropertyType, ScalarType};
+use point::Point;
 use rayon::prelude::*;
 use std::io::Read;
 use std::path::Path;
@@ -84,7 +88,23 @@ fn check_counts(path: &Path, header: &Header, file_len: u64) -> InputResult<()> 
     Ok(())
 }
 
+/// Load a PLY file into one mesh; see the module documentation.
 pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
+    load_ply_with(path, Coordinates::Float32)
+}
+
+/// [`load_ply`], keeping the file's coordinates as `coordinates` says:
+/// for [`Coordinates::Float64`], `double` properties as written (`float`
+/// ones are float32 by the header, whatever digits an ASCII file writes).
+pub fn load_ply_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
+    match coordinates {
+        Coordinates::Float32 => read_ply::<Vec3>(path),
+        Coordinates::Float64 => read_ply::<DVec3>(path),
+    }
+}
+
+/// The file's one mesh, its positions read as `P` ([`Point::split`]).
+fn read_ply<P: Point>(path: &Path) -> InputResult<LoadedAsset> {
     let mut file = std::fs::File::open(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let bad = |e: &dyn std::fmt::Display| InputError::file(path, format!("invalid PLY: {e}"));
@@ -127,7 +147,7 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     // tests pin this): it is the number of the body's first line.
     let line = reader.line();
     let body = reader.into_inner();
-    let (mut positions, mut indices, first_vertex_line) = if header.encoding == Encoding::Ascii {
+    let (read, mut indices, first_vertex_line) = if header.encoding == Encoding::Ascii {
         let body = ascii::read_body(path, &header, body, line.saturating_sub(1))?;
         let n = body.positions.len();
         let indices = (body.faces)
@@ -138,6 +158,7 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
         let (positions, indices) = binary::read_body(path, &header, body, line)?;
         (positions, indices, None)
     };
+    let (mut positions, exact_positions) = P::split(read);
     if strips::has_strips(&header) {
         indices.extend(strips::strip_triangles(path, &bytes, positions.len())?);
     }
@@ -149,7 +170,13 @@ pub fn load_ply(path: &Path) -> InputResult<LoadedAsset> {
     // The file's bytes are not needed past here; unmapping a large mesh's
     // (264 MB for the 13.9M-triangle dragon) took 20 ms on this thread.
     crate::system::memory::drop_aside(bytes);
-    Ok(mesh_asset(path, positions, indices, warnings))
+    let mesh = LoadedMesh {
+        positions,
+        exact_positions,
+        indices,
+        ..LoadedMesh::default()
+    };
+    Ok(mesh_asset(path, mesh, warnings))
 }
 
 /// Bytes a task of the file's read copies: a few pages' clears and copies
@@ -175,28 +202,14 @@ fn read_at(file: &std::fs::File, part: &mut [u8], offset: u64) -> std::io::Resul
     Ok(filled)
 }
 
-/// One mesh of `positions` and triangles `indices`, named after the file,
-/// with the header's `warnings` and one more if it has no triangles.
-fn mesh_asset(
-    path: &Path,
-    positions: Vec<Vec3>,
-    indices: Vec<[u32; 3]>,
-    warnings: Vec<InputError>,
-) -> LoadedAsset {
+/// The file's one `mesh`, named after the file, with the header's
+/// `warnings` and one more if it has no triangles.
+fn mesh_asset(path: &Path, mesh: LoadedMesh, warnings: Vec<InputError>) -> LoadedAsset {
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().to_string());
     let mut asset = LoadedAsset {
-        meshes: vec![LoadedMesh {
-            name,
-            positions,
-            indices,
-            normals: None,
-            material: None,
-            uvs: None,
-            tangents: None,
-            mirrored: false,
-        }],
+        meshes: vec![LoadedMesh { name, ..mesh }],
         warnings,
         ..LoadedAsset::default()
     };
