@@ -176,8 +176,8 @@ fn corner_arrays(py: Python<'_>, tris: Vec<[glam::Vec3; 3]>) -> PyResult<CornerA
 }
 
 impl Mesh {
-    /// Vertices and faces: as given, or the triangles' corners merged by
-    /// exact position (a loaded or placed mesh).
+    /// Vertices and faces: as given, or the faces' float64 corners merged
+    /// by exact position (a loaded, placed or far mesh).
     fn indexed(&self) -> (Vec<glam::DVec3>, Vec<[u32; 3]>) {
         if let Some((vertices, faces)) = self.0.given() {
             return (vertices.to_vec(), faces.to_vec());
@@ -186,14 +186,14 @@ impl Mesh {
         let mut vertices = Vec::new();
         let faces = self
             .0
-            .triangles()
+            .corner_positions()
             .iter()
             .map(|tri| {
                 tri.map(|p| {
                     *index
-                        .entry(p.to_array().map(f32::to_bits))
+                        .entry(p.to_array().map(f64::to_bits))
                         .or_insert_with(|| {
-                            vertices.push(p.as_dvec3());
+                            vertices.push(p);
                             vertices.len() as u32 - 1
                         })
                 })
@@ -322,7 +322,9 @@ impl Mesh {
     /// on shared indices or on the tree); a mesh whose float64 vertices
     /// float32 does not hold exactly (most float64 arrays; hit points are
     /// computed on them) as ``Mesh(vertices, faces)`` of them as given,
-    /// float64 and int64; a placed mesh as ``Mesh._placed(vertices, faces,
+    /// float64 and int64; a mesh far from the origin that float32 holds
+    /// exactly relative to its centre as ``Mesh(vertices, faces)`` of its
+    /// float64 ``vertices`` and ``faces``; a placed mesh as ``Mesh._placed(vertices, faces,
     /// transforms)``: the mesh it places, so, placed again by the same maps
     /// (float64 (n, 3, 4)).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
@@ -337,6 +339,13 @@ impl Mesh {
             let faces = PyArray1::from_vec(py, idx).reshape([faces.len(), 3])?;
             let args = (vertices, faces).into_pyobject(py)?.into_any();
             return Ok((slf.get_type().into_any(), args));
+        }
+        if mesh.centre() != glam::DVec3::ZERO {
+            // Its corners in float64 (float32 would move them): the same
+            // box, so the same centre, and the same numbers traced.
+            let this = slf.borrow();
+            let args = (this.vertices(py)?, this.faces(py)?).into_pyobject(py)?;
+            return Ok((slf.get_type().into_any(), args.into_any()));
         }
         let Some((prototype, maps)) = mesh.placement() else {
             let (vertices, faces) = corner_arrays(py, mesh.triangles())?;

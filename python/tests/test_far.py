@@ -158,6 +158,31 @@ def test_a_far_mesh_pickles_as_given():
         np.testing.assert_array_equal(a[key], b[key])
 
 
+@pytest.mark.parametrize("at", [[500000.5, 5000000.25, 100.0], [2e12, -3e11, 7.0]])
+def test_a_far_grid_gives_back_its_vertices_and_pickles(at, tmp_path):
+    """A far mesh that float32 holds exactly relative to its centre (a
+    grid's half and quarter metres at UTM coordinates, whole numbers at
+    2e12) keeps no copy as given, yet gives back its float64 vertices,
+    pickles and loads from a file without moving a corner (float32 of the
+    world coordinates would merge them)."""
+    import pickle
+
+    v, f = helpers.box([-2.0, -1.5, -0.25], [2.0, 1.5, 0.25])
+    v = v + np.array(at)
+    mesh = strata_rt.Mesh(v, f)
+    rng = np.random.default_rng(3)
+    origins = np.array(at) + helpers.random_directions(rng, 500) * 10
+    directions = np.array(at) + rng.uniform(-1, 1, (500, 3)) * [2, 1.5, 0.25] - origins
+    want = mesh.intersect(origins, directions)
+    assert (want.prim >= 0).all()
+    write_obj(tmp_path / "grid.obj", v, f)
+    for copy in [mesh, pickle.loads(pickle.dumps(mesh)), strata_rt.Mesh.load(tmp_path / "grid.obj")]:
+        np.testing.assert_array_equal(copy.vertices[copy.faces], v[f])
+        got = copy.intersect(origins, directions)
+        for key in want.keys():
+            np.testing.assert_array_equal(got[key], want[key], err_msg=key)
+
+
 def test_a_mesh_near_the_origin_keeps_every_bit(bumpy):
     """Near the origin nothing moves: the stored triangles are the float32
     vertices given, bit for bit."""

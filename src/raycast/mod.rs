@@ -26,14 +26,16 @@
 //! | [`Mesh::contains`] | inside or not (parity of crossings) | point |
 //! | [`Mesh::closest_point`] | [`ClosestPoint`]: point, distance, face | point |
 //!
-//! **Far from the origin.** A mesh made from arrays ([`Mesh::new_exact`])
-//! whose box lies farther from the origin than its size is held relative
+//! **Far from the origin.** A mesh made from arrays ([`Mesh::new_exact`]),
+//! or loaded from a file that writes float64 ([`Mesh::load`]), whose box
+//! lies farther from the origin than its size is held relative
 //! to a centre near its box's middle ([`Mesh::centre`]): the tree and the
 //! walk are float32 numbers of the mesh's own size, not of its distance
 //! from the origin, so UTM coordinates or a mesh moved by 1e6 are traced as
 //! accurately as at the origin. A binding makes rays and points relative
 //! to it (in float64, then rounded). The centre is the box's middle
-//! rounded to a multiple of the power of two at least the box's size, so a
+//! rounded to a multiple of the power of two at least the box's size (0
+//! on an axis where the middle is no farther out than that size), so a
 //! mesh near the origin keeps centre 0 (and every bit of its answers), and
 //! a mesh moved by a multiple of that power answers bit for bit as it did
 //! unmoved. Hit points and closest points are computed in float64 on the
@@ -492,6 +494,26 @@ impl Mesh {
         tris
     }
 
+    /// Every face's world corners in float64, in face order: as given, or
+    /// as traced moved back by the centre (exactly: a mesh is held relative
+    /// to a centre without its vertices as given only where float32 holds
+    /// them so there), or, for a placed mesh, [`Mesh::triangles`] widened.
+    /// [`Mesh::triangles`] rounds these to float32, which a far mesh's
+    /// corners do not survive (an integer grid at 2e12 merges).
+    pub fn corner_positions(&self) -> Vec<[DVec3; 3]> {
+        if let Some(g) = &self.given {
+            let corner = |k: u32| g.vertices[k as usize];
+            return g.faces.iter().map(|f| f.map(corner)).collect();
+        }
+        if self.centre == DVec3::ZERO {
+            let tris = self.triangles();
+            return tris.iter().map(|t| t.map(Vec3::as_dvec3)).collect();
+        }
+        let c = self.centre;
+        let tris = self.geometry.file_order_triangles();
+        tris.iter().map(|t| t.map(|p| p.as_dvec3() + c)).collect()
+    }
+
     /// `out[i]`: the first hit of `rays[i]` in `(tmin, tmax]`. Watertight:
     /// a ray through a shared edge or vertex of a closed mesh hits one of
     /// the faces there, never none.
@@ -699,7 +721,9 @@ impl Mesh {
 
 /// What a mesh of `vertices` is traced relative to (module docs): the
 /// middle of their box rounded to a multiple of the power of two at least
-/// its largest side; zero where that is zero (a mesh near the origin).
+/// its largest side; zero on each axis where the middle lies no farther
+/// from the origin than that side (a mesh near the origin, whose answers
+/// keep every bit: rounding alone took the box [0, 1] to 1).
 fn centre_of<'a>(vertices: impl Iterator<Item = &'a DVec3>) -> DVec3 {
     let (lo, hi) = vertices
         .filter(|v| v.is_finite())
@@ -711,9 +735,11 @@ fn centre_of<'a>(vertices: impl Iterator<Item = &'a DVec3>) -> DVec3 {
     }
     let size = (hi - lo).max_element().max(f64::MIN_POSITIVE);
     let step = 2f64.powi(size.log2().ceil() as i32);
-    let centre = ((lo + hi) * 0.5 / step).round() * step;
+    let middle = (lo + hi) * 0.5;
+    let centre = (middle / step).round() * step;
+    let near = middle.abs().cmple(DVec3::splat(size));
     // -0.0 is 0.0 (a centre of zero keeps every bit).
-    centre + DVec3::ZERO
+    DVec3::select(near, DVec3::ZERO, centre) + DVec3::ZERO
 }
 
 /// The [min, max] corners of the box of `tris`'s vertices moved by `map`.

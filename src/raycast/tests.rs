@@ -585,3 +585,20 @@ fn a_loaded_file_keeps_the_scene_s_face_order() {
     assert_eq!(vertices.len(), 9);
     assert!(!vertices.contains(&DVec3::splat(7.0)));
 }
+
+/// A mesh no farther from the origin than its size keeps centre 0 on that
+/// axis (rounding the box's middle alone took the box [0, 1] to 1, and
+/// moved the rays of a mesh at the origin); one farther is held near its
+/// middle, a multiple of the power of two at least its size.
+#[test]
+fn a_mesh_near_the_origin_keeps_centre_zero() {
+    let tri = |o: DVec3| vec![o, o + DVec3::X, o + DVec3::Y];
+    for (at, want) in [
+        (DVec3::ZERO, DVec3::ZERO),
+        (DVec3::new(0.2, -1.0, 0.0), DVec3::ZERO),
+        (DVec3::new(1e6, 0.5, 3.0), DVec3::new(1e6 + 1.0, 0.0, 3.0)),
+    ] {
+        let mesh = Mesh::new_exact(tri(at), vec![[0, 1, 2]], BuildQuality::Auto).unwrap();
+        assert_eq!(mesh.centre(), want, "{at}");
+    }
+}
