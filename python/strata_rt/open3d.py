@@ -95,10 +95,10 @@ def _mesh_arrays(mesh: Any) -> Tuple[Any, Any]:
     """Vertices and triangles of one mesh object: an Open3D tensor mesh
     (``vertex.positions``, ``triangle.indices``), a legacy Open3D mesh
     (``vertices``, ``triangles``), a trimesh (``vertices``, ``faces``) or a
-    ``strata_rt.Mesh`` (its ``triangles``)."""
+    ``strata_rt.Mesh`` (its float64 ``vertices`` and ``faces``: its
+    float32 ``triangles`` would move a far mesh's corners)."""
     if isinstance(mesh, Mesh):
-        tris = mesh.triangles
-        return tris.reshape(-1, 3), np.arange(3 * len(tris)).reshape(-1, 3)
+        return mesh.vertices, mesh.faces
     if hasattr(mesh, "vertex") and hasattr(mesh, "triangle"):
         return mesh.vertex["positions"], mesh.triangle["indices"]
     for faces in ("faces", "triangles"):

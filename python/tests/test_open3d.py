@@ -304,6 +304,24 @@ def test_an_empty_scene_and_a_scene_grown_after_a_query():
     assert scene.cast_rays(rays)["geometry_ids"][0] == 3
 
 
+def test_a_far_strata_mesh_is_added_as_it_holds_its_corners():
+    """A strata_rt.Mesh far from the origin goes in with its float64
+    corners (UTM coordinates, where float32 is 0.5 m coarse): the scene
+    answers as the mesh does."""
+    utm = np.array([500123.37, 5000456.71, 100.0])
+    v, f = helpers.icosphere(2)
+    mesh = strata_rt.Mesh(v * 5 + utm, f)
+    scene = RaycastingScene()
+    scene.add_triangles(mesh)
+    rng = np.random.default_rng(8)
+    origins = utm + helpers.random_directions(rng, 500) * 20
+    directions = utm + rng.uniform(-3, 3, (500, 3)) - origins
+    want = mesh.intersect(origins, directions)
+    got = scene.cast_rays(np.hstack([origins, directions]))
+    np.testing.assert_array_equal(got["primitive_ids"], np.where(want.prim >= 0, want.prim, INVALID_ID))
+    np.testing.assert_array_equal(got["t_hit"], want.t)
+
+
 def test_create_rays_pinhole_both_forms():
     k = np.array([[100.0, 0, 20], [0, 50, 10], [0, 0, 1]])
     angle = 0.3
