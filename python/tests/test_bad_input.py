@@ -208,6 +208,34 @@ def test_bad_files_give_strata_s_one_line_message(tmp_path):
     raises(lambda: strata_rt.Mesh.load(odd), str(odd), kind=strata_rt.InputError)
 
 
+@pytest.mark.parametrize(
+    "name, unused, used",
+    [
+        ("m.obj", "v 0 0 0\nv nan nan nan\nv 1 0 0\nv 0 1 0\nf 1 3 4\n", "f 1 2 3\n"),
+        ("m.off", "OFF\n4 1 0\n0 0 0\nnan nan nan\n1 0 0\n0 1 0\n3 0 2 3\n", None),
+        (
+            "m.ply",
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
+            "property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            "0 0 0\nnan nan nan\n1 0 0\n0 1 0\n3 0 2 3\n",
+            None,
+        ),
+    ],
+)
+def test_a_file_s_vertex_no_face_uses_may_be_nan(tmp_path, name, unused, used):
+    """As from arrays and as trimesh reads it: a file's NaN vertex that no
+    face uses loads (left out of ``vertices``); one a face uses raises
+    strata's one-line message naming the file and the lines."""
+    path = tmp_path / name
+    path.write_text(unused)
+    mesh = strata_rt.Mesh.load(path)
+    np.testing.assert_array_equal(mesh.vertices[mesh.faces], [[[0, 0, 0], [1, 0, 0], [0, 1, 0]]])
+    if used:
+        path.write_text(unused + used)
+        message = raises(lambda: strata_rt.Mesh.load(path), str(path), "line 6", "vertex on line 2", kind=strata_rt.InputError)
+        assert "\n" not in message
+
+
 def test_a_path_is_a_str_a_path_like_or_bytes(tmp_path):
     obj = tmp_path / "tri.obj"
     obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")

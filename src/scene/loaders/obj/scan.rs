@@ -73,15 +73,16 @@ fn count_elements(text: &str) -> Counts {
     counts
 }
 
-/// Check one index of a face corner: `singular` and `plural` name the
-/// element ("vertex", "vertices") for messages,
-/// `so_far` is how many elements precede the face, `total` how many the file has.
+/// Check one index of a face corner, and return it counted from 0 in the
+/// whole file: `singular` and `plural` name the element ("vertex",
+/// "vertices") for messages, `so_far` is how many elements precede the
+/// face, `total` how many the file has.
 fn check_index(
     text: &str,
     (singular, plural): (&str, &str),
     so_far: usize,
     total: usize,
-) -> Result<(), String> {
+) -> Result<usize, String> {
     let index: isize = text
         .parse()
         .map_err(|_| format!("'{text}' is not an integer {singular} index"))?;
@@ -97,17 +98,26 @@ fn check_index(
                  (only {so_far} {plural} are defined before this line)"
             ));
         }
+        Ok(so_far - index.unsigned_abs())
     } else if index as usize > total {
-        return Err(format!(
+        Err(format!(
             "{singular} index {index} is out of range (the file defines {total} {plural})"
-        ));
+        ))
+    } else {
+        Ok(index as usize - 1)
     }
-    Ok(())
 }
 
 /// Validate a face's vertex tokens; returns whether every corner has a
-/// normal, and whether every corner has texture coordinates.
-fn check_face(tokens: &[&str], defined: Counts, total: Counts) -> Result<(bool, bool), String> {
+/// normal, and whether every corner has texture coordinates. A corner at
+/// a vertex of `not_finite` (its index from 0 and its line, in order) is
+/// an error naming that vertex's line.
+fn check_face(
+    tokens: &[&str],
+    defined: Counts,
+    total: Counts,
+    not_finite: &[(usize, usize)],
+) -> Result<(bool, bool), String> {
     if tokens.len() < 3 {
         return Err(format!(
             "a face needs at least 3 vertices, this one has {}",
@@ -125,18 +135,25 @@ fn check_face(tokens: &[&str], defined: Counts, total: Counts) -> Result<(bool, 
         if parts[0].is_empty() {
             return Err(format!("'{token}' has no vertex index"));
         }
-        check_index(parts[0], ("vertex", "vertices"), defined.v, total.v)?;
+        let vertex = check_index(parts[0], ("vertex", "vertices"), defined.v, total.v)?;
+        if let Ok(k) = not_finite.binary_search_by_key(&vertex, |&(k, _)| k) {
+            return Err(format!(
+                "'{token}' uses the vertex on line {}, whose coordinates are not finite \
+                 numbers (NaN, infinite or too large)",
+                not_finite[k].1
+            ));
+        }
         match parts.get(1).filter(|p| !p.is_empty()) {
-            Some(vt) => check_index(
-                vt,
-                ("texture coordinate", "texture coordinates"),
-                defined.vt,
-                total.vt,
-            )?,
+            Some(vt) => {
+                let names = ("texture coordinate", "texture coordinates");
+                check_index(vt, names, defined.vt, total.vt)?;
+            }
             None => has_texcoords = false,
         }
         match parts.get(2).filter(|p| !p.is_empty()) {
-            Some(vn) => check_index(vn, ("normal", "normals"), defined.vn, total.vn)?,
+            Some(vn) => {
+                check_index(vn, ("normal", "normals"), defined.vn, total.vn)?;
+            }
             None => has_normals = false,
         }
     }
@@ -170,6 +187,8 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
     // be read (whose materials then go unnamed without more warnings).
     let mut warned_names: HashSet<String> = HashSet::new();
     let mut library_missing = false;
+    // The vertices whose coordinates are not finite, with their lines.
+    let mut not_finite: Vec<(usize, usize)> = Vec::new();
 
     for (number, line) in text.split('\n').enumerate() {
         let at = |message: String| InputError::new(path, format!("line {}", number + 1), message);
@@ -192,9 +211,14 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
                 }
                 let mut xyz = [0.0f32; 3];
                 for (i, token) in rest[..3].iter().enumerate() {
-                    xyz[i] = parse_finite(token, "vertex coordinate").map_err(&at)?;
+                    xyz[i] = parse_number(token, "vertex coordinate").map_err(&at)?;
                 }
-                if rest.len() == 4 {
+                if !xyz.iter().all(|c| c.is_finite()) {
+                    // An error only where a face uses it (a depth image's
+                    // mesh keeps its missing pixels; tobj leaves a vertex no
+                    // face uses out of every mesh).
+                    not_finite.push((defined.v, number + 1));
+                } else if rest.len() == 4 {
                     let w = parse_finite(rest[3], "vertex weight w").map_err(&at)?;
                     if w == 0.0 || xyz.iter().any(|c| !(c / w).is_finite()) {
                         return Err(at(format!(
@@ -236,7 +260,7 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
             }
             "f" => {
                 let (has_normals, has_texcoords) =
-                    check_face(&rest, defined, total).map_err(&at)?;
+                    check_face(&rest, defined, total, &not_finite).map_err(&at)?;
                 scan.faces.push(FaceInfo {
                     triangles: (rest.len() - 2) as u32,
                     has_normals,
@@ -402,12 +426,29 @@ mod tests {
     fn bad_vertices_report_their_line() {
         expect_line_error("v 0 0 0\nv 1 0\n", 2, "3 coordinates");
         expect_line_error("v 0 0 0\n\nv 1 zero 0\n", 3, "'zero' is not a number");
-        expect_line_error("# c\nv nan 0 0\n", 2, "not a finite number");
-        expect_line_error("v 0 0 inf\n", 1, "not a finite number");
-        expect_line_error("v 1e39 0 0\n", 1, "not a finite number");
+        // Not finite (NaN, infinite, beyond float32): an error at the
+        // line of a face that uses it, naming the vertex's line.
+        let tri = "v 1 0 0\nv 0 1 0\n";
+        expect_line_error(
+            &format!("# c\nv nan 0 0\n{tri}f 1 2 3\n"),
+            5,
+            "vertex on line 2",
+        );
+        expect_line_error(&format!("v 0 0 inf\n{tri}f -1 -2 -3\n"), 4, "line 1, whose");
+        expect_line_error(&format!("v 1e39 0 0\n{tri}f 2 3 1\n"), 4, "not finite");
         expect_line_error("v 0 0 0 0\n", 1, "weight");
         expect_line_error("v 0 0 0\nvn 0 NaN 1\n", 2, "not a finite number");
         expect_line_error("vn 0 1\n", 1, "3 numbers");
+    }
+
+    /// A vertex no face uses may be anything, as a depth image's mesh
+    /// keeps its missing pixels (trimesh reads such a file; strata's PLY
+    /// and OFF readers and its arrays take it too).
+    #[test]
+    fn a_vertex_no_face_uses_may_be_nan() {
+        let text = "v 0 0 0\nv nan nan nan\nv 1 0 0\nv inf 0 1e39\nv 0 1 0\nf 1 3 5\n";
+        let asset = load_text(text).unwrap();
+        assert_eq!(corners(&asset), [[Vec3::ZERO, Vec3::X, Vec3::Y]]);
     }
 
     #[test]
