@@ -73,18 +73,29 @@ fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
         return Ok(None);
     }
     let asset = load_mesh_file_with(path, Coordinates::Float64)?;
+    if !asset.shared.is_empty() {
+        return Ok(None);
+    }
     let (mut vertices, mut faces) = (Vec::new(), Vec::new());
-    for mesh in &asset.meshes {
-        let Some(exact) = &mesh.exact_positions else {
+    for mesh in asset.meshes {
+        let Some(exact) = mesh.exact_positions else {
             return Ok(None);
         };
+        let used = used_vertices(&mesh.indices, exact.len());
+        let base = vertices.len() as u32;
+        if used.iter().all(|&u| u) {
+            // Every vertex used (a PLY's, most often): the arrays as read.
+            if base == 0 && faces.is_empty() {
+                (vertices, faces) = (exact, mesh.indices);
+            } else {
+                vertices.extend(exact);
+                faces.extend(mesh.indices.iter().map(|t| t.map(|k| k + base)));
+            }
+            continue;
+        }
         // A vertex no face uses is never traced; a file may leave it NaN.
         let mut index = vec![u32::MAX; exact.len()];
-        for ((k, &p), used) in exact
-            .iter()
-            .enumerate()
-            .zip(used_vertices(&mesh.indices, exact.len()))
-        {
+        for ((k, p), used) in exact.into_iter().enumerate().zip(used) {
             if used {
                 index[k] = vertices.len() as u32;
                 vertices.push(p);
@@ -92,7 +103,7 @@ fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
         }
         faces.extend(mesh.indices.iter().map(|t| t.map(|k| index[k as usize])));
     }
-    Ok(asset.shared.is_empty().then_some((vertices, faces)))
+    Ok(Some((vertices, faces)))
 }
 
 /// A triangle mesh and its tree, built once and asked any number of
