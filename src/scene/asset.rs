@@ -25,10 +25,10 @@ pub struct LoadedMesh {
     pub positions: Vec<Vec3>,
     /// The file's own coordinates in float64, one per position (`positions`
     /// are their rounding to float32), kept only where the load asked for
-    /// them ([`Coordinates::Float64`]) and the file can write more than
-    /// float32 holds: OBJ and OFF text, PLY `double` properties. A query
-    /// mesh is held to them (`raycast::Mesh::load`); a scene traces
-    /// `positions`.
+    /// them ([`Coordinates::Float64`]), by the loaders of the formats that
+    /// can write more than float32 holds: OBJ and OFF text, PLY `double`
+    /// properties (a PLY's `float` ones widened). A query mesh is held to
+    /// them (`raycast::Mesh::load`); a scene traces `positions`.
     ///
     /// [`Coordinates::Float64`]: crate::scene::loaders::Coordinates::Float64
     pub exact_positions: Option<Vec<DVec3>>,
