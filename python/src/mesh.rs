@@ -304,13 +304,18 @@ impl Mesh {
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a
     /// ValueError; FileNotFoundError if it does not exist) with strata's
-    /// one-line message naming the file and the line or key.
+    /// one-line message naming the file and the line or key. What it reads
+    /// leniently, as other tools do (a file without faces, a material no
+    /// library defines), warns (``UserWarning``) in the same words.
     #[staticmethod]
     fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
         let path = args::path(path, "path")?;
         let loaded = py.detach(|| raycast::Mesh::load(&path, BuildQuality::Auto));
         match loaded {
-            Ok(mesh) => Ok(Self(mesh, 0)),
+            Ok((mesh, warnings)) => {
+                crate::render::warn_input(py, &warnings)?;
+                Ok(Self(mesh, 0))
+            }
             Err(e) if !path.exists() => Err(PyFileNotFoundError::new_err(e.to_string())),
             Err(e) => Err(crate::InputError::new_err(e.to_string())),
         }

@@ -278,18 +278,29 @@ fn argument_of(flag: &str) -> String {
 /// warning, in strata's words: the loaders' and those of the settings as
 /// `UserWarning`, samples the film dropped as `RuntimeWarning`.
 fn warn(py: Python<'_>, scene: &[strata::error::InputError], render: &[Warning]) -> PyResult<()> {
-    let said = scene.iter().map(|w| (w.to_string(), true));
+    warn_input(py, scene)?;
     let found = render.iter().map(|w| {
         let user = !matches!(w, Warning::InvalidSamples { .. });
         (w.to_string(), user)
     });
-    for (message, user) in said.chain(found) {
+    for (message, user) in found {
         let category = if user {
             py.get_type::<PyUserWarning>()
         } else {
             py.get_type::<PyRuntimeWarning>()
         };
         let message = CString::new(message).unwrap_or_default();
+        PyErr::warn(py, &category, &message, 1)?;
+    }
+    Ok(())
+}
+
+/// Raises each of `said` (what a loader or the scene's settings read
+/// leniently) as a `UserWarning`, in strata's words.
+pub(crate) fn warn_input(py: Python<'_>, said: &[strata::error::InputError]) -> PyResult<()> {
+    let category = py.get_type::<PyUserWarning>();
+    for w in said {
+        let message = CString::new(w.to_string()).unwrap_or_default();
         PyErr::warn(py, &category, &message, 1)?;
     }
     Ok(())

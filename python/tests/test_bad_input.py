@@ -236,6 +236,18 @@ def test_a_file_s_vertex_no_face_uses_may_be_nan(tmp_path, name, unused, used):
         assert "\n" not in message
 
 
+@pytest.mark.parametrize("name, text", [("points.obj", "v 0 0 0\nv 1 0 0\n"), ("empty.stl", "solid s\nendsolid s\n")])
+def test_a_file_read_leniently_warns_in_strata_s_words(tmp_path, name, text):
+    """What strata's loaders read as other tools do but say a word about
+    (here a file without faces) is a UserWarning naming the file, as the
+    strata command prints it; the mesh loads."""
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.warns(UserWarning, match="no faces|no triangles") as said:
+        mesh = strata_rt.Mesh.load(path)
+    assert len(mesh) == 0 and str(path) in str(said[0].message)
+
+
 def test_a_path_is_a_str_a_path_like_or_bytes(tmp_path):
     obj = tmp_path / "tri.obj"
     obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")

@@ -58,8 +58,9 @@ use glam::{Affine3A, DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
 
-/// A mesh's float64 vertices and its faces, as [`Mesh::new_exact`] takes them.
-type Arrays = (Vec<DVec3>, Vec<[u32; 3]>);
+/// A mesh's float64 vertices and its faces, as [`Mesh::new_exact`] takes
+/// them, and what the file's loader read leniently.
+type Arrays = (Vec<DVec3>, Vec<[u32; 3]>, Vec<InputError>);
 
 /// A mesh file's vertices as the file writes them, in float64, and its
 /// faces in file order: each mesh's vertices that its faces use, in the
@@ -72,12 +73,12 @@ fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
     if !check_extension(path).is_ok_and(|e| matches!(e.as_str(), "obj" | "ply" | "off")) {
         return Ok(None);
     }
-    let asset = load_mesh_file_with(path, Coordinates::Float64)?;
+    let mut asset = load_mesh_file_with(path, Coordinates::Float64)?;
     if !asset.shared.is_empty() {
         return Ok(None);
     }
     let (mut vertices, mut faces) = (Vec::new(), Vec::new());
-    for mesh in asset.meshes {
+    for mesh in std::mem::take(&mut asset.meshes) {
         let Some(exact) = mesh.exact_positions else {
             return Ok(None);
         };
@@ -103,7 +104,7 @@ fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
         }
         faces.extend(mesh.indices.iter().map(|t| t.map(|k| index[k as usize])));
     }
-    Ok(Some((vertices, faces)))
+    Ok(Some((vertices, faces, asset.warnings)))
 }
 
 /// A triangle mesh and its tree, built once and asked any number of
@@ -378,22 +379,25 @@ impl Mesh {
     /// text, PLY `double` properties), the file's own float64 coordinates
     /// are held as a mesh from arrays is ([`Mesh::new_exact`]): centred
     /// where far from the origin, hit and closest points on the faces the
-    /// file writes ([`file_arrays`]).
-    pub fn load(path: &Path, quality: BuildQuality) -> InputResult<Self> {
-        if let Some((vertices, faces)) = file_arrays(path)? {
-            return Self::new_exact(vertices, faces, quality)
-                .map_err(|e| InputError::file(path, e.to_string()));
+    /// file writes ([`file_arrays`]). With it, what the loader read
+    /// leniently (a file without faces, a material no library defines),
+    /// each a warning naming the file and the line.
+    pub fn load(path: &Path, quality: BuildQuality) -> InputResult<(Self, Vec<InputError>)> {
+        if let Some((vertices, faces, warnings)) = file_arrays(path)? {
+            let mesh = Self::new_exact(vertices, faces, quality)
+                .map_err(|e| InputError::file(path, e.to_string()))?;
+            return Ok((mesh, warnings));
         }
         let (scene, _) = load_mesh_scene(path, quality)?;
+        let warnings = scene.warnings;
         let mesh = Self::from_geometry(scene.geometry);
         // Traced as the file places it (its centre is the origin).
         let extent = match mesh.triangle_count() {
             0 => 0.0,
             _ => mesh.bounds[0].abs().max(mesh.bounds[1].abs()).max_element(),
         };
-        check_extent(f64::from(extent))
-            .map_err(|e| crate::error::InputError::file(path, e.to_string()))?;
-        Ok(mesh)
+        check_extent(f64::from(extent)).map_err(|e| InputError::file(path, e.to_string()))?;
+        Ok((mesh, warnings))
     }
 
     /// This mesh placed once by each of `maps` (object to world): stored

@@ -549,7 +549,7 @@ fn a_far_file_is_held_as_it_writes_its_coordinates() {
     let dir = temp_dir("far-files");
     for (k, path) in mesh_files(&dir, &given, &faces).iter().enumerate() {
         let want = if k < 4 { &arrays } else { &float32 };
-        let mesh = Mesh::load(path, BuildQuality::Auto).unwrap();
+        let (mesh, _) = Mesh::load(path, BuildQuality::Auto).unwrap();
         assert_eq!(mesh.centre(), want.centre(), "{}", path.display());
         // The faces' corners as given (tobj orders an OBJ's vertices by
         // first use).
@@ -574,7 +574,8 @@ fn a_loaded_file_keeps_the_scene_s_face_order() {
     let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 7 7 7\nv 0.1 0.2 0.3\n\
                 o a\nf 1 2 3 4\nf 1 1 2\no b\nf 6 2 3\nf 4 6 1\n";
     let path = write(&dir, "two.obj", text.as_bytes());
-    let loaded = Mesh::load(&path, BuildQuality::Auto).unwrap();
+    let (loaded, warnings) = Mesh::load(&path, BuildQuality::Auto).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
     let (scene, _) = load_mesh_scene(&path, BuildQuality::Auto).unwrap();
     let compiled = Mesh::from_geometry(scene.geometry);
     assert_eq!(loaded.triangle_count(), 5);
