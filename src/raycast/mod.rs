@@ -490,17 +490,11 @@ impl Mesh {
     /// Every face's vertices in face order (every copy's, in world space):
     /// a copy of what the trees store.
     pub fn triangles(&self) -> Vec<[Vec3; 3]> {
-        if let Some(g) = &self.given {
-            let corner = |k: u32| g.vertices[k as usize].as_vec3();
-            return g.faces.iter().map(|f| f.map(corner)).collect();
+        if let Some(own) = self.own_corners() {
+            return own.iter().map(|t| t.map(DVec3::as_vec3)).collect();
         }
         let g = &self.geometry;
         let mut tris = g.file_order_triangles();
-        if self.centre != DVec3::ZERO {
-            let c = self.centre;
-            let back = |p: Vec3| (p.as_dvec3() + c).as_vec3();
-            tris.iter_mut().for_each(|t| *t = t.map(back));
-        }
         for instance in g.instances() {
             let m = instance.affine();
             let own = g.prototypes()[instance.prototype as usize].file_order_triangles();
@@ -509,24 +503,36 @@ impl Mesh {
         tris
     }
 
-    /// Every face's world corners in float64, in face order: as given, or
-    /// as traced moved back by the centre (exactly: a mesh is held relative
-    /// to a centre without its vertices as given only where float32 holds
-    /// them so there), or, for a placed mesh, [`Mesh::triangles`] widened.
+    /// Every face's world corners in float64, in face order: those of
+    /// a mesh held as given or relative to a centre ([`Mesh::own_corners`]),
+    /// else (near the origin, or placed) [`Mesh::triangles`] widened.
     /// [`Mesh::triangles`] rounds these to float32, which a far mesh's
     /// corners do not survive (an integer grid at 2e12 merges).
     pub fn corner_positions(&self) -> Vec<[DVec3; 3]> {
+        match self.own_corners() {
+            Some(own) => own,
+            None => (self.triangles().iter())
+                .map(|t| t.map(Vec3::as_dvec3))
+                .collect(),
+        }
+    }
+
+    /// The float64 world corners of a mesh that is not simply its trees'
+    /// float32 triangles: as given, or as traced moved back by the centre
+    /// (exactly: without its vertices as given, a mesh is held relative to
+    /// a centre only where float32 holds them so there). `None` for a mesh
+    /// traced as it lies (centre 0, a placed mesh among them).
+    fn own_corners(&self) -> Option<Vec<[DVec3; 3]>> {
         if let Some(g) = &self.given {
             let corner = |k: u32| g.vertices[k as usize];
-            return g.faces.iter().map(|f| f.map(corner)).collect();
+            return Some(g.faces.iter().map(|f| f.map(corner)).collect());
         }
         if self.centre == DVec3::ZERO {
-            let tris = self.triangles();
-            return tris.iter().map(|t| t.map(Vec3::as_dvec3)).collect();
+            return None;
         }
         let c = self.centre;
         let tris = self.geometry.file_order_triangles();
-        tris.iter().map(|t| t.map(|p| p.as_dvec3() + c)).collect()
+        Some(tris.iter().map(|t| t.map(|p| p.as_dvec3() + c)).collect())
     }
 
     /// `out[i]`: the first hit of `rays[i]` in `(tmin, tmax]`. Watertight:
