@@ -21,7 +21,7 @@ use strata::accel::BuildQuality;
 use strata::error::InputError;
 use strata::math::Ray;
 use strata::rays::file::{encode_rays, write_file, RAY_BYTES};
-use strata::rays::{generate, topology::Topology, RayKind};
+use strata::rays::{generate, topology, RayKind};
 use strata::scene::load_mesh_scene;
 
 /// A kind of ray set, or all of them.
@@ -112,7 +112,7 @@ pub fn run(args: RaysArgs) -> Result<(), CliError> {
         });
         rays.extend(set);
     }
-    let closed = Topology::new(&triangles, 0.0).closed;
+    let closed = topology::is_closed(&triangles, 0.0);
     let description = Description {
         format: "strata-rays",
         mesh: args.mesh.display().to_string(),
