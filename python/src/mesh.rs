@@ -300,13 +300,14 @@ impl Mesh {
     /// format can write in float64 is kept so, as trimesh reads it (OBJ
     /// and OFF decimals, PLY ``double`` properties) and held as a mesh
     /// from those arrays is; PLY ``float``, STL and glTF coordinates are
-    /// read as float32.
+    /// read as float32. Only the faces are read: no material library or
+    /// texture, so a missing image is no error.
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a
     /// ValueError; FileNotFoundError if it does not exist) with strata's
     /// one-line message naming the file and the line or key. What it reads
-    /// leniently, as other tools do (a file without faces, a material no
-    /// library defines), warns (``UserWarning``) in the same words.
+    /// leniently, as other tools do (a file without faces), warns
+    /// (``UserWarning``) in the same words.
     #[staticmethod]
     fn load(py: Python<'_>, path: &Bound<'_, PyAny>) -> PyResult<Self> {
         let path = args::path(path, "path")?;

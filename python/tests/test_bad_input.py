@@ -5,6 +5,7 @@ import os
 import signal
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -246,6 +247,22 @@ def test_a_file_read_leniently_warns_in_strata_s_words(tmp_path, name, text):
     with pytest.warns(UserWarning, match="no faces|no triangles") as said:
         mesh = strata_rt.Mesh.load(path)
     assert len(mesh) == 0 and str(path) in str(said[0].message)
+
+
+def test_a_file_s_looks_are_not_read(tmp_path):
+    """Mesh.load reads a file's faces alone, as trimesh does for ray
+    queries: an OBJ whose material library has a mistake and names a texture
+    that is not there loads without a word (a render of it is an error
+    naming the library's line)."""
+    (tmp_path / "looks.mtl").write_text("newmtl a\nKd red\nmap_Kd gone.png\n")
+    path = tmp_path / "quad.obj"
+    path.write_text("mtllib looks.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl a\nf 1 2 3 4\nusemtl b\nf 1 3 4\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mesh = strata_rt.Mesh.load(path)
+    assert len(mesh) == 3
+    hit = mesh.intersect([[0.25, 0.1, 1.0]], [[0, 0, -1]])
+    assert hit.prim[0] in (0, 1) and hit.t[0] == 1.0
 
 
 def test_a_path_is_a_str_a_path_like_or_bytes(tmp_path):

@@ -51,7 +51,7 @@ use crate::geometry::instance::placed;
 use crate::geometry::travel::SPAN;
 use crate::geometry::{Found, Geometry};
 pub use crate::math::Ray;
-use crate::scene::loaders::{check_extension, load_mesh_file_with, used_vertices, Coordinates};
+use crate::scene::loaders::{check_extension, load_mesh_file_with, used_vertices, Reading};
 pub use crate::scene::MeshArraysError;
 use crate::scene::{check_extent, load_mesh_scene, mesh_geometry};
 use glam::{Affine3A, DVec3, Vec3};
@@ -73,7 +73,7 @@ fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
     if !check_extension(path).is_ok_and(|e| matches!(e.as_str(), "obj" | "ply" | "off")) {
         return Ok(None);
     }
-    let mut asset = load_mesh_file_with(path, Coordinates::Float64)?;
+    let mut asset = load_mesh_file_with(path, Reading::EXACT_FACES)?;
     if !asset.shared.is_empty() {
         return Ok(None);
     }

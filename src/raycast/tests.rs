@@ -603,3 +603,46 @@ fn a_mesh_near_the_origin_keeps_centre_zero() {
         assert_eq!(mesh.centre(), want, "{at}");
     }
 }
+
+/// A file traced for its faces reads none of its looks: an OBJ whose
+/// material library has a mistake and names a texture that is not there,
+/// and a glTF whose material's image is not there, load as queries and as
+/// `strata trace` loads them (a render of them is an error naming the
+/// texture).
+#[test]
+fn a_file_traced_for_its_faces_reads_none_of_its_looks() {
+    let dir = temp_dir("faces-alone");
+    write(&dir, "looks.mtl", b"newmtl a\nKd red\nmap_Kd gone.png\n");
+    let obj = write(
+        &dir,
+        "quad.obj",
+        b"mtllib looks.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nusemtl a\n\
+          f 1/1 2/1 3/1 4/1\nusemtl none\nf 1 3 4\n",
+    );
+    let gltf = write(
+        &dir,
+        "tri.gltf",
+        br#"{"asset":{"version":"2.0"},
+            "buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+            "bufferViews":[{"buffer":0,"byteLength":36}],
+            "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
+            "images":[{"uri":"gone.png"}],"textures":[{"source":0}],
+            "materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0},"material":0}]}],
+            "nodes":[{"mesh":0}]}"#,
+    );
+    for (path, triangles) in [(&obj, 3u32), (&gltf, 1)] {
+        let render = crate::scene::loaders::load_mesh_file(path).unwrap_err();
+        assert!(render.to_string().contains("gone.png") || render.to_string().contains("red"));
+        let (mesh, warnings) = Mesh::load(path, BuildQuality::Auto).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert_eq!(mesh.triangle_count(), u64::from(triangles));
+        let (scene, _) = load_mesh_scene(path, BuildQuality::Auto).unwrap();
+        assert_eq!(scene.geometry.triangle_count(), triangles);
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let ray = Ray::new(Vec3::new(0.25, 0.1, 1.0), Vec3::NEG_Z);
+        let mut hit = [FirstHit::MISS];
+        mesh.first_hits(&[ray], &mut hit, false);
+        assert_eq!(hit[0].t, 1.0, "{}", path.display());
+    }
+}

@@ -15,7 +15,7 @@ use crate::material::Material;
 use crate::math::Aabb;
 use crate::math::Transform;
 use crate::scene::asset::{place_tangents, LoadedAsset, LoadedMesh};
-use crate::scene::loaders::{self, load_mesh_file};
+use crate::scene::loaders::{self, load_mesh_file_with, Reading};
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -255,9 +255,10 @@ impl Compiler<'_> {
             }
             let mut asset = match self.preloaded.take_if(|(p, _)| *p == path) {
                 Some((_, asset)) => asset,
-                None => load_mesh_file(&path)?,
+                None if self.traced_file => load_mesh_file_with(&path, Reading::FACES)?,
+                None => load_mesh_file_with(&path, Reading::RENDER)?,
             };
-            if self.bake_shared {
+            if self.traced_file {
                 asset = asset.into_baked();
             }
             self.warnings.append(&mut asset.warnings);

@@ -273,7 +273,7 @@ fn compile_for(
     let compile_start = Instant::now();
     let mut c = Compiler::new(path, &desc.source, &desc.edited);
     instance::count_mesh_uses(&c.base_dir, &desc.objects, 1, &mut c.mesh_uses);
-    c.bake_shared = purpose == Purpose::MeshFile;
+    c.traced_file = purpose == Purpose::MeshFile;
     c.preloaded = preloaded;
     // Every mistake of the file in one run: each part is compiled after
     // another's mistake too (parts the reading left out are skipped), and
@@ -468,10 +468,11 @@ struct Compiler<'d> {
     /// shared mesh (`None`: the meshes the file places once).
     prototypes: Vec<instance::PrototypeParts>,
     prototype_ids: HashMap<(PathBuf, Option<usize>), u32>,
-    /// Bake the meshes a file shares among its placements instead of
-    /// instancing them: a mesh file traced as it is numbers its
-    /// triangles as the file's copies.
-    bake_shared: bool,
+    /// One mesh file traced as it is: the meshes it shares among its
+    /// placements are baked, not instanced, so its triangles are numbered
+    /// as the file's copies, and its faces alone are read
+    /// (`loaders::Reading::FACES`: no materials, no textures).
+    traced_file: bool,
     instances: Vec<Instance>,
     /// The mesh files' warnings, in the order the files were read.
     warnings: Vec<InputError>,
@@ -504,7 +505,7 @@ impl<'d> Compiler<'d> {
             mesh_uses: HashMap::new(),
             prototypes: Vec::new(),
             prototype_ids: HashMap::new(),
-            bake_shared: false,
+            traced_file: false,
             instances: Vec::new(),
             warnings: Vec::new(),
             preloaded: None,

@@ -92,26 +92,58 @@ pub enum Coordinates {
     Float64,
 }
 
+/// What a load reads of a mesh file beyond its faces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reading {
+    /// The precision its coordinates are kept in.
+    pub coordinates: Coordinates,
+    /// Whether its materials are read, and the textures they use: a
+    /// render's. A file traced for its faces alone (`strata trace`, a query
+    /// mesh) reads neither, so it pays for no image decoded, and a missing
+    /// texture or a material library's mistake is no error there.
+    pub materials: bool,
+}
+
+impl Reading {
+    /// A render's: float32, materials and textures.
+    pub const RENDER: Self = Self {
+        coordinates: Coordinates::Float32,
+        materials: true,
+    };
+    /// Faces to trace as a scene does (`strata trace`, `rays`, `bench`):
+    /// float32, no materials.
+    pub const FACES: Self = Self {
+        coordinates: Coordinates::Float32,
+        materials: false,
+    };
+    /// A query mesh's faces (`raycast::Mesh::load`): float64 where the
+    /// file writes more, no materials.
+    pub const EXACT_FACES: Self = Self {
+        coordinates: Coordinates::Float64,
+        materials: false,
+    };
+}
+
 /// Load any supported mesh file, chosen by its extension (case-insensitive):
 /// `.obj`, `.gltf`, `.glb`, `.ply`, `.off` or `.stl`; a file without one by
 /// the format its first bytes tell ([`check_extension`]). Any other
 /// extension, or first bytes that say the file holds another format, is an
 /// [`InputError`] naming the file and what it is.
 pub fn load_mesh_file(path: &Path) -> InputResult<LoadedAsset> {
-    load_mesh_file_with(path, Coordinates::Float32)
+    load_mesh_file_with(path, Reading::RENDER)
 }
 
-/// [`load_mesh_file`], keeping the file's coordinates as `coordinates` says.
-pub fn load_mesh_file_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
+/// [`load_mesh_file`], reading what `reading` says.
+pub fn load_mesh_file_with(path: &Path, reading: Reading) -> InputResult<LoadedAsset> {
     let extension = check_extension(path).map_err(|e| InputError::file(path, e))?;
     let (head, len) = sniff::read_head(path)?;
     sniff::check_mesh_head(path, &extension, &head, len)?;
     match extension.as_str() {
-        "obj" => obj::load_obj_with(path, coordinates),
-        "gltf" | "glb" => gltf::load_gltf(path),
-        "off" => off::load_off_with(path, coordinates),
+        "obj" => obj::load_obj_with(path, reading),
+        "gltf" | "glb" => gltf::load_gltf_with(path, reading.materials),
+        "off" => off::load_off_with(path, reading.coordinates),
         "stl" => stl::load_stl(path),
-        _ => ply::load_ply_with(path, coordinates),
+        _ => ply::load_ply_with(path, reading.coordinates),
     }
 }
 

@@ -170,6 +170,13 @@ pub const LUMENS_PER_WATT: f32 = 683.0;
 /// Load a `.gltf` or `.glb` file; see the module documentation for what
 /// comes through and how.
 pub fn load_gltf(path: &Path) -> InputResult<LoadedAsset> {
+    load_gltf_with(path, true)
+}
+
+/// [`load_gltf`], without its materials and their textures unless
+/// `materials` (no image is decoded then; every primitive gets the
+/// default material).
+pub fn load_gltf_with(path: &Path, materials: bool) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let is_glb_name = path
@@ -193,6 +200,7 @@ pub fn load_gltf(path: &Path) -> InputResult<LoadedAsset> {
         path,
         root: &root,
         buffers,
+        read_materials: materials,
     }
     .load()
 }
@@ -203,6 +211,8 @@ struct Loader<'a> {
     path: &'a Path,
     root: &'a json::Root,
     buffers: Vec<Cow<'a, [u8]>>,
+    /// Whether the materials and their textures are read.
+    read_materials: bool,
 }
 
 impl Loader<'_> {
@@ -211,7 +221,10 @@ impl Loader<'_> {
     }
 
     fn load(&self) -> InputResult<LoadedAsset> {
-        let (materials, textures) = self.materials()?;
+        let (materials, textures) = match self.read_materials {
+            true => self.materials()?,
+            false => Default::default(),
+        };
         let mut asset = LoadedAsset {
             materials,
             textures,
@@ -256,7 +269,9 @@ impl Loader<'_> {
         }
         self.place_meshes(&uses, &mut asset)?;
         self.warn_of_rest_poses(&uses, &mut asset);
-        self.warn_of_unread_textures(&mut asset);
+        if self.read_materials {
+            self.warn_of_unread_textures(&mut asset);
+        }
         if !empty_scene {
             super::warn_without_triangles(
                 &mut asset,

@@ -82,7 +82,8 @@ impl Loader<'_> {
         };
         let indices =
             assemble_triangles(mode, &order).map_err(|message| self.error(location, message))?;
-        let material = match primitive.material.map(|m| m.value()) {
+        let read = self.read_materials;
+        let material = match primitive.material.map(|m| m.value()).filter(|_| read) {
             Some(m) if m >= asset.materials.len() => {
                 return Err(self.error(
                     format!("{location}.material"),

@@ -302,6 +302,18 @@ mod tests {
             );
             let err = load_gltf(&path).unwrap_err();
             assert!(err.to_string().contains("used by textures[1]"), "{err}");
+            // Read for its faces alone, no image is read: the quad, with
+            // the default material.
+            let faces = super::super::load_gltf_with(&path, false).unwrap();
+            assert!(faces.materials.is_empty() && faces.textures.images.is_empty());
+            assert!(faces
+                .meshes
+                .iter()
+                .all(|m| m.material.is_none() && m.uvs.is_none()));
+            assert_eq!(
+                faces.meshes.iter().map(|m| m.indices.len()).sum::<usize>(),
+                2
+            );
         }
         // Unused images are never read.
         let rest = with_images(r#"{"uri":"gone.png"}"#).replace(r#""index":1"#, r#""index":0"#);

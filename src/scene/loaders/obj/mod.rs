@@ -103,7 +103,7 @@ mod mtl;
 mod scan;
 
 use super::text::decode_text;
-use super::{io_message, Coordinates};
+use super::{io_message, Coordinates, Reading};
 use crate::error::{InputError, InputResult};
 use crate::geometry::{MeshNormals, MeshUvs};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
@@ -118,17 +118,18 @@ use std::path::Path;
 /// Errors name the file and, for malformed content, the line. An OBJ without
 /// faces loads as an asset without triangles.
 pub fn load_obj(path: &Path) -> InputResult<LoadedAsset> {
-    load_obj_with(path, Coordinates::Float32)
+    load_obj_with(path, Reading::RENDER)
 }
 
-/// [`load_obj`], keeping the file's coordinates as `coordinates` says
-/// (tobj reads them as float64, `use_f64`; a scene's float32 positions are
-/// those rounded).
-pub fn load_obj_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
+/// [`load_obj`], reading what `reading` says: the coordinates kept in
+/// float64 where asked (tobj reads them so, `use_f64`; a scene's float32
+/// positions are those rounded); without materials, no `mtllib` is read
+/// and `usemtl` lines say nothing.
+pub fn load_obj_with(path: &Path, reading: Reading) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let text = decode_text(path, &bytes)?;
-    let mut scan = scan_obj(path, &text)?;
+    let mut scan = scan_obj(path, &text, reading.materials)?;
 
     let source: Cow<str> = if scan.needs_rewrite {
         Cow::Owned(rewrite_for_tobj(&text, scan.strip_colours))
@@ -230,7 +231,7 @@ pub fn load_obj_with(path: &Path, coordinates: Coordinates) -> InputResult<Loade
         asset.meshes.push(LoadedMesh {
             name: name(model.name),
             positions: vec3s(&mesh.positions).map(|p| p.as_vec3()).collect(),
-            exact_positions: (coordinates == Coordinates::Float64)
+            exact_positions: (reading.coordinates == Coordinates::Float64)
                 .then(|| vec3s(&mesh.positions).collect()),
             indices,
             normals,

@@ -405,10 +405,12 @@ pub(super) fn mtl_to_material(m: &tobj::Material) -> Material {
 
 #[cfg(test)]
 mod tests {
-    use super::super::load_obj;
     use super::super::test_helpers::SQUARE;
+    use super::super::{load_obj, load_obj_with};
     use crate::material::Material;
+    use crate::scene::asset::LoadedAsset;
     use crate::scene::loaders::test_files::{temp_dir, write};
+    use crate::scene::loaders::Reading;
     use glam::Vec3;
 
     #[test]
@@ -555,7 +557,32 @@ mod tests {
                 let file = std::str::from_utf8(&statement[7..]).unwrap();
                 assert!(shown.contains(file), "{shown} should name {file}");
             }
+            // Read for its faces alone (`strata trace`, a query mesh), the
+            // file reads no library: its faces, no material, no word.
+            let faces = load_obj_with(&dir.join("q.obj"), Reading::FACES).unwrap();
+            assert!(faces.materials.is_empty() && faces.textures.images.is_empty());
+            assert!(faces.warnings.is_empty(), "{:?}", faces.warnings);
+            assert!(faces
+                .meshes
+                .iter()
+                .all(|m| m.material.is_none() && m.uvs.is_none()));
+            let triangles: usize = faces.meshes.iter().map(|m| m.indices.len()).sum();
+            assert_eq!(triangles, 6);
         }
+        // A usemtl naming a material no library defines is a word in a
+        // render, none where materials are not read.
+        write(&dir, "looks.mtl", b"newmtl a\nKd 1 1 1\n");
+        let render = load_obj(&dir.join("q.obj")).unwrap();
+        assert!(render
+            .warnings
+            .iter()
+            .any(|w| w.to_string().contains("'b' is not defined")));
+        let faces = load_obj_with(&dir.join("q.obj"), Reading::FACES).unwrap();
+        assert!(faces.warnings.is_empty(), "{:?}", faces.warnings);
+        let positions = |a: &LoadedAsset| -> Vec<Vec3> {
+            a.meshes.iter().flat_map(|m| m.positions.clone()).collect()
+        };
+        assert_eq!(positions(&faces), positions(&render));
     }
 
     /// What a library holds that strata does not read is a warning at

@@ -168,8 +168,9 @@ fn after_first_space(line: &str) -> &str {
 }
 
 /// The validation pass: checks everything tobj would reject (or silently
-/// mangle), with line numbers, and loads the material libraries.
-pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
+/// mangle), with line numbers, and, with `materials`, loads the material
+/// libraries (without, `mtllib` and `usemtl` lines say nothing).
+pub(super) fn scan_obj(path: &Path, text: &str, materials: bool) -> InputResult<ObjScan> {
     let total = count_elements(text);
     let mut defined = Counts::default();
     let mut scan = ObjScan {
@@ -286,11 +287,14 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
                 let name = after_first_space(line);
                 if name.is_empty() {
                     scan.needs_rewrite = true;
-                    scan.warnings
-                        .push(at("usemtl without a material name (after a space): \
-                         the faces after it get the default material"
-                            .to_string()));
-                } else if total.mtllib
+                    if materials {
+                        scan.warnings
+                            .push(at("usemtl without a material name (after a space): \
+                             the faces after it get the default material"
+                                .to_string()));
+                    }
+                } else if materials
+                    && total.mtllib
                     && !material_names.contains(name)
                     && !library_missing
                     && warned_names.insert(name.to_string())
@@ -303,6 +307,7 @@ pub(super) fn scan_obj(path: &Path, text: &str) -> InputResult<ObjScan> {
                     )));
                 }
             }
+            "mtllib" if !materials => {}
             "mtllib" => {
                 let name = after_first_space(line);
                 if name.is_empty() {
