@@ -297,10 +297,10 @@ impl Mesh {
     /// loaders, used as it is: triangle i of the file is face i. ``path``
     /// is a str, an ``os.PathLike`` (``pathlib.Path``) or bytes, as
     /// ``os.fspath`` takes them; anything else raises TypeError. What the
-    /// format can write in float64 is kept so, as trimesh reads it (OBJ
-    /// and OFF decimals, PLY ``double`` properties) and held as a mesh
-    /// from those arrays is; PLY ``float``, STL and glTF coordinates are
-    /// read as float32. Only the faces are read: no material library or
+    /// format can write in float64 is kept so, as trimesh reads it (OBJ,
+    /// OFF and ASCII STL decimals, PLY ``double`` properties) and held as a
+    /// mesh from those arrays is; PLY ``float``, binary STL and glTF
+    /// coordinates are read as float32. Only the faces are read: no material library or
     /// texture, so a missing image is no error.
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a

@@ -80,6 +80,17 @@ def write_obj(path, v, f):
         out.writelines(f"f {a} {b} {c}\n" for a, b, c in (f + 1).tolist())
 
 
+def write_stl(path, v, f):
+    """An ASCII STL of float64 corners in shortest round-trip decimals."""
+    with open(path, "w") as out:
+        out.write("solid sphere\n")
+        for corners in v[f].tolist():
+            out.write("facet normal 0 0 0\nouter loop\n")
+            out.writelines(f"vertex {x!r} {y!r} {z!r}\n" for x, y, z in corners)
+            out.write("endloop\nendfacet\n")
+        out.write("endsolid sphere\n")
+
+
 def write_ply(path, v, f, scalar):
     """A binary PLY of `scalar` ("double" or "float") vertex properties."""
     dtype = {"double": "<f8", "float": "<f4"}[scalar]
@@ -97,8 +108,8 @@ def write_ply(path, v, f, scalar):
 
 
 def test_a_far_file_loads_as_it_writes_its_coordinates(tmp_path):
-    """Mesh.load keeps an OBJ's decimals and a PLY's doubles in float64, as
-    trimesh reads them: the UTM sphere from a file answers as from its
+    """Mesh.load keeps an OBJ's or ASCII STL's decimals and a PLY's doubles in
+    float64, as trimesh reads them: the UTM sphere from a file answers as from its
     arrays, bit for bit, on its own faces' planes. A PLY of floats is
     float32 by its header, and loads as such."""
     v, f = sphere_at(UTM)
@@ -107,7 +118,8 @@ def test_a_far_file_loads_as_it_writes_its_coordinates(tmp_path):
     want = strata_rt.Mesh(v, f).intersect(origins, directions)
     write_obj(tmp_path / "sphere.obj", v, f)
     write_ply(tmp_path / "sphere.ply", v, f, "double")
-    for name in ["sphere.obj", "sphere.ply"]:
+    write_stl(tmp_path / "sphere.stl", v, f)
+    for name in ["sphere.obj", "sphere.ply", "sphere.stl"]:
         loaded = strata_rt.Mesh.load(tmp_path / name)
         got = loaded.intersect(origins, directions)
         for key in want.keys():

@@ -66,11 +66,11 @@ type Arrays = (Vec<DVec3>, Vec<[u32; 3]>, Vec<InputError>);
 /// faces in file order: each mesh's vertices that its faces use, in the
 /// loader's order (tobj's for an OBJ: an object's own, by first use), the
 /// meshes one after another, as a scene compiles them. `None`
-/// for a format whose coordinates are float32 (glTF, STL) or a file whose
+/// for a format whose coordinates are float32 (glTF, binary STL) or a file whose
 /// extension names none (the scene's compile words that error), which are
 /// loaded as a scene's meshes are.
 fn file_arrays(path: &Path) -> InputResult<Option<Arrays>> {
-    if !check_extension(path).is_ok_and(|e| matches!(e.as_str(), "obj" | "ply" | "off")) {
+    if !check_extension(path).is_ok_and(|e| matches!(e.as_str(), "obj" | "ply" | "off" | "stl")) {
         return Ok(None);
     }
     let mut asset = load_mesh_file_with(path, Reading::EXACT_FACES)?;

@@ -462,7 +462,7 @@ fn a_vertex_no_face_uses_changes_nothing() {
 /// The files of one mesh, each format that can write float64: an OBJ and
 /// an OFF of shortest round-trip decimals, PLYs of `double` properties
 /// (ASCII and binary), and a PLY of `float` properties with the same text.
-fn mesh_files(dir: &Path, v: &[DVec3], faces: &[[u32; 3]]) -> [std::path::PathBuf; 5] {
+fn mesh_files(dir: &Path, v: &[DVec3], faces: &[[u32; 3]]) -> [std::path::PathBuf; 6] {
     let rows = |prefix: &str| -> String {
         v.iter()
             .map(|p| format!("{prefix}{:?} {:?} {:?}\n", p.x, p.y, p.z))
@@ -500,17 +500,36 @@ fn mesh_files(dir: &Path, v: &[DVec3], faces: &[[u32; 3]]) -> [std::path::PathBu
         binary.push(3);
         binary.extend(t.iter().flat_map(|&k| (k as i32).to_le_bytes()));
     }
-    let files = ["m.obj", "m.off", "double.ply", "binary.ply", "float.ply"].map(|f| dir.join(f));
+    let stl: String = faces
+        .iter()
+        .map(|t| {
+            let corners: String = (t.iter())
+                .map(|&k| v[k as usize])
+                .map(|p| format!("vertex {:?} {:?} {:?}\n", p.x, p.y, p.z))
+                .collect();
+            format!("facet normal 0 0 0\nouter loop\n{corners}endloop\nendfacet\n")
+        })
+        .collect();
+    let files = [
+        "m.obj",
+        "m.off",
+        "double.ply",
+        "binary.ply",
+        "m.stl",
+        "float.ply",
+    ];
+    let files = files.map(|f| dir.join(f));
     let texts = [
         obj.into_bytes(),
         off.into_bytes(),
         ascii("double").into_bytes(),
         binary,
+        format!("solid m\n{stl}endsolid m\n").into_bytes(),
     ];
     for (path, bytes) in files.iter().zip(texts) {
         std::fs::write(path, bytes).unwrap();
     }
-    std::fs::write(&files[4], ascii("float")).unwrap();
+    std::fs::write(&files[5], ascii("float")).unwrap();
     files
 }
 
@@ -522,7 +541,7 @@ fn given_corners(mesh: &Mesh) -> Option<Vec<[DVec3; 3]>> {
 
 /// A file's own float64 coordinates are held as it writes them: a cube
 /// at UTM-like coordinates (where float32 is 0.5 m coarse) loaded from an
-/// OBJ, an OFF and `double` PLYs is the mesh of its float64 arrays, bit
+/// OBJ, an OFF, `double` PLYs and an ASCII STL is the mesh of its float64 arrays, bit
 /// for bit (its centre, its vertices as given, every first hit); from a
 /// PLY whose header says `float`, it is the mesh of those arrays rounded
 /// to float32, as the header says, whatever digits the text writes.
@@ -548,7 +567,7 @@ fn a_far_file_is_held_as_it_writes_its_coordinates() {
     };
     let dir = temp_dir("far-files");
     for (k, path) in mesh_files(&dir, &given, &faces).iter().enumerate() {
-        let want = if k < 4 { &arrays } else { &float32 };
+        let want = if k < 5 { &arrays } else { &float32 };
         let (mesh, _) = Mesh::load(path, BuildQuality::Auto).unwrap();
         assert_eq!(mesh.centre(), want.centre(), "{}", path.display());
         // The faces' corners as given (tobj orders an OBJ's vertices by

@@ -26,8 +26,8 @@ pub struct LoadedMesh {
     /// The file's own coordinates in float64, one per position (`positions`
     /// are their rounding to float32), kept only where the load asked for
     /// them ([`Coordinates::Float64`]), by the loaders of the formats that
-    /// can write more than float32 holds: OBJ and OFF text, PLY `double`
-    /// properties (a PLY's `float` ones widened). A query mesh is held to
+    /// can write more than float32 holds: OBJ, OFF and ASCII STL text, PLY
+    /// `double` properties (a PLY's `float` ones widened). A query mesh is held to
     /// them (`raycast::Mesh::load`); a scene traces `positions`.
     ///
     /// [`Coordinates::Float64`]: crate::scene::loaders::Coordinates::Float64

@@ -142,7 +142,7 @@ pub fn load_mesh_file_with(path: &Path, reading: Reading) -> InputResult<LoadedA
         "obj" => obj::load_obj_with(path, reading),
         "gltf" | "glb" => gltf::load_gltf_with(path, reading.materials),
         "off" => off::load_off_with(path, reading.coordinates),
-        "stl" => stl::load_stl(path),
+        "stl" => stl::load_stl_with(path, reading.coordinates),
         _ => ply::load_ply_with(path, reading.coordinates),
     }
 }

@@ -21,17 +21,29 @@
 //! triangle (binary): a coordinate that is no finite number, a loop of
 //! fewer than three vertices, a statement out of place, a file that ends
 //! inside a solid.
+//!
+//! Where the load keeps a file's coordinates in float64
+//! ([`Coordinates::Float64`]), an ASCII file's decimals are kept as
+//! written (`LoadedMesh::exact_positions`), as trimesh reads them, and
+//! corners are one vertex where their float64 values are; binary STL is
+//! float32 by its format.
 
-use super::io_message;
 use super::text::decode_text;
+use super::{io_message, Coordinates};
 use crate::error::{InputError, InputResult};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
 /// Load a binary or ASCII STL file; see the module documentation.
 pub fn load_stl(path: &Path) -> InputResult<LoadedAsset> {
+    load_stl_with(path, Coordinates::Float32)
+}
+
+/// [`load_stl`], keeping an ASCII file's coordinates as `coordinates`
+/// says.
+pub fn load_stl_with(path: &Path, coordinates: Coordinates) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
     let binary_len = bytes
@@ -47,7 +59,7 @@ pub fn load_stl(path: &Path) -> InputResult<LoadedAsset> {
     {
         // Binary headers that start with `solid` (and lie about the count)
         // hold NUL bytes soon after; ASCII never does.
-        read_ascii(path, &decode_text(path, &bytes)?)?
+        read_ascii(path, &decode_text(path, &bytes)?, coordinates)?
     } else {
         let message = match binary_len {
             Some(len) => format!(
@@ -73,22 +85,52 @@ pub fn load_stl(path: &Path) -> InputResult<LoadedAsset> {
 struct Welder {
     positions: Vec<Vec3>,
     ids: HashMap<[u32; 3], u32>,
+    /// The float64 positions, where kept: then corners are told apart by
+    /// them (`exact_ids`), not by their float32 rounding.
+    exact: Option<Vec<DVec3>>,
+    exact_ids: HashMap<[u64; 3], u32>,
 }
 
 impl Welder {
-    fn vertex(&mut self, p: Vec3) -> u32 {
-        // +0 and -0 are one place.
-        let key = (p + Vec3::ZERO).to_array().map(f32::to_bits);
-        *self.ids.entry(key).or_insert_with(|| {
-            self.positions.push(p);
-            (self.positions.len() - 1) as u32
-        })
+    /// A welder that keeps float64 positions where `coordinates` asks.
+    fn new(coordinates: Coordinates) -> Self {
+        Self {
+            exact: (coordinates == Coordinates::Float64).then(Vec::new),
+            ..Self::default()
+        }
     }
 
-    fn mesh(self, name: String, indices: Vec<[u32; 3]>) -> LoadedMesh {
+    /// The vertex at `p`, or where this welder keeps float64 positions,
+    /// at `exact` (the value `p` rounds). +0 and -0 are one place.
+    fn vertex(&mut self, p: Vec3, exact: DVec3) -> u32 {
+        let positions = &mut self.positions;
+        let mut add = || {
+            positions.push(p);
+            (positions.len() - 1) as u32
+        };
+        match &mut self.exact {
+            None => {
+                let key = (p + Vec3::ZERO).to_array().map(f32::to_bits);
+                *self.ids.entry(key).or_insert_with(add)
+            }
+            Some(kept) => {
+                let key = (exact + DVec3::ZERO).to_array().map(f64::to_bits);
+                *self.exact_ids.entry(key).or_insert_with(|| {
+                    kept.push(exact);
+                    add()
+                })
+            }
+        }
+    }
+
+    /// The mesh of these vertices; the welder is ready for the next.
+    fn take_mesh(&mut self, name: String, indices: Vec<[u32; 3]>) -> LoadedMesh {
+        self.ids.clear();
+        self.exact_ids.clear();
         LoadedMesh {
             name,
-            positions: self.positions,
+            positions: std::mem::take(&mut self.positions),
+            exact_positions: self.exact.as_mut().map(std::mem::take),
             indices,
             ..LoadedMesh::default()
         }
@@ -114,14 +156,14 @@ fn read_binary(path: &Path, bytes: &[u8]) -> InputResult<LoadedMesh> {
                     format!("triangle {t}: corner {k} is not finite: {p}"),
                 ));
             }
-            *id = welder.vertex(p);
+            *id = welder.vertex(p, p.as_dvec3());
         }
         indices.push(corner);
     }
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-    Ok(welder.mesh(name, indices))
+    Ok(welder.take_mesh(name, indices))
 }
 
 /// Where an ASCII file's reading is: the statement expected next.
@@ -134,11 +176,11 @@ enum Expect {
     EndFacet,
 }
 
-fn read_ascii(path: &Path, text: &str) -> InputResult<LoadedAsset> {
+fn read_ascii(path: &Path, text: &str, coordinates: Coordinates) -> InputResult<LoadedAsset> {
     let mut asset = LoadedAsset::default();
     let mut expect = Expect::Solid;
     let mut name = String::new();
-    let mut welder = Welder::default();
+    let mut welder = Welder::new(coordinates);
     let mut indices = Vec::new();
     let mut corners: Vec<u32> = Vec::new();
     let mut last = 0;
@@ -168,8 +210,8 @@ fn read_ascii(path: &Path, text: &str) -> InputResult<LoadedAsset> {
             }
             (Expect::Facet, "facet") => Expect::Loop,
             (Expect::Facet, "endsolid") => {
-                let mesh = std::mem::take(&mut welder)
-                    .mesh(std::mem::take(&mut name), std::mem::take(&mut indices));
+                let mesh =
+                    welder.take_mesh(std::mem::take(&mut name), std::mem::take(&mut indices));
                 asset.meshes.push(mesh);
                 Expect::Solid
             }
@@ -186,14 +228,19 @@ fn read_ascii(path: &Path, text: &str) -> InputResult<LoadedAsset> {
                     )));
                 };
                 let mut p = [0.0f32; 3];
-                for (c, token) in p.iter_mut().zip([x, y, z]) {
+                let mut exact = [0.0f64; 3];
+                for ((c, e), token) in p.iter_mut().zip(&mut exact).zip([x, y, z]) {
                     *c = token
                         .parse::<f32>()
                         .ok()
                         .filter(|v| v.is_finite())
                         .ok_or_else(|| at(format!("'{token}' is not a finite number")))?;
+                    if welder.exact.is_some() {
+                        // A float32 number parses as a float64 one too.
+                        *e = token.parse::<f64>().unwrap_or_default();
+                    }
                 }
-                corners.push(welder.vertex(Vec3::from(p)));
+                corners.push(welder.vertex(Vec3::from(p), DVec3::from(exact)));
                 Expect::Vertex
             }
             (Expect::Vertex, "endloop") => {
@@ -263,6 +310,38 @@ mod tests {
         let asset = load_mesh_file(&write(&dir, "two.stl", two.as_bytes())).unwrap();
         assert_eq!(asset.meshes.len(), 2);
         assert_eq!(asset.meshes[0].indices, [[0, 1, 2], [0, 2, 3]]);
+    }
+
+    /// Kept in float64, an ASCII file's corners are its decimals, and two
+    /// that float32 would round to one place stay two vertices.
+    #[test]
+    fn ascii_decimals_kept_in_float64_are_welded_by_their_own_values() {
+        use crate::scene::loaders::{load_mesh_file_with, Reading};
+        let dir = temp_dir("stl-exact");
+        let text = "solid far\nfacet normal 0 0 0\nouter loop\nvertex 5000456.71 0 0\n\
+                    vertex 5000457.71 0 0\nvertex 5000456.71 1 0\nendloop\nendfacet\n\
+                    facet normal 0 0 0\nouter loop\nvertex 5000456.7 0 0\nvertex 5000456.71 1 0\n\
+                    vertex 5000456.71 1 1\nendloop\nendfacet\nendsolid far\n";
+        let path = write(&dir, "far.stl", text.as_bytes());
+        let rounded = load_mesh_file(&path).unwrap();
+        let exact = load_mesh_file_with(&path, Reading::EXACT_FACES).unwrap();
+        let (r, e) = (&rounded.meshes[0], &exact.meshes[0]);
+        assert!(r.exact_positions.is_none());
+        assert_eq!(
+            r.positions.len(),
+            4,
+            "5000456.7 and .71 round to one float32"
+        );
+        assert_eq!(r.indices, [[0, 1, 2], [0, 2, 3]]);
+        let kept = e.exact_positions.as_ref().unwrap();
+        assert_eq!(kept[0].x, 5000456.71);
+        assert_eq!(kept[3].x, 5000456.7);
+        assert_eq!(e.indices, [[0, 1, 2], [3, 2, 4]]);
+        assert_eq!(e.positions.len(), kept.len());
+        assert_eq!(
+            e.positions[3], r.positions[0],
+            "each float32 position its value rounded"
+        );
     }
 
     #[test]
