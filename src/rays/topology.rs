@@ -124,8 +124,9 @@ const NONE: u32 = u32::MAX;
 /// Flat arrays throughout: a vertex's edges are one run of `(end,
 /// triangle)` pairs, so finding an edge scans that vertex's few, and the
 /// run is the vertex's fan. A map from each edge to a list of its
-/// triangles (one allocation an edge) took 75 s and 3.5 GB on a mesh of
-/// 14 million triangles, for `strata rays` to say whether it is closed.
+/// triangles (one allocation an edge) took 75 s and most of 6.7 GB on a
+/// mesh of 14 million triangles, for `strata rays` to say whether it is
+/// closed (docs/performance.md).
 struct Welded {
     points: Vec<Vec3>,
     corners: Vec<[u32; 3]>,
@@ -214,9 +215,9 @@ struct Leaving {
 }
 
 impl Leaving {
-    fn new(welded: &[[u32; 3]], vertices: usize) -> Self {
+    fn new(corners: &[[u32; 3]], vertices: usize) -> Self {
         let mut first = vec![0usize; vertices + 1];
-        for &v in welded.iter().flatten() {
+        for &v in corners.iter().flatten() {
             first[v as usize + 1] += 1;
         }
         for v in 0..vertices {
@@ -224,7 +225,7 @@ impl Leaving {
         }
         let mut next = first.clone();
         let mut ends = vec![(0, 0); first[vertices]];
-        for (i, w) in welded.iter().enumerate() {
+        for (i, w) in corners.iter().enumerate() {
             for k in 0..3 {
                 let slot = &mut next[w[k] as usize];
                 ends[*slot] = (w[(k + 1) % 3], i as u32);
