@@ -180,9 +180,10 @@ def strata_rate(args, mesh, threads):
         raise InputError(mesh, f"strata trace did not run on {threads_word(threads)}: {out.stdout.strip()}")
     rate = float(out.stdout.split(" Mrays/s")[0].rsplit("= ", 1)[1])
     build = float(out.stdout.split("BVH ")[1].split(" s")[0])
-    # "..., kernel avx2)": the instruction set strata walked in (STRATA_SIMD).
-    kernel = out.stdout.split("kernel ")[1].split(")")[0] if "kernel " in out.stdout else "?"
-    if kernel not in KERNELS_SEEN:
+    # "..., kernel avx2)": the instruction set strata walked in (STRATA_SIMD);
+    # embree_trace, whose line this parses too, names none.
+    kernel = out.stdout.split("kernel ")[1].split(")")[0] if "kernel " in out.stdout else None
+    if kernel is not None and kernel not in KERNELS_SEEN:
         KERNELS_SEEN.add(kernel)
         print(f"# strata walks rays with its {kernel} kernel (STRATA_SIMD picks another)", flush=True)
     for line in out.stdout.splitlines():

@@ -194,11 +194,23 @@ pub fn run(args: TraceArgs) -> Result<(), CliError> {
     write_file(&args.hits, &encode_hits(&hits))?;
     if !args.quiet {
         let found = hits.iter().filter(|h| h.is_hit()).count();
+        // An instanced scene's placed triangles count as its own (its
+        // tree holds each instance, not its triangles).
+        let placed = scene.geometry.instanced_triangles();
+        let own = u64::from(scene.geometry.triangle_count());
+        let against = match placed {
+            0 => format!("{own} triangles"),
+            _ => format!(
+                "{} triangles ({placed} placed by {})",
+                own + placed,
+                super::count(scene.geometry.instances().len(), "instance", "instances")
+            ),
+        };
         println!(
-            "traced {} rays ({}) against {} triangles: {} {} in {:.3} s = {:.2} Mrays/s on {} (load {:.2} s, BVH {:.2} s, kernel {}) -> {}",
+            "traced {} rays ({}) against {}: {} {} in {:.3} s = {:.2} Mrays/s on {} (load {:.2} s, BVH {:.2} s, kernel {}) -> {}",
             rays.len(),
             if args.occlusion { "occlusion" } else { "closest hit" },
-            scene.geometry.triangle_count(),
+            against,
             found,
             if args.occlusion { "occluded" } else { "hits" },
             seconds,

@@ -91,6 +91,14 @@ fn embree_instances_answer_as_strata_instances_do() {
         );
         hits(&dir.join("s.hits"))
     });
+    // The summary counts the triangles the instances place.
+    let said = run(
+        &mut strata(&["trace", "s.toml", "--rays", "rays.bin", "--hits", "s.hits"]),
+        "strata trace",
+    );
+    let (placed, n) = (tris.len() * g.instances().len(), g.instances().len());
+    let against = format!("against {placed} triangles ({placed} placed by {n} instances)");
+    assert!(said.contains(&against), "{said}");
     let total = ours.len();
     assert_eq!(total, 5 * PER_KIND);
     let found = ours.iter().filter(|h| h.is_hit()).count();
