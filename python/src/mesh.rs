@@ -300,8 +300,8 @@ impl Mesh {
     /// format can write in float64 is kept so, as trimesh reads it (OBJ,
     /// OFF and ASCII STL decimals, PLY ``double`` properties) and held as a
     /// mesh from those arrays is; PLY ``float``, binary STL and glTF
-    /// coordinates are read as float32. Only the faces are read: no material library or
-    /// texture, so a missing image is no error.
+    /// coordinates are read as float32. Only the faces are read: no
+    /// material library or texture, so a missing image is no error.
     ///
     /// A file strata cannot read raises ``strata_rt.InputError`` (a
     /// ValueError; FileNotFoundError if it does not exist) with strata's

@@ -218,9 +218,9 @@ class Mesh:
         """Load an OBJ, PLY, glTF, GLB, OFF or STL file with strata's loaders; triangle i of the file
         is face i. ``path`` is a str, bytes or an ``os.PathLike``, as ``os.fspath`` takes them.
         OBJ, OFF and ASCII STL decimals and PLY ``double`` properties are kept in float64 (as from
-        arrays); PLY ``float``, binary STL and glTF coordinates are read as float32. Only the faces are read (no
-        material library or texture). A file strata cannot read raises ``InputError``; what it
-        reads leniently (no faces) warns (``UserWarning``)."""
+        arrays); PLY ``float``, binary STL and glTF coordinates are read as float32. Only the faces
+        are read (no material library or texture). A file strata cannot read raises
+        ``InputError``; what it reads leniently (no faces) warns (``UserWarning``)."""
     @property
     def triangle_count(self) -> int:
         """The number of triangles (faces); of a placed mesh, every copy's."""

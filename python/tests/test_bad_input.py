@@ -250,10 +250,9 @@ def test_a_file_read_leniently_warns_in_strata_s_words(tmp_path, name, text):
 
 
 def test_a_file_s_looks_are_not_read(tmp_path):
-    """Mesh.load reads a file's faces alone, as trimesh does for ray
-    queries: an OBJ whose material library has a mistake and names a texture
-    that is not there loads without a word (a render of it is an error
-    naming the library's line)."""
+    """Mesh.load reads a file's faces alone: an OBJ whose material library
+    has a mistake and names a texture that is not there loads without a
+    word (a render of it is an error naming the library's line)."""
     (tmp_path / "looks.mtl").write_text("newmtl a\nKd red\nmap_Kd gone.png\n")
     path = tmp_path / "quad.obj"
     path.write_text("mtllib looks.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl a\nf 1 2 3 4\nusemtl b\nf 1 3 4\n")
