@@ -625,9 +625,10 @@ fn a_mesh_near_the_origin_keeps_centre_zero() {
 
 /// A file traced for its faces reads none of its looks: an OBJ whose
 /// material library has a mistake and names a texture that is not there,
-/// and a glTF whose material's image is not there, load as queries and as
+/// a glTF whose material's image is not there, and one that requires
+/// texture extensions strata does not read, load as queries and as
 /// `strata trace` loads them (a render of them is an error naming the
-/// texture).
+/// texture or the extension).
 #[test]
 fn a_file_traced_for_its_faces_reads_none_of_its_looks() {
     let dir = temp_dir("faces-alone");
@@ -650,9 +651,27 @@ fn a_file_traced_for_its_faces_reads_none_of_its_looks() {
             "meshes":[{"primitives":[{"attributes":{"POSITION":0},"material":0}]}],
             "nodes":[{"mesh":0}]}"#,
     );
-    for (path, triangles) in [(&obj, 3u32), (&gltf, 1)] {
+    // A glTF that requires texture extensions strata does not read, its
+    // texture's image in one of them (no `source`).
+    let text = std::fs::read_to_string(&gltf).unwrap();
+    let webp = text
+        .replace(
+            r#""images":[{"uri":"gone.png"}],"textures":[{"source":0}]"#,
+            r#""extensionsRequired":["KHR_texture_basisu","EXT_texture_webp"],
+               "extensionsUsed":["KHR_texture_basisu","EXT_texture_webp"],
+               "images":[{"uri":"gone.webp"}],"textures":[{"extensions":{"EXT_texture_webp":{"source":0}}}]"#,
+        )
+        .into_bytes();
+    let webp = write(&dir, "webp.gltf", &webp);
+    for (path, triangles) in [(&obj, 3u32), (&gltf, 1), (&webp, 1)] {
         let render = crate::scene::loaders::load_mesh_file(path).unwrap_err();
-        assert!(render.to_string().contains("gone.png") || render.to_string().contains("red"));
+        let said = render.to_string();
+        assert!(
+            ["gone.png", "red", "KHR_texture_basisu"]
+                .iter()
+                .any(|w| said.contains(w)),
+            "{said}"
+        );
         let (mesh, warnings) = Mesh::load(path, BuildQuality::Auto).unwrap();
         assert!(warnings.is_empty(), "{warnings:?}");
         assert_eq!(mesh.triangle_count(), u64::from(triangles));

@@ -100,7 +100,8 @@ pub struct Reading {
     /// Whether its materials are read, and the textures they use: a
     /// render's. A file traced for its faces alone (`strata trace`, a query
     /// mesh) reads neither, so it pays for no image decoded, and a missing
-    /// texture or a material library's mistake is no error there.
+    /// texture, a material library's mistake or a glTF's required texture
+    /// extension is no error there.
     pub materials: bool,
 }
 

@@ -104,6 +104,16 @@ const EXTENSION_WORDS: &[(&str, &str)] = &[
 /// nothing in the document's structure.
 const QUANTIZATION: &str = "KHR_mesh_quantization";
 
+/// The beginnings of the names of extensions that change only how a
+/// surface looks (its material and textures): a file read for its faces
+/// alone may require them (`KHR_texture_basisu`, `EXT_texture_webp`), and
+/// reads them no more than its materials.
+const LOOKS: [&str; 3] = ["KHR_materials_", "KHR_texture_", "EXT_texture_"];
+
+/// Where in the document the looks are, which a file read for its faces
+/// alone does not read, so their mistakes are none of its own.
+const LOOKS_PARTS: [&str; 4] = ["materials[", "textures[", "images[", "samplers["];
+
 /// The extensions a file may require: the `gltf` crate's, and
 /// [`QUANTIZATION`].
 fn readable_extensions() -> Vec<&'static str> {
@@ -112,11 +122,17 @@ fn readable_extensions() -> Vec<&'static str> {
     names
 }
 
-/// Parse and validate the JSON document.
+/// Parse and validate the JSON document; without `materials`, the
+/// extensions and parts that are only looks ([`LOOKS`], [`LOOKS_PARTS`])
+/// are not checked.
 ///
 /// The `gltf` crate's validator indexes the POSITION accessor without a
 /// bounds check, so that reference is checked first.
-pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Root> {
+pub(super) fn parse_root(
+    path: &Path,
+    json_bytes: &[u8],
+    materials: bool,
+) -> InputResult<json::Root> {
     let root: json::Root = match json::deserialize::from_slice(json_bytes) {
         Ok(root) => root,
         Err(e) => lenient_root(path, json_bytes)
@@ -125,7 +141,7 @@ pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Ro
     if version_1(&json::Value::String(root.asset.version.clone())) {
         return Err(gltf_1_refusal(path));
     }
-    check_required_extensions(path, &root)?;
+    check_required_extensions(path, &root, materials)?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             if let Some(index) = primitive
@@ -161,7 +177,11 @@ pub(super) fn parse_root(path: &Path, json_bytes: &[u8]) -> InputResult<json::Ro
             && (where_.ends_with(".min") || where_.ends_with(".max"));
         let custom_attribute =
             *error == json::validation::Error::Invalid && where_.contains(".attributes[");
-        !(quantization || unused_bounds || custom_attribute)
+        let looks = !materials
+            && (LOOKS_PARTS.iter().any(|p| where_.starts_with(p))
+                || where_.starts_with("extensionsRequired[")
+                    && LOOKS.iter().any(|p| where_.contains(&format!("\"{p}"))));
+        !(quantization || unused_bounds || custom_attribute || looks)
     });
     if let Some((location, error)) = problems.first() {
         let mut message = format!("invalid glTF: {error}");
@@ -230,14 +250,16 @@ fn gltf_1_refusal(path: &Path) -> InputError {
 
 /// Each `extensionsRequired` entry the `gltf` crate is not built to read
 /// is refused by name, before validation reports what the extension
-/// stands in for (a Draco file's accessors have no `bufferView`).
-fn check_required_extensions(path: &Path, root: &json::Root) -> InputResult<()> {
+/// stands in for (a Draco file's accessors have no `bufferView`); one of
+/// looks alone ([`LOOKS`]) is let be where `materials` are not read.
+fn check_required_extensions(path: &Path, root: &json::Root, materials: bool) -> InputResult<()> {
     let enabled = readable_extensions();
+    let looks = |name: &str| !materials && LOOKS.iter().any(|p| name.starts_with(p));
     let Some((i, name)) = root
         .extensions_required
         .iter()
         .enumerate()
-        .find(|(_, name)| !enabled.contains(&name.as_str()))
+        .find(|(_, name)| !enabled.contains(&name.as_str()) && !looks(name))
     else {
         return Ok(());
     };

@@ -116,7 +116,8 @@
 //! targets are not applied: meshes render in their rest pose and base
 //! shape, with a warning for each kind. glTF 1.0 and every
 //! `extensionsRequired` entry the loader does not read are refused by name
-//! (`container.rs`). A scene that lists no nodes (or has no `nodes` key)
+//! (`container.rs`), but for one of looks alone in a file read without
+//! its materials ([`load_gltf_with`]). A scene that lists no nodes (or has no `nodes` key)
 //! loads empty with a warning in [`LoadedAsset::warnings`], and so does a
 //! file whose scene holds no triangles.
 //!
@@ -174,8 +175,8 @@ pub fn load_gltf(path: &Path) -> InputResult<LoadedAsset> {
 }
 
 /// [`load_gltf`], without its materials and their textures unless
-/// `materials` (no image is decoded then; every primitive gets the
-/// default material).
+/// `materials` (no image is decoded then, every primitive gets the
+/// default material, and an extension of looks alone may be required).
 pub fn load_gltf_with(path: &Path, materials: bool) -> InputResult<LoadedAsset> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::file(path, format!("cannot read: {}", io_message(&e))))?;
@@ -194,7 +195,7 @@ pub fn load_gltf_with(path: &Path, materials: bool) -> InputResult<LoadedAsset> 
     } else {
         (&bytes[..], None)
     };
-    let root = parse_root(path, json_bytes)?;
+    let root = parse_root(path, json_bytes, materials)?;
     let buffers = load_buffers(path, &root, bin)?;
     Loader {
         path,
