@@ -375,13 +375,14 @@ impl Mesh {
 
     /// A mesh file (OBJ, PLY, OFF, STL, glTF or GLB) read with strata's
     /// loaders and used as it is: triangle `i` of the file is face `i`.
-    /// Where the format can write more than float32 holds (OBJ and OFF
-    /// text, PLY `double` properties), the file's own float64 coordinates
-    /// are held as a mesh from arrays is ([`Mesh::new_exact`]): centred
-    /// where far from the origin, hit and closest points on the faces the
-    /// file writes ([`file_arrays`]). With it, what the loader read
-    /// leniently (a file without faces, a material no library defines),
-    /// each a warning naming the file and the line.
+    /// Where the format can write more than float32 holds (OBJ, OFF and
+    /// ASCII STL text, PLY `double` properties), the file's own float64
+    /// coordinates are held as a mesh from arrays is ([`Mesh::new_exact`]):
+    /// centred where far from the origin, hit and closest points on the
+    /// faces the file writes ([`file_arrays`]). Only the faces are read
+    /// (`Reading::EXACT_FACES`, or `FACES` for the scene's path): no
+    /// materials or textures. With it, what the loader read leniently (a
+    /// file without faces), each a warning naming the file and the line.
     pub fn load(path: &Path, quality: BuildQuality) -> InputResult<(Self, Vec<InputError>)> {
         if let Some((vertices, faces, warnings)) = file_arrays(path)? {
             let mesh = Self::new_exact(vertices, faces, quality)

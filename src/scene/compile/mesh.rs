@@ -253,10 +253,13 @@ impl Compiler<'_> {
             if let Err(message) = loaders::check_extension(&path) {
                 return Err(self.err(at, message));
             }
+            let reading = match self.traced_file {
+                true => Reading::FACES,
+                false => Reading::RENDER,
+            };
             let mut asset = match self.preloaded.take_if(|(p, _)| *p == path) {
                 Some((_, asset)) => asset,
-                None if self.traced_file => load_mesh_file_with(&path, Reading::FACES)?,
-                None => load_mesh_file_with(&path, Reading::RENDER)?,
+                None => load_mesh_file_with(&path, reading)?,
             };
             if self.traced_file {
                 asset = asset.into_baked();
