@@ -618,31 +618,10 @@ impl Mesh {
     ) -> PyResult<Crossings> {
         let threads = Threads::new(threads)?;
         let (rays, _) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
-        let (counts, found) = run::flat(py, &threads, &rays, |rays, found, counts| {
-            self.0.all_hits(rays, found, counts, uv)
+        let parts = run::flat(py, &threads, &rays, |rays, part| {
+            self.0.all_hits(rays, part, uv)
         })?;
-        let mut splits = Vec::with_capacity(counts.len() + 1);
-        let mut ray = Vec::with_capacity(found.len());
-        let mut total = 0i64;
-        splits.push(0);
-        for (i, c) in counts.into_iter().enumerate() {
-            total += c as i64;
-            splits.push(total);
-            ray.extend(std::iter::repeat_n(i as i64, c as usize));
-        }
-        let t: Vec<f32> = found.iter().map(|c| c.t).collect();
-        let prim: Vec<i64> = found.iter().map(|c| c.face).collect();
-        let column = |f: fn(&raycast::Crossing) -> f64| {
-            uv.then(|| PyArray1::from_vec(py, found.iter().map(f).collect()).unbind())
-        };
-        Ok(Crossings {
-            splits: PyArray1::from_vec(py, splits).unbind(),
-            t: PyArray1::from_vec(py, t).unbind(),
-            prim: PyArray1::from_vec(py, prim).unbind(),
-            ray: PyArray1::from_vec(py, ray).unbind(),
-            u: column(|c| c.u),
-            v: column(|c| c.v),
-        })
+        Crossings::from_parts(py, &threads, &parts, uv)
     }
 
     /// The number of surface crossings along each ray in (t_min, t_max]

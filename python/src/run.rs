@@ -192,39 +192,49 @@ pub fn each_ray<R: Send>(
     Ok(())
 }
 
-/// The answers of a query with any number of answers per ray, in ray
-/// order: `answer` appends a task's answers to its vector and returns how
-/// many each ray had. Rays, threads, GIL and Ctrl-C as for [`each_ray`].
-pub fn flat<R: Send>(
+/// The answers of a query with any number of answers per ray: `answer`
+/// appends a task's rays' answers to its part. One part per task, in ray
+/// order, left as the tasks made them: a caller copies them into its
+/// arrays on every thread ([`cut`]), not one part after another on the
+/// calling thread. Rays, threads, GIL and Ctrl-C as for [`each_ray`].
+pub fn flat<P: Default + Send>(
     py: Python<'_>,
     threads: &Threads,
     rays: &RaySource<'_>,
-    answer: impl Fn(&[Ray], &mut Vec<R>, &mut Vec<u32>) + Sync,
-) -> PyResult<(Vec<u32>, Vec<R>)> {
-    let mut counts = Vec::with_capacity(rays.len());
-    let mut answers = Vec::new();
+    answer: impl Fn(&[Ray], &mut P) + Sync,
+) -> PyResult<Vec<P>> {
+    let mut parts = Vec::with_capacity(rays.len().div_ceil(TASK));
     let mut items = Vec::with_capacity(rays.len().min(CHUNK));
     for start in (0..rays.len()).step_by(CHUNK) {
         rays.read(start..(start + CHUNK).min(rays.len()), threads, &mut items)?;
-        let parts: Vec<(Vec<u32>, Vec<R>)> = py.detach(|| {
+        let chunk: Vec<P> = py.detach(|| {
             threads.run(items.len().div_ceil(TASK), |min_len| {
                 items
                     .par_chunks(TASK)
                     .with_min_len(min_len)
                     .map(|items| {
-                        let mut found = Vec::new();
-                        let mut counts = Vec::with_capacity(items.len());
-                        answer(items, &mut found, &mut counts);
-                        (counts, found)
+                        let mut part = P::default();
+                        answer(items, &mut part);
+                        part
                     })
                     .collect()
             })
         })?;
-        for (c, a) in parts {
-            counts.extend(c);
-            answers.extend(a);
-        }
+        parts.extend(chunk);
         py.check_signals()?;
     }
-    Ok((counts, answers))
+    Ok(parts)
+}
+
+/// `column` cut into consecutive pieces of `lengths` (which sum to at most
+/// its length), one per part of a [`flat`] query, so that each part's
+/// task fills its own.
+pub fn cut<T>(mut column: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    lengths
+        .map(|n| {
+            let (piece, rest) = std::mem::take(&mut column).split_at_mut(n);
+            column = rest;
+            piece
+        })
+        .collect()
 }

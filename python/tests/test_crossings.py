@@ -201,6 +201,30 @@ def test_all_hits_is_named_and_gives_rays_and_barycentrics(bumpy):
     assert (found.u >= -1e-9).all() and (found.v >= -1e-9).all() and (found.u + found.v <= 1 + 1e-9).all()
 
 
+def test_all_hits_over_many_tasks_and_chunks_is_one_list_in_ray_order(bumpy):
+    """More rays than one chunk between Ctrl-C checks (65,536), so hundreds
+    of tasks' lists are copied into one on every thread: each column lines
+    up with count_hits and with the same rays' answers one thread and a
+    ray at a time."""
+    vertices, faces = bumpy
+    mesh = strata_rt.Mesh(vertices, faces)
+    rng = np.random.default_rng(6)
+    origins, directions = helpers.random_rays(rng, vertices, 70_000)
+    found = mesh.all_hits(origins, directions, uv=True)
+    counts = mesh.count_hits(origins, directions)
+    assert found.splits[0] == 0 and counts.sum() > 70_000
+    np.testing.assert_array_equal(np.diff(found.splits), counts)
+    np.testing.assert_array_equal(found.ray, np.repeat(np.arange(70_000), counts))
+    one = mesh.all_hits(origins, directions, uv=True, threads=1)
+    for key in found.keys():
+        np.testing.assert_array_equal(found[key], one[key])
+    for i in rng.choice(70_000, 40, replace=False):
+        alone = mesh.all_hits(origins[i:i + 1], directions[i:i + 1], uv=True)
+        rows = slice(found.splits[i], found.splits[i + 1])
+        for key in ("t", "prim", "u", "v"):
+            np.testing.assert_array_equal(found[key][rows], alone[key])
+
+
 def test_crossings_count_in_words_and_are_a_mapping_that_unpacks(bumpy):
     mesh = strata_rt.Mesh(*bumpy)
     rng = np.random.default_rng(6)

@@ -21,7 +21,7 @@
 //! |---|---|---|
 //! | [`Mesh::first_hits`], [`Mesh::first_hits_into`] | [`FirstHit`]: t, face, barycentrics, normal, point (or the columns asked for) | ray |
 //! | [`Mesh::occluded`] | whether anything blocks it | ray |
-//! | [`Mesh::all_hits`] | every [`Crossing`] of the surface, nearest first, and their count | ray |
+//! | [`Mesh::all_hits`] | every crossing of the surface ([`Crossings`]: t, face, barycentrics), nearest first, and their count | ray |
 //! | [`Mesh::count_hits`] | how many crossings | ray |
 //! | [`Mesh::contains`] | inside or not (parity of crossings) | point |
 //! | [`Mesh::closest_point`] | [`ClosestPoint`]: point, distance, face | point |
@@ -226,16 +226,21 @@ impl FirstHitColumns<'_> {
     }
 }
 
-/// Where a ray crosses the surface: its t and the face crossed.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Crossing {
-    pub t: f32,
-    pub face: i64,
+/// Every crossing of the surface along a run of rays, column by column,
+/// ray after ray and each ray's nearest first ([`Mesh::all_hits`]): the
+/// arrays a binding hands out, with no record per crossing in between.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Crossings {
+    /// How many crossings each ray has.
+    pub counts: Vec<u32>,
+    pub t: Vec<f32>,
+    /// The face crossed.
+    pub face: Vec<i64>,
     /// Barycentric weights of the face's second and third vertices where
     /// the ray meets the face's plane, in float64 ([`exact::plane_hit`]);
-    /// NaN unless asked for.
-    pub u: f64,
-    pub v: f64,
+    /// empty unless asked for.
+    pub u: Vec<f64>,
+    pub v: Vec<f64>,
 }
 
 /// The nearest surface point to a query point, or [`ClosestPoint::MISS`].
@@ -653,30 +658,34 @@ impl Mesh {
     }
 
     /// Appends every crossing of the surface along each ray of `rays` in
-    /// `(tmin, tmax]` to `out`, nearest first (then by face), ray after
-    /// ray, and each ray's number of them to `counts`. One walk per ray,
+    /// `(tmin, tmax]` to `out`'s columns, nearest first (then by face),
+    /// ray after ray, and each ray's number of them to its counts. One walk per ray,
     /// not a re-cast from each hit: a ray through a shared edge or vertex
     /// of a closed mesh, where it crosses the surface, is reported once
     /// ([`Geometry::crossings`]).
     ///
     /// `uv`: whether to find each crossing's barycentrics (a second look at
-    /// the face's corners); without it they stay NaN.
-    pub fn all_hits(&self, rays: &[Ray], out: &mut Vec<Crossing>, counts: &mut Vec<u32>, uv: bool) {
+    /// the face's corners); without it their columns stay as they are.
+    pub fn all_hits(&self, rays: &[Ray], out: &mut Crossings, uv: bool) {
         // Several rays in flight ([`Geometry::crossings_stream`]), each
         // ray's list then copied out in ray order.
         let mut found = Vec::new();
         let mut spans = vec![(0, 0); rays.len()];
         self.geometry.crossings_stream(rays, &mut found, &mut spans);
+        out.counts.extend(spans.iter().map(|&(_, n)| n));
+        out.t.reserve(found.len());
+        out.face.reserve(found.len());
         for (ray, &(first, n)) in rays.iter().zip(&spans) {
-            counts.push(n);
-            out.extend(found[first..first + n as usize].iter().map(|c| {
+            for c in &found[first..first + n as usize] {
                 let face = self.geometry.flat_prim(c, &self.flat) as i64;
-                let (u, v) = match uv {
-                    true => self.plane_uv(ray, c, face),
-                    false => (f64::NAN, f64::NAN),
-                };
-                Crossing { t: c.t, face, u, v }
-            }));
+                out.t.push(c.t);
+                out.face.push(face);
+                if uv {
+                    let (u, v) = self.plane_uv(ray, c, face);
+                    out.u.push(u);
+                    out.v.push(v);
+                }
+            }
         }
     }
 

@@ -94,21 +94,21 @@ fn a_placed_mesh_answers_as_a_mesh_of_its_copies() {
     let (rays, points) = rays_and_points(2000);
     // Crossings, counts, inside and nearest points are the copies' bit for
     // bit (each candidate triangle moved to world space as they hold it).
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    let (mut na, mut nb) = (Vec::new(), Vec::new());
-    placed.all_hits(&rays, &mut a, &mut na, true);
-    copies.all_hits(&rays, &mut b, &mut nb, true);
-    let key = |c: &Crossing| (c.t, c.face);
-    let (ka, kb): (Vec<_>, Vec<_>) = (a.iter().map(key).collect(), b.iter().map(key).collect());
-    assert_eq!((&ka, &na), (&kb, &nb));
+    let (mut a, mut b) = (Crossings::default(), Crossings::default());
+    placed.all_hits(&rays, &mut a, true);
+    copies.all_hits(&rays, &mut b, true);
+    assert_eq!((&a.t, &a.face, &a.counts), (&b.t, &b.face, &b.counts));
     // Each crossing's barycentrics put it on its face.
+    assert_eq!((a.u.len(), a.v.len()), (a.t.len(), a.t.len()));
     assert!(a
+        .u
         .iter()
-        .all(|c| c.u >= -1e-9 && c.v >= -1e-9 && c.u + c.v <= 1.0 + 1e-9));
-    assert!(a.len() > 1000, "{} crossings", a.len());
+        .zip(&a.v)
+        .all(|(&u, &v)| u >= -1e-9 && v >= -1e-9 && u + v <= 1.0 + 1e-9));
+    assert!(a.t.len() > 1000, "{} crossings", a.t.len());
     let mut counts = vec![0; rays.len()];
     placed.count_hits(&rays, &mut counts);
-    assert_eq!(counts, na);
+    assert_eq!(counts, a.counts);
     let (mut ia, mut ib) = (vec![false; points.len()], vec![false; points.len()]);
     placed.contains(&points, &mut ia);
     copies.contains(&points, &mut ib);
@@ -198,15 +198,16 @@ fn every_query_counts_a_hit_at_t_max_without_a_nudge() {
         let towards = Ray::new(Vec3::new(0.13, 0.21, -5.0), Vec3::new(0.01, -0.02, 1.0));
         let mut first = [FirstHit::MISS];
         mesh.first_hits(&[towards], &mut first, true);
-        let mut all = Vec::new();
-        mesh.all_hits(&[towards], &mut all, &mut Vec::new(), true);
-        for (t, crossing) in [(first[0].t, false), (all[0].t, true)] {
+        let mut all = Crossings::default();
+        mesh.all_hits(&[towards], &mut all, true);
+        for (t, crossing) in [(first[0].t, false), (all.t[0], true)] {
             for (tmax, counts) in [(t, true), (t.next_down(), false)] {
                 let ray = Ray::segment(towards.origin, towards.direction, tmax);
                 if crossing {
-                    let mut found = Vec::new();
-                    mesh.all_hits(&[ray], &mut found, &mut Vec::new(), false);
-                    assert_eq!(found.first().map(|c| c.t) == Some(t), counts);
+                    let mut found = Crossings::default();
+                    mesh.all_hits(&[ray], &mut found, false);
+                    assert_eq!(found.t.first() == Some(&t), counts);
+                    assert!(found.u.is_empty() && found.v.is_empty());
                     let mut n = [0];
                     mesh.count_hits(&[ray], &mut n);
                     assert_eq!(n[0] > 0, counts);
@@ -264,14 +265,18 @@ fn crossing_queries_answer_the_same_in_flight() {
     let (rays, points) = rays_and_points(2000);
     type Answers = (Vec<(f32, i64, u64, u64)>, Vec<u32>, Vec<u32>, Vec<bool>);
     let answers = |m: &Mesh| -> Answers {
-        let (mut all, mut n) = (Vec::new(), Vec::new());
-        m.all_hits(&rays, &mut all, &mut n, true);
+        let mut all = Crossings::default();
+        m.all_hits(&rays, &mut all, true);
         let mut counts = vec![0; rays.len()];
         m.count_hits(&rays, &mut counts);
         let mut inside = vec![false; points.len()];
         m.contains(&points, &mut inside);
-        let key = |c: &Crossing| (c.t, c.face, c.u.to_bits(), c.v.to_bits());
-        (all.iter().map(key).collect(), n, counts, inside)
+        let bits = |x: &[f64]| x.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let (u, v) = (bits(&all.u), bits(&all.v));
+        let rows = (all.t.iter().zip(&all.face).zip(u).zip(v))
+            .map(|(((&t, &face), u), v)| (t, face, u, v))
+            .collect();
+        (rows, all.counts, counts, inside)
     };
     for mut mesh in [placed, copies] {
         let alone = answers(&mesh);
