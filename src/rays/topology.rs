@@ -7,9 +7,9 @@
 //! area can never be hit, and a sliver thinner than float rounding cannot
 //! be hit reliably, so neither can close a gap.
 
+use crate::math::weld::{key, Welder};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// A point that two or more triangles share, with the triangles around it.
 #[derive(Debug, Clone, PartialEq)]
@@ -37,11 +37,6 @@ pub struct Topology {
 pub fn normal(t: &[Vec3; 3]) -> DVec3 {
     let [a, b, c] = t.map(|v| v.as_dvec3());
     (b - a).cross(c - a)
-}
-
-fn key(v: Vec3) -> [u32; 3] {
-    // +0 and -0 are the same point.
-    (v + Vec3::ZERO).to_array().map(f32::to_bits)
 }
 
 /// Radius of the largest circle inside the triangle (0 if degenerate).
@@ -136,20 +131,21 @@ struct Welded {
 
 impl Welded {
     fn new(triangles: &[[Vec3; 3]], thin: f64) -> Self {
-        let mut ids: HashMap<[u32; 3], u32> = HashMap::with_capacity(triangles.len() / 2);
-        let mut points: Vec<Vec3> = Vec::new();
+        let mut welder = Welder::with_capacity(triangles.len() / 2);
+        let mut points: Vec<Vec3> = Vec::with_capacity(triangles.len() / 2);
         let corners: Vec<[u32; 3]> = triangles
             .iter()
             .map(|t| {
                 t.map(|v| {
-                    *ids.entry(key(v)).or_insert_with(|| {
+                    let (id, new) = welder.id(key(v));
+                    if new {
                         points.push(v);
-                        points.len() as u32 - 1
-                    })
+                    }
+                    id
                 })
             })
             .collect();
-        drop(ids);
+        drop(welder);
         let degenerate: Vec<bool> = (triangles.par_iter().zip(&corners))
             .map(|(t, w)| {
                 w[0] == w[1]

@@ -16,6 +16,7 @@
 //! it, which leaves the parity unchanged, as it should.
 
 use crate::accel::Bvh8;
+use crate::math::weld::{self, Welder};
 use crate::math::Ray;
 use crate::shape::triangle::ShearedRay;
 use glam::Vec3;
@@ -139,12 +140,8 @@ pub struct OpenEdge {
 /// offending edge in triangle order, so the message is reproducible.
 pub fn check_closed(tris: &[[Vec3; 3]]) -> Result<(), OpenEdge> {
     // Weld by exact position (+0.0 makes −0.0 and 0.0 one vertex).
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut id = |p: Vec3| {
-        let key = (p + Vec3::ZERO).to_array().map(f32::to_bits);
-        let next = ids.len() as u32;
-        *ids.entry(key).or_insert(next)
-    };
+    let mut welder = Welder::with_capacity(tris.len() / 2);
+    let mut id = |p: Vec3| welder.id(weld::key(p)).0;
     let welded: Vec<[u32; 3]> = tris.iter().map(|t| t.map(&mut id)).collect();
     let edges = |w: &[u32; 3]| {
         let degenerate = w[0] == w[1] || w[1] == w[2] || w[0] == w[2];

@@ -31,9 +31,9 @@
 use super::text::decode_text;
 use super::{io_message, Coordinates};
 use crate::error::{InputError, InputResult};
+use crate::math::weld::{self, Welder};
 use crate::scene::asset::{LoadedAsset, LoadedMesh};
 use glam::{DVec3, Vec3};
-use std::collections::HashMap;
 use std::path::Path;
 
 /// Load a binary or ASCII STL file; see the module documentation.
@@ -82,51 +82,51 @@ pub fn load_stl_with(path: &Path, coordinates: Coordinates) -> InputResult<Loade
 
 /// Corners made vertices: one per distinct position, in order of first use.
 #[derive(Default)]
-struct Welder {
+struct Vertices {
     positions: Vec<Vec3>,
-    ids: HashMap<[u32; 3], u32>,
+    welder: Welder<[u32; 3]>,
     /// The float64 positions, where kept: then corners are told apart by
-    /// them (`exact_ids`), not by their float32 rounding.
+    /// them (`exact_welder`), not by their float32 rounding.
     exact: Option<Vec<DVec3>>,
-    exact_ids: HashMap<[u64; 3], u32>,
+    exact_welder: Welder<[u64; 3]>,
 }
 
-impl Welder {
-    /// A welder that keeps float64 positions where `coordinates` asks.
-    fn new(coordinates: Coordinates) -> Self {
+impl Vertices {
+    /// Vertices that keep float64 positions where `coordinates` asks,
+    /// with room for `n` of them.
+    fn new(coordinates: Coordinates, n: usize) -> Self {
+        let exact = coordinates == Coordinates::Float64;
         Self {
-            exact: (coordinates == Coordinates::Float64).then(Vec::new),
-            ..Self::default()
+            positions: Vec::with_capacity(n),
+            welder: Welder::with_capacity(if exact { 0 } else { n }),
+            exact: exact.then(|| Vec::with_capacity(n)),
+            exact_welder: Welder::with_capacity(if exact { n } else { 0 }),
         }
     }
 
-    /// The vertex at `p`, or where this welder keeps float64 positions,
+    /// The vertex at `p`, or where these vertices keep float64 positions,
     /// at `exact` (the value `p` rounds). +0 and -0 are one place.
     fn vertex(&mut self, p: Vec3, exact: DVec3) -> u32 {
-        let positions = &mut self.positions;
-        let mut add = || {
-            positions.push(p);
-            (positions.len() - 1) as u32
-        };
-        match &mut self.exact {
-            None => {
-                let key = (p + Vec3::ZERO).to_array().map(f32::to_bits);
-                *self.ids.entry(key).or_insert_with(add)
-            }
+        let (id, new) = match &mut self.exact {
+            None => self.welder.id(weld::key(p)),
             Some(kept) => {
-                let key = (exact + DVec3::ZERO).to_array().map(f64::to_bits);
-                *self.exact_ids.entry(key).or_insert_with(|| {
+                let (id, new) = self.exact_welder.id(weld::exact_key(exact));
+                if new {
                     kept.push(exact);
-                    add()
-                })
+                }
+                (id, new)
             }
+        };
+        if new {
+            self.positions.push(p);
         }
+        id
     }
 
-    /// The mesh of these vertices; the welder is ready for the next.
+    /// The mesh of these vertices; they are ready for the next.
     fn take_mesh(&mut self, name: String, indices: Vec<[u32; 3]>) -> LoadedMesh {
-        self.ids.clear();
-        self.exact_ids.clear();
+        self.welder.clear();
+        self.exact_welder.clear();
         LoadedMesh {
             name,
             positions: std::mem::take(&mut self.positions),
@@ -139,7 +139,9 @@ impl Welder {
 
 fn read_binary(path: &Path, bytes: &[u8]) -> InputResult<LoadedMesh> {
     let records = bytes[84..].chunks_exact(50);
-    let mut welder = Welder::default();
+    // A closed mesh has about half as many vertices as triangles: room
+    // for them up front, not the map grown and rehashed again and again.
+    let mut vertices = Vertices::new(Coordinates::Float32, records.len() / 2);
     let mut indices = Vec::with_capacity(records.len());
     for (t, record) in records.enumerate() {
         let mut corner = [0u32; 3];
@@ -156,14 +158,14 @@ fn read_binary(path: &Path, bytes: &[u8]) -> InputResult<LoadedMesh> {
                     format!("triangle {t}: corner {k} is not finite: {p}"),
                 ));
             }
-            *id = welder.vertex(p, p.as_dvec3());
+            *id = vertices.vertex(p, p.as_dvec3());
         }
         indices.push(corner);
     }
     let name = path
         .file_stem()
         .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-    Ok(welder.take_mesh(name, indices))
+    Ok(vertices.take_mesh(name, indices))
 }
 
 /// Where an ASCII file's reading is: the statement expected next.
@@ -180,7 +182,7 @@ fn read_ascii(path: &Path, text: &str, coordinates: Coordinates) -> InputResult<
     let mut asset = LoadedAsset::default();
     let mut expect = Expect::Solid;
     let mut name = String::new();
-    let mut welder = Welder::new(coordinates);
+    let mut vertices = Vertices::new(coordinates, 0);
     let mut indices = Vec::new();
     let mut corners: Vec<u32> = Vec::new();
     let mut last = 0;
@@ -211,7 +213,7 @@ fn read_ascii(path: &Path, text: &str, coordinates: Coordinates) -> InputResult<
             (Expect::Facet, "facet") => Expect::Loop,
             (Expect::Facet, "endsolid") => {
                 let mesh =
-                    welder.take_mesh(std::mem::take(&mut name), std::mem::take(&mut indices));
+                    vertices.take_mesh(std::mem::take(&mut name), std::mem::take(&mut indices));
                 asset.meshes.push(mesh);
                 Expect::Solid
             }
@@ -235,12 +237,12 @@ fn read_ascii(path: &Path, text: &str, coordinates: Coordinates) -> InputResult<
                         .ok()
                         .filter(|v| v.is_finite())
                         .ok_or_else(|| at(format!("'{token}' is not a finite number")))?;
-                    if welder.exact.is_some() {
+                    if vertices.exact.is_some() {
                         // A float32 number parses as a float64 one too.
                         *e = token.parse::<f64>().unwrap_or_default();
                     }
                 }
-                corners.push(welder.vertex(Vec3::from(p), DVec3::from(exact)));
+                corners.push(vertices.vertex(Vec3::from(p), DVec3::from(exact)));
                 Expect::Vertex
             }
             (Expect::Vertex, "endloop") => {
