@@ -6,6 +6,7 @@
 //! wanted.
 
 use glam::{DVec3, Vec3};
+use numpy::ndarray::ArrayView2;
 use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -128,12 +129,14 @@ fn as_numpy<'py>(
     Ok(Some(array.call_method1("astype", (dtype,))?))
 }
 
-/// An (n, 3) array held for reading: row-major float32 or float64 where it
-/// lies, or a float32 copy of anything else (other dtypes, lists, strided
-/// views).
+/// An (n, 3) array held for reading: float32 or float64 where it lies,
+/// row-major or by its strides (a column slice of an (n, 6) array of rays,
+/// Fortran order), or a float64 copy of anything else (other dtypes, lists).
 pub enum Vec3Array<'py> {
     F32(PyReadonlyArray2<'py, f32>),
     F64(PyReadonlyArray2<'py, f64>),
+    StridedF32(PyReadonlyArray2<'py, f32>),
+    StridedF64(PyReadonlyArray2<'py, f64>),
     Copied(Vec<DVec3>),
 }
 
@@ -142,6 +145,8 @@ pub enum Vec3Array<'py> {
 pub enum Vec3Rows<'a> {
     F32(&'a [f32]),
     F64(&'a [f64]),
+    StridedF32(ArrayView2<'a, f32>),
+    StridedF64(ArrayView2<'a, f64>),
     Copied(&'a [DVec3]),
 }
 
@@ -150,6 +155,8 @@ impl Vec3Rows<'_> {
         match self {
             Self::F32(flat) => flat.len() / 3,
             Self::F64(flat) => flat.len() / 3,
+            Self::StridedF32(rows) => rows.nrows(),
+            Self::StridedF64(rows) => rows.nrows(),
             Self::Copied(rows) => rows.len(),
         }
     }
@@ -189,6 +196,31 @@ impl Row for Flat<'_, f64> {
     }
 }
 
+/// A row read by the view's strides: each of its three values where it
+/// lies, so a column slice of a wider array is read on the query's threads
+/// as a row-major one is, not first copied row by row on one thread.
+impl Row for ArrayView2<'_, f32> {
+    #[inline(always)]
+    fn row(&self, i: usize) -> Vec3 {
+        Vec3::new(self[[i, 0]], self[[i, 1]], self[[i, 2]])
+    }
+    #[inline(always)]
+    fn row64(&self, i: usize) -> DVec3 {
+        self.row(i).as_dvec3()
+    }
+}
+
+impl Row for ArrayView2<'_, f64> {
+    #[inline(always)]
+    fn row(&self, i: usize) -> Vec3 {
+        self.row64(i).as_vec3()
+    }
+    #[inline(always)]
+    fn row64(&self, i: usize) -> DVec3 {
+        DVec3::new(self[[i, 0]], self[[i, 1]], self[[i, 2]])
+    }
+}
+
 impl Row for &[DVec3] {
     #[inline(always)]
     fn row(&self, i: usize) -> Vec3 {
@@ -212,6 +244,14 @@ macro_rules! with_rows {
                 let $r = Flat(flat);
                 $body
             }
+            Vec3Rows::StridedF32(view) => {
+                let $r = view;
+                $body
+            }
+            Vec3Rows::StridedF64(view) => {
+                let $r = view;
+                $body
+            }
             Vec3Rows::Copied(rows) => {
                 let $r = rows;
                 $body
@@ -226,6 +266,8 @@ impl Vec3Array<'_> {
         Ok(match self {
             Self::F32(a) => Vec3Rows::F32(a.as_slice().map_err(flat)?),
             Self::F64(a) => Vec3Rows::F64(a.as_slice().map_err(flat)?),
+            Self::StridedF32(a) => Vec3Rows::StridedF32(a.as_array()),
+            Self::StridedF64(a) => Vec3Rows::StridedF64(a.as_array()),
             Self::Copied(rows) => Vec3Rows::Copied(rows),
         })
     }
@@ -237,22 +279,30 @@ fn in_place<T: Element>(a: &PyReadonlyArray2<'_, T>) -> bool {
     a.is_c_contiguous() && a.shape()[1] == 3
 }
 
+/// Whether an (n, 3) array that is not row-major can be read by its
+/// strides: any (n, 3) one with rows (else [`rows_of`] says what is wrong).
+fn strided<T: Element>(a: &PyReadonlyArray2<'_, T>) -> bool {
+    a.shape()[0] > 0 && a.shape()[1] == 3
+}
+
 /// An (n, 3) array of any float or integer dtype, held for reading.
 pub fn read_vec3s<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Vec3Array<'py>> {
     const WHAT: &str = "floats";
     let copied =
         |rows: Vec<[f64; 3]>| Vec3Array::Copied(rows.into_iter().map(DVec3::from).collect());
     if let Ok(a) = obj.extract::<PyReadonlyArray2<f32>>() {
-        if in_place(&a) {
-            return Ok(Vec3Array::F32(a));
-        }
-        return Ok(copied(rows_of(&a, name, WHAT, f64::from)?));
+        return Ok(match (in_place(&a), strided(&a)) {
+            (true, _) => Vec3Array::F32(a),
+            (false, true) => Vec3Array::StridedF32(a),
+            (false, false) => copied(rows_of(&a, name, WHAT, f64::from)?),
+        });
     }
     if let Ok(a) = obj.extract::<PyReadonlyArray2<f64>>() {
-        if in_place(&a) {
-            return Ok(Vec3Array::F64(a));
-        }
-        return Ok(copied(rows_of(&a, name, WHAT, |x| x)?));
+        return Ok(match (in_place(&a), strided(&a)) {
+            (true, _) => Vec3Array::F64(a),
+            (false, true) => Vec3Array::StridedF64(a),
+            (false, false) => copied(rows_of(&a, name, WHAT, |x| x)?),
+        });
     }
     match as_numpy(obj, name, "fiu", WHAT, "float64", 2)? {
         None => Ok(Vec3Array::Copied(Vec::new())),

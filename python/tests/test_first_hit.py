@@ -129,10 +129,29 @@ def test_any_dtype_and_layout_gives_the_same_answers(bumpy, rng):
         (np.asfortranarray(o32), np.asfortranarray(d32)),
         (o32[::-1][::-1], d32[::-1][::-1]),
         (o32.astype(np.longdouble), d32.astype(np.longdouble)),
+        (np.hstack([o32, d32])[:, :3], np.hstack([o32, d32])[:, 3:]),  # float32 (n, 6) columns
     ]:
         got = mesh.intersect(origins, directions)
         np.testing.assert_array_equal(got.prim, want.prim)
         np.testing.assert_array_equal(got.t, want.t)
+    # Views read where they lie, by their strides: rows backwards, every
+    # other row, columns of an (n, 6) array; each answers for the rows it
+    # shows, in every query.
+    for view in (slice(None, None, -1), slice(None, None, 2), slice(7, None, 3)):
+        got = mesh.intersect(o32[view], d32[view])
+        np.testing.assert_array_equal(got.prim, want.prim[view])
+        np.testing.assert_array_equal(got.t, want.t[view])
+    for rays in (np.hstack([o32, d32]), np.hstack([o32, d32]).astype(np.float64)):
+        o_view, d_view = rays[:, :3], rays[:, 3:]
+        assert not o_view.flags.c_contiguous
+        np.testing.assert_array_equal(mesh.occluded(o_view, d_view), mesh.occluded(o32, d32))
+        np.testing.assert_array_equal(mesh.count_hits(o_view, d_view), mesh.count_hits(o32, d32))
+        listed, contiguous = mesh.all_hits(o_view, d_view, uv=True), mesh.all_hits(o32, d32, uv=True)
+        for key in contiguous.keys():
+            np.testing.assert_array_equal(listed[key], contiguous[key])
+    points = np.hstack([o32, o32])[:, 3:]
+    np.testing.assert_array_equal(mesh.contains(points), mesh.contains(o32))
+    np.testing.assert_array_equal(mesh.closest_point(points).distance, mesh.closest_point(o32).distance)
     # Every integer dtype of faces, any float dtype of vertices: the same mesh.
     for vdtype, fdtype in [(np.float64, np.int64), (np.float16, np.uint16), (np.float32, np.uint64), (np.float64, np.int16)]:
         v = vertices.astype(np.float32).astype(vdtype)
@@ -140,6 +159,9 @@ def test_any_dtype_and_layout_gives_the_same_answers(bumpy, rng):
         if vdtype is np.float16:
             continue  # a different (coarser) mesh; it only has to build
         np.testing.assert_array_equal(other.intersect(o32, d32).prim, want.prim)
+    # Vertices as a view of a wider array's columns: the same mesh.
+    wide_vertices = np.hstack([vertices, vertices]).astype(np.float32)[:, 3:]
+    np.testing.assert_array_equal(strata_rt.Mesh(wide_vertices, faces).intersect(o32, d32).t, want.t)
     # Lists of faces and vertices.
     listed = strata_rt.Mesh(vertices.astype(np.float32).tolist(), faces.tolist())
     np.testing.assert_array_equal(listed.intersect(o32, d32).t, want.t)

@@ -94,6 +94,30 @@ def test_cast_rays_keys_dtypes_shapes_and_misses():
     assert RaycastingScene.INVALID_ID == INVALID_ID == 2**32 - 1
 
 
+def test_one_geometry_s_ids_are_its_own_faces_and_invalid_on_a_miss():
+    """A scene of one geometry takes a shortcut to its ids (its faces are
+    the scene's): the same ids as a scene of two gives its first box."""
+    v, f = helpers.box([0, 0, 0], [1, 1, 1])
+    one = RaycastingScene()
+    assert one.add_triangles(v.astype(np.float32), f.astype(np.uint32)) == 0
+    two, *_ = two_boxes()
+    rays = np.array([
+        [0.25, 0.5, 5, 0, 0, -1],    # the top face, then the bottom one
+        [0.5, -3, 0.75, 0, 1, 0],    # front face, then the back face
+        [10, 10, 10, 0, 0, -1],      # nothing
+        [np.nan, 0, 0, 1, 0, 0],     # a NaN origin: a miss
+    ], dtype=np.float32)
+    for query in ("cast_rays", "list_intersections"):
+        mine, theirs = getattr(one, query)(rays), getattr(two, query)(rays)
+        for key in ("geometry_ids", "primitive_ids"):
+            assert mine[key].dtype == np.uint32
+            np.testing.assert_array_equal(mine[key], theirs[key])
+    ans = one.cast_rays(rays)
+    assert ans["geometry_ids"].tolist() == [0, 0, INVALID_ID, INVALID_ID]
+    assert (ans["primitive_ids"][2:] == INVALID_ID).all() and (ans["primitive_ids"][:2] < len(f)).all()
+    assert one.list_intersections(rays)["geometry_ids"].tolist() == [0, 0, 0, 0]  # in and out of the box
+
+
 def test_rays_of_any_leading_shape_answer_in_that_shape():
     scene, *_ = two_boxes()
     rays = RaycastingScene.create_rays_pinhole(fov_deg=60, center=[2, 0.5, 0.5], eye=[2, -6, 0.5],
