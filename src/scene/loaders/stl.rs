@@ -81,7 +81,6 @@ pub fn load_stl_with(path: &Path, coordinates: Coordinates) -> InputResult<Loade
 }
 
 /// Corners made vertices: one per distinct position, in order of first use.
-#[derive(Default)]
 struct Vertices {
     positions: Vec<Vec3>,
     welder: Welder<[u32; 3]>,
