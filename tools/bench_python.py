@@ -21,6 +21,11 @@ interleaved round by round; the table gives the median in Mrays/s (Mpoints/s
 for points). embreex runs on one thread (its loop holds the GIL); Open3D
 and strata on --threads (default: all of the machine's).
 
+`--engines strata,open3d,strata.open3d` adds strata_rt's drop-in for Open3D
+(`strata_rt.open3d.RaycastingScene`, called exactly as the open3d engine
+calls Open3D's, on numpy arrays): what the drop-in costs an Open3D user
+beside `strata_rt.Mesh`.
+
 Agreement: the hit fraction and the mean hit distance of each first-hit
 engine are printed, so that a fast wrong answer shows.
 
@@ -157,56 +162,76 @@ class Embreex:
         return np.bincount(rays, minlength=len(o))
 
 
+def numpy_of(x):
+    """An Open3D tensor's numpy array (a numpy array as it is)."""
+    return x.numpy() if hasattr(x, "numpy") else x
+
+
 class Open3D:
     name = "open3d"
 
     def __init__(self, threads):
         import open3d as o3d
 
-        self.o3d = o3d
+        self.module = o3d.t.geometry
+        self.tensor = o3d.core.Tensor
         self.threads = 0 if threads is None else threads
 
     def build(self, v, f):
-        o3d = self.o3d
-        self.scene = o3d.t.geometry.RaycastingScene(nthreads=self.threads)
-        self.scene.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(f.astype(np.uint32)))
+        self.scene = self.module.RaycastingScene(nthreads=self.threads)
+        self.scene.add_triangles(self.tensor(v), self.tensor(f.astype(np.uint32)))
         # Open3D builds its Embree scene at the first query: do it here.
         self.scene.cast_rays(self.rays(v[:1], np.ones((1, 3), np.float32)))
 
     def rays(self, o, d):
-        return self.o3d.core.Tensor(np.hstack([o, d]))
+        return self.tensor(np.hstack([o, d]))
 
     def intersect(self, o, d):
         ans = self.scene.cast_rays(self.rays(o, d), nthreads=self.threads)
-        prim = ans["primitive_ids"].numpy().astype(np.int64)
+        prim = numpy_of(ans["primitive_ids"]).astype(np.int64)
         prim[prim == self.scene.INVALID_ID] = -1
         # Every output as numpy, as strata hands them over.
         for k in ("primitive_uvs", "primitive_normals"):
-            ans[k].numpy()
-        return ans["t_hit"].numpy(), prim
+            numpy_of(ans[k])
+        return numpy_of(ans["t_hit"]), prim
 
     def occluded(self, o, d):
-        return self.scene.test_occlusions(self.rays(o, d), nthreads=self.threads).numpy()
+        return numpy_of(self.scene.test_occlusions(self.rays(o, d), nthreads=self.threads))
 
     def all_hits(self, o, d):
         ans = self.scene.list_intersections(self.rays(o, d), nthreads=self.threads)
-        return ans["ray_splits"].numpy(), ans["t_hit"].numpy(), ans["primitive_ids"].numpy()
+        return numpy_of(ans["ray_splits"]), numpy_of(ans["t_hit"]), numpy_of(ans["primitive_ids"])
 
     def count_hits(self, o, d):
-        return self.scene.count_intersections(self.rays(o, d), nthreads=self.threads).numpy()
+        return numpy_of(self.scene.count_intersections(self.rays(o, d), nthreads=self.threads))
 
     def closest_point(self, p):
-        ans = self.scene.compute_closest_points(self.o3d.core.Tensor(p), nthreads=self.threads)
-        return np.linalg.norm(ans["points"].numpy() - p, axis=1)
+        ans = self.scene.compute_closest_points(self.tensor(p), nthreads=self.threads)
+        return np.linalg.norm(numpy_of(ans["points"]) - p, axis=1)
 
     def contains(self, p):
-        return self.scene.compute_occupancy(self.o3d.core.Tensor(p), nthreads=self.threads).numpy() > 0.5
+        return numpy_of(self.scene.compute_occupancy(self.tensor(p), nthreads=self.threads)) > 0.5
+
+
+class StrataOpen3D(Open3D):
+    """strata_rt's drop-in for Open3D's RaycastingScene, called as an Open3D
+    user calls Open3D's (one (n, 6) array of rays, Open3D's result keys), on
+    numpy arrays: what the drop-in itself costs beside strata_rt.Mesh."""
+
+    name = "strata.open3d"
+
+    def __init__(self, threads):
+        import strata_rt.open3d
+
+        self.module = strata_rt.open3d
+        self.tensor = np.asarray
+        self.threads = 0 if threads is None else threads
 
 
 # What the first-hit row asks strata_rt for: what Open3D's cast_rays answers.
 INTERSECT_FIELDS = ("t", "prim", "u", "v", "normal")
 
-ENGINES = {"strata": Strata, "embreex": Embreex, "open3d": Open3D}
+ENGINES = {"strata": Strata, "embreex": Embreex, "open3d": Open3D, "strata.open3d": StrataOpen3D}
 
 # (query, input kind, engines' method names)
 QUERIES = [

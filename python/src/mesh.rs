@@ -62,6 +62,22 @@ fn task_pieces<T>(column: &mut [T], width: usize, rows: std::ops::Range<usize>) 
         .collect()
 }
 
+/// Every NaN of `column` made 0, on the threads of the caller's
+/// `Threads::run`: a miss's u, v, normal and point are NaN and a hit's
+/// never are (its triangle has area), so this is `zero_misses`, in
+/// parallel, where numpy's `where` made a serial pass an array.
+fn nan_to_zero<T: Copy + PartialOrd + Default + Send>(column: &mut [T], min_len: usize) {
+    #[allow(clippy::eq_op)] // x != x: NaN, for f32 and f64 alike
+    column
+        .par_chunks_mut(TASK)
+        .with_min_len(min_len)
+        .for_each(|c| {
+            c.iter_mut()
+                .filter(|x| **x != **x)
+                .for_each(|x| *x = T::default())
+        });
+}
+
 /// A zeroed column of `len` values where `wanted`, else an empty one.
 fn column<T: Clone + Default>(wanted: bool, len: usize) -> Vec<T> {
     if wanted {
@@ -501,7 +517,9 @@ impl Mesh {
     /// ``fields``: the names of the arrays to compute (default all); the
     /// others are None and cost nothing (``fields=("t", "prim")`` skips
     /// the second look at each hit face that ``normal`` and ``point`` take).
-    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise", fields=None))]
+    /// ``zero_misses=True``: a miss's u, v, normal and point are 0, as
+    /// Open3D answers, not NaN.
+    #[pyo3(signature = (origins, directions, t_max=None, threads=None, t_min=None, bad_rays="raise", fields=None, zero_misses=false))]
     #[allow(clippy::too_many_arguments)]
     fn intersect(
         &self,
@@ -513,6 +531,7 @@ impl Mesh {
         t_min: Option<&Bound<'_, PyAny>>,
         #[pyo3(from_py_with = args::bad_rays)] bad_rays: &str,
         fields: Option<&Bound<'_, PyAny>>,
+        zero_misses: bool,
     ) -> PyResult<Hits> {
         let threads = Threads::new(threads)?;
         let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
@@ -555,6 +574,16 @@ impl Mesh {
                 })
             })?;
             py.check_signals()?;
+        }
+        if zero_misses {
+            py.detach(|| {
+                threads.run(n.div_ceil(TASK), |min_len| {
+                    for column in [&mut u, &mut v, &mut normal] {
+                        nan_to_zero(column, min_len);
+                    }
+                    nan_to_zero(&mut point, min_len);
+                })
+            })?;
         }
         let to = |key: &str, tail: &'static [usize]| (fields.has(key), tail);
         Ok(Hits {

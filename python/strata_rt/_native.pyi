@@ -258,9 +258,11 @@ class Mesh:
         t_min: Optional[float] = None,
         bad_rays: Literal["raise", "miss"] = "raise",
         fields: Optional[Sequence[Literal["t", "prim", "u", "v", "normal", "point"]]] = None,
+        zero_misses: bool = False,
     ) -> Hits:
         """The first hit of each ray in (t_min, t_max] (t_min 0 and t_max inf by default): t, prim,
-        u, v, normal, point, or only the arrays named in ``fields`` (the others are not computed)."""
+        u, v, normal, point, or only the arrays named in ``fields`` (the others are not computed);
+        with ``zero_misses=True`` a miss's u, v, normal and point are 0 (as Open3D's), not NaN."""
     def occluded(
         self,
         origins: ArrayLike,

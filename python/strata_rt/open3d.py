@@ -263,14 +263,11 @@ class RaycastingScene:
         ``primitive_normals`` float32 (..., 3) (zeros on a miss)."""
         o, d, shape = self._rays(rays)
         hits = self.mesh.intersect(
-            o, d, threads=self._query_threads(nthreads), bad_rays="miss", fields=("t", "prim", "u", "v", "normal")
+            o, d, threads=self._query_threads(nthreads), bad_rays="miss", fields=("t", "prim", "u", "v", "normal"),
+            zero_misses=True,
         )
-        hit = hits.prim >= 0
         geometry_ids, primitive_ids = self._ids(hits.prim)
-        # float32 in, float32 out: no copy made only to cast.
-        zero = np.float32(0)
-        uvs = np.where(hit[:, None], np.stack([hits.u, hits.v], axis=1), zero).astype(np.float32, copy=False)
-        normals = np.where(hit[:, None], hits.normal, zero).astype(np.float32, copy=False)
+        uvs, normals = np.stack([hits.u, hits.v], axis=1), hits.normal
         return self._out(rays, {
             "t_hit": hits.t.reshape(shape),
             "geometry_ids": geometry_ids.reshape(shape),

@@ -167,6 +167,24 @@ def test_any_dtype_and_layout_gives_the_same_answers(bumpy, rng):
     np.testing.assert_array_equal(listed.intersect(o32, d32).t, want.t)
 
 
+def test_zero_misses_zeroes_a_miss_s_arrays_and_nothing_else(bumpy, rng):
+    """zero_misses=True (Open3D's convention): a miss's u, v, normal and
+    point are 0 where they would be NaN; t stays inf, prim -1, and every
+    hit's arrays are the default call's bit for bit."""
+    mesh = strata_rt.Mesh(*bumpy)
+    o, d = helpers.random_rays(rng, bumpy[0], 3000)
+    plain, zeroed = mesh.intersect(o, d), mesh.intersect(o, d, zero_misses=True)
+    miss = plain.prim < 0
+    assert 0 < miss.sum() < len(o)
+    np.testing.assert_array_equal(zeroed.t, plain.t)
+    np.testing.assert_array_equal(zeroed.prim, plain.prim)
+    for key in ("u", "v", "normal", "point"):
+        assert np.isnan(plain[key][miss]).all() and (zeroed[key][miss] == 0).all(), key
+        np.testing.assert_array_equal(zeroed[key][~miss], plain[key][~miss])
+    some = mesh.intersect(o, d, fields=("t", "normal"), zero_misses=True)
+    assert some.u is None and (some.normal[miss] == 0).all()
+
+
 def test_empty_input_gives_empty_answers(bumpy):
     mesh = strata_rt.Mesh(*bumpy)
     for empty in (np.zeros((0, 3)), [], np.zeros((0, 3), dtype=np.float32)):
