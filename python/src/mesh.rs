@@ -64,8 +64,10 @@ fn task_pieces<T>(column: &mut [T], width: usize, rows: std::ops::Range<usize>) 
 
 /// Every NaN of `column` made 0, on the threads of the caller's
 /// `Threads::run`: a miss's u, v, normal and point are NaN and a hit's
-/// never are (its triangle has area), so this is `zero_misses`, in
-/// parallel, where numpy's `where` made a serial pass an array.
+/// are not (its triangle has area; only one degenerate in float64 but not
+/// in float32 could give a NaN normal, which then reads 0 too), so this is
+/// `zero_misses`, in parallel, where numpy's `where` made a serial pass an
+/// array.
 fn nan_to_zero<T: Copy + PartialOrd + Default + Send>(column: &mut [T], min_len: usize) {
     #[allow(clippy::eq_op)] // x != x: NaN, for f32 and f64 alike
     column
