@@ -62,24 +62,6 @@ fn task_pieces<T>(column: &mut [T], width: usize, rows: std::ops::Range<usize>) 
         .collect()
 }
 
-/// Every NaN of `column` made 0, on the threads of the caller's
-/// `Threads::run`: a miss's u, v, normal and point are NaN and a hit's
-/// are not (its triangle has area; only one degenerate in float64 but not
-/// in float32 could give a NaN normal, which then reads 0 too), so this is
-/// `zero_misses`, in parallel, where numpy's `where` made a serial pass an
-/// array.
-fn nan_to_zero<T: Copy + PartialOrd + Default + Send>(column: &mut [T], min_len: usize) {
-    #[allow(clippy::eq_op)] // x != x: NaN, for f32 and f64 alike
-    column
-        .par_chunks_mut(TASK)
-        .with_min_len(min_len)
-        .for_each(|c| {
-            c.iter_mut()
-                .filter(|x| **x != **x)
-                .for_each(|x| *x = T::default())
-        });
-}
-
 /// A zeroed column of `len` values where `wanted`, else an empty one.
 fn column<T: Clone + Default>(wanted: bool, len: usize) -> Vec<T> {
     if wanted {
@@ -539,6 +521,10 @@ impl Mesh {
         let (rays, lead) = self.rays(origins, directions, t_max, t_min, bad_rays)?;
         let n = rays.len();
         let fields = Fields::new(fields)?;
+        let miss = match zero_misses {
+            true => raycast::FirstHit::ZEROED_MISS,
+            false => raycast::FirstHit::MISS,
+        };
         let mut chunk = Vec::with_capacity(n.min(CHUNK));
         let mut t = column::<f32>(fields.has("t"), n);
         let mut prim = column::<i64>(fields.has("prim"), n);
@@ -563,6 +549,7 @@ impl Mesh {
                     v,
                     normal,
                     point,
+                    miss,
                 })
                 .collect::<Vec<_>>();
             let tasks = pieces.len();
@@ -576,16 +563,6 @@ impl Mesh {
                 })
             })?;
             py.check_signals()?;
-        }
-        if zero_misses {
-            py.detach(|| {
-                threads.run(n.div_ceil(TASK), |min_len| {
-                    for column in [&mut u, &mut v, &mut normal] {
-                        nan_to_zero(column, min_len);
-                    }
-                    nan_to_zero(&mut point, min_len);
-                })
-            })?;
         }
         let to = |key: &str, tail: &'static [usize]| (fields.has(key), tail);
         Ok(Hits {

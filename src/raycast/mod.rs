@@ -169,6 +169,15 @@ impl FirstHit {
         normal: Vec3::NAN,
         point: DVec3::NAN,
     };
+
+    /// A miss as Open3D answers one: t infinite, face -1, 0 else.
+    pub const ZEROED_MISS: FirstHit = FirstHit {
+        u: 0.0,
+        v: 0.0,
+        normal: Vec3::ZERO,
+        point: DVec3::ZERO,
+        ..FirstHit::MISS
+    };
 }
 
 /// Where [`Mesh::first_hits_into`] writes its rays' first hits: a column
@@ -187,6 +196,9 @@ pub struct FirstHitColumns<'a> {
     pub normal: &'a mut [f32],
     /// [`FirstHit::point`], x, y and z a ray.
     pub point: &'a mut [f64],
+    /// What a miss writes: [`FirstHit::MISS`], or a binding's own
+    /// ([`FirstHit::ZEROED_MISS`], Open3D's).
+    pub miss: FirstHit,
 }
 
 impl FirstHitColumns<'_> {
@@ -575,7 +587,10 @@ impl Mesh {
         }
         let point = !out.point.is_empty();
         let surface = point || !out.normal.is_empty();
-        self.each_first_hit(rays, surface, point, |i, hit| out.put(i, &hit));
+        let miss = out.miss;
+        self.each_first_hit(rays, surface, point, |i, hit| {
+            out.put(i, if hit.face < 0 { &miss } else { &hit })
+        });
     }
 
     /// Each ray's first hit, handed to `put` with the ray's index; with

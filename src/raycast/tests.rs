@@ -379,6 +379,7 @@ fn first_hit_columns_hold_what_first_hits_answers() {
                 v: &mut v,
                 normal: &mut normal,
                 point: &mut point,
+                miss: FirstHit::MISS,
             };
             mesh.first_hits_into(&rays, columns);
             for (i, h) in want.iter().enumerate() {
@@ -424,6 +425,7 @@ fn a_first_hit_column_of_the_wrong_length_is_refused() {
         v: &mut [],
         normal: &mut [],
         point: &mut [],
+        miss: FirstHit::MISS,
     };
     mesh.first_hits_into(&rays, columns);
 }
