@@ -119,7 +119,10 @@ impl<T: NodeTest, S> Walk<T, S> {
                 } else {
                     descend_any(&mut self.stack, &node.child, mask)
                 };
-                if prefetch_next {
+                // Of several children entered nearest first, the one
+                // picked is among those `descend_nearest` just prefetched.
+                let prefetched = O::NEAREST_FIRST && bvh.prefetch && mask & (mask - 1) != 0;
+                if prefetch_next && !prefetched {
                     bvh.prefetch_child(self.current, leaf_data);
                 }
                 return None;
