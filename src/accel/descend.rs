@@ -121,7 +121,7 @@ impl Bvh8 {
         if mask & (mask - 1) == 0 {
             return child[mask.trailing_zeros() as usize % 8];
         }
-        if self.prefetch {
+        if self.prefetches_entered(mask) {
             let mut m = mask;
             while m != 0 {
                 self.prefetch_child(child[m.trailing_zeros() as usize % 8], leaf_data);
@@ -146,6 +146,14 @@ impl Bvh8 {
         let entries = nearest_last(tn, mask, child);
         let n = mask.count_ones() as usize;
         stack.push_all_but_nth(&entries, n) as u32
+    }
+
+    /// Whether [`Bvh8::descend_nearest`] prefetches the children in
+    /// `mask`, the one it returns among them: where the tree prefetches
+    /// and more than one child is entered.
+    #[inline(always)]
+    pub(super) fn prefetches_entered(&self, mask: u32) -> bool {
+        self.prefetch && mask & (mask - 1) != 0
     }
 
     /// Prefetches the node, or the leaf's entry of `leaf_data`, that child

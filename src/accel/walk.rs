@@ -119,9 +119,9 @@ impl<T: NodeTest, S> Walk<T, S> {
                 } else {
                     descend_any(&mut self.stack, &node.child, mask)
                 };
-                // Of several children entered nearest first, the one
-                // picked is among those `descend_nearest` just prefetched.
-                let prefetched = O::NEAREST_FIRST && bvh.prefetch && mask & (mask - 1) != 0;
+                // Nearest first, the child picked may be among those
+                // `descend_nearest` just prefetched.
+                let prefetched = O::NEAREST_FIRST && bvh.prefetches_entered(mask);
                 if prefetch_next && !prefetched {
                     bvh.prefetch_child(self.current, leaf_data);
                 }
