@@ -41,6 +41,7 @@
 //! unmoved. Hit points and closest points are computed in float64 on the
 //! triangle the walk found, as given ([`exact`]).
 
+mod answers;
 pub mod exact;
 #[cfg(test)]
 mod tests;
@@ -54,6 +55,7 @@ pub use crate::math::Ray;
 use crate::scene::loaders::{check_extension, load_mesh_file_with, used_vertices, Reading};
 pub use crate::scene::MeshArraysError;
 use crate::scene::{check_extent, load_mesh_scene, mesh_geometry};
+pub use answers::{ClosestPoint, Crossings, FirstHit, FirstHitColumns};
 use glam::{Affine3A, DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
@@ -138,148 +140,6 @@ pub struct Mesh {
 struct Given {
     vertices: Vec<DVec3>,
     faces: Vec<[u32; 3]>,
-}
-
-/// One ray's first hit, or [`FirstHit::MISS`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FirstHit {
-    /// Along the ray, in its direction's lengths; infinite on a miss.
-    pub t: f32,
-    /// The face hit (in the copies' numbering for a placed mesh); -1 on a miss.
-    pub face: i64,
-    /// Barycentric coordinates of the face's second and third vertices.
-    pub u: f32,
-    pub v: f32,
-    /// The unit geometric normal of the face in world space, by the
-    /// right-hand rule over its vertex order (trimesh's face normal).
-    pub normal: Vec3,
-    /// Where the ray meets the plane of the face, in world space and
-    /// float64 ([`exact::plane_hit`]): on the face's plane to float64's
-    /// precision, wherever the mesh lies.
-    pub point: DVec3,
-}
-
-impl FirstHit {
-    /// What a ray that hits nothing answers: t infinite, face -1, NaN else.
-    pub const MISS: FirstHit = FirstHit {
-        t: f32::INFINITY,
-        face: -1,
-        u: f32::NAN,
-        v: f32::NAN,
-        normal: Vec3::NAN,
-        point: DVec3::NAN,
-    };
-
-    /// A miss as Open3D answers one: t infinite, face -1, 0 else.
-    pub const ZEROED_MISS: FirstHit = FirstHit {
-        u: 0.0,
-        v: 0.0,
-        normal: Vec3::ZERO,
-        point: DVec3::ZERO,
-        ..FirstHit::MISS
-    };
-}
-
-/// Where [`Mesh::first_hits_into`] writes its rays' first hits: a column
-/// a quantity, row i for ray i (three values a row for `normal` and
-/// `point`); an empty column is not asked for.
-pub struct FirstHitColumns<'a> {
-    /// [`FirstHit::t`], a value a ray.
-    pub t: &'a mut [f32],
-    /// [`FirstHit::face`], a value a ray.
-    pub face: &'a mut [i64],
-    /// [`FirstHit::u`], a value a ray.
-    pub u: &'a mut [f32],
-    /// [`FirstHit::v`], a value a ray.
-    pub v: &'a mut [f32],
-    /// [`FirstHit::normal`], x, y and z a ray.
-    pub normal: &'a mut [f32],
-    /// [`FirstHit::point`], x, y and z a ray.
-    pub point: &'a mut [f64],
-    /// What a miss writes: [`FirstHit::MISS`], or a binding's own
-    /// ([`FirstHit::ZEROED_MISS`], Open3D's).
-    pub miss: FirstHit,
-}
-
-impl FirstHitColumns<'_> {
-    /// Each column's length and values a row.
-    fn lens(&self) -> [(usize, usize); 6] {
-        [
-            (self.t.len(), 1),
-            (self.face.len(), 1),
-            (self.u.len(), 1),
-            (self.v.len(), 1),
-            (self.normal.len(), 3),
-            (self.point.len(), 3),
-        ]
-    }
-
-    /// Writes `hit` into row `i` of each column asked for.
-    #[inline(always)]
-    fn put(&mut self, i: usize, hit: &FirstHit) {
-        if let Some(o) = self.t.get_mut(i) {
-            *o = hit.t;
-        }
-        if let Some(o) = self.face.get_mut(i) {
-            *o = hit.face;
-        }
-        if let Some(o) = self.u.get_mut(i) {
-            *o = hit.u;
-        }
-        if let Some(o) = self.v.get_mut(i) {
-            *o = hit.v;
-        }
-        if let Some(o) = self.normal.get_mut(3 * i..3 * i + 3) {
-            hit.normal.write_to_slice(o);
-        }
-        if let Some(o) = self.point.get_mut(3 * i..3 * i + 3) {
-            hit.point.write_to_slice(o);
-        }
-    }
-}
-
-/// Every crossing of the surface along a run of rays, column by column,
-/// ray after ray and each ray's nearest first ([`Mesh::all_hits`]): the
-/// arrays a binding hands out, with no record per crossing in between.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Crossings {
-    /// How many crossings each ray has.
-    pub counts: Vec<u32>,
-    pub t: Vec<f32>,
-    /// The face crossed.
-    pub face: Vec<i64>,
-    /// Barycentric weights of the face's second and third vertices where
-    /// the ray meets the face's plane, in float64 ([`exact::plane_hit`]);
-    /// empty unless asked for.
-    pub u: Vec<f64>,
-    pub v: Vec<f64>,
-}
-
-/// The nearest surface point to a query point, or [`ClosestPoint::MISS`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ClosestPoint {
-    /// In world space and float64, on the face as given
-    /// ([`exact::closest_on_triangle`]).
-    pub point: DVec3,
-    /// Its distance (float64); negative inside where a signed distance
-    /// was asked.
-    pub distance: f64,
-    /// Barycentric weights of the face's second and third vertices at it.
-    pub u: f64,
-    pub v: f64,
-    /// The face it lies on; -1 where none lies within reach.
-    pub face: i64,
-}
-
-impl ClosestPoint {
-    /// Nothing within reach: point NaN, distance infinite, face -1.
-    pub const MISS: ClosestPoint = ClosestPoint {
-        point: DVec3::NAN,
-        distance: f64::INFINITY,
-        u: f64::NAN,
-        v: f64::NAN,
-        face: -1,
-    };
 }
 
 /// Why [`Mesh::place`] refused.
@@ -566,7 +426,19 @@ impl Mesh {
     #[inline(never)]
     pub fn first_hits(&self, rays: &[Ray], out: &mut [FirstHit], surface: bool) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
-        self.each_first_hit(rays, surface, surface, |i, hit| out[i] = hit);
+        self.each_first_hit(rays, surface, |i, ray, hit| {
+            out[i] = match hit {
+                None => FirstHit::MISS,
+                Some(hit) if surface => self.first_hit(ray, hit, true),
+                Some(hit) => FirstHit {
+                    t: hit.t,
+                    face: self.geometry.flat_prim(hit, &self.flat) as i64,
+                    u: hit.u,
+                    v: hit.v,
+                    ..FirstHit::MISS
+                },
+            }
+        });
     }
 
     /// [`Mesh::first_hits`] written straight into the columns asked for
@@ -575,7 +447,12 @@ impl Mesh {
     /// binding's arrays,
     /// without a row of every quantity staged for each ray and copied
     /// again (3% of the Python package's first hits on the dragon's
-    /// random rays, docs/python.md).
+    /// random rays, docs/python.md). Where no normal is asked for, a hit's
+    /// t, face, u and v go into their columns as they are: a whole
+    /// [`FirstHit`] made for each ray and read back was written in pieces
+    /// and read whole, and the read waited on the writes, most of the
+    /// columns' cost (docs/python.md, "Reading the rays and writing the
+    /// answers").
     #[inline(never)]
     pub fn first_hits_into(&self, rays: &[Ray], mut out: FirstHitColumns<'_>) {
         let n = rays.len();
@@ -588,20 +465,25 @@ impl Mesh {
         let point = !out.point.is_empty();
         let surface = point || !out.normal.is_empty();
         let miss = out.miss;
-        self.each_first_hit(rays, surface, point, |i, hit| {
-            out.put(i, if hit.face < 0 { &miss } else { &hit })
+        self.each_first_hit(rays, surface, |i, ray, hit| match hit {
+            None => out.put(i, &miss),
+            Some(hit) if surface => out.put(i, &self.first_hit(ray, hit, point)),
+            Some(hit) => {
+                let face = self.geometry.flat_prim(hit, &self.flat) as i64;
+                out.put_plain(i, hit.t, face, hit.u, hit.v)
+            }
         });
     }
 
-    /// Each ray's first hit, handed to `put` with the ray's index; with
-    /// `surface` its face's normal, and with `point` too its point.
+    /// Each ray's first hit (`None`: a miss), handed to `put` with the
+    /// ray's index and the ray; with `surface` the hit triangles are
+    /// prefetched first, for `put` to read their corners.
     #[inline(always)]
     fn each_first_hit(
         &self,
         rays: &[Ray],
         surface: bool,
-        point: bool,
-        mut put: impl FnMut(usize, FirstHit),
+        mut put: impl FnMut(usize, &Ray, Option<&crate::accel::PrimHit>),
     ) {
         for (k, rays) in rays.chunks(SPAN).enumerate() {
             let mut found = [None; SPAN];
@@ -616,18 +498,7 @@ impl Mesh {
                 }
             }
             for (j, (hit, ray)) in found.iter().zip(rays).enumerate() {
-                let answer = match hit {
-                    None => FirstHit::MISS,
-                    Some(hit) if surface => self.first_hit(ray, hit, point),
-                    Some(hit) => FirstHit {
-                        t: hit.t,
-                        face: self.geometry.flat_prim(hit, &self.flat) as i64,
-                        u: hit.u,
-                        v: hit.v,
-                        ..FirstHit::MISS
-                    },
-                };
-                put(k * SPAN + j, answer);
+                put(k * SPAN + j, ray, hit.as_ref());
             }
         }
     }
