@@ -11,11 +11,9 @@ use numpy::{Element, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUnt
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use strata::math::Ray;
 
-use crate::run::{Threads, CHUNK, TASK};
+use crate::run::{gather, gather_into, Threads};
 
 fn error(message: String) -> PyErr {
     PyValueError::new_err(message)
@@ -354,7 +352,8 @@ pub fn points(
 ) -> PyResult<Vec<(DVec3, Vec3)>> {
     let array = read_vec3s(obj, name)?;
     let rows = array.rows()?;
-    let (points, bad) = with_rows!(rows, |r| gather(threads, rows.len(), |i| {
+    let fill = (DVec3::ZERO, Vec3::ZERO);
+    let (points, bad) = with_rows!(rows, |r| gather(threads, rows.len(), fill, |i| {
         let p = r.row64(i);
         let near = (p - centre).as_vec3();
         ((p, near), !p.as_vec3().is_finite() || !near.is_finite())
@@ -363,55 +362,6 @@ pub fn points(
         Some(i) => Err(not_finite(name, i, points[i].0.as_vec3())),
         None => Ok(points),
     }
-}
-
-/// How many tasks reading `n` rows makes: rows of [`TASK`] at a time, as
-/// many as one chunk of a query has at most (a whole array of points is
-/// read at once), so that reading starts no more threads than the query's
-/// steps do.
-fn read_tasks(n: usize) -> usize {
-    n.min(CHUNK).div_ceil(TASK)
-}
-
-/// `out` = `make(i)` for `i` in `range` (its old items dropped, its
-/// memory kept), on `threads`, and the first `i` whose answer came back
-/// marked bad.
-fn gather_into<T: Send>(
-    threads: &Threads,
-    range: std::ops::Range<usize>,
-    out: &mut Vec<T>,
-    make: impl Fn(usize) -> (T, bool) + Sync,
-) -> PyResult<Option<usize>> {
-    let first_bad = AtomicUsize::new(usize::MAX);
-    out.clear();
-    threads.run(read_tasks(range.len()), |min_len| {
-        out.par_extend(
-            range
-                .into_par_iter()
-                .with_min_len(min_len.max(TASK))
-                .map(|i| {
-                    let (value, bad) = make(i);
-                    if bad {
-                        first_bad.fetch_min(i, Ordering::Relaxed);
-                    }
-                    value
-                }),
-        )
-    })?;
-    let bad = first_bad.into_inner();
-    Ok((bad != usize::MAX).then_some(bad))
-}
-
-/// `make(i)` for `i` in `0..n`, on `threads`, and the first `i` whose
-/// answer came back marked bad.
-fn gather<T: Send>(
-    threads: &Threads,
-    n: usize,
-    make: impl Fn(usize) -> (T, bool) + Sync,
-) -> PyResult<(Vec<T>, Option<usize>)> {
-    let mut out = Vec::with_capacity(n);
-    let bad = gather_into(threads, 0..n, &mut out, make)?;
-    Ok((out, bad))
 }
 
 /// An (m, 3) array of any integer dtype, as vertex indices: each in
@@ -691,6 +641,7 @@ impl RaySource<'_> {
             threads,
             range.clone(),
             out,
+            NO_RAY,
             |i| {
                 let (oi, di) = (
                     if one_origin { 0 } else { i },

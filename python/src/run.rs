@@ -1,9 +1,11 @@
 //! Running a query: its rays (or points) in chunks, each on rayon with the
-//! GIL released, and Ctrl-C checked between chunks.
+//! GIL released, and Ctrl-C checked between chunks; and the arrays read
+//! on the same threads ([`gather`]).
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use strata::math::Ray;
 
@@ -237,4 +239,70 @@ pub fn cut<T>(mut column: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec
             piece
         })
         .collect()
+}
+
+/// How many tasks reading `n` rows makes: rows of [`TASK`] at a time, as
+/// many as one chunk of a query has at most (a whole array of points is
+/// read at once), so that reading starts no more threads than the query's
+/// steps do.
+fn read_tasks(n: usize) -> usize {
+    n.min(CHUNK).div_ceil(TASK)
+}
+
+/// `out` = `make(i)` for `i` in `range` (its old items dropped, its
+/// memory kept), on `threads`, and the first `i` whose answer came back
+/// marked bad.
+///
+/// Each task writes its run of [`TASK`] items in place, in a loop of its
+/// own into which `make` is inlined: collected item by item through
+/// rayon's `map`, `make` stayed a call whose answer went back through
+/// memory (narrow stores read again as one wide load, which waited on
+/// them), 12 ns a ray, most of what reading the rays cost (docs/python.md,
+/// "Reading the rays and writing the answers"). `out` is grown to the
+/// range's length with `fill` on `threads` where it is shorter (a chunk's
+/// vector kept from the last chunk is only cut), and every item is then
+/// written once.
+pub fn gather_into<T: Copy + Send + Sync>(
+    threads: &Threads,
+    range: std::ops::Range<usize>,
+    out: &mut Vec<T>,
+    fill: T,
+    make: impl Fn(usize) -> (T, bool) + Sync,
+) -> PyResult<Option<usize>> {
+    let first_bad = AtomicUsize::new(usize::MAX);
+    let (start, len) = (range.start, range.len());
+    let grow = len.saturating_sub(out.len());
+    out.truncate(len);
+    threads.run(read_tasks(len), |min_len| {
+        out.par_extend(rayon::iter::repeat_n(fill, grow).with_min_len(min_len.max(TASK)));
+        out.par_chunks_mut(TASK)
+            .enumerate()
+            .with_min_len(min_len)
+            .for_each(|(c, items)| {
+                let first = start + c * TASK;
+                for (k, item) in items.iter_mut().enumerate() {
+                    let (value, bad) = make(first + k);
+                    *item = value;
+                    if bad {
+                        first_bad.fetch_min(first + k, Ordering::Relaxed);
+                    }
+                }
+            })
+    })?;
+    let bad = first_bad.into_inner();
+    Ok((bad != usize::MAX).then_some(bad))
+}
+
+/// `make(i)` for `i` in `0..n`, on `threads`, and the first `i` whose
+/// answer came back marked bad (`fill`: any value of `T`, which every
+/// item overwrites).
+pub fn gather<T: Copy + Send + Sync>(
+    threads: &Threads,
+    n: usize,
+    fill: T,
+    make: impl Fn(usize) -> (T, bool) + Sync,
+) -> PyResult<(Vec<T>, Option<usize>)> {
+    let mut out = Vec::with_capacity(n);
+    let bad = gather_into(threads, 0..n, &mut out, fill, make)?;
+    Ok((out, bad))
 }
